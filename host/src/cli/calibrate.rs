@@ -1,0 +1,10 @@
+//! `rigctl calibrate` (being written).
+
+use super::CliError;
+
+#[derive(clap::Args, Debug)]
+pub struct Args {}
+
+pub fn run(_args: Args) -> Result<(), CliError> {
+    Err(CliError::failure("rigctl calibrate: not implemented yet"))
+}

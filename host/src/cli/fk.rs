@@ -1,0 +1,10 @@
+//! `rigctl fk` (being written).
+
+use super::CliError;
+
+#[derive(clap::Args, Debug)]
+pub struct Args {}
+
+pub fn run(_args: Args) -> Result<(), CliError> {
+    Err(CliError::failure("rigctl fk: not implemented yet"))
+}

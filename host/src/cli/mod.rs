@@ -1,0 +1,84 @@
+//! One file per subcommand; each has an `Args` (clap) and a `run`.
+
+use rigctl::error::{Classify, ErrorKind};
+
+mod board_sim;
+mod calibrate;
+mod export;
+mod fk;
+mod ports;
+mod record;
+mod simulate;
+
+#[derive(clap::Parser, Debug)]
+#[command(name = "rigctl", version, about = "Low-cost robot calibration rig: record, model, simulate, calibrate")]
+pub struct Cli {
+    #[command(subcommand)]
+    pub command: Command,
+}
+
+#[derive(clap::Subcommand, Debug)]
+pub enum Command {
+    /// Forward kinematics of every row of a joint file (CSV x,y,z,phi,theta,psi).
+    Fk(fk::Args),
+    /// A virtual rig with known truth: writes pose files and the truth.
+    Simulate(simulate::Args),
+    /// Identify the model's parameters from measured poses.
+    Calibrate(calibrate::Args),
+    /// List serial ports.
+    Ports(ports::Args),
+    /// Record the DAQ board's frames to a file.
+    Record(record::Args),
+    /// Export a recording to CSV.
+    Export(export::Args),
+    /// A virtual DAQ board on a pseudo-terminal.
+    BoardSim(board_sim::Args),
+}
+
+pub fn run(cli: Cli) -> Result<(), CliError> {
+    match cli.command {
+        Command::Fk(a) => fk::run(a),
+        Command::Simulate(a) => simulate::run(a),
+        Command::Calibrate(a) => calibrate::run(a),
+        Command::Ports(a) => ports::run(a),
+        Command::Record(a) => record::run(a),
+        Command::Export(a) => export::run(a),
+        Command::BoardSim(a) => board_sim::run(a),
+    }
+}
+
+/// An error on its way to the exit code: the message and its class.
+#[derive(Debug)]
+pub struct CliError {
+    pub kind: ErrorKind,
+    pub message: String,
+}
+
+impl CliError {
+    pub fn exit_code(&self) -> u8 {
+        match self.kind {
+            ErrorKind::BadInput => 2,
+            ErrorKind::Failure => 1,
+        }
+    }
+
+    pub fn bad_input(message: impl Into<String>) -> Self {
+        Self { kind: ErrorKind::BadInput, message: message.into() }
+    }
+
+    pub fn failure(message: impl Into<String>) -> Self {
+        Self { kind: ErrorKind::Failure, message: message.into() }
+    }
+}
+
+impl std::fmt::Display for CliError {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str(&self.message)
+    }
+}
+
+impl<E: Classify + std::fmt::Display> From<E> for CliError {
+    fn from(e: E) -> Self {
+        Self { kind: e.kind(), message: e.to_string() }
+    }
+}

@@ -1,0 +1,1 @@
+//! Pose CSV files (FORMATS.md). (being written)

@@ -1,0 +1,29 @@
+//! `rigctl`'s library: everything the CLI does, as typed functions with typed errors.
+//!
+//! | module | holds |
+//! |---|---|
+//! | [`model`] | the kinematic + tilting model (chain, FK, Jacobians, moments, tilting, IK, model files) |
+//! | [`io`] | pose CSV files, atomic output files |
+//! | [`sim`] | the virtual rig with known truth (`rigctl simulate`) |
+//! | [`calib`] | identification (`rigctl calibrate`): solvers, identifiability, statistics |
+//! | [`daq`] | the acquisition path: recordings, `record`, `export`, the virtual board |
+//! | [`error`] | how errors are classified (bad input vs failure of the run) |
+#![forbid(unsafe_code)]
+
+pub mod calib;
+pub mod daq;
+pub mod error;
+pub mod io;
+pub mod model;
+pub mod sim;
+
+/// Where the shared documents and data live: `$RIG_SHARED_DIR`, else `../shared` beside the
+/// repository checkout. `None` when neither exists.
+pub fn shared_dir() -> Option<std::path::PathBuf> {
+    if let Some(dir) = std::env::var_os("RIG_SHARED_DIR") {
+        let dir = std::path::PathBuf::from(dir);
+        return dir.is_dir().then_some(dir);
+    }
+    let dir = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../../shared");
+    dir.is_dir().then_some(dir)
+}

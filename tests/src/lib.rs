@@ -1,0 +1,34 @@
+//! Helpers for the end-to-end tests in `tests/tests/`.
+
+use std::path::PathBuf;
+use std::process::Command;
+
+/// The `rigctl` binary built by this workspace (cargo builds it before running the tests of the
+/// workspace; if it is missing it is built here).
+pub fn rigctl() -> Command {
+    Command::new(rigctl_path())
+}
+
+pub fn rigctl_path() -> PathBuf {
+    let exe = std::env::current_exe().expect("test executable path");
+    // target/<profile>/deps/<test> -> target/<profile>/rigctl
+    let profile_dir = exe.parent().and_then(|d| d.parent()).expect("target dir");
+    let bin = profile_dir.join(format!("rigctl{}", std::env::consts::EXE_SUFFIX));
+    if !bin.exists() {
+        let status = Command::new(env!("CARGO"))
+            .args(["build", "-p", "rigctl", "--bin", "rigctl"])
+            .status()
+            .expect("run cargo build");
+        assert!(status.success(), "cargo build -p rigctl failed");
+    }
+    bin
+}
+
+/// `../shared` beside the checkout, or `None` with a message saying the test is skipped.
+pub fn shared_or_skip(test: &str) -> Option<PathBuf> {
+    let dir = rigctl::shared_dir();
+    if dir.is_none() {
+        eprintln!("SKIPPED {test}: ../shared (or $RIG_SHARED_DIR) is absent");
+    }
+    dir
+}
