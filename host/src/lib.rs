@@ -6,16 +6,22 @@
 //! | [`io`] | pose CSV files, atomic output files |
 //! | [`sim`] | the virtual rig with known truth (`rigctl simulate`) |
 //! | [`calib`] | identification (`rigctl calibrate`): solvers, identifiability, statistics |
+//! | [`diagnose`] | `rigctl diagnose`: residual analysis, candidate effects, forward selection |
 //! | [`daq`] | the acquisition path: recordings, `record`, `export`, the virtual board |
+//! | [`sheet`] | the printable trace sheet's geometry and SVG |
+//! | [`trace`] | scanned pencil traces -> centreline in sheet mm; simulated scans |
 //! | [`error`] | how errors are classified (bad input vs failure of the run) |
 #![forbid(unsafe_code)]
 
 pub mod calib;
 pub mod daq;
+pub mod diagnose;
 pub mod error;
 pub mod io;
 pub mod model;
+pub mod sheet;
 pub mod sim;
+pub mod trace;
 
 /// Where the shared documents and data live: `$RIG_SHARED_DIR`, else `../shared` beside the
 /// repository checkout. `None` when neither exists.

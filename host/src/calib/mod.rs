@@ -1,1 +1,27 @@
-//! (being written)
+//! Identification of a model's parameters from measured poses (`rigctl calibrate`).
+//!
+//! | module | holds |
+//! |---|---|
+//! | [`lm`] | Levenberg-Marquardt / Gauss-Newton on a generic least-squares problem |
+//! | [`identifiability`] | rank, condition number, unidentifiable parameters and their names |
+//! | [`stats`] | the error statistics object of FORMATS.md |
+//! | [`report`] | the `calibrate --json` document |
+//! | [`problem`] | measured poses, position errors, the identification as a least-squares problem |
+//! | [`fit`] | identifiability + LM + covariance on a parameter subset |
+//! | [`influence`] | influence-based identification (thesis eq. 3.7-3.8) |
+//! | [`calibrate`] | the whole `calibrate` command: selection, methods, report |
+
+pub mod calibrate;
+pub mod error;
+pub mod fit;
+pub mod identifiability;
+pub mod influence;
+pub mod lm;
+pub mod problem;
+pub mod report;
+pub mod stats;
+
+pub use calibrate::{calibrate, default_selection, CalibrateOptions, Method, Outcome};
+pub use error::CalibError;
+pub use problem::{position_errors, Poses};
+pub use stats::Stats;

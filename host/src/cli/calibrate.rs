@@ -1,10 +1,175 @@
-//! `rigctl calibrate` (being written).
+//! `rigctl calibrate --poses CAL.csv [--validate VAL.csv] [--method standard|influence|tilting]
+//! [--json OUT.json] [--out MODEL.toml] [--robot NAME | --model FILE] [--tool-mm L]
+//! [--set NAME=VALUE ...] [--params a,b,c] [--base]`: identifies the model's parameters and
+//! prints a thesis-table-4.5 style summary.
+
+use std::fmt::Write as _;
+use std::path::PathBuf;
+
+use nalgebra::Vector3;
+use rigctl::calib::stats::AxisExtremes;
+use rigctl::calib::{calibrate, CalibrateOptions, Method, Poses};
+use rigctl::io::atomic::write_bytes_atomic;
+use rigctl::model::{choose_model, ModelChoice};
 
 use super::CliError;
 
 #[derive(clap::Args, Debug)]
-pub struct Args {}
+pub struct Args {
+    /// Calibration poses: q1..qN (deg) and measured x,y,z (mm, frame R).
+    #[arg(long, value_name = "CAL.csv")]
+    pub poses: PathBuf,
+    /// Held-out poses, only evaluated.
+    #[arg(long, value_name = "VAL.csv")]
+    pub validate: Option<PathBuf>,
+    /// standard (no tilting), influence (thesis eq. 3.7-3.8) or tilting (tilting first, fig. 4.9).
+    #[arg(long, default_value = "tilting", value_parser = parse_method)]
+    pub method: Method,
+    /// Write the result as JSON (FORMATS.md "calibrate --json").
+    #[arg(long, value_name = "OUT.json")]
+    pub json: Option<PathBuf>,
+    /// Write the calibrated model (TOML, loadable with --model).
+    #[arg(long, value_name = "MODEL.toml")]
+    pub out: Option<PathBuf>,
+    /// Built-in robot: katana450 (default) or ur5.
+    #[arg(long, value_name = "NAME", conflicts_with = "model")]
+    pub robot: Option<String>,
+    /// Model file (TOML), e.g. one written by `calibrate --out`.
+    #[arg(long, value_name = "FILE.toml")]
+    pub model: Option<PathBuf>,
+    /// Katana tool length d5 in mm (200 bare, 330 with the pencil holder).
+    #[arg(long, value_name = "L")]
+    pub tool_mm: Option<f64>,
+    /// Set a nominal parameter before calibrating (deg / mm), e.g. tool_dz=31; repeatable.
+    #[arg(long = "set", value_name = "NAME=VALUE")]
+    pub sets: Vec<String>,
+    /// Parameters to identify, comma separated (default: the Katana's 12 geometric ones, or for
+    /// other robots all joint offsets, twists, lengths and the tool point).
+    #[arg(long, value_name = "a,b,c", value_delimiter = ',')]
+    pub params: Option<Vec<String>>,
+    /// Also identify the base frame (base_x, base_y, base_z, base_rx, base_ry).
+    #[arg(long)]
+    pub base: bool,
+    /// Identifiability threshold: directions whose scaled singular value is below RTOL times the
+    /// largest are reported unidentifiable and kept nominal.
+    #[arg(long, value_name = "RTOL", default_value_t = rigctl::calib::identifiability::DEFAULT_RTOL)]
+    pub rtol: f64,
+}
 
-pub fn run(_args: Args) -> Result<(), CliError> {
-    Err(CliError::failure("rigctl calibrate: not implemented yet"))
+fn parse_method(s: &str) -> Result<Method, String> {
+    s.parse()
+}
+
+pub fn run(args: Args) -> Result<(), CliError> {
+    let model = choose_model(&ModelChoice {
+        robot: args.robot.as_deref(),
+        model_file: args.model.as_deref(),
+        tool_mm: args.tool_mm,
+        sets: &args.sets,
+    })?;
+    let cal = Poses::read(&args.poses, &model)?;
+    let val = args
+        .validate
+        .as_deref()
+        .map(|p| Poses::read(p, &model))
+        .transpose()?;
+    let opts = CalibrateOptions {
+        method: args.method,
+        params: args.params.clone(),
+        base: args.base,
+        rtol: args.rtol,
+        ..Default::default()
+    };
+    let outcome = calibrate(&model, &cal, val.as_ref(), &opts)?;
+    if let Some(path) = &args.json {
+        let text = serde_json::to_string_pretty(&outcome.report)
+            .map_err(|e| CliError::failure(format!("encoding JSON: {e}")))?;
+        write_bytes_atomic(path, format!("{text}\n").as_bytes())?;
+    }
+    if let Some(path) = &args.out {
+        outcome.model.write_file(path)?;
+    }
+    print!("{}", summary(&outcome, val.is_some()));
+    Ok(())
+}
+
+/// Table 4.5 style: min / max / average of |dX|, |dY|, |dZ|, |dP| before, after the standard
+/// calibration and after the chosen method.
+fn table(title: &str, errs: &[Vec<Vector3<f64>>; 3], method: &str) -> String {
+    let mut s = String::new();
+    let _ = writeln!(s, "{title} ({} poses), mm", errs[0].len());
+    let _ = writeln!(
+        s,
+        "{:<8} {:<5} {:>10} {:>10} {:>10}",
+        "", "", "before", "standard", method
+    );
+    let stats: Vec<_> = errs
+        .iter()
+        .map(|e| rigctl::calib::Stats::from_errors(e))
+        .collect();
+    let ext: Vec<_> = errs.iter().map(|e| AxisExtremes::from_errors(e)).collect();
+    let labels = ["|dX|", "|dY|", "|dZ|", "|dP|"];
+    for (row, pick) in [("Minimum", 0), ("Maximum", 1), ("Average", 2)] {
+        for (k, label) in labels.iter().enumerate() {
+            let v: Vec<f64> = (0..3)
+                .map(|c| match (pick, k) {
+                    (0, 3) => stats[c].min_mm,
+                    (1, 3) => stats[c].max_mm,
+                    (2, 3) => stats[c].mean_mm,
+                    (0, _) => ext[c].min_abs_mm[k],
+                    (1, _) => ext[c].max_abs_mm[k],
+                    (_, 0) => stats[c].mean_abs_x_mm,
+                    (_, 1) => stats[c].mean_abs_y_mm,
+                    _ => stats[c].mean_abs_z_mm,
+                })
+                .collect();
+            let first = if k == 0 { row } else { "" };
+            let _ = writeln!(
+                s,
+                "{first:<8} {label:<5} {:>10.4} {:>10.4} {:>10.4}",
+                v[0], v[1], v[2]
+            );
+        }
+    }
+    s
+}
+
+fn summary(o: &rigctl::calib::Outcome, with_val: bool) -> String {
+    let r = &o.report;
+    let mut s = table("Calibration poses", &o.calibration_errors, &r.method);
+    if with_val {
+        s.push('\n');
+        s.push_str(&table("Validation poses", &o.validation_errors, &r.method));
+    }
+    let _ = writeln!(
+        s,
+        "\nmethod {}{}; rank {}; condition number {:.1}; iterations {}{}",
+        r.method,
+        if r.tilting_applied {
+            " (tilting applied)"
+        } else {
+            ""
+        },
+        r.rank,
+        r.condition_number,
+        r.iterations,
+        if r.converged { "" } else { " (not converged)" }
+    );
+    if !r.unidentifiable.is_empty() {
+        let _ = writeln!(
+            s,
+            "unidentifiable: {} (kept nominal: {})",
+            r.unidentifiable.join(", "),
+            r.fixed.join(", ")
+        );
+    }
+    let _ = writeln!(s, "{:<12} {:>14} {:>12}", "parameter", "value", "sigma");
+    for (name, v) in &r.parameters.0 {
+        let sig = r
+            .sigma
+            .get(name)
+            .map_or_else(|| "fixed".to_string(), |x| format!("{x:.6}"));
+        let _ = writeln!(s, "{name:<12} {v:>14.6} {sig:>12}");
+    }
+    s
 }

@@ -1,10 +1,38 @@
-//! `rigctl export` (being written).
+//! `rigctl export FILE --csv DIR`: `pot.csv`, `tilt.csv` and `status.csv` from a recording
+//! (columns in `rigctl::daq::export`).
+
+use std::path::PathBuf;
+
+use rigctl::daq::export::export_csv;
 
 use super::CliError;
 
 #[derive(clap::Args, Debug)]
-pub struct Args {}
+pub struct Args {
+    /// Recording written by `rigctl record`.
+    #[arg(value_name = "FILE")]
+    pub file: PathBuf,
+    /// Directory for pot.csv, tilt.csv and status.csv (created if missing).
+    #[arg(long, value_name = "DIR")]
+    pub csv: PathBuf,
+}
 
-pub fn run(_args: Args) -> Result<(), CliError> {
-    Err(CliError::failure("rigctl export: not implemented yet"))
+pub fn run(args: Args) -> Result<(), CliError> {
+    let summary = export_csv(&args.file, &args.csv)?;
+    if summary.truncated_tail_bytes > 0 {
+        eprintln!(
+            "rigctl export: {}: ignored an incomplete last record ({} bytes; the run was cut short)",
+            args.file.display(),
+            summary.truncated_tail_bytes
+        );
+    }
+    eprintln!(
+        "rigctl export: {}: pot.csv {} rows, tilt.csv {} rows, status.csv {} rows ({} samples dropped)",
+        args.csv.display(),
+        summary.pot_rows,
+        summary.tilt_rows,
+        summary.status_rows,
+        summary.tally.dropped()
+    );
+    Ok(())
 }

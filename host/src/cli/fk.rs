@@ -1,10 +1,67 @@
-//! `rigctl fk` (being written).
+//! `rigctl fk --joints FILE.csv [--tilt] [--tool-mm L] [--set NAME=VALUE ...]
+//! [--robot NAME | --model FILE.toml]`: forward kinematics of every row, CSV
+//! `x,y,z,phi,theta,psi` (mm in frame R, ZXZ Euler angles in deg) on stdout.
+
+use std::fmt::Write as _;
+use std::io::Write as _;
+use std::path::PathBuf;
+
+use rigctl::io::pose_csv::{read_poses, PoseSpec};
+use rigctl::model::{choose_model, ModelChoice, ModelError, Tilt};
 
 use super::CliError;
 
 #[derive(clap::Args, Debug)]
-pub struct Args {}
+pub struct Args {
+    /// Pose file with columns q1..qN (deg); other columns are ignored.
+    #[arg(long, value_name = "FILE.csv")]
+    pub joints: PathBuf,
+    /// Add joint tilting with the declared values (MODEL.md).
+    #[arg(long)]
+    pub tilt: bool,
+    /// Katana tool length d5 in mm (200 bare, 330 with the pencil holder).
+    #[arg(long, value_name = "L")]
+    pub tool_mm: Option<f64>,
+    /// Override a model parameter (deg for angles, mm for lengths), e.g. dth2=0.03; repeatable.
+    #[arg(long = "set", value_name = "NAME=VALUE")]
+    pub sets: Vec<String>,
+    /// Built-in robot: katana450 (default) or ur5.
+    #[arg(long, value_name = "NAME", conflicts_with = "model")]
+    pub robot: Option<String>,
+    /// Model file (TOML), e.g. one written by `calibrate --out`.
+    #[arg(long, value_name = "FILE.toml")]
+    pub model: Option<PathBuf>,
+}
 
-pub fn run(_args: Args) -> Result<(), CliError> {
-    Err(CliError::failure("rigctl fk: not implemented yet"))
+pub fn run(args: Args) -> Result<(), CliError> {
+    let model = choose_model(&ModelChoice {
+        robot: args.robot.as_deref(),
+        model_file: args.model.as_deref(),
+        tool_mm: args.tool_mm,
+        sets: &args.sets,
+    })?;
+    if args.tilt && !model.has_tilt() {
+        return Err(ModelError::NoTiltData {
+            model: model.name().to_string(),
+        }
+        .into());
+    }
+    let poses = read_poses(&args.joints, &PoseSpec::for_model(&model, false))?;
+    let tilt = if args.tilt { Tilt::Static } else { Tilt::Off };
+    let mut out = String::from("x,y,z,phi,theta,psi\n");
+    for pose in &poses.poses {
+        let fk = model.fk(&pose.q, tilt)?;
+        let p = fk.position_mm;
+        let [phi, theta, psi] = fk.zxz_deg();
+        let _ = writeln!(
+            out,
+            "{:.9},{:.9},{:.9},{phi:.9},{theta:.9},{psi:.9}",
+            p.x, p.y, p.z
+        );
+    }
+    let mut stdout = std::io::stdout().lock();
+    stdout
+        .write_all(out.as_bytes())
+        .and_then(|()| stdout.flush())
+        .map_err(|e| CliError::failure(format!("writing to stdout: {e}")))
 }

@@ -4,11 +4,14 @@ use rigctl::error::{Classify, ErrorKind};
 
 mod board_sim;
 mod calibrate;
+mod diagnose;
 mod export;
 mod fk;
 mod ports;
 mod record;
+mod sheet;
 mod simulate;
+mod trace;
 
 #[derive(clap::Parser, Debug)]
 #[command(name = "rigctl", version, about = "Low-cost robot calibration rig: record, model, simulate, calibrate")]
@@ -25,6 +28,8 @@ pub enum Command {
     Simulate(simulate::Args),
     /// Identify the model's parameters from measured poses.
     Calibrate(calibrate::Args),
+    /// Fit the declared model, find the effects it lacks, report before/after each.
+    Diagnose(diagnose::Args),
     /// List serial ports.
     Ports(ports::Args),
     /// Record the DAQ board's frames to a file.
@@ -33,6 +38,10 @@ pub enum Command {
     Export(export::Args),
     /// A virtual DAQ board on a pseudo-terminal.
     BoardSim(board_sim::Args),
+    /// Write the printable trace sheet (SVG, A4).
+    Sheet(sheet::Args),
+    /// Extract the pencil centreline from a scanned sheet (CSV x,y in mm).
+    Trace(trace::Args),
 }
 
 pub fn run(cli: Cli) -> Result<(), CliError> {
@@ -40,10 +49,13 @@ pub fn run(cli: Cli) -> Result<(), CliError> {
         Command::Fk(a) => fk::run(a),
         Command::Simulate(a) => simulate::run(a),
         Command::Calibrate(a) => calibrate::run(a),
+        Command::Diagnose(a) => diagnose::run(a),
         Command::Ports(a) => ports::run(a),
         Command::Record(a) => record::run(a),
         Command::Export(a) => export::run(a),
         Command::BoardSim(a) => board_sim::run(a),
+        Command::Sheet(a) => sheet::run(a),
+        Command::Trace(a) => trace::run(a),
     }
 }
 

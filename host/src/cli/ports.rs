@@ -1,4 +1,4 @@
-//! `rigctl ports` (being written).
+//! `rigctl ports`: the serial ports the OS knows, one per line (`PATH<TAB>DESCRIPTION`).
 
 use super::CliError;
 
@@ -6,5 +6,12 @@ use super::CliError;
 pub struct Args {}
 
 pub fn run(_args: Args) -> Result<(), CliError> {
-    Err(CliError::failure("rigctl ports: not implemented yet"))
+    let ports = rigctl::daq::link::list_ports()?;
+    if ports.is_empty() {
+        eprintln!("rigctl ports: no serial ports found (is the board plugged in?)");
+    }
+    for port in ports {
+        println!("{}\t{}", port.path, port.description);
+    }
+    Ok(())
 }

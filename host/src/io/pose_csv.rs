@@ -1,1 +1,307 @@
-//! Pose CSV files (FORMATS.md). (being written)
+//! Pose CSV files (FORMATS.md "Pose files"): a header naming the columns, one pose per row,
+//! `#` comment lines. Columns `q1..qN` (deg, mm for a prismatic joint) are required; `x,y,z`
+//! (mm) are required when the caller needs measured positions and checked whenever present;
+//! `t` (s) is optional and numeric; `id` is optional text; any other column is kept as text and
+//! ignored. A missing, non-numeric, NaN or infinite value in a used column, a wrong field
+//! count, or a joint outside its limits is [`PoseCsvError`] (bad input) naming the file, the
+//! line (1-based, physical) and the column.
+
+use std::path::Path;
+
+use crate::error::{Classify, ErrorKind};
+use crate::model::Model;
+
+/// What a reader expects of a pose file.
+#[derive(Debug, Clone, PartialEq)]
+pub struct PoseSpec {
+    /// Number of joint columns `q1..qN` required.
+    pub n_joints: usize,
+    /// Joint limits `[min, max]` per joint; empty = no limit check.
+    pub limits: Vec<[f64; 2]>,
+    /// Whether `x, y, z` must be present.
+    pub require_xyz: bool,
+}
+
+impl PoseSpec {
+    /// The model's joint count and limits.
+    pub fn for_model(model: &Model, require_xyz: bool) -> Self {
+        Self {
+            n_joints: model.n_joints(),
+            limits: model.joint_limits(),
+            require_xyz,
+        }
+    }
+}
+
+/// One row of a pose file.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Pose {
+    /// Line number in the file (1-based).
+    pub line: usize,
+    /// Joint readings `q1..qN` (deg; mm for a prismatic joint).
+    pub q: Vec<f64>,
+    /// Measured tool point (mm, frame R), when the file has `x,y,z`.
+    pub xyz_mm: Option<[f64; 3]>,
+    /// Time since the start of the session (s), when the file has `t`.
+    pub t_s: Option<f64>,
+    /// Pose name, when the file has `id`.
+    pub id: Option<String>,
+    /// The other columns' text, in the order of [`PoseFile::extra_columns`].
+    pub extra: Vec<String>,
+}
+
+/// A parsed pose file.
+#[derive(Debug, Clone, PartialEq)]
+pub struct PoseFile {
+    /// The file name used in messages.
+    pub source: String,
+    /// The header's column names.
+    pub header: Vec<String>,
+    /// Names of the columns kept as text (not q, x, y, z, t, id).
+    pub extra_columns: Vec<String>,
+    /// The poses, in file order.
+    pub poses: Vec<Pose>,
+}
+
+impl PoseFile {
+    /// Joint vectors of all poses.
+    pub fn joints(&self) -> Vec<Vec<f64>> {
+        self.poses.iter().map(|p| p.q.clone()).collect()
+    }
+
+    /// Measured positions of all poses (`None` if the file has no `x,y,z`).
+    pub fn positions_mm(&self) -> Option<Vec<[f64; 3]>> {
+        self.poses.iter().map(|p| p.xyz_mm).collect()
+    }
+
+    /// Text of extra column `name` of pose `i`.
+    pub fn extra(&self, i: usize, name: &str) -> Option<&str> {
+        let c = self.extra_columns.iter().position(|n| n == name)?;
+        self.poses.get(i)?.extra.get(c).map(String::as_str)
+    }
+}
+
+/// A pose file that cannot be used (always bad input, exit code 2).
+#[derive(Debug, thiserror::Error)]
+pub enum PoseCsvError {
+    #[error("cannot read pose file {file}: {source}")]
+    Read {
+        file: String,
+        #[source]
+        source: std::io::Error,
+    },
+    #[error("{file}: no header row")]
+    NoHeader { file: String },
+    #[error("{file}: no pose rows")]
+    NoPoses { file: String },
+    #[error("{file}:{line}: column `{column}` is missing from the header")]
+    MissingColumn {
+        file: String,
+        line: usize,
+        column: String,
+    },
+    #[error("{file}:{line}: column `{column}` appears twice in the header")]
+    DuplicateColumn {
+        file: String,
+        line: usize,
+        column: String,
+    },
+    #[error("{file}:{line}: {found} fields, the header has {expected}")]
+    FieldCount {
+        file: String,
+        line: usize,
+        expected: usize,
+        found: usize,
+    },
+    #[error("{file}:{line}: column `{column}`: {problem} (`{value}`)")]
+    BadValue {
+        file: String,
+        line: usize,
+        column: String,
+        value: String,
+        problem: &'static str,
+    },
+    #[error(
+        "{file}:{line}: column `{column}`: joint value {value} outside the limits [{min}, {max}]"
+    )]
+    JointLimit {
+        file: String,
+        line: usize,
+        column: String,
+        value: f64,
+        min: f64,
+        max: f64,
+    },
+}
+
+impl Classify for PoseCsvError {
+    fn kind(&self) -> ErrorKind {
+        ErrorKind::BadInput
+    }
+}
+
+/// Reads and checks a pose file.
+pub fn read_poses(path: &Path, spec: &PoseSpec) -> Result<PoseFile, PoseCsvError> {
+    let file = path.display().to_string();
+    let text = std::fs::read_to_string(path).map_err(|source| PoseCsvError::Read {
+        file: file.clone(),
+        source,
+    })?;
+    parse_poses(&text, &file, spec)
+}
+
+/// Where each used column sits in a row.
+struct Layout {
+    q: Vec<usize>,
+    xyz: Option<[usize; 3]>,
+    t: Option<usize>,
+    id: Option<usize>,
+    extra: Vec<usize>,
+}
+
+fn layout(
+    header: &[String],
+    file: &str,
+    line: usize,
+    spec: &PoseSpec,
+) -> Result<Layout, PoseCsvError> {
+    for (i, h) in header.iter().enumerate() {
+        if header[..i].contains(h) {
+            return Err(PoseCsvError::DuplicateColumn {
+                file: file.into(),
+                line,
+                column: h.clone(),
+            });
+        }
+    }
+    let find = |name: &str| header.iter().position(|h| h == name);
+    let need = |name: &str| {
+        find(name).ok_or_else(|| PoseCsvError::MissingColumn {
+            file: file.into(),
+            line,
+            column: name.into(),
+        })
+    };
+    let q = (1..=spec.n_joints)
+        .map(|i| need(&format!("q{i}")))
+        .collect::<Result<Vec<_>, _>>()?;
+    let xyz = match (find("x"), find("y"), find("z")) {
+        (Some(x), Some(y), Some(z)) => Some([x, y, z]),
+        (None, None, None) if !spec.require_xyz => None,
+        _ => Some([need("x")?, need("y")?, need("z")?]),
+    };
+    let (t, id) = (find("t"), find("id"));
+    let used: Vec<usize> = q
+        .iter()
+        .copied()
+        .chain(xyz.into_iter().flatten())
+        .chain(t)
+        .chain(id)
+        .collect();
+    let extra = (0..header.len()).filter(|i| !used.contains(i)).collect();
+    Ok(Layout {
+        q,
+        xyz,
+        t,
+        id,
+        extra,
+    })
+}
+
+fn number(
+    fields: &[&str],
+    col: usize,
+    header: &[String],
+    file: &str,
+    line: usize,
+) -> Result<f64, PoseCsvError> {
+    let raw = fields[col];
+    let bad = |problem| PoseCsvError::BadValue {
+        file: file.into(),
+        line,
+        column: header[col].clone(),
+        value: raw.to_string(),
+        problem,
+    };
+    if raw.is_empty() {
+        return Err(bad("missing value"));
+    }
+    let v: f64 = raw.parse().map_err(|_| bad("not a number"))?;
+    if v.is_nan() {
+        Err(bad("NaN"))
+    } else if v.is_infinite() {
+        Err(bad("infinite"))
+    } else {
+        Ok(v)
+    }
+}
+
+/// Parses pose-file text; `file` names it in messages.
+pub fn parse_poses(text: &str, file: &str, spec: &PoseSpec) -> Result<PoseFile, PoseCsvError> {
+    let text = text.strip_prefix('\u{feff}').unwrap_or(text);
+    let mut rows = text
+        .lines()
+        .enumerate()
+        .map(|(i, l)| (i + 1, l.trim_end_matches('\r')))
+        .filter(|(_, l)| !l.trim().is_empty() && !l.trim_start().starts_with('#'));
+    let (header_line, header_text) = rows
+        .next()
+        .ok_or_else(|| PoseCsvError::NoHeader { file: file.into() })?;
+    let header: Vec<String> = header_text
+        .split(',')
+        .map(|h| h.trim().to_string())
+        .collect();
+    let lay = layout(&header, file, header_line, spec)?;
+    let mut poses = Vec::new();
+    for (line, row) in rows {
+        let fields: Vec<&str> = row.split(',').map(str::trim).collect();
+        if fields.len() != header.len() {
+            return Err(PoseCsvError::FieldCount {
+                file: file.into(),
+                line,
+                expected: header.len(),
+                found: fields.len(),
+            });
+        }
+        let num = |col| number(&fields, col, &header, file, line);
+        let mut q = Vec::with_capacity(lay.q.len());
+        for (j, &col) in lay.q.iter().enumerate() {
+            let v = num(col)?;
+            if let Some(&[min, max]) = spec.limits.get(j) {
+                if v < min || v > max {
+                    return Err(PoseCsvError::JointLimit {
+                        file: file.into(),
+                        line,
+                        column: header[col].clone(),
+                        value: v,
+                        min,
+                        max,
+                    });
+                }
+            }
+            q.push(v);
+        }
+        let xyz_mm = match lay.xyz {
+            Some([x, y, z]) => Some([num(x)?, num(y)?, num(z)?]),
+            None => None,
+        };
+        let t_s = lay.t.map(num).transpose()?;
+        poses.push(Pose {
+            line,
+            q,
+            xyz_mm,
+            t_s,
+            id: lay.id.map(|c| fields[c].to_string()),
+            extra: lay.extra.iter().map(|&c| fields[c].to_string()).collect(),
+        });
+    }
+    if poses.is_empty() {
+        return Err(PoseCsvError::NoPoses { file: file.into() });
+    }
+    Ok(PoseFile {
+        source: file.into(),
+        extra_columns: lay.extra.iter().map(|&c| header[c].clone()).collect(),
+        header,
+        poses,
+    })
+}

@@ -1,0 +1,49 @@
+//! Runtime of `diagnose` on a simulated session of 118 calibration + 60 validation poses (the
+//! ISO 9283 sequence), clean and with one undeclared encoder harmonic.
+
+use criterion::{criterion_group, criterion_main, Criterion};
+use rigctl::calib::Poses;
+use rigctl::diagnose::data::Dataset;
+use rigctl::diagnose::{diagnose, DiagnoseOptions};
+use rigctl::model::katana450;
+use rigctl::sim::effects::parse_effect;
+use rigctl::sim::simulate::{simulate, SimConfig, SimPose};
+
+fn dataset(poses: &[SimPose]) -> Dataset {
+    Dataset {
+        poses: Poses {
+            q_deg: poses.iter().map(|p| p.q_deg.clone()).collect(),
+            xyz_mm: poses.iter().map(|p| p.measured_mm).collect(),
+        },
+        t_s: Some(poses.iter().map(|p| p.t_s).collect()),
+    }
+}
+
+fn bench(c: &mut Criterion) {
+    let declared = katana450(200.0).expect("preset");
+    let mut g = c.benchmark_group("diagnose_118_60");
+    g.sample_size(10);
+    for (name, effects) in [
+        ("clean", vec![]),
+        ("harmonic_j2_h1", vec!["encoder_harmonic:j2:h1=0.03,40"]),
+    ] {
+        let cfg = SimConfig {
+            effects: effects
+                .iter()
+                .map(|e| parse_effect(e).expect("effect"))
+                .collect(),
+            ..SimConfig::default()
+        };
+        let out = simulate(&declared, &cfg).expect("simulate");
+        let (cal, val) = (dataset(&out.cal), dataset(&out.val));
+        g.bench_function(name, |b| {
+            b.iter(|| {
+                diagnose(&declared, &cal, &val, &DiagnoseOptions::default()).expect("diagnose")
+            })
+        });
+    }
+    g.finish();
+}
+
+criterion_group!(benches, bench);
+criterion_main!(benches);

@@ -1,0 +1,69 @@
+//! `trace` on an A4 scan at 600 dpi (4961 x 7016 px, a 100 mm-radius pencil circle, rotated
+//! 2 degrees): PNG decoding and tracing measured separately.
+//!
+//! The bench also leaves the scan and its truth in `target/tmp/trace_bench/` (`scan600.png`,
+//! `truth.csv` = the pencil centreline, closed, x,y mm in sheet coordinates) for the OpenCV
+//! baseline `bench/trace_opencv.py`.
+
+use criterion::{criterion_group, criterion_main, Criterion};
+use indicatif::ProgressBar;
+use rigctl::trace::{load_scan, render_scan, trace_image, RenderSpec, TraceOptions};
+use std::io::Write;
+use std::path::PathBuf;
+use std::time::Duration;
+
+fn bench_dir() -> PathBuf {
+    PathBuf::from(env!("CARGO_TARGET_TMPDIR")).join("trace_bench")
+}
+
+fn truth() -> Vec<[f64; 2]> {
+    let n = 12_566;
+    (0..n)
+        .map(|i| {
+            let a = std::f64::consts::TAU * i as f64 / n as f64;
+            let r = 100.0 + 0.3 * (3.0 * a).sin() + 0.15 * (5.0 * a + 0.4).cos();
+            [r * a.cos(), r * a.sin()]
+        })
+        .collect()
+}
+
+fn trace_a4_600dpi(c: &mut Criterion) {
+    let spec = RenderSpec {
+        dpi: 600.0,
+        pencil_mm: truth(),
+        pencil_closed: true,
+        rotation_deg: 2.0,
+        shift_mm: [1.5, -2.0],
+        seed: 600,
+        ..RenderSpec::default()
+    };
+    let img = render_scan(&spec);
+    let dir = bench_dir();
+    let png = dir.join("scan600.png");
+    let written = std::fs::create_dir_all(&dir).is_ok() && img.save(&png).is_ok() && {
+        let mut csv = String::from("x,y\n");
+        for p in &spec.pencil_mm {
+            csv.push_str(&format!("{:.5},{:.5}\n", p[0], p[1]));
+        }
+        std::fs::File::create(dir.join("truth.csv"))
+            .and_then(|mut f| f.write_all(csv.as_bytes()))
+            .is_ok()
+    };
+    if !written {
+        eprintln!("could not write {}", dir.display());
+        return;
+    }
+    let mut g = c.benchmark_group("trace");
+    g.sample_size(10).measurement_time(Duration::from_secs(8));
+    g.bench_function("decode_png_a4_600dpi", |b| {
+        b.iter(|| load_scan(&png).map(|i| i.width()))
+    });
+    let opts = TraceOptions::default();
+    g.bench_function("trace_a4_600dpi", |b| {
+        b.iter(|| trace_image(&img, &opts, &ProgressBar::hidden()).map(|t| t.strokes.len()))
+    });
+    g.finish();
+}
+
+criterion_group!(benches, trace_a4_600dpi);
+criterion_main!(benches);

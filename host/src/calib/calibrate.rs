@@ -1,0 +1,248 @@
+//! `rigctl calibrate` as a library call: choose the parameters, run the standard and the chosen
+//! identification, and summarise the errors before and after (thesis table 4.5).
+
+use std::str::FromStr;
+
+use nalgebra::Vector3;
+
+use super::error::CalibError;
+use super::fit::{fit_parameters, Fit};
+use super::identifiability::DEFAULT_RTOL;
+use super::influence::{fit_influence, InfluenceConfig};
+use super::lm::LmConfig;
+use super::problem::{position_errors, Poses};
+use super::report::{BeforeAfter, CalibrateReport, NamedValues, StandardSummary};
+use super::stats::Stats;
+use crate::model::{Model, ParamKind, KATANA_GEOMETRIC_PARAMS};
+
+/// Identification method (FORMATS.md `--method`).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+pub enum Method {
+    /// Conventional least squares on the geometric parameters, no tilting (thesis 3.6).
+    Standard,
+    /// Influence-based identification (thesis 3.6, eq. 3.7-3.8), no tilting.
+    Influence,
+    /// Tilting compensated first (declared tilt model on), then geometric identification
+    /// (thesis fig. 4.9). Falls back to `Standard` behaviour for a model without tilting data.
+    #[default]
+    Tilting,
+}
+
+impl Method {
+    /// The name used on the command line and in the JSON.
+    pub fn as_str(self) -> &'static str {
+        match self {
+            Method::Standard => "standard",
+            Method::Influence => "influence",
+            Method::Tilting => "tilting",
+        }
+    }
+}
+
+impl FromStr for Method {
+    type Err = String;
+    fn from_str(s: &str) -> Result<Self, String> {
+        match s {
+            "standard" => Ok(Method::Standard),
+            "influence" => Ok(Method::Influence),
+            "tilting" => Ok(Method::Tilting),
+            _ => Err(format!(
+                "unknown method `{s}` (standard, influence, tilting)"
+            )),
+        }
+    }
+}
+
+/// Settings of [`calibrate`].
+#[derive(Debug, Clone, PartialEq)]
+pub struct CalibrateOptions {
+    /// The method.
+    pub method: Method,
+    /// Parameters to identify by name; `None` = [`default_selection`].
+    pub params: Option<Vec<String>>,
+    /// Also identify the base frame (`base_*`) with the default selection.
+    pub base: bool,
+    /// Solver settings.
+    pub lm: LmConfig,
+    /// Identifiability threshold (relative singular value).
+    pub rtol: f64,
+    /// Settings of the influence-based method.
+    pub influence: InfluenceConfig,
+}
+
+impl Default for CalibrateOptions {
+    fn default() -> Self {
+        Self {
+            method: Method::default(),
+            params: None,
+            base: false,
+            lm: LmConfig::default(),
+            rtol: DEFAULT_RTOL,
+            influence: InfluenceConfig::default(),
+        }
+    }
+}
+
+/// The parameters identified by default, in preference order (earlier ones are kept when a
+/// combination is unidentifiable):
+/// * a model with the Katana's 12 geometric parameters (MODEL.md): those 12
+///   (`dth1..dth5, al2..al5, be3..be5`);
+/// * any other model (e.g. `ur5`): joint offsets, the tool point, the base frame (with `base`),
+///   then every constant twist and length of the chain (so that in a redundant pair the chain
+///   constant is the one kept nominal);
+/// * with `base`: the base frame `base_*` is added.
+pub fn default_selection(model: &Model, base: bool) -> Vec<usize> {
+    let mut sel: Vec<usize> = if KATANA_GEOMETRIC_PARAMS
+        .iter()
+        .all(|n| model.param_index(n).is_some())
+    {
+        KATANA_GEOMETRIC_PARAMS
+            .iter()
+            .filter_map(|n| model.param_index(n))
+            .collect()
+    } else {
+        let mut s = model.params_of_kind(ParamKind::JointOffset);
+        s.extend(model.params_of_kind(ParamKind::Tool));
+        if base {
+            s.extend(model.params_of_kind(ParamKind::Base));
+        }
+        let chain: Vec<usize> = (0..model.params().len())
+            .filter(|&i| matches!(model.params()[i].kind, ParamKind::Twist | ParamKind::Length))
+            .collect();
+        s.extend(chain);
+        return s;
+    };
+    if base {
+        sel.extend(model.params_of_kind(ParamKind::Base));
+    }
+    sel
+}
+
+/// Resolves a selection by names (or the default one).
+pub fn resolve_selection(model: &Model, opts: &CalibrateOptions) -> Result<Vec<usize>, CalibError> {
+    match &opts.params {
+        None => Ok(default_selection(model, opts.base)),
+        Some(names) => {
+            let mut sel = Vec::new();
+            for n in names.iter().map(|n| n.trim()).filter(|n| !n.is_empty()) {
+                let i = model.require_param(n)?;
+                if !sel.contains(&i) {
+                    sel.push(i);
+                }
+            }
+            if sel.is_empty() {
+                return Err(CalibError::EmptySelection);
+            }
+            Ok(sel)
+        }
+    }
+}
+
+/// Result of [`calibrate`].
+#[derive(Debug, Clone)]
+pub struct Outcome {
+    /// The calibrated model (write with `to_toml_string`).
+    pub model: Model,
+    /// Whether the calibrated model is meant to be evaluated with tilting.
+    pub tilt: bool,
+    /// The JSON document.
+    pub report: CalibrateReport,
+    /// Error vectors (measured - model) of the calibration poses: before, standard, chosen.
+    pub calibration_errors: [Vec<Vector3<f64>>; 3],
+    /// Same for the validation poses (empty without them).
+    pub validation_errors: [Vec<Vector3<f64>>; 3],
+}
+
+fn values_of(model: &Model, cols: &[usize]) -> NamedValues {
+    NamedValues(
+        cols.iter()
+            .map(|&c| (model.params()[c].name.clone(), model.params()[c].value))
+            .collect(),
+    )
+}
+
+/// Calibrates `nominal` on `cal` (and evaluates on `val`): the standard identification always
+/// (for the comparison), then the chosen method. "before" is the nominal model without tilting.
+pub fn calibrate(
+    nominal: &Model,
+    cal: &Poses,
+    val: Option<&Poses>,
+    opts: &CalibrateOptions,
+) -> Result<Outcome, CalibError> {
+    let selection = resolve_selection(nominal, opts)?;
+    let standard = fit_parameters(nominal, cal, &selection, false, &opts.lm, opts.rtol)?;
+    let tilt = opts.method == Method::Tilting && nominal.has_tilt();
+    let chosen: Fit = match opts.method {
+        Method::Standard => standard.clone(),
+        Method::Tilting if !tilt => standard.clone(),
+        Method::Tilting => fit_parameters(nominal, cal, &selection, true, &opts.lm, opts.rtol)?,
+        Method::Influence => {
+            // Same identifiable set as the standard fit; the influence iteration on it.
+            let inf = fit_influence(nominal, cal, &standard.fitted, &opts.influence)?;
+            Fit {
+                model: inf.model,
+                iterations: inf.iterations,
+                converged: inf.poses_converged == cal.len(),
+                ..standard.clone()
+            }
+        }
+    };
+    let errs = |m: &Model, p: &Poses, t: bool| position_errors(m, p, t);
+    let cal_errors = [
+        errs(nominal, cal, false)?,
+        errs(&standard.model, cal, false)?,
+        errs(&chosen.model, cal, tilt)?,
+    ];
+    let val_errors = match val {
+        Some(v) => [
+            errs(nominal, v, false)?,
+            errs(&standard.model, v, false)?,
+            errs(&chosen.model, v, tilt)?,
+        ],
+        None => [Vec::new(), Vec::new(), Vec::new()],
+    };
+    let mut reported: Vec<usize> = chosen.fitted.iter().chain(&chosen.fixed).copied().collect();
+    reported.sort_unstable_by_key(|c| selection.iter().position(|s| s == c));
+    let report = CalibrateReport {
+        method: opts.method.as_str().to_string(),
+        calibration: BeforeAfter {
+            before: Stats::from_errors(&cal_errors[0]),
+            after: Stats::from_errors(&cal_errors[2]),
+        },
+        validation: val.map(|_| BeforeAfter {
+            before: Stats::from_errors(&val_errors[0]),
+            after: Stats::from_errors(&val_errors[2]),
+        }),
+        parameters: values_of(&chosen.model, &reported),
+        unidentifiable: chosen.unidentifiable.clone(),
+        condition_number: chosen.condition_number,
+        standard: StandardSummary {
+            calibration: Stats::from_errors(&cal_errors[1]),
+            validation: val.map(|_| Stats::from_errors(&val_errors[1])),
+        },
+        sigma: NamedValues(
+            chosen
+                .fitted
+                .iter()
+                .zip(&chosen.sigma)
+                .map(|(&c, &s)| (chosen.model.params()[c].name.clone(), s))
+                .collect(),
+        ),
+        fixed: chosen
+            .fixed
+            .iter()
+            .map(|&c| nominal.params()[c].name.clone())
+            .collect(),
+        rank: chosen.rank,
+        iterations: chosen.iterations,
+        converged: chosen.converged,
+        tilting_applied: tilt,
+    };
+    Ok(Outcome {
+        model: chosen.model,
+        tilt,
+        report,
+        calibration_errors: cal_errors,
+        validation_errors: val_errors,
+    })
+}

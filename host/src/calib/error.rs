@@ -1,0 +1,54 @@
+//! Errors of the identification.
+
+use super::lm::LmError;
+use crate::error::{Classify, ErrorKind};
+use crate::model::ModelError;
+
+/// Everything that can stop a calibration.
+#[derive(Debug, thiserror::Error)]
+pub enum CalibError {
+    /// The model could not be evaluated or changed (bad parameter name, wrong joint count...).
+    #[error(transparent)]
+    Model(#[from] ModelError),
+    /// No pose to calibrate on.
+    #[error("no calibration pose")]
+    NoPoses,
+    /// None of the selected parameters is identifiable from these poses.
+    #[error("none of the selected parameters is identifiable from these poses")]
+    NothingToFit,
+    /// Fewer measured coordinates than unknowns.
+    #[error("{residuals} measured coordinates cannot determine {params} parameters; add poses")]
+    TooFewPoses { residuals: usize, params: usize },
+    /// The solver failed (non-finite values).
+    #[error("solver failed: {0}")]
+    Solver(String),
+    /// A parameter selection that names no parameter.
+    #[error("--params: empty parameter list")]
+    EmptySelection,
+}
+
+impl CalibError {
+    /// Maps a solver error.
+    pub fn from_lm(e: LmError<ModelError>) -> Self {
+        match e {
+            LmError::Problem(m) => CalibError::Model(m),
+            LmError::Underdetermined { residuals, params } => {
+                CalibError::TooFewPoses { residuals, params }
+            }
+            other => CalibError::Solver(other.to_string()),
+        }
+    }
+}
+
+impl Classify for CalibError {
+    fn kind(&self) -> ErrorKind {
+        match self {
+            CalibError::Model(e) => e.kind(),
+            CalibError::Solver(_) => ErrorKind::Failure,
+            CalibError::NoPoses
+            | CalibError::NothingToFit
+            | CalibError::TooFewPoses { .. }
+            | CalibError::EmptySelection => ErrorKind::BadInput,
+        }
+    }
+}

@@ -1,0 +1,514 @@
+//! Levenberg-Marquardt (and plain Gauss-Newton) for small dense nonlinear least-squares problems.
+//!
+//! Minimises `0.5 |r(x)|^2`. Each iteration factors the column-scaled Jacobian `J D^-1` once
+//! (Householder QR, then an SVD of the small `n x n` triangular factor), so trial steps for
+//! several damping values cost only `O(n^2)`. The step solves
+//! `(Js^T Js + lambda I) y = -Js^T r`, `dx = D^-1 y` with the SVD (singular values below
+//! `rank_rtol * s_max` are dropped, so a rank-deficient problem still takes finite steps).
+//! Column scaling `D` is the running maximum of the Jacobian column norms (Moré 1978), which
+//! makes the method invariant to the units of the parameters (degrees vs millimetres).
+//! Damping follows Nielsen (1999): `lambda *= max(1/3, 1 - (2 rho - 1)^3)` on success,
+//! `lambda *= nu, nu *= 2` on failure.
+
+use nalgebra::{DMatrix, DVector};
+
+/// A least-squares problem: residuals `r(x)` (length [`Self::n_residuals`]) and their Jacobian
+/// `dr/dx` (`n_residuals x n_params`).
+pub trait Problem {
+    /// The problem's own error type (e.g. a model evaluation error).
+    type Error;
+    /// Number of unknowns.
+    fn n_params(&self) -> usize;
+    /// Number of residuals.
+    fn n_residuals(&self) -> usize;
+    /// Writes `r(x)` into `r`, and `dr/dx` into `jac` when it is given.
+    fn evaluate(
+        &mut self,
+        x: &DVector<f64>,
+        r: &mut DVector<f64>,
+        jac: Option<&mut DMatrix<f64>>,
+    ) -> Result<(), Self::Error>;
+}
+
+/// Settings of the solver.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct LmConfig {
+    /// Iteration cap (Jacobian evaluations).
+    pub max_iterations: usize,
+    /// Stop when the relative decrease of the cost in a successful step is below this.
+    pub ftol: f64,
+    /// Stop when the scaled step is below `xtol * (|D x| + xtol)`.
+    pub xtol: f64,
+    /// Stop when the infinity norm of the scaled gradient `Js^T r / |r|` is below this.
+    pub gtol: f64,
+    /// Initial damping relative to the largest squared scaled singular value; 0 gives
+    /// Gauss-Newton steps (with step halving when a step increases the cost).
+    pub initial_damping: f64,
+    /// Singular values of the scaled Jacobian below `rank_rtol * s_max` are treated as zero.
+    pub rank_rtol: f64,
+}
+
+impl Default for LmConfig {
+    fn default() -> Self {
+        Self {
+            max_iterations: 100,
+            ftol: 1e-12,
+            xtol: 1e-10,
+            gtol: 1e-10,
+            initial_damping: 1e-4,
+            rank_rtol: 1e-12,
+        }
+    }
+}
+
+impl LmConfig {
+    /// Gauss-Newton: no damping (steps are halved when they increase the cost).
+    pub fn gauss_newton() -> Self {
+        Self {
+            initial_damping: 0.0,
+            ..Self::default()
+        }
+    }
+}
+
+/// Why the solver stopped.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, serde::Serialize)]
+#[serde(rename_all = "snake_case")]
+pub enum Termination {
+    /// The cost no longer decreases (relative decrease below `ftol`).
+    CostConverged,
+    /// The step became negligible (`xtol`).
+    StepConverged,
+    /// The gradient vanished (`gtol`), or the residual is exactly zero.
+    GradientConverged,
+    /// No damping value produced a decrease: the current point is a minimum to working precision.
+    NoFurtherDecrease,
+    /// The iteration cap was reached; the best point found is returned.
+    MaxIterations,
+}
+
+impl Termination {
+    /// Whether the stop is a convergence criterion (not the iteration cap).
+    pub fn converged(self) -> bool {
+        self != Termination::MaxIterations
+    }
+}
+
+/// Failure of the solver.
+#[derive(Debug, thiserror::Error)]
+pub enum LmError<E> {
+    /// The problem's evaluation failed.
+    #[error("{0}")]
+    Problem(E),
+    /// Residuals or Jacobian are NaN or infinite at the start point.
+    #[error("residuals or Jacobian not finite at the start point")]
+    NonFiniteStart,
+    /// Start vector or problem dimensions inconsistent.
+    #[error("dimension mismatch: {0}")]
+    Dimensions(String),
+    /// Fewer residuals than unknowns.
+    #[error("{residuals} residuals cannot determine {params} unknowns")]
+    Underdetermined { residuals: usize, params: usize },
+}
+
+impl<E: crate::error::Classify> crate::error::Classify for LmError<E> {
+    fn kind(&self) -> crate::error::ErrorKind {
+        match self {
+            LmError::Problem(e) => e.kind(),
+            LmError::Underdetermined { .. } => crate::error::ErrorKind::BadInput,
+            _ => crate::error::ErrorKind::Failure,
+        }
+    }
+}
+
+/// Result of a solve.
+#[derive(Debug, Clone)]
+pub struct LmReport {
+    /// The solution.
+    pub x: DVector<f64>,
+    /// Residuals at `x`.
+    pub residuals: DVector<f64>,
+    /// Jacobian at `x` (evaluated after the last accepted step).
+    pub jacobian: DMatrix<f64>,
+    /// `0.5 |r|^2` at `x`.
+    pub cost: f64,
+    /// `0.5 |r|^2` at the start.
+    pub initial_cost: f64,
+    /// Number of Jacobian evaluations (iterations).
+    pub iterations: usize,
+    /// Number of residual evaluations.
+    pub evaluations: usize,
+    /// Why it stopped.
+    pub termination: Termination,
+}
+
+/// The SVD of the column-scaled Jacobian, kept as `V`, `s` and `U^T r`.
+struct ScaledSvd {
+    v: DMatrix<f64>,
+    s: DVector<f64>,
+    ut_r: DVector<f64>,
+}
+
+impl ScaledSvd {
+    /// QR of `js` (m x n, m >= n), then SVD of `R`; `U^T r = U_R^T (Q^T r)`.
+    fn new(js: DMatrix<f64>, r: &DVector<f64>) -> Option<Self> {
+        let n = js.ncols();
+        let qr = js.qr();
+        let mut qtr = r.clone();
+        qr.q_tr_mul(&mut qtr);
+        let rr = qr.r();
+        let svd = rr.svd(true, true);
+        let u = svd.u?;
+        let v_t = svd.v_t?;
+        let qtr_n = qtr.rows(0, n).into_owned();
+        Some(Self {
+            v: v_t.transpose(),
+            s: svd.singular_values,
+            ut_r: u.transpose() * qtr_n,
+        })
+    }
+
+    fn max_sv(&self) -> f64 {
+        self.s.iter().copied().fold(0.0, f64::max)
+    }
+
+    /// Scaled step `y = -V diag(s / (s^2 + lambda)) U^T r` (dropping tiny singular values).
+    fn step(&self, lambda: f64, rank_rtol: f64) -> DVector<f64> {
+        let cut = rank_rtol * self.max_sv();
+        let coef = DVector::from_iterator(
+            self.s.len(),
+            self.s.iter().zip(self.ut_r.iter()).map(|(&s, &u)| {
+                if s > cut {
+                    -s * u / (s * s + lambda)
+                } else {
+                    0.0
+                }
+            }),
+        );
+        &self.v * coef
+    }
+}
+
+fn all_finite<'a>(it: impl IntoIterator<Item = &'a f64>) -> bool {
+    it.into_iter().all(|v| v.is_finite())
+}
+
+/// Solves `problem` from `x0` with Levenberg-Marquardt (or Gauss-Newton, see
+/// [`LmConfig::gauss_newton`]).
+pub fn solve<P: Problem>(
+    problem: &mut P,
+    x0: DVector<f64>,
+    cfg: &LmConfig,
+) -> Result<LmReport, LmError<P::Error>> {
+    let (n, m) = (problem.n_params(), problem.n_residuals());
+    if x0.len() != n {
+        return Err(LmError::Dimensions(format!(
+            "start vector has {} entries, problem has {n} unknowns",
+            x0.len()
+        )));
+    }
+    if m < n {
+        return Err(LmError::Underdetermined {
+            residuals: m,
+            params: n,
+        });
+    }
+    let mut x = x0;
+    let mut r = DVector::zeros(m);
+    let mut jac = DMatrix::zeros(m, n);
+    problem
+        .evaluate(&x, &mut r, Some(&mut jac))
+        .map_err(LmError::Problem)?;
+    let mut evaluations = 1;
+    if !all_finite(r.iter()) || !all_finite(jac.iter()) {
+        return Err(LmError::NonFiniteStart);
+    }
+    let mut cost = 0.5 * r.norm_squared();
+    let initial_cost = cost;
+    let mut diag: DVector<f64> = DVector::from_element(n, 0.0);
+    let mut lambda = -1.0;
+    let mut nu = 2.0;
+    let mut r_try = DVector::zeros(m);
+    let mut iterations = 1;
+    let termination = loop {
+        if cost == 0.0 {
+            break Termination::GradientConverged;
+        }
+        // Column scaling: running max of the column norms (1 for a zero column).
+        for (j, d) in diag.iter_mut().enumerate() {
+            let c = jac.column(j).norm();
+            *d = d.max(c);
+            if *d == 0.0 {
+                *d = 1.0;
+            }
+        }
+        let mut js = jac.clone();
+        for (j, d) in diag.iter().enumerate() {
+            js.column_mut(j).unscale_mut(*d);
+        }
+        let grad_inf = (js.transpose() * &r).amax() / r.norm();
+        if grad_inf < cfg.gtol {
+            break Termination::GradientConverged;
+        }
+        let Some(svd) = ScaledSvd::new(js, &r) else {
+            break Termination::NoFurtherDecrease;
+        };
+        if lambda < 0.0 {
+            lambda = cfg.initial_damping * svd.max_sv().powi(2);
+        }
+        let xs_norm = x.component_mul(&diag).norm();
+        // Inner loop: find a damping value that decreases the cost.
+        let mut accepted = None;
+        let mut gn_scale = 1.0;
+        for _ in 0..40 {
+            let y = svd.step(lambda, cfg.rank_rtol) * gn_scale;
+            let dx = y.component_div(&diag);
+            if y.norm() <= cfg.xtol * (xs_norm + cfg.xtol) {
+                break;
+            }
+            let x_try = &x + &dx;
+            problem
+                .evaluate(&x_try, &mut r_try, None)
+                .map_err(LmError::Problem)?;
+            evaluations += 1;
+            let cost_try = 0.5 * r_try.norm_squared();
+            if cost_try.is_finite() && cost_try < cost {
+                // Gain ratio rho = actual / predicted decrease.
+                let jy = {
+                    let lin: DVector<f64> = svd.v.transpose() * &y;
+                    lin.component_mul(&svd.s)
+                };
+                let predicted = -(jy.dot(&svd.ut_r)) - 0.5 * jy.norm_squared();
+                let rho = if predicted > 0.0 {
+                    (cost - cost_try) / predicted
+                } else {
+                    1.0
+                };
+                if lambda > 0.0 {
+                    lambda *= (1.0 - (2.0 * rho - 1.0).powi(3)).max(1.0 / 3.0);
+                }
+                nu = 2.0;
+                accepted = Some((x_try, cost_try, y.norm()));
+                break;
+            }
+            if lambda > 0.0 {
+                lambda *= nu;
+                nu *= 2.0;
+            } else {
+                gn_scale *= 0.5;
+            }
+        }
+        let Some((x_new, cost_new, step_norm)) = accepted else {
+            break if iterations == 1 && cost == initial_cost {
+                Termination::NoFurtherDecrease
+            } else {
+                Termination::StepConverged
+            };
+        };
+        let rel_decrease = (cost - cost_new) / cost;
+        x = x_new;
+        std::mem::swap(&mut r, &mut r_try);
+        cost = cost_new;
+        problem
+            .evaluate(&x, &mut r, Some(&mut jac))
+            .map_err(LmError::Problem)?;
+        evaluations += 1;
+        if rel_decrease < cfg.ftol {
+            break Termination::CostConverged;
+        }
+        if step_norm <= cfg.xtol * (x.component_mul(&diag).norm() + cfg.xtol) {
+            break Termination::StepConverged;
+        }
+        if iterations >= cfg.max_iterations {
+            break Termination::MaxIterations;
+        }
+        iterations += 1;
+    };
+    Ok(LmReport {
+        x,
+        residuals: r,
+        jacobian: jac,
+        cost,
+        initial_cost,
+        iterations,
+        evaluations,
+        termination,
+    })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// Rosenbrock as least squares: r = (10 (x2 - x1^2), 1 - x1); minimum (1, 1).
+    struct Rosenbrock;
+    impl Problem for Rosenbrock {
+        type Error = std::convert::Infallible;
+        fn n_params(&self) -> usize {
+            2
+        }
+        fn n_residuals(&self) -> usize {
+            2
+        }
+        fn evaluate(
+            &mut self,
+            x: &DVector<f64>,
+            r: &mut DVector<f64>,
+            jac: Option<&mut DMatrix<f64>>,
+        ) -> Result<(), Self::Error> {
+            r[0] = 10.0 * (x[1] - x[0] * x[0]);
+            r[1] = 1.0 - x[0];
+            if let Some(j) = jac {
+                j[(0, 0)] = -20.0 * x[0];
+                j[(0, 1)] = 10.0;
+                j[(1, 0)] = -1.0;
+                j[(1, 1)] = 0.0;
+            }
+            Ok(())
+        }
+    }
+
+    #[test]
+    fn rosenbrock_reaches_the_minimum() {
+        let rep = solve(
+            &mut Rosenbrock,
+            DVector::from_vec(vec![-1.2, 1.0]),
+            &LmConfig::default(),
+        )
+        .unwrap();
+        assert!(
+            (rep.x[0] - 1.0).abs() < 1e-8 && (rep.x[1] - 1.0).abs() < 1e-8,
+            "{:?}",
+            rep.x
+        );
+        assert!(rep.termination.converged());
+    }
+
+    /// Exponential fit y = a exp(b t) on exact data with badly scaled unknowns
+    /// (a ~ 1e3, b ~ 1e-3): column scaling must make it converge from far away.
+    struct ExpFit {
+        t: Vec<f64>,
+        y: Vec<f64>,
+    }
+    impl Problem for ExpFit {
+        type Error = std::convert::Infallible;
+        fn n_params(&self) -> usize {
+            2
+        }
+        fn n_residuals(&self) -> usize {
+            self.t.len()
+        }
+        fn evaluate(
+            &mut self,
+            x: &DVector<f64>,
+            r: &mut DVector<f64>,
+            jac: Option<&mut DMatrix<f64>>,
+        ) -> Result<(), Self::Error> {
+            let mut jac = jac;
+            for (i, (&t, &y)) in self.t.iter().zip(&self.y).enumerate() {
+                let e = (x[1] * t).exp();
+                r[i] = x[0] * e - y;
+                if let Some(j) = jac.as_deref_mut() {
+                    j[(i, 0)] = e;
+                    j[(i, 1)] = x[0] * t * e;
+                }
+            }
+            Ok(())
+        }
+    }
+
+    #[test]
+    fn badly_scaled_exponential_fit() {
+        let t: Vec<f64> = (0..50).map(|i| f64::from(i) * 20.0).collect();
+        let y = t.iter().map(|t| 2500.0 * (1.5e-3 * t).exp()).collect();
+        let mut p = ExpFit { t, y };
+        for cfg in [LmConfig::default(), LmConfig::gauss_newton()] {
+            let rep = solve(&mut p, DVector::from_vec(vec![1000.0, 1e-4]), &cfg).unwrap();
+            assert!(
+                (rep.x[0] / 2500.0 - 1.0).abs() < 1e-9,
+                "{cfg:?} {:?}",
+                rep.x
+            );
+            assert!(
+                (rep.x[1] / 1.5e-3 - 1.0).abs() < 1e-9,
+                "{cfg:?} {:?}",
+                rep.x
+            );
+        }
+    }
+
+    /// A linear problem with two identical columns: the rank-deficient step must stay finite and
+    /// reach the least-squares residual (the minimum-norm split between the twins).
+    struct Twins;
+    impl Problem for Twins {
+        type Error = std::convert::Infallible;
+        fn n_params(&self) -> usize {
+            3
+        }
+        fn n_residuals(&self) -> usize {
+            4
+        }
+        fn evaluate(
+            &mut self,
+            x: &DVector<f64>,
+            r: &mut DVector<f64>,
+            jac: Option<&mut DMatrix<f64>>,
+        ) -> Result<(), Self::Error> {
+            let a = DMatrix::from_row_slice(
+                4,
+                3,
+                &[1.0, 1.0, 0.0, 2.0, 2.0, 1.0, 0.0, 0.0, 1.0, 1.0, 1.0, 3.0],
+            );
+            let b = DVector::from_vec(vec![2.0, 5.0, 1.0, 5.0]);
+            r.copy_from(&(&a * x - b));
+            if let Some(j) = jac {
+                j.copy_from(&a);
+            }
+            Ok(())
+        }
+    }
+
+    #[test]
+    fn rank_deficient_problem_stays_finite() {
+        let rep = solve(&mut Twins, DVector::zeros(3), &LmConfig::default()).unwrap();
+        assert!(rep.x.iter().all(|v| v.is_finite()));
+        // Exact solution exists: x0 + x1 = 2, x2 = 1.
+        assert!((rep.x[0] + rep.x[1] - 2.0).abs() < 1e-8, "{:?}", rep.x);
+        assert!((rep.x[2] - 1.0).abs() < 1e-8);
+        assert!(
+            (rep.x[0] - rep.x[1]).abs() < 1e-6,
+            "minimum-norm split expected: {:?}",
+            rep.x
+        );
+        assert!(rep.cost < 1e-16);
+    }
+
+    #[test]
+    fn underdetermined_is_an_error() {
+        struct One;
+        impl Problem for One {
+            type Error = std::convert::Infallible;
+            fn n_params(&self) -> usize {
+                2
+            }
+            fn n_residuals(&self) -> usize {
+                1
+            }
+            fn evaluate(
+                &mut self,
+                _: &DVector<f64>,
+                _: &mut DVector<f64>,
+                _: Option<&mut DMatrix<f64>>,
+            ) -> Result<(), Self::Error> {
+                Ok(())
+            }
+        }
+        assert!(matches!(
+            solve(&mut One, DVector::zeros(2), &LmConfig::default()),
+            Err(LmError::Underdetermined {
+                residuals: 1,
+                params: 2
+            })
+        ));
+    }
+}

@@ -1,0 +1,139 @@
+//! The `calibrate --json` document (FORMATS.md): exact keys, parameter values in file units
+//! (degrees for angles, millimetres for lengths).
+//!
+//! Contract keys: `method`, `calibration {before, after}`, `validation {before, after}` (only with
+//! validation poses), `parameters {name: value}`, `unidentifiable [names or combinations]`,
+//! `condition_number`. Added keys (FORMATS.md allows additions): `standard` (the conventional
+//! result used for the table-4.5 comparison), `sigma` (one standard deviation of each fitted
+//! parameter), `fixed` (parameters kept at their nominal value), `rank`, `iterations`,
+//! `converged`, `tilting_applied`.
+
+use serde::ser::SerializeMap;
+use serde::{Serialize, Serializer};
+
+use super::stats::Stats;
+
+/// Error statistics before (nominal model without tilting) and after calibration.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize)]
+pub struct BeforeAfter {
+    /// Nominal model, no tilting.
+    pub before: Stats,
+    /// The calibrated model.
+    pub after: Stats,
+}
+
+/// `{name: value}` in a fixed (model) order.
+#[derive(Debug, Clone, PartialEq, Default)]
+pub struct NamedValues(pub Vec<(String, f64)>);
+
+impl Serialize for NamedValues {
+    fn serialize<S: Serializer>(&self, s: S) -> Result<S::Ok, S::Error> {
+        let mut m = s.serialize_map(Some(self.0.len()))?;
+        for (k, v) in &self.0 {
+            m.serialize_entry(k, v)?;
+        }
+        m.end()
+    }
+}
+
+impl NamedValues {
+    /// The value called `name`.
+    pub fn get(&self, name: &str) -> Option<f64> {
+        self.0.iter().find(|(k, _)| k == name).map(|(_, v)| *v)
+    }
+}
+
+/// The conventional (no tilting) calibration run alongside the chosen method.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize)]
+pub struct StandardSummary {
+    /// Calibration poses after the standard calibration.
+    pub calibration: Stats,
+    /// Validation poses after the standard calibration (with validation poses only).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub validation: Option<Stats>,
+}
+
+/// The whole `calibrate --json` document.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct CalibrateReport {
+    /// `standard`, `influence` or `tilting`.
+    pub method: String,
+    /// Statistics over the calibration poses.
+    pub calibration: BeforeAfter,
+    /// Statistics over the validation poses (with `--validate` only).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub validation: Option<BeforeAfter>,
+    /// Identified parameter values (file units), fitted and fixed ones, in model order.
+    pub parameters: NamedValues,
+    /// Unidentifiable parameters or combinations (`"be5"`, `"dth5+be4"`).
+    pub unidentifiable: Vec<String>,
+    /// Condition number of the column-scaled identification Jacobian of the fitted parameters.
+    pub condition_number: f64,
+    /// Standard calibration for comparison (table 4.5 "conventional calibration").
+    pub standard: StandardSummary,
+    /// One standard deviation of each fitted parameter (file units), `sigma^2 (J^T J)^-1`.
+    pub sigma: NamedValues,
+    /// Parameters kept at their nominal value because they are not identifiable.
+    pub fixed: Vec<String>,
+    /// Numerical rank of the identification Jacobian over the selected parameters.
+    pub rank: usize,
+    /// Solver iterations of the chosen method.
+    pub iterations: usize,
+    /// Whether the solver met a convergence criterion (not the iteration cap).
+    pub converged: bool,
+    /// Whether the calibrated model includes the declared joint tilting (method `tilting` on a
+    /// model with tilting data).
+    pub tilting_applied: bool,
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use nalgebra::Vector3;
+
+    #[test]
+    fn contract_keys_and_order() {
+        let st = Stats::from_errors(&[Vector3::new(0.1, 0.0, 0.0)]);
+        let r = CalibrateReport {
+            method: "tilting".into(),
+            calibration: BeforeAfter {
+                before: st,
+                after: st,
+            },
+            validation: None,
+            parameters: NamedValues(vec![("dth2".into(), 0.03), ("al2".into(), 90.01)]),
+            unidentifiable: vec!["be5".into(), "dth5+be4".into()],
+            condition_number: 12.5,
+            standard: StandardSummary {
+                calibration: st,
+                validation: None,
+            },
+            sigma: NamedValues(vec![("dth2".into(), 0.001)]),
+            fixed: vec!["be4".into(), "be5".into()],
+            rank: 10,
+            iterations: 4,
+            converged: true,
+            tilting_applied: true,
+        };
+        let text = serde_json::to_string(&r).unwrap();
+        let v: serde_json::Value = serde_json::from_str(&text).unwrap();
+        for key in [
+            "method",
+            "calibration",
+            "parameters",
+            "unidentifiable",
+            "condition_number",
+        ] {
+            assert!(v.get(key).is_some(), "missing {key}");
+        }
+        assert!(
+            v.get("validation").is_none(),
+            "validation only with --validate"
+        );
+        assert!(v["calibration"]["before"]["mean_mm"].is_number());
+        assert!(v["calibration"]["after"]["n"].is_number());
+        // Model order is kept.
+        assert!(text.find("\"dth2\"").unwrap() < text.find("\"al2\"").unwrap());
+        assert_eq!(v["parameters"]["al2"], 90.01);
+    }
+}

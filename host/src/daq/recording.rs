@@ -1,0 +1,533 @@
+//! The recording file written by `rigctl record` and read by `rigctl export`.
+//!
+//! # Layout (format version 1)
+//!
+//! ```text
+//! RIGREC 1\n                      magic and format version, ASCII
+//! {"protocol_version":1,...}\n    one line of JSON: [`RecordingMeta`]
+//! record*                         append-only, until the end of the file
+//! ```
+//!
+//! Each record is one complete frame exactly as it arrived on the link (the COBS-encoded bytes
+//! between two `0x00` delimiters, delimiters excluded), prefixed by its length and the host's
+//! receive time:
+//!
+//! | bytes | type | meaning |
+//! |---|---|---|
+//! | 4 | `u32` little-endian | `len`: number of frame bytes, 1 ..= [`MAX_FRAME_LEN`] |
+//! | 8 | `u64` little-endian | `host_rx_us`: host monotonic time of reception, microseconds since [`RecordingMeta::start_time_unix_us`] |
+//! | `len` | bytes | the frame |
+//!
+//! Only frames that decoded (CRC correct) are recorded; the frame's own CRC stays inside the
+//! stored bytes, so a reader can check every record again.
+//!
+//! # Crash safety
+//!
+//! The recording is deliberately *not* written under a temporary name (unlike every other output
+//! of `rigctl`): it is a log whose prefix is valuable. Each record is handed to the operating
+//! system with one `write` as soon as its frame is decoded, and the file is `fsync`ed about once
+//! per second and at the end. A crash of `rigctl`, an unplugged board or a killed process
+//! therefore loses no complete frame that had reached the host; a power cut loses at most the last
+//! second. A record cut short by such an event is the only damage possible, and the reader
+//! tolerates it: [`parse_recording`] returns every complete record and reports the length of the
+//! incomplete tail in [`Recording::truncated_tail_bytes`].
+
+use serde::{Deserialize, Serialize};
+use std::fs::{File, OpenOptions};
+use std::io::Write;
+use std::path::{Path, PathBuf};
+use std::time::{Duration, Instant};
+
+/// First bytes of every recording, up to the version number.
+pub const MAGIC: &[u8] = b"RIGREC ";
+/// The format version this module writes (and the only one it reads).
+pub const FORMAT_VERSION: u32 = 1;
+/// Largest frame a record may hold; a larger length prefix means the file is corrupt.
+pub const MAX_FRAME_LEN: usize = 4096;
+/// Longest accepted metadata line, bytes.
+const MAX_HEADER_LEN: usize = 64 * 1024;
+/// Bytes before a record's frame: length + receive time.
+const RECORD_PREFIX_LEN: usize = 4 + 8;
+/// How often the writer asks the OS to put the file on disk.
+const SYNC_INTERVAL: Duration = Duration::from_secs(1);
+
+/// The metadata line of a recording. Unknown keys are ignored when reading, so later versions of
+/// `rigctl` may add keys without bumping [`FORMAT_VERSION`].
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct RecordingMeta {
+    /// Wire protocol version the host spoke (`rig_protocol::PROTOCOL_VERSION`).
+    pub protocol_version: u16,
+    /// Serial port (or pseudo-terminal) the frames came from.
+    pub port: String,
+    /// Host wall-clock time at `host_rx_us == 0`, microseconds since the Unix epoch.
+    pub start_time_unix_us: u64,
+    /// Potentiometer sample rate requested in `Start`, Hz.
+    pub pot_rate_hz: u32,
+    /// Inclinometer reading rate requested in `Start` (per sensor), Hz.
+    pub tilt_rate_hz: u32,
+    /// The board's `Hello`, when one was received before recording started.
+    pub hello: Option<HelloMeta>,
+    /// Version of the `rigctl` that wrote the file.
+    pub rigctl_version: String,
+}
+
+/// The board's `Hello` in a readable form.
+#[derive(Debug, Clone, PartialEq, Eq, Serialize, Deserialize)]
+pub struct HelloMeta {
+    pub protocol_version: u16,
+    /// `"major.minor.patch"`.
+    pub firmware_version: String,
+    /// The MCU's unique id, lowercase hex.
+    pub board_id: String,
+    pub schema_hash: u32,
+    pub tilt_sensors: u8,
+}
+
+impl From<&rig_protocol::Hello> for HelloMeta {
+    fn from(h: &rig_protocol::Hello) -> Self {
+        let [major, minor, patch] = h.firmware_version;
+        Self {
+            protocol_version: h.protocol_version,
+            firmware_version: format!("{major}.{minor}.{patch}"),
+            board_id: h.board_id.iter().map(|b| format!("{b:02x}")).collect(),
+            schema_hash: h.schema_hash,
+            tilt_sensors: h.tilt_sensors,
+        }
+    }
+}
+
+/// One stored frame.
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub struct Record {
+    /// Host receive time, microseconds since [`RecordingMeta::start_time_unix_us`].
+    pub host_rx_us: u64,
+    /// The frame as received (COBS-encoded, no delimiter).
+    pub frame: Vec<u8>,
+}
+
+/// A whole recording in memory.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Recording {
+    pub meta: RecordingMeta,
+    pub records: Vec<Record>,
+    /// Bytes at the end of the file that do not form a complete record (a run cut short); 0 for a
+    /// cleanly closed file.
+    pub truncated_tail_bytes: usize,
+}
+
+/// What can go wrong with a recording file.
+#[derive(Debug, thiserror::Error)]
+pub enum RecordingError {
+    #[error("cannot open recording {path}: {source}")]
+    Open {
+        path: PathBuf,
+        #[source]
+        source: std::io::Error,
+    },
+    #[error("{path} already exists (pass --overwrite to replace it)")]
+    Exists { path: PathBuf },
+    #[error("cannot write recording {path}: {source}")]
+    Write {
+        path: PathBuf,
+        #[source]
+        source: std::io::Error,
+    },
+    #[error("{path}: not a rigctl recording (no `RIGREC` magic)")]
+    NotARecording { path: PathBuf },
+    #[error("{path}: recording format version {version} is not supported (this rigctl reads {FORMAT_VERSION})")]
+    UnsupportedVersion { path: PathBuf, version: String },
+    #[error("{path}: bad header: {reason}")]
+    BadHeader { path: PathBuf, reason: String },
+    #[error(
+        "{path}: corrupt record at byte {offset}: frame length {len} outside 1..={MAX_FRAME_LEN}"
+    )]
+    CorruptRecord {
+        path: PathBuf,
+        offset: usize,
+        len: u64,
+    },
+}
+
+impl crate::error::Classify for RecordingError {
+    fn kind(&self) -> crate::error::ErrorKind {
+        use crate::error::ErrorKind;
+        match self {
+            Self::Write { .. } => ErrorKind::Failure,
+            Self::Open { .. }
+            | Self::Exists { .. }
+            | Self::NotARecording { .. }
+            | Self::UnsupportedVersion { .. }
+            | Self::BadHeader { .. }
+            | Self::CorruptRecord { .. } => ErrorKind::BadInput,
+        }
+    }
+}
+
+/// Appends records to a new recording file; see the module documentation for the guarantees.
+#[derive(Debug)]
+pub struct RecordingWriter {
+    file: File,
+    path: PathBuf,
+    last_sync: Instant,
+    buf: Vec<u8>,
+    records: u64,
+}
+
+impl RecordingWriter {
+    /// Creates `path` and writes the header. Refuses an existing file unless `overwrite`.
+    pub fn create(
+        path: &Path,
+        meta: &RecordingMeta,
+        overwrite: bool,
+    ) -> Result<Self, RecordingError> {
+        let mut opts = OpenOptions::new();
+        opts.write(true);
+        if overwrite {
+            opts.create(true).truncate(true);
+        } else {
+            opts.create_new(true);
+        }
+        let file = opts.open(path).map_err(|source| {
+            if source.kind() == std::io::ErrorKind::AlreadyExists {
+                RecordingError::Exists {
+                    path: path.to_path_buf(),
+                }
+            } else {
+                RecordingError::Open {
+                    path: path.to_path_buf(),
+                    source,
+                }
+            }
+        })?;
+        let mut writer = Self {
+            file,
+            path: path.to_path_buf(),
+            last_sync: Instant::now(),
+            buf: Vec::with_capacity(MAX_FRAME_LEN + RECORD_PREFIX_LEN),
+            records: 0,
+        };
+        writer.buf.extend_from_slice(&header_bytes(meta));
+        writer.write_buf()?;
+        writer.sync()?;
+        Ok(writer)
+    }
+
+    /// Appends one frame with one `write` call (so it is in the OS's hands when this returns);
+    /// syncs to disk when the last sync is more than a second old.
+    pub fn append(&mut self, host_rx_us: u64, frame: &[u8]) -> Result<(), RecordingError> {
+        if frame.is_empty() || frame.len() > MAX_FRAME_LEN {
+            return Err(RecordingError::Write {
+                path: self.path.clone(),
+                source: std::io::Error::new(
+                    std::io::ErrorKind::InvalidInput,
+                    format!("frame of {} bytes cannot be recorded", frame.len()),
+                ),
+            });
+        }
+        self.buf.clear();
+        // `frame.len() <= MAX_FRAME_LEN` fits in a u32.
+        self.buf
+            .extend_from_slice(&(frame.len() as u32).to_le_bytes());
+        self.buf.extend_from_slice(&host_rx_us.to_le_bytes());
+        self.buf.extend_from_slice(frame);
+        self.write_buf()?;
+        self.records += 1;
+        if self.last_sync.elapsed() >= SYNC_INTERVAL {
+            self.sync()?;
+        }
+        Ok(())
+    }
+
+    /// Records appended so far.
+    pub fn records(&self) -> u64 {
+        self.records
+    }
+
+    /// The file being written.
+    pub fn path(&self) -> &Path {
+        &self.path
+    }
+
+    /// Syncs the file to disk and closes it.
+    pub fn finish(mut self) -> Result<(), RecordingError> {
+        self.sync()
+    }
+
+    fn write_buf(&mut self) -> Result<(), RecordingError> {
+        self.file
+            .write_all(&self.buf)
+            .map_err(|source| RecordingError::Write {
+                path: self.path.clone(),
+                source,
+            })
+    }
+
+    fn sync(&mut self) -> Result<(), RecordingError> {
+        self.last_sync = Instant::now();
+        self.file
+            .sync_data()
+            .map_err(|source| RecordingError::Write {
+                path: self.path.clone(),
+                source,
+            })
+    }
+}
+
+/// The header: magic, version, metadata line.
+pub fn header_bytes(meta: &RecordingMeta) -> Vec<u8> {
+    let mut out = Vec::with_capacity(256);
+    out.extend_from_slice(MAGIC);
+    out.extend_from_slice(format!("{FORMAT_VERSION}\n").as_bytes());
+    // Serializing a struct of strings and integers to JSON cannot fail.
+    out.extend_from_slice(serde_json::to_string(meta).unwrap_or_default().as_bytes());
+    out.push(b'\n');
+    out
+}
+
+/// Reads a whole recording file.
+pub fn read_recording(path: &Path) -> Result<Recording, RecordingError> {
+    let bytes = std::fs::read(path).map_err(|source| RecordingError::Open {
+        path: path.to_path_buf(),
+        source,
+    })?;
+    parse_recording(path, &bytes)
+}
+
+/// Parses the bytes of a recording (`path` only names the file in errors). Never panics: a
+/// truncated last record is reported in [`Recording::truncated_tail_bytes`]; a truncated header is
+/// an error.
+pub fn parse_recording(path: &Path, bytes: &[u8]) -> Result<Recording, RecordingError> {
+    let bad_header = |reason: String| RecordingError::BadHeader {
+        path: path.to_path_buf(),
+        reason,
+    };
+    if !bytes.starts_with(MAGIC) {
+        return Err(RecordingError::NotARecording {
+            path: path.to_path_buf(),
+        });
+    }
+    let (version_line, rest) = split_line(&bytes[MAGIC.len()..], 16)
+        .ok_or_else(|| bad_header("the version line is incomplete".into()))?;
+    let version = String::from_utf8_lossy(version_line).into_owned();
+    if version != FORMAT_VERSION.to_string() {
+        return Err(RecordingError::UnsupportedVersion {
+            path: path.to_path_buf(),
+            version,
+        });
+    }
+    let (meta_line, body) = split_line(rest, MAX_HEADER_LEN)
+        .ok_or_else(|| bad_header("the metadata line is incomplete".into()))?;
+    let meta: RecordingMeta =
+        serde_json::from_slice(meta_line).map_err(|e| bad_header(format!("metadata JSON: {e}")))?;
+    let header_len = bytes.len() - body.len();
+
+    let mut records = Vec::new();
+    let mut pos = 0usize;
+    while body.len() - pos >= RECORD_PREFIX_LEN {
+        let len_bytes: [u8; 4] = read_array(body, pos);
+        let len = u32::from_le_bytes(len_bytes) as usize;
+        if len == 0 || len > MAX_FRAME_LEN {
+            return Err(RecordingError::CorruptRecord {
+                path: path.to_path_buf(),
+                offset: header_len + pos,
+                len: len as u64,
+            });
+        }
+        let frame_start = pos + RECORD_PREFIX_LEN;
+        if body.len() - frame_start < len {
+            break;
+        }
+        let host_rx_us = u64::from_le_bytes(read_array(body, pos + 4));
+        records.push(Record {
+            host_rx_us,
+            frame: body[frame_start..frame_start + len].to_vec(),
+        });
+        pos = frame_start + len;
+    }
+    Ok(Recording {
+        meta,
+        records,
+        truncated_tail_bytes: body.len() - pos,
+    })
+}
+
+/// Splits off the first `\n`-terminated line (without the `\n`) if it ends within `max` bytes.
+fn split_line(bytes: &[u8], max: usize) -> Option<(&[u8], &[u8])> {
+    let end = bytes.iter().take(max).position(|&b| b == b'\n')?;
+    Some((&bytes[..end], &bytes[end + 1..]))
+}
+
+/// `N` bytes at `pos`; the caller has checked that they exist.
+fn read_array<const N: usize>(bytes: &[u8], pos: usize) -> [u8; N] {
+    let mut out = [0u8; N];
+    out.copy_from_slice(&bytes[pos..pos + N]);
+    out
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn meta() -> RecordingMeta {
+        RecordingMeta {
+            protocol_version: 1,
+            port: "/dev/ttyACM0".into(),
+            start_time_unix_us: 1_700_000_000_000_000,
+            pot_rate_hz: 1000,
+            tilt_rate_hz: 100,
+            hello: Some(HelloMeta {
+                protocol_version: 1,
+                firmware_version: "0.1.0".into(),
+                board_id: "00112233445566778899aabb".into(),
+                schema_hash: 0xdead_beef,
+                tilt_sensors: 3,
+            }),
+            rigctl_version: "0.1.0".into(),
+        }
+    }
+
+    fn frames() -> Vec<Record> {
+        vec![
+            Record {
+                host_rx_us: 10,
+                frame: vec![1, 2, 3],
+            },
+            Record {
+                host_rx_us: 2_000,
+                frame: vec![7; 40],
+            },
+            Record {
+                host_rx_us: u64::MAX,
+                frame: vec![0xff],
+            },
+        ]
+    }
+
+    fn write_small(path: &Path) -> Vec<u8> {
+        let mut w = RecordingWriter::create(path, &meta(), false).unwrap();
+        for r in frames() {
+            w.append(r.host_rx_us, &r.frame).unwrap();
+        }
+        assert_eq!(w.records(), 3);
+        w.finish().unwrap();
+        std::fs::read(path).unwrap()
+    }
+
+    #[test]
+    fn round_trip() {
+        let dir = tempfile::tempdir().unwrap();
+        let path = dir.path().join("run.rigrec");
+        write_small(&path);
+        let rec = read_recording(&path).unwrap();
+        assert_eq!(rec.meta, meta());
+        assert_eq!(rec.records, frames());
+        assert_eq!(rec.truncated_tail_bytes, 0);
+    }
+
+    #[test]
+    fn layout_is_as_documented() {
+        let dir = tempfile::tempdir().unwrap();
+        let bytes = write_small(&dir.path().join("run.rigrec"));
+        assert!(bytes.starts_with(b"RIGREC 1\n{\"protocol_version\":1,"));
+        let header_len = header_bytes(&meta()).len();
+        // First record: len 3, time 10, frame 1 2 3.
+        assert_eq!(
+            &bytes[header_len..header_len + 15],
+            &[3, 0, 0, 0, 10, 0, 0, 0, 0, 0, 0, 0, 1, 2, 3]
+        );
+        assert_eq!(bytes.len(), header_len + 3 * 12 + 3 + 40 + 1);
+    }
+
+    #[test]
+    fn every_truncation_keeps_the_complete_records() {
+        let dir = tempfile::tempdir().unwrap();
+        let bytes = write_small(&dir.path().join("run.rigrec"));
+        let header_len = header_bytes(&meta()).len();
+        let ends: Vec<usize> = {
+            let mut end = header_len;
+            frames()
+                .iter()
+                .map(|r| {
+                    end += RECORD_PREFIX_LEN + r.frame.len();
+                    end
+                })
+                .collect()
+        };
+        let path = Path::new("cut.rigrec");
+        for cut in 0..=bytes.len() {
+            let result = parse_recording(path, &bytes[..cut]);
+            if cut < header_len {
+                assert!(result.is_err(), "cut {cut} inside the header must fail");
+                continue;
+            }
+            let rec = result.unwrap_or_else(|e| panic!("cut {cut}: {e}"));
+            let complete = ends.iter().filter(|&&e| e <= cut).count();
+            assert_eq!(rec.records, frames()[..complete], "cut {cut}");
+            let last_end = if complete == 0 {
+                header_len
+            } else {
+                ends[complete - 1]
+            };
+            assert_eq!(rec.truncated_tail_bytes, cut - last_end, "cut {cut}");
+        }
+    }
+
+    #[test]
+    fn garbage_never_panics() {
+        let path = Path::new("x");
+        let mut header = header_bytes(&meta());
+        // Pseudo-random bodies after a valid header and pseudo-random whole files.
+        let mut state = 0x1234_5678_9abc_def0u64;
+        for n in 0..500 {
+            let mut body = Vec::new();
+            for _ in 0..(n % 64) {
+                state ^= state << 13;
+                state ^= state >> 7;
+                state ^= state << 17;
+                body.push((state >> 24) as u8);
+            }
+            let _ = parse_recording(path, &body);
+            header.truncate(header_bytes(&meta()).len());
+            header.extend_from_slice(&body);
+            let _ = parse_recording(path, &header);
+        }
+    }
+
+    #[test]
+    fn corrupt_length_is_an_error_with_offset() {
+        let mut bytes = header_bytes(&meta());
+        let header_len = bytes.len();
+        bytes.extend_from_slice(&(MAX_FRAME_LEN as u32 + 1).to_le_bytes());
+        bytes.extend_from_slice(&[0; 8]);
+        match parse_recording(Path::new("x"), &bytes) {
+            Err(RecordingError::CorruptRecord { offset, .. }) => assert_eq!(offset, header_len),
+            other => panic!("expected CorruptRecord, got {other:?}"),
+        }
+    }
+
+    #[test]
+    fn wrong_magic_and_version_are_refused() {
+        let p = Path::new("x");
+        assert!(matches!(
+            parse_recording(p, b"PNG\n"),
+            Err(RecordingError::NotARecording { .. })
+        ));
+        assert!(matches!(
+            parse_recording(p, b"RIGREC 2\n{}\n"),
+            Err(RecordingError::UnsupportedVersion { .. })
+        ));
+    }
+
+    #[test]
+    fn existing_file_is_not_overwritten_by_default() {
+        let dir = tempfile::tempdir().unwrap();
+        let path = dir.path().join("run.rigrec");
+        std::fs::write(&path, b"keep").unwrap();
+        assert!(matches!(
+            RecordingWriter::create(&path, &meta(), false),
+            Err(RecordingError::Exists { .. })
+        ));
+        assert_eq!(std::fs::read(&path).unwrap(), b"keep");
+        RecordingWriter::create(&path, &meta(), true).unwrap();
+    }
+}

@@ -1,0 +1,410 @@
+//! The decision rule: greedy forward selection of effects, each accepted only when the data
+//! demand it.
+//!
+//! At each step, with the current fit (declared model + effects accepted so far):
+//!
+//! 1. **Screen** every remaining candidate linearly ([`super::residual::screen`]) and rank by the
+//!    linearised change of BIC (`m ln(RSS1/RSS0) + k ln m`, `k` = new identifiable directions,
+//!    `m` = 3 x poses). Candidates that only alias fitted parameters (`k = 0`) drop out here.
+//! 2. **Refit** the best [`DecideConfig::refit_top`] fully (Levenberg-Marquardt on every fitted
+//!    unknown plus the candidate's, with the SVD identifiability analysis deciding which of the
+//!    candidate's unknowns are new; aliased ones stay fixed and are reported as unidentifiable
+//!    combinations), and rank them by the exact change of BIC.
+//! 3. **Test** in that order; the first candidate that passes both tests is accepted:
+//!    * the nested-model F-test on the RSS with `k` added parameters, `p <` [`DecideConfig::alpha`]
+//!      (default 0.001), and a BIC decrease;
+//!    * k-fold cross-validation on the calibration poses ([`DecideConfig::folds`], default 5,
+//!      folds drawn with a seeded ChaCha8 permutation): every fold is refitted (from the full-data
+//!      solution, same unknowns) and predicts its held-out poses; with per-pose held-out errors
+//!      `e0` (without the candidate) and `e1` (with it), the mean must drop by at least
+//!      [`DecideConfig::cv_min_gain`] (relative, default 1 %) and the paired one-sided t statistic
+//!      of `e0 - e1` must exceed [`DecideConfig::cv_t_min`] (default 2.326, p < 0.01).
+//! 4. Repeat until no candidate passes (or [`DecideConfig::max_effects`]).
+
+use nalgebra::Vector3;
+use rand::seq::SliceRandom;
+use rand::SeedableRng;
+use rand_chacha::ChaCha8Rng;
+
+use super::candidates::{library, Candidate};
+use super::data::Dataset;
+use super::extended::{fit, ExtFit, Unknown};
+use super::residual::screen;
+use super::stat::{delta_bic, nested_f_test};
+use crate::calib::lm::LmConfig;
+use crate::calib::CalibError;
+
+/// Settings of the selection.
+#[derive(Debug, Clone, PartialEq)]
+pub struct DecideConfig {
+    /// Significance level of the F-test.
+    pub alpha: f64,
+    /// Number of cross-validation folds.
+    pub folds: usize,
+    /// Seed of the fold assignment.
+    pub seed: u64,
+    /// Smallest relative drop of the cross-validated mean error.
+    pub cv_min_gain: f64,
+    /// Smallest paired t statistic of the cross-validated improvement.
+    pub cv_t_min: f64,
+    /// Number of screened candidates refitted fully per step.
+    pub refit_top: usize,
+    /// Most effects accepted.
+    pub max_effects: usize,
+    /// Solver settings of the full fits.
+    pub lm: LmConfig,
+    /// Solver settings of the cross-validation refits.
+    pub lm_cv: LmConfig,
+    /// Identifiability threshold (relative singular value).
+    pub rtol: f64,
+}
+
+impl Default for DecideConfig {
+    fn default() -> Self {
+        Self {
+            alpha: 1e-3,
+            folds: 5,
+            seed: 1,
+            cv_min_gain: 0.01,
+            cv_t_min: 2.326,
+            refit_top: 4,
+            max_effects: 8,
+            lm: LmConfig::default(),
+            lm_cv: LmConfig {
+                max_iterations: 30,
+                ftol: 1e-10,
+                ..LmConfig::default()
+            },
+            rtol: crate::calib::identifiability::DEFAULT_RTOL,
+        }
+    }
+}
+
+/// The tests of one candidate at one step.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Trial {
+    /// The candidate.
+    pub candidate: Candidate,
+    /// New identifiable directions it added.
+    pub added: usize,
+    /// RSS before and after (mm^2).
+    pub rss_before_mm2: f64,
+    /// RSS after the refit (mm^2).
+    pub rss_after_mm2: f64,
+    /// F statistic and p-value of the nested test.
+    pub f: f64,
+    /// p-value of the F-test.
+    pub p_value: f64,
+    /// Change of BIC (negative = better).
+    pub delta_bic: f64,
+    /// Cross-validated mean error without / with the candidate (mm); NaN when not run.
+    pub cv_mean_mm: [f64; 2],
+    /// Paired t statistic of the cross-validated improvement (NaN when not run).
+    pub cv_t: f64,
+    /// Whether it was accepted.
+    pub accepted: bool,
+    /// Why not, when it was not.
+    pub reason: String,
+}
+
+/// One accepted effect.
+#[derive(Debug, Clone)]
+pub struct Accepted {
+    /// Its tests.
+    pub trial: Trial,
+    /// The fit before it was added.
+    pub before: ExtFit,
+    /// The fit with it.
+    pub after: ExtFit,
+}
+
+/// Result of [`forward_selection`].
+#[derive(Debug, Clone)]
+pub struct Selection {
+    /// Accepted effects in order.
+    pub steps: Vec<Accepted>,
+    /// The candidates tested (refitted) at the last step, none accepted.
+    pub last_trials: Vec<Trial>,
+    /// The final fit.
+    pub last: ExtFit,
+    /// All unknowns requested in the final fit.
+    pub requested: Vec<Unknown>,
+}
+
+/// Fold of every pose: a seeded permutation cut into `k` nearly equal parts.
+pub fn fold_assignment(n: usize, k: usize, seed: u64) -> Vec<usize> {
+    let mut order: Vec<usize> = (0..n).collect();
+    order.shuffle(&mut ChaCha8Rng::seed_from_u64(seed));
+    let mut fold = vec![0; n];
+    for (rank, &i) in order.iter().enumerate() {
+        fold[i] = rank % k.max(1);
+    }
+    fold
+}
+
+/// Held-out error (mm) of every pose under k-fold cross-validation of `fit`'s unknowns.
+pub fn cv_errors(f: &ExtFit, data: &Dataset, cfg: &DecideConfig) -> Result<Vec<f64>, CalibError> {
+    let n = data.len();
+    let k = cfg.folds.clamp(2, n.max(2));
+    let fold = fold_assignment(n, k, cfg.seed);
+    let mut out = vec![0.0; n];
+    for g in 0..k {
+        let train: Vec<usize> = (0..n).filter(|&i| fold[i] != g).collect();
+        let test: Vec<usize> = (0..n).filter(|&i| fold[i] == g).collect();
+        if test.is_empty() || 3 * train.len() < f.fitted.len() {
+            continue;
+        }
+        let sub = data.subset(&train);
+        let refit = fit(&f.ext, &sub, &f.fitted, &cfg.lm_cv, cfg.rtol, true)?;
+        for &i in &test {
+            let p = refit.ext.predict_mm(&data.poses.q_deg[i], data.t(i))?;
+            out[i] = (data.poses.xyz_mm[i] - p).norm();
+        }
+    }
+    Ok(out)
+}
+
+/// Mean of `e0 - e1`, relative to mean `e0`, and the paired t statistic.
+fn paired_gain(e0: &[f64], e1: &[f64]) -> (f64, f64, f64, f64) {
+    let n = e0.len().min(e1.len());
+    if n < 2 {
+        return (f64::NAN, f64::NAN, 0.0, 0.0);
+    }
+    let nf = n as f64;
+    let m0 = e0.iter().sum::<f64>() / nf;
+    let m1 = e1.iter().sum::<f64>() / nf;
+    let d: Vec<f64> = e0.iter().zip(e1).map(|(a, b)| a - b).collect();
+    let md = d.iter().sum::<f64>() / nf;
+    let var = d.iter().map(|x| (x - md).powi(2)).sum::<f64>() / (nf - 1.0);
+    let t = if var > 0.0 {
+        md / (var / nf).sqrt()
+    } else if md > 0.0 {
+        f64::INFINITY
+    } else {
+        0.0
+    };
+    let rel = if m0 > 0.0 { md / m0 } else { 0.0 };
+    (m0, m1, rel, t)
+}
+
+/// Greedy forward selection from the declared fit `declared` (its requested unknowns
+/// `declared_unknowns`) on `data`. See the module documentation.
+pub fn forward_selection(
+    declared: ExtFit,
+    declared_unknowns: &[Unknown],
+    data: &Dataset,
+    cfg: &DecideConfig,
+) -> Result<Selection, CalibError> {
+    let m = 3 * data.len();
+    let mut cur = declared;
+    let mut requested: Vec<Unknown> = declared_unknowns.to_vec();
+    let mut steps: Vec<Accepted> = Vec::new();
+    let mut last_trials = Vec::new();
+    while steps.len() < cfg.max_effects {
+        let cands = library(&cur.ext, &requested, data);
+        if cands.is_empty() {
+            break;
+        }
+        let screens = screen(&cur.ext, data, &cur.fitted, &cands, cfg.rtol)?;
+        let rss0 = cur.rss_mm2;
+        let mut ranked: Vec<(usize, usize, f64)> = screens
+            .iter()
+            .filter(|s| s.added > 0)
+            .map(|s| {
+                (
+                    s.candidate,
+                    s.added,
+                    delta_bic(m, rss0, (rss0 - s.delta_rss_mm2).max(rss0 * 1e-12), s.added),
+                )
+            })
+            .filter(|(_, _, b)| *b < 0.0)
+            .collect();
+        ranked.sort_by(|a, b| a.2.total_cmp(&b.2));
+        ranked.truncate(cfg.refit_top);
+        let mut refits: Vec<(Trial, ExtFit)> = Vec::new();
+        for (ci, _, _) in &ranked {
+            let cand = &cands[*ci];
+            let mut req = requested.clone();
+            req.extend(cand.unknowns.iter().copied());
+            // Two starts: the current values, and the linearised least-squares step of all fitted
+            // unknowns plus the candidate's (reaches effects whose influence is switched on only
+            // away from zero, e.g. a base tilt that gives joint 1 a gravity torque and so its
+            // backlash); the lower RSS wins.
+            // The linearised restart is repeated from the best fit while it lowers the RSS by more
+            // than 1 % (the sign steps of the tilt law stop the solver at a step edge).
+            let mut best: Option<ExtFit> = fit(&cur.ext, data, &req, &cfg.lm, cfg.rtol, false).ok();
+            let mut from = cur.clone();
+            for _ in 0..4 {
+                let Some(start) = linear_start(&from, data, cand) else {
+                    break;
+                };
+                let Ok(f2) = fit(&start, data, &req, &cfg.lm, cfg.rtol, false) else {
+                    break;
+                };
+                let better = best.as_ref().is_none_or(|b| f2.rss_mm2 < 0.99 * b.rss_mm2);
+                if !better {
+                    break;
+                }
+                from = f2.clone();
+                best = Some(f2);
+            }
+            let Some(after) = best else { continue };
+            let added = after.fitted.len().saturating_sub(cur.fitted.len());
+            let dof = m.saturating_sub(after.fitted.len());
+            let (f, p) = nested_f_test(rss0, after.rss_mm2, added, dof);
+            let dbic = if added > 0 {
+                delta_bic(m, rss0, after.rss_mm2, added)
+            } else {
+                0.0
+            };
+            let trial = Trial {
+                candidate: cand.clone(),
+                added,
+                rss_before_mm2: rss0,
+                rss_after_mm2: after.rss_mm2,
+                f,
+                p_value: p,
+                delta_bic: dbic,
+                cv_mean_mm: [f64::NAN; 2],
+                cv_t: f64::NAN,
+                accepted: false,
+                reason: String::new(),
+            };
+            refits.push((trial, after));
+        }
+        refits.sort_by(|a, b| a.0.delta_bic.total_cmp(&b.0.delta_bic));
+        let mut cv_before: Option<Vec<f64>> = None;
+        let mut chosen: Option<(Trial, ExtFit)> = None;
+        let mut trials = Vec::new();
+        for (mut trial, after) in refits {
+            if chosen.is_some() {
+                trial.reason = "not tested: an earlier candidate was accepted".into();
+                trials.push(trial);
+                continue;
+            }
+            if trial.added == 0 {
+                trial.reason = "adds no identifiable direction (aliases fitted parameters)".into();
+            } else if !(trial.p_value < cfg.alpha && trial.delta_bic < 0.0) {
+                trial.reason = format!(
+                    "F-test p = {:.2e} (needs < {:.0e}) or BIC change {:+.1} (needs < 0)",
+                    trial.p_value, cfg.alpha, trial.delta_bic
+                );
+            } else {
+                if cv_before.is_none() {
+                    cv_before = Some(cv_errors(&cur, data, cfg)?);
+                }
+                let e0 = cv_before.as_deref().unwrap_or(&[]);
+                let e1 = cv_errors(&after, data, cfg)?;
+                let (m0, m1, rel, t) = paired_gain(e0, &e1);
+                trial.cv_mean_mm = [m0, m1];
+                trial.cv_t = t;
+                if rel >= cfg.cv_min_gain && t >= cfg.cv_t_min {
+                    trial.accepted = true;
+                    chosen = Some((trial.clone(), after));
+                    continue;
+                }
+                trial.reason = format!(
+                    "cross-validation: mean {m0:.4} -> {m1:.4} mm ({:+.1} %, t = {t:.2}; needs >= {:.0} % and t >= {:.2})",
+                    -100.0 * rel,
+                    100.0 * cfg.cv_min_gain,
+                    cfg.cv_t_min
+                );
+            }
+            trials.push(trial);
+        }
+        match chosen {
+            Some((trial, after)) => {
+                requested.extend(trial.candidate.unknowns.iter().copied());
+                let before = std::mem::replace(&mut cur, after.clone());
+                steps.push(Accepted {
+                    trial,
+                    before,
+                    after,
+                });
+            }
+            None => {
+                last_trials = trials;
+                break;
+            }
+        }
+    }
+    Ok(Selection {
+        steps,
+        last_trials,
+        last: cur,
+        requested,
+    })
+}
+
+/// The current model moved by the Gauss-Newton step of its fitted unknowns plus `cand`'s
+/// (minimum-norm least squares on column-scaled Jacobians), or `None` if it cannot be computed.
+fn linear_start(
+    cur: &ExtFit,
+    data: &Dataset,
+    cand: &Candidate,
+) -> Option<super::extended::ExtModel> {
+    let mut unknowns = cur.fitted.clone();
+    unknowns.extend(
+        cand.unknowns
+            .iter()
+            .copied()
+            .filter(|u| !cur.fitted.contains(u)),
+    );
+    let (mut jac, err) = cur.ext.stacked(data, &unknowns).ok()?;
+    let norms: Vec<f64> = (0..jac.ncols()).map(|k| jac.column(k).norm()).collect();
+    for (k, n) in norms.iter().enumerate() {
+        if *n > 0.0 {
+            jac.column_mut(k).unscale_mut(*n);
+        }
+    }
+    let svd = jac.svd(true, true);
+    let top = svd.singular_values.iter().copied().fold(0.0, f64::max);
+    let step = svd.solve(&err, 1e-6 * top).ok()?;
+    let mut ext = cur.ext.clone();
+    for (k, u) in unknowns.iter().enumerate() {
+        if norms[k] > 0.0 {
+            let v = ext.value(*u) + step[k] / norms[k];
+            ext.set_value(*u, v).ok()?;
+        }
+    }
+    Some(ext)
+}
+
+/// Per-pose contribution of an effect: predictions after minus before (mm) on `data`.
+pub fn contribution(
+    before: &ExtFit,
+    after: &ExtFit,
+    data: &Dataset,
+) -> Result<Vec<Vector3<f64>>, CalibError> {
+    let e0 = before.ext.errors(data)?;
+    let e1 = after.ext.errors(data)?;
+    Ok(e0.iter().zip(&e1).map(|(a, b)| a - b).collect())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn folds_are_balanced_and_seeded() {
+        let f = fold_assignment(118, 5, 7);
+        for g in 0..5 {
+            let c = f.iter().filter(|&&x| x == g).count();
+            assert!(c == 23 || c == 24, "fold {g}: {c}");
+        }
+        assert_eq!(f, fold_assignment(118, 5, 7));
+        assert_ne!(f, fold_assignment(118, 5, 8));
+    }
+
+    #[test]
+    fn paired_gain_of_a_clear_improvement() {
+        let e0: Vec<f64> = (0..50).map(|k| 1.0 + 0.01 * k as f64).collect();
+        let e1: Vec<f64> = e0
+            .iter()
+            .enumerate()
+            .map(|(k, e)| 0.5 * e + 0.001 * (k % 3) as f64)
+            .collect();
+        let (_, _, rel, t) = paired_gain(&e0, &e1);
+        assert!(rel > 0.45 && t > 10.0, "{rel} {t}");
+    }
+}

@@ -1,0 +1,399 @@
+//! The declared model extended with the effects that are not parameters of a [`Model`]: a
+//! measurement-side position drift linear in the pose time `t`, joint-offset drifts, and joint
+//! compliance (a joint deflection proportional to the gravity torque about the joint axis).
+//!
+//! Prediction of pose k (joint readings `q`, time `t` s):
+//!
+//! ```text
+//! q_eff_j = q_j + r_j t / 3600 + c_j tau_j(q)          r_j deg/h, c_j deg per kgf.m
+//! p       = fk(q_eff, declared tilt) + v t / 3600      v mm/h in frame R
+//! ```
+//!
+//! `tau_j(q)` is the static gravity torque about joint axis j (kgf.m) of the untilted chain at the
+//! readings, from [`GravityModel`]. A file without a `t` column has `t = 0` for every pose, so
+//! the drift terms have no effect (and are never candidates).
+
+use nalgebra::{DMatrix, DVector, Vector3};
+
+use super::data::Dataset;
+use super::gravity::GravityModel;
+use crate::calib::identifiability::analyse;
+use crate::calib::lm::{solve, LmConfig, Problem};
+use crate::calib::CalibError;
+use crate::model::{Model, ModelError, Tilt, Wrt};
+
+/// Seconds per hour (drift rates are per hour).
+const S_PER_H: f64 = 3600.0;
+
+/// One unknown of an extended fit.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+pub enum Unknown {
+    /// A model parameter (index into [`Model::params`]), in its own unit.
+    Param(usize),
+    /// Measured-position drift along axis 0/1/2 of frame R, mm per hour.
+    PositionDrift(usize),
+    /// Drift of joint j's offset (0-based), deg per hour.
+    JointDrift(usize),
+    /// Compliance of joint j (0-based): deflection per gravity torque, deg per kgf.m.
+    Compliance(usize),
+}
+
+impl Unknown {
+    /// A readable name: the model parameter's name, `drift_x_mm_per_h`, `drift_j2_deg_per_h`,
+    /// `compliance_j2_deg_per_kgfm`.
+    pub fn name(&self, model: &Model) -> String {
+        match *self {
+            Unknown::Param(i) => model
+                .params()
+                .get(i)
+                .map(|p| p.name.clone())
+                .unwrap_or_else(|| format!("param{i}")),
+            Unknown::PositionDrift(a) => format!("drift_{}_mm_per_h", ["x", "y", "z"][a.min(2)]),
+            Unknown::JointDrift(j) => format!("drift_j{}_deg_per_h", j + 1),
+            Unknown::Compliance(j) => format!("compliance_j{}_deg_per_kgfm", j + 1),
+        }
+    }
+}
+
+/// A model plus the extra (non-model) effect values.
+#[derive(Debug, Clone)]
+pub struct ExtModel {
+    /// The robot model (all parameters, effect parameters included).
+    pub model: Model,
+    /// Whether the declared static tilting is applied.
+    pub tilt: bool,
+    /// Position drift, mm per hour in R.
+    pub drift_mm_per_h: Vector3<f64>,
+    /// Joint offset drift per joint, deg per hour.
+    pub joint_drift_deg_per_h: Vec<f64>,
+    /// Compliance per joint, deg per kgf.m.
+    pub compliance_deg_per_kgfm: Vec<f64>,
+    /// Link masses for the compliance torques (None: no compliance possible).
+    pub gravity: Option<GravityModel>,
+}
+
+impl ExtModel {
+    /// `model` with no extra effect; tilting when the model has tilting data.
+    pub fn new(model: Model) -> Self {
+        let n = model.n_joints();
+        let tilt = model.has_tilt();
+        let gravity = GravityModel::for_model(&model);
+        Self {
+            model,
+            tilt,
+            drift_mm_per_h: Vector3::zeros(),
+            joint_drift_deg_per_h: vec![0.0; n],
+            compliance_deg_per_kgfm: vec![0.0; n],
+            gravity,
+        }
+    }
+
+    fn tilt_mode(&self) -> Tilt<'static> {
+        if self.tilt {
+            Tilt::Static
+        } else {
+            Tilt::Off
+        }
+    }
+
+    /// Current value of an unknown.
+    pub fn value(&self, u: Unknown) -> f64 {
+        match u {
+            Unknown::Param(i) => self.model.params().get(i).map_or(0.0, |p| p.value),
+            Unknown::PositionDrift(a) => self.drift_mm_per_h[a.min(2)],
+            Unknown::JointDrift(j) => self.joint_drift_deg_per_h.get(j).copied().unwrap_or(0.0),
+            Unknown::Compliance(j) => self.compliance_deg_per_kgfm.get(j).copied().unwrap_or(0.0),
+        }
+    }
+
+    /// Sets an unknown.
+    pub fn set_value(&mut self, u: Unknown, v: f64) -> Result<(), ModelError> {
+        if !v.is_finite() {
+            return Err(ModelError::NonFinite {
+                name: u.name(&self.model),
+                value: v,
+            });
+        }
+        match u {
+            Unknown::Param(i) => self.model.set_param_at(i, v)?,
+            Unknown::PositionDrift(a) => self.drift_mm_per_h[a.min(2)] = v,
+            Unknown::JointDrift(j) => {
+                if let Some(x) = self.joint_drift_deg_per_h.get_mut(j) {
+                    *x = v;
+                }
+            }
+            Unknown::Compliance(j) => {
+                if let Some(x) = self.compliance_deg_per_kgfm.get_mut(j) {
+                    *x = v;
+                }
+            }
+        }
+        Ok(())
+    }
+
+    /// Gravity torques about the joint axes (kgf.m), zeros without a gravity model.
+    pub fn torques_kgfm(&self, q_deg: &[f64]) -> Result<Vec<f64>, ModelError> {
+        match &self.gravity {
+            Some(g) => g.axis_torques_kgfm(&self.model, q_deg),
+            None => Ok(vec![0.0; self.model.n_joints()]),
+        }
+    }
+
+    fn needs_torques(&self, unknowns: &[Unknown]) -> bool {
+        self.compliance_deg_per_kgfm.iter().any(|c| *c != 0.0)
+            || unknowns.iter().any(|u| matches!(u, Unknown::Compliance(_)))
+    }
+
+    /// Effective joint values fed to the model and the torques used (empty if not needed).
+    fn effective_joints(
+        &self,
+        q_deg: &[f64],
+        t_s: f64,
+        with_torques: bool,
+    ) -> Result<(Vec<f64>, Vec<f64>), ModelError> {
+        let tau = if with_torques {
+            self.torques_kgfm(q_deg)?
+        } else {
+            Vec::new()
+        };
+        let q_eff = q_deg
+            .iter()
+            .enumerate()
+            .map(|(j, q)| {
+                let drift =
+                    self.joint_drift_deg_per_h.get(j).copied().unwrap_or(0.0) * t_s / S_PER_H;
+                let comp = self.compliance_deg_per_kgfm.get(j).copied().unwrap_or(0.0)
+                    * tau.get(j).copied().unwrap_or(0.0);
+                q + drift + comp
+            })
+            .collect();
+        Ok((q_eff, tau))
+    }
+
+    /// Predicted measured position (mm, R) of a pose.
+    pub fn predict_mm(&self, q_deg: &[f64], t_s: f64) -> Result<Vector3<f64>, ModelError> {
+        let with_tau = self.compliance_deg_per_kgfm.iter().any(|c| *c != 0.0);
+        let (q_eff, _) = self.effective_joints(q_deg, t_s, with_tau)?;
+        Ok(self.model.position_mm(&q_eff, self.tilt_mode())?
+            + self.drift_mm_per_h * (t_s / S_PER_H))
+    }
+
+    /// Predicted position and its Jacobian (3 x unknowns, mm per unit) of a pose.
+    pub fn predict_with_jacobian(
+        &self,
+        q_deg: &[f64],
+        t_s: f64,
+        unknowns: &[Unknown],
+    ) -> Result<(Vector3<f64>, DMatrix<f64>), ModelError> {
+        let with_tau = self.needs_torques(unknowns);
+        let (q_eff, tau) = self.effective_joints(q_deg, t_s, with_tau)?;
+        let mut wrt: Vec<Wrt> = Vec::with_capacity(unknowns.len());
+        let mut slot = Vec::with_capacity(unknowns.len());
+        for u in unknowns {
+            let w = match *u {
+                Unknown::Param(i) => Some(Wrt::Param(i)),
+                Unknown::JointDrift(j) | Unknown::Compliance(j) => Some(Wrt::Joint(j)),
+                Unknown::PositionDrift(_) => None,
+            };
+            slot.push(w.map(|w| {
+                wrt.push(w);
+                wrt.len() - 1
+            }));
+        }
+        let (fk, jm) = self
+            .model
+            .position_jacobian(&q_eff, self.tilt_mode(), &wrt)?;
+        let mut jac = DMatrix::zeros(3, unknowns.len());
+        for (c, u) in unknowns.iter().enumerate() {
+            let col: Vector3<f64> = match (*u, slot[c]) {
+                (Unknown::PositionDrift(a), _) => {
+                    let mut v = Vector3::zeros();
+                    v[a.min(2)] = t_s / S_PER_H;
+                    v
+                }
+                (Unknown::JointDrift(_), Some(s)) => jm.column(s) * (t_s / S_PER_H),
+                (Unknown::Compliance(j), Some(s)) => {
+                    jm.column(s) * tau.get(j).copied().unwrap_or(0.0)
+                }
+                (_, Some(s)) => jm.column(s).into_owned(),
+                (_, None) => Vector3::zeros(),
+            };
+            jac.view_mut((0, c), (3, 1)).copy_from(&col);
+        }
+        Ok((fk.position_mm + self.drift_mm_per_h * (t_s / S_PER_H), jac))
+    }
+
+    /// Errors `measured - predicted` of every pose (mm).
+    pub fn errors(&self, data: &Dataset) -> Result<Vec<Vector3<f64>>, ModelError> {
+        (0..data.len())
+            .map(|k| Ok(data.poses.xyz_mm[k] - self.predict_mm(&data.poses.q_deg[k], data.t(k))?))
+            .collect()
+    }
+
+    /// Stacked Jacobian (3 rows per pose) wrt `unknowns`, and the stacked errors
+    /// `measured - predicted`.
+    pub fn stacked(
+        &self,
+        data: &Dataset,
+        unknowns: &[Unknown],
+    ) -> Result<(DMatrix<f64>, DVector<f64>), ModelError> {
+        let n = data.len();
+        let mut jac = DMatrix::zeros(3 * n, unknowns.len());
+        let mut err = DVector::zeros(3 * n);
+        for k in 0..n {
+            let (p, j) = self.predict_with_jacobian(&data.poses.q_deg[k], data.t(k), unknowns)?;
+            jac.view_mut((3 * k, 0), (3, unknowns.len())).copy_from(&j);
+            err.fixed_rows_mut::<3>(3 * k)
+                .copy_from(&(data.poses.xyz_mm[k] - p));
+        }
+        Ok((jac, err))
+    }
+}
+
+/// The extended fit as a least-squares problem (residual `predicted - measured`).
+struct ExtProblem<'a> {
+    ext: ExtModel,
+    data: &'a Dataset,
+    unknowns: Vec<Unknown>,
+}
+
+impl ExtProblem<'_> {
+    fn set(&mut self, x: &DVector<f64>) -> Result<(), ModelError> {
+        for (&u, &v) in self.unknowns.iter().zip(x.iter()) {
+            self.ext.set_value(u, v)?;
+        }
+        Ok(())
+    }
+}
+
+impl Problem for ExtProblem<'_> {
+    type Error = ModelError;
+
+    fn n_params(&self) -> usize {
+        self.unknowns.len()
+    }
+
+    fn n_residuals(&self) -> usize {
+        3 * self.data.len()
+    }
+
+    fn evaluate(
+        &mut self,
+        x: &DVector<f64>,
+        r: &mut DVector<f64>,
+        jac: Option<&mut DMatrix<f64>>,
+    ) -> Result<(), ModelError> {
+        self.set(x)?;
+        match jac {
+            Some(jac) => {
+                let (j, e) = self.ext.stacked(self.data, &self.unknowns)?;
+                jac.copy_from(&j);
+                r.copy_from(&(-e));
+            }
+            None => {
+                for k in 0..self.data.len() {
+                    let p = self
+                        .ext
+                        .predict_mm(&self.data.poses.q_deg[k], self.data.t(k))?;
+                    r.fixed_rows_mut::<3>(3 * k)
+                        .copy_from(&(p - self.data.poses.xyz_mm[k]));
+                }
+            }
+        }
+        Ok(())
+    }
+}
+
+/// Result of [`fit`].
+#[derive(Debug, Clone)]
+pub struct ExtFit {
+    /// The fitted extended model.
+    pub ext: ExtModel,
+    /// Unknowns that were fitted (identifiable), in request order.
+    pub fitted: Vec<Unknown>,
+    /// Requested unknowns kept at their start value (unidentifiable).
+    pub fixed: Vec<Unknown>,
+    /// Names of the unidentifiable combinations (e.g. `"dth5+tool_dx"`).
+    pub unidentifiable: Vec<String>,
+    /// One standard deviation per fitted unknown (same order as `fitted`).
+    pub sigma: Vec<f64>,
+    /// Residual sum of squares over all coordinates (mm^2).
+    pub rss_mm2: f64,
+    /// Number of residual coordinates (3 per pose).
+    pub n_residuals: usize,
+}
+
+impl ExtFit {
+    /// Standard deviation of `u` (infinite if it was not fitted).
+    pub fn sigma_of(&self, u: Unknown) -> f64 {
+        self.fitted
+            .iter()
+            .position(|&f| f == u)
+            .map_or(f64::INFINITY, |i| self.sigma[i])
+    }
+}
+
+/// Fits `unknowns` of `start` to `data`: identifiability analysis of the Jacobian at the start
+/// (unknowns listed first are preferred; see [`analyse`]), then Levenberg-Marquardt on the
+/// identifiable ones. `skip_analysis` fits all of them as given (for cross-validation refits that
+/// reuse an earlier analysis; the solver still drops numerically null directions).
+pub fn fit(
+    start: &ExtModel,
+    data: &Dataset,
+    unknowns: &[Unknown],
+    lm: &LmConfig,
+    rtol: f64,
+    skip_analysis: bool,
+) -> Result<ExtFit, CalibError> {
+    if data.is_empty() {
+        return Err(CalibError::NoPoses);
+    }
+    let names: Vec<String> = unknowns.iter().map(|u| u.name(&start.model)).collect();
+    let (fitted, fixed, unidentifiable) = if skip_analysis {
+        (unknowns.to_vec(), Vec::new(), Vec::new())
+    } else {
+        let (jac0, _) = start.stacked(data, unknowns)?;
+        let id = analyse(&jac0, rtol);
+        let name_refs: Vec<&str> = names.iter().map(String::as_str).collect();
+        (
+            id.kept.iter().map(|&k| unknowns[k]).collect::<Vec<_>>(),
+            id.fixed.iter().map(|&k| unknowns[k]).collect::<Vec<_>>(),
+            id.combinations
+                .iter()
+                .map(|c| c.name(&name_refs))
+                .collect::<Vec<_>>(),
+        )
+    };
+    let n_res = 3 * data.len();
+    if fitted.is_empty() {
+        let rss = start.errors(data)?.iter().map(|e| e.norm_squared()).sum();
+        return Ok(ExtFit {
+            ext: start.clone(),
+            fitted,
+            fixed,
+            unidentifiable,
+            sigma: Vec::new(),
+            rss_mm2: rss,
+            n_residuals: n_res,
+        });
+    }
+    let mut problem = ExtProblem {
+        ext: start.clone(),
+        data,
+        unknowns: fitted.clone(),
+    };
+    let x0 = DVector::from_iterator(fitted.len(), fitted.iter().map(|&u| start.value(u)));
+    let rep = solve(&mut problem, x0, lm).map_err(CalibError::from_lm)?;
+    problem.set(&rep.x)?;
+    let rss = rep.residuals.norm_squared();
+    let sigma = crate::calib::fit::parameter_sigmas(&rep.jacobian, rss, rtol);
+    Ok(ExtFit {
+        ext: problem.ext,
+        fitted,
+        fixed,
+        unidentifiable,
+        sigma,
+        rss_mm2: rss,
+        n_residuals: n_res,
+    })
+}

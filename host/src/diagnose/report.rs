@@ -1,0 +1,222 @@
+//! The `diagnose --json` document (FORMATS.md keys, plus extra keys) and the text table.
+//!
+//! Documented keys: `declared{calibration, validation}`, `effects[{id, parameters,
+//! validation_mean_mm_before, validation_mean_mm_after, evidence}]`, `final{calibration,
+//! validation}`, `unexplained{structured, note}`. Extra keys: per effect `uncertainty` (one sigma
+//! per parameter, null when held fixed), `calibration_mean_mm_before/after`,
+//! `cv_mean_mm_before/after`, `p_value`, `f_statistic`, `delta_bic`, `added_parameters`,
+//! `regressor`, `unidentifiable`, `model_parameters` (fitted model values); at the top `noise`,
+//! `robot`, `tilting`, `declared_unidentifiable`, `rejected` (candidates refitted at the last
+//! step and why they failed), `rule`.
+
+use std::fmt::Write as _;
+
+use serde::ser::{SerializeMap, Serializer};
+use serde::Serialize;
+
+use super::decide::{DecideConfig, Trial};
+use crate::calib::Stats;
+
+/// A map that keeps its insertion order in JSON.
+#[derive(Debug, Clone, PartialEq, Default)]
+pub struct Ordered<T>(pub Vec<(String, T)>);
+
+impl<T: Serialize> Serialize for Ordered<T> {
+    fn serialize<S: Serializer>(&self, s: S) -> Result<S::Ok, S::Error> {
+        let mut m = s.serialize_map(Some(self.0.len()))?;
+        for (k, v) in &self.0 {
+            m.serialize_entry(k, v)?;
+        }
+        m.end()
+    }
+}
+
+impl<T> FromIterator<(String, T)> for Ordered<T> {
+    fn from_iter<I: IntoIterator<Item = (String, T)>>(iter: I) -> Self {
+        Self(iter.into_iter().collect())
+    }
+}
+
+impl<T: Copy> Ordered<T> {
+    /// The value called `name`.
+    pub fn get(&self, name: &str) -> Option<T> {
+        self.0.iter().find(|(k, _)| k == name).map(|(_, v)| *v)
+    }
+}
+
+/// Statistics of the calibration and validation poses.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize)]
+pub struct SetStats {
+    pub calibration: Stats,
+    pub validation: Stats,
+}
+
+/// One added effect.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct EffectReport {
+    pub id: String,
+    pub parameters: Ordered<f64>,
+    pub validation_mean_mm_before: f64,
+    pub validation_mean_mm_after: f64,
+    pub evidence: String,
+    pub uncertainty: Ordered<Option<f64>>,
+    pub calibration_mean_mm_before: f64,
+    pub calibration_mean_mm_after: f64,
+    pub cv_mean_mm_before: f64,
+    pub cv_mean_mm_after: f64,
+    pub p_value: f64,
+    pub f_statistic: f64,
+    pub delta_bic: f64,
+    pub added_parameters: usize,
+    pub regressor: String,
+    pub unidentifiable: Vec<String>,
+    pub model_parameters: Ordered<f64>,
+}
+
+/// What remains unexplained.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct Unexplained {
+    pub structured: bool,
+    pub note: String,
+}
+
+/// The noise estimated from the final calibration residual.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize)]
+pub struct NoiseReport {
+    /// Standard deviation per coordinate, mm.
+    pub sigma_mm: f64,
+    /// Mean Euclidean error of that noise alone, mm.
+    pub expected_mean_mm: f64,
+}
+
+/// A candidate tested at the last step and not accepted.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct TrialReport {
+    pub id: String,
+    pub added_parameters: usize,
+    pub p_value: f64,
+    pub delta_bic: f64,
+    pub cv_mean_mm_before: Option<f64>,
+    pub cv_mean_mm_after: Option<f64>,
+    pub reason: String,
+}
+
+impl TrialReport {
+    /// From a trial.
+    pub fn from_trial(t: &Trial) -> Self {
+        let fin = |v: f64| v.is_finite().then_some(v);
+        Self {
+            id: t.candidate.id.clone(),
+            added_parameters: t.added,
+            p_value: t.p_value,
+            delta_bic: t.delta_bic,
+            cv_mean_mm_before: fin(t.cv_mean_mm[0]),
+            cv_mean_mm_after: fin(t.cv_mean_mm[1]),
+            reason: t.reason.clone(),
+        }
+    }
+}
+
+/// The whole document.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct DiagnoseReport {
+    pub declared: SetStats,
+    pub effects: Vec<EffectReport>,
+    #[serde(rename = "final")]
+    pub final_: SetStats,
+    pub unexplained: Unexplained,
+    pub noise: NoiseReport,
+    pub robot: String,
+    pub tilting: bool,
+    pub declared_unidentifiable: Vec<String>,
+    pub rejected: Vec<TrialReport>,
+    pub rule: String,
+}
+
+/// One-line statement of the decision rule in force.
+pub fn rule_text(cfg: &DecideConfig) -> String {
+    format!(
+        "greedy forward selection; accept when the F-test p < {:.0e} with a BIC decrease and {}-fold cross-validation \
+         (seed {}) lowers the held-out mean error by >= {:.0} % with paired t >= {:.2}",
+        cfg.alpha,
+        cfg.folds,
+        cfg.seed,
+        100.0 * cfg.cv_min_gain,
+        cfg.cv_t_min
+    )
+}
+
+fn fmt_params(p: &Ordered<f64>) -> String {
+    p.0.iter()
+        .map(|(k, v)| format!("{k}={v:.4}"))
+        .collect::<Vec<_>>()
+        .join(" ")
+}
+
+impl DiagnoseReport {
+    /// The human-readable table printed on stdout.
+    pub fn table(&self) -> String {
+        let mut s = String::new();
+        let _ = writeln!(
+            s,
+            "diagnose: {} ({}), {} calibration / {} validation poses",
+            self.robot,
+            if self.tilting {
+                "declared tilting"
+            } else {
+                "rigid"
+            },
+            self.declared.calibration.n,
+            self.declared.validation.n
+        );
+        let _ = writeln!(
+            s,
+            "{:<28} {:>12} {:>12} {:>10}  parameters",
+            "step", "cal mean mm", "val mean mm", "p-value"
+        );
+        let _ = writeln!(
+            s,
+            "{:<28} {:>12.4} {:>12.4} {:>10}  {}",
+            "declared model",
+            self.declared.calibration.mean_mm,
+            self.declared.validation.mean_mm,
+            "-",
+            if self.declared_unidentifiable.is_empty() {
+                String::new()
+            } else {
+                format!(
+                    "(unidentifiable: {})",
+                    self.declared_unidentifiable.join(", ")
+                )
+            }
+        );
+        for e in &self.effects {
+            let _ = writeln!(
+                s,
+                "{:<28} {:>12.4} {:>12.4} {:>10.1e}  {}",
+                format!("+ {}", e.id),
+                e.calibration_mean_mm_after,
+                e.validation_mean_mm_after,
+                e.p_value,
+                fmt_params(&e.parameters)
+            );
+        }
+        if self.effects.is_empty() {
+            let _ = writeln!(
+                s,
+                "no effect added: the declared model explains the data down to the noise"
+            );
+        }
+        let _ = writeln!(
+            s,
+            "{:<28} {:>12.4} {:>12.4}",
+            "final", self.final_.calibration.mean_mm, self.final_.validation.mean_mm
+        );
+        let _ = writeln!(
+            s,
+            "unexplained: structured = {}; {}",
+            self.unexplained.structured, self.unexplained.note
+        );
+        s
+    }
+}

@@ -1,0 +1,609 @@
+//! The model's structure: a sequence of elementary transforms over named parameters, joints,
+//! point masses and joint-tilting values, and the builder that assembles it.
+
+use nalgebra::Vector3;
+
+use super::error::ModelError;
+use super::param::{Param, ParamKind, Unit};
+
+/// Coordinate axis of an elementary transform.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Axis {
+    X,
+    Y,
+    Z,
+}
+
+impl Axis {
+    /// Column index 0, 1, 2.
+    pub fn index(self) -> usize {
+        match self {
+            Axis::X => 0,
+            Axis::Y => 1,
+            Axis::Z => 2,
+        }
+    }
+}
+
+/// Rotation about or translation along an axis.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Motion {
+    /// `R<axis>(value)`, value in degrees.
+    Rot,
+    /// `T<axis>(value)`, value in millimetres.
+    Trans,
+}
+
+/// One elementary transform of the chain. Its value is the parameter `param`, plus, when it is
+/// driven by joint `joint` (0-based), the joint reading and the joint's encoder-harmonic error.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct Elem {
+    pub motion: Motion,
+    pub axis: Axis,
+    /// Index into the model's parameters: the constant value, or the joint offset.
+    pub param: usize,
+    /// The joint driving this transform, if any (0-based).
+    pub joint: Option<usize>,
+}
+
+/// One harmonic `s sin(n q) + c cos(n q)` (deg) of a joint's encoder error.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct Harmonic {
+    /// Order `n` (1..=3).
+    pub order: u32,
+    /// Index of the `enc_j<i>_h<n>_sin` parameter.
+    pub sin_param: usize,
+    /// Index of the `enc_j<i>_h<n>_cos` parameter.
+    pub cos_param: usize,
+}
+
+/// Number of encoder harmonics every revolute joint carries (FORMATS.md: n = 1..3).
+pub const HARMONIC_ORDERS: u32 = 3;
+
+/// One joint: the transform it drives, its limits and its encoder harmonics.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Joint {
+    /// Index of the driven element; joint frame i is the frame right after it.
+    pub elem: usize,
+    /// `true` for a prismatic joint (`Tz`), `false` for a revolute one (`Rz`).
+    pub prismatic: bool,
+    /// Lower and upper limit (deg, or mm for a prismatic joint).
+    pub limits: [f64; 2],
+    /// Encoder harmonics (empty for a prismatic joint).
+    pub harmonics: Vec<Harmonic>,
+}
+
+/// A point mass rigidly attached to a frame of the chain (link centre of gravity).
+#[derive(Debug, Clone, PartialEq)]
+pub struct PointMass {
+    /// The joint that carries it (0-based).
+    pub joint: usize,
+    /// Number of elements after the joint's element: the mass sits in the frame after element
+    /// `joints[joint].elem + after`.
+    pub after: usize,
+    /// Mass (kg).
+    pub mass_kg: f64,
+    /// Centre of gravity in that frame (mm).
+    pub com_mm: Vector3<f64>,
+}
+
+/// How the tilt direction angle gamma is computed from the moment (MODEL.md eq. 5.16).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+pub enum GammaLaw {
+    /// `gamma = (pi/2) |eta_x| / (|eta_x| + |eta_y|)`: the declared model.
+    #[default]
+    Linear,
+    /// `gamma = atan2(|eta_x|, |eta_y|)`: the exact direction (erratum 3), an option.
+    Atan2,
+}
+
+/// Per-joint indices of the tilting parameters.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct TiltParams {
+    /// `clearance_j<i>` (deg).
+    pub clearance: usize,
+    /// `backlash_j<i>` (deg).
+    pub backlash: usize,
+    /// `stiffness_j<i>` (kgf.m/deg).
+    pub stiffness: usize,
+}
+
+/// Declared tilting values of one joint (thesis table 5.2).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct TiltValues {
+    pub clearance_deg: f64,
+    pub backlash_deg: f64,
+    pub stiffness_kgfm_per_deg: f64,
+}
+
+/// A robot model: constant structure plus current parameter values. Cheap to clone; change
+/// values with [`Model::set_param`] / [`Model::set_param_values`].
+#[derive(Debug, Clone, PartialEq)]
+pub struct Model {
+    pub(crate) name: String,
+    pub(crate) elems: Vec<Elem>,
+    /// Range of `elems` that is the robot's own chain (without base and tool elements).
+    pub(crate) robot_elems: std::ops::Range<usize>,
+    pub(crate) joints: Vec<Joint>,
+    pub(crate) params: Vec<Param>,
+    pub(crate) masses: Vec<PointMass>,
+    pub(crate) tilt: Option<Vec<TiltParams>>,
+    pub(crate) gamma_law: GammaLaw,
+    pub(crate) payload_param: usize,
+    pub(crate) scale_param: usize,
+}
+
+impl Model {
+    /// The model's name (e.g. `"katana450"`).
+    pub fn name(&self) -> &str {
+        &self.name
+    }
+
+    /// Number of joints.
+    pub fn n_joints(&self) -> usize {
+        self.joints.len()
+    }
+
+    /// The joints, in order.
+    pub fn joints(&self) -> &[Joint] {
+        &self.joints
+    }
+
+    /// Joint limits `[min, max]` (deg, mm for prismatic), in joint order.
+    pub fn joint_limits(&self) -> Vec<[f64; 2]> {
+        self.joints.iter().map(|j| j.limits).collect()
+    }
+
+    /// The elementary transforms, base and tool elements included.
+    pub fn elems(&self) -> &[Elem] {
+        &self.elems
+    }
+
+    /// Link masses (without the payload).
+    pub fn masses(&self) -> &[PointMass] {
+        &self.masses
+    }
+
+    /// Whether the model has tilting data (so `Tilt::Static` / `Tilt::Moments` can be used).
+    pub fn has_tilt(&self) -> bool {
+        self.tilt.is_some()
+    }
+
+    /// Tilting parameter indices per joint, if the model has tilting data.
+    pub fn tilt_params(&self) -> Option<&[TiltParams]> {
+        self.tilt.as_deref()
+    }
+
+    /// The gamma law used by the tilt model.
+    pub fn gamma_law(&self) -> GammaLaw {
+        self.gamma_law
+    }
+
+    /// Chooses the gamma law (the declared model is [`GammaLaw::Linear`]).
+    pub fn set_gamma_law(&mut self, law: GammaLaw) {
+        self.gamma_law = law;
+    }
+
+    /// All parameters, in a fixed order (the order of Jacobian columns by index).
+    pub fn params(&self) -> &[Param] {
+        &self.params
+    }
+
+    /// Parameter names, in order.
+    pub fn param_names(&self) -> impl Iterator<Item = &str> {
+        self.params.iter().map(|p| p.name.as_str())
+    }
+
+    /// Index of the parameter called `name`.
+    pub fn param_index(&self, name: &str) -> Option<usize> {
+        self.params.iter().position(|p| p.name == name)
+    }
+
+    /// Index of `name`, or [`ModelError::UnknownParam`] listing the valid names.
+    pub fn require_param(&self, name: &str) -> Result<usize, ModelError> {
+        self.param_index(name)
+            .ok_or_else(|| ModelError::UnknownParam {
+                name: name.to_string(),
+                valid: self.param_names().collect::<Vec<_>>().join(", "),
+            })
+    }
+
+    /// Current value of `name`.
+    pub fn param(&self, name: &str) -> Option<f64> {
+        self.param_index(name).map(|i| self.params[i].value)
+    }
+
+    /// Sets `name` to `value` (in the parameter's unit).
+    pub fn set_param(&mut self, name: &str, value: f64) -> Result<(), ModelError> {
+        let i = self.require_param(name)?;
+        self.set_param_at(i, value)
+    }
+
+    /// Sets parameter `index` to `value`.
+    pub fn set_param_at(&mut self, index: usize, value: f64) -> Result<(), ModelError> {
+        let count = self.params.len();
+        let p = self
+            .params
+            .get_mut(index)
+            .ok_or(ModelError::ParamIndex { index, count })?;
+        if !value.is_finite() {
+            return Err(ModelError::NonFinite {
+                name: p.name.clone(),
+                value,
+            });
+        }
+        if p.unit == Unit::KgfmPerDeg && value <= 0.0 {
+            return Err(ModelError::Invalid(format!(
+                "{} = {value}: a stiffness must be > 0",
+                p.name
+            )));
+        }
+        p.value = value;
+        Ok(())
+    }
+
+    /// All current values, in parameter order.
+    pub fn param_values(&self) -> Vec<f64> {
+        self.params.iter().map(|p| p.value).collect()
+    }
+
+    /// Sets all values at once (`values.len()` must equal the number of parameters).
+    pub fn set_param_values(&mut self, values: &[f64]) -> Result<(), ModelError> {
+        if values.len() != self.params.len() {
+            return Err(ModelError::ParamIndex {
+                index: values.len(),
+                count: self.params.len(),
+            });
+        }
+        for (i, &v) in values.iter().enumerate() {
+            self.set_param_at(i, v)?;
+        }
+        Ok(())
+    }
+
+    /// Indices of the parameters of one kind, in order.
+    pub fn params_of_kind(&self, kind: ParamKind) -> Vec<usize> {
+        (0..self.params.len())
+            .filter(|&i| self.params[i].kind == kind)
+            .collect()
+    }
+
+    /// Index of `payload_kg`.
+    pub fn payload_param(&self) -> usize {
+        self.payload_param
+    }
+
+    /// Index of `scale_ppm`.
+    pub fn scale_param(&self) -> usize {
+        self.scale_param
+    }
+
+    /// Declared tilting values of every joint (current parameter values), if any.
+    pub fn tilt_values(&self) -> Option<Vec<TiltValues>> {
+        self.tilt.as_ref().map(|t| {
+            t.iter()
+                .map(|tp| TiltValues {
+                    clearance_deg: self.params[tp.clearance].value,
+                    backlash_deg: self.params[tp.backlash].value,
+                    stiffness_kgfm_per_deg: self.params[tp.stiffness].value,
+                })
+                .collect()
+        })
+    }
+
+    /// Index `k` of the frame (the one after element `k`) that carries `mass`.
+    pub fn mass_frame(&self, mass: &PointMass) -> usize {
+        self.joints[mass.joint].elem + mass.after
+    }
+}
+
+/// Assembles a [`Model`]: base elements first, then the robot's chain in order, then (in
+/// [`ModelBuilder::build`]) the tool elements and the encoder, tilt, payload and scale
+/// parameters.
+#[derive(Debug, Clone)]
+pub struct ModelBuilder {
+    name: String,
+    elems: Vec<Elem>,
+    robot_start: usize,
+    params: Vec<Param>,
+    joints: Vec<Joint>,
+    masses: Vec<PointMass>,
+    tilt_values: Vec<Option<TiltValues>>,
+    gamma_law: GammaLaw,
+}
+
+impl ModelBuilder {
+    /// Starts a model: adds `base_x, base_y, base_z` (mm) and `base_rx, base_ry` (deg), all 0,
+    /// as `Tx Ty Tz Rx Ry` in frame R.
+    pub fn new(name: &str) -> Self {
+        let mut b = Self {
+            name: name.to_string(),
+            elems: Vec::new(),
+            robot_start: 0,
+            params: Vec::new(),
+            joints: Vec::new(),
+            masses: Vec::new(),
+            tilt_values: Vec::new(),
+            gamma_law: GammaLaw::Linear,
+        };
+        let base = [
+            (Motion::Trans, Axis::X, "base_x"),
+            (Motion::Trans, Axis::Y, "base_y"),
+            (Motion::Trans, Axis::Z, "base_z"),
+            (Motion::Rot, Axis::X, "base_rx"),
+            (Motion::Rot, Axis::Y, "base_ry"),
+        ];
+        for (motion, axis, name) in base {
+            let unit = if motion == Motion::Rot {
+                Unit::Deg
+            } else {
+                Unit::Mm
+            };
+            let param = b.params.len();
+            b.params.push(Param {
+                name: name.into(),
+                value: 0.0,
+                unit,
+                kind: ParamKind::Base,
+            });
+            b.elems.push(Elem {
+                motion,
+                axis,
+                param,
+                joint: None,
+            });
+        }
+        b.robot_start = b.elems.len();
+        b
+    }
+
+    fn add_param(
+        &mut self,
+        name: &str,
+        value: f64,
+        unit: Unit,
+        kind: ParamKind,
+    ) -> Result<usize, ModelError> {
+        if self.params.iter().any(|p| p.name == name) {
+            return Err(ModelError::Invalid(format!(
+                "parameter name `{name}` used twice"
+            )));
+        }
+        if name.is_empty() || !name.chars().all(|c| c.is_ascii_alphanumeric() || c == '_') {
+            return Err(ModelError::Invalid(format!(
+                "parameter name `{name}`: use letters, digits and `_`"
+            )));
+        }
+        if !value.is_finite() {
+            return Err(ModelError::NonFinite {
+                name: name.into(),
+                value,
+            });
+        }
+        self.params.push(Param {
+            name: name.into(),
+            value,
+            unit,
+            kind,
+        });
+        Ok(self.params.len() - 1)
+    }
+
+    /// Appends a constant transform `R<axis>(value deg)` or `T<axis>(value mm)` whose value is
+    /// the new parameter `name`. The parameter kind is `Twist` / `Length` unless given.
+    pub fn constant(
+        &mut self,
+        motion: Motion,
+        axis: Axis,
+        name: &str,
+        value: f64,
+    ) -> Result<&mut Self, ModelError> {
+        let (unit, kind) = match motion {
+            Motion::Rot => (Unit::Deg, ParamKind::Twist),
+            Motion::Trans => (Unit::Mm, ParamKind::Length),
+        };
+        let param = self.add_param(name, value, unit, kind)?;
+        self.elems.push(Elem {
+            motion,
+            axis,
+            param,
+            joint: None,
+        });
+        Ok(self)
+    }
+
+    /// Appends the next joint: `Rz(q + offset)` (revolute) or `Tz(q + offset)` (prismatic),
+    /// with offset parameter `offset_name`, limits `[min, max]` and optional tilting values.
+    /// Joint frame i is the frame right after this element.
+    pub fn joint(
+        &mut self,
+        prismatic: bool,
+        offset_name: &str,
+        offset: f64,
+        limits: [f64; 2],
+        tilt: Option<TiltValues>,
+    ) -> Result<&mut Self, ModelError> {
+        if !(limits[0].is_finite() && limits[1].is_finite() && limits[0] <= limits[1]) {
+            return Err(ModelError::Invalid(format!(
+                "joint {}: limits [{}, {}] are not an interval",
+                self.joints.len() + 1,
+                limits[0],
+                limits[1]
+            )));
+        }
+        let unit = if prismatic { Unit::Mm } else { Unit::Deg };
+        let param = self.add_param(offset_name, offset, unit, ParamKind::JointOffset)?;
+        let joint = self.joints.len();
+        let (motion, axis) = if prismatic {
+            (Motion::Trans, Axis::Z)
+        } else {
+            (Motion::Rot, Axis::Z)
+        };
+        self.elems.push(Elem {
+            motion,
+            axis,
+            param,
+            joint: Some(joint),
+        });
+        self.joints.push(Joint {
+            elem: self.elems.len() - 1,
+            prismatic,
+            limits,
+            harmonics: Vec::new(),
+        });
+        self.tilt_values.push(tilt);
+        Ok(self)
+    }
+
+    /// Attaches a link mass to joint `joint` (1-based), `after` elements past its element.
+    pub fn mass(
+        &mut self,
+        joint: usize,
+        after: usize,
+        mass_kg: f64,
+        com_mm: [f64; 3],
+    ) -> Result<&mut Self, ModelError> {
+        if joint == 0 || joint > self.joints.len() {
+            return Err(ModelError::Invalid(format!(
+                "mass on joint {joint}: joints are numbered 1..{} (declare the mass after its joint)",
+                self.joints.len()
+            )));
+        }
+        if !(mass_kg.is_finite() && mass_kg >= 0.0 && com_mm.iter().all(|c| c.is_finite())) {
+            return Err(ModelError::Invalid(format!(
+                "mass on joint {joint}: values must be finite, kg >= 0"
+            )));
+        }
+        self.masses.push(PointMass {
+            joint: joint - 1,
+            after,
+            mass_kg,
+            com_mm: Vector3::from(com_mm),
+        });
+        Ok(self)
+    }
+
+    /// Chooses the gamma law.
+    pub fn gamma_law(&mut self, law: GammaLaw) -> &mut Self {
+        self.gamma_law = law;
+        self
+    }
+
+    /// Number of joints added so far.
+    pub fn n_joints(&self) -> usize {
+        self.joints.len()
+    }
+
+    /// Finishes the model: appends `tool_dx, tool_dy, tool_dz` (mm, `Tx Ty Tz` in the last
+    /// frame), the encoder harmonics `enc_j<i>_h<n>_sin/_cos` (deg, n = 1..3, revolute joints),
+    /// `clearance_j<i>, backlash_j<i>, stiffness_j<i>` (if every joint has tilting values),
+    /// `payload_kg` and `scale_ppm`.
+    pub fn build(mut self) -> Result<Model, ModelError> {
+        if self.joints.is_empty() {
+            return Err(ModelError::Invalid("the chain has no joint".into()));
+        }
+        let robot_elems = self.robot_start..self.elems.len();
+        for (axis, name) in [
+            (Axis::X, "tool_dx"),
+            (Axis::Y, "tool_dy"),
+            (Axis::Z, "tool_dz"),
+        ] {
+            let param = self.add_param(name, 0.0, Unit::Mm, ParamKind::Tool)?;
+            self.elems.push(Elem {
+                motion: Motion::Trans,
+                axis,
+                param,
+                joint: None,
+            });
+        }
+        let last_frame = self.elems.len() - 1;
+        for m in &self.masses {
+            if self.joints[m.joint].elem + m.after > last_frame {
+                return Err(ModelError::Invalid(format!(
+                    "mass on joint {} is {} elements past its joint, beyond the end of the chain",
+                    m.joint + 1,
+                    m.after
+                )));
+            }
+        }
+        for j in 0..self.joints.len() {
+            if self.joints[j].prismatic {
+                continue;
+            }
+            for n in 1..=HARMONIC_ORDERS {
+                let s = self.add_param(
+                    &format!("enc_j{}_h{n}_sin", j + 1),
+                    0.0,
+                    Unit::Deg,
+                    ParamKind::EncoderHarmonic,
+                )?;
+                let c = self.add_param(
+                    &format!("enc_j{}_h{n}_cos", j + 1),
+                    0.0,
+                    Unit::Deg,
+                    ParamKind::EncoderHarmonic,
+                )?;
+                self.joints[j].harmonics.push(Harmonic {
+                    order: n,
+                    sin_param: s,
+                    cos_param: c,
+                });
+            }
+        }
+        let n_tilt = self.tilt_values.iter().filter(|t| t.is_some()).count();
+        let tilt = if n_tilt == 0 {
+            None
+        } else if n_tilt < self.joints.len() {
+            return Err(ModelError::Invalid(
+                "tilting values must be given for every joint or for none".into(),
+            ));
+        } else {
+            let mut out = Vec::new();
+            for (j, tv) in self.tilt_values.clone().into_iter().enumerate() {
+                let tv = tv.ok_or_else(|| ModelError::Invalid("missing tilt values".into()))?;
+                if tv.stiffness_kgfm_per_deg <= 0.0 {
+                    return Err(ModelError::Invalid(format!(
+                        "joint {}: stiffness must be > 0",
+                        j + 1
+                    )));
+                }
+                let i = j + 1;
+                out.push(TiltParams {
+                    clearance: self.add_param(
+                        &format!("clearance_j{i}"),
+                        tv.clearance_deg,
+                        Unit::Deg,
+                        ParamKind::Tilt,
+                    )?,
+                    backlash: self.add_param(
+                        &format!("backlash_j{i}"),
+                        tv.backlash_deg,
+                        Unit::Deg,
+                        ParamKind::Tilt,
+                    )?,
+                    stiffness: self.add_param(
+                        &format!("stiffness_j{i}"),
+                        tv.stiffness_kgfm_per_deg,
+                        Unit::KgfmPerDeg,
+                        ParamKind::Tilt,
+                    )?,
+                });
+            }
+            Some(out)
+        };
+        let payload_param = self.add_param("payload_kg", 0.0, Unit::Kg, ParamKind::Payload)?;
+        let scale_param = self.add_param("scale_ppm", 0.0, Unit::Ppm, ParamKind::Scale)?;
+        Ok(Model {
+            name: self.name,
+            elems: self.elems,
+            robot_elems,
+            joints: self.joints,
+            params: self.params,
+            masses: self.masses,
+            tilt,
+            gamma_law: self.gamma_law,
+            payload_param,
+            scale_param,
+        })
+    }
+}

@@ -1,0 +1,320 @@
+//! Forward kinematics: frames of the chain, tool pose, static joint moments, tilting, ZXZ Euler
+//! angles. Lengths in mm, angles in degrees at the interface; radians inside.
+
+use nalgebra::{Matrix3, Vector3};
+
+use super::chain::{Model, Motion, TiltValues};
+use super::error::ModelError;
+use super::tilt::tilt_from_moment;
+
+/// Gravity in frame R, per kg, in kgf (MODEL.md: -z of R, 1 kgf per kg).
+pub const GRAVITY_KGF_PER_KG: Vector3<f64> = Vector3::new(0.0, 0.0, -1.0);
+
+/// Which joint tilting to apply when evaluating the chain.
+#[derive(Debug, Clone, Copy, Default)]
+pub enum Tilt<'a> {
+    /// No tilting (the conventional rigid model).
+    #[default]
+    Off,
+    /// Tilting from the static gravity moments of this pose (the declared model).
+    Static,
+    /// Tilting from externally supplied moments (kgf.m in joint frame i, one per joint), e.g.
+    /// from recursive Newton-Euler along a trajectory.
+    Moments(&'a [Vector3<f64>]),
+}
+
+/// World (frame R) placement of every frame of the chain: entry `k` is the frame after
+/// element `k` of [`Model::elems`] (base and tool elements included). With tilting, the tilt of
+/// joint i is part of the frame after the joint's element (joint frame i).
+#[derive(Debug, Clone)]
+pub struct Frames {
+    /// Rotation of frame k in R.
+    pub rot: Vec<Matrix3<f64>>,
+    /// Origin of frame k in R (mm).
+    pub pos_mm: Vec<Vector3<f64>>,
+    /// Per joint: rotation of joint frame i before its tilt (equal to `rot[elem]` untilted).
+    pub joint_rot_untilted: Vec<Matrix3<f64>>,
+}
+
+impl Frames {
+    /// Rotation and origin of the frame before element `e` (identity / origin for e = 0).
+    pub fn before(&self, e: usize) -> (Matrix3<f64>, Vector3<f64>) {
+        if e == 0 {
+            (Matrix3::identity(), Vector3::zeros())
+        } else {
+            (self.rot[e - 1], self.pos_mm[e - 1])
+        }
+    }
+
+    /// Origin of the last frame (the tool point, before the measurement scale).
+    pub fn tool_mm(&self) -> Vector3<f64> {
+        self.pos_mm.last().copied().unwrap_or_else(Vector3::zeros)
+    }
+
+    /// Rotation of the last frame.
+    pub fn tool_rot(&self) -> Matrix3<f64> {
+        self.rot.last().copied().unwrap_or_else(Matrix3::identity)
+    }
+}
+
+/// Result of forward kinematics for one pose.
+#[derive(Debug, Clone)]
+pub struct Fk {
+    /// Tool point in R (mm), measurement scale included.
+    pub position_mm: Vector3<f64>,
+    /// Tool (last frame) rotation in R.
+    pub rotation: Matrix3<f64>,
+    /// Joint moments used for tilting (kgf.m, joint frame i); empty with `Tilt::Off`.
+    pub moments_kgfm: Vec<Vector3<f64>>,
+    /// Tilts `(da, db, dt)` per joint (deg); empty with `Tilt::Off`.
+    pub tilts_deg: Vec<Vector3<f64>>,
+}
+
+impl Fk {
+    /// ZXZ Euler angles `(phi, theta, psi)` of the tool rotation, degrees (thesis eq. 2.3).
+    pub fn zxz_deg(&self) -> [f64; 3] {
+        zxz_deg(&self.rotation)
+    }
+}
+
+/// ZXZ Euler angles of thesis eq. 2.3, degrees: `phi = atan2(R13, -R23)`,
+/// `theta = atan2(-R23 cos phi + R13 sin phi, R33)`, `psi = atan2(R31, R32)`.
+pub fn zxz_deg(r: &Matrix3<f64>) -> [f64; 3] {
+    let phi = r[(0, 2)].atan2(-r[(1, 2)]);
+    let theta = (-r[(1, 2)] * phi.cos() + r[(0, 2)] * phi.sin()).atan2(r[(2, 2)]);
+    let psi = r[(2, 0)].atan2(r[(2, 1)]);
+    [phi.to_degrees(), theta.to_degrees(), psi.to_degrees()]
+}
+
+/// Rotation matrix about a coordinate axis (0 = x, 1 = y, 2 = z) by `rad`.
+pub(crate) fn axis_rotation(axis: usize, rad: f64) -> Matrix3<f64> {
+    let (s, c) = rad.sin_cos();
+    match axis {
+        0 => Matrix3::new(1.0, 0.0, 0.0, 0.0, c, -s, 0.0, s, c),
+        1 => Matrix3::new(c, 0.0, s, 0.0, 1.0, 0.0, -s, 0.0, c),
+        _ => Matrix3::new(c, -s, 0.0, s, c, 0.0, 0.0, 0.0, 1.0),
+    }
+}
+
+/// `Rx(da) . Ry(db) . Rz(dt)` for a tilt in degrees.
+pub(crate) fn tilt_rotation(t_deg: &Vector3<f64>) -> Matrix3<f64> {
+    axis_rotation(0, t_deg.x.to_radians())
+        * axis_rotation(1, t_deg.y.to_radians())
+        * axis_rotation(2, t_deg.z.to_radians())
+}
+
+/// Moments and tilts of one evaluation, with the untilted frames when they were computed.
+pub(crate) struct TiltState {
+    pub moments_kgfm: Vec<Vector3<f64>>,
+    pub tilts_deg: Vec<Vector3<f64>>,
+    pub untilted: Option<Frames>,
+}
+
+impl Model {
+    /// [`ModelError::JointCount`] unless `q_deg` has one value per joint.
+    pub fn check_joints(&self, q_deg: &[f64]) -> Result<(), ModelError> {
+        if q_deg.len() != self.joints.len() {
+            return Err(ModelError::JointCount {
+                expected: self.joints.len(),
+                found: q_deg.len(),
+            });
+        }
+        Ok(())
+    }
+
+    /// Effective joint value `q + offset + sum_n (s_n sin(n q) + c_n cos(n q))` (deg or mm) and
+    /// its derivative wrt `q`, for joint index `joint` (0-based, `< n_joints()`; panics
+    /// otherwise, like slice indexing).
+    pub fn joint_value(&self, joint: usize, q: f64) -> (f64, f64) {
+        let j = &self.joints[joint];
+        let mut v = q + self.params[self.elems[j.elem].param].value;
+        let mut dv = 1.0;
+        for h in &j.harmonics {
+            let n = f64::from(h.order);
+            let (s, c) = (n * q).to_radians().sin_cos();
+            let (a_s, a_c) = (
+                self.params[h.sin_param].value,
+                self.params[h.cos_param].value,
+            );
+            v += a_s * s + a_c * c;
+            dv += n * std::f64::consts::PI / 180.0 * (a_s * c - a_c * s);
+        }
+        (v, dv)
+    }
+
+    /// World placement of every frame for joints `q_deg`, with the given tilts (deg, one per
+    /// joint) inserted at the joint frames, or none.
+    pub fn frames(
+        &self,
+        q_deg: &[f64],
+        tilts_deg: Option<&[Vector3<f64>]>,
+    ) -> Result<Frames, ModelError> {
+        self.check_joints(q_deg)?;
+        if let Some(t) = tilts_deg {
+            if t.len() != self.joints.len() {
+                return Err(ModelError::TiltCount {
+                    expected: self.joints.len(),
+                    found: t.len(),
+                });
+            }
+        }
+        let n = self.elems.len();
+        let mut rot = Vec::with_capacity(n);
+        let mut pos_mm = Vec::with_capacity(n);
+        let mut joint_rot_untilted = Vec::with_capacity(self.joints.len());
+        let mut r = Matrix3::identity();
+        let mut p = Vector3::zeros();
+        for e in &self.elems {
+            let v = match e.joint {
+                Some(j) => self.joint_value(j, q_deg[j]).0,
+                None => self.params[e.param].value,
+            };
+            match e.motion {
+                Motion::Rot => r *= axis_rotation(e.axis.index(), v.to_radians()),
+                Motion::Trans => p += r.column(e.axis.index()) * v,
+            }
+            if let Some(j) = e.joint {
+                joint_rot_untilted.push(r);
+                if let Some(t) = tilts_deg {
+                    r *= tilt_rotation(&t[j]);
+                }
+            }
+            rot.push(r);
+            pos_mm.push(p);
+        }
+        Ok(Frames {
+            rot,
+            pos_mm,
+            joint_rot_untilted,
+        })
+    }
+
+    /// Multiplier of the measurement scale, `1 + scale_ppm * 1e-6`.
+    pub fn scale_factor(&self) -> f64 {
+        1.0 + self.params[self.scale_param].value * 1e-6
+    }
+
+    /// World positions (mm) and masses (kg) of the link masses and the payload, with the index
+    /// of the frame each is attached to.
+    pub(crate) fn mass_points(&self, fr: &Frames) -> Vec<(usize, f64, Vector3<f64>)> {
+        let mut out: Vec<_> = self
+            .masses
+            .iter()
+            .map(|m| {
+                let k = self.mass_frame(m);
+                (k, m.mass_kg, fr.rot[k] * m.com_mm + fr.pos_mm[k])
+            })
+            .collect();
+        let payload = self.params[self.payload_param].value;
+        if payload != 0.0 {
+            out.push((self.elems.len() - 1, payload, fr.tool_mm()));
+        }
+        out
+    }
+
+    /// Static gravity moments (kgf.m) of every joint in its joint frame, from untilted frames
+    /// `fr`: sum over masses carried at or after joint i of `(c - o_i) x (m g)`.
+    pub(crate) fn moments_from_frames(&self, fr: &Frames) -> Vec<Vector3<f64>> {
+        let points = self.mass_points(fr);
+        self.joints
+            .iter()
+            .map(|j| {
+                let o = fr.pos_mm[j.elem];
+                let s: Vector3<f64> = points
+                    .iter()
+                    .filter(|(k, _, _)| *k >= j.elem)
+                    .map(|(_, m, c)| ((c - o) * 1e-3).cross(&(GRAVITY_KGF_PER_KG * *m)))
+                    .sum();
+                fr.rot[j.elem].transpose() * s
+            })
+            .collect()
+    }
+
+    /// Static joint moments (kgf.m, joint frame i) at `q_deg`, computed on the untilted chain
+    /// (link masses + payload, gravity -z of R).
+    pub fn moments_kgfm(&self, q_deg: &[f64]) -> Result<Vec<Vector3<f64>>, ModelError> {
+        let fr = self.frames(q_deg, None)?;
+        Ok(self.moments_from_frames(&fr))
+    }
+
+    /// Tilts `(da, db, dt)` (deg) of every joint for moments `moments_kgfm` (one per joint).
+    pub fn tilts_deg(
+        &self,
+        moments_kgfm: &[Vector3<f64>],
+    ) -> Result<Vec<Vector3<f64>>, ModelError> {
+        let tv = self.require_tilt()?;
+        if moments_kgfm.len() != self.joints.len() {
+            return Err(ModelError::MomentCount {
+                expected: self.joints.len(),
+                found: moments_kgfm.len(),
+            });
+        }
+        Ok(moments_kgfm
+            .iter()
+            .zip(&tv)
+            .map(|(eta, tv)| tilt_from_moment(eta, tv, self.gamma_law))
+            .collect())
+    }
+
+    pub(crate) fn require_tilt(&self) -> Result<Vec<TiltValues>, ModelError> {
+        self.tilt_values().ok_or_else(|| ModelError::NoTiltData {
+            model: self.name.clone(),
+        })
+    }
+
+    /// Moments and tilts for a tilt mode (empty for `Tilt::Off`), plus the untilted frames
+    /// when they were needed.
+    pub(crate) fn tilt_state(
+        &self,
+        q_deg: &[f64],
+        tilt: Tilt<'_>,
+    ) -> Result<TiltState, ModelError> {
+        match tilt {
+            Tilt::Off => Ok(TiltState {
+                moments_kgfm: Vec::new(),
+                tilts_deg: Vec::new(),
+                untilted: None,
+            }),
+            Tilt::Static => {
+                let fr = self.frames(q_deg, None)?;
+                let moments_kgfm = self.moments_from_frames(&fr);
+                let tilts_deg = self.tilts_deg(&moments_kgfm)?;
+                Ok(TiltState {
+                    moments_kgfm,
+                    tilts_deg,
+                    untilted: Some(fr),
+                })
+            }
+            Tilt::Moments(m) => {
+                let tilts_deg = self.tilts_deg(m)?;
+                Ok(TiltState {
+                    moments_kgfm: m.to_vec(),
+                    tilts_deg,
+                    untilted: None,
+                })
+            }
+        }
+    }
+
+    /// Forward kinematics of one pose: tool point (mm, R, scale included), rotation, and the
+    /// moments and tilts used.
+    pub fn fk(&self, q_deg: &[f64], tilt: Tilt<'_>) -> Result<Fk, ModelError> {
+        let TiltState {
+            moments_kgfm,
+            tilts_deg,
+            ..
+        } = self.tilt_state(q_deg, tilt)?;
+        let fr = self.frames(q_deg, (!tilts_deg.is_empty()).then_some(&tilts_deg[..]))?;
+        Ok(Fk {
+            position_mm: fr.tool_mm() * self.scale_factor(),
+            rotation: fr.tool_rot(),
+            moments_kgfm,
+            tilts_deg,
+        })
+    }
+
+    /// Tool point only (mm, R).
+    pub fn position_mm(&self, q_deg: &[f64], tilt: Tilt<'_>) -> Result<Vector3<f64>, ModelError> {
+        Ok(self.fk(q_deg, tilt)?.position_mm)
+    }
+}

@@ -1,0 +1,377 @@
+//! Model files (TOML): a robot described as elementary transforms and/or DH / MDH / MDH+beta
+//! rows, with joint limits, tilting values, link masses and parameter overrides.
+//!
+//! ```toml
+//! name = "my_arm"
+//! gamma_law = "linear"            # optional: "linear" (declared, default) or "atan2"
+//!
+//! # The chain, in order from frame R (after the automatic base elements) to the last frame
+//! # (before the automatic tool elements). Each entry is one of:
+//! [[chain]]                       # a constant elementary transform
+//! op = "tx"                       # rx ry rz (deg) | tx ty tz (mm)
+//! name = "mount_x"                # parameter name (letters, digits, _), unique
+//! value = 55.0
+//!
+//! [[chain]]                       # a joint: op "rz" (revolute) or "tz" (prismatic)
+//! op = "rz"
+//! joint = 1                       # joints numbered 1..N in chain order
+//! name = "dth1"                   # the joint offset parameter
+//! value = 0.0                     # offset (default 0)
+//!
+//! [[chain]]                       # standard DH row: Rz(q+theta) Tz(d) Tx(a) Rx(alpha)
+//! op = "dh"                       # parameters dth<j> d<j> a<j> al<j>
+//! joint = 2
+//! theta = 0.0
+//! d = 0.0
+//! a = 190.0
+//! alpha = 0.0
+//!
+//! [[chain]]                       # modified DH row: Rx(alpha) Tx(a) [Ry(beta)] Rz(q+theta) Tz(d)
+//! op = "mdh"                      # parameters al<j> a<j> [be<j>] dth<j> d<j>; beta optional
+//! joint = 3
+//! alpha = 0.0
+//! a = 139.0
+//! beta = 0.0
+//! theta = 0.0
+//! d = 0.0
+//!
+//! [[joint]]                       # one per joint, in order (limits in deg, mm if prismatic)
+//! min = -169.5
+//! max = 169.5
+//! clearance_deg = 0.022           # tilting values: optional, but for all joints or none
+//! backlash_deg = 0.063
+//! stiffness_kgfm_per_deg = 122.0
+//!
+//! [[mass]]                        # a link mass carried by `joint`, in the frame `after`
+//! joint = 2                       # elements past the joint's element (0 = joint frame;
+//! after = 0                       # a "dh" row expands to Rz Tz Tx Rx, "mdh" to Rx Tx [Ry] Rz Tz)
+//! kg = 1.03
+//! com_mm = [100.0, 0.0, 0.0]
+//!
+//! [params]                        # overrides of any parameter, by name (deg / mm / kg / ppm)
+//! tool_dz = 12.5
+//! dth2 = 0.03
+//! ```
+//!
+//! Every model also gets the base, tool, encoder-harmonic, tilting, payload and scale
+//! parameters listed in the [`super`] module doc; set them in `[params]`.
+//! [`Model::to_toml_string`] writes the chain as elementary transforms with all current values,
+//! so writing and reading back gives the identical model.
+
+use serde::Deserialize;
+use std::collections::BTreeMap;
+use std::fmt::Write as _;
+use std::path::Path;
+
+use super::chain::{Axis, GammaLaw, Model, ModelBuilder, Motion, TiltValues};
+use super::error::ModelError;
+use super::param::ParamKind;
+
+#[derive(Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+struct ModelFile {
+    name: String,
+    #[serde(default)]
+    gamma_law: Option<String>,
+    chain: Vec<ChainEntry>,
+    #[serde(default)]
+    joint: Vec<JointEntry>,
+    #[serde(default)]
+    mass: Vec<MassEntry>,
+    #[serde(default)]
+    params: BTreeMap<String, f64>,
+}
+
+#[derive(Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+struct ChainEntry {
+    op: String,
+    name: Option<String>,
+    value: Option<f64>,
+    joint: Option<usize>,
+    theta: Option<f64>,
+    d: Option<f64>,
+    a: Option<f64>,
+    alpha: Option<f64>,
+    beta: Option<f64>,
+}
+
+#[derive(Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+struct JointEntry {
+    min: f64,
+    max: f64,
+    clearance_deg: Option<f64>,
+    backlash_deg: Option<f64>,
+    stiffness_kgfm_per_deg: Option<f64>,
+}
+
+#[derive(Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+struct MassEntry {
+    joint: usize,
+    #[serde(default)]
+    after: usize,
+    kg: f64,
+    com_mm: [f64; 3],
+}
+
+fn parse_axis_op(op: &str) -> Option<(Motion, Axis)> {
+    let motion = match op.as_bytes().first()? {
+        b'r' => Motion::Rot,
+        b't' => Motion::Trans,
+        _ => return None,
+    };
+    let axis = match op.get(1..)? {
+        "x" => Axis::X,
+        "y" => Axis::Y,
+        "z" => Axis::Z,
+        _ => return None,
+    };
+    Some((motion, axis))
+}
+
+fn op_name(motion: Motion, axis: Axis) -> &'static str {
+    match (motion, axis) {
+        (Motion::Rot, Axis::X) => "rx",
+        (Motion::Rot, Axis::Y) => "ry",
+        (Motion::Rot, Axis::Z) => "rz",
+        (Motion::Trans, Axis::X) => "tx",
+        (Motion::Trans, Axis::Y) => "ty",
+        (Motion::Trans, Axis::Z) => "tz",
+    }
+}
+
+/// Round-trip-exact decimal form of a finite f64 that TOML reads as a float.
+fn fmt_f64(v: f64) -> String {
+    format!("{v:?}")
+}
+
+fn build(file: ModelFile) -> Result<Model, String> {
+    let mut b = ModelBuilder::new(&file.name);
+    match file.gamma_law.as_deref() {
+        None | Some("linear") => {}
+        Some("atan2") => {
+            b.gamma_law(GammaLaw::Atan2);
+        }
+        Some(other) => {
+            return Err(format!(
+                "gamma_law = \"{other}\": use \"linear\" or \"atan2\""
+            ))
+        }
+    }
+    let joint_info = |j: usize| -> Result<([f64; 2], Option<TiltValues>), String> {
+        let e = file
+            .joint
+            .get(j - 1)
+            .ok_or_else(|| format!("joint {j} has no [[joint]] entry (limits)"))?;
+        let tilt = match (e.clearance_deg, e.backlash_deg, e.stiffness_kgfm_per_deg) {
+            (None, None, None) => None,
+            (Some(c), Some(b), Some(k)) => {
+                Some(TiltValues { clearance_deg: c, backlash_deg: b, stiffness_kgfm_per_deg: k })
+            }
+            _ => return Err(format!("joint {j}: give all of clearance_deg, backlash_deg, stiffness_kgfm_per_deg or none")),
+        };
+        Ok(([e.min, e.max], tilt))
+    };
+    for (n, c) in file.chain.iter().enumerate() {
+        let at = |msg: String| format!("chain entry {} (op = \"{}\"): {msg}", n + 1, c.op);
+        let need = |v: Option<f64>, field: &str| v.ok_or_else(|| at(format!("missing `{field}`")));
+        let next_joint = b.n_joints() + 1;
+        match (c.op.as_str(), c.joint) {
+            ("dh" | "mdh", None) => return Err(at("missing `joint`".into())),
+            ("dh" | "mdh", Some(j)) => {
+                if c.name.is_some() || c.value.is_some() {
+                    return Err(at(
+                        "a row takes theta, d, a, alpha (beta), not name/value".into()
+                    ));
+                }
+                let (limits, tilt) = joint_info(j).map_err(&at)?;
+                let (theta, d, a, alpha) = (
+                    c.theta.unwrap_or(0.0),
+                    need(c.d, "d")?,
+                    need(c.a, "a")?,
+                    need(c.alpha, "alpha")?,
+                );
+                if c.op == "dh" {
+                    if c.beta.is_some() {
+                        return Err(at("`beta` belongs to an \"mdh\" row".into()));
+                    }
+                    b.dh_row(j, theta, d, a, alpha, limits, tilt)
+                        .map_err(|e| at(e.to_string()))?;
+                } else {
+                    b.mdh_row(j, alpha, a, c.beta, theta, d, limits, tilt)
+                        .map_err(|e| at(e.to_string()))?;
+                }
+            }
+            (op, joint) => {
+                let (motion, axis) = parse_axis_op(op)
+                    .ok_or_else(|| at("op must be rx, ry, rz, tx, ty, tz, dh or mdh".into()))?;
+                if c.theta.is_some()
+                    || c.d.is_some()
+                    || c.a.is_some()
+                    || c.alpha.is_some()
+                    || c.beta.is_some()
+                {
+                    return Err(at(
+                        "an elementary transform takes name/value (and joint), not row fields"
+                            .into(),
+                    ));
+                }
+                let name = c
+                    .name
+                    .as_deref()
+                    .ok_or_else(|| at("missing `name`".into()))?;
+                match joint {
+                    None => {
+                        let value = need(c.value, "value")?;
+                        b.constant(motion, axis, name, value)
+                            .map_err(|e| at(e.to_string()))?;
+                    }
+                    Some(j) => {
+                        if axis != Axis::Z {
+                            return Err(at("a joint is rz (revolute) or tz (prismatic)".into()));
+                        }
+                        if j != next_joint {
+                            return Err(at(format!(
+                                "joint {j}: joints must come in order, expected {next_joint}"
+                            )));
+                        }
+                        let (limits, tilt) = joint_info(j).map_err(&at)?;
+                        b.joint(
+                            motion == Motion::Trans,
+                            name,
+                            c.value.unwrap_or(0.0),
+                            limits,
+                            tilt,
+                        )
+                        .map_err(|e| at(e.to_string()))?;
+                    }
+                }
+            }
+        }
+    }
+    if file.joint.len() != b.n_joints() {
+        return Err(format!(
+            "{} [[joint]] entries for {} joints in the chain",
+            file.joint.len(),
+            b.n_joints()
+        ));
+    }
+    for (n, m) in file.mass.iter().enumerate() {
+        b.mass(m.joint, m.after, m.kg, m.com_mm)
+            .map_err(|e| format!("mass entry {}: {e}", n + 1))?;
+    }
+    let mut model = b.build().map_err(|e| e.to_string())?;
+    for (name, &value) in &file.params {
+        model
+            .set_param(name, value)
+            .map_err(|e| format!("[params] {e}"))?;
+    }
+    Ok(model)
+}
+
+impl Model {
+    /// Parses a model file's text; `source` names it in error messages.
+    pub fn from_toml_str(text: &str, source: &str) -> Result<Model, ModelError> {
+        let file_err = |message: String| ModelError::File {
+            file: source.to_string(),
+            message,
+        };
+        let file: ModelFile = toml::from_str(text).map_err(|e| file_err(e.to_string()))?;
+        build(file).map_err(file_err)
+    }
+
+    /// Reads a model file.
+    pub fn from_file(path: &Path) -> Result<Model, ModelError> {
+        let text = std::fs::read_to_string(path).map_err(|source| ModelError::Read {
+            path: path.to_path_buf(),
+            source,
+        })?;
+        Self::from_toml_str(&text, &path.display().to_string())
+    }
+
+    /// The model as a model file: the chain as elementary transforms with the current values,
+    /// joints, masses, and the non-zero base/tool/encoder/payload/scale parameters.
+    pub fn to_toml_string(&self) -> String {
+        let mut s = String::new();
+        let _ = writeln!(
+            s,
+            "# rigctl model file (format: see rigctl::model::toml_file)"
+        );
+        let _ = writeln!(
+            s,
+            "name = \"{}\"",
+            self.name.replace('\\', "\\\\").replace('"', "\\\"")
+        );
+        let law = match self.gamma_law {
+            GammaLaw::Linear => "linear",
+            GammaLaw::Atan2 => "atan2",
+        };
+        let _ = writeln!(s, "gamma_law = \"{law}\"");
+        for e in &self.elems[self.robot_elems.clone()] {
+            let p = &self.params[e.param];
+            let _ = writeln!(s, "\n[[chain]]\nop = \"{}\"", op_name(e.motion, e.axis));
+            if let Some(j) = e.joint {
+                let _ = writeln!(s, "joint = {}", j + 1);
+            }
+            let _ = writeln!(s, "name = \"{}\"\nvalue = {}", p.name, fmt_f64(p.value));
+        }
+        let tilt = self.tilt_values();
+        for (j, joint) in self.joints.iter().enumerate() {
+            let _ = writeln!(
+                s,
+                "\n[[joint]]\nmin = {}\nmax = {}",
+                fmt_f64(joint.limits[0]),
+                fmt_f64(joint.limits[1])
+            );
+            if let Some(t) = tilt.as_ref().and_then(|t| t.get(j)) {
+                let _ = writeln!(
+                    s,
+                    "clearance_deg = {}\nbacklash_deg = {}\nstiffness_kgfm_per_deg = {}",
+                    fmt_f64(t.clearance_deg),
+                    fmt_f64(t.backlash_deg),
+                    fmt_f64(t.stiffness_kgfm_per_deg)
+                );
+            }
+        }
+        for m in &self.masses {
+            let c = m.com_mm;
+            let _ = writeln!(
+                s,
+                "\n[[mass]]\njoint = {}\nafter = {}\nkg = {}\ncom_mm = [{}, {}, {}]",
+                m.joint + 1,
+                m.after,
+                fmt_f64(m.mass_kg),
+                fmt_f64(c.x),
+                fmt_f64(c.y),
+                fmt_f64(c.z)
+            );
+        }
+        let _ = writeln!(s, "\n[params]");
+        let extra = |k: ParamKind| {
+            matches!(
+                k,
+                ParamKind::Base
+                    | ParamKind::Tool
+                    | ParamKind::EncoderHarmonic
+                    | ParamKind::Payload
+                    | ParamKind::Scale
+            )
+        };
+        for p in self
+            .params
+            .iter()
+            .filter(|p| extra(p.kind) && p.value != 0.0)
+        {
+            let _ = writeln!(s, "{} = {}", p.name, fmt_f64(p.value));
+        }
+        s
+    }
+
+    /// Writes [`Model::to_toml_string`] to `path` atomically.
+    pub fn write_file(&self, path: &Path) -> Result<(), ModelError> {
+        crate::io::atomic::write_bytes_atomic(path, self.to_toml_string().as_bytes())?;
+        Ok(())
+    }
+}

@@ -1,0 +1,277 @@
+//! Effects the declared model lacks (FORMATS.md effect ids), applied to the simulated truth.
+//!
+//! `--effect ID=VALUE`: VALUE is one number or a comma-separated list:
+//!
+//! | id | VALUE | applied as |
+//! |---|---|---|
+//! | `link_length:a2` `:a3` `:d4` `:d5` | delta mm | added to that length parameter |
+//! | `encoder_harmonic:j<i>:h<n>` | `A,phi` (deg, deg; `A` alone means phi = 0) | joint error `A sin(n q_i + phi)`: `enc_j<i>_h<n>_sin += A cos phi`, `enc_j<i>_h<n>_cos += A sin phi` |
+//! | `tool_offset` | `dx,dy,dz` mm | `tool_dx/dy/dz` (last link frame) |
+//! | `base_offset` | `dx,dy,dz` mm | `base_x/y/z` (frame R) |
+//! | `base_tilt` | `rx,ry` deg | `base_rx/ry`: the chain rotates about x, y of R while gravity stays along -z of R, so gravity changes direction in robot coordinates |
+//! | `payload` | kg | `payload_kg` (a point mass at the tool point: moments, so tilting) |
+//! | `scale` | ppm | `scale_ppm` (instrument scale about the origin of R) |
+//! | `stiffness:j<i>` | delta kgf.m/deg | **added** to the declared `stiffness_j<i>` (the result must stay > 0) |
+//! | `backlash:j<i>` `clearance:j<i>` | delta deg | **added** to the declared `backlash_j<i>` / `clearance_j<i>` |
+//! | `time_drift` | `vx,vy,vz` mm per hour (one value `v` means `0,0,v`) | measured position += v t / 3600 (a thermal drift of the instrument or base, linear in the pose time `t`) |
+//! | `time_drift:j<i>` | deg per hour | joint i's offset grows by rate x t / 3600 (thermal drift of the encoder zero) |
+//!
+//! Deltas (not absolute values) are used throughout so that an effect's VALUE is its size.
+
+use nalgebra::Vector3;
+
+use crate::model::{Model, ModelError};
+
+/// A bad `--effect` argument.
+#[derive(Debug, thiserror::Error)]
+pub enum EffectError {
+    /// No `=` in the argument.
+    #[error("effect `{0}`: expected ID=VALUE")]
+    Syntax(String),
+    /// An effect id this simulator does not know.
+    #[error("unknown effect id `{id}`; known: link_length:a2|a3|d4|d5, encoder_harmonic:j<i>:h<n>, tool_offset, base_offset, base_tilt, payload, scale, stiffness:j<i>, backlash:j<i>, clearance:j<i>, time_drift, time_drift:j<i>")]
+    UnknownId { id: String },
+    /// A value that is not a finite number, or the wrong number of values.
+    #[error("effect `{id}`: value `{value}`: {reason}")]
+    BadValue {
+        id: String,
+        value: String,
+        reason: String,
+    },
+    /// The model rejected the changed parameter (e.g. a joint it does not have, stiffness <= 0).
+    #[error("effect `{id}`: {source}")]
+    Model {
+        id: String,
+        #[source]
+        source: ModelError,
+    },
+}
+
+impl crate::error::Classify for EffectError {
+    fn kind(&self) -> crate::error::ErrorKind {
+        crate::error::ErrorKind::BadInput
+    }
+}
+
+/// What an effect changes.
+#[derive(Debug, Clone, PartialEq)]
+pub enum EffectKind {
+    /// Deltas added to named model parameters.
+    Params(Vec<(String, f64)>),
+    /// Measured position drift, mm per hour in frame R.
+    PositionDrift(Vector3<f64>),
+    /// Joint offset drift of joint index (0-based), deg per hour.
+    JointDrift(usize, f64),
+}
+
+/// One parsed `--effect`.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Effect {
+    /// The effect id as given (e.g. `encoder_harmonic:j2:h1`).
+    pub id: String,
+    /// The values as given.
+    pub values: Vec<f64>,
+    /// What it does to the truth.
+    pub kind: EffectKind,
+}
+
+fn joint_index(id: &str, s: &str) -> Result<usize, EffectError> {
+    s.strip_prefix('j')
+        .and_then(|n| n.parse::<usize>().ok())
+        .filter(|&n| n >= 1)
+        .ok_or_else(|| EffectError::UnknownId { id: id.to_string() })
+}
+
+fn expect_count(id: &str, raw: &str, values: &[f64], allowed: &[usize]) -> Result<(), EffectError> {
+    if allowed.contains(&values.len()) {
+        Ok(())
+    } else {
+        Err(EffectError::BadValue {
+            id: id.into(),
+            value: raw.into(),
+            reason: format!(
+                "expected {} comma-separated value(s)",
+                allowed
+                    .iter()
+                    .map(|n| n.to_string())
+                    .collect::<Vec<_>>()
+                    .join(" or ")
+            ),
+        })
+    }
+}
+
+/// Parses `ID=VALUE` (see the module documentation).
+pub fn parse_effect(arg: &str) -> Result<Effect, EffectError> {
+    let (id, raw) = arg
+        .split_once('=')
+        .ok_or_else(|| EffectError::Syntax(arg.to_string()))?;
+    let (id, raw) = (id.trim(), raw.trim());
+    let values: Vec<f64> = raw
+        .split(',')
+        .map(|s| {
+            s.trim()
+                .parse::<f64>()
+                .ok()
+                .filter(|v| v.is_finite())
+                .ok_or_else(|| EffectError::BadValue {
+                    id: id.into(),
+                    value: raw.into(),
+                    reason: format!("`{}` is not a finite number", s.trim()),
+                })
+        })
+        .collect::<Result<_, _>>()?;
+    let parts: Vec<&str> = id.split(':').collect();
+    let one = |name: String| -> Result<EffectKind, EffectError> {
+        expect_count(id, raw, &values, &[1])?;
+        Ok(EffectKind::Params(vec![(name, values[0])]))
+    };
+    let names3 = |names: [&str; 3]| -> Result<EffectKind, EffectError> {
+        expect_count(id, raw, &values, &[3])?;
+        Ok(EffectKind::Params(
+            names
+                .iter()
+                .zip(&values)
+                .map(|(n, v)| (n.to_string(), *v))
+                .collect(),
+        ))
+    };
+    let kind = match parts.as_slice() {
+        ["link_length", l @ ("a2" | "a3" | "d4" | "d5")] => one(l.to_string())?,
+        ["encoder_harmonic", j, h] => {
+            let ji = joint_index(id, j)?;
+            let n = h
+                .strip_prefix('h')
+                .and_then(|n| n.parse::<u32>().ok())
+                .filter(|n| (1..=3).contains(n))
+                .ok_or_else(|| EffectError::UnknownId { id: id.to_string() })?;
+            expect_count(id, raw, &values, &[1, 2])?;
+            let amp = values[0];
+            let phi = values.get(1).copied().unwrap_or(0.0).to_radians();
+            EffectKind::Params(vec![
+                (format!("enc_j{ji}_h{n}_sin"), amp * phi.cos()),
+                (format!("enc_j{ji}_h{n}_cos"), amp * phi.sin()),
+            ])
+        }
+        ["tool_offset"] => names3(["tool_dx", "tool_dy", "tool_dz"])?,
+        ["base_offset"] => names3(["base_x", "base_y", "base_z"])?,
+        ["base_tilt"] => {
+            expect_count(id, raw, &values, &[2])?;
+            EffectKind::Params(vec![
+                ("base_rx".into(), values[0]),
+                ("base_ry".into(), values[1]),
+            ])
+        }
+        ["payload"] => one("payload_kg".into())?,
+        ["scale"] => one("scale_ppm".into())?,
+        [what @ ("stiffness" | "backlash" | "clearance"), j] => {
+            let ji = joint_index(id, j)?;
+            one(format!("{what}_j{ji}"))?
+        }
+        ["time_drift"] => {
+            expect_count(id, raw, &values, &[1, 3])?;
+            let v = if values.len() == 1 {
+                Vector3::new(0.0, 0.0, values[0])
+            } else {
+                Vector3::new(values[0], values[1], values[2])
+            };
+            EffectKind::PositionDrift(v)
+        }
+        ["time_drift", j] => {
+            let ji = joint_index(id, j)?;
+            expect_count(id, raw, &values, &[1])?;
+            EffectKind::JointDrift(ji - 1, values[0])
+        }
+        _ => return Err(EffectError::UnknownId { id: id.to_string() }),
+    };
+    Ok(Effect {
+        id: id.to_string(),
+        values,
+        kind,
+    })
+}
+
+impl Effect {
+    /// Adds this effect's parameter deltas to `model` (drifts are applied per pose, see
+    /// [`TimeEffects`]). Checks that a joint-drift joint exists.
+    pub fn apply(&self, model: &mut Model) -> Result<(), EffectError> {
+        let err = |source| EffectError::Model {
+            id: self.id.clone(),
+            source,
+        };
+        match &self.kind {
+            EffectKind::Params(list) => {
+                for (name, delta) in list {
+                    let v = model.param(name).ok_or_else(|| {
+                        err(ModelError::UnknownParam {
+                            name: name.clone(),
+                            valid: model.param_names().collect::<Vec<_>>().join(", "),
+                        })
+                    })?;
+                    model.set_param(name, v + delta).map_err(err)?;
+                }
+                Ok(())
+            }
+            EffectKind::PositionDrift(_) => Ok(()),
+            EffectKind::JointDrift(j, _) => {
+                if *j >= model.n_joints() {
+                    return Err(err(ModelError::JointIndex {
+                        index: *j,
+                        count: model.n_joints(),
+                    }));
+                }
+                Ok(())
+            }
+        }
+    }
+}
+
+/// The time-dependent effects, applied pose by pose.
+#[derive(Debug, Clone, Default, PartialEq)]
+pub struct TimeEffects {
+    /// Position drift, mm per hour in R.
+    pub position_mm_per_h: Vector3<f64>,
+    /// Joint offset drift per joint, deg per hour.
+    pub joint_deg_per_h: Vec<f64>,
+}
+
+impl TimeEffects {
+    /// Collects the drifts of `effects` for a model with `n_joints` joints.
+    pub fn from_effects(effects: &[Effect], n_joints: usize) -> Self {
+        let mut out = Self {
+            position_mm_per_h: Vector3::zeros(),
+            joint_deg_per_h: vec![0.0; n_joints],
+        };
+        for e in effects {
+            match e.kind {
+                EffectKind::PositionDrift(v) => out.position_mm_per_h += v,
+                EffectKind::JointDrift(j, r) if j < n_joints => out.joint_deg_per_h[j] += r,
+                _ => {}
+            }
+        }
+        out
+    }
+
+    /// Whether any joint drifts.
+    pub fn has_joint_drift(&self) -> bool {
+        self.joint_deg_per_h.iter().any(|r| *r != 0.0)
+    }
+
+    /// `model` with the joint offsets drifted to time `t_s`.
+    pub fn drifted_model(&self, model: &Model, t_s: f64) -> Result<Model, ModelError> {
+        let mut m = model.clone();
+        for (j, rate) in self.joint_deg_per_h.iter().enumerate() {
+            if *rate != 0.0 {
+                let k = m.elems()[m.joints()[j].elem].param;
+                let v = m.params()[k].value;
+                m.set_param_at(k, v + rate * t_s / 3600.0)?;
+            }
+        }
+        Ok(m)
+    }
+
+    /// Position drift at time `t_s`, mm in R.
+    pub fn position_offset_mm(&self, t_s: f64) -> Vector3<f64> {
+        self.position_mm_per_h * (t_s / 3600.0)
+    }
+}

@@ -1,0 +1,111 @@
+//! The files of `rigctl simulate --out DIR`, all written atomically:
+//!
+//! - `cal.csv`, `val.csv`: pose files (FORMATS.md) with columns `q1..qN,x,y,z,t,id`; joints with
+//!   9 decimals (deg), positions with 9 decimals (mm), `t` with 3 decimals (s);
+//! - `truth.toml`: the truth model as a model file (`rigctl fk --model truth.toml --tilt`
+//!   reproduces the noise-free positions when no time drift is simulated);
+//! - `truth.json`: `{"format", "seed", "robot", "noise_mm", "noise", "tilt",
+//!   "pose_interval_s", "geometric_errors": {"distribution", "sigma_deg", "deltas": {name: deg}},
+//!   "effects": [{"id", "values", "parameters": {name: delta}}],
+//!   "time_drift": {"position_mm_per_h": [x, y, z], "joint_deg_per_h": [...]},
+//!   "truth_parameters": {name: value}, "cal_poses", "val_poses"}` where `truth_parameters`
+//!   lists every parameter whose truth value differs from the declared one (the values to
+//!   `--set` on the declared model).
+
+use std::fmt::Write as _;
+use std::path::Path;
+
+use serde_json::{json, Map, Value};
+
+use super::effects::EffectKind;
+use super::simulate::{SimConfig, SimError, SimOutput, SimPose};
+use crate::io::atomic::write_bytes_atomic;
+
+/// Format tag of `truth.json`.
+pub const TRUTH_JSON_FORMAT: &str = "rigctl-simulate-truth/1";
+
+/// The pose file text (header + one row per pose).
+pub fn poses_csv(poses: &[SimPose], n_joints: usize) -> String {
+    let mut s = String::new();
+    let header: Vec<String> = (1..=n_joints)
+        .map(|i| format!("q{i}"))
+        .chain(["x", "y", "z", "t", "id"].map(String::from))
+        .collect();
+    let _ = writeln!(s, "{}", header.join(","));
+    for p in poses {
+        for q in &p.q_deg {
+            let _ = write!(s, "{q:.9},");
+        }
+        let m = p.measured_mm;
+        let _ = writeln!(s, "{:.9},{:.9},{:.9},{:.3},{}", m.x, m.y, m.z, p.t_s, p.id);
+    }
+    s
+}
+
+/// The `truth.json` document.
+pub fn truth_json(out: &SimOutput, cfg: &SimConfig) -> Value {
+    let deltas: Map<String, Value> = out
+        .geometric_errors
+        .iter()
+        .map(|(n, d)| (n.clone(), json!(d)))
+        .collect();
+    let effects: Vec<Value> = cfg
+        .effects
+        .iter()
+        .map(|e| {
+            let params: Map<String, Value> = match &e.kind {
+                EffectKind::Params(list) => {
+                    list.iter().map(|(n, d)| (n.clone(), json!(d))).collect()
+                }
+                _ => Map::new(),
+            };
+            json!({"id": e.id, "values": e.values, "parameters": params})
+        })
+        .collect();
+    let truth_params: Map<String, Value> = out
+        .truth
+        .params()
+        .iter()
+        .zip(out.declared.params())
+        .filter(|(t, d)| t.value != d.value)
+        .map(|(t, _)| (t.name.clone(), json!(t.value)))
+        .collect();
+    let drift = &out.time_effects;
+    json!({
+        "format": TRUTH_JSON_FORMAT,
+        "seed": cfg.seed,
+        "robot": out.declared.name(),
+        "noise_mm": cfg.noise_mm,
+        "noise": "gaussian, independent per coordinate, standard deviation noise_mm",
+        "tilt": out.tilt,
+        "pose_interval_s": cfg.pose_interval_s,
+        "geometric_errors": {"distribution": "gaussian", "sigma_deg": cfg.geometric_sigma_deg, "deltas": deltas},
+        "effects": effects,
+        "time_drift": {
+            "position_mm_per_h": [drift.position_mm_per_h.x, drift.position_mm_per_h.y, drift.position_mm_per_h.z],
+            "joint_deg_per_h": drift.joint_deg_per_h,
+        },
+        "truth_parameters": truth_params,
+        "cal_poses": out.cal.len(),
+        "val_poses": out.val.len(),
+    })
+}
+
+/// Writes `cal.csv`, `val.csv`, `truth.toml` and `truth.json` into `dir` (created if missing).
+pub fn write_outputs(dir: &Path, out: &SimOutput, cfg: &SimConfig) -> Result<(), SimError> {
+    std::fs::create_dir_all(dir).map_err(|source| SimError::Write {
+        path: dir.to_path_buf(),
+        source,
+    })?;
+    let n = out.declared.n_joints();
+    let json_text = serde_json::to_string_pretty(&truth_json(out, cfg))
+        .map_err(|e| SimError::Config(format!("cannot serialise truth.json: {e}")))?;
+    write_bytes_atomic(&dir.join("cal.csv"), poses_csv(&out.cal, n).as_bytes())?;
+    write_bytes_atomic(&dir.join("val.csv"), poses_csv(&out.val, n).as_bytes())?;
+    write_bytes_atomic(
+        &dir.join("truth.toml"),
+        out.truth.to_toml_string().as_bytes(),
+    )?;
+    write_bytes_atomic(&dir.join("truth.json"), (json_text + "\n").as_bytes())?;
+    Ok(())
+}

@@ -1,0 +1,124 @@
+//! Separating graphite from printed red: a per-pixel "graphite darkness".
+//!
+//! Layers multiply (paper x red ink x graphite). Graphite is neutral grey, so it darkens all
+//! channels alike; red ink keeps most of the red channel and removes green and blue. The green
+//! to red ratio of a pixel therefore gives the red-ink coverage `c`, and dividing the red
+//! channel by the red ink's red transmittance at that coverage leaves the graphite alone:
+//!
+//! `rho = (G/Gp) / (R/Rp)`, `c = (1 - rho) / ((1 - Tg) - rho (1 - Tr))`,
+//! `graphite = (R/Rp) / (1 - c (1 - Tr))`, darkness = `1 - graphite`,
+//!
+//! with `Rp, Gp` the paper level and `Tr, Tg` the red ink's transmittances, estimated from the
+//! scan's most saturated pixels.
+
+use image::RgbImage;
+
+/// Darkness below which a pixel counts as paper (weights are `darkness - floor`).
+pub(crate) const DEFAULT_FLOOR: f32 = 0.12;
+
+/// The per-pixel graphite model of one scan.
+#[derive(Debug, Clone, Copy)]
+pub(crate) struct InkModel {
+    /// Paper level per channel, 0..255.
+    pub paper: [f32; 3],
+    /// Red ink transmittance `[red, green]` relative to paper, if red ink was found.
+    pub red_ink: Option<[f32; 2]>,
+    /// Darkness treated as zero weight.
+    pub floor: f32,
+}
+
+impl InkModel {
+    /// Estimates the red ink from the strongly red pixels among every `step`-th pixel of every
+    /// `step`-th row.
+    pub fn estimate(img: &RgbImage, paper: [f32; 3], floor: f32, step: usize) -> Self {
+        let step = step.max(1);
+        let (w, h) = (img.width() as usize, img.height() as usize);
+        let raw = img.as_raw();
+        let mut samples: Vec<[f32; 2]> = Vec::new();
+        for y in (0..h).step_by(step) {
+            let row = &raw[3 * w * y..3 * w * (y + 1)];
+            for px in row.chunks_exact(3).step_by(step) {
+                let r = px[0] as f32 / paper[0];
+                let g = px[1] as f32 / paper[1];
+                if r > 0.6 && g < 0.5 * r {
+                    samples.push([r, g]);
+                }
+            }
+        }
+        let red_ink = (samples.len() >= 50).then(|| {
+            // The most saturated fifth: pixels fully covered by the ink.
+            samples.sort_by(|a, b| (a[1] / a[0]).total_cmp(&(b[1] / b[0])));
+            let core_len = samples.len().div_ceil(5);
+            let core = &samples[..core_len];
+            let mid = core.len() / 2;
+            let tr = core.iter().map(|s| s[0]).sum::<f32>() / core.len() as f32;
+            let tg = core[mid][1];
+            [tr.min(1.0), tg.clamp(0.0, 0.5)]
+        });
+        Self {
+            paper,
+            red_ink,
+            floor,
+        }
+    }
+
+    /// Graphite darkness of one pixel, 0 (paper, red ink) .. 1 (black).
+    #[inline]
+    pub fn darkness(&self, px: &[u8]) -> f32 {
+        let r = px[0] as f32 / self.paper[0];
+        let mut graphite = r;
+        if let Some([tr, tg]) = self.red_ink {
+            let g = px[1] as f32 / self.paper[1];
+            if r > 1e-3 {
+                let rho = g / r;
+                if rho < 0.98 {
+                    let denom = (1.0 - tg) - rho * (1.0 - tr);
+                    if denom > 1e-3 {
+                        let c = ((1.0 - rho) / denom).clamp(0.0, 1.0);
+                        graphite = r / (1.0 - c * (1.0 - tr));
+                    }
+                }
+            }
+        }
+        (1.0 - graphite).clamp(0.0, 1.0)
+    }
+
+    /// Centroid weight of one pixel: darkness above the paper floor.
+    #[inline]
+    pub fn weight(&self, px: &[u8]) -> f32 {
+        (self.darkness(px) - self.floor).max(0.0)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn red_ink_is_removed_and_graphite_kept() {
+        let paper = [240.0, 240.0, 240.0];
+        let model = InkModel {
+            paper,
+            red_ink: Some([0.9, 0.12]),
+            floor: 0.0,
+        };
+        let mix = |red_cov: f32, graphite: f32| -> [u8; 3] {
+            let tr = 1.0 - red_cov * 0.1;
+            let tg = 1.0 - red_cov * 0.88;
+            [
+                (240.0 * tr * graphite) as u8,
+                (240.0 * tg * graphite) as u8,
+                (240.0 * tg * graphite) as u8,
+            ]
+        };
+        for cov in [0.0, 0.3, 0.7, 1.0] {
+            for graphite in [1.0, 0.45] {
+                let d = model.darkness(&mix(cov, graphite));
+                assert!(
+                    (d - (1.0 - graphite)).abs() < 0.02,
+                    "cov {cov} g {graphite}: {d}"
+                );
+            }
+        }
+    }
+}

@@ -1,0 +1,52 @@
+//! `diagnose` on real data: the UR5 laser-tracker set (shared/data/real/ur5_laser_tracker, 1000
+//! grid poses to calibrate, 20 random poses held out). Skipped when the shared data are absent.
+//! Reference bar: the published hybrid MDH + neural-network result on the same 20 poses,
+//! 0.1549 mm mean (README of the data set).
+
+use rigctl::diagnose::data::Dataset;
+use rigctl::diagnose::{diagnose, DiagnoseOptions};
+use rigctl::model::{ur5, UR5_SMR_TOOL_MM};
+
+#[test]
+fn ur5_laser_tracker_effects_lower_the_held_out_error() {
+    let Some(shared) = rigctl::shared_dir() else {
+        eprintln!("SKIPPED ur5_laser_tracker_effects_lower_the_held_out_error: shared data absent");
+        return;
+    };
+    let dir = shared.join("data/real/ur5_laser_tracker");
+    if !dir.join("grid.csv").is_file() {
+        eprintln!(
+            "SKIPPED ur5_laser_tracker_effects_lower_the_held_out_error: {} absent",
+            dir.display()
+        );
+        return;
+    }
+    let mut model = ur5().unwrap();
+    for (name, v) in ["tool_dx", "tool_dy", "tool_dz"]
+        .iter()
+        .zip(UR5_SMR_TOOL_MM)
+    {
+        model.set_param(name, v).unwrap();
+    }
+    let cal = Dataset::read(&dir.join("grid.csv"), &model).unwrap();
+    let val = Dataset::read(&dir.join("random.csv"), &model).unwrap();
+    assert_eq!((cal.len(), val.len()), (1000, 20));
+    let d = diagnose(&model, &cal, &val, &DiagnoseOptions::default()).unwrap();
+    let r = &d.report;
+    eprintln!("{}", r.table());
+    assert!(
+        !r.effects.is_empty(),
+        "the DH model explains the tracker data down to noise?\n{}",
+        r.table()
+    );
+    assert!(
+        r.final_.validation.mean_mm < 0.9 * r.declared.validation.mean_mm,
+        "{}",
+        r.table()
+    );
+    assert!(
+        r.final_.validation.mean_mm < 0.1549,
+        "worse than the published hybrid model\n{}",
+        r.table()
+    );
+}

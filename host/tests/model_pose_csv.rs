@@ -1,0 +1,158 @@
+//! Pose CSV reading (FORMATS.md): what is accepted, and every bad-input rule with the file,
+//! line and column it must name.
+
+use rigctl::error::{Classify, ErrorKind};
+use rigctl::io::pose_csv::{parse_poses, read_poses, PoseCsvError, PoseSpec};
+use rigctl::model::katana450;
+
+fn spec(require_xyz: bool) -> PoseSpec {
+    PoseSpec::for_model(&katana450(200.0).unwrap(), require_xyz)
+}
+
+#[test]
+fn reads_columns_comments_and_extras() {
+    let text = "\u{feff}# a comment\n\
+                id,t,q1,q2,q3,q4,q5,note,x,y,z\n\
+                \n\
+                p1, 0.5,1,2,3,4,5,first,10,20,30\r\n\
+                # another comment\n\
+                p2,1.5,-1,-2,-3,-4,-5,,11,21,31\n";
+    let f = parse_poses(text, "mem.csv", &spec(true)).unwrap();
+    assert_eq!(f.poses.len(), 2);
+    assert_eq!(f.extra_columns, ["note"]);
+    let p = &f.poses[0];
+    assert_eq!((p.line, p.id.as_deref(), p.t_s), (4, Some("p1"), Some(0.5)));
+    assert_eq!(p.q, [1.0, 2.0, 3.0, 4.0, 5.0]);
+    assert_eq!(p.xyz_mm, Some([10.0, 20.0, 30.0]));
+    assert_eq!(f.poses[1].line, 6);
+    assert_eq!(f.extra(0, "note"), Some("first"));
+    assert_eq!(f.extra(1, "note"), Some(""));
+    // x,y,z are optional for FK input.
+    let f = parse_poses("q5,q4,q3,q2,q1\n5,4,3,2,1\n", "mem.csv", &spec(false)).unwrap();
+    assert_eq!(f.poses[0].q, [1.0, 2.0, 3.0, 4.0, 5.0]);
+    assert_eq!(f.poses[0].xyz_mm, None);
+    assert_eq!(f.positions_mm(), None);
+}
+
+/// Each rule: text, expected line, a fragment the message must contain.
+#[test]
+fn every_bad_input_rule_names_file_line_and_column() {
+    let h = "q1,q2,q3,q4,q5,x,y,z\n";
+    let ok = "0,0,0,0,0,1,2,3\n";
+    let cases: Vec<(String, bool, usize, &str)> = vec![
+        (
+            format!("{h}{ok}0,0,,0,0,1,2,3\n"),
+            true,
+            3,
+            "column `q3`: missing value",
+        ),
+        (
+            format!("{h}{ok}0,0,abc,0,0,1,2,3\n"),
+            true,
+            3,
+            "column `q3`: not a number",
+        ),
+        (
+            format!("{h}{ok}0,0,0,0,0,NaN,2,3\n"),
+            true,
+            3,
+            "column `x`: NaN",
+        ),
+        (
+            format!("{h}{ok}0,0,0,0,0,1,inf,3\n"),
+            true,
+            3,
+            "column `y`: infinite",
+        ),
+        (
+            format!("{h}{ok}{ok}0,0,0,0,0,1,2\n"),
+            true,
+            4,
+            "7 fields, the header has 8",
+        ),
+        (format!("{h}0,0,0,0,0,1,2,3,4\n"), true, 2, "9 fields"),
+        (
+            format!("{h}{ok}0,103,0,0,0,1,2,3\n"),
+            true,
+            3,
+            "column `q2`: joint value 103 outside the limits [-30, 102]",
+        ),
+        (format!("{h}-170,0,0,0,0,1,2,3\n"), true, 2, "column `q1`"),
+        (
+            "# c\nq1,q2,q3,q4,x,y,z\n0,0,0,0,1,2,3\n".to_string(),
+            true,
+            2,
+            "column `q5` is missing",
+        ),
+        (
+            "q1,q2,q3,q4,q5\n0,0,0,0,0\n".to_string(),
+            true,
+            1,
+            "column `x` is missing",
+        ),
+        (
+            "q1,q2,q3,q4,q5,x,y\n0,0,0,0,0,1,2\n".to_string(),
+            false,
+            1,
+            "column `z` is missing",
+        ),
+        (
+            "q1,q2,q3,q4,q5,q1\n0,0,0,0,0,0\n".to_string(),
+            false,
+            1,
+            "column `q1` appears twice",
+        ),
+        (
+            "q1,q2,q3,q4,q5,t\n0,0,0,0,0,soon\n".to_string(),
+            false,
+            2,
+            "column `t`: not a number",
+        ),
+    ];
+    for (text, require_xyz, line, fragment) in cases {
+        let err = parse_poses(&text, "poses.csv", &spec(require_xyz)).unwrap_err();
+        assert_eq!(err.kind(), ErrorKind::BadInput);
+        let msg = err.to_string();
+        assert!(
+            msg.starts_with(&format!("poses.csv:{line}: ")),
+            "`{msg}` should name poses.csv line {line}"
+        );
+        assert!(
+            msg.contains(fragment),
+            "`{msg}` should contain `{fragment}`"
+        );
+    }
+}
+
+#[test]
+fn empty_files_and_missing_files() {
+    for text in ["", "# only a comment\n"] {
+        assert!(matches!(
+            parse_poses(text, "e.csv", &spec(false)),
+            Err(PoseCsvError::NoHeader { .. })
+        ));
+    }
+    assert!(matches!(
+        parse_poses("q1,q2,q3,q4,q5\n", "e.csv", &spec(false)),
+        Err(PoseCsvError::NoPoses { .. })
+    ));
+    let err = read_poses(std::path::Path::new("/nonexistent/p.csv"), &spec(false)).unwrap_err();
+    assert!(err.to_string().contains("/nonexistent/p.csv"));
+    assert_eq!(err.kind(), ErrorKind::BadInput);
+}
+
+#[test]
+fn reads_the_shared_ur5_pose_files() {
+    let Some(shared) = rigctl::shared_dir() else {
+        eprintln!("SKIPPED reads_the_shared_ur5_pose_files: ../shared is absent");
+        return;
+    };
+    let model = rigctl::model::ur5().unwrap();
+    let f = read_poses(
+        &shared.join("data/real/ur5_laser_tracker/grid.csv"),
+        &PoseSpec::for_model(&model, true),
+    )
+    .unwrap();
+    assert_eq!(f.poses.len(), 1000);
+    assert!(f.poses.iter().all(|p| p.id.is_some() && p.xyz_mm.is_some()));
+}

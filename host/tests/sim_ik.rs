@@ -1,0 +1,106 @@
+//! Inverse kinematics round trips: FK(IK(target)) = target over the workspace, for the nominal
+//! Katana, a calibrated (perturbed) one and the tilted chain.
+
+use nalgebra::Vector3;
+use rand::{Rng, SeedableRng};
+use rand_chacha::ChaCha8Rng;
+use rigctl::model::{katana450, Model, KATANA_GEOMETRIC_PARAMS};
+use rigctl::sim::ik::{solve, tool_target, IkTilt};
+
+fn random_q(rng: &mut ChaCha8Rng, model: &Model) -> Vec<f64> {
+    model
+        .joint_limits()
+        .iter()
+        .map(|l| rng.gen_range(l[0] + 1.0..l[1] - 1.0))
+        .collect()
+}
+
+/// Random joints whose tool point stays clear of the table (z > 0 in R) and of the joint-1
+/// axis, where q1 is undetermined.
+fn random_reachable(rng: &mut ChaCha8Rng, model: &Model) -> Vec<f64> {
+    loop {
+        let q = random_q(rng, model);
+        let t = tool_target(model, &q, IkTilt::Off).expect("fk");
+        let w = t.position_mm - t.axis * 200.0 - Vector3::new(55.0, 55.0, 201.5);
+        if t.position_mm.z > 0.0 && w.x.hypot(w.y) > 20.0 {
+            return q;
+        }
+    }
+}
+
+fn round_trip(model: &Model, tilt: IkTilt, n: usize, seed: u64) -> (f64, f64, usize) {
+    let mut rng = ChaCha8Rng::seed_from_u64(seed);
+    let (mut worst_mm, mut worst_axis, mut same_branch) = (0.0f64, 0.0f64, 0usize);
+    for _ in 0..n {
+        let q = random_reachable(&mut rng, model);
+        let target = tool_target(model, &q, tilt).expect("fk");
+        // a seed away from the answer: every joint shifted by up to 20 degrees
+        let seed_q: Vec<f64> = q.iter().map(|v| v + rng.gen_range(-20.0..20.0)).collect();
+        let sol = solve(model, &target, &seed_q, tilt).expect("reachable by construction");
+        let got = tool_target(model, &sol, tilt).expect("fk");
+        worst_mm = worst_mm.max((got.position_mm - target.position_mm).norm());
+        worst_axis = worst_axis.max((got.axis - target.axis).norm());
+        for (v, l) in sol.iter().zip(model.joint_limits()) {
+            assert!(
+                *v >= l[0] - 1e-9 && *v <= l[1] + 1e-9,
+                "joint {v} outside {l:?}"
+            );
+        }
+        if sol.iter().zip(&q).all(|(a, b)| (a - b).abs() < 1e-6) {
+            same_branch += 1;
+        }
+    }
+    (worst_mm, worst_axis, same_branch)
+}
+
+#[test]
+fn nominal_round_trip_is_exact_and_prefers_the_seed_branch() {
+    let model = katana450(200.0).unwrap();
+    let n = 300;
+    let (mm, axis, same) = round_trip(&model, IkTilt::Off, n, 1);
+    assert!(mm < 1e-9, "worst position error {mm} mm");
+    assert!(axis < 1e-9, "worst axis error {axis}");
+    // the seed is within 20 deg of the generating joints, so the nearest branch is (almost
+    // always) that one; singular poses (tool normal to the arm plane) may differ
+    assert!(
+        same >= n * 95 / 100,
+        "only {same}/{n} solutions on the seed's branch"
+    );
+}
+
+#[test]
+fn calibrated_model_round_trip_is_exact() {
+    let mut model = katana450(200.0).unwrap();
+    let mut rng = ChaCha8Rng::seed_from_u64(7);
+    for name in KATANA_GEOMETRIC_PARAMS {
+        let v = model.param(name).unwrap() + rng.gen_range(-0.3..0.3);
+        model.set_param(name, v).unwrap();
+    }
+    for name in ["a2", "a3", "d4", "d5"] {
+        let v = model.param(name).unwrap() + rng.gen_range(-2.0..2.0);
+        model.set_param(name, v).unwrap();
+    }
+    model.set_param("tool_dx", 1.5).unwrap();
+    model.set_param("enc_j2_h1_sin", 0.05).unwrap();
+    let (mm, axis, _) = round_trip(&model, IkTilt::Off, 150, 2);
+    assert!(mm < 1e-9, "worst position error {mm} mm");
+    assert!(axis < 1e-9, "worst axis error {axis}");
+}
+
+#[test]
+fn tilted_model_round_trip_is_exact() {
+    let model = katana450(200.0).unwrap();
+    let (mm, axis, _) = round_trip(&model, IkTilt::Static, 100, 3);
+    assert!(mm < 1e-9, "worst position error {mm} mm");
+    assert!(axis < 1e-9, "worst axis error {axis}");
+}
+
+#[test]
+fn unreachable_target_is_an_error_not_a_panic() {
+    let model = katana450(200.0).unwrap();
+    let target = rigctl::sim::paths::ToolTarget {
+        position_mm: Vector3::new(2000.0, 0.0, 200.0),
+        axis: -Vector3::z(),
+    };
+    assert!(solve(&model, &target, &[0.0; 5], IkTilt::Off).is_err());
+}

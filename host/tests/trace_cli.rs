@@ -1,0 +1,119 @@
+//! `rigctl sheet` and `rigctl trace` end to end: files, CSV contract, exit codes.
+
+use rigctl::sheet::ReferencePath;
+use rigctl::trace::{render_scan, RenderSpec};
+use std::process::Command;
+
+fn rigctl() -> Command {
+    Command::new(env!("CARGO_BIN_EXE_rigctl"))
+}
+
+fn circle_scan(dir: &std::path::Path, mirrored: bool) -> std::path::PathBuf {
+    let n = 6_284;
+    let pencil: Vec<[f64; 2]> = (0..n)
+        .map(|i| {
+            let a = std::f64::consts::TAU * i as f64 / n as f64;
+            [100.2 * a.cos(), 100.2 * a.sin()]
+        })
+        .collect();
+    let spec = RenderSpec {
+        dpi: 300.0,
+        pencil_mm: pencil,
+        pencil_closed: true,
+        reference: Some(ReferencePath::Circle),
+        rotation_deg: 1.0,
+        mirrored,
+        ..RenderSpec::default()
+    };
+    let path = dir.join(if mirrored { "mirrored.png" } else { "scan.png" });
+    render_scan(&spec).save(&path).expect("save png");
+    path
+}
+
+#[test]
+fn sheet_writes_an_a4_svg() {
+    let dir = tempfile::tempdir().expect("tempdir");
+    let out = dir.path().join("sheet.svg");
+    let st = rigctl()
+        .args(["sheet", "--out"])
+        .arg(&out)
+        .args(["--path", "circle", "--path", "line"])
+        .status()
+        .expect("run");
+    assert!(st.success());
+    let svg = std::fs::read_to_string(&out).expect("svg");
+    assert!(
+        svg.contains(r#"viewBox="0 0 210 297""#)
+            && svg.contains("<line ")
+            && svg.contains("expected 180.0 mm")
+    );
+}
+
+#[test]
+fn trace_writes_csv_along_the_circle() {
+    let dir = tempfile::tempdir().expect("tempdir");
+    let scan = circle_scan(dir.path(), false);
+    let out = dir.path().join("trace.csv");
+    let o = rigctl()
+        .arg("trace")
+        .arg(&scan)
+        .arg("--out")
+        .arg(&out)
+        .output()
+        .expect("run");
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let csv = std::fs::read_to_string(&out).expect("csv");
+    let mut lines = csv.lines();
+    assert_eq!(lines.next(), Some("x,y"));
+    let pts: Vec<[f64; 2]> = lines
+        .map(|l| {
+            let (x, y) = l.split_once(',').expect("two columns");
+            [x.parse().expect("x"), y.parse().expect("y")]
+        })
+        .collect();
+    assert!(pts.len() > 1250, "{} points", pts.len());
+    for w in pts.windows(2) {
+        assert!((w[0][0] - w[1][0]).hypot(w[0][1] - w[1][1]) <= 0.5 + 1e-3);
+    }
+    for p in &pts {
+        assert!((p[0].hypot(p[1]) - 100.2).abs() < 0.08, "{p:?}");
+    }
+}
+
+#[test]
+fn trace_exit_codes() {
+    let dir = tempfile::tempdir().expect("tempdir");
+    let mirrored = circle_scan(dir.path(), true);
+    let out = dir.path().join("t.csv");
+    let o = rigctl()
+        .arg("trace")
+        .arg(&mirrored)
+        .arg("--out")
+        .arg(&out)
+        .output()
+        .expect("run");
+    assert_eq!(o.status.code(), Some(2));
+    assert!(String::from_utf8_lossy(&o.stderr).contains("mirrored"));
+    assert!(!out.exists());
+    let o = rigctl()
+        .arg("trace")
+        .arg(dir.path().join("missing.png"))
+        .arg("--out")
+        .arg(&out)
+        .output()
+        .expect("run");
+    assert_eq!(o.status.code(), Some(2));
+    let o = rigctl()
+        .arg("trace")
+        .arg(&mirrored)
+        .arg("--out")
+        .arg(&out)
+        .arg("--no-fiducials")
+        .output()
+        .expect("run");
+    assert_eq!(
+        o.status.code(),
+        Some(2),
+        "--no-fiducials without --mm-per-px is a usage error"
+    );
+}
