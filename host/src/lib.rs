@@ -10,6 +10,8 @@
 //! | [`daq`] | the acquisition path: recordings, `record`, `export`, the virtual board |
 //! | [`sheet`] | the printable trace sheet's geometry and SVG |
 //! | [`trace`] | scanned pencil traces -> centreline in sheet mm; simulated scans |
+//! | [`urdf`] | URDF import: a serial chain of a URDF file as a [`model::Model`] (`rigctl urdf2model`) |
+//! | [`tiago`] | the TIAGo motion-capture data set (FIGAROH) as poses, and its calibration levels |
 //! | [`error`] | how errors are classified (bad input vs failure of the run) |
 #![forbid(unsafe_code)]
 
@@ -19,9 +21,13 @@ pub mod diagnose;
 pub mod error;
 pub mod io;
 pub mod model;
+pub mod plot;
+pub mod report;
 pub mod sheet;
 pub mod sim;
+pub mod tiago;
 pub mod trace;
+pub mod urdf;
 
 /// Where the shared documents and data live: `$RIG_SHARED_DIR`, else `../shared` beside the
 /// repository checkout. `None` when neither exists.

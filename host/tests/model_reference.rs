@@ -152,7 +152,7 @@ fn katana_fk_reference_rows() {
     for r in &rows {
         let exact_q = r.q.iter().all(|&q| q == 0.0);
         exact_rows += usize::from(exact_q);
-        for k in 0..6 {
+        for (k, column) in OUT.iter().enumerate() {
             let allowed = if exact_q {
                 TOL
             } else {
@@ -163,7 +163,7 @@ fn katana_fk_reference_rows() {
                 err <= allowed,
                 "katana_fk.csv line {}, column {}: got {:.9}, want {:.9} (|error| {err:.2e} > {allowed:.2e})",
                 r.line,
-                OUT[k],
+                column,
                 r.got[k],
                 r.want[k]
             );
@@ -181,7 +181,7 @@ fn katana_fk_reference_tilt_increments() {
             continue;
         };
         pairs += 1;
-        for k in 0..6 {
+        for (k, column) in OUT.iter().enumerate() {
             let got = on.got[k] - off.got[k];
             let want = on.want[k] - off.want[k];
             assert!(
@@ -189,7 +189,7 @@ fn katana_fk_reference_tilt_increments() {
                 "katana_fk.csv lines {} - {}, column {}: tilting moves it by {got:.9}, reference {want:.9}",
                 on.line,
                 off.line,
-                OUT[k]
+                column
             );
         }
     }

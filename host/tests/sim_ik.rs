@@ -103,4 +103,72 @@ fn unreachable_target_is_an_error_not_a_panic() {
         axis: -Vector3::z(),
     };
     assert!(solve(&model, &target, &[0.0; 5], IkTilt::Off).is_err());
+    // degenerate targets: no tool axis, a NaN coordinate
+    let zero_axis = rigctl::sim::paths::ToolTarget {
+        position_mm: Vector3::new(300.0, 0.0, 300.0),
+        axis: Vector3::zeros(),
+    };
+    assert!(solve(&model, &zero_axis, &[0.0; 5], IkTilt::Off).is_err());
+    let nan = rigctl::sim::paths::ToolTarget {
+        position_mm: Vector3::new(f64::NAN, 0.0, 300.0),
+        axis: -Vector3::z(),
+    };
+    assert!(solve(&model, &nan, &[0.0; 5], IkTilt::Off).is_err());
+    // a wrong seed length is a model error, not a panic
+    assert!(solve(&model, &target, &[0.0; 4], IkTilt::Off).is_err());
+}
+
+/// Golden poses from the independent reference implementation
+/// (shared/data/reference/katana_fk.csv, nominal rigid rows): the IK of each reference position
+/// and tool axis (from its ZXZ angles), seeded 15 deg away, returns the reference joints, and
+/// its tool point is the reference position.
+#[test]
+fn ik_recovers_the_reference_joints() {
+    let Some(shared) = rigctl::shared_dir() else {
+        eprintln!("SKIPPED ik_recovers_the_reference_joints: ../shared is absent");
+        return;
+    };
+    let Ok(text) = std::fs::read_to_string(shared.join("data/reference/katana_fk.csv")) else {
+        eprintln!("SKIPPED ik_recovers_the_reference_joints: reference file absent");
+        return;
+    };
+    let model = katana450(200.0).unwrap();
+    let mut checked = 0;
+    for line in text.lines().filter(|l| !l.starts_with('#')).skip(1) {
+        let f: Vec<&str> = line.split(',').collect();
+        if !f[5].is_empty() || f[6] != "0" || f[7].parse::<f64>().unwrap() != 200.0 {
+            continue;
+        }
+        let v: Vec<f64> = f
+            .iter()
+            .enumerate()
+            .filter(|(i, _)| ![5, 6].contains(i))
+            .map(|(_, s)| s.parse().unwrap())
+            .collect();
+        let q = &v[..5];
+        let p = Vector3::new(v[6], v[7], v[8]);
+        let (phi, theta) = (v[9].to_radians(), v[10].to_radians());
+        let axis = Vector3::new(
+            phi.sin() * theta.sin(),
+            -phi.cos() * theta.sin(),
+            theta.cos(),
+        );
+        let seed: Vec<f64> = q.iter().map(|x| x + 15.0).collect();
+        let target = rigctl::sim::paths::ToolTarget {
+            position_mm: p,
+            axis,
+        };
+        let sol = solve(&model, &target, &seed, IkTilt::Off).unwrap();
+        let got = tool_target(&model, &sol, IkTilt::Off).unwrap();
+        // the reference prints 9 decimals
+        assert!((got.position_mm - p).norm() < 1e-8, "{line}");
+        // q = 0 is the singular pose (tool normal to the arm plane): the seed picks the pitch
+        if q.iter().any(|x| *x != 0.0) {
+            for (a, b) in sol.iter().zip(q) {
+                assert!((a - b).abs() < 1e-5, "{line}: {sol:?}");
+            }
+        }
+        checked += 1;
+    }
+    assert!(checked >= 5, "only {checked} reference rows");
 }

@@ -9,9 +9,11 @@ mod export;
 mod fk;
 mod ports;
 mod record;
+mod report;
 mod sheet;
 mod simulate;
 mod trace;
+mod urdf2model;
 
 #[derive(clap::Parser, Debug)]
 #[command(name = "rigctl", version, about = "Low-cost robot calibration rig: record, model, simulate, calibrate")]
@@ -30,6 +32,8 @@ pub enum Command {
     Calibrate(calibrate::Args),
     /// Fit the declared model, find the effects it lacks, report before/after each.
     Diagnose(diagnose::Args),
+    /// One self-contained HTML page (tables, plots, provenance) from a run directory.
+    Report(report::Args),
     /// List serial ports.
     Ports(ports::Args),
     /// Record the DAQ board's frames to a file.
@@ -42,6 +46,8 @@ pub enum Command {
     Sheet(sheet::Args),
     /// Extract the pencil centreline from a scanned sheet (CSV x,y in mm).
     Trace(trace::Args),
+    /// Write a URDF serial chain (base link .. tip link) as a model file.
+    Urdf2model(urdf2model::Args),
 }
 
 pub fn run(cli: Cli) -> Result<(), CliError> {
@@ -50,12 +56,14 @@ pub fn run(cli: Cli) -> Result<(), CliError> {
         Command::Simulate(a) => simulate::run(a),
         Command::Calibrate(a) => calibrate::run(a),
         Command::Diagnose(a) => diagnose::run(a),
+        Command::Report(a) => report::run(a),
         Command::Ports(a) => ports::run(a),
         Command::Record(a) => record::run(a),
         Command::Export(a) => export::run(a),
         Command::BoardSim(a) => board_sim::run(a),
         Command::Sheet(a) => sheet::run(a),
         Command::Trace(a) => trace::run(a),
+        Command::Urdf2model(a) => urdf2model::run(a),
     }
 }
 

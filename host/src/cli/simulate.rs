@@ -25,10 +25,10 @@ pub struct Args {
     #[arg(long = "effect", value_name = "ID=VALUE")]
     pub effects: Vec<String>,
     /// Measurement noise, standard deviation per coordinate (mm).
-    #[arg(long, default_value_t = 0.01)]
+    #[arg(long, default_value_t = 0.01, allow_negative_numbers = true)]
     pub noise_mm: f64,
     /// Standard deviation of the random geometric errors (deg) on the 12 geometric parameters.
-    #[arg(long, default_value_t = 0.05)]
+    #[arg(long, default_value_t = 0.05, allow_negative_numbers = true)]
     pub geometric_sigma_deg: f64,
     /// Built-in robot (declared model): katana450 (default) or ur5.
     #[arg(long, value_name = "NAME", conflicts_with = "model")]

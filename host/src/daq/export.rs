@@ -3,7 +3,7 @@
 //! | file | columns | one row per |
 //! |---|---|---|
 //! | `pot.csv` | `seq,t_us,raw` | potentiometer sample; `t_us = t0_us + i * period_us` (board time, us), `raw` ADC counts |
-//! | `tilt.csv` | `sensor,t_us,x,y,z,temp` | inclinometer reading, raw counts (SCL3300 mode 1: 6000 counts/g; T[degC] = -273 + temp / 18.9) |
+//! | `tilt.csv` | `sensor,t_us,x,y,z,temp` | inclinometer reading, raw counts (SCL3300 mode 1: 6000 counts/g; T(degC) = -273 + temp / 18.9) |
 //! | `status.csv` | `host_rx_us,uptime_us,dropped_samples,dropped_frames,overruns,sensor_errors,rx_errors` | board `Status` frame; `host_rx_us` = host receive time (us since the recording's start), the rest as in `rig_protocol::Status` |
 //!
 //! Rows are in the order the frames arrived. Each file is written under a temporary name and

@@ -14,7 +14,7 @@
 
 /// SCL3300 acceleration sensitivity in measurement mode 1, counts per g.
 pub const SCL3300_COUNTS_PER_G: f64 = 6000.0;
-/// SCL3300 temperature scale: T[degC] = -273 + raw / 18.9.
+/// SCL3300 temperature scale: T(degC) = -273 + raw / 18.9.
 pub const SCL3300_TEMP_COUNTS_PER_K: f64 = 18.9;
 /// Largest ADC count (12 bits).
 pub const POT_FULL_SCALE: u16 = 4095;

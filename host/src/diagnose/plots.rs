@@ -72,6 +72,8 @@ pub fn effect_svg(trace: &EffectTrace, reg: &Regressor) -> Result<String, PlotEr
         name: trace.id.clone(),
         message: e,
     };
+    // Text needs the embedded font registered (plotters is built with `ab_glyph`).
+    crate::plot::register_fonts().map_err(|e| err(e.to_string()))?;
     let before = along(&trace.errors_before, &trace.contribution);
     let after = along(&trace.errors_after, &trace.contribution);
     let model: Vec<f64> = trace.contribution.iter().map(|d| d.norm()).collect();

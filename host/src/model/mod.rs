@@ -26,7 +26,11 @@
 //!   table 4.2; tilting table 5.2). [`KATANA_GEOMETRIC_PARAMS`] lists the thesis's 12.
 //! - [`ur5`]`()` (standard DH rows `dth<i> d<i> a<i> al<i>`, i = 1..6; tool point = flange,
 //!   [`UR5_SMR_TOOL_MM`] is the laser-tracker SMR offset to `--set`; no masses, no tilting).
-//! - [`preset`]`(name, tool_mm)`.
+//! - [`preset`]`(name, tool_mm)`; [`choose_model`]`(&ModelChoice { robot, model_file, tool_mm,
+//!   sets })` implements the CLI's `--robot | --model`, `--tool-mm`, `--set NAME=VALUE`
+//!   ([`parse_set`]).
+//! - Other arms: [`ModelBuilder`] (`new`, `constant`, `joint`, `dh_row`, `mdh_row`, `mass`,
+//!   `build`), or a model file.
 //!
 //! # Evaluation (all `&self`, joints `q_deg` in deg / mm)
 //! - [`Model::fk`]`(q, Tilt) -> Fk { position_mm, rotation, moments_kgfm, tilts_deg }`,

@@ -13,7 +13,8 @@
 //!
 //! The rotation of the tool about its own axis is not free (it follows from q1..q5). When `t` is
 //! normal to the arm plane (`t = -+e_n`, as at q = 0) the roll axis may point anywhere in the
-//! plane and the arm has a one-parameter self-motion; the seed's wrist pitch is used there.
+//! plane and the arm has a one-parameter self-motion; the reachable wrist pitch nearest the
+//! seed's is used there.
 //!
 //! # Method
 //! A closed-form solution on the model's geometry at q = 0 (lengths a2, a3, d4, d5 and the
@@ -126,7 +127,8 @@ fn wrap_rad(a: f64) -> f64 {
 }
 
 /// Closed-form candidates (rad, unwrapped later) for the nominal Katana geometry.
-/// `phi_seed` is the wrist pitch `q2+q3+q4` to use when the roll axis is free.
+/// `phi_seed` is the wrist pitch `q2+q3+q4` wanted when the roll axis is free (the reachable
+/// pitch nearest to it is used).
 pub fn closed_form_candidates(
     geo: &ArmGeometry,
     target: &ToolTarget,
@@ -149,9 +151,29 @@ pub fn closed_form_candidates(
         let c5 = -t.dot(&e_n);
         let t_p = t - e_n * t.dot(&e_n);
         let s_abs = t_p.norm();
+        // elbow position of the planar 2-link problem for wrist pitch `phi`, if reachable
+        let planar = |phi: f64| {
+            let r = -e_rho * phi.sin() + up * phi.cos();
+            let p4 = w - r * geo.d4_mm;
+            let (rho, h) = (p4.dot(&e_rho), p4.z);
+            let (a2, a3) = (geo.a2_mm, geo.a3_mm);
+            let d = (rho * rho + h * h - a2 * a2 - a3 * a3) / (2.0 * a2 * a3);
+            (-1.0 - 1e-12..=1.0 + 1e-12)
+                .contains(&d)
+                .then_some((rho, h, d.clamp(-1.0, 1.0)))
+        };
         for sgn in [1.0, -1.0] {
             let (phi, q5) = if s_abs < 1e-12 {
-                (phi_seed, 0f64.atan2(c5))
+                // singular: the roll axis may point anywhere in the arm plane; take the
+                // reachable pitch nearest the seed's (1-degree search)
+                let Some(phi) = (0..=180)
+                    .flat_map(|k| [k, -k])
+                    .map(|k| phi_seed + f64::from(k).to_radians())
+                    .find(|phi| planar(*phi).is_some())
+                else {
+                    break;
+                };
+                (phi, 0f64.atan2(c5))
             } else {
                 let e_phi = t_p * (sgn / s_abs);
                 (
@@ -159,19 +181,14 @@ pub fn closed_form_candidates(
                     (sgn * s_abs).atan2(c5),
                 )
             };
-            let r = -e_rho * phi.sin() + up * phi.cos();
-            let p4 = w - r * geo.d4_mm;
-            let (rho, h) = (p4.dot(&e_rho), p4.z);
-            let (a2, a3) = (geo.a2_mm, geo.a3_mm);
-            let d = (rho * rho + h * h - a2 * a2 - a3 * a3) / (2.0 * a2 * a3);
-            if !(-1.0 - 1e-12..=1.0 + 1e-12).contains(&d) {
-                continue;
-            }
-            for elbow in [1.0, -1.0] {
-                let q3 = elbow * d.clamp(-1.0, 1.0).acos();
-                let q2 = h.atan2(rho) - (a3 * q3.sin()).atan2(a2 + a3 * q3.cos());
-                let q4 = phi - q2 - q3;
-                out.push([q1, q2, q3, q4, q5].map(wrap_rad));
+            if let Some((rho, h, d)) = planar(phi) {
+                let (a2, a3) = (geo.a2_mm, geo.a3_mm);
+                for elbow in [1.0, -1.0] {
+                    let q3 = elbow * d.acos();
+                    let q2 = h.atan2(rho) - (a3 * q3.sin()).atan2(a2 + a3 * q3.cos());
+                    let q4 = phi - q2 - q3;
+                    out.push([q1, q2, q3, q4, q5].map(wrap_rad));
+                }
             }
             if s_abs < 1e-12 {
                 break;
@@ -229,7 +246,8 @@ pub fn tool_target(model: &Model, q_deg: &[f64], tilt: IkTilt) -> Result<ToolTar
     })
 }
 
-/// Residual (target - current) and joint Jacobian (per degree) at `q_deg`.
+/// Residual (target - current; the axis rows weighted by [`AXIS_WEIGHT_MM`]) and joint
+/// Jacobian (per degree, or per mm for a prismatic joint) at `q_deg`.
 fn residual_and_jacobian(
     model: &Model,
     q_deg: &[f64],
@@ -253,16 +271,13 @@ fn residual_and_jacobian(
     for (j, joint) in model.joints().iter().enumerate() {
         let o = fr.pos_mm[joint.elem];
         let z = fr.joint_rot_untilted[j].column(2).into_owned();
-        let dv = model.joint_value(j, q_deg[j]).1 * std::f64::consts::PI / 180.0;
-        let col_p = if joint.prismatic {
-            z * (dv * 180.0 / std::f64::consts::PI * scale)
+        // d(effective joint value)/d(reading): 1 + the encoder harmonics' slope
+        let dv = model.joint_value(j, q_deg[j]).1;
+        let (col_p, col_t) = if joint.prismatic {
+            (z * (dv * scale), Vector3::zeros())
         } else {
-            z.cross(&(p - o * scale)) * dv
-        };
-        let col_t = if joint.prismatic {
-            Vector3::zeros()
-        } else {
-            z.cross(&t) * dv
+            let per_deg = dv.to_radians();
+            (z.cross(&(p - o * scale)) * per_deg, z.cross(&t) * per_deg)
         };
         for k in 0..3 {
             jac[(k, j)] = col_p[k];
@@ -272,8 +287,12 @@ fn residual_and_jacobian(
     Ok((e, jac, dp.norm(), dt.norm()))
 }
 
-/// Gauss-Newton refinement of `q_deg` on the model's FK. Returns the joints and the final
-/// position residual (mm) and axis residual.
+/// Gauss-Newton refinement of `q_start_deg` on the model's FK (SVD least squares on the 6 x n
+/// system of position and weighted tool-axis residuals, steps capped at 10 deg, stopping when
+/// converged, after 60 iterations, or when a step makes the residual grow more than 4-fold).
+/// With tilting the Jacobian leaves out the tilt's slope, so convergence is linear (the tilt
+/// changes slowly with the joints). Returns the joints (deg) and the final position residual
+/// (mm) and axis residual (unit vector).
 pub fn refine(
     model: &Model,
     target: &ToolTarget,
@@ -321,6 +340,19 @@ pub fn solve(
     tilt: IkTilt,
 ) -> Result<Vec<f64>, IkError> {
     model.check_joints(seed_deg)?;
+    let axis_norm = target.axis.norm();
+    let finite = target
+        .position_mm
+        .iter()
+        .chain(target.axis.iter())
+        .all(|v| v.is_finite());
+    if !finite || axis_norm < 1e-9 {
+        return Err(IkError::Unreachable {
+            position_mm: target.position_mm.into(),
+            axis: target.axis.into(),
+            residual_mm: f64::INFINITY,
+        });
+    }
     let geo = ArmGeometry::of(model)?;
     let limits = model.joint_limits();
     let phi_seed = (seed_deg[1] + seed_deg[2] + seed_deg[3]).to_radians();
@@ -342,7 +374,8 @@ pub fn solve(
     for c in cands {
         let (q, rp, rt) = refine(model, target, &c, tilt)?;
         best = best.min(rp);
-        if rp >= TOL_MM * 10.0 || rt >= TOL_AXIS * 1e3 {
+        let converged = rp < TOL_MM * 10.0 && rt < TOL_AXIS * 1e3;
+        if !converged {
             continue;
         }
         // the same pose with every angle in its representation nearest the seed, if inside

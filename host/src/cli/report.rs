@@ -1,0 +1,44 @@
+//! `rigctl report RUN_DIR --html OUT.html [--robot NAME] [--tool-mm L]`: one self-contained HTML
+//! page from a run directory (see `rigctl::report`).
+
+use std::path::PathBuf;
+
+use rigctl::report::{write_report, ReportOptions};
+
+use super::CliError;
+
+#[derive(clap::Args, Debug)]
+pub struct Args {
+    /// Directory holding any of cal.csv, val.csv, truth.json, truth.toml, calibrate*.json,
+    /// diagnose*.json, model files (*.toml), commands.txt.
+    #[arg(value_name = "RUN_DIR")]
+    pub run_dir: PathBuf,
+    /// The page to write.
+    #[arg(long, value_name = "OUT.html")]
+    pub html: PathBuf,
+    /// Declared (nominal) robot preset (default: truth.json's robot, else katana450).
+    #[arg(long, value_name = "NAME")]
+    pub robot: Option<String>,
+    /// Katana tool length d5 of the declared model (mm).
+    #[arg(long, value_name = "L")]
+    pub tool_mm: Option<f64>,
+}
+
+pub fn run(args: Args) -> Result<(), CliError> {
+    let opts = ReportOptions {
+        robot: args.robot,
+        tool_mm: args.tool_mm,
+    };
+    let report = write_report(&args.run_dir, &args.html, &opts)?;
+    println!(
+        "report: {} tables, {} figures, {} notes written to {}",
+        report.tables.len(),
+        report.figures.len(),
+        report.notes.len(),
+        args.html.display()
+    );
+    for n in &report.notes {
+        eprintln!("note: {n}");
+    }
+    Ok(())
+}

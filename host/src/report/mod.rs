@@ -1,0 +1,172 @@
+//! `rigctl report RUN_DIR --html OUT.html`: one self-contained HTML page (inline CSS and SVG, no
+//! scripts, no external links) from whatever a run directory holds.
+//!
+//! | module | holds |
+//! |---|---|
+//! | [`run_dir`] | the files understood (`cal.csv`, `val.csv`, `truth.json`, `truth.toml`, `calibrate*.json`, `diagnose*.json`, other `*.toml` = calibrated models, `commands.txt` / `*.cmd`) and their SHA-256 |
+//! | [`table`] | thesis table 4.5 (min / max / average of abs(dX) abs(dY) abs(dZ) abs(dP)) from JSON stats or error vectors |
+//! | [`analysis`] | recomputed numbers: per-pose errors, parameter influence (fig. 3.8), moments and tilts (fig. 5.8-5.10), path error (fig. 5.12) |
+//! | [`build`] | [`build_report`]: run directory -> [`Report`] |
+//! | [`html`] | [`render_html`]: [`Report`] -> page |
+//!
+//! Missing or unreadable pieces become notes on the page; a directory with nothing usable is
+//! [`ReportError::NothingUsable`] (bad input, exit 2).
+
+pub mod analysis;
+pub mod build;
+pub mod html;
+pub mod run_dir;
+pub mod table;
+
+use std::path::{Path, PathBuf};
+
+pub use build::build_report;
+pub use html::render_html;
+pub use run_dir::{FileInfo, RunDir};
+pub use table::ErrorTable;
+
+use crate::error::{Classify, ErrorKind};
+use crate::io::atomic::AtomicWriteError;
+
+/// Why a report could not be made.
+#[derive(Debug, thiserror::Error)]
+pub enum ReportError {
+    /// The run directory cannot be listed.
+    #[error("cannot read run directory {path}: {source}")]
+    Dir {
+        path: PathBuf,
+        #[source]
+        source: std::io::Error,
+    },
+    /// Nothing in the directory could be used.
+    #[error("{path}: nothing to report (expected cal.csv, val.csv, calibrate*.json or diagnose*.json){}", notes_suffix(.notes))]
+    NothingUsable { path: PathBuf, notes: Vec<String> },
+    /// The page could not be written.
+    #[error(transparent)]
+    Write(#[from] AtomicWriteError),
+}
+
+fn notes_suffix(notes: &[String]) -> String {
+    if notes.is_empty() {
+        String::new()
+    } else {
+        format!("; {}", notes.join("; "))
+    }
+}
+
+impl Classify for ReportError {
+    fn kind(&self) -> ErrorKind {
+        match self {
+            ReportError::Dir { .. } | ReportError::NothingUsable { .. } => ErrorKind::BadInput,
+            ReportError::Write(_) => ErrorKind::Failure,
+        }
+    }
+}
+
+/// Options of `rigctl report`.
+#[derive(Debug, Clone, Default)]
+pub struct ReportOptions {
+    /// Declared (nominal) robot preset; default: `truth.json`'s `robot`, else `katana450`.
+    pub robot: Option<String>,
+    /// Katana tool length d5 (mm) of the declared model.
+    pub tool_mm: Option<f64>,
+}
+
+/// A figure: caption and inline SVG.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Figure {
+    /// What the figure shows.
+    pub caption: String,
+    /// The SVG document.
+    pub svg: String,
+}
+
+/// One identified parameter.
+#[derive(Debug, Clone, PartialEq)]
+pub struct ParamRow {
+    /// Name (MODEL.md).
+    pub name: String,
+    /// Identified value (deg / mm).
+    pub value: f64,
+    /// One standard deviation, if fitted.
+    pub sigma: Option<f64>,
+    /// Value in the nominal model.
+    pub nominal: Option<f64>,
+    /// Value in the simulation truth (truth.toml), if present.
+    pub truth: Option<f64>,
+}
+
+/// The parameters of one `calibrate --json` document.
+#[derive(Debug, Clone, PartialEq)]
+pub struct ParamTable {
+    /// File name.
+    pub source: String,
+    /// Method.
+    pub method: String,
+    /// Rows in document order.
+    pub rows: Vec<ParamRow>,
+    /// Unidentifiable parameters or combinations.
+    pub unidentifiable: Vec<String>,
+    /// Condition number, if given.
+    pub condition_number: Option<f64>,
+}
+
+/// One effect added by `diagnose`.
+#[derive(Debug, Clone, PartialEq)]
+pub struct EffectRow {
+    /// Effect id (FORMATS.md).
+    pub id: String,
+    /// `name = value, ...`.
+    pub parameters: String,
+    /// Validation mean error before adding it (mm).
+    pub validation_mean_mm_before: Option<f64>,
+    /// ... and after (mm).
+    pub validation_mean_mm_after: Option<f64>,
+    /// Why it was accepted.
+    pub evidence: String,
+}
+
+/// The `diagnose --json` part.
+#[derive(Debug, Clone, PartialEq, Default)]
+pub struct DiagnoseSection {
+    /// File name.
+    pub source: String,
+    /// Declared vs final model tables.
+    pub tables: Vec<ErrorTable>,
+    /// Effects in the order added.
+    pub effects: Vec<EffectRow>,
+    /// What remains unexplained.
+    pub unexplained: String,
+}
+
+/// Everything on the page.
+#[derive(Debug, Clone, Default)]
+pub struct Report {
+    /// The run directory as given.
+    pub run_dir: String,
+    /// rigctl's version.
+    pub rigctl_version: &'static str,
+    /// Table 4.5 style tables.
+    pub tables: Vec<ErrorTable>,
+    /// Figures.
+    pub figures: Vec<Figure>,
+    /// Identified parameters.
+    pub parameters: Vec<ParamTable>,
+    /// Diagnosis.
+    pub diagnose: Option<DiagnoseSection>,
+    /// Facts from `truth.json`.
+    pub simulation: Vec<(String, String)>,
+    /// Recorded command lines (file, text).
+    pub commands: Vec<(String, String)>,
+    /// Files of the run directory.
+    pub files: Vec<FileInfo>,
+    /// What was skipped and why.
+    pub notes: Vec<String>,
+}
+
+/// Builds the report of `dir` and writes it to `out` atomically; returns the report.
+pub fn write_report(dir: &Path, out: &Path, opts: &ReportOptions) -> Result<Report, ReportError> {
+    let report = build_report(dir, opts)?;
+    crate::io::atomic::write_bytes_atomic(out, render_html(&report).as_bytes())?;
+    Ok(report)
+}

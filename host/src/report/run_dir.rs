@@ -1,0 +1,174 @@
+//! What a run directory holds: the files `rigctl report` understands, and their provenance.
+
+use std::path::{Path, PathBuf};
+
+use serde_json::Value;
+use sha2::{Digest, Sha256};
+
+use super::ReportError;
+
+/// Name, size and SHA-256 of one file of the run directory.
+#[derive(Debug, Clone, PartialEq)]
+pub struct FileInfo {
+    /// File name (no directory).
+    pub name: String,
+    /// Size in bytes.
+    pub size_bytes: u64,
+    /// SHA-256 of the content, lowercase hex.
+    pub sha256: String,
+    /// What the report used it as (`"calibration poses"`, `"model"`, ...; empty if unused).
+    pub role: String,
+}
+
+/// The files found in a run directory, sorted by role.
+#[derive(Debug, Clone, Default)]
+pub struct RunDir {
+    /// The directory.
+    pub dir: PathBuf,
+    /// Every regular file, sorted by name.
+    pub files: Vec<FileInfo>,
+    /// `cal.csv`.
+    pub cal_csv: Option<PathBuf>,
+    /// `val.csv`.
+    pub val_csv: Option<PathBuf>,
+    /// `truth.json` (from `rigctl simulate`), parsed.
+    pub truth_json: Option<Value>,
+    /// `truth.toml` (the simulated truth model).
+    pub truth_toml: Option<PathBuf>,
+    /// Every `calibrate*.json`, parsed: (file name, document).
+    pub calibrate: Vec<(String, Value)>,
+    /// `diagnose*.json`, parsed (the first by name).
+    pub diagnose: Option<(String, Value)>,
+    /// Every other `*.toml` (calibrated models), sorted by name.
+    pub models: Vec<PathBuf>,
+    /// Recorded command lines (`commands.txt`, `*.cmd`), (file name, text).
+    pub commands: Vec<(String, String)>,
+    /// Things that could not be used, with the reason.
+    pub notes: Vec<String>,
+}
+
+/// Lowercase hex SHA-256 of `bytes`.
+pub fn sha256_hex(bytes: &[u8]) -> String {
+    Sha256::digest(bytes)
+        .iter()
+        .map(|b| format!("{b:02x}"))
+        .collect()
+}
+
+fn read_json(path: &Path, name: &str, notes: &mut Vec<String>) -> Option<Value> {
+    let text = std::fs::read_to_string(path)
+        .map_err(|e| notes.push(format!("{name}: cannot read: {e}")))
+        .ok()?;
+    serde_json::from_str(&text)
+        .map_err(|e| notes.push(format!("{name}: not valid JSON ({e}); skipped")))
+        .ok()
+}
+
+impl RunDir {
+    /// Scans `dir` (not recursively). Unreadable or malformed files become notes; only a
+    /// missing or unreadable directory is an error.
+    pub fn scan(dir: &Path) -> Result<Self, ReportError> {
+        let io = |source| ReportError::Dir {
+            path: dir.to_path_buf(),
+            source,
+        };
+        let mut names: Vec<String> = std::fs::read_dir(dir)
+            .map_err(io)?
+            .filter_map(|e| e.ok())
+            .filter(|e| e.file_type().map(|t| t.is_file()).unwrap_or(false))
+            .map(|e| e.file_name().to_string_lossy().into_owned())
+            .filter(|n| !n.starts_with('.'))
+            .collect();
+        names.sort();
+        let mut run = RunDir {
+            dir: dir.to_path_buf(),
+            ..Default::default()
+        };
+        for name in names {
+            let path = dir.join(&name);
+            let bytes = match std::fs::read(&path) {
+                Ok(b) => b,
+                Err(e) => {
+                    run.notes.push(format!("{name}: cannot read: {e}"));
+                    continue;
+                }
+            };
+            let lower = name.to_ascii_lowercase();
+            let role = if lower == "cal.csv" {
+                run.cal_csv = Some(path.clone());
+                "calibration poses"
+            } else if lower == "val.csv" {
+                run.val_csv = Some(path.clone());
+                "validation poses"
+            } else if lower == "truth.json" {
+                run.truth_json = read_json(&path, &name, &mut run.notes);
+                "simulation truth"
+            } else if lower == "truth.toml" {
+                run.truth_toml = Some(path.clone());
+                "truth model"
+            } else if lower.starts_with("calibrate") && lower.ends_with(".json") {
+                match read_json(&path, &name, &mut run.notes) {
+                    Some(v) => {
+                        run.calibrate.push((name.clone(), v));
+                        "calibrate result"
+                    }
+                    None => "",
+                }
+            } else if lower.starts_with("diagnose") && lower.ends_with(".json") {
+                if run.diagnose.is_none() {
+                    if let Some(v) = read_json(&path, &name, &mut run.notes) {
+                        run.diagnose = Some((name.clone(), v));
+                    }
+                }
+                "diagnose result"
+            } else if lower.ends_with(".toml") {
+                run.models.push(path.clone());
+                "model"
+            } else if lower == "commands.txt" || lower.ends_with(".cmd") {
+                run.commands
+                    .push((name.clone(), String::from_utf8_lossy(&bytes).into_owned()));
+                "command lines"
+            } else {
+                ""
+            };
+            run.files.push(FileInfo {
+                name,
+                size_bytes: bytes.len() as u64,
+                sha256: sha256_hex(&bytes),
+                role: role.to_string(),
+            });
+        }
+        Ok(run)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn sha256_matches_the_fips_180_2_examples() {
+        // FIPS 180-2 appendix B.1 and the empty message.
+        assert_eq!(
+            sha256_hex(b"abc"),
+            "ba7816bf8f01cfea414140de5dae2223b00361a396177a9cb410ff61f20015ad"
+        );
+        assert_eq!(
+            sha256_hex(b""),
+            "e3b0c44298fc1c149afbf4c8996fb92427ae41e4649b934ca495991b7852b855"
+        );
+    }
+
+    #[test]
+    fn malformed_json_is_a_note_not_an_error() {
+        let dir = tempfile::tempdir().unwrap();
+        std::fs::write(dir.path().join("calibrate.json"), "{not json").unwrap();
+        std::fs::write(dir.path().join("m.toml"), "x").unwrap();
+        let run = RunDir::scan(dir.path()).unwrap();
+        assert!(run.calibrate.is_empty());
+        assert_eq!(run.notes.len(), 1, "{:?}", run.notes);
+        assert!(run.notes[0].contains("calibrate.json"));
+        assert_eq!(run.models.len(), 1);
+        assert_eq!(run.files.len(), 2);
+    }
+}

@@ -1,0 +1,16 @@
+//! URDF import: any serial chain of a URDF file (base link to tip link) as a
+//! [`crate::model::Model`], so every command can use it through a model file
+//! (`rigctl urdf2model`, then `--model`).
+//!
+//! * [`Urdf::from_file`] / [`Urdf::parse`]: links and joints (URDF units), errors with
+//!   `file:line:column`.
+//! * [`import_chain`]`(&urdf, &ImportOptions) -> Imported { model, joint_names }`: the chain as
+//!   elementary transforms; the structure and parameter names are documented in [`import`].
+
+pub mod error;
+pub mod import;
+pub mod parse;
+
+pub use error::UrdfError;
+pub use import::{import_chain, param_stem, rpy_matrix, rpy_of, ImportOptions, Imported};
+pub use parse::{JointType, Urdf, UrdfJoint};

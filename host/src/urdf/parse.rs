@@ -1,0 +1,317 @@
+//! The kinematic part of a URDF file: links and joints (origin, axis, type, limits).
+//!
+//! Only `<joint>` elements that are direct children of `<robot>` count (the ones inside
+//! `<transmission>` or `<gazebo>` are references, not joints). Values stay in URDF units
+//! (metres, radians) here; [`super::import`] converts at the model's edge.
+
+use std::collections::HashMap;
+
+use super::error::UrdfError;
+
+/// URDF joint type.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum JointType {
+    Revolute,
+    Continuous,
+    Prismatic,
+    Fixed,
+    Floating,
+    Planar,
+}
+
+impl JointType {
+    fn parse(s: &str) -> Option<Self> {
+        Some(match s {
+            "revolute" => Self::Revolute,
+            "continuous" => Self::Continuous,
+            "prismatic" => Self::Prismatic,
+            "fixed" => Self::Fixed,
+            "floating" => Self::Floating,
+            "planar" => Self::Planar,
+            _ => return None,
+        })
+    }
+
+    /// The URDF spelling.
+    pub fn as_str(self) -> &'static str {
+        match self {
+            Self::Revolute => "revolute",
+            Self::Continuous => "continuous",
+            Self::Prismatic => "prismatic",
+            Self::Fixed => "fixed",
+            Self::Floating => "floating",
+            Self::Planar => "planar",
+        }
+    }
+}
+
+/// One `<joint>` of the file (URDF units: m, rad).
+#[derive(Debug, Clone, PartialEq)]
+pub struct UrdfJoint {
+    /// The `name` attribute.
+    pub name: String,
+    /// The `type` attribute.
+    pub joint_type: JointType,
+    /// `<parent link=..>`.
+    pub parent: String,
+    /// `<child link=..>`.
+    pub child: String,
+    /// `<origin xyz>` (m), default 0.
+    pub origin_xyz_m: [f64; 3],
+    /// `<origin rpy>` (rad, fixed-axis roll-pitch-yaw: `R = Rz(y) Ry(p) Rx(r)`), default 0.
+    pub origin_rpy_rad: [f64; 3],
+    /// `<axis xyz>` as written (not normalised), default `1 0 0` as the URDF spec says.
+    pub axis: [f64; 3],
+    /// `<limit lower upper>` (rad or m), if the element is present.
+    pub limits: Option<[f64; 2]>,
+    /// 1-based line of the `<joint>` element.
+    pub line: u32,
+}
+
+/// The links and joints of a URDF file.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Urdf {
+    /// Where the text came from (file name), for messages.
+    pub source_name: String,
+    /// The `<robot name>`.
+    pub robot_name: String,
+    /// Link names, in file order.
+    pub links: Vec<String>,
+    /// Joints, in file order.
+    pub joints: Vec<UrdfJoint>,
+}
+
+impl Urdf {
+    /// Reads and parses a URDF file.
+    pub fn from_file(path: &std::path::Path) -> Result<Self, UrdfError> {
+        let text = std::fs::read_to_string(path).map_err(|source| UrdfError::Read {
+            path: path.to_path_buf(),
+            source,
+        })?;
+        Self::parse(&text, &path.display().to_string())
+    }
+
+    /// Parses URDF text; `source_name` names it in error messages.
+    pub fn parse(text: &str, source_name: &str) -> Result<Self, UrdfError> {
+        let doc = roxmltree::Document::parse(text).map_err(|e| UrdfError::Xml {
+            source_name: source_name.to_string(),
+            message: e.to_string(),
+        })?;
+        let ctx = Ctx {
+            doc: &doc,
+            source_name,
+        };
+        let robot = doc.root_element();
+        if robot.tag_name().name() != "robot" {
+            return Err(ctx.err(robot, "the root element must be <robot>".into()));
+        }
+        let robot_name = robot.attribute("name").unwrap_or("urdf").to_string();
+        let mut links = Vec::new();
+        let mut joints = Vec::new();
+        for node in robot.children().filter(|n| n.is_element()) {
+            match node.tag_name().name() {
+                "link" => links.push(ctx.attr(node, "name")?.to_string()),
+                "joint" => joints.push(ctx.joint(node)?),
+                _ => {}
+            }
+        }
+        let urdf = Urdf {
+            source_name: source_name.to_string(),
+            robot_name,
+            links,
+            joints,
+        };
+        urdf.check_links()?;
+        Ok(urdf)
+    }
+
+    fn check_links(&self) -> Result<(), UrdfError> {
+        for j in &self.joints {
+            for link in [&j.parent, &j.child] {
+                if !self.links.iter().any(|l| l == link) {
+                    return Err(UrdfError::UnknownLink {
+                        source_name: self.source_name.clone(),
+                        link: link.clone(),
+                    });
+                }
+            }
+        }
+        Ok(())
+    }
+
+    /// The root link: the only link that is no joint's child.
+    pub fn root_link(&self) -> Result<&str, UrdfError> {
+        let roots: Vec<&str> = self
+            .links
+            .iter()
+            .filter(|l| !self.joints.iter().any(|j| &j.child == *l))
+            .map(String::as_str)
+            .collect();
+        match roots.as_slice() {
+            [one] => Ok(one),
+            [] => Err(self.tree_err("no root link (every link is a joint's child)".into())),
+            many => Err(self.tree_err(format!(
+                "several root links ({}); choose one with --base-link",
+                many.join(", ")
+            ))),
+        }
+    }
+
+    /// The joints from `base` (default: the root link) down to `tip`, in order from the base.
+    pub fn chain(&self, base: Option<&str>, tip: &str) -> Result<Vec<&UrdfJoint>, UrdfError> {
+        let base = match base {
+            Some(b) => b,
+            None => self.root_link()?,
+        };
+        for link in [base, tip] {
+            if !self.links.iter().any(|l| l == link) {
+                return Err(UrdfError::UnknownLink {
+                    source_name: self.source_name.clone(),
+                    link: link.to_string(),
+                });
+            }
+        }
+        let mut by_child: HashMap<&str, usize> = HashMap::new();
+        for (i, j) in self.joints.iter().enumerate() {
+            if by_child.insert(j.child.as_str(), i).is_some() {
+                return Err(self.tree_err(format!("link `{}` has two parent joints", j.child)));
+            }
+        }
+        let mut out = Vec::new();
+        let mut link = tip;
+        while link != base {
+            let Some(&i) = by_child.get(link) else {
+                return Err(UrdfError::NotBelow {
+                    source_name: self.source_name.clone(),
+                    base: base.to_string(),
+                    tip: tip.to_string(),
+                });
+            };
+            if out.len() > self.joints.len() {
+                return Err(self.tree_err("the joints form a cycle".into()));
+            }
+            out.push(&self.joints[i]);
+            link = &self.joints[i].parent;
+        }
+        out.reverse();
+        Ok(out)
+    }
+
+    fn tree_err(&self, message: String) -> UrdfError {
+        UrdfError::Tree {
+            source_name: self.source_name.clone(),
+            message,
+        }
+    }
+}
+
+struct Ctx<'d, 'i> {
+    doc: &'d roxmltree::Document<'i>,
+    source_name: &'d str,
+}
+
+impl Ctx<'_, '_> {
+    fn err(&self, node: roxmltree::Node, message: String) -> UrdfError {
+        let pos = self.doc.text_pos_at(node.range().start);
+        UrdfError::Element {
+            source_name: self.source_name.to_string(),
+            line: pos.row,
+            column: pos.col,
+            message,
+        }
+    }
+
+    fn attr<'a>(&self, node: roxmltree::Node<'a, '_>, name: &str) -> Result<&'a str, UrdfError> {
+        node.attribute(name).ok_or_else(|| {
+            self.err(
+                node,
+                format!("<{}> needs a `{name}` attribute", node.tag_name().name()),
+            )
+        })
+    }
+
+    fn child<'a, 'i>(
+        &self,
+        node: roxmltree::Node<'a, 'i>,
+        tag: &str,
+    ) -> Option<roxmltree::Node<'a, 'i>> {
+        node.children()
+            .find(|n| n.is_element() && n.tag_name().name() == tag)
+    }
+
+    fn number(&self, node: roxmltree::Node, attr: &str, text: &str) -> Result<f64, UrdfError> {
+        match text.trim().parse::<f64>() {
+            Ok(v) if v.is_finite() => Ok(v),
+            _ => Err(self.err(node, format!("`{attr}`: `{text}` is not a finite number"))),
+        }
+    }
+
+    fn triple(&self, node: roxmltree::Node, attr: &str) -> Result<Option<[f64; 3]>, UrdfError> {
+        let Some(text) = node.attribute(attr) else {
+            return Ok(None);
+        };
+        let parts: Vec<&str> = text.split_whitespace().collect();
+        if parts.len() != 3 {
+            return Err(self.err(node, format!("`{attr}` = `{text}`: expected 3 numbers")));
+        }
+        let mut out = [0.0; 3];
+        for (o, p) in out.iter_mut().zip(parts) {
+            *o = self.number(node, attr, p)?;
+        }
+        Ok(Some(out))
+    }
+
+    fn link_ref(&self, joint: roxmltree::Node, tag: &str) -> Result<String, UrdfError> {
+        let node = self.child(joint, tag).ok_or_else(|| {
+            self.err(
+                joint,
+                format!("<joint> needs a <{tag} link=\"...\"/> element"),
+            )
+        })?;
+        Ok(self.attr(node, "link")?.to_string())
+    }
+
+    fn joint(&self, node: roxmltree::Node) -> Result<UrdfJoint, UrdfError> {
+        let name = self.attr(node, "name")?.to_string();
+        let type_text = self.attr(node, "type")?;
+        let joint_type = JointType::parse(type_text)
+            .ok_or_else(|| self.err(node, format!("joint `{name}`: unknown type `{type_text}`")))?;
+        let (mut xyz, mut rpy) = ([0.0; 3], [0.0; 3]);
+        if let Some(origin) = self.child(node, "origin") {
+            xyz = self.triple(origin, "xyz")?.unwrap_or(xyz);
+            rpy = self.triple(origin, "rpy")?.unwrap_or(rpy);
+        }
+        let axis = match self.child(node, "axis") {
+            Some(a) => self.triple(a, "xyz")?.unwrap_or([1.0, 0.0, 0.0]),
+            None => [1.0, 0.0, 0.0],
+        };
+        let limits = match self.child(node, "limit") {
+            Some(l) => {
+                let get = |attr: &str| -> Result<f64, UrdfError> {
+                    l.attribute(attr)
+                        .map_or(Ok(0.0), |t| self.number(l, attr, t))
+                };
+                let (lower, upper) = (get("lower")?, get("upper")?);
+                if lower > upper {
+                    return Err(self.err(
+                        l,
+                        format!("joint `{name}`: limit lower {lower} > upper {upper}"),
+                    ));
+                }
+                Some([lower, upper])
+            }
+            None => None,
+        };
+        Ok(UrdfJoint {
+            parent: self.link_ref(node, "parent")?,
+            child: self.link_ref(node, "child")?,
+            name,
+            joint_type,
+            origin_xyz_m: xyz,
+            origin_rpy_rad: rpy,
+            axis,
+            limits,
+            line: self.doc.text_pos_at(node.range().start).row,
+        })
+    }
+}

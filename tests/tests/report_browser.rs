@@ -1,0 +1,132 @@
+//! `rigctl simulate` + `calibrate` + `report`, then the page rendered by headless Chromium: the
+//! DOM holds the error table, no console error, and a screenshot is not blank.
+//! Without /usr/bin/chromium the test fails under CI (env CI=true) and skips locally.
+
+use std::path::Path;
+use std::process::{Command, Output};
+
+use rig_tests::rigctl;
+
+const CHROMIUM: &str = "/usr/bin/chromium";
+
+fn run_ok(cmd: &mut Command, what: &str) -> Output {
+    let out = cmd.output().unwrap_or_else(|e| panic!("{what}: {e}"));
+    assert!(
+        out.status.success(),
+        "{what}: {}\n{}",
+        out.status,
+        String::from_utf8_lossy(&out.stderr)
+    );
+    out
+}
+
+fn chromium(profile: &Path, extra: &[&str], page: &Path) -> Output {
+    let url = format!("file://{}", page.display());
+    Command::new(CHROMIUM)
+        .args([
+            "--headless",
+            "--no-sandbox",
+            "--disable-gpu",
+            "--disable-quic",
+            "--no-first-run",
+            "--disable-background-networking",
+            "--disable-component-update",
+            "--disable-sync",
+        ])
+        .arg(format!("--user-data-dir={}", profile.display()))
+        .args(extra)
+        .arg(url)
+        .output()
+        .expect("run chromium")
+}
+
+#[test]
+fn report_renders_in_headless_chromium() {
+    if !Path::new(CHROMIUM).exists() {
+        if std::env::var("CI").is_ok_and(|v| v == "true") {
+            panic!("{CHROMIUM} is required under CI (apt-get install -y chromium)");
+        }
+        eprintln!("skipping report_renders_in_headless_chromium: {CHROMIUM} not installed");
+        return;
+    }
+    let dir = tempfile::tempdir().unwrap();
+    let run = dir.path().join("run");
+    run_ok(
+        rigctl()
+            .args(["simulate", "--seed", "3", "--val", "20", "--out"])
+            .arg(&run),
+        "simulate",
+    );
+    run_ok(
+        rigctl()
+            .current_dir(&run)
+            .args(["calibrate", "--poses", "cal.csv", "--validate", "val.csv"])
+            .args(["--json", "calibrate.json", "--out", "calibrated.toml"]),
+        "calibrate",
+    );
+    let page = dir.path().join("report.html");
+    run_ok(
+        rigctl().arg("report").arg(&run).arg("--html").arg(&page),
+        "report",
+    );
+    let html = std::fs::read_to_string(&page).unwrap();
+    assert!(!html.contains("<script"), "no scripts");
+
+    // (a) the DOM as Chromium parsed it, and the console
+    let profile = tempfile::tempdir().unwrap();
+    let out = chromium(
+        profile.path(),
+        &["--dump-dom", "--enable-logging=stderr", "--v=0"],
+        &page,
+    );
+    assert!(out.status.success(), "chromium --dump-dom: {}", out.status);
+    let dom = String::from_utf8_lossy(&out.stdout);
+    let log = String::from_utf8_lossy(&out.stderr);
+    for want in [
+        "id=\"table-0\"",
+        "Calibration poses",
+        "after tilting",
+        "<svg",
+        "SHA-256",
+    ] {
+        assert!(dom.contains(want), "DOM lacks {want:?}");
+    }
+    for bad in ["Uncaught", "ERROR:CONSOLE"] {
+        assert!(
+            !log.contains(bad),
+            "console error in chromium's log:\n{log}"
+        );
+    }
+
+    // (b) a screenshot that is not blank
+    let shot = dir.path().join("shot.png");
+    let profile = tempfile::tempdir().unwrap();
+    let out = chromium(
+        profile.path(),
+        &[
+            &format!("--screenshot={}", shot.display()),
+            "--window-size=1200,2000",
+        ],
+        &page,
+    );
+    assert!(
+        out.status.success(),
+        "chromium --screenshot: {}",
+        out.status
+    );
+    let img = image::open(&shot).expect("screenshot PNG").to_luma8();
+    assert_eq!((img.width(), img.height()), (1200, 2000));
+    let n = (img.width() * img.height()) as f64;
+    let mean = img.pixels().map(|p| p.0[0] as f64).sum::<f64>() / n;
+    let var = img
+        .pixels()
+        .map(|p| (p.0[0] as f64 - mean).powi(2))
+        .sum::<f64>()
+        / n;
+    let dark = img.pixels().filter(|p| p.0[0] < 128).count() as f64 / n;
+    assert!(var > 100.0, "screenshot looks blank: variance {var:.1}");
+    assert!(dark > 0.005 && dark < 0.5, "dark fraction {dark:.4}");
+    if let Ok(keep) = std::env::var("REPORT_SCREENSHOT") {
+        let _ = std::fs::copy(&shot, keep);
+    }
+}
