@@ -18,7 +18,7 @@ pub fn block_press(
     block: usize,
 ) -> Option<f64> {
     let m = jac.nrows();
-    if block == 0 || m % block != 0 || cols.len() >= m {
+    if block == 0 || !m.is_multiple_of(block) || cols.len() >= m {
         return None;
     }
     let mut a = DMatrix::zeros(m, cols.len());
@@ -40,7 +40,7 @@ pub fn block_press(
     let mut press = 0.0;
     for b in 0..m / block {
         let qb = q.rows(b * block, block);
-        let hii = DMatrix::identity(block, block) - &qb * qb.transpose();
+        let hii = DMatrix::identity(block, block) - qb * qb.transpose();
         let loo = hii.lu().solve(&e.rows(b * block, block).into_owned())?;
         press += loo.norm_squared();
     }

@@ -183,7 +183,7 @@ impl Emitter<'_> {
     fn align(&mut self, stem: &str, j: &UrdfJoint) -> Result<Matrix3<f64>, UrdfError> {
         let a = Vector3::from(j.axis);
         let norm = a.norm();
-        if !(norm > 1e-9) {
+        if norm.is_nan() || norm <= 1e-9 {
             return Err(UrdfError::Element {
                 source_name: self.urdf.source_name.clone(),
                 line: j.line,
