@@ -3,7 +3,8 @@
 #   1. set up: the Rust target for the board, a release build of rigctl;
 #   2. simulate a Katana 450 with random geometric errors + joint tilting (known truth);
 #   3. calibrate it (standard vs tilting-first) on 118 ISO-9283 poses, validate on held-out poses;
-#   4. diagnose: look for effects the declared model lacks (here: an undeclared encoder harmonic).
+#   4. diagnose: look for effects the declared model lacks (here: an undeclared encoder harmonic);
+#   5. an HTML report with the plots.
 # Results go to runs/demo/ (or the folder given as $1).
 set -euo pipefail
 cd "$(dirname "$0")/.."
@@ -25,9 +26,10 @@ echo "== calibrate (tilting first, the default)"
 "$rigctl" calibrate --poses "$out/cal.csv" --validate "$out/val.csv" \
   --json "$out/calibrate.json" --out "$out/calibrated.toml"
 
-if "$rigctl" diagnose --help >/dev/null 2>&1; then
-  echo "== diagnose: what does the declared model lack?"
-  "$rigctl" diagnose --poses "$out/cal.csv" --validate "$out/val.csv" \
-    --json "$out/diagnose.json" --out "$out/extended.toml" --plots "$out/plots"
-fi
-echo "results in $out/"
+echo "== diagnose: what does the declared model lack?"
+"$rigctl" diagnose --poses "$out/cal.csv" --validate "$out/val.csv" \
+  --json "$out/diagnose.json" --out "$out/extended.toml" --plots "$out/plots"
+
+echo "== report"
+"$rigctl" report "$out" --html "$out/report.html"
+echo "results in $out/ (open $out/report.html)"

@@ -12,6 +12,7 @@
 //! | [`trace`] | scanned pencil traces -> centreline in sheet mm; simulated scans |
 //! | [`urdf`] | URDF import: a serial chain of a URDF file as a [`model::Model`] (`rigctl urdf2model`) |
 //! | [`tiago`] | the TIAGo motion-capture data set (FIGAROH) as poses, and its calibration levels |
+//! | [`fusion`] | the low-cost measurement: pot calibration, clock alignment, joints + pot + trace -> partial error samples |
 //! | [`error`] | how errors are classified (bad input vs failure of the run) |
 #![forbid(unsafe_code)]
 
@@ -19,6 +20,7 @@ pub mod calib;
 pub mod daq;
 pub mod diagnose;
 pub mod error;
+pub mod fusion;
 pub mod io;
 pub mod model;
 pub mod plot;

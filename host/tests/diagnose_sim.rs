@@ -200,6 +200,7 @@ fn base_offset() {
 #[test]
 fn base_tilt() {
     let r = assert_found("base_tilt=0.03,-0.02", "base_tilt", 2.5);
+    eprintln!("DBG floor {:.5}\n{}\n{:?}", r.floor_mm, r.diag.report.table(), r.diag.report.effects[0].parameters);
     assert!(
         (param(&r, "rx") - 0.03).abs() < 0.006 && (param(&r, "ry") + 0.02).abs() < 0.006,
         "{:?}",
@@ -251,4 +252,43 @@ fn two_effects_are_both_found() {
     let e = &r.diag.report.effects;
     assert!((e[0].validation_mean_mm_after - e[1].validation_mean_mm_before).abs() < 1e-12);
     assert!((e[1].validation_mean_mm_after - final_val(&r)).abs() < 1e-12);
+}
+
+#[test]
+#[ignore]
+fn explore_base_tilt() {
+    use rigctl::diagnose::extended::{fit, ExtModel, Unknown};
+    let declared = katana450(200.0).unwrap();
+    let cfg = SimConfig {
+        seed: 1,
+        effects: vec![parse_effect("base_tilt=0.03,-0.02").unwrap()],
+        ..SimConfig::default()
+    };
+    let out = simulate(&declared, &cfg).unwrap();
+    let cal = dataset(&out.cal);
+    let val = dataset(&out.val);
+    let opts = DiagnoseOptions::default();
+    let (dfit, req) = rigctl::diagnose::declared_fit(&declared, &cal, &opts.decide).unwrap();
+    let truth = ExtModel::new(out.truth.clone());
+    let rss = |e: &ExtModel, d: &Dataset| e.errors(d).unwrap().iter().map(|v| v.norm_squared()).sum::<f64>();
+    let mean = |e: &ExtModel, d: &Dataset| e.errors(d).unwrap().iter().map(|v| v.norm()).sum::<f64>() / d.len() as f64;
+    eprintln!("truth: cal rss {:.5} val mean {:.5}", rss(&truth, &cal), mean(&truth, &val));
+    let rx = declared.param_index("base_rx").unwrap();
+    let ry = declared.param_index("base_ry").unwrap();
+    let fitted: Vec<Unknown> = dfit.fitted.clone();
+    for (a, b) in [(0.0269, -0.01755), (0.03, -0.02), (0.029, -0.019), (0.028, -0.0185), (0.031, -0.021)] {
+        let mut s = dfit.ext.clone();
+        s.set_value(Unknown::Param(rx), a).unwrap();
+        s.set_value(Unknown::Param(ry), b).unwrap();
+        let f = fit(&s, &cal, &fitted, &opts.decide.lm, opts.decide.rtol, true).unwrap();
+        let mut all = fitted.clone();
+        all.push(Unknown::Param(rx));
+        all.push(Unknown::Param(ry));
+        let g = fit(&f.ext, &cal, &all, &opts.decide.lm, opts.decide.rtol, true).unwrap();
+        eprintln!(
+            "rx {a} ry {b}: profile rss {:.5} val {:.5} | full LM rss {:.5} rx {:.5} ry {:.5} val {:.5}",
+            f.rss_mm2, mean(&f.ext, &val), g.rss_mm2, g.ext.value(Unknown::Param(rx)), g.ext.value(Unknown::Param(ry)), mean(&g.ext, &val)
+        );
+    }
+    let _ = req;
 }

@@ -20,7 +20,7 @@ use super::gravity::GravityModel;
 use crate::calib::identifiability::analyse;
 use crate::calib::lm::{solve, LmConfig, Problem};
 use crate::calib::CalibError;
-use crate::model::{Model, ModelError, Tilt, Wrt};
+use crate::model::{sign_1e9, Model, ModelError, Tilt, Wrt};
 
 /// Seconds per hour (drift rates are per hour).
 const S_PER_H: f64 = 3600.0;
@@ -221,6 +221,25 @@ impl ExtModel {
             jac.view_mut((0, c), (3, 1)).copy_from(&col);
         }
         Ok((fk.position_mm + self.drift_mm_per_h * (t_s / S_PER_H), jac))
+    }
+
+    /// The sign pattern of the tilting law (MODEL.md eq. 5.19, `sign(x)` = 0 for `|x| < 1e-9`):
+    /// per pose, per joint, the signs of the three components of the static joint moment, in
+    /// that order. The prediction is smooth in the unknowns only while this pattern stays the
+    /// same; empty without tilting.
+    pub fn moment_signs(&self, data: &Dataset) -> Result<Vec<i8>, ModelError> {
+        if !self.tilt {
+            return Ok(Vec::new());
+        }
+        let with_tau = self.compliance_deg_per_kgfm.iter().any(|c| *c != 0.0);
+        let mut out = Vec::with_capacity(3 * data.len() * self.model.n_joints());
+        for k in 0..data.len() {
+            let (q_eff, _) = self.effective_joints(&data.poses.q_deg[k], data.t(k), with_tau)?;
+            for eta in self.model.moments_kgfm(&q_eff)? {
+                out.extend(eta.iter().map(|x| sign_1e9(*x) as i8));
+            }
+        }
+        Ok(out)
     }
 
     /// Errors `measured - predicted` of every pose (mm).

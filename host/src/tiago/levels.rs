@@ -12,7 +12,7 @@ use crate::calib::identifiability::DEFAULT_RTOL;
 use crate::calib::lm::LmConfig;
 use crate::calib::{position_errors, CalibError, Poses, Stats};
 use crate::model::{Model, ParamKind};
-use crate::urdf::{import_chain, ImportOptions, Urdf, UrdfError};
+use crate::urdf::{import_chain, import_chain_with_masses, ImportOptions, Urdf, UrdfError};
 
 /// Data directory below the shared directory.
 pub const DATA_DIR: &str = "data/real/thanhndv212__figaroh-examples/examples/tiago";
@@ -55,6 +55,8 @@ impl crate::error::Classify for TiagoError {
 pub struct TiagoData {
     /// `base_footprint` .. `wrist_ft_tool_link` of the URDF (joints: torso mm, arm deg).
     pub model: Model,
+    /// The same chain with the URDF link masses (for gravity torques, [`super::terms`]).
+    pub mass_model: Model,
     /// URDF joint names in model order (`torso_lift_joint`, `arm_1_joint` .. `arm_7_joint`).
     pub joint_names: Vec<String>,
     /// Training postures.
@@ -67,19 +69,19 @@ impl TiagoData {
     /// Loads the data set from `dir` (the [`DATA_DIR`] below the shared directory).
     pub fn load(dir: &Path) -> Result<Self, TiagoError> {
         let urdf = Urdf::from_file(&dir.join(URDF_FILE))?;
-        let imported = import_chain(
-            &urdf,
-            &ImportOptions {
-                base_link: Some(BASE_LINK),
-                tip_link: TIP_LINK,
-                tool_mm: [0.0; 3],
-            },
-        )?;
+        let opts = ImportOptions {
+            base_link: Some(BASE_LINK),
+            tip_link: TIP_LINK,
+            tool_mm: [0.0; 3],
+        };
+        let imported = import_chain(&urdf, &opts)?;
+        let mass_model = import_chain_with_masses(&urdf, &opts)?.model;
         let read = |f: &str| PostureSet::read(&dir.join(f), &imported.model, &imported.joint_names);
         Ok(Self {
             training: read(TRAINING_FILE)?,
             validation: read(VALIDATION_FILE)?,
             model: imported.model,
+            mass_model,
             joint_names: imported.joint_names,
         })
     }

@@ -6,5 +6,6 @@ pub mod levels;
 pub mod markers;
 pub mod mocap;
 pub mod select;
+pub mod terms;
 
 pub use mocap::{MocapError, Posture, PostureSet, N_MARKERS};

@@ -258,6 +258,55 @@ impl Emitter<'_> {
 /// Imports the chain `opts.base_link` .. `opts.tip_link` of `urdf` (see the module doc for the
 /// structure and the parameter names).
 pub fn import_chain(urdf: &Urdf, opts: &ImportOptions) -> Result<Imported, UrdfError> {
+    import(urdf, opts, false)
+}
+
+/// As [`import_chain`], and every movable joint of the chain carries, as one point mass in its
+/// joint frame, the `<inertial>` masses of the links it moves rigidly: its child link and every
+/// link below it up to the next movable joint of the chain (joints off the chain, e.g. gripper
+/// fingers, count at zero; links below the tip count with the last joint). Links before the
+/// first movable joint are not carried. Used for gravity torques
+/// ([`crate::diagnose::gravity::GravityModel::for_model`]).
+pub fn import_chain_with_masses(urdf: &Urdf, opts: &ImportOptions) -> Result<Imported, UrdfError> {
+    import(urdf, opts, true)
+}
+
+/// Mass (kg) and centre of mass (m, in `link`'s frame) of the links moved rigidly with `link`:
+/// its subtree, not crossing the joints in `stop` (joints off the chain at zero).
+fn rigid_mass(urdf: &Urdf, link: &str, stop: &[&str]) -> (f64, Vector3<f64>) {
+    let mut mass_kg = 0.0;
+    let mut moment = Vector3::zeros();
+    let mut stack = vec![(link.to_string(), Frame::identity())];
+    let mut visited = 0;
+    while let Some((l, f)) = stack.pop() {
+        visited += 1;
+        if visited > urdf.links.len() {
+            break; // a cycle; `chain` reports it for the chain itself
+        }
+        for i in urdf.inertials.iter().filter(|i| i.link == l) {
+            mass_kg += i.mass_kg;
+            moment += i.mass_kg * (f.r * Vector3::from(i.com_xyz_m) + f.t);
+        }
+        for j in urdf
+            .joints
+            .iter()
+            .filter(|j| j.parent == l && !stop.contains(&j.name.as_str()))
+        {
+            stack.push((
+                j.child.clone(),
+                f.then(&Frame::origin(j.origin_xyz_m, j.origin_rpy_rad)),
+            ));
+        }
+    }
+    let com = if mass_kg > 0.0 {
+        moment / mass_kg
+    } else {
+        Vector3::zeros()
+    };
+    (mass_kg, com)
+}
+
+fn import(urdf: &Urdf, opts: &ImportOptions, masses: bool) -> Result<Imported, UrdfError> {
     let chain = urdf.chain(opts.base_link, opts.tip_link)?;
     let base = match opts.base_link {
         Some(b) => b.to_string(),
@@ -277,7 +326,12 @@ pub fn import_chain(urdf: &Urdf, opts: &ImportOptions) -> Result<Imported, UrdfE
     em.constant(Motion::Rot, Axis::Z, "base_rz", 0.0)?;
     let mut pending = Frame::identity();
     let mut joint_names = Vec::new();
-    for j in chain {
+    let movable: Vec<&str> = chain
+        .iter()
+        .filter(|j| j.joint_type != JointType::Fixed)
+        .map(|j| j.name.as_str())
+        .collect();
+    for j in &chain {
         if j.joint_type == JointType::Fixed {
             pending = pending.then(&Frame::origin(j.origin_xyz_m, j.origin_rpy_rad));
             continue;
@@ -287,6 +341,17 @@ pub fn import_chain(urdf: &Urdf, opts: &ImportOptions) -> Result<Imported, UrdfE
         let align = em.align(&stem, j)?;
         em.joint(&stem, j)?;
         joint_names.push(j.name.clone());
+        if masses {
+            let (mass_kg, com_m) = rigid_mass(urdf, &j.child, &movable);
+            // The URDF child frame is the joint frame turned by `align^T`.
+            let com_mm: [f64; 3] = (align.transpose() * com_m * 1e3).into();
+            em.builder
+                .mass(joint_names.len(), 0, mass_kg, com_mm)
+                .map_err(|source| UrdfError::Model {
+                    source_name: urdf.source_name.clone(),
+                    source,
+                })?;
+        }
         pending = Frame {
             r: align.transpose(),
             t: Vector3::zeros(),
@@ -306,4 +371,59 @@ pub fn import_chain(urdf: &Urdf, opts: &ImportOptions) -> Result<Imported, UrdfE
         })?;
     }
     Ok(Imported { model, joint_names })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// Joint 1 (z) carries link1 (2 kg at x = 0.5 m) and, through a fixed joint at x = 1 m
+    /// turned 90 deg about z, link1b (1 kg at its own x = 0.1 m, i.e. link1's y = 0.1 m):
+    /// 3 kg at (2/3, 0.1/3, 0) m. Joint 2 (axis x, so an aligned joint frame) carries link2
+    /// (1 kg at its own z = 0.2 m), at (1, 0, 0.2) m in the world at q = 0.
+    const XML: &str = r#"<robot name="m">
+      <link name="base"/>
+      <link name="link1"><inertial><mass value="2"/><origin xyz="0.5 0 0"/></inertial></link>
+      <link name="link1b"><inertial><mass value="1"/><origin xyz="0.1 0 0"/></inertial></link>
+      <link name="link2"><inertial><mass value="1"/><origin xyz="0 0 0.2"/></inertial></link>
+      <joint name="j1" type="revolute"><parent link="base"/><child link="link1"/>
+        <axis xyz="0 0 1"/><limit lower="-3" upper="3"/></joint>
+      <joint name="f" type="fixed"><parent link="link1"/><child link="link1b"/>
+        <origin xyz="1 0 0" rpy="0 0 1.5707963267948966"/></joint>
+      <joint name="j2" type="revolute"><parent link="link1b"/><child link="link2"/>
+        <axis xyz="1 0 0"/><limit lower="-3" upper="3"/></joint>
+    </robot>"#;
+
+    #[test]
+    fn link_masses_are_carried_by_their_joints() {
+        let urdf = Urdf::parse(XML, "m.urdf").unwrap();
+        assert_eq!(urdf.inertials.len(), 3);
+        let opts = ImportOptions {
+            base_link: None,
+            tip_link: "link2",
+            tool_mm: [0.0; 3],
+        };
+        let model = import_chain_with_masses(&urdf, &opts).unwrap().model;
+        assert!(import_chain(&urdf, &opts)
+            .unwrap()
+            .model
+            .masses()
+            .is_empty());
+        let masses = model.masses();
+        assert_eq!(masses.len(), 2);
+        assert!((masses[0].mass_kg - 3.0).abs() < 1e-12);
+        assert!((masses[1].mass_kg - 1.0).abs() < 1e-12);
+        let fr = model.frames(&[0.0, 0.0], None).unwrap();
+        let world = |k: usize| {
+            let f = model.mass_frame(&masses[k]);
+            fr.rot[f] * masses[k].com_mm + fr.pos_mm[f]
+        };
+        let expected = [
+            Vector3::new(2000.0 / 3.0, 100.0 / 3.0, 0.0),
+            Vector3::new(1000.0, 0.0, 200.0),
+        ];
+        for (k, e) in expected.iter().enumerate() {
+            assert!((world(k) - e).norm() < 1e-9, "{k}: {}", world(k));
+        }
+    }
 }

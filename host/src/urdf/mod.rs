@@ -12,5 +12,7 @@ pub mod import;
 pub mod parse;
 
 pub use error::UrdfError;
-pub use import::{import_chain, param_stem, rpy_matrix, rpy_of, ImportOptions, Imported};
-pub use parse::{JointType, Urdf, UrdfJoint};
+pub use import::{
+    import_chain, import_chain_with_masses, param_stem, rpy_matrix, rpy_of, ImportOptions, Imported,
+};
+pub use parse::{JointType, LinkInertial, Urdf, UrdfJoint};

@@ -68,6 +68,17 @@ pub struct UrdfJoint {
     pub line: u32,
 }
 
+/// The mass and centre of mass of a link's `<inertial>` (URDF units).
+#[derive(Debug, Clone, PartialEq)]
+pub struct LinkInertial {
+    /// The link's name.
+    pub link: String,
+    /// `<mass value>` (kg).
+    pub mass_kg: f64,
+    /// `<origin xyz>` of the `<inertial>` (m, in the link frame), default 0.
+    pub com_xyz_m: [f64; 3],
+}
+
 /// The links and joints of a URDF file.
 #[derive(Debug, Clone, PartialEq)]
 pub struct Urdf {
@@ -79,6 +90,8 @@ pub struct Urdf {
     pub links: Vec<String>,
     /// Joints, in file order.
     pub joints: Vec<UrdfJoint>,
+    /// The `<inertial>` of every link that has one, in file order.
+    pub inertials: Vec<LinkInertial>,
 }
 
 impl Urdf {
@@ -108,9 +121,16 @@ impl Urdf {
         let robot_name = robot.attribute("name").unwrap_or("urdf").to_string();
         let mut links = Vec::new();
         let mut joints = Vec::new();
+        let mut inertials = Vec::new();
         for node in robot.children().filter(|n| n.is_element()) {
             match node.tag_name().name() {
-                "link" => links.push(ctx.attr(node, "name")?.to_string()),
+                "link" => {
+                    let name = ctx.attr(node, "name")?.to_string();
+                    if let Some(i) = ctx.inertial(node, &name)? {
+                        inertials.push(i);
+                    }
+                    links.push(name);
+                }
                 "joint" => joints.push(ctx.joint(node)?),
                 _ => {}
             }
@@ -120,6 +140,7 @@ impl Urdf {
             robot_name,
             links,
             joints,
+            inertials,
         };
         urdf.check_links()?;
         Ok(urdf)
@@ -269,6 +290,33 @@ impl Ctx<'_, '_> {
             )
         })?;
         Ok(self.attr(node, "link")?.to_string())
+    }
+
+    /// The `<inertial>` of `<link>` `node` (named `link`), if it has one with a `<mass>`.
+    fn inertial(
+        &self,
+        node: roxmltree::Node,
+        link: &str,
+    ) -> Result<Option<LinkInertial>, UrdfError> {
+        let Some(inertial) = self.child(node, "inertial") else {
+            return Ok(None);
+        };
+        let Some(mass) = self.child(inertial, "mass") else {
+            return Ok(None);
+        };
+        let mass_kg = self.number(mass, "value", self.attr(mass, "value")?)?;
+        if mass_kg < 0.0 {
+            return Err(self.err(mass, format!("link `{link}`: negative mass {mass_kg}")));
+        }
+        let com_xyz_m = match self.child(inertial, "origin") {
+            Some(o) => self.triple(o, "xyz")?.unwrap_or([0.0; 3]),
+            None => [0.0; 3],
+        };
+        Ok(Some(LinkInertial {
+            link: link.to_string(),
+            mass_kg,
+            com_xyz_m,
+        }))
     }
 
     fn joint(&self, node: roxmltree::Node) -> Result<UrdfJoint, UrdfError> {

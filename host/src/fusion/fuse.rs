@@ -1,0 +1,405 @@
+//! The fusion (`rigctl fuse`): joint readings + potentiometer recording + pencil trace ->
+//! partial Cartesian error samples.
+//!
+//! For every joint sample (robot clock `t`):
+//! 1. the nominal tool point `p = p(q)` and tool axis `a` of the model (rigid chain, no
+//!    tilting: the robot controller's view) and its height `h = n . (p - origin)` above the sheet;
+//! 2. the board time of `t` from the clock alignment ([`super::align`]), and the pencil travel
+//!    `d` there (potentiometer counts through the pot calibration, linear interpolation);
+//!    samples with the pencil off the paper (`d > stop - contact_margin_mm`) are skipped;
+//! 3. **out of plane**: the pencil tip `p_true + d a` lies on the paper, so the true tool point's
+//!    height is `-d (n . a)` (= `d` while the tool axis is the sheet normal); `dev_n` is that
+//!    minus `h`;
+//! 4. **in plane, across the path**: the nominal tip `p + d a` projected onto the sheet, the
+//!    closest point of the traced curve, the curve's unit tangent there (oriented along the
+//!    motion) and the in-plane normal `u` to its left (seen from the pencil side); `dev_u` is
+//!    the signed distance from the projection to the trace along `u`. Samples farther than
+//!    `max_in_plane_mm` from the trace, or nearer than `end_exclusion_mm` to an end of an open
+//!    trace (where the closest point is not across the path), are skipped;
+//! 5. **along the path: nothing** -- the trace carries no time, so the component of the error
+//!    along the path is not measured and is not in the file.
+//!
+//! The tip's offset `d a` moves the projection by `d` times the tool axis's tilt from the
+//! normal (well under 0.01 mm for `|d| < 3 mm` and tilts below 0.2 deg), the same for the true
+//! and the nominal tip to first order; it is neglected.
+//!
+//! # The fused-samples file (`FUSED.csv`, format `rigctl-fused/1`)
+//! Comma separated, UTF-8, `#` lines are comments (the first names the format), then a header
+//! row and one row per fused sample:
+//!
+//! | column | unit | meaning |
+//! |---|---|---|
+//! | `t` | s | robot-clock time of the joint sample |
+//! | `q1` .. `qN` | deg | joint readings |
+//! | `nom_x`, `nom_y`, `nom_z` | mm | nominal tool point of the fusing model, frame R |
+//! | `dev_u` | mm | measured minus nominal tool point along `u` (in plane, across the path) |
+//! | `u_x`, `u_y`, `u_z` | 1 | unit in-plane normal of the path, frame R |
+//! | `dev_n` | mm | measured minus nominal tool point along `n` (out of plane) |
+//! | `n_x`, `n_y`, `n_z` | 1 | unit sheet normal (out of the paper), frame R |
+//!
+//! So the measured tool point `P` satisfies `u . P = u . nom + dev_u` and
+//! `n . P = n . nom + dev_n`; these two projections are what a calibration may use
+//! ([`crate::calib::projected`]), independently of the model used for fusing.
+
+use std::fmt::Write as _;
+use std::path::Path;
+
+use nalgebra::Vector3;
+
+use super::align::{align, AlignOptions, ClockAlignment};
+use super::curve::TracedCurve;
+use super::error::FusionError;
+use super::placement::SheetPlacement;
+use super::pot::TravelSeries;
+use crate::io::atomic::write_bytes_atomic;
+use crate::io::pose_csv::{read_poses, PoseSpec};
+use crate::model::{Model, Tilt};
+
+/// Format tag in the first comment line of `FUSED.csv`.
+pub const FUSED_FORMAT: &str = "rigctl-fused/1";
+
+/// Joint readings of the robot controller with their times.
+#[derive(Debug, Clone, PartialEq, Default)]
+pub struct JointSamples {
+    /// Robot-clock times, s, increasing.
+    pub t_s: Vec<f64>,
+    /// Joint readings, deg.
+    pub q_deg: Vec<Vec<f64>>,
+}
+
+impl JointSamples {
+    /// Reads a joint file (pose-file rules of FORMATS.md: columns `t`, `q1..qN`; `t` required
+    /// and strictly increasing).
+    pub fn read(path: &Path, model: &Model) -> Result<Self, FusionError> {
+        let file = read_poses(path, &PoseSpec::for_model(model, false))?;
+        let mut out = Self::default();
+        for p in &file.poses {
+            let t = p.t_s.ok_or_else(|| FusionError::Csv {
+                path: path.to_path_buf(),
+                line: p.line,
+                column: "t".into(),
+                reason: "a time is required in every row".into(),
+            })?;
+            if out.t_s.last().is_some_and(|&prev| t <= prev) {
+                return Err(FusionError::Csv {
+                    path: path.to_path_buf(),
+                    line: p.line,
+                    column: "t".into(),
+                    reason: format!("time {t} s does not increase"),
+                });
+            }
+            out.t_s.push(t);
+            out.q_deg.push(p.q.clone());
+        }
+        Ok(out)
+    }
+}
+
+/// Settings of [`fuse`].
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct FuseOptions {
+    /// Clock alignment settings.
+    pub align: AlignOptions,
+    /// A sample is on the paper when its travel is this much below the stop, mm.
+    pub contact_margin_mm: f64,
+    /// Largest in-plane distance to the trace accepted, mm.
+    pub max_in_plane_mm: f64,
+    /// Samples whose closest trace point is nearer than this to an end of an open trace are
+    /// skipped, mm.
+    pub end_exclusion_mm: f64,
+    /// A trace whose ends are this close is closed, mm.
+    pub close_tol_mm: f64,
+    /// Largest gap between potentiometer samples to interpolate across, s.
+    pub max_pot_gap_s: f64,
+}
+
+impl Default for FuseOptions {
+    fn default() -> Self {
+        Self {
+            align: AlignOptions::default(),
+            contact_margin_mm: 0.3,
+            max_in_plane_mm: 3.0,
+            end_exclusion_mm: 3.0,
+            close_tol_mm: 2.0,
+            max_pot_gap_s: 0.01,
+        }
+    }
+}
+
+/// One fused sample (see the module documentation for the meaning of the fields).
+#[derive(Debug, Clone, PartialEq)]
+pub struct FusedSample {
+    /// Robot-clock time, s.
+    pub t_s: f64,
+    /// Joint readings, deg.
+    pub q_deg: Vec<f64>,
+    /// Nominal tool point of the fusing model, mm in R.
+    pub nominal_mm: Vector3<f64>,
+    /// Measured minus nominal along `u`, mm.
+    pub dev_u_mm: f64,
+    /// In-plane normal of the path (unit, R).
+    pub u: Vector3<f64>,
+    /// Measured minus nominal along `n`, mm.
+    pub dev_n_mm: f64,
+    /// Sheet normal (unit, R).
+    pub n: Vector3<f64>,
+}
+
+impl FusedSample {
+    /// The measured part of the error as a vector in R: `dev_u u + dev_n n` (mm).
+    pub fn measured_error_mm(&self) -> Vector3<f64> {
+        self.u * self.dev_u_mm + self.n * self.dev_n_mm
+    }
+}
+
+/// Counts of skipped joint samples.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+pub struct Skipped {
+    /// Outside the recording (after alignment).
+    pub outside_recording: usize,
+    /// Pencil off the paper.
+    pub off_paper: usize,
+    /// Farther than `max_in_plane_mm` from the trace.
+    pub off_trace: usize,
+    /// Near an end of an open trace.
+    pub near_trace_end: usize,
+}
+
+/// Result of [`fuse`].
+#[derive(Debug, Clone, PartialEq)]
+pub struct Fused {
+    /// The fused samples, in time order.
+    pub samples: Vec<FusedSample>,
+    /// The clock alignment found.
+    pub alignment: ClockAlignment,
+    /// The pencil's stop reading (off the paper), mm.
+    pub stop_mm: f64,
+    /// Why the other joint samples were left out.
+    pub skipped: Skipped,
+}
+
+/// Fuses the joint readings `joints` (nominal `model`), the pencil travel `pot` (board clock),
+/// the traced curve `trace` (sheet mm) and the sheet `placement`.
+pub fn fuse(
+    model: &Model,
+    joints: &JointSamples,
+    pot: &TravelSeries,
+    trace: &TracedCurve,
+    placement: &SheetPlacement,
+    o: &FuseOptions,
+) -> Result<Fused, FusionError> {
+    let n = placement.normal();
+    let mut nom = Vec::with_capacity(joints.t_s.len());
+    for q in &joints.q_deg {
+        let fk = model.fk(q, Tilt::Off)?;
+        nom.push((fk.position_mm, fk.rotation.column(2).into_owned()));
+    }
+    let h: Vec<f64> = nom.iter().map(|(p, _)| placement.height_mm(p)).collect();
+    let stop_mm = pot
+        .stop_mm()
+        .ok_or_else(|| FusionError::NoSamples("the recording has no potentiometer sample".into()))?;
+    let alignment = align(pot, &joints.t_s, &h, stop_mm, &o.align)?;
+    let proj: Vec<[f64; 2]> = nom.iter().map(|(p, _)| placement.to_sheet_mm(p)).collect();
+    let mut skipped = Skipped::default();
+    let mut samples = Vec::new();
+    let last = joints.t_s.len().saturating_sub(1);
+    for (k, &t) in joints.t_s.iter().enumerate() {
+        let Some(d) = pot.at(alignment.board_s(t), o.max_pot_gap_s) else {
+            skipped.outside_recording += 1;
+            continue;
+        };
+        if d > stop_mm - o.contact_margin_mm {
+            skipped.off_paper += 1;
+            continue;
+        }
+        let (p, a) = nom[k];
+        let height_true = -d * n.dot(&a);
+        let tip = placement.to_sheet_mm(&(p + a * d));
+        let c = trace.closest(tip);
+        if c.distance_mm > o.max_in_plane_mm {
+            skipped.off_trace += 1;
+            continue;
+        }
+        if c.to_end_mm < o.end_exclusion_mm {
+            skipped.near_trace_end += 1;
+            continue;
+        }
+        let motion = [
+            proj[(k + 1).min(last)][0] - proj[k.saturating_sub(1)][0],
+            proj[(k + 1).min(last)][1] - proj[k.saturating_sub(1)][1],
+        ];
+        let mut tan = c.tangent;
+        if motion[0].hypot(motion[1]) > 1e-3 && tan[0] * motion[0] + tan[1] * motion[1] < 0.0 {
+            tan = [-tan[0], -tan[1]];
+        }
+        let u_sheet = [-tan[1], tan[0]];
+        let dev_u = (c.point[0] - tip[0]) * u_sheet[0] + (c.point[1] - tip[1]) * u_sheet[1];
+        samples.push(FusedSample {
+            t_s: t,
+            q_deg: joints.q_deg[k].clone(),
+            nominal_mm: p,
+            dev_u_mm: dev_u,
+            u: placement.dir_to_r(u_sheet),
+            dev_n_mm: height_true - h[k],
+            n,
+        });
+    }
+    if samples.is_empty() {
+        return Err(FusionError::NoSamples(format!(
+            "{} joint samples: {} outside the recording, {} with the pencil off the paper, {} off \
+             the trace, {} near a trace end",
+            joints.t_s.len(),
+            skipped.outside_recording,
+            skipped.off_paper,
+            skipped.off_trace,
+            skipped.near_trace_end
+        )));
+    }
+    Ok(Fused {
+        samples,
+        alignment,
+        stop_mm,
+        skipped,
+    })
+}
+
+/// The header row of `FUSED.csv` for `n_joints` joints.
+pub fn fused_header(n_joints: usize) -> String {
+    let mut h = String::from("t");
+    for j in 1..=n_joints {
+        let _ = write!(h, ",q{j}");
+    }
+    h.push_str(",nom_x,nom_y,nom_z,dev_u,u_x,u_y,u_z,dev_n,n_x,n_y,n_z");
+    h
+}
+
+/// The text of `FUSED.csv`.
+pub fn fused_csv(samples: &[FusedSample]) -> String {
+    let nj = samples.first().map_or(0, |s| s.q_deg.len());
+    let mut out = format!("# {FUSED_FORMAT}: partial tool-point errors, see rigctl::fusion::fuse\n");
+    out.push_str(&fused_header(nj));
+    out.push('\n');
+    for s in samples {
+        let _ = write!(out, "{}", s.t_s);
+        for q in &s.q_deg {
+            let _ = write!(out, ",{q}");
+        }
+        let v = [
+            s.nominal_mm.x, s.nominal_mm.y, s.nominal_mm.z, s.dev_u_mm, s.u.x, s.u.y, s.u.z,
+            s.dev_n_mm, s.n.x, s.n.y, s.n.z,
+        ];
+        for x in v {
+            let _ = write!(out, ",{x}");
+        }
+        out.push('\n');
+    }
+    out
+}
+
+/// Writes `FUSED.csv` atomically.
+pub fn write_fused(path: &Path, samples: &[FusedSample]) -> Result<(), FusionError> {
+    write_bytes_atomic(path, fused_csv(samples).as_bytes())?;
+    Ok(())
+}
+
+/// Parses the text of `FUSED.csv` with `n_joints` joints (`path` names it in errors).
+pub fn parse_fused(text: &str, path: &Path, n_joints: usize) -> Result<Vec<FusedSample>, FusionError> {
+    let err = |line: usize, column: &str, reason: String| FusionError::Csv {
+        path: path.to_path_buf(),
+        line,
+        column: column.into(),
+        reason,
+    };
+    let mut rows = text
+        .lines()
+        .enumerate()
+        .map(|(i, l)| (i + 1, l.trim()))
+        .filter(|(_, l)| !l.is_empty() && !l.starts_with('#'));
+    let (hl, header) = rows.next().ok_or_else(|| err(1, "header", "no header row".into()))?;
+    let cols: Vec<&str> = header.split(',').map(str::trim).collect();
+    let want = fused_header(n_joints);
+    let idx: Vec<usize> = want
+        .split(',')
+        .map(|name| {
+            cols.iter()
+                .position(|c| *c == name)
+                .ok_or_else(|| err(hl, name, "column missing from the header".into()))
+        })
+        .collect::<Result<_, _>>()?;
+    let names: Vec<&str> = want.split(',').collect();
+    let mut out = Vec::new();
+    for (line, row) in rows {
+        let f: Vec<&str> = row.split(',').map(str::trim).collect();
+        if f.len() != cols.len() {
+            return Err(err(line, "row", format!("{} fields, the header has {}", f.len(), cols.len())));
+        }
+        let v: Vec<f64> = idx
+            .iter()
+            .zip(&names)
+            .map(|(&i, name)| {
+                f[i].parse::<f64>()
+                    .ok()
+                    .filter(|x| x.is_finite())
+                    .ok_or_else(|| err(line, name, format!("not a finite number (`{}`)", f[i])))
+            })
+            .collect::<Result<_, _>>()?;
+        let at = |k: usize| v[1 + n_joints + k];
+        let u = Vector3::new(at(4), at(5), at(6));
+        let n = Vector3::new(at(8), at(9), at(10));
+        for (dir, name) in [(u, "u_x"), (n, "n_x")] {
+            if (dir.norm() - 1.0).abs() > 1e-6 {
+                return Err(err(line, name, format!("direction of length {} is not a unit vector", dir.norm())));
+            }
+        }
+        out.push(FusedSample {
+            t_s: v[0],
+            q_deg: v[1..=n_joints].to_vec(),
+            nominal_mm: Vector3::new(at(0), at(1), at(2)),
+            dev_u_mm: at(3),
+            u,
+            dev_n_mm: at(7),
+            n,
+        });
+    }
+    if out.is_empty() {
+        return Err(err(hl, "rows", "no sample rows".into()));
+    }
+    Ok(out)
+}
+
+/// Reads `FUSED.csv`.
+pub fn read_fused(path: &Path, n_joints: usize) -> Result<Vec<FusedSample>, FusionError> {
+    let text = std::fs::read_to_string(path).map_err(|source| FusionError::Read {
+        path: path.to_path_buf(),
+        source,
+    })?;
+    parse_fused(&text, path, n_joints)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn fused_file_round_trip_and_errors() {
+        let h = std::f64::consts::FRAC_1_SQRT_2;
+        let s = FusedSample {
+            t_s: 1.25,
+            q_deg: vec![1.0, 2.0, 3.0, 4.0, 5.0],
+            nominal_mm: Vector3::new(0.1, -300.0, 139.3),
+            dev_u_mm: -0.123,
+            u: Vector3::new(1.0, 0.0, 0.0),
+            dev_n_mm: 0.456,
+            n: Vector3::new(0.0, h, h),
+        };
+        let text = fused_csv(std::slice::from_ref(&s));
+        assert!(text.starts_with("# rigctl-fused/1"));
+        let back = parse_fused(&text, Path::new("f.csv"), 5).unwrap();
+        assert_eq!(back, vec![s.clone()]);
+        let e = (s.measured_error_mm() - Vector3::new(-0.123, 0.456 * h, 0.456 * h)).norm();
+        assert!(e < 1e-12);
+        let bad = text.replace(",-0.123,", ",nan,");
+        let msg = parse_fused(&bad, Path::new("f.csv"), 5).unwrap_err().to_string();
+        assert!(msg.contains("f.csv:3") && msg.contains("dev_u"), "{msg}");
+    }
+}

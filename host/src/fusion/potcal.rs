@@ -1,0 +1,485 @@
+//! Potentiometer calibration: raw ADC counts -> pencil travel (mm) along the tool axis.
+//!
+//! Pencil travel is the pencil tip's position along the tool axis relative to the model's tool
+//! point (d5 = 330 mm with the pencil holder): positive = pencil extended out of the holder
+//! (the tool point is above the paper), 0 = tip at the tool point. The spring pushes the pencil
+//! out against a stop, so off the paper the travel reads the stop value.
+//!
+//! The jig holds the pencil at known travels (gauge blocks under the tip) and the board records
+//! the counts. Two points give a line; more points give a least-squares polynomial of the chosen
+//! degree (1 by default, up to [`MAX_DEGREE`]) with its residuals, and a linearity check: with
+//! at least 4 points a linear fit is compared with a quadratic one
+//! ([`PotCalibration::nonlinearity`]).
+//!
+//! The polynomial is in the normalised count `x = (raw - centre_raw) / half_range_raw` over the
+//! calibrated range, for conditioning: `travel_mm = sum_i coefficients[i] x^i`.
+//!
+//! # Jig file (`--points JIG.csv`)
+//! A header row, then one row per gauge; `#` lines are comments. Either
+//! * `raw,travel_mm`: the counts read for each known travel, or
+//! * `start_s,end_s,travel_mm`: with `--recording`, the window (seconds after the recording's
+//!   first potentiometer sample, board clock) during which the pencil sat on that gauge; the
+//!   counts are the window's mean.
+//!
+//! # Calibration file (`POT.toml`)
+//! ```toml
+//! format = "rigctl-potcal/1"
+//! centre_raw = 2000.0
+//! half_range_raw = 950.0
+//! coefficients = [0.0, -2.5]   # travel_mm = c0 + c1 x + ...
+//! raw_min = 1050.0             # calibrated range of counts
+//! raw_max = 2950.0
+//! points = 6
+//! rms_residual_mm = 0.004      # absent for an exact fit (points = degree + 1)
+//! max_residual_mm = 0.007
+//! ```
+
+use std::path::Path;
+
+use nalgebra::{DMatrix, DVector};
+use serde::{Deserialize, Serialize};
+
+use super::error::FusionError;
+use super::pot::PotSample;
+use crate::io::atomic::write_bytes_atomic;
+
+/// Format tag of the calibration file.
+pub const POTCAL_FORMAT: &str = "rigctl-potcal/1";
+/// Highest polynomial degree offered.
+pub const MAX_DEGREE: usize = 3;
+
+/// One gauge: the counts read and the known travel.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct JigPoint {
+    /// Raw ADC counts (a mean, so fractional).
+    pub raw: f64,
+    /// Known pencil travel, mm.
+    pub travel_mm: f64,
+}
+
+/// A jig gauge given as a time window of a recording.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct JigWindow {
+    /// Window start, s after the first pot sample (board clock).
+    pub start_s: f64,
+    /// Window end, s.
+    pub end_s: f64,
+    /// Known travel, mm.
+    pub travel_mm: f64,
+}
+
+/// The contents of a jig file.
+#[derive(Debug, Clone, PartialEq)]
+pub enum JigFile {
+    /// `raw,travel_mm` rows.
+    Points(Vec<JigPoint>),
+    /// `start_s,end_s,travel_mm` rows.
+    Windows(Vec<JigWindow>),
+}
+
+/// A fitted counts -> travel map (see the module documentation).
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct PotCalibration {
+    /// Always [`POTCAL_FORMAT`].
+    pub format: String,
+    /// Centre of the normalised count.
+    pub centre_raw: f64,
+    /// Half range of the normalised count.
+    pub half_range_raw: f64,
+    /// Polynomial coefficients in the normalised count, constant first (mm).
+    pub coefficients: Vec<f64>,
+    /// Lowest calibrated count.
+    pub raw_min: f64,
+    /// Highest calibrated count.
+    pub raw_max: f64,
+    /// Number of jig points.
+    pub points: usize,
+    /// RMS of the fit residuals, mm (absent for an exact fit).
+    #[serde(skip_serializing_if = "Option::is_none", default)]
+    pub rms_residual_mm: Option<f64>,
+    /// Largest absolute residual, mm (absent for an exact fit).
+    #[serde(skip_serializing_if = "Option::is_none", default)]
+    pub max_residual_mm: Option<f64>,
+}
+
+/// Least-squares polynomial of `degree` through `(x, y)`; returns the coefficients.
+fn polyfit(x: &[f64], y: &[f64], degree: usize) -> Option<Vec<f64>> {
+    let a = DMatrix::from_fn(x.len(), degree + 1, |r, c| x[r].powi(c as i32));
+    let b = DVector::from_column_slice(y);
+    let svd = a.svd(true, true);
+    let s_max = svd.singular_values.max();
+    if svd.singular_values.min() < 1e-9 * s_max {
+        return None;
+    }
+    svd.solve(&b, 0.0).ok().map(|c| c.iter().copied().collect())
+}
+
+fn polyval(c: &[f64], x: f64) -> f64 {
+    c.iter().rev().fold(0.0, |acc, &ci| acc * x + ci)
+}
+
+impl PotCalibration {
+    /// Fits a polynomial of `degree` (1..=[`MAX_DEGREE`]) to the jig points. Needs at least
+    /// `degree + 1` points with distinct counts, and a map that is monotonic over the calibrated
+    /// range (a pencil travel must map to one count).
+    pub fn fit(points: &[JigPoint], degree: usize) -> Result<Self, FusionError> {
+        if !(1..=MAX_DEGREE).contains(&degree) {
+            return Err(FusionError::Invalid(format!(
+                "potentiometer calibration degree {degree}: must be 1..={MAX_DEGREE}"
+            )));
+        }
+        if let Some(p) = points
+            .iter()
+            .find(|p| !(p.raw.is_finite() && p.travel_mm.is_finite()))
+        {
+            return Err(FusionError::Invalid(format!(
+                "jig point ({}, {}) is not finite",
+                p.raw, p.travel_mm
+            )));
+        }
+        let raw_min = points.iter().map(|p| p.raw).fold(f64::INFINITY, f64::min);
+        let raw_max = points.iter().map(|p| p.raw).fold(f64::NEG_INFINITY, f64::max);
+        let mut distinct: Vec<f64> = points.iter().map(|p| p.raw).collect();
+        distinct.sort_by(f64::total_cmp);
+        distinct.dedup_by(|a, b| (*a - *b).abs() < 1e-9);
+        if distinct.len() < degree + 1 {
+            return Err(FusionError::Invalid(format!(
+                "a degree-{degree} potentiometer calibration needs at least {} jig points with \
+                 different counts, got {}",
+                degree + 1,
+                distinct.len()
+            )));
+        }
+        let centre_raw = 0.5 * (raw_min + raw_max);
+        let half_range_raw = 0.5 * (raw_max - raw_min);
+        let x: Vec<f64> = points
+            .iter()
+            .map(|p| (p.raw - centre_raw) / half_range_raw)
+            .collect();
+        let y: Vec<f64> = points.iter().map(|p| p.travel_mm).collect();
+        let coefficients = polyfit(&x, &y, degree).ok_or_else(|| {
+            FusionError::Invalid("potentiometer calibration: singular jig points".into())
+        })?;
+        // monotonic over the range: the derivative keeps one sign
+        let deriv: Vec<f64> = (1..coefficients.len())
+            .map(|i| coefficients[i] * i as f64)
+            .collect();
+        let slopes: Vec<f64> = (0..=200)
+            .map(|k| polyval(&deriv, -1.0 + k as f64 / 100.0))
+            .collect();
+        let all_pos = slopes.iter().all(|&s| s > 0.0);
+        let all_neg = slopes.iter().all(|&s| s < 0.0);
+        if !(all_pos || all_neg) {
+            return Err(FusionError::Invalid(format!(
+                "the degree-{degree} potentiometer calibration is not monotonic over counts \
+                 {raw_min}..{raw_max}; use a lower degree or check the jig points"
+            )));
+        }
+        let residuals: Vec<f64> = x
+            .iter()
+            .zip(&y)
+            .map(|(&xi, &yi)| yi - polyval(&coefficients, xi))
+            .collect();
+        let (rms, max) = if points.len() > degree + 1 {
+            let rms = (residuals.iter().map(|r| r * r).sum::<f64>() / residuals.len() as f64).sqrt();
+            let max = residuals.iter().fold(0.0f64, |m, r| m.max(r.abs()));
+            (Some(rms), Some(max))
+        } else {
+            (None, None)
+        };
+        Ok(Self {
+            format: POTCAL_FORMAT.into(),
+            centre_raw,
+            half_range_raw,
+            coefficients,
+            raw_min,
+            raw_max,
+            points: points.len(),
+            rms_residual_mm: rms,
+            max_residual_mm: max,
+        })
+    }
+
+    /// Pencil travel (mm) for a count.
+    pub fn travel_mm(&self, raw: f64) -> f64 {
+        polyval(&self.coefficients, (raw - self.centre_raw) / self.half_range_raw)
+    }
+
+    /// Sensitivity at the centre of the range, mm per count.
+    pub fn mm_per_count(&self) -> f64 {
+        self.coefficients.get(1).copied().unwrap_or(0.0) / self.half_range_raw
+    }
+
+    /// Linearity check (needs at least 4 points): `Some(message)` when a quadratic fits the
+    /// points clearly better than a line (RMS more than 3x lower and the linear RMS above
+    /// 0.005 mm), i.e. a degree-2 calibration is advisable.
+    pub fn nonlinearity(points: &[JigPoint]) -> Option<String> {
+        if points.len() < 4 {
+            return None;
+        }
+        let lin = Self::fit(points, 1).ok()?.rms_residual_mm?;
+        let quad = Self::fit(points, 2).ok()?.rms_residual_mm?;
+        (lin > 0.005 && lin > 3.0 * quad).then(|| {
+            format!(
+                "the potentiometer looks non-linear: linear fit RMS {lin:.4} mm, quadratic {quad:.4} \
+                 mm (consider --degree 2)"
+            )
+        })
+    }
+
+    /// The calibration file's text.
+    pub fn to_toml_string(&self) -> String {
+        format!(
+            "# rigctl potcal: pencil travel (mm, + = extended, 0 = model tool point) = \
+             sum coefficients[i] * ((raw - centre_raw) / half_range_raw)^i\n{}",
+            toml::to_string(self).unwrap_or_default()
+        )
+    }
+
+    /// Parses a calibration file's text.
+    pub fn from_toml_str(text: &str, path: &Path) -> Result<Self, FusionError> {
+        let bad = |reason: String| FusionError::Toml {
+            path: path.to_path_buf(),
+            reason,
+        };
+        let c: Self = toml::from_str(text).map_err(|e| bad(e.to_string()))?;
+        if c.format != POTCAL_FORMAT {
+            return Err(bad(format!(
+                "format `{}`, expected `{POTCAL_FORMAT}`",
+                c.format
+            )));
+        }
+        let finite = c.coefficients.iter().all(|v| v.is_finite())
+            && c.centre_raw.is_finite()
+            && c.half_range_raw.is_finite();
+        if c.coefficients.len() < 2 || !finite || c.half_range_raw <= 0.0 {
+            return Err(bad(
+                "needs finite coefficients (at least 2) and half_range_raw > 0".into(),
+            ));
+        }
+        Ok(c)
+    }
+
+    /// Reads a calibration file.
+    pub fn read(path: &Path) -> Result<Self, FusionError> {
+        let text = std::fs::read_to_string(path).map_err(|source| FusionError::Read {
+            path: path.to_path_buf(),
+            source,
+        })?;
+        Self::from_toml_str(&text, path)
+    }
+
+    /// Writes the calibration file atomically.
+    pub fn write(&self, path: &Path) -> Result<(), FusionError> {
+        write_bytes_atomic(path, self.to_toml_string().as_bytes())?;
+        Ok(())
+    }
+}
+
+/// Parses a jig file's text (see the module documentation).
+pub fn parse_jig_csv(text: &str, path: &Path) -> Result<JigFile, FusionError> {
+    let csv_err = |line: usize, column: &str, reason: String| FusionError::Csv {
+        path: path.to_path_buf(),
+        line,
+        column: column.to_string(),
+        reason,
+    };
+    let mut rows = text
+        .lines()
+        .enumerate()
+        .map(|(i, l)| (i + 1, l.trim()))
+        .filter(|(_, l)| !l.is_empty() && !l.starts_with('#'));
+    let (hline, header) = rows
+        .next()
+        .ok_or_else(|| csv_err(1, "header", "no header row".into()))?;
+    let cols: Vec<&str> = header.split(',').map(str::trim).collect();
+    let find = |name: &str| cols.iter().position(|c| *c == name);
+    let travel = find("travel_mm")
+        .ok_or_else(|| csv_err(hline, "travel_mm", "column missing from the header".into()))?;
+    let windows = match (find("raw"), find("start_s"), find("end_s")) {
+        (Some(r), _, _) => Err(r),
+        (None, Some(s), Some(e)) => Ok((s, e)),
+        _ => {
+            return Err(csv_err(
+                hline,
+                "raw",
+                "the header needs `raw` or `start_s,end_s`".into(),
+            ))
+        }
+    };
+    let mut points = Vec::new();
+    let mut wins = Vec::new();
+    for (line, row) in rows {
+        let fields: Vec<&str> = row.split(',').map(str::trim).collect();
+        if fields.len() != cols.len() {
+            return Err(csv_err(
+                line,
+                "row",
+                format!("{} fields, the header has {}", fields.len(), cols.len()),
+            ));
+        }
+        let num = |i: usize| -> Result<f64, FusionError> {
+            fields[i]
+                .parse::<f64>()
+                .ok()
+                .filter(|v| v.is_finite())
+                .ok_or_else(|| csv_err(line, cols[i], format!("not a finite number (`{}`)", fields[i])))
+        };
+        let t = num(travel)?;
+        match windows {
+            Err(r) => points.push(JigPoint {
+                raw: num(r)?,
+                travel_mm: t,
+            }),
+            Ok((s, e)) => {
+                let (s_v, e_v) = (num(s)?, num(e)?);
+                if e_v <= s_v {
+                    return Err(csv_err(line, "end_s", "must be after start_s".into()));
+                }
+                wins.push(JigWindow {
+                    start_s: s_v,
+                    end_s: e_v,
+                    travel_mm: t,
+                });
+            }
+        }
+    }
+    if points.is_empty() && wins.is_empty() {
+        return Err(csv_err(hline, "rows", "no jig rows".into()));
+    }
+    Ok(match windows {
+        Err(_) => JigFile::Points(points),
+        Ok(_) => JigFile::Windows(wins),
+    })
+}
+
+/// Reads a jig file.
+pub fn read_jig_csv(path: &Path) -> Result<JigFile, FusionError> {
+    let text = std::fs::read_to_string(path).map_err(|source| FusionError::Read {
+        path: path.to_path_buf(),
+        source,
+    })?;
+    parse_jig_csv(&text, path)
+}
+
+/// Jig points from recording windows: the mean count of the samples inside each window (times
+/// relative to the first sample). A window with no sample is an error.
+pub fn points_from_windows(
+    samples: &[PotSample],
+    windows: &[JigWindow],
+) -> Result<Vec<JigPoint>, FusionError> {
+    let Some(first) = samples.first() else {
+        return Err(FusionError::Invalid(
+            "the recording has no potentiometer sample".into(),
+        ));
+    };
+    windows
+        .iter()
+        .map(|w| {
+            let (lo, hi) = (
+                first.t_us as f64 + w.start_s * 1e6,
+                first.t_us as f64 + w.end_s * 1e6,
+            );
+            let inside: Vec<f64> = samples
+                .iter()
+                .filter(|s| (lo..=hi).contains(&(s.t_us as f64)))
+                .map(|s| f64::from(s.raw))
+                .collect();
+            if inside.is_empty() {
+                return Err(FusionError::Invalid(format!(
+                    "jig window {}..{} s holds no potentiometer sample",
+                    w.start_s, w.end_s
+                )));
+            }
+            Ok(JigPoint {
+                raw: inside.iter().sum::<f64>() / inside.len() as f64,
+                travel_mm: w.travel_mm,
+            })
+        })
+        .collect()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn two_point_jig_is_exact_and_has_no_residual() {
+        let c = PotCalibration::fit(
+            &[
+                JigPoint { raw: 1000.0, travel_mm: 2.0 },
+                JigPoint { raw: 3000.0, travel_mm: -3.0 },
+            ],
+            1,
+        )
+        .unwrap();
+        // line through the two points: slope -5/2000 mm per count
+        assert!((c.travel_mm(2000.0) - (-0.5)).abs() < 1e-12);
+        assert!((c.mm_per_count() - (-0.0025)).abs() < 1e-15);
+        assert!(c.rms_residual_mm.is_none());
+        let back = PotCalibration::from_toml_str(&c.to_toml_string(), Path::new("p.toml")).unwrap();
+        assert!((back.travel_mm(1234.0) - c.travel_mm(1234.0)).abs() < 1e-12);
+    }
+
+    #[test]
+    fn multi_point_residuals_and_nonlinearity_check() {
+        // travel = -(raw - 2000)/400 + 1e-7 (raw - 2000)^2: ~0.1 mm of bow over +-1000 counts
+        let pts: Vec<JigPoint> = (0..7)
+            .map(|k| {
+                let raw = 1000.0 + 1000.0 * k as f64 / 3.0;
+                let d = raw - 2000.0;
+                JigPoint { raw, travel_mm: -d / 400.0 + 1e-7 * d * d }
+            })
+            .collect();
+        let lin = PotCalibration::fit(&pts, 1).unwrap();
+        assert!(lin.rms_residual_mm.unwrap() > 0.01);
+        assert!(PotCalibration::nonlinearity(&pts).is_some());
+        let quad = PotCalibration::fit(&pts, 2).unwrap();
+        assert!(quad.max_residual_mm.unwrap() < 1e-9);
+        assert!((quad.travel_mm(2500.0) - (-1.25 + 0.025)).abs() < 1e-9);
+        // a straight pot passes the check
+        let straight: Vec<JigPoint> = pts
+            .iter()
+            .map(|p| JigPoint { travel_mm: -(p.raw - 2000.0) / 400.0, ..*p })
+            .collect();
+        assert!(PotCalibration::nonlinearity(&straight).is_none());
+    }
+
+    #[test]
+    fn too_few_or_non_monotonic_points_are_refused() {
+        let one = [JigPoint { raw: 1.0, travel_mm: 1.0 }; 3];
+        assert!(PotCalibration::fit(&one, 1).is_err());
+        let zigzag = [
+            JigPoint { raw: 0.0, travel_mm: 0.0 },
+            JigPoint { raw: 1.0, travel_mm: 1.0 },
+            JigPoint { raw: 2.0, travel_mm: 0.0 },
+        ];
+        assert!(PotCalibration::fit(&zigzag, 2).is_err());
+    }
+
+    #[test]
+    fn jig_file_forms() {
+        let p = Path::new("jig.csv");
+        let JigFile::Points(pts) = parse_jig_csv("# gauges\nraw,travel_mm\n1000,2\n3000,-3\n", p).unwrap()
+        else {
+            panic!("points expected")
+        };
+        assert_eq!(pts.len(), 2);
+        let JigFile::Windows(w) = parse_jig_csv("start_s,end_s,travel_mm\n0.5,1.5,1.0\n", p).unwrap()
+        else {
+            panic!("windows expected")
+        };
+        assert_eq!(w[0].end_s, 1.5);
+        let err = parse_jig_csv("raw,travel_mm\n1000,abc\n", p).unwrap_err().to_string();
+        assert!(err.contains("jig.csv:2") && err.contains("travel_mm"), "{err}");
+        let samples: Vec<PotSample> = (0..3000u64)
+            .map(|k| PotSample { t_us: 5_000_000 + 1000 * k, raw: if k < 1500 { 1000 } else { 3000 } })
+            .collect();
+        let wins = [
+            JigWindow { start_s: 0.1, end_s: 1.0, travel_mm: 2.0 },
+            JigWindow { start_s: 2.0, end_s: 2.9, travel_mm: -3.0 },
+        ];
+        let pts = points_from_windows(&samples, &wins).unwrap();
+        assert_eq!((pts[0].raw, pts[1].raw), (1000.0, 3000.0));
+    }
+}
