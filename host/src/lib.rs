@@ -4,8 +4,10 @@
 //! |---|---|
 //! | [`model`] | the kinematic + tilting model (chain, FK, Jacobians, moments, tilting, IK, model files) |
 //! | [`io`] | pose CSV files, atomic output files |
+//! | [`joints`] | joint-tilting values (clearance, backlash, stiffness) from inclinometer readings (`rigctl joints`) |
 //! | [`sim`] | the virtual rig with known truth (`rigctl simulate`) |
 //! | [`calib`] | identification (`rigctl calibrate`): solvers, identifiability, statistics |
+//! | [`compensate`] | trajectory correction (`rigctl compensate`, eq. 5.22): joints that put the calibrated, tilting arm on a path |
 //! | [`diagnose`] | `rigctl diagnose`: residual analysis, candidate effects, forward selection |
 //! | [`daq`] | the acquisition path: recordings, `record`, `export`, the virtual board |
 //! | [`sheet`] | the printable trace sheet's geometry and SVG |
@@ -17,11 +19,13 @@
 #![forbid(unsafe_code)]
 
 pub mod calib;
+pub mod compensate;
 pub mod daq;
 pub mod diagnose;
 pub mod error;
 pub mod fusion;
 pub mod io;
+pub mod joints;
 pub mod model;
 pub mod plot;
 pub mod report;

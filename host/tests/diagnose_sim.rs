@@ -195,14 +195,14 @@ fn base_offset() {
 
 /// A base tilt gives joint 1 a gravity torque about its axis, which switches its declared
 /// backlash (sign(eta_z) b, MODEL.md eq. 5.19) on with pose-dependent signs: the fit objective
-/// has steps, and the solver stops a little short of the truth. The effect is named first; the
-/// held-out error is allowed 2.5x the floor (measured: 2.2x) instead of 1.5x.
+/// has steps, at which the Levenberg-Marquardt refit stops (rx 0.0269, 2.2x the floor without
+/// the polish); the derivative-free polish (`rigctl::diagnose::polish`) carries the fit across
+/// them to the 1.5x acceptance and to within 10 % of the true tilt.
 #[test]
 fn base_tilt() {
-    let r = assert_found("base_tilt=0.03,-0.02", "base_tilt", 2.5);
-    eprintln!("DBG floor {:.5}\n{}\n{:?}", r.floor_mm, r.diag.report.table(), r.diag.report.effects[0].parameters);
+    let r = assert_found("base_tilt=0.03,-0.02", "base_tilt", 1.5);
     assert!(
-        (param(&r, "rx") - 0.03).abs() < 0.006 && (param(&r, "ry") + 0.02).abs() < 0.006,
+        (param(&r, "rx") - 0.03).abs() < 0.003 && (param(&r, "ry") + 0.02).abs() < 0.002,
         "{:?}",
         r.diag.report.effects[0].parameters
     );
@@ -254,41 +254,32 @@ fn two_effects_are_both_found() {
     assert!((e[1].validation_mean_mm_after - final_val(&r)).abs() < 1e-12);
 }
 
+/// Regressions of the selection rule on other seeds: a first encoder harmonic that a second one
+/// nearly aliases over joint 2's range (settled by cross-validation, then by simplicity), and a
+/// base tilt that the linear screen cannot see because it switches on joint 1's backlash (found
+/// by the sign-onset probe).
 #[test]
-#[ignore]
-fn explore_base_tilt() {
-    use rigctl::diagnose::extended::{fit, ExtModel, Unknown};
-    let declared = katana450(200.0).unwrap();
-    let cfg = SimConfig {
-        seed: 1,
-        effects: vec![parse_effect("base_tilt=0.03,-0.02").unwrap()],
-        ..SimConfig::default()
-    };
-    let out = simulate(&declared, &cfg).unwrap();
-    let cal = dataset(&out.cal);
-    let val = dataset(&out.val);
-    let opts = DiagnoseOptions::default();
-    let (dfit, req) = rigctl::diagnose::declared_fit(&declared, &cal, &opts.decide).unwrap();
-    let truth = ExtModel::new(out.truth.clone());
-    let rss = |e: &ExtModel, d: &Dataset| e.errors(d).unwrap().iter().map(|v| v.norm_squared()).sum::<f64>();
-    let mean = |e: &ExtModel, d: &Dataset| e.errors(d).unwrap().iter().map(|v| v.norm()).sum::<f64>() / d.len() as f64;
-    eprintln!("truth: cal rss {:.5} val mean {:.5}", rss(&truth, &cal), mean(&truth, &val));
-    let rx = declared.param_index("base_rx").unwrap();
-    let ry = declared.param_index("base_ry").unwrap();
-    let fitted: Vec<Unknown> = dfit.fitted.clone();
-    for (a, b) in [(0.0269, -0.01755), (0.03, -0.02), (0.029, -0.019), (0.028, -0.0185), (0.031, -0.021)] {
-        let mut s = dfit.ext.clone();
-        s.set_value(Unknown::Param(rx), a).unwrap();
-        s.set_value(Unknown::Param(ry), b).unwrap();
-        let f = fit(&s, &cal, &fitted, &opts.decide.lm, opts.decide.rtol, true).unwrap();
-        let mut all = fitted.clone();
-        all.push(Unknown::Param(rx));
-        all.push(Unknown::Param(ry));
-        let g = fit(&f.ext, &cal, &all, &opts.decide.lm, opts.decide.rtol, true).unwrap();
-        eprintln!(
-            "rx {a} ry {b}: profile rss {:.5} val {:.5} | full LM rss {:.5} rx {:.5} ry {:.5} val {:.5}",
-            f.rss_mm2, mean(&f.ext, &val), g.rss_mm2, g.ext.value(Unknown::Param(rx)), g.ext.value(Unknown::Param(ry)), mean(&g.ext, &val)
+fn near_aliases_and_sign_onsets_on_other_seeds() {
+    let cases = [
+        ("encoder_harmonic:j2:h1=0.03,40", "encoder_harmonic:j2:h1", 7),
+        ("base_tilt=0.03,-0.02", "base_tilt", 2),
+        ("base_tilt=0.03,-0.02", "base_tilt", 3),
+        ("base_tilt=0.03,-0.02", "base_tilt", 4),
+    ];
+    for (effect, id, seed) in cases {
+        let r = run(&[effect], seed);
+        let got = ids(&r);
+        assert_eq!(
+            got.first().map(String::as_str),
+            Some(id),
+            "{effect} seed {seed}: effects {got:?}\n{}",
+            r.diag.report.table()
+        );
+        assert!(
+            final_val(&r) <= 1.5 * r.floor_mm,
+            "{effect} seed {seed}: validation mean {:.4} mm > 1.5 x floor {:.4} mm",
+            final_val(&r),
+            r.floor_mm
         );
     }
-    let _ = req;
 }

@@ -7,6 +7,7 @@
 //! | [`stats`] | the error statistics object of FORMATS.md |
 //! | [`report`] | the `calibrate --json` document |
 //! | [`problem`] | measured poses, position errors, the identification as a least-squares problem |
+//! | [`projected`] | identification from partial measurements (projections on known directions, `calibrate --samples`) |
 //! | [`fit`] | identifiability + LM + covariance on a parameter subset |
 //! | [`influence`] | influence-based identification (thesis eq. 3.7-3.8) |
 //! | [`calibrate`] | the whole `calibrate` command: selection, methods, report |
@@ -18,6 +19,7 @@ pub mod identifiability;
 pub mod influence;
 pub mod lm;
 pub mod problem;
+pub mod projected;
 pub mod report;
 pub mod stats;
 

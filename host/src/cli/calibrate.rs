@@ -2,6 +2,11 @@
 //! [--json OUT.json] [--out MODEL.toml] [--robot NAME | --model FILE] [--tool-mm L]
 //! [--set NAME=VALUE ...] [--params a,b,c] [--base]`: identifies the model's parameters and
 //! prints a thesis-table-4.5 style summary.
+//!
+//! `rigctl calibrate --samples FUSED.csv [--method standard|tilting] [--errors-csv FILE] ...`:
+//! the same from the partial measurements of the low-cost rig (`rigctl fuse` output,
+//! `rigctl::calib::projected`); with `tilting` the declared tilting is driven by the moments in
+//! motion along the logged joint trajectory.
 
 use std::fmt::Write as _;
 use std::path::PathBuf;
@@ -17,8 +22,16 @@ use super::CliError;
 #[derive(clap::Args, Debug)]
 pub struct Args {
     /// Calibration poses: q1..qN (deg) and measured x,y,z (mm, frame R).
-    #[arg(long, value_name = "CAL.csv")]
-    pub poses: PathBuf,
+    #[arg(long, value_name = "CAL.csv", required_unless_present = "samples")]
+    pub poses: Option<PathBuf>,
+    /// Partial measurements instead of poses: fused samples (`rigctl fuse` output); the stats
+    /// are then over the measured components (|dP| = sqrt(dev_u^2 + dev_n^2)). Without --model
+    /// the Katana's tool length defaults to 330 mm (the pencil holder).
+    #[arg(long, value_name = "FUSED.csv", conflicts_with_all = ["poses", "validate"])]
+    pub samples: Option<PathBuf>,
+    /// With --samples: write the per-sample measured errors before/after (CSV).
+    #[arg(long, value_name = "ERRORS.csv", requires = "samples")]
+    pub errors_csv: Option<PathBuf>,
     /// Held-out poses, only evaluated.
     #[arg(long, value_name = "VAL.csv")]
     pub validate: Option<PathBuf>,
@@ -61,13 +74,20 @@ fn parse_method(s: &str) -> Result<Method, String> {
 }
 
 pub fn run(args: Args) -> Result<(), CliError> {
+    if let Some(samples) = &args.samples {
+        return run_samples(&args, samples);
+    }
+    let poses = args
+        .poses
+        .as_deref()
+        .ok_or_else(|| CliError::bad_input("--poses or --samples is required"))?;
     let model = choose_model(&ModelChoice {
         robot: args.robot.as_deref(),
         model_file: args.model.as_deref(),
         tool_mm: args.tool_mm,
         sets: &args.sets,
     })?;
-    let cal = Poses::read(&args.poses, &model)?;
+    let cal = Poses::read(poses, &model)?;
     let val = args
         .validate
         .as_deref()
@@ -141,6 +161,74 @@ fn summary(o: &rigctl::calib::Outcome, with_val: bool) -> String {
         s.push('\n');
         s.push_str(&table("Validation poses", &o.validation_errors, &r.method));
     }
+    s.push_str(&report_tail(r));
+    s
+}
+
+/// `calibrate --samples`: identification from partial (projected) measurements.
+fn run_samples(args: &Args, samples: &std::path::Path) -> Result<(), CliError> {
+    use rigctl::calib::projected::{calibrate_projected, errors_csv, ProjectedData, SampleTilt};
+    let tool_mm = match (&args.model, args.tool_mm) {
+        (None, None) => Some(rigctl::model::KATANA_PENCIL_TOOL_MM),
+        (_, t) => t,
+    };
+    let model = choose_model(&ModelChoice {
+        robot: args.robot.as_deref(),
+        model_file: args.model.as_deref(),
+        tool_mm,
+        sets: &args.sets,
+    })?;
+    let fused = rigctl::fusion::read_fused(samples, model.n_joints())?;
+    let data = ProjectedData::from_fused(&fused);
+    let (data, tilt) = match args.method {
+        Method::Standard => (data, SampleTilt::Off),
+        Method::Tilting => (data.with_dynamic_moments(&model)?, SampleTilt::Dynamic),
+        Method::Influence => {
+            return Err(CliError::bad_input(
+                "--method influence needs full positions (--poses); use standard or tilting with --samples",
+            ))
+        }
+    };
+    let opts = CalibrateOptions {
+        method: args.method,
+        params: args.params.clone(),
+        base: args.base,
+        rtol: args.rtol,
+        ..Default::default()
+    };
+    let outcome = calibrate_projected(&model, &data, tilt, &opts)?;
+    if let Some(path) = &args.json {
+        let text = serde_json::to_string_pretty(&outcome.report)
+            .map_err(|e| CliError::failure(format!("encoding JSON: {e}")))?;
+        write_bytes_atomic(path, format!("{text}\n").as_bytes())?;
+    }
+    if let Some(path) = &args.out {
+        outcome.model.write_file(path)?;
+    }
+    if let Some(path) = &args.errors_csv {
+        let text = errors_csv(&fused, &outcome.errors[0], &outcome.errors[2]);
+        write_bytes_atomic(path, text.as_bytes())?;
+    }
+    let mut s = table(
+        "Fused samples, measured components only (|dP| = sqrt(dev_u^2 + dev_n^2); along the path not measured)",
+        &outcome.errors,
+        &outcome.report.method,
+    );
+    s.push_str(&report_tail(&outcome.report));
+    let _ = writeln!(
+        s,
+        "outliers left out of the fit: {} of {} measured components (> {} robust sigmas)",
+        outcome.rejected,
+        data.rows.len(),
+        rigctl::calib::projected::OUTLIER_SIGMAS
+    );
+    print!("{s}");
+    Ok(())
+}
+
+/// Method, rank, condition, unidentifiable parameters and the parameter table.
+fn report_tail(r: &rigctl::calib::report::CalibrateReport) -> String {
+    let mut s = String::new();
     let _ = writeln!(
         s,
         "\nmethod {}{}; rank {}; condition number {:.1}; iterations {}{}",

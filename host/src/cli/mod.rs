@@ -4,10 +4,14 @@ use rigctl::error::{Classify, ErrorKind};
 
 mod board_sim;
 mod calibrate;
+mod compensate;
 mod diagnose;
 mod export;
 mod fk;
+mod joints;
+mod fuse;
 mod ports;
+mod potcal;
 mod record;
 mod report;
 mod sheet;
@@ -46,8 +50,16 @@ pub enum Command {
     Sheet(sheet::Args),
     /// Extract the pencil centreline from a scanned sheet (CSV x,y in mm).
     Trace(trace::Args),
+    /// Calibrate the pencil's potentiometer (counts -> mm) from a gauge-block jig.
+    Potcal(potcal::Args),
+    /// Fuse joint readings, the pot recording and the pencil trace into partial error samples.
+    Fuse(fuse::Args),
     /// Write a URDF serial chain (base link .. tip link) as a model file.
     Urdf2model(urdf2model::Args),
+    /// Joint clearance, backlash and stiffness from inclinometer readings, into a model file.
+    Joints(joints::Args),
+    /// Joints that put the calibrated, tilting arm on a Cartesian path (eq. 5.22).
+    Compensate(compensate::Args),
 }
 
 pub fn run(cli: Cli) -> Result<(), CliError> {
@@ -63,7 +75,11 @@ pub fn run(cli: Cli) -> Result<(), CliError> {
         Command::BoardSim(a) => board_sim::run(a),
         Command::Sheet(a) => sheet::run(a),
         Command::Trace(a) => trace::run(a),
+        Command::Potcal(a) => potcal::run(a),
+        Command::Fuse(a) => fuse::run(a),
         Command::Urdf2model(a) => urdf2model::run(a),
+        Command::Joints(a) => joints::run(a),
+        Command::Compensate(a) => compensate::run(a),
     }
 }
 

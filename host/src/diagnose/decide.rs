@@ -6,11 +6,22 @@
 //! 1. **Screen** every remaining candidate linearly ([`super::residual::screen`]) and rank by the
 //!    linearised change of BIC (`m ln(RSS1/RSS0) + k ln m`, `k` = new identifiable directions,
 //!    `m` = 3 x poses). Candidates that only alias fitted parameters (`k = 0`) drop out here.
+//!    A linear screen taken where a sign step of the tilting law sits exactly at zero (e.g. the
+//!    joint-1 axis torque, 0 at every pose until the base tilts) cannot see the step the
+//!    candidate would switch on; every candidate whose small move flips such a sign
+//!    ([`onset_candidates`]) is therefore refitted too, whatever its screen.
 //! 2. **Refit** the best [`DecideConfig::refit_top`] fully (Levenberg-Marquardt on every fitted
 //!    unknown plus the candidate's, with the SVD identifiability analysis deciding which of the
 //!    candidate's unknowns are new; aliased ones stay fixed and are reported as unidentifiable
-//!    combinations), and rank them by the exact change of BIC.
-//! 3. **Test** in that order; the first candidate that passes both tests is accepted:
+//!    combinations), and rank them by the exact change of BIC. A refit that crossed sign steps
+//!    of the tilting law and stopped at one is polished derivative-free first
+//!    ([`super::polish`]).
+//! 3. **Test** in that order; the first candidate that passes both tests is accepted. Candidates
+//!    that pass the F-test and BIC and lie within [`DecideConfig::bic_tie`] of the best exact BIC
+//!    are near-aliases on the calibration poses (e.g. a first and a second encoder harmonic over a
+//!    narrow joint range, or a tool offset along the last axis and that link's length): their
+//!    cross-validated errors decide, and where those do not differ significantly the simplest
+//!    candidate (fewest unknowns, lowest harmonic order) comes first:
 //!    * the nested-model F-test on the RSS with `k` added parameters, `p <` [`DecideConfig::alpha`]
 //!      (default 0.001), and a BIC decrease;
 //!    * k-fold cross-validation on the calibration poses ([`DecideConfig::folds`], default 5,
@@ -29,6 +40,7 @@ use rand_chacha::ChaCha8Rng;
 use super::candidates::{library, Candidate};
 use super::data::Dataset;
 use super::extended::{fit, ExtFit, Unknown};
+use super::polish::{needs_polish, polish};
 use super::residual::screen;
 use super::stat::{delta_bic, nested_f_test};
 use crate::calib::lm::LmConfig;
@@ -57,6 +69,16 @@ pub struct DecideConfig {
     pub lm_cv: LmConfig,
     /// Identifiability threshold (relative singular value).
     pub rtol: f64,
+    /// Most profile evaluations of the derivative-free polish of a refit that crossed sign steps
+    /// of the tilting law ([`super::polish`]); 0 disables it.
+    pub polish_max_evals: usize,
+    /// Width of the band of exact BIC changes (from the best) within which passing candidates
+    /// are ranked by their cross-validated error instead (10 = "strong evidence" on the
+    /// Kass-Raftery scale).
+    pub bic_tie: f64,
+    /// Step (in each unknown's own unit) of the probe that looks for sign steps a candidate
+    /// switches on ([`onset_candidates`]).
+    pub onset_probe: f64,
 }
 
 impl Default for DecideConfig {
@@ -76,6 +98,9 @@ impl Default for DecideConfig {
                 ..LmConfig::default()
             },
             rtol: crate::calib::identifiability::DEFAULT_RTOL,
+            polish_max_evals: 100,
+            bic_tie: 10.0,
+            onset_probe: 1e-3,
         }
     }
 }
@@ -187,6 +212,44 @@ fn paired_gain(e0: &[f64], e1: &[f64]) -> (f64, f64, f64, f64) {
     (m0, m1, rel, t)
 }
 
+/// Order of near-tied candidates (indices `ids`, cross-validated per-pose errors `errs`): the
+/// ones the best cross-validated candidate does not beat significantly (paired t below
+/// [`DecideConfig::cv_t_min`]) are statistically equivalent, and among them the simplest comes
+/// first ([`simplicity`]: fewer unknowns, then a lower harmonic order); the others follow by
+/// cross-validated mean.
+fn rank_contenders<'a>(
+    ids: &[usize],
+    errs: &[Vec<f64>],
+    candidate: impl Fn(usize) -> &'a Candidate,
+    cfg: &DecideConfig,
+) -> Vec<usize> {
+    let mean = |e: &[f64]| e.iter().sum::<f64>() / e.len().max(1) as f64;
+    let Some(best) = (0..ids.len()).min_by(|&a, &b| mean(&errs[a]).total_cmp(&mean(&errs[b])))
+    else {
+        return Vec::new();
+    };
+    let (mut equivalent, mut worse): (Vec<usize>, Vec<usize>) = (0..ids.len()).partition(|&k| {
+        let t = paired_gain(&errs[k], &errs[best]).3;
+        !(t >= cfg.cv_t_min)
+    });
+    equivalent.sort_by_key(|&k| simplicity(candidate(ids[k])));
+    worse.sort_by(|&a, &b| mean(&errs[a]).total_cmp(&mean(&errs[b])));
+    equivalent.into_iter().chain(worse).map(|k| ids[k]).collect()
+}
+
+/// Occam's order of a candidate: its number of unknowns, then its harmonic order (a first
+/// harmonic is smoother than a second one; 0 for effects that are not harmonics).
+fn simplicity(c: &Candidate) -> (usize, u32) {
+    let order = c
+        .id
+        .rsplit(':')
+        .next()
+        .and_then(|h| h.strip_prefix('h'))
+        .and_then(|n| n.parse().ok())
+        .unwrap_or(0);
+    (c.unknowns.len(), order)
+}
+
 /// Greedy forward selection from the declared fit `declared` (its requested unknowns
 /// `declared_unknowns`) on `data`. See the module documentation.
 pub fn forward_selection(
@@ -221,6 +284,12 @@ pub fn forward_selection(
             .collect();
         ranked.sort_by(|a, b| a.2.total_cmp(&b.2));
         ranked.truncate(cfg.refit_top);
+        for ci in onset_candidates(&cur, &cands, data, cfg)? {
+            if !ranked.iter().any(|r| r.0 == ci) {
+                let added = screens.iter().find(|s| s.candidate == ci).map_or(0, |s| s.added);
+                ranked.push((ci, added, 0.0));
+            }
+        }
         let mut refits: Vec<(Trial, ExtFit)> = Vec::new();
         for (ci, _, _) in &ranked {
             let cand = &cands[*ci];
@@ -248,7 +317,10 @@ pub fn forward_selection(
                 from = f2.clone();
                 best = Some(f2);
             }
-            let Some(after) = best else { continue };
+            let Some(mut after) = best else { continue };
+            if needs_polish(&cur.ext, &after, data, cfg.rtol)? {
+                after = polish(after, &cur.ext, &cand.unknowns, data, cfg)?;
+            }
             let added = after.fitted.len().saturating_sub(cur.fitted.len());
             let dof = m.saturating_sub(after.fitted.len());
             let (f, p) = nested_f_test(rss0, after.rss_mm2, added, dof);
@@ -274,9 +346,42 @@ pub fn forward_selection(
         }
         refits.sort_by(|a, b| a.0.delta_bic.total_cmp(&b.0.delta_bic));
         let mut cv_before: Option<Vec<f64>> = None;
+        let mut cv_cache: Vec<Option<Vec<f64>>> = vec![None; refits.len()];
+        let passes = |t: &Trial| t.added > 0 && t.p_value < cfg.alpha && t.delta_bic < 0.0;
+        let contenders: Vec<usize> = match refits.iter().map(|r| &r.0).find(|t| passes(t)) {
+            Some(best) => (0..refits.len())
+                .filter(|&i| {
+                    passes(&refits[i].0) && refits[i].0.delta_bic <= best.delta_bic + cfg.bic_tie
+                })
+                .collect(),
+            None => Vec::new(),
+        };
+        if contenders.len() > 1 {
+            let mut errs = Vec::with_capacity(contenders.len());
+            for &i in &contenders {
+                let e1 = cv_errors(&refits[i].1, data, cfg)?;
+                errs.push(e1.clone());
+                cv_cache[i] = Some(e1);
+            }
+            let ranked = rank_contenders(&contenders, &errs, |i| &refits[i].0.candidate, cfg);
+            // Contenders first (see `rank_contenders`); then the rest in BIC order.
+            let order: Vec<usize> = ranked
+                .into_iter()
+                .chain((0..refits.len()).filter(|i| !contenders.contains(i)))
+                .collect();
+            let mut slots: Vec<Option<(Trial, ExtFit)>> = refits.into_iter().map(Some).collect();
+            let mut caches: Vec<Option<Vec<f64>>> = std::mem::take(&mut cv_cache);
+            refits = Vec::with_capacity(order.len());
+            for i in order {
+                if let Some(r) = slots[i].take() {
+                    refits.push(r);
+                    cv_cache.push(caches[i].take());
+                }
+            }
+        }
         let mut chosen: Option<(Trial, ExtFit)> = None;
         let mut trials = Vec::new();
-        for (mut trial, after) in refits {
+        for ((mut trial, after), cached) in refits.into_iter().zip(cv_cache) {
             if chosen.is_some() {
                 trial.reason = "not tested: an earlier candidate was accepted".into();
                 trials.push(trial);
@@ -294,7 +399,10 @@ pub fn forward_selection(
                     cv_before = Some(cv_errors(&cur, data, cfg)?);
                 }
                 let e0 = cv_before.as_deref().unwrap_or(&[]);
-                let e1 = cv_errors(&after, data, cfg)?;
+                let e1 = match cached {
+                    Some(e1) => e1,
+                    None => cv_errors(&after, data, cfg)?,
+                };
                 let (m0, m1, rel, t) = paired_gain(e0, &e1);
                 trial.cv_mean_mm = [m0, m1];
                 trial.cv_t = t;
@@ -334,6 +442,43 @@ pub fn forward_selection(
         last: cur,
         requested,
     })
+}
+
+/// Indices of the candidates whose small move ([`DecideConfig::onset_probe`] on each of their
+/// unknowns) flips a sign of the joint moments at some pose: where the tilting law's sign steps
+/// sit exactly at zero in the current fit, the linear screen cannot see what the candidate would
+/// switch on, so these are always refitted.
+pub fn onset_candidates(
+    cur: &ExtFit,
+    cands: &[Candidate],
+    data: &Dataset,
+    cfg: &DecideConfig,
+) -> Result<Vec<usize>, CalibError> {
+    let base = cur.ext.moment_signs(data).map_err(CalibError::Model)?;
+    if base.is_empty() || cfg.onset_probe <= 0.0 {
+        return Ok(Vec::new());
+    }
+    let mut out = Vec::new();
+    for (ci, cand) in cands.iter().enumerate() {
+        let mut probe = cur.ext.clone();
+        let mut ok = true;
+        for &u in &cand.unknowns {
+            if probe.set_value(u, probe.value(u) + cfg.onset_probe).is_err() {
+                ok = false;
+                break;
+            }
+        }
+        if !ok {
+            continue;
+        }
+        let Ok(signs) = probe.moment_signs(data) else {
+            continue;
+        };
+        if signs.iter().zip(&base).any(|(a, b)| a != b) {
+            out.push(ci);
+        }
+    }
+    Ok(out)
 }
 
 /// The current model moved by the Gauss-Newton step of its fitted unknowns plus `cand`'s

@@ -9,6 +9,7 @@
 //! | [`candidates`] | the effect library (FORMATS.md effect ids) and effect-unit parameters |
 //! | [`residual`] | regressors, linearised screening, structure tests |
 //! | [`decide`] | greedy forward selection: F-test + BIC + k-fold cross-validation |
+//! | [`polish`] | derivative-free polish of a refit across the sign steps of the tilting law |
 //! | [`stat`] | F distribution, BIC, noise statistics |
 //! | [`report`] | the `diagnose --json` document and the text table |
 //! | [`plots`] | SVG plots of the residual against the regressor that traced each effect |
@@ -31,6 +32,7 @@ pub mod decide;
 pub mod extended;
 pub mod gravity;
 pub mod plots;
+pub mod polish;
 pub mod report;
 pub mod residual;
 pub mod stat;

@@ -7,8 +7,9 @@
 //! Before drawing (and, to measure drift, after drawing) the robot, with the pencil on the
 //! paper, dips the tool point along the sheet normal: e.g. 1.5 mm down and back up in 0.5 s,
 //! smoothly, with a short dwell on either side. The descent onto the paper serves as well. The
-//! pencil's travel then follows the nominal height of the tool point above the paper,
-//! `h(t) = n . (p_nominal(q(t)) - origin)`, up to a constant: the geometric errors of the arm
+//! pencil's travel then follows the travel predicted from the nominal height of the tool point
+//! above the paper, `h(t) = n . (p_nominal(q(t)) - origin)`, along the pencil axis `a`,
+//! `-h / (n . a)` (the caller passes this prediction as `h_mm`), up to a constant: the geometric errors of the arm
 //! shift the level by a fraction of a millimetre but hardly change over a 1.5 mm dip.
 //!
 //! # Estimation
@@ -47,9 +48,9 @@ impl Default for AlignOptions {
     fn default() -> Self {
         Self {
             contact_margin_mm: 0.5,
-            min_speed_mm_s: 0.5,
+            min_speed_mm_s: 2.0,
             pad_s: 0.15,
-            min_span_mm: 0.3,
+            min_span_mm: 1.0,
             coarse_step_s: 1e-3,
             max_rms_mm: 0.1,
         }
@@ -92,7 +93,12 @@ impl ClockAlignment {
 }
 
 /// Index ranges `[a, b)` of the marker windows (see the module documentation).
-pub fn marker_windows(t_s: &[f64], h_mm: &[f64], stop_mm: f64, o: &AlignOptions) -> Vec<(usize, usize)> {
+pub fn marker_windows(
+    t_s: &[f64],
+    h_mm: &[f64],
+    stop_mm: f64,
+    o: &AlignOptions,
+) -> Vec<(usize, usize)> {
     let n = t_s.len().min(h_mm.len());
     if n < 3 {
         return Vec::new();
@@ -119,7 +125,9 @@ pub fn marker_windows(t_s: &[f64], h_mm: &[f64], stop_mm: f64, o: &AlignOptions)
             let (&first, &last) = (idx.first()?, idx.last()?);
             let (lo, hi) = idx
                 .iter()
-                .fold((f64::INFINITY, f64::NEG_INFINITY), |(l, h), &k| (l.min(h_mm[k]), h.max(h_mm[k])));
+                .fold((f64::INFINITY, f64::NEG_INFINITY), |(l, h), &k| {
+                    (l.min(h_mm[k]), h.max(h_mm[k]))
+                });
             (hi - lo >= o.min_span_mm && last - first + 1 == idx.len()).then_some((first, last + 1))
         })
         .collect()
@@ -186,7 +194,9 @@ pub fn align(
         }
     }
     if !best.0.is_finite() {
-        return Err(FusionError::Alignment("no offset puts the markers inside the recording".into()));
+        return Err(FusionError::Alignment(
+            "no offset puts the markers inside the recording".into(),
+        ));
     }
     let mut markers = Vec::new();
     for &(a, b) in &wins {
@@ -213,7 +223,10 @@ pub fn align(
             samples: t.len(),
         });
     }
-    let centres: Vec<f64> = markers.iter().map(|m| 0.5 * (m.start_s + m.end_s)).collect();
+    let centres: Vec<f64> = markers
+        .iter()
+        .map(|m| 0.5 * (m.start_s + m.end_s))
+        .collect();
     let span = centres.iter().cloned().fold(f64::NEG_INFINITY, f64::max)
         - centres.iter().cloned().fold(f64::INFINITY, f64::min);
     let n = markers.len() as f64;
@@ -283,7 +296,10 @@ mod tests {
         let h: Vec<f64> = t_r.iter().map(|&t| h_of(t)).collect();
         let n_pot = 11_500;
         let b0 = offset - 0.2;
-        let mut pot = TravelSeries { t_s: Vec::new(), travel_mm: Vec::new() };
+        let mut pot = TravelSeries {
+            t_s: Vec::new(),
+            travel_mm: Vec::new(),
+        };
         for j in 0..n_pot {
             let tb = b0 + j as f64 * 1e-3;
             let tr = (tb - offset) / (1.0 + drift_ppm * 1e-6);

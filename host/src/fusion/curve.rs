@@ -14,6 +14,9 @@ pub struct Closest {
     pub arc_mm: f64,
     /// Distance along the curve to its nearer end (infinite for a closed curve), mm.
     pub to_end_mm: f64,
+    /// Largest angle between `tangent` and the 0.5 mm chords centred within +-2 mm of the
+    /// closest point, rad: large at a step or kink of the curve.
+    pub roughness_rad: f64,
 }
 
 /// Half length of the curve piece whose chord gives the tangent, mm.
@@ -61,8 +64,15 @@ impl TracedCurve {
     /// The point at arc length `s` (wrapped for a closed curve, clamped otherwise).
     pub fn point_at(&self, s: f64) -> [f64; 2] {
         let len = self.length_mm();
-        let s = if self.closed { s.rem_euclid(len) } else { s.clamp(0.0, len) };
-        let i = self.arc.partition_point(|&a| a <= s).clamp(1, self.pts.len() - 1);
+        let s = if self.closed {
+            s.rem_euclid(len)
+        } else {
+            s.clamp(0.0, len)
+        };
+        let i = self
+            .arc
+            .partition_point(|&a| a <= s)
+            .clamp(1, self.pts.len() - 1);
         let (a0, a1) = (self.arc[i - 1], self.arc[i]);
         let f = if a1 > a0 { (s - a0) / (a1 - a0) } else { 0.0 };
         let (p, q) = (self.pts[i - 1], self.pts[i]);
@@ -96,14 +106,85 @@ impl TracedCurve {
         } else {
             arc_mm.min(self.length_mm() - arc_mm)
         };
+        let tangent = [tx / tn, ty / tn];
+        let roughness_rad = (-4..=4)
+            .map(|k| {
+                let c = arc_mm + 0.5 * f64::from(k);
+                let (a, b) = (self.point_at(c - 0.25), self.point_at(c + 0.25));
+                let (dx, dy) = (b[0] - a[0], b[1] - a[1]);
+                let cross = tangent[0] * dy - tangent[1] * dx;
+                let dot = tangent[0] * dx + tangent[1] * dy;
+                if dx == 0.0 && dy == 0.0 {
+                    0.0
+                } else {
+                    cross.atan2(dot).abs()
+                }
+            })
+            .fold(0.0, f64::max);
         Closest {
             point,
             distance_mm,
-            tangent: [tx / tn, ty / tn],
+            tangent,
             arc_mm,
             to_end_mm,
+            roughness_rad,
         }
     }
+}
+
+/// Reads a trace file (`rigctl trace` output, FORMATS.md: CSV `x,y` in sheet mm, a header row,
+/// `#` comment lines).
+pub fn read_trace_csv(path: &std::path::Path) -> Result<Vec<[f64; 2]>, super::FusionError> {
+    use super::FusionError;
+    let text = std::fs::read_to_string(path).map_err(|source| FusionError::Read {
+        path: path.to_path_buf(),
+        source,
+    })?;
+    let err = |line: usize, column: &str, reason: String| FusionError::Csv {
+        path: path.to_path_buf(),
+        line,
+        column: column.into(),
+        reason,
+    };
+    let mut rows = text
+        .lines()
+        .enumerate()
+        .map(|(i, l)| (i + 1, l.trim()))
+        .filter(|(_, l)| !l.is_empty() && !l.starts_with('#'));
+    let (hl, header) = rows
+        .next()
+        .ok_or_else(|| err(1, "header", "no header row".into()))?;
+    let cols: Vec<&str> = header.split(',').map(str::trim).collect();
+    let ix = cols
+        .iter()
+        .position(|c| *c == "x")
+        .ok_or_else(|| err(hl, "x", "column missing from the header".into()))?;
+    let iy = cols
+        .iter()
+        .position(|c| *c == "y")
+        .ok_or_else(|| err(hl, "y", "column missing from the header".into()))?;
+    let mut pts = Vec::new();
+    for (line, row) in rows {
+        let f: Vec<&str> = row.split(',').map(str::trim).collect();
+        if f.len() != cols.len() {
+            return Err(err(
+                line,
+                "row",
+                format!("{} fields, the header has {}", f.len(), cols.len()),
+            ));
+        }
+        let num = |i: usize, name: &str| {
+            f[i].parse::<f64>()
+                .ok()
+                .filter(|v| v.is_finite())
+                .ok_or_else(|| err(line, name, format!("not a finite number (`{}`)", f[i])))
+        };
+        pts.push([num(ix, "x")?, num(iy, "y")?]);
+    }
+    if pts.len() < 2 {
+        return Err(err(hl, "rows", "a trace needs at least 2 points".into()));
+    }
+    Ok(pts)
 }
 
 #[cfg(test)]
@@ -127,8 +208,13 @@ mod tests {
             assert!((cl.distance_mm - 0.7).abs() < 1e-3, "{cl:?}");
             // tangent at right angles to the radius
             let radial = [ang.cos(), ang.sin()];
-            assert!((cl.tangent[0] * radial[0] + cl.tangent[1] * radial[1]).abs() < 1e-6);
+            assert!(
+                (cl.tangent[0] * radial[0] + cl.tangent[1] * radial[1]).abs() < 1e-4,
+                "{cl:?}"
+            );
             assert!(cl.to_end_mm.is_infinite());
+            // chords 2 mm away turn by 0.02 rad on r = 100 mm
+            assert!(cl.roughness_rad < 0.03, "{cl:?}");
         }
     }
 
@@ -141,5 +227,15 @@ mod tests {
         assert!((cl.distance_mm - 0.2).abs() < 1e-12);
         assert!((cl.to_end_mm - 5.0).abs() < 1e-9);
         assert!((cl.tangent[0] - 1.0).abs() < 1e-12);
+        assert!(cl.roughness_rad < 1e-12);
+        // a 0.3 mm step across the line (over one 0.5 mm segment) shows as roughness
+        let mut pts: Vec<[f64; 2]> = (0..=400).map(|k| [-100.0 + 0.5 * k as f64, 0.0]).collect();
+        for p in pts.iter_mut().skip(201) {
+            p[1] += 0.3;
+        }
+        let c = TracedCurve::new(pts, 1.0).unwrap();
+        let r = c.closest([1.0, 0.3]).roughness_rad;
+        assert!(r > 0.2, "{r}"); // 2.5x the fusion's threshold of 0.1 rad
+        assert!(c.closest([5.0, 0.3]).roughness_rad < 1e-9);
     }
 }

@@ -1,10 +1,18 @@
 //! The fusion (`rigctl fuse`): joint readings + potentiometer recording + pencil trace ->
 //! partial Cartesian error samples.
 //!
-//! For every joint sample (robot clock `t`):
-//! 1. the nominal tool point `p = p(q)` and tool axis `a` of the model (rigid chain, no
-//!    tilting: the robot controller's view) and its height `h = n . (p - origin)` above the sheet;
-//! 2. the board time of `t` from the clock alignment ([`super::align`]), and the pencil travel
+//! For every joint sample (robot clock `t`) **while drawing** (the pencil predicted on the paper
+//! and the model's point moving at `min_speed_mm_s` or faster in the plane; dwells, dips, the
+//! descent and the lift only serve the clock alignment) and not **ambiguous** (no other
+//! drawing sample more than `ambiguity_gap_s` away in time passes within `ambiguity_mm`: there
+//! the trace cannot tell the passes apart, e.g. where a closed path meets its start; every
+//! sample with the pencil predicted on the paper counts, dwells included):
+//! 1. the nominal tool point `p = p(q)` and tool axis `a` of the fusing model (with its declared
+//!    tilting driven by the moments in motion along the logged joints,
+//!    [`super::motion::moments_in_motion`], when the model has tilting data; rigid otherwise)
+//!    and its height `h = n . (p - origin)` above the sheet;
+//! 2. the board time of `t` from the clock alignment ([`super::align`], on the travel the
+//!    pencil would show for the model, `-h / (n . a)`), and the pencil travel
 //!    `d` there (potentiometer counts through the pot calibration, linear interpolation);
 //!    samples with the pencil off the paper (`d > stop - contact_margin_mm`) are skipped;
 //! 3. **out of plane**: the pencil tip `p_true + d a` lies on the paper, so the true tool point's
@@ -14,14 +22,21 @@
 //!    closest point of the traced curve, the curve's unit tangent there (oriented along the
 //!    motion) and the in-plane normal `u` to its left (seen from the pencil side); `dev_u` is
 //!    the signed distance from the projection to the trace along `u`. Samples farther than
-//!    `max_in_plane_mm` from the trace, or nearer than `end_exclusion_mm` to an end of an open
-//!    trace (where the closest point is not across the path), are skipped;
+//!    `max_in_plane_mm` from the trace, nearer than `end_exclusion_mm` to an end of an open
+//!    trace, or where the trace turns more than `max_kink_rad` away from the nominal motion or
+//!    has a step within +-2 mm (roughness above `max_roughness_rad`; e.g. a backlash step of the
+//!    arm): there the closest point is not across the path;
 //! 5. **along the path: nothing** -- the trace carries no time, so the component of the error
 //!    along the path is not measured and is not in the file.
 //!
-//! The tip's offset `d a` moves the projection by `d` times the tool axis's tilt from the
-//! normal (well under 0.01 mm for `|d| < 3 mm` and tilts below 0.2 deg), the same for the true
-//! and the nominal tip to first order; it is neglected.
+//! Second order: the unmeasured along-path error `e_t` bends the across-path reading by about
+//! `e_t^2 / (2 R)` on a path of radius `R` (0.02 mm for 2 mm on the 100 mm circle); fusing again
+//! with the calibrated model (`rigctl fuse --model CAL.toml`, then calibrate again) shrinks `e_t`
+//! and this with it.
+//!
+//! The tip offset `d a` uses the model's tool axis; the arm's true axis differs by its
+//! orientation error (a fraction of a degree), which moves the tip by `|d|` times that angle
+//! (about 0.002 mm for `|d| = 1 mm`); it is neglected.
 //!
 //! # The fused-samples file (`FUSED.csv`, format `rigctl-fused/1`)
 //! Comma separated, UTF-8, `#` lines are comments (the first names the format), then a header
@@ -49,6 +64,7 @@ use nalgebra::Vector3;
 use super::align::{align, AlignOptions, ClockAlignment};
 use super::curve::TracedCurve;
 use super::error::FusionError;
+use super::motion::moments_in_motion;
 use super::placement::SheetPlacement;
 use super::pot::TravelSeries;
 use crate::io::atomic::write_bytes_atomic;
@@ -111,6 +127,20 @@ pub struct FuseOptions {
     pub close_tol_mm: f64,
     /// Largest gap between potentiometer samples to interpolate across, s.
     pub max_pot_gap_s: f64,
+    /// Least in-plane speed of the nominal point for a drawing sample, mm/s.
+    pub min_speed_mm_s: f64,
+    /// A sample whose nominal projection passes within this distance of another drawing
+    /// sample's more than `ambiguity_gap_s` apart is ambiguous, mm.
+    pub ambiguity_mm: f64,
+    /// See `ambiguity_mm`, s.
+    pub ambiguity_gap_s: f64,
+    /// Largest angle between the trace's tangent and the nominal motion, rad: a larger one is a
+    /// kink or step of the trace (e.g. a backlash step of the arm), where the closest point is
+    /// not across the path.
+    pub max_kink_rad: f64,
+    /// Largest roughness of the trace around the closest point ([`super::curve::Closest`]),
+    /// rad: beyond it the trace has a step there.
+    pub max_roughness_rad: f64,
 }
 
 impl Default for FuseOptions {
@@ -122,6 +152,11 @@ impl Default for FuseOptions {
             end_exclusion_mm: 3.0,
             close_tol_mm: 2.0,
             max_pot_gap_s: 0.01,
+            min_speed_mm_s: 5.0,
+            ambiguity_mm: 3.0,
+            ambiguity_gap_s: 1.0,
+            max_kink_rad: 0.05,
+            max_roughness_rad: 0.1,
         }
     }
 }
@@ -155,6 +190,14 @@ impl FusedSample {
 /// Counts of skipped joint samples.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
 pub struct Skipped {
+    /// Not drawing: the nominal point is still or moving slower than `min_speed_mm_s` in the
+    /// plane (dwells, dips, the descent and the lift), or off the paper's plane.
+    pub not_drawing: usize,
+    /// Where the pencil marked the same place at another time (the trace cannot tell the
+    /// passes apart).
+    pub ambiguous: usize,
+    /// Where the trace turns away from the nominal motion by more than `max_kink_rad`.
+    pub kinked: usize,
     /// Outside the recording (after alignment).
     pub outside_recording: usize,
     /// Pencil off the paper.
@@ -189,21 +232,63 @@ pub fn fuse(
     o: &FuseOptions,
 ) -> Result<Fused, FusionError> {
     let n = placement.normal();
+    // the model's tool point: with its declared tilting in motion when it has tilting data
+    // (which also moves the point by backlash steps as the torques change sign)
+    let moments = if model.has_tilt() {
+        Some(moments_in_motion(model, &joints.t_s, &joints.q_deg)?)
+    } else {
+        None
+    };
     let mut nom = Vec::with_capacity(joints.t_s.len());
-    for q in &joints.q_deg {
-        let fk = model.fk(q, Tilt::Off)?;
+    for (k, q) in joints.q_deg.iter().enumerate() {
+        let tilt = moments.as_ref().map_or(Tilt::Off, |m| Tilt::Moments(&m[k]));
+        let fk = model.fk(q, tilt)?;
         nom.push((fk.position_mm, fk.rotation.column(2).into_owned()));
     }
     let h: Vec<f64> = nom.iter().map(|(p, _)| placement.height_mm(p)).collect();
-    let stop_mm = pot
-        .stop_mm()
-        .ok_or_else(|| FusionError::NoSamples("the recording has no potentiometer sample".into()))?;
-    let alignment = align(pot, &joints.t_s, &h, stop_mm, &o.align)?;
+    let stop_mm = pot.stop_mm().ok_or_else(|| {
+        FusionError::NoSamples("the recording has no potentiometer sample".into())
+    })?;
+    // the travel the pencil would show for the model: -h / (n . a)
+    let predicted: Vec<f64> = nom
+        .iter()
+        .zip(&h)
+        .map(|((_, a), hk)| -hk / n.dot(a).min(-1e-6))
+        .collect();
+    let alignment = align(pot, &joints.t_s, &predicted, stop_mm, &o.align)?;
     let proj: Vec<[f64; 2]> = nom.iter().map(|(p, _)| placement.to_sheet_mm(p)).collect();
     let mut skipped = Skipped::default();
     let mut samples = Vec::new();
     let last = joints.t_s.len().saturating_sub(1);
+    let speed = |k: usize| {
+        let (a, b) = (k.saturating_sub(1), (k + 1).min(last));
+        let dt = joints.t_s[b] - joints.t_s[a];
+        let d = (proj[b][0] - proj[a][0]).hypot(proj[b][1] - proj[a][1]);
+        if dt > 0.0 {
+            d / dt
+        } else {
+            0.0
+        }
+    };
+    let on_paper = |k: usize| predicted[k] < stop_mm - o.align.contact_margin_mm;
+    let moving: Vec<bool> = (0..joints.t_s.len())
+        .map(|k| speed(k) >= o.min_speed_mm_s && on_paper(k))
+        .collect();
+    // every sample with the pencil predicted on the paper left a mark the trace may hold
+    let marking: Vec<usize> = (0..joints.t_s.len()).filter(|&k| on_paper(k)).collect();
     for (k, &t) in joints.t_s.iter().enumerate() {
+        if !moving[k] {
+            skipped.not_drawing += 1;
+            continue;
+        }
+        let ambiguous = marking.iter().any(|&j| {
+            (joints.t_s[j] - t).abs() > o.ambiguity_gap_s
+                && (proj[j][0] - proj[k][0]).hypot(proj[j][1] - proj[k][1]) < o.ambiguity_mm
+        });
+        if ambiguous {
+            skipped.ambiguous += 1;
+            continue;
+        }
         let Some(d) = pot.at(alignment.board_s(t), o.max_pot_gap_s) else {
             skipped.outside_recording += 1;
             continue;
@@ -229,8 +314,14 @@ pub fn fuse(
             proj[(k + 1).min(last)][1] - proj[k.saturating_sub(1)][1],
         ];
         let mut tan = c.tangent;
-        if motion[0].hypot(motion[1]) > 1e-3 && tan[0] * motion[0] + tan[1] * motion[1] < 0.0 {
+        let m_len = motion[0].hypot(motion[1]);
+        if m_len > 1e-3 && tan[0] * motion[0] + tan[1] * motion[1] < 0.0 {
             tan = [-tan[0], -tan[1]];
+        }
+        let cross = (tan[0] * motion[1] - tan[1] * motion[0]) / m_len.max(1e-300);
+        if cross.abs() > o.max_kink_rad.sin() || c.roughness_rad > o.max_roughness_rad {
+            skipped.kinked += 1;
+            continue;
         }
         let u_sheet = [-tan[1], tan[0]];
         let dev_u = (c.point[0] - tip[0]) * u_sheet[0] + (c.point[1] - tip[1]) * u_sheet[1];
@@ -246,13 +337,16 @@ pub fn fuse(
     }
     if samples.is_empty() {
         return Err(FusionError::NoSamples(format!(
-            "{} joint samples: {} outside the recording, {} with the pencil off the paper, {} off \
-             the trace, {} near a trace end",
+            "{} joint samples: {} not drawing, {} ambiguous, {} outside the recording, {} with the \
+             pencil off the paper, {} off the trace, {} near a trace end, {} at a kink",
             joints.t_s.len(),
+            skipped.not_drawing,
+            skipped.ambiguous,
             skipped.outside_recording,
             skipped.off_paper,
             skipped.off_trace,
-            skipped.near_trace_end
+            skipped.near_trace_end,
+            skipped.kinked
         )));
     }
     Ok(Fused {
@@ -276,7 +370,8 @@ pub fn fused_header(n_joints: usize) -> String {
 /// The text of `FUSED.csv`.
 pub fn fused_csv(samples: &[FusedSample]) -> String {
     let nj = samples.first().map_or(0, |s| s.q_deg.len());
-    let mut out = format!("# {FUSED_FORMAT}: partial tool-point errors, see rigctl::fusion::fuse\n");
+    let mut out =
+        format!("# {FUSED_FORMAT}: partial tool-point errors, see rigctl::fusion::fuse\n");
     out.push_str(&fused_header(nj));
     out.push('\n');
     for s in samples {
@@ -285,8 +380,17 @@ pub fn fused_csv(samples: &[FusedSample]) -> String {
             let _ = write!(out, ",{q}");
         }
         let v = [
-            s.nominal_mm.x, s.nominal_mm.y, s.nominal_mm.z, s.dev_u_mm, s.u.x, s.u.y, s.u.z,
-            s.dev_n_mm, s.n.x, s.n.y, s.n.z,
+            s.nominal_mm.x,
+            s.nominal_mm.y,
+            s.nominal_mm.z,
+            s.dev_u_mm,
+            s.u.x,
+            s.u.y,
+            s.u.z,
+            s.dev_n_mm,
+            s.n.x,
+            s.n.y,
+            s.n.z,
         ];
         for x in v {
             let _ = write!(out, ",{x}");
@@ -303,7 +407,11 @@ pub fn write_fused(path: &Path, samples: &[FusedSample]) -> Result<(), FusionErr
 }
 
 /// Parses the text of `FUSED.csv` with `n_joints` joints (`path` names it in errors).
-pub fn parse_fused(text: &str, path: &Path, n_joints: usize) -> Result<Vec<FusedSample>, FusionError> {
+pub fn parse_fused(
+    text: &str,
+    path: &Path,
+    n_joints: usize,
+) -> Result<Vec<FusedSample>, FusionError> {
     let err = |line: usize, column: &str, reason: String| FusionError::Csv {
         path: path.to_path_buf(),
         line,
@@ -315,7 +423,9 @@ pub fn parse_fused(text: &str, path: &Path, n_joints: usize) -> Result<Vec<Fused
         .enumerate()
         .map(|(i, l)| (i + 1, l.trim()))
         .filter(|(_, l)| !l.is_empty() && !l.starts_with('#'));
-    let (hl, header) = rows.next().ok_or_else(|| err(1, "header", "no header row".into()))?;
+    let (hl, header) = rows
+        .next()
+        .ok_or_else(|| err(1, "header", "no header row".into()))?;
     let cols: Vec<&str> = header.split(',').map(str::trim).collect();
     let want = fused_header(n_joints);
     let idx: Vec<usize> = want
@@ -331,7 +441,11 @@ pub fn parse_fused(text: &str, path: &Path, n_joints: usize) -> Result<Vec<Fused
     for (line, row) in rows {
         let f: Vec<&str> = row.split(',').map(str::trim).collect();
         if f.len() != cols.len() {
-            return Err(err(line, "row", format!("{} fields, the header has {}", f.len(), cols.len())));
+            return Err(err(
+                line,
+                "row",
+                format!("{} fields, the header has {}", f.len(), cols.len()),
+            ));
         }
         let v: Vec<f64> = idx
             .iter()
@@ -348,7 +462,11 @@ pub fn parse_fused(text: &str, path: &Path, n_joints: usize) -> Result<Vec<Fused
         let n = Vector3::new(at(8), at(9), at(10));
         for (dir, name) in [(u, "u_x"), (n, "n_x")] {
             if (dir.norm() - 1.0).abs() > 1e-6 {
-                return Err(err(line, name, format!("direction of length {} is not a unit vector", dir.norm())));
+                return Err(err(
+                    line,
+                    name,
+                    format!("direction of length {} is not a unit vector", dir.norm()),
+                ));
             }
         }
         out.push(FusedSample {
@@ -399,7 +517,9 @@ mod tests {
         let e = (s.measured_error_mm() - Vector3::new(-0.123, 0.456 * h, 0.456 * h)).norm();
         assert!(e < 1e-12);
         let bad = text.replace(",-0.123,", ",nan,");
-        let msg = parse_fused(&bad, Path::new("f.csv"), 5).unwrap_err().to_string();
+        let msg = parse_fused(&bad, Path::new("f.csv"), 5)
+            .unwrap_err()
+            .to_string();
         assert!(msg.contains("f.csv:3") && msg.contains("dev_u"), "{msg}");
     }
 }

@@ -149,7 +149,8 @@ impl SheetPlacement {
                 f.format
             )));
         }
-        Self::new(f.origin_mm.into(), f.x_axis.into(), f.y_axis.into()).map_err(|e| bad(e.to_string()))
+        Self::new(f.origin_mm.into(), f.x_axis.into(), f.y_axis.into())
+            .map_err(|e| bad(e.to_string()))
     }
 
     /// Reads a placement file.

@@ -52,7 +52,10 @@ impl TravelSeries {
     pub fn new(samples: &[PotSample], travel_of_raw: impl Fn(f64) -> f64) -> Self {
         Self {
             t_s: samples.iter().map(|s| s.t_us as f64 * 1e-6).collect(),
-            travel_mm: samples.iter().map(|s| travel_of_raw(f64::from(s.raw))).collect(),
+            travel_mm: samples
+                .iter()
+                .map(|s| travel_of_raw(f64::from(s.raw)))
+                .collect(),
         }
     }
 
@@ -63,7 +66,7 @@ impl TravelSeries {
         if n < 2 || !(t_s >= self.t_s[0] && t_s <= self.t_s[n - 1]) {
             return None;
         }
-        let i = self.t_s.partition_point(|&x| x <= t_s).clamp(1, n - 1);
+        let i = self.t_s.partition_point(|&x| x < t_s).clamp(1, n - 1);
         let (t0, t1) = (self.t_s[i - 1], self.t_s[i]);
         if t1 - t0 > max_gap_s {
             return None;
@@ -75,7 +78,12 @@ impl TravelSeries {
     /// The stop reading (pencil fully extended, off the paper): the 99.9th percentile of the
     /// travel, robust against single noisy samples.
     pub fn stop_mm(&self) -> Option<f64> {
-        let mut v: Vec<f64> = self.travel_mm.iter().copied().filter(|x| x.is_finite()).collect();
+        let mut v: Vec<f64> = self
+            .travel_mm
+            .iter()
+            .copied()
+            .filter(|x| x.is_finite())
+            .collect();
         if v.is_empty() {
             return None;
         }

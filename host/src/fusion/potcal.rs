@@ -138,7 +138,10 @@ impl PotCalibration {
             )));
         }
         let raw_min = points.iter().map(|p| p.raw).fold(f64::INFINITY, f64::min);
-        let raw_max = points.iter().map(|p| p.raw).fold(f64::NEG_INFINITY, f64::max);
+        let raw_max = points
+            .iter()
+            .map(|p| p.raw)
+            .fold(f64::NEG_INFINITY, f64::max);
         let mut distinct: Vec<f64> = points.iter().map(|p| p.raw).collect();
         distinct.sort_by(f64::total_cmp);
         distinct.dedup_by(|a, b| (*a - *b).abs() < 1e-9);
@@ -181,7 +184,8 @@ impl PotCalibration {
             .map(|(&xi, &yi)| yi - polyval(&coefficients, xi))
             .collect();
         let (rms, max) = if points.len() > degree + 1 {
-            let rms = (residuals.iter().map(|r| r * r).sum::<f64>() / residuals.len() as f64).sqrt();
+            let rms =
+                (residuals.iter().map(|r| r * r).sum::<f64>() / residuals.len() as f64).sqrt();
             let max = residuals.iter().fold(0.0f64, |m, r| m.max(r.abs()));
             (Some(rms), Some(max))
         } else {
@@ -202,7 +206,10 @@ impl PotCalibration {
 
     /// Pencil travel (mm) for a count.
     pub fn travel_mm(&self, raw: f64) -> f64 {
-        polyval(&self.coefficients, (raw - self.centre_raw) / self.half_range_raw)
+        polyval(
+            &self.coefficients,
+            (raw - self.centre_raw) / self.half_range_raw,
+        )
     }
 
     /// Sensitivity at the centre of the range, mm per count.
@@ -323,7 +330,13 @@ pub fn parse_jig_csv(text: &str, path: &Path) -> Result<JigFile, FusionError> {
                 .parse::<f64>()
                 .ok()
                 .filter(|v| v.is_finite())
-                .ok_or_else(|| csv_err(line, cols[i], format!("not a finite number (`{}`)", fields[i])))
+                .ok_or_else(|| {
+                    csv_err(
+                        line,
+                        cols[i],
+                        format!("not a finite number (`{}`)", fields[i]),
+                    )
+                })
         };
         let t = num(travel)?;
         match windows {
@@ -407,8 +420,14 @@ mod tests {
     fn two_point_jig_is_exact_and_has_no_residual() {
         let c = PotCalibration::fit(
             &[
-                JigPoint { raw: 1000.0, travel_mm: 2.0 },
-                JigPoint { raw: 3000.0, travel_mm: -3.0 },
+                JigPoint {
+                    raw: 1000.0,
+                    travel_mm: 2.0,
+                },
+                JigPoint {
+                    raw: 3000.0,
+                    travel_mm: -3.0,
+                },
             ],
             1,
         )
@@ -428,7 +447,10 @@ mod tests {
             .map(|k| {
                 let raw = 1000.0 + 1000.0 * k as f64 / 3.0;
                 let d = raw - 2000.0;
-                JigPoint { raw, travel_mm: -d / 400.0 + 1e-7 * d * d }
+                JigPoint {
+                    raw,
+                    travel_mm: -d / 400.0 + 1e-7 * d * d,
+                }
             })
             .collect();
         let lin = PotCalibration::fit(&pts, 1).unwrap();
@@ -440,19 +462,34 @@ mod tests {
         // a straight pot passes the check
         let straight: Vec<JigPoint> = pts
             .iter()
-            .map(|p| JigPoint { travel_mm: -(p.raw - 2000.0) / 400.0, ..*p })
+            .map(|p| JigPoint {
+                travel_mm: -(p.raw - 2000.0) / 400.0,
+                ..*p
+            })
             .collect();
         assert!(PotCalibration::nonlinearity(&straight).is_none());
     }
 
     #[test]
     fn too_few_or_non_monotonic_points_are_refused() {
-        let one = [JigPoint { raw: 1.0, travel_mm: 1.0 }; 3];
+        let one = [JigPoint {
+            raw: 1.0,
+            travel_mm: 1.0,
+        }; 3];
         assert!(PotCalibration::fit(&one, 1).is_err());
         let zigzag = [
-            JigPoint { raw: 0.0, travel_mm: 0.0 },
-            JigPoint { raw: 1.0, travel_mm: 1.0 },
-            JigPoint { raw: 2.0, travel_mm: 0.0 },
+            JigPoint {
+                raw: 0.0,
+                travel_mm: 0.0,
+            },
+            JigPoint {
+                raw: 1.0,
+                travel_mm: 1.0,
+            },
+            JigPoint {
+                raw: 2.0,
+                travel_mm: 0.0,
+            },
         ];
         assert!(PotCalibration::fit(&zigzag, 2).is_err());
     }
@@ -460,24 +497,42 @@ mod tests {
     #[test]
     fn jig_file_forms() {
         let p = Path::new("jig.csv");
-        let JigFile::Points(pts) = parse_jig_csv("# gauges\nraw,travel_mm\n1000,2\n3000,-3\n", p).unwrap()
+        let JigFile::Points(pts) =
+            parse_jig_csv("# gauges\nraw,travel_mm\n1000,2\n3000,-3\n", p).unwrap()
         else {
             panic!("points expected")
         };
         assert_eq!(pts.len(), 2);
-        let JigFile::Windows(w) = parse_jig_csv("start_s,end_s,travel_mm\n0.5,1.5,1.0\n", p).unwrap()
+        let JigFile::Windows(w) =
+            parse_jig_csv("start_s,end_s,travel_mm\n0.5,1.5,1.0\n", p).unwrap()
         else {
             panic!("windows expected")
         };
         assert_eq!(w[0].end_s, 1.5);
-        let err = parse_jig_csv("raw,travel_mm\n1000,abc\n", p).unwrap_err().to_string();
-        assert!(err.contains("jig.csv:2") && err.contains("travel_mm"), "{err}");
+        let err = parse_jig_csv("raw,travel_mm\n1000,abc\n", p)
+            .unwrap_err()
+            .to_string();
+        assert!(
+            err.contains("jig.csv:2") && err.contains("travel_mm"),
+            "{err}"
+        );
         let samples: Vec<PotSample> = (0..3000u64)
-            .map(|k| PotSample { t_us: 5_000_000 + 1000 * k, raw: if k < 1500 { 1000 } else { 3000 } })
+            .map(|k| PotSample {
+                t_us: 5_000_000 + 1000 * k,
+                raw: if k < 1500 { 1000 } else { 3000 },
+            })
             .collect();
         let wins = [
-            JigWindow { start_s: 0.1, end_s: 1.0, travel_mm: 2.0 },
-            JigWindow { start_s: 2.0, end_s: 2.9, travel_mm: -3.0 },
+            JigWindow {
+                start_s: 0.1,
+                end_s: 1.0,
+                travel_mm: 2.0,
+            },
+            JigWindow {
+                start_s: 2.0,
+                end_s: 2.9,
+                travel_mm: -3.0,
+            },
         ];
         let pts = points_from_windows(&samples, &wins).unwrap();
         assert_eq!((pts[0].raw, pts[1].raw), (1000.0, 3000.0));

@@ -10,6 +10,7 @@
 //! | [`rnea`] | recursive Newton-Euler joint moments (thesis eq. 5.14), generic |
 //! | [`dynamics`] | RNEA on a [`crate::model::Model`], joint trajectories, positions in motion |
 //! | [`effects`] | the FORMATS.md effect ids and how they change the truth |
+//! | [`session`] | a simulated low-cost session: joints, pot recording, scanned trace, truth |
 //! | [`simulate`] | one session: truth model, commanded poses, noisy measurements |
 //! | [`output`] | `cal.csv`, `val.csv`, `truth.toml`, `truth.json` |
 //!
@@ -31,4 +32,5 @@ pub mod output;
 pub mod paths;
 pub mod plan;
 pub mod rnea;
+pub mod session;
 pub mod simulate;

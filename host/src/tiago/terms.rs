@@ -1,6 +1,8 @@
 //! Non-geometric joint terms for the TIAGo data: a joint deflection added to the reading of
 //! joint `i`, proportional to the gravity torque about its axis (`compliance_j<i>`, deg per
 //! kgf.m) or to its sign (`backlash_j<i>`, deg: half the play, the side taken by the load).
+//! `i` is the 1-based model joint, as in `enc_j<i>_*`: for TIAGo j1 = `torso_lift_joint`,
+//! j2..j8 = `arm_1_joint`..`arm_7_joint`.
 //! Torques come from the URDF link masses ([`crate::urdf::import_chain_with_masses`]) on the
 //! nominal chain, gravity along `-z` of `base_footprint`.
 //!
@@ -359,4 +361,87 @@ pub fn cross_validated_rms(
         sum_sq += fit.errors(&held)?[0].norm_squared();
     }
     Ok((sum_sq / poses.len().max(1) as f64).sqrt())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::urdf::{import_chain_with_masses, ImportOptions, Urdf};
+
+    /// Two joints about horizontal axes (y), a 2 kg link 0.4 m long and a 1 kg link: the
+    /// gravity torques vary with the posture.
+    const XML: &str = r#"<robot name="m">
+      <link name="base"/>
+      <link name="l1"><inertial><mass value="2"/><origin xyz="0.4 0 0"/></inertial></link>
+      <link name="l2"><inertial><mass value="1"/><origin xyz="0.3 0 0"/></inertial></link>
+      <link name="tip"/>
+      <joint name="j1" type="revolute"><parent link="base"/><child link="l1"/>
+        <origin xyz="0 0 0.5"/><axis xyz="0 1 0"/><limit lower="-3" upper="3"/></joint>
+      <joint name="j2" type="revolute"><parent link="l1"/><child link="l2"/>
+        <origin xyz="0.8 0 0"/><axis xyz="0 1 0"/><limit lower="-3" upper="3"/></joint>
+      <joint name="t" type="fixed"><parent link="l2"/><child link="tip"/>
+        <origin xyz="0.6 0 0"/></joint>
+    </robot>"#;
+
+    #[test]
+    fn synthetic_compliance_is_selected_and_recovered() {
+        let urdf = Urdf::parse(XML, "m.urdf").unwrap();
+        let opts = ImportOptions {
+            base_link: None,
+            tip_link: "tip",
+            tool_mm: [0.0; 3],
+        };
+        let model = import_chain_with_masses(&urdf, &opts).unwrap().model;
+        let torques = Torques::new(&model).unwrap();
+        // At q = 0 both links are horizontal: |torque j1| = 2*0.4 + 1*1.1 = 1.9 kgf.m.
+        let t0 = torques.at(&[0.0, 0.0]).unwrap();
+        assert!((t0[0].abs() - 1.9).abs() < 1e-12, "{t0:?}");
+        assert!((t0[1].abs() - 0.3).abs() < 1e-12, "{t0:?}");
+        let truth = [
+            JointTerm {
+                joint: 0,
+                kind: TermKind::Compliance,
+            },
+            JointTerm {
+                joint: 1,
+                kind: TermKind::Compliance,
+            },
+        ];
+        let coef = [0.05, -0.2];
+        let mut poses = Poses {
+            q_deg: Vec::new(),
+            xyz_mm: Vec::new(),
+        };
+        for a in [-60.0, -25.0, 0.0, 30.0, 70.0] {
+            for b in [-80.0, -20.0, 15.0, 50.0, 100.0] {
+                let q = vec![a, b];
+                let tau = torques.at(&q).unwrap();
+                let qc = corrected(&q, &truth, &coef, &tau);
+                poses
+                    .xyz_mm
+                    .push(model.position_mm(&qc, Tilt::Off).unwrap());
+                poses.q_deg.push(q);
+            }
+        }
+        let pools = Pools {
+            compliance: true,
+            backlash: true,
+            ..Pools::default()
+        };
+        let sel = select_terms(&model, &poses, &[], pools, &torques).unwrap();
+        for t in &truth {
+            assert!(sel.terms.contains(t), "{:?}", sel.added);
+        }
+        let fit = fit_terms(&model, &poses, &[], &truth, &torques, &LmConfig::default()).unwrap();
+        for (f, c) in fit.coef.iter().zip(coef) {
+            assert!((f - c).abs() < 1e-6, "{f} vs {c}");
+        }
+        let max_mm = fit
+            .errors(&poses)
+            .unwrap()
+            .iter()
+            .map(|e| e.norm())
+            .fold(0.0, f64::max);
+        assert!(max_mm < 1e-6, "{max_mm}");
+    }
 }

@@ -1,0 +1,72 @@
+//! `rigctl compensate --path PATH.csv [--robot NAME | --model CALIBRATED.toml] [--set ...]
+//! [--no-tilt] [--no-nominal] --out JOINTS.csv`: joints that put the calibrated, tilting arm on a
+//! Cartesian path (thesis eq. 5.22; see `rigctl::compensate`).
+
+use std::path::PathBuf;
+
+use rigctl::compensate::{compensate, read_path, write_joints_csv};
+use rigctl::model::{choose_model, preset, ModelChoice};
+use rigctl::sim::ik::IkTilt;
+
+use super::CliError;
+
+#[derive(clap::Args, Debug)]
+pub struct Args {
+    /// Desired path: columns x,y,z (mm, frame R), optional ax,ay,az (tool axis) and t (s).
+    #[arg(long, value_name = "PATH.csv")]
+    pub path: PathBuf,
+    /// Built-in robot: katana450 (default).
+    #[arg(long, value_name = "NAME", conflicts_with = "model")]
+    pub robot: Option<String>,
+    /// Calibrated model file (TOML), e.g. written by `calibrate --out` or `joints --out`.
+    #[arg(long, value_name = "FILE.toml")]
+    pub model: Option<PathBuf>,
+    /// Katana tool length d5 in mm (preset only).
+    #[arg(long, value_name = "L")]
+    pub tool_mm: Option<f64>,
+    /// Override a model parameter, e.g. payload_kg=0.5; repeatable.
+    #[arg(long = "set", value_name = "NAME=VALUE")]
+    pub sets: Vec<String>,
+    /// Solve with static joint tilting (the default; accepted for explicitness).
+    #[arg(long, overrides_with = "no_tilt")]
+    pub tilt: bool,
+    /// Solve on the rigid calibrated chain (no tilting).
+    #[arg(long)]
+    pub no_tilt: bool,
+    /// Leave out the nominal (katana450 preset, the model's d5) joints q<i>_nominal.
+    #[arg(long)]
+    pub no_nominal: bool,
+    /// Output joint file: [t,]q1..qN[,q1_nominal..qN_nominal], deg.
+    #[arg(long, value_name = "JOINTS.csv")]
+    pub out: PathBuf,
+}
+
+pub fn run(args: Args) -> Result<(), CliError> {
+    let model = choose_model(&ModelChoice {
+        robot: args.robot.as_deref(),
+        model_file: args.model.as_deref(),
+        tool_mm: args.tool_mm,
+        sets: &args.sets,
+    })?;
+    let points = read_path(&args.path)?;
+    let nominal = if args.no_nominal {
+        None
+    } else {
+        // the uncalibrated controller: the preset with the same tool length
+        let mut nom = preset("katana450", None)?;
+        if let (Some(d5), Some(_)) = (model.param("d5"), nom.param_index("d5")) {
+            nom.set_param("d5", d5)?;
+        }
+        (nom.n_joints() == model.n_joints()).then_some(nom)
+    };
+    let tilt = if args.no_tilt {
+        IkTilt::Off
+    } else {
+        IkTilt::Static
+    };
+    let file = args.path.display().to_string();
+    let out = compensate(&model, nominal.as_ref(), &points, tilt, &file)?;
+    write_joints_csv(&args.out, model.n_joints(), &out)?;
+    eprintln!("{} path points -> {}", out.len(), args.out.display());
+    Ok(())
+}

@@ -1,0 +1,121 @@
+//! `rigctl fuse --joints JOINTS.csv --recording REC --trace TRACE.csv --placement SHEET.toml
+//! --pot POT.toml [--robot NAME | --model FILE] [--tool-mm L] --out FUSED.csv`: joint readings +
+//! potentiometer recording + pencil trace -> partial error samples (`rigctl::fusion::fuse`).
+
+use std::path::PathBuf;
+
+use rigctl::fusion::curve::{read_trace_csv, TracedCurve};
+use rigctl::fusion::pot::{read_pot_samples, TravelSeries};
+use rigctl::fusion::{
+    fuse, write_fused, FuseOptions, JointSamples, PotCalibration, SheetPlacement,
+};
+use rigctl::model::{choose_model, ModelChoice, KATANA_PENCIL_TOOL_MM};
+
+use super::CliError;
+
+#[derive(clap::Args, Debug)]
+pub struct Args {
+    /// Joint readings of the robot controller: CSV `t` (s, robot clock), `q1..qN` (deg).
+    #[arg(long, value_name = "JOINTS.csv")]
+    pub joints: PathBuf,
+    /// The board recording (potentiometer samples, board clock).
+    #[arg(long, value_name = "REC")]
+    pub recording: PathBuf,
+    /// The pencil trace: CSV `x,y` in sheet mm (`rigctl trace` output).
+    #[arg(long, value_name = "TRACE.csv")]
+    pub trace: PathBuf,
+    /// Where the sheet lies in frame R (TOML, see rigctl::fusion::placement).
+    #[arg(long, value_name = "SHEET.toml")]
+    pub placement: PathBuf,
+    /// Potentiometer calibration (`rigctl potcal` output).
+    #[arg(long, value_name = "POT.toml")]
+    pub pot: PathBuf,
+    /// Built-in robot: katana450 (default) or ur5.
+    #[arg(long, value_name = "NAME", conflicts_with = "model")]
+    pub robot: Option<String>,
+    /// Model file (TOML), e.g. one written by `calibrate --out`.
+    #[arg(long, value_name = "FILE.toml")]
+    pub model: Option<PathBuf>,
+    /// Katana tool length d5 in mm (default 330: the pencil holder).
+    #[arg(long, value_name = "L")]
+    pub tool_mm: Option<f64>,
+    /// Set a model parameter (deg / mm); repeatable.
+    #[arg(long = "set", value_name = "NAME=VALUE")]
+    pub sets: Vec<String>,
+    /// Largest in-plane distance from the trace, mm.
+    #[arg(long, default_value_t = 3.0)]
+    pub max_in_plane_mm: f64,
+    /// Output: the fused samples (CSV, format rigctl-fused/1).
+    #[arg(long, value_name = "FUSED.csv")]
+    pub out: PathBuf,
+}
+
+pub fn run(args: Args) -> Result<(), CliError> {
+    let tool_mm = match (&args.model, args.tool_mm) {
+        (None, None) => Some(KATANA_PENCIL_TOOL_MM),
+        (_, t) => t,
+    };
+    let model = choose_model(&ModelChoice {
+        robot: args.robot.as_deref(),
+        model_file: args.model.as_deref(),
+        tool_mm,
+        sets: &args.sets,
+    })?;
+    if !(args.max_in_plane_mm > 0.0 && args.max_in_plane_mm.is_finite()) {
+        return Err(CliError::bad_input(
+            "--max-in-plane-mm must be a positive number",
+        ));
+    }
+    let joints = JointSamples::read(&args.joints, &model)?;
+    let cal = PotCalibration::read(&args.pot)?;
+    let pot = TravelSeries::new(&read_pot_samples(&args.recording)?, |r| cal.travel_mm(r));
+    let opts = FuseOptions {
+        max_in_plane_mm: args.max_in_plane_mm,
+        ..FuseOptions::default()
+    };
+    let curve = TracedCurve::new(read_trace_csv(&args.trace)?, opts.close_tol_mm)
+        .ok_or_else(|| CliError::bad_input(format!("{}: too few points", args.trace.display())))?;
+    let placement = SheetPlacement::read(&args.placement)?;
+    let fused = fuse(&model, &joints, &pot, &curve, &placement, &opts)?;
+    write_fused(&args.out, &fused.samples)?;
+    let a = &fused.alignment;
+    println!(
+        "clock: board = robot {} {:.6} s, drift {:+.2} ppm ({} markers)",
+        if a.offset_s < 0.0 { "-" } else { "+" },
+        a.offset_s.abs(),
+        a.drift_ppm,
+        a.markers.len()
+    );
+    for m in &a.markers {
+        println!(
+            "  marker {:.2}..{:.2} s: offset {:.6} s, level {:+.3} mm, misfit rms {:.4} mm",
+            m.start_s, m.end_s, m.offset_s, m.level_mm, m.rms_mm
+        );
+    }
+    let n = fused.samples.len() as f64;
+    let rms = |f: &dyn Fn(&rigctl::fusion::FusedSample) -> f64| {
+        (fused.samples.iter().map(|s| f(s).powi(2)).sum::<f64>() / n).sqrt()
+    };
+    let sk = fused.skipped;
+    println!(
+        "fused {} of {} joint samples (skipped: {} not drawing, {} ambiguous, {} at a trace kink, \
+         {} outside the recording, {} pencil off the paper, {} off the trace, {} near a trace end)",
+        fused.samples.len(),
+        joints.t_s.len(),
+        sk.not_drawing,
+        sk.ambiguous,
+        sk.kinked,
+        sk.outside_recording,
+        sk.off_paper,
+        sk.off_trace,
+        sk.near_trace_end
+    );
+    println!(
+        "measured deviation from the nominal model: rms across the path {:.4} mm, out of plane {:.4} mm \
+         (along the path: not measured); pencil stop {:.3} mm",
+        rms(&|s| s.dev_u_mm),
+        rms(&|s| s.dev_n_mm),
+        fused.stop_mm
+    );
+    Ok(())
+}

@@ -1,0 +1,71 @@
+//! `rigctl joints --readings JOINTS_TILT.csv [--robot NAME | --model FILE.toml] [--set ...]
+//! --out MODEL.toml [--json OUT.json]`: joint clearance, backlash and stiffness from
+//! inclinometer readings (see `rigctl::joints`), written into the model file.
+
+use std::path::PathBuf;
+
+use rigctl::joints::{identify, read_readings, report_json, JointsError};
+use rigctl::model::{choose_model, ModelChoice};
+
+use super::CliError;
+
+#[derive(clap::Args, Debug)]
+pub struct Args {
+    /// Inclinometer readings: joint,config,q1..qN,payload_kg,incl_x_deg,incl_y_deg,incl_z_deg.
+    #[arg(long, value_name = "FILE.csv")]
+    pub readings: PathBuf,
+    /// Built-in robot: katana450 (default).
+    #[arg(long, value_name = "NAME", conflicts_with = "model")]
+    pub robot: Option<String>,
+    /// Model file (TOML) to start from, e.g. one written by `calibrate --out`.
+    #[arg(long, value_name = "FILE.toml")]
+    pub model: Option<PathBuf>,
+    /// Katana tool length d5 in mm.
+    #[arg(long, value_name = "L")]
+    pub tool_mm: Option<f64>,
+    /// Override a model parameter, e.g. payload_kg=0.5; repeatable.
+    #[arg(long = "set", value_name = "NAME=VALUE")]
+    pub sets: Vec<String>,
+    /// The model file to write, with clearance_j<i>, backlash_j<i>, stiffness_j<i> identified.
+    #[arg(long, value_name = "MODEL.toml")]
+    pub out: PathBuf,
+    /// Also write the per-joint estimates, sigmas and residuals as JSON.
+    #[arg(long, value_name = "OUT.json")]
+    pub json: Option<PathBuf>,
+}
+
+pub fn run(args: Args) -> Result<(), CliError> {
+    let model = choose_model(&ModelChoice {
+        robot: args.robot.as_deref(),
+        model_file: args.model.as_deref(),
+        tool_mm: args.tool_mm,
+        sets: &args.sets,
+    })?;
+    let readings = read_readings(&args.readings, &model)?;
+    let result = identify(&model, &readings)?;
+    for f in &result.fits {
+        let show = |e: Option<rigctl::joints::Estimate>| match e {
+            Some(e) => format!("{:.6} +- {:.6}", e.value, e.sigma),
+            None => "kept".to_string(),
+        };
+        eprintln!(
+            "joint {}: {} readings, C = {} deg, b = {} deg, k = {} kgf.m/deg",
+            f.joint,
+            f.rows,
+            show(f.clearance_deg),
+            show(f.backlash_deg),
+            show(f.stiffness_kgfm_per_deg)
+        );
+        for n in &f.notes {
+            eprintln!("  joint {}: {n}", f.joint);
+        }
+    }
+    result.model.write_file(&args.out)?;
+    if let Some(path) = &args.json {
+        let text = serde_json::to_string_pretty(&report_json(&result.fits))
+            .map_err(|e| CliError::failure(format!("JSON report: {e}")))?;
+        rigctl::io::atomic::write_bytes_atomic(path, format!("{text}\n").as_bytes())
+            .map_err(JointsError::from)?;
+    }
+    Ok(())
+}

@@ -1,0 +1,62 @@
+//! `rigctl potcal --points JIG.csv [--recording REC] [--degree 1] --out POT.toml`: calibrates the
+//! pencil's potentiometer (counts -> travel mm) from a gauge-block jig (see
+//! `rigctl::fusion::potcal` for the file formats).
+
+use std::path::PathBuf;
+
+use rigctl::fusion::pot::read_pot_samples;
+use rigctl::fusion::potcal::{points_from_windows, read_jig_csv, JigFile, PotCalibration};
+
+use super::CliError;
+
+#[derive(clap::Args, Debug)]
+pub struct Args {
+    /// Jig points: CSV `raw,travel_mm`, or `start_s,end_s,travel_mm` windows of --recording.
+    #[arg(long, value_name = "JIG.csv")]
+    pub points: PathBuf,
+    /// The board recording the windows refer to (seconds after its first pot sample).
+    #[arg(long, value_name = "REC")]
+    pub recording: Option<PathBuf>,
+    /// Polynomial degree (1 = linear; up to 3).
+    #[arg(long, default_value_t = 1)]
+    pub degree: usize,
+    /// Output calibration (TOML).
+    #[arg(long, value_name = "POT.toml")]
+    pub out: PathBuf,
+}
+
+pub fn run(args: Args) -> Result<(), CliError> {
+    let points = match read_jig_csv(&args.points)? {
+        JigFile::Points(p) => p,
+        JigFile::Windows(w) => {
+            let rec = args.recording.as_deref().ok_or_else(|| {
+                CliError::bad_input(format!(
+                    "{}: the jig gives time windows (start_s,end_s); pass the recording with --recording",
+                    args.points.display()
+                ))
+            })?;
+            points_from_windows(&read_pot_samples(rec)?, &w)?
+        }
+    };
+    let cal = PotCalibration::fit(&points, args.degree)?;
+    cal.write(&args.out)?;
+    println!(
+        "potcal: {} points, degree {}, {:.6} mm/count at the centre, counts {:.1}..{:.1}",
+        cal.points,
+        cal.coefficients.len() - 1,
+        cal.mm_per_count(),
+        cal.raw_min,
+        cal.raw_max
+    );
+    match (cal.rms_residual_mm, cal.max_residual_mm) {
+        (Some(rms), Some(max)) => println!("residuals: rms {rms:.4} mm, max {max:.4} mm"),
+        _ => println!(
+            "residuals: none (exact fit through {} points; add points to check)",
+            cal.points
+        ),
+    }
+    if let Some(w) = PotCalibration::nonlinearity(&points).filter(|_| args.degree == 1) {
+        eprintln!("rigctl potcal: warning: {w}");
+    }
+    Ok(())
+}

@@ -1,0 +1,705 @@
+//! A simulated session of the low-cost rig (thesis 5.5.2, fig. 5.11 right): the arm draws a
+//! path with a spring-loaded pencil on a sheet lying on the 45-degree plane, the board records
+//! the pencil's potentiometer, the robot controller logs its joint readings, and the sheet is
+//! scanned. Everything the real session would leave behind is written, plus the truth.
+//!
+//! # The robot
+//! * Truth model: the declared model (katana450 with the 330 mm pencil holder) with random
+//!   geometric errors (normal, `geometric_sigma_deg`, the same draw as `rigctl simulate` for the
+//!   same seed: [`super::simulate::truth_model`]) and the declared joint tilting driven by the
+//!   moments **in motion** (RNEA, [`super::dynamics::moments_kgfm`], slender-rod links; joint
+//!   rates and accelerations by central differences over +-10 ms of the 1 kHz joint path).
+//! * Commands: the controller knows only the nominal model, so the joint trajectory is the IK of
+//!   the **nominal** rigid model ([`super::ik::solve`]) of the planned targets (tool axis fixed,
+//!   [`default_pencil_axis`]: 22.5 deg from the sheet normal), computed at 1 kHz; the arm follows it exactly in joint space and the
+//!   joint readings are logged at `robot_rate_hz` (`joints.csv`: `t,q1..q5`, robot clock from 0).
+//!
+//! # The timeline (robot clock)
+//! dwell 0.5 s with the tool point `lift_mm` above the path's start; descend onto the paper in
+//! 1 s (quintic); dwell 0.3 s; **dip** `dip_mm` into the paper and back in 0.5 s
+//! (`-dip sin^2`); dwell 0.3 s; draw the path in `draw_duration_s` (quintic profile); dwell
+//! 0.3 s; dip again; dwell 0.3 s; lift in 1 s; dwell 0.5 s. The dips are the clock-alignment
+//! markers of [`crate::fusion::align`].
+//!
+//! # The pencil and the board
+//! The pencil slides along the true tool axis; its travel (mm, + = extended, 0 = the tool point)
+//! is what keeps its tip on the paper, `-h_true / (n . a_true)`, up to its stop at
+//! `pencil_stop_mm` (off the paper). The potentiometer reads
+//! `raw = counts_at_zero + counts_per_mm * travel + N(0, pot_noise_counts)`, rounded and
+//! clamped to 12 bits, sampled at `pot_rate_hz` on the **board clock**
+//! `board = robot (1 + clock_drift_ppm 1e-6) + clock_offset_s`, sent in `PotBatch` frames of 50
+//! samples and stored as a recording (`pot.rec`, [`crate::daq::recording`]). A gauge-block jig
+//! (`potjig.csv`: `raw,travel_mm` at -3..+2 mm, each the mean of 100 readings) calibrates it.
+//!
+//! # The sheet
+//! `placement.toml` ([`crate::fusion::placement`]; by default the 45-degree plane through
+//! [`SESSION_SHEET_ORIGIN_MM`]); the pencil tip's path on the paper, rendered
+//! as a scan ([`crate::trace::render_scan`]) at `dpi`, rotated by `scan_rotation_deg` and shifted
+//! on the glass (`scan.png`), with the printed reference path.
+//!
+//! # Files (written into the output directory, each atomically)
+//! `joints.csv`, `pot.rec`, `potjig.csv`, `scan.png`, `placement.toml` (the session's inputs) and
+//! `truth.toml` (truth model), `truth_path.csv` (`t,q1..q5,x,y,z`: the true tool point at every
+//! joint reading, a pose file), `session.json` (clock offset, pot scale, geometric errors).
+
+use std::path::Path;
+use std::str::FromStr;
+
+use image::RgbImage;
+use nalgebra::Vector3;
+use rand::SeedableRng;
+use rand_chacha::ChaCha8Rng;
+use rand_distr::{Distribution, Normal};
+use rig_protocol::{encode_device, DeviceMsg, PotBatch, DEVICE_FRAME_MAX};
+
+use super::dynamics::{moments_kgfm, Inertia};
+use super::ik::{solve, IkError, IkTilt};
+use super::paths::{quintic_profile, ToolTarget};
+use super::plan::KATANA_SEED_DEG;
+use super::simulate::{truth_model, SimConfig, SimError};
+use crate::daq::recording::{RecordingError, RecordingMeta, RecordingWriter};
+use crate::fusion::{FusionError, JigPoint, SheetPlacement};
+use crate::io::atomic::{write_bytes_atomic, AtomicWriteError};
+use crate::model::{Model, ModelError, Tilt};
+use crate::sheet::{ReferencePath, CIRCLE_RADIUS_MM};
+use crate::trace::{render_scan, RenderSpec};
+
+/// Format tag of `session.json`.
+pub const SESSION_FORMAT: &str = "rigctl-session-truth/1";
+/// Half width (1 ms steps) of the central differences giving the joint rates of the truth.
+const DIFF_STEPS: usize = 10;
+/// Potentiometer samples per frame.
+const BATCH: usize = 50;
+/// Default sheet origin of the simulated session, mm in R. With the pencil holder (d5 = 330 mm)
+/// the thesis's circle about [0 -300 139.2893] is only partly reachable within the joint limits
+/// of table 3.1 with a fixed pencil axis (see `tests/sim_plan.rs`); on this parallel 45-degree
+/// plane the whole circle and line are, with the pencil inclined 22.5 deg from the sheet normal
+/// towards -z ([`default_pencil_axis`]).
+pub const SESSION_SHEET_ORIGIN_MM: [f64; 3] = [55.0, -200.0, 200.0];
+
+/// The default pencil (tool) axis while drawing on a sheet with normal `n`: halfway between
+/// `-n` and straight down (22.5 deg from `-n` on the 45-degree plane).
+pub fn default_pencil_axis(n: &Vector3<f64>) -> Vector3<f64> {
+    (-n - Vector3::z()).normalize()
+}
+
+/// Half length of the drawn line, mm (the printed reference line is +-100 mm).
+pub const LINE_HALF_LENGTH_DRAWN_MM: f64 = 90.0;
+
+/// The drawn path.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum SessionPath {
+    /// The thesis circle, radius 100 mm about the sheet origin, counter-clockwise on the sheet
+    /// from (-100, 0).
+    Circle,
+    /// A straight line along sheet x from -90 to +90 mm, on a sheet whose origin is 30 mm up
+    /// the slope from the circle's centre.
+    Line,
+}
+
+impl FromStr for SessionPath {
+    type Err = String;
+    fn from_str(s: &str) -> Result<Self, String> {
+        match s {
+            "circle" => Ok(Self::Circle),
+            "line" => Ok(Self::Line),
+            _ => Err(format!("unknown session path `{s}` (circle, line)")),
+        }
+    }
+}
+
+impl SessionPath {
+    /// The name used on the command line.
+    pub fn as_str(self) -> &'static str {
+        match self {
+            Self::Circle => "circle",
+            Self::Line => "line",
+        }
+    }
+
+    /// The default sheet placement of this path: the 45-degree plane of
+    /// [`SheetPlacement::thesis_plane`] through [`SESSION_SHEET_ORIGIN_MM`] (the circle), or 30 mm
+    /// up the slope from it (the line).
+    pub fn default_placement(self) -> SheetPlacement {
+        let c = Vector3::from(SESSION_SHEET_ORIGIN_MM);
+        let base = SheetPlacement::thesis_plane(c);
+        match self {
+            Self::Circle => base,
+            Self::Line => SheetPlacement::thesis_plane(c + base.y_axis * 30.0),
+        }
+    }
+
+    /// Sheet point at path parameter `s` in 0..1.
+    pub fn sheet_point(self, s: f64) -> [f64; 2] {
+        match self {
+            Self::Circle => {
+                let a = std::f64::consts::PI + std::f64::consts::TAU * s;
+                [CIRCLE_RADIUS_MM * a.cos(), CIRCLE_RADIUS_MM * a.sin()]
+            }
+            Self::Line => [LINE_HALF_LENGTH_DRAWN_MM * (2.0 * s - 1.0), 0.0],
+        }
+    }
+
+    fn reference(self) -> ReferencePath {
+        match self {
+            Self::Circle => ReferencePath::Circle,
+            Self::Line => ReferencePath::Line,
+        }
+    }
+}
+
+/// Settings of a simulated session (see the module documentation).
+#[derive(Debug, Clone, PartialEq)]
+pub struct SessionConfig {
+    pub path: SessionPath,
+    /// Seed of the truth errors and of the noise (the same seed gives the same robot).
+    pub seed: u64,
+    /// Standard deviation of the geometric errors, deg.
+    pub geometric_sigma_deg: f64,
+    /// Drawing time, s.
+    pub draw_duration_s: f64,
+    /// Joint log rate, Hz (divides 1000).
+    pub robot_rate_hz: u32,
+    /// Potentiometer sample rate, Hz (divides 1e6).
+    pub pot_rate_hz: u32,
+    /// Board time at robot time 0, s.
+    pub clock_offset_s: f64,
+    /// Board clock rate error, ppm.
+    pub clock_drift_ppm: f64,
+    /// Counts at zero travel.
+    pub counts_at_zero: f64,
+    /// Counts per mm of travel (negative: counts fall as the pencil extends).
+    pub counts_per_mm: f64,
+    /// Potentiometer noise, counts (standard deviation).
+    pub pot_noise_counts: f64,
+    /// Travel at the pencil's stop (off the paper), mm.
+    pub pencil_stop_mm: f64,
+    /// Height of the tool point above the paper before and after drawing, mm.
+    pub lift_mm: f64,
+    /// Depth of the marker dips, mm.
+    pub dip_mm: f64,
+    /// Scan resolution, dpi.
+    pub dpi: f64,
+    /// Rotation of the sheet on the scanner, deg.
+    pub scan_rotation_deg: f64,
+    /// Link inertia for the moments in motion.
+    pub inertia: Inertia,
+    /// Sheet placement (`None`: the path's default).
+    pub placement: Option<SheetPlacement>,
+    /// Pencil (tool) axis while drawing, unit, frame R (`None`: [`default_pencil_axis`]).
+    pub pencil_axis: Option<Vector3<f64>>,
+}
+
+impl Default for SessionConfig {
+    fn default() -> Self {
+        Self {
+            path: SessionPath::Circle,
+            seed: 1,
+            geometric_sigma_deg: 0.05,
+            draw_duration_s: 8.0,
+            robot_rate_hz: 100,
+            pot_rate_hz: 1000,
+            clock_offset_s: 12.345_678_9,
+            clock_drift_ppm: 0.0,
+            counts_at_zero: 2000.0,
+            counts_per_mm: -380.0,
+            pot_noise_counts: 1.0,
+            pencil_stop_mm: 2.0,
+            lift_mm: 5.0,
+            dip_mm: 1.5,
+            dpi: 600.0,
+            scan_rotation_deg: 1.2,
+            inertia: Inertia::default(),
+            placement: None,
+            pencil_axis: None,
+        }
+    }
+}
+
+/// Why a session could not be simulated or written.
+#[derive(Debug, thiserror::Error)]
+pub enum SessionError {
+    /// A setting out of range.
+    #[error("{0}")]
+    Config(String),
+    /// A target the nominal arm cannot reach.
+    #[error(transparent)]
+    Ik(#[from] IkError),
+    /// The model failed.
+    #[error(transparent)]
+    Model(#[from] ModelError),
+    /// The truth could not be built.
+    #[error(transparent)]
+    Sim(#[from] SimError),
+    /// The pencil would leave its travel range (the arm is too far off).
+    #[error("the pencil travel {travel_mm:.2} mm at robot time {t_s:.3} s is beyond its range")]
+    PencilRange { travel_mm: f64, t_s: f64 },
+    /// A frame could not be encoded.
+    #[error("cannot encode a potentiometer frame: {0}")]
+    Encode(String),
+    /// The scan could not be encoded.
+    #[error("cannot encode the scan: {0}")]
+    Image(String),
+    /// The recording could not be written.
+    #[error(transparent)]
+    Recording(#[from] RecordingError),
+    /// An output directory or file could not be written.
+    #[error("cannot write {path}: {source}")]
+    Write {
+        path: std::path::PathBuf,
+        #[source]
+        source: std::io::Error,
+    },
+    /// An atomic write failed.
+    #[error(transparent)]
+    Atomic(#[from] AtomicWriteError),
+    /// The placement file could not be written.
+    #[error(transparent)]
+    Fusion(#[from] FusionError),
+}
+
+impl crate::error::Classify for SessionError {
+    fn kind(&self) -> crate::error::ErrorKind {
+        use crate::error::ErrorKind;
+        match self {
+            Self::Config(_) => ErrorKind::BadInput,
+            Self::Ik(e) => e.kind(),
+            Self::Model(e) => e.kind(),
+            Self::Sim(e) => e.kind(),
+            Self::Fusion(e) => e.kind(),
+            _ => ErrorKind::Failure,
+        }
+    }
+}
+
+/// A simulated session in memory.
+#[derive(Debug, Clone)]
+pub struct Session {
+    /// The truth model.
+    pub truth: Model,
+    /// Geometric errors of the truth (name, deg).
+    pub geometric_errors: Vec<(String, f64)>,
+    /// The sheet placement.
+    pub placement: SheetPlacement,
+    /// Joint log times (robot clock), s.
+    pub t_s: Vec<f64>,
+    /// Joint readings at those times, deg.
+    pub q_deg: Vec<Vec<f64>>,
+    /// True tool point at those times, mm in R.
+    pub truth_mm: Vec<Vector3<f64>>,
+    /// Stored frames (COBS bytes without the delimiter) with their host receive times, µs.
+    pub frames: Vec<(u64, Vec<u8>)>,
+    /// First board sample time, µs.
+    pub board_t0_us: u64,
+    /// Board time between potentiometer samples, µs.
+    pub pot_period_us: u32,
+    /// The potentiometer counts, one per sample from `board_t0_us`.
+    pub pot_raw: Vec<u16>,
+    /// The pencil tip's path on the paper while in contact, sheet mm.
+    pub pencil_mm: Vec<[f64; 2]>,
+    /// The gauge-block jig readings.
+    pub jig: Vec<JigPoint>,
+}
+
+/// The planned target at robot time `t`: path parameter and height above the paper (mm).
+fn timeline(cfg: &SessionConfig, t: f64) -> (f64, f64) {
+    let dip = |tau: f64| -cfg.dip_mm * (std::f64::consts::PI * tau).sin().powi(2);
+    let q = |tau: f64, dur: f64| quintic_profile(tau, dur).0;
+    let phases: [(f64, u8); 11] = [
+        (0.5, 0),
+        (1.0, 1),
+        (0.3, 2),
+        (0.5, 3),
+        (0.3, 2),
+        (cfg.draw_duration_s, 4),
+        (0.3, 5),
+        (0.5, 6),
+        (0.3, 5),
+        (1.0, 7),
+        (0.5, 8),
+    ];
+    let mut start = 0.0;
+    for (dur, kind) in phases {
+        if t < start + dur || kind == 8 {
+            let tau = (t - start).clamp(0.0, dur);
+            return match kind {
+                0 => (0.0, cfg.lift_mm),
+                1 => (0.0, cfg.lift_mm * (1.0 - q(tau, dur))),
+                2 => (0.0, 0.0),
+                3 => (0.0, dip(tau / dur)),
+                4 => (q(tau, dur), 0.0),
+                5 => (1.0, 0.0),
+                6 => (1.0, dip(tau / dur)),
+                7 => (1.0, cfg.lift_mm * q(tau, dur)),
+                _ => (1.0, cfg.lift_mm),
+            };
+        }
+        start += dur;
+    }
+    (1.0, cfg.lift_mm)
+}
+
+/// Total robot time of the session, s.
+pub fn session_duration_s(cfg: &SessionConfig) -> f64 {
+    5.2 + cfg.draw_duration_s
+}
+
+fn check(cfg: &SessionConfig) -> Result<(), SessionError> {
+    let bad = |m: String| Err(SessionError::Config(m));
+    if !(cfg.draw_duration_s > 0.5 && cfg.draw_duration_s <= 600.0) {
+        return bad(format!(
+            "draw duration {} s: must be in 0.5..600",
+            cfg.draw_duration_s
+        ));
+    }
+    if cfg.robot_rate_hz == 0 || 1000 % cfg.robot_rate_hz != 0 {
+        return bad(format!(
+            "robot rate {} Hz must divide 1000",
+            cfg.robot_rate_hz
+        ));
+    }
+    if cfg.pot_rate_hz == 0 || 1_000_000 % cfg.pot_rate_hz != 0 || cfg.pot_rate_hz > 10_000 {
+        return bad(format!(
+            "pot rate {} Hz must divide 1e6 and be <= 10 kHz",
+            cfg.pot_rate_hz
+        ));
+    }
+    let finite = [
+        cfg.clock_offset_s,
+        cfg.clock_drift_ppm,
+        cfg.counts_at_zero,
+        cfg.counts_per_mm,
+        cfg.pot_noise_counts,
+        cfg.pencil_stop_mm,
+        cfg.lift_mm,
+        cfg.dip_mm,
+        cfg.dpi,
+        cfg.scan_rotation_deg,
+        cfg.geometric_sigma_deg,
+    ];
+    if finite.iter().any(|v| !v.is_finite())
+        || cfg.clock_offset_s < 1.0
+        || cfg.counts_per_mm == 0.0
+        || cfg.pot_noise_counts < 0.0
+        || cfg.lift_mm <= cfg.pencil_stop_mm
+        || cfg.dpi < 300.0
+        || cfg.geometric_sigma_deg < 0.0
+    {
+        return bad("session settings out of range (offset >= 1 s, lift above the pencil stop, dpi >= 300, ...)".into());
+    }
+    Ok(())
+}
+
+/// Simulates a session of the `declared` model.
+pub fn simulate_session(declared: &Model, cfg: &SessionConfig) -> Result<Session, SessionError> {
+    check(cfg)?;
+    let (truth, geometric_errors) = truth_model(
+        declared,
+        &SimConfig {
+            seed: cfg.seed,
+            geometric_sigma_deg: cfg.geometric_sigma_deg,
+            ..SimConfig::default()
+        },
+    )?;
+    let placement = cfg
+        .placement
+        .unwrap_or_else(|| cfg.path.default_placement());
+    let n = placement.normal();
+    let pencil_axis = cfg.pencil_axis.unwrap_or_else(|| default_pencil_axis(&n));
+    if !(pencil_axis.dot(&n) < -0.5) {
+        return Err(SessionError::Config(
+            "the pencil axis must point into the sheet, within 60 deg of its normal".into(),
+        ));
+    }
+    let dt = 1e-3;
+    let steps = (session_duration_s(cfg) / dt).round() as usize;
+    // 1. commanded joints at 1 kHz: IK of the nominal rigid model
+    let mut seed = KATANA_SEED_DEG.to_vec();
+    seed.truncate(declared.n_joints());
+    seed.resize(declared.n_joints(), 0.0);
+    let mut q_all: Vec<Vec<f64>> = Vec::with_capacity(steps + 1);
+    for k in 0..=steps {
+        let (s, h) = timeline(cfg, k as f64 * dt);
+        let target = ToolTarget {
+            position_mm: placement.to_r_mm(cfg.path.sheet_point(s)) + n * h,
+            axis: pencil_axis,
+        };
+        let q = solve(declared, &target, &seed, IkTilt::Off)?;
+        seed.clone_from(&q);
+        q_all.push(q);
+    }
+    // 2. the truth in motion: rates by central differences, RNEA moments, tilted FK
+    let nj = declared.n_joints();
+    let mut p_true = Vec::with_capacity(steps + 1);
+    let mut travel = Vec::with_capacity(steps + 1);
+    let mut pencil_mm: Vec<[f64; 2]> = Vec::new();
+    for k in 0..=steps {
+        // rates over +-10 ms: the IK's round-off would swamp second differences over 1 ms
+        let w = DIFF_STEPS.min(k).min(steps - k);
+        let (a, b) = (k - w, k + w);
+        let h = w as f64 * dt;
+        let (qd, qdd): (Vec<f64>, Vec<f64>) = if w == 0 {
+            (vec![0.0; nj], vec![0.0; nj])
+        } else {
+            (0..nj)
+                .map(|j| {
+                    (
+                        (q_all[b][j] - q_all[a][j]) / (2.0 * h),
+                        (q_all[b][j] - 2.0 * q_all[k][j] + q_all[a][j]) / (h * h),
+                    )
+                })
+                .unzip()
+        };
+        let m = moments_kgfm(&truth, &q_all[k], &qd, &qdd, cfg.inertia)?;
+        let fk = truth.fk(&q_all[k], Tilt::Moments(&m))?;
+        let axis = fk.rotation.column(2).into_owned();
+        let free = -placement.height_mm(&fk.position_mm) / n.dot(&axis);
+        let d = free.min(cfg.pencil_stop_mm);
+        if !(d > -cfg.lift_mm) {
+            return Err(SessionError::PencilRange {
+                travel_mm: d,
+                t_s: k as f64 * dt,
+            });
+        }
+        if free <= cfg.pencil_stop_mm {
+            let tip = placement.to_sheet_mm(&(fk.position_mm + axis * d));
+            let far = pencil_mm
+                .last()
+                .is_none_or(|l| (l[0] - tip[0]).hypot(l[1] - tip[1]) >= 0.05);
+            if far {
+                pencil_mm.push(tip);
+            }
+        }
+        p_true.push(fk.position_mm);
+        travel.push(d);
+    }
+    // 3. joint log
+    let every = (1000 / cfg.robot_rate_hz) as usize;
+    let idx: Vec<usize> = (0..=steps).step_by(every).collect();
+    let t_s: Vec<f64> = idx.iter().map(|&k| k as f64 * dt).collect();
+    let q_deg: Vec<Vec<f64>> = idx.iter().map(|&k| round_q(&q_all[k])).collect();
+    let truth_mm: Vec<Vector3<f64>> = idx.iter().map(|&k| p_true[k]).collect();
+    // 4. potentiometer on the board clock
+    let mut rng = ChaCha8Rng::seed_from_u64(cfg.seed);
+    rng.set_stream(7);
+    let noise = Normal::new(0.0, cfg.pot_noise_counts.max(1e-12))
+        .map_err(|e| SessionError::Config(format!("pot noise: {e}")))?;
+    let rate = 1.0 + cfg.clock_drift_ppm * 1e-6;
+    let period_us = 1_000_000 / cfg.pot_rate_hz;
+    let board_t0_us = ((-0.3 * rate + cfg.clock_offset_s) * 1e6).round() as u64;
+    let board_t1_us = (((session_duration_s(cfg) + 0.3) * rate + cfg.clock_offset_s) * 1e6) as u64;
+    let n_pot = ((board_t1_us - board_t0_us) / u64::from(period_us)) as usize;
+    let travel_at = |tr: f64| {
+        let x = (tr / dt).clamp(0.0, steps as f64);
+        let i = (x.floor() as usize).min(steps.saturating_sub(1));
+        let f = x - i as f64;
+        travel[i] + f * (travel[(i + 1).min(steps)] - travel[i])
+    };
+    let mut raws = Vec::with_capacity(n_pot);
+    for j in 0..n_pot {
+        let tb = (board_t0_us + j as u64 * u64::from(period_us)) as f64 * 1e-6;
+        let tr = (tb - cfg.clock_offset_s) / rate;
+        let c = cfg.counts_at_zero + cfg.counts_per_mm * travel_at(tr) + noise.sample(&mut rng);
+        raws.push(c.round().clamp(0.0, 4095.0) as u16);
+    }
+    let mut frames = Vec::new();
+    let mut buf = [0u8; DEVICE_FRAME_MAX];
+    for (b, chunk) in raws.chunks(BATCH).enumerate() {
+        let t0_us = board_t0_us + (b * BATCH) as u64 * u64::from(period_us);
+        let samples = heapless::Vec::from_slice(chunk)
+            .map_err(|_| SessionError::Encode("batch too long".into()))?;
+        let msg = DeviceMsg::Pot(PotBatch {
+            seq: b as u32,
+            t0_us,
+            period_us,
+            samples,
+        });
+        let frame =
+            encode_device(&msg, &mut buf).map_err(|e| SessionError::Encode(format!("{e:?}")))?;
+        let stored = frame[..frame.len() - 1].to_vec();
+        let last_us = t0_us + (chunk.len() as u64 - 1) * u64::from(period_us);
+        frames.push((last_us - board_t0_us + 1500, stored));
+    }
+    // 5. gauge-block jig
+    let jig = (-3..=2)
+        .map(|k| {
+            let travel_mm = f64::from(k);
+            let mean: f64 = (0..100)
+                .map(|_| {
+                    cfg.counts_at_zero + cfg.counts_per_mm * travel_mm + noise.sample(&mut rng)
+                })
+                .map(|c| c.round())
+                .sum::<f64>()
+                / 100.0;
+            JigPoint {
+                raw: mean,
+                travel_mm,
+            }
+        })
+        .collect();
+    Ok(Session {
+        truth,
+        geometric_errors,
+        placement,
+        t_s,
+        q_deg,
+        truth_mm,
+        frames,
+        board_t0_us,
+        pot_period_us: period_us,
+        pot_raw: raws,
+        pencil_mm,
+        jig,
+    })
+}
+
+impl Session {
+    /// The potentiometer samples as the board stamped them.
+    pub fn pot_samples(&self) -> Vec<crate::fusion::pot::PotSample> {
+        self.pot_raw
+            .iter()
+            .enumerate()
+            .map(|(j, &raw)| crate::fusion::pot::PotSample {
+                t_us: self.board_t0_us + j as u64 * u64::from(self.pot_period_us),
+                raw,
+            })
+            .collect()
+    }
+}
+
+/// Joint readings as the controller logs them (6 decimals of a degree).
+fn round_q(q: &[f64]) -> Vec<f64> {
+    q.iter().map(|v| (v * 1e6).round() / 1e6).collect()
+}
+
+/// The simulated scan of the session's sheet.
+pub fn render_session_scan(s: &Session, cfg: &SessionConfig) -> RgbImage {
+    render_scan(&RenderSpec {
+        dpi: cfg.dpi,
+        pencil_mm: s.pencil_mm.clone(),
+        pencil_closed: cfg.path == SessionPath::Circle,
+        reference: Some(cfg.path.reference()),
+        rotation_deg: cfg.scan_rotation_deg,
+        shift_mm: [1.5, -2.0],
+        seed: cfg.seed.wrapping_add(17),
+        ..RenderSpec::default()
+    })
+}
+
+/// Writes the session's files into `dir` (created if missing); see the module documentation.
+pub fn write_session(dir: &Path, s: &Session, cfg: &SessionConfig) -> Result<(), SessionError> {
+    let io = |path: &Path| {
+        let path = path.to_path_buf();
+        move |source| SessionError::Write { path, source }
+    };
+    std::fs::create_dir_all(dir).map_err(io(dir))?;
+    let nj = s.q_deg.first().map_or(0, Vec::len);
+    let qhead: Vec<String> = (1..=nj).map(|j| format!("q{j}")).collect();
+    let mut joints = format!("t,{}\n", qhead.join(","));
+    let mut truth_path = format!("t,{},x,y,z\n", qhead.join(","));
+    for ((t, q), p) in s.t_s.iter().zip(&s.q_deg).zip(&s.truth_mm) {
+        let qs: Vec<String> = q.iter().map(|v| format!("{v:.6}")).collect();
+        joints.push_str(&format!("{t:.3},{}\n", qs.join(",")));
+        truth_path.push_str(&format!(
+            "{t:.3},{},{:.9},{:.9},{:.9}\n",
+            qs.join(","),
+            p.x,
+            p.y,
+            p.z
+        ));
+    }
+    write_bytes_atomic(&dir.join("joints.csv"), joints.as_bytes())?;
+    write_bytes_atomic(&dir.join("truth_path.csv"), truth_path.as_bytes())?;
+    let mut jig =
+        String::from("# gauge-block jig: mean counts of 100 readings per gauge\nraw,travel_mm\n");
+    for p in &s.jig {
+        jig.push_str(&format!("{:.2},{}\n", p.raw, p.travel_mm));
+    }
+    write_bytes_atomic(&dir.join("potjig.csv"), jig.as_bytes())?;
+    s.placement.write(&dir.join("placement.toml"))?;
+    s.truth.write_file(&dir.join("truth.toml"))?;
+    // the recording: written under a temporary name, renamed when complete
+    let rec = dir.join("pot.rec");
+    let tmp = dir.join(".pot.rec.tmp");
+    let meta = RecordingMeta {
+        protocol_version: rig_protocol::PROTOCOL_VERSION,
+        port: "simulated".into(),
+        start_time_unix_us: 0,
+        pot_rate_hz: cfg.pot_rate_hz,
+        tilt_rate_hz: 0,
+        hello: None,
+        rigctl_version: env!("CARGO_PKG_VERSION").into(),
+    };
+    let mut w = RecordingWriter::create(&tmp, &meta, true)?;
+    for (rx, f) in &s.frames {
+        w.append(*rx, f)?;
+    }
+    w.finish()?;
+    std::fs::rename(&tmp, &rec).map_err(io(&rec))?;
+    // the scan
+    let img = render_session_scan(s, cfg);
+    let mut png = Vec::new();
+    image::codecs::png::PngEncoder::new(&mut png)
+        .write_image(
+            img.as_raw(),
+            img.width(),
+            img.height(),
+            image::ExtendedColorType::Rgb8,
+        )
+        .map_err(|e| SessionError::Image(e.to_string()))?;
+    write_bytes_atomic(&dir.join("scan.png"), &png)?;
+    let errors: serde_json::Map<String, serde_json::Value> = s
+        .geometric_errors
+        .iter()
+        .map(|(k, v)| (k.clone(), serde_json::json!(v)))
+        .collect();
+    let json = serde_json::json!({
+        "format": SESSION_FORMAT,
+        "path": cfg.path.as_str(),
+        "seed": cfg.seed,
+        "clock_offset_s": cfg.clock_offset_s,
+        "clock_drift_ppm": cfg.clock_drift_ppm,
+        "counts_at_zero": cfg.counts_at_zero,
+        "counts_per_mm": cfg.counts_per_mm,
+        "pot_noise_counts": cfg.pot_noise_counts,
+        "pencil_stop_mm": cfg.pencil_stop_mm,
+        "draw_duration_s": cfg.draw_duration_s,
+        "dpi": cfg.dpi,
+        "scan_rotation_deg": cfg.scan_rotation_deg,
+        "geometric_errors_deg": errors,
+    });
+    let text = serde_json::to_string_pretty(&json).unwrap_or_default();
+    write_bytes_atomic(&dir.join("session.json"), format!("{text}\n").as_bytes())?;
+    Ok(())
+}
+
+use image::ImageEncoder as _;
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn timeline_is_continuous_and_has_two_dips() {
+        let cfg = SessionConfig::default();
+        let total = session_duration_s(&cfg);
+        let mut prev = timeline(&cfg, 0.0);
+        let mut minima = 0;
+        let mut was_low = false;
+        for k in 1..=(total * 1000.0) as usize {
+            let cur = timeline(&cfg, k as f64 * 1e-3);
+            assert!(
+                (cur.0 - prev.0).abs() < 1e-3 && (cur.1 - prev.1).abs() < 0.05,
+                "{k}"
+            );
+            let low = cur.1 < -0.5 * cfg.dip_mm;
+            if low && !was_low {
+                minima += 1;
+            }
+            was_low = low;
+            prev = cur;
+        }
+        assert_eq!(minima, 2);
+        assert_eq!(timeline(&cfg, total), (1.0, cfg.lift_mm));
+    }
+}
