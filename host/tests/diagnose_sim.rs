@@ -261,7 +261,11 @@ fn two_effects_are_both_found() {
 #[test]
 fn near_aliases_and_sign_onsets_on_other_seeds() {
     let cases = [
-        ("encoder_harmonic:j2:h1=0.03,40", "encoder_harmonic:j2:h1", 7),
+        (
+            "encoder_harmonic:j2:h1=0.03,40",
+            "encoder_harmonic:j2:h1",
+            7,
+        ),
         ("base_tilt=0.03,-0.02", "base_tilt", 2),
         ("base_tilt=0.03,-0.02", "base_tilt", 3),
         ("base_tilt=0.03,-0.02", "base_tilt", 4),

@@ -8,8 +8,8 @@ mod compensate;
 mod diagnose;
 mod export;
 mod fk;
-mod joints;
 mod fuse;
+mod joints;
 mod ports;
 mod potcal;
 mod record;
@@ -20,7 +20,11 @@ mod trace;
 mod urdf2model;
 
 #[derive(clap::Parser, Debug)]
-#[command(name = "rigctl", version, about = "Low-cost robot calibration rig: record, model, simulate, calibrate")]
+#[command(
+    name = "rigctl",
+    version,
+    about = "Low-cost robot calibration rig: record, model, simulate, calibrate"
+)]
 pub struct Cli {
     #[command(subcommand)]
     pub command: Command,
@@ -99,11 +103,17 @@ impl CliError {
     }
 
     pub fn bad_input(message: impl Into<String>) -> Self {
-        Self { kind: ErrorKind::BadInput, message: message.into() }
+        Self {
+            kind: ErrorKind::BadInput,
+            message: message.into(),
+        }
     }
 
     pub fn failure(message: impl Into<String>) -> Self {
-        Self { kind: ErrorKind::Failure, message: message.into() }
+        Self {
+            kind: ErrorKind::Failure,
+            message: message.into(),
+        }
     }
 }
 
@@ -115,6 +125,9 @@ impl std::fmt::Display for CliError {
 
 impl<E: Classify + std::fmt::Display> From<E> for CliError {
     fn from(e: E) -> Self {
-        Self { kind: e.kind(), message: e.to_string() }
+        Self {
+            kind: e.kind(),
+            message: e.to_string(),
+        }
     }
 }

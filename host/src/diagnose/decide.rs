@@ -230,23 +230,26 @@ fn rank_contenders<'a>(
     };
     let (mut equivalent, mut worse): (Vec<usize>, Vec<usize>) = (0..ids.len()).partition(|&k| {
         let t = paired_gain(&errs[k], &errs[best]).3;
-        !(t >= cfg.cv_t_min)
+        t.is_nan() || t < cfg.cv_t_min
     });
     equivalent.sort_by_key(|&k| simplicity(candidate(ids[k])));
     worse.sort_by(|&a, &b| mean(&errs[a]).total_cmp(&mean(&errs[b])));
-    equivalent.into_iter().chain(worse).map(|k| ids[k]).collect()
+    equivalent
+        .into_iter()
+        .chain(worse)
+        .map(|k| ids[k])
+        .collect()
 }
 
 /// Occam's order of a candidate: its number of unknowns, then its harmonic order (a first
 /// harmonic is smoother than a second one; 0 for effects that are not harmonics).
 fn simplicity(c: &Candidate) -> (usize, u32) {
-    let order = c
-        .id
-        .rsplit(':')
-        .next()
-        .and_then(|h| h.strip_prefix('h'))
-        .and_then(|n| n.parse().ok())
-        .unwrap_or(0);
+    let order =
+        c.id.rsplit(':')
+            .next()
+            .and_then(|h| h.strip_prefix('h'))
+            .and_then(|n| n.parse().ok())
+            .unwrap_or(0);
     (c.unknowns.len(), order)
 }
 
@@ -286,7 +289,10 @@ pub fn forward_selection(
         ranked.truncate(cfg.refit_top);
         for ci in onset_candidates(&cur, &cands, data, cfg)? {
             if !ranked.iter().any(|r| r.0 == ci) {
-                let added = screens.iter().find(|s| s.candidate == ci).map_or(0, |s| s.added);
+                let added = screens
+                    .iter()
+                    .find(|s| s.candidate == ci)
+                    .map_or(0, |s| s.added);
                 ranked.push((ci, added, 0.0));
             }
         }
@@ -463,7 +469,10 @@ pub fn onset_candidates(
         let mut probe = cur.ext.clone();
         let mut ok = true;
         for &u in &cand.unknowns {
-            if probe.set_value(u, probe.value(u) + cfg.onset_probe).is_err() {
+            if probe
+                .set_value(u, probe.value(u) + cfg.onset_probe)
+                .is_err()
+            {
                 ok = false;
                 break;
             }
