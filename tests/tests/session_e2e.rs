@@ -1,7 +1,9 @@
 //! End to end on simulated low-cost sessions (thesis 5.5.2): the circle and the line, each on
-//! its own sheet, drawn by one simulated robot; `rigctl trace` -> `rigctl potcal` ->
-//! `rigctl fuse` -> `rigctl calibrate --samples`, then the identified parameters are compared
-//! with the truth and the path error along both paths before and after (thesis fig. 5.12).
+//! its own sheet, drawn by one simulated robot: `rigctl simulate --session` -> `rigctl trace`
+//! -> `rigctl potcal` -> `rigctl fuse` -> `rigctl calibrate --samples`; then the identified
+//! parameters are compared with the truth, and the path error along both paths before and after
+//! (thesis fig. 5.12) is computed (written to `$RIG_SESSION_OUT/path_errors.csv` and
+//! `measured_errors.csv` when that variable is set).
 
 use std::path::Path;
 
@@ -13,7 +15,7 @@ use rigctl::calib::projected::{fit_projected, ProjectedData, SampleTilt};
 use rigctl::fusion::motion::moments_in_motion;
 use rigctl::fusion::read_fused;
 use rigctl::model::{katana450, Model, Tilt, KATANA_PENCIL_TOOL_MM};
-use rigctl::sim::session::{simulate_session, write_session, SessionConfig, SessionPath};
+use rigctl::sim::session::{simulate_session, SessionConfig, SessionPath};
 
 fn run_ok(args: &[&str]) -> String {
     let out = rigctl().args(args).output().expect("run rigctl");
@@ -37,10 +39,29 @@ fn session(dir: &Path, path: SessionPath, declared: &Model) -> std::path::PathBu
         seed: 21,
         ..SessionConfig::default()
     };
+    run_ok(&[
+        "simulate",
+        "--session",
+        path.as_str(),
+        "--seed",
+        "21",
+        "--out",
+        s(dir),
+    ]);
+    // the same session in memory, for the pencil's true path on the paper
     let sess = simulate_session(declared, &cfg).expect("simulate session");
-    write_session(dir, &sess, &cfg).expect("write session");
     let trace = dir.join("trace.csv");
     run_ok(&["trace", s(&dir.join("scan.png")), "--out", s(&trace)]);
+    {
+        let pts = rigctl::fusion::curve::read_trace_csv(&trace).unwrap();
+        let truth = rigctl::fusion::curve::TracedCurve::new(sess.pencil_mm.clone(), 2.0).unwrap();
+        let d: Vec<f64> = pts.iter().map(|p| truth.closest(*p).distance_mm).collect();
+        let rms = (d.iter().map(|x| x * x).sum::<f64>() / d.len() as f64).sqrt();
+        eprintln!(
+            "{path:?} trace vs true tip path: rms {rms:.4} mm, max {:.4}",
+            d.iter().cloned().fold(0.0, f64::max)
+        );
+    }
     let pot = dir.join("pot.toml");
     let out = run_ok(&[
         "potcal",
@@ -245,4 +266,50 @@ fn simulated_sessions_calibrate_through_the_cli() {
         std::fs::write(dir.join("path_errors.csv"), &csv).unwrap();
         std::fs::copy(&errs, dir.join("measured_errors.csv")).unwrap();
     }
+}
+
+#[test]
+fn bad_inputs_exit_with_code_2() {
+    let tmp = tempfile::tempdir().unwrap();
+    let jig = tmp.path().join("jig.csv");
+    std::fs::write(&jig, "start_s,end_s,travel_mm\n0.1,0.9,1.0\n1.1,1.9,-1.0\n").unwrap();
+    let fused = tmp.path().join("fused.csv");
+    std::fs::write(&fused, "t,q1,q2,q3,q4,q5\n0,1,2,3,4,5\n").unwrap();
+    let missing = tmp.path().join("missing.csv");
+    let cases: Vec<Vec<&str>> = vec![
+        // windows need the recording
+        vec!["potcal", "--points", s(&jig), "--out", "pot.toml"],
+        vec![
+            "fuse",
+            "--joints",
+            s(&missing),
+            "--recording",
+            s(&missing),
+            "--trace",
+            s(&missing),
+            "--placement",
+            s(&missing),
+            "--pot",
+            s(&missing),
+            "--out",
+            "f.csv",
+        ],
+        // a fused file without the direction columns
+        vec!["calibrate", "--samples", s(&fused)],
+        vec!["calibrate", "--samples", s(&fused), "--method", "influence"],
+    ];
+    for args in cases {
+        let out = rigctl()
+            .current_dir(tmp.path())
+            .args(&args)
+            .output()
+            .unwrap();
+        assert_eq!(
+            out.status.code(),
+            Some(2),
+            "{args:?}: {}",
+            String::from_utf8_lossy(&out.stderr)
+        );
+    }
+    assert!(!tmp.path().join("pot.toml").exists() && !tmp.path().join("f.csv").exists());
 }

@@ -389,6 +389,10 @@ pub fn fit_projected_robust(
     Ok((fit, data.rows.len() - kept.rows.len()))
 }
 
+/// Extra passes of [`calibrate_projected`] with `SampleTilt::Dynamic`, each recomputing the
+/// moments in motion on the model fitted last.
+pub const DYNAMIC_PASSES: usize = 2;
+
 /// Result of [`calibrate_projected`].
 #[derive(Debug, Clone)]
 pub struct ProjectedOutcome {
@@ -408,7 +412,9 @@ pub struct ProjectedOutcome {
 
 /// `rigctl calibrate --samples`: the standard (rigid) identification, and the chosen one with
 /// `tilt` (`Static` or `Dynamic` for the method `tilting`; `Off` repeats the standard one), both
-/// with outlier rejection ([`fit_projected_robust`]; the statistics cover every sample).
+/// with outlier rejection ([`fit_projected_robust`]; the statistics cover every sample). With
+/// `Dynamic` the moments in motion are recomputed on the fitted model and the fit repeated
+/// ([`DYNAMIC_PASSES`]); `data`'s own moments (e.g. of the nominal model) start it.
 /// `opts.method` names the method in the report; the influence method needs full positions and
 /// is treated as `standard`.
 pub fn calibrate_projected(
@@ -418,10 +424,10 @@ pub fn calibrate_projected(
     opts: &CalibrateOptions,
 ) -> Result<ProjectedOutcome, CalibError> {
     let selection = resolve_selection(nominal, opts)?;
-    let robust = |t: SampleTilt| {
+    let robust = |d: &ProjectedData, t: SampleTilt| {
         fit_projected_robust(
             nominal,
-            data,
+            d,
             &selection,
             t,
             &opts.lm,
@@ -429,22 +435,32 @@ pub fn calibrate_projected(
             OUTLIER_SIGMAS,
         )
     };
-    let standard = robust(SampleTilt::Off)?;
+    let standard = robust(data, SampleTilt::Off)?;
     let tilt = if nominal.has_tilt() {
         tilt
     } else {
         SampleTilt::Off
     };
-    let (chosen, rejected) = if tilt == SampleTilt::Off {
-        standard.clone()
-    } else {
-        robust(tilt)?
+    let mut moved = data.clone();
+    let (chosen, rejected) = match tilt {
+        SampleTilt::Off => standard.clone(),
+        SampleTilt::Static => robust(data, tilt)?,
+        SampleTilt::Dynamic => {
+            // the moments depend on the chain: recompute them on the fitted model and refit
+            // (the arm's moments are those of its true chain, not of the nominal one)
+            let mut fit = robust(data, tilt)?;
+            for _ in 0..DYNAMIC_PASSES {
+                moved = moved.with_dynamic_moments(&fit.0.model)?;
+                fit = robust(&moved, tilt)?;
+            }
+            fit
+        }
     };
     let standard = standard.0;
     let errors = [
         measured_errors(nominal, data, SampleTilt::Off)?,
         measured_errors(&standard.model, data, SampleTilt::Off)?,
-        measured_errors(&chosen.model, data, tilt)?,
+        measured_errors(&chosen.model, &moved, tilt)?,
     ];
     let mut reported: Vec<usize> = chosen.fitted.iter().chain(&chosen.fixed).copied().collect();
     reported.sort_unstable_by_key(|c| selection.iter().position(|s| s == c));

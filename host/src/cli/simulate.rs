@@ -1,10 +1,12 @@
-//! `rigctl simulate`: a virtual rig with known truth (see `rigctl::sim::simulate`).
+//! `rigctl simulate`: a virtual rig with known truth (see `rigctl::sim::simulate`); with
+//! `--session circle|line` a simulated low-cost rig session (`rigctl::sim::session`).
 
 use std::path::PathBuf;
 
 use rigctl::model::{choose_model, ModelChoice};
 use rigctl::sim::effects::parse_effect;
 use rigctl::sim::output::write_outputs;
+use rigctl::sim::session::{simulate_session, write_session, SessionConfig, SessionPath};
 use rigctl::sim::simulate::{simulate, SimConfig};
 
 use super::CliError;
@@ -45,9 +47,60 @@ pub struct Args {
     /// Number of validation poses.
     #[arg(long = "val", value_name = "N", default_value_t = 60)]
     pub n_val: usize,
+    /// Instead of poses: a low-cost rig session (thesis 5.5.2) drawing this path on a sheet on
+    /// the 45-degree plane; writes joints.csv, pot.rec, potjig.csv, scan.png, placement.toml and
+    /// the truth (truth.toml, truth_path.csv, session.json; see rigctl::sim::session). The same
+    /// --seed gives the same robot for both paths. Without --model the Katana's tool length
+    /// defaults to 330 mm (the pencil holder).
+    #[arg(long, value_name = "circle|line", value_parser = parse_session, conflicts_with = "effects")]
+    pub session: Option<SessionPath>,
+    /// With --session: the board clock's reading at robot time 0, s.
+    #[arg(long, value_name = "S", requires = "session")]
+    pub clock_offset_s: Option<f64>,
+}
+
+fn parse_session(s: &str) -> Result<SessionPath, String> {
+    s.parse()
+}
+
+/// `simulate --session`.
+fn run_session(args: &Args, path: SessionPath) -> Result<(), CliError> {
+    let tool_mm = match (&args.model, args.tool_mm) {
+        (None, None) => Some(rigctl::model::KATANA_PENCIL_TOOL_MM),
+        (_, t) => t,
+    };
+    let declared = choose_model(&ModelChoice {
+        robot: args.robot.as_deref(),
+        model_file: args.model.as_deref(),
+        tool_mm,
+        sets: &args.sets,
+    })?;
+    let mut cfg = SessionConfig {
+        path,
+        seed: args.seed,
+        geometric_sigma_deg: args.geometric_sigma_deg,
+        ..SessionConfig::default()
+    };
+    if let Some(off) = args.clock_offset_s {
+        cfg.clock_offset_s = off;
+    }
+    let session = simulate_session(&declared, &cfg)?;
+    write_session(&args.out, &session, &cfg)?;
+    println!(
+        "simulate: {} session, {} joint samples, {} potentiometer frames, scan at {} dpi written to {}",
+        path.as_str(),
+        session.t_s.len(),
+        session.frames.len(),
+        cfg.dpi,
+        args.out.display()
+    );
+    Ok(())
 }
 
 pub fn run(args: Args) -> Result<(), CliError> {
+    if let Some(path) = args.session {
+        return run_session(&args, path);
+    }
     let effects = args
         .effects
         .iter()

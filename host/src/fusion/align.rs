@@ -173,7 +173,8 @@ pub fn align(
     let w_t0 = t_s[wins[0].0];
     let w_t1 = t_s[wins[wins.len() - 1].1 - 1];
     let (lo, hi) = (p0 - w_t0, p1 - w_t1);
-    if !(hi >= lo) || !(o.coarse_step_s > 0.0) {
+    let ordered = hi.partial_cmp(&lo).is_some_and(|c| c.is_ge());
+    if !ordered || o.coarse_step_s.partial_cmp(&0.0) != Some(std::cmp::Ordering::Greater) {
         return Err(FusionError::Alignment(format!(
             "the recording ({:.3} s) is shorter than the marked part of the joint readings \
              ({:.3} s)",
@@ -205,7 +206,7 @@ pub fn align(
         let tau = golden_min(f, best.1 - o.coarse_step_s, best.1 + o.coarse_step_s, 1e-8);
         let (var, level) = window_cost(pot, t, h, tau);
         let rms = var.sqrt();
-        if !(rms <= o.max_rms_mm) {
+        if rms.is_nan() || rms > o.max_rms_mm {
             return Err(FusionError::Alignment(format!(
                 "the marker at robot time {:.3}..{:.3} s does not match the potentiometer (RMS \
                  misfit {rms:.3} mm > {} mm)",
@@ -312,7 +313,7 @@ mod tests {
 
     #[test]
     fn known_offset_is_recovered_within_a_millisecond() {
-        for offset in [1234.567_891, -3.210_987, 0.000_4] {
+        for offset in [1_234.567_891, -3.210_987, 0.4e-3] {
             let (pot, t, h) = case(offset, 0.0);
             let a = align(&pot, &t, &h, 2.0, &AlignOptions::default()).unwrap();
             assert_eq!(a.markers.len(), 2);

@@ -406,7 +406,7 @@ pub fn simulate_session(declared: &Model, cfg: &SessionConfig) -> Result<Session
         .unwrap_or_else(|| cfg.path.default_placement());
     let n = placement.normal();
     let pencil_axis = cfg.pencil_axis.unwrap_or_else(|| default_pencil_axis(&n));
-    if !(pencil_axis.dot(&n) < -0.5) {
+    if pencil_axis.dot(&n).is_nan() || pencil_axis.dot(&n) >= -0.5 {
         return Err(SessionError::Config(
             "the pencil axis must point into the sheet, within 60 deg of its normal".into(),
         ));
@@ -455,7 +455,7 @@ pub fn simulate_session(declared: &Model, cfg: &SessionConfig) -> Result<Session
         let axis = fk.rotation.column(2).into_owned();
         let free = -placement.height_mm(&fk.position_mm) / n.dot(&axis);
         let d = free.min(cfg.pencil_stop_mm);
-        if !(d > -cfg.lift_mm) {
+        if d.is_nan() || d <= -cfg.lift_mm {
             return Err(SessionError::PencilRange {
                 travel_mm: d,
                 t_s: k as f64 * dt,
