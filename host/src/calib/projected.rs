@@ -513,28 +513,28 @@ pub fn calibrate_projected(
     })
 }
 
-/// Per-sample measured errors before and after calibration as CSV (for plots, thesis fig. 5.12
-/// style): `t,q1..qN,dev_u_before,dev_n_before,dp_before,dev_u_after,dev_n_after,dp_after`
-/// (mm; `dev_*` = measured minus model along `u` / `n`, `dp` = `sqrt(dev_u^2 + dev_n^2)`).
-pub fn errors_csv(
-    samples: &[FusedSample],
-    before: &[Vector3<f64>],
-    after: &[Vector3<f64>],
-) -> String {
+/// Per-sample measured errors before calibration, after the standard one and after the chosen
+/// method, as CSV (for plots, thesis fig. 5.12 style):
+/// `t,q1..qN,dev_u_before,dev_n_before,dp_before,dev_u_after,dev_n_after,dp_after,dev_u_standard,dev_n_standard,dp_standard`
+/// (mm; `dev_*` = measured minus model along `u` / `n`, `dp` = `sqrt(dev_u^2 + dev_n^2)`;
+/// `errors` is [`ProjectedOutcome::errors`]: nominal, standard, chosen).
+pub fn errors_csv(samples: &[FusedSample], errors: &[Vec<Vector3<f64>>; 3]) -> String {
     use std::fmt::Write as _;
     let nj = samples.first().map_or(0, |s| s.q_deg.len());
     let mut out = String::from("t");
     for j in 1..=nj {
         let _ = write!(out, ",q{j}");
     }
-    out.push_str(",dev_u_before,dev_n_before,dp_before,dev_u_after,dev_n_after,dp_after\n");
-    for ((s, b), a) in samples.iter().zip(before).zip(after) {
+    out.push_str(",dev_u_before,dev_n_before,dp_before,dev_u_after,dev_n_after,dp_after");
+    out.push_str(",dev_u_standard,dev_n_standard,dp_standard\n");
+    for (k, s) in samples.iter().enumerate() {
         let _ = write!(out, "{}", s.t_s);
         for q in &s.q_deg {
             let _ = write!(out, ",{q}");
         }
-        for e in [b, a] {
-            let (u, n) = (s.u.dot(e), s.n.dot(e));
+        for set in [0, 2, 1] {
+            let e = errors[set].get(k).copied().unwrap_or_else(Vector3::zeros);
+            let (u, n) = (s.u.dot(&e), s.n.dot(&e));
             let _ = write!(out, ",{u:.6},{n:.6},{:.6}", u.hypot(n));
         }
         out.push('\n');

@@ -90,9 +90,63 @@ impl AxisExtremes {
     }
 }
 
+/// Integrated autocorrelation time `1 + 2 sum_k rho_k` of a series (in its order): the number of
+/// consecutive values that carry about as much information as one independent value. The sum
+/// stops at the first lag whose correlation is below 0.05, or at a tenth of the series; at least
+/// 1, and exactly 1 for fewer than 20 values or a constant series. Residuals sampled densely
+/// along a path are serially correlated, so statistics that assume independent values (sigmas,
+/// F-tests, t statistics) must count `n / tau` of them.
+pub fn autocorrelation_time(series: &[f64]) -> f64 {
+    let n = series.len();
+    if n < 20 {
+        return 1.0;
+    }
+    let mean = series.iter().sum::<f64>() / n as f64;
+    let var = series.iter().map(|v| (v - mean).powi(2)).sum::<f64>() / n as f64;
+    if !(var > 0.0) || !var.is_finite() {
+        return 1.0;
+    }
+    let mut tau = 1.0;
+    for lag in 1..n / 10 {
+        let c = (0..n - lag)
+            .map(|i| (series[i] - mean) * (series[i + lag] - mean))
+            .sum::<f64>()
+            / (n as f64 * var);
+        if c < 0.05 {
+            break;
+        }
+        tau += 2.0 * c;
+    }
+    tau
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// White noise has tau about 1; an AR(1) series with coefficient a has
+    /// tau = (1 + a) / (1 - a) (here 3 for a = 0.5), to the estimator's truncation.
+    #[test]
+    fn autocorrelation_time_of_white_and_ar1_series() {
+        use rand::SeedableRng;
+        use rand_distr::{Distribution, Normal};
+        let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(3);
+        let normal = Normal::new(0.0, 1.0).unwrap();
+        let white: Vec<f64> = (0..20_000).map(|_| normal.sample(&mut rng)).collect();
+        let t = autocorrelation_time(&white);
+        assert!((1.0..1.1).contains(&t), "white: {t}");
+        let mut x = 0.0;
+        let ar: Vec<f64> = (0..20_000)
+            .map(|_| {
+                x = 0.5 * x + normal.sample(&mut rng);
+                x
+            })
+            .collect();
+        let t = autocorrelation_time(&ar);
+        assert!((2.6..3.2).contains(&t), "AR(1) 0.5: {t}");
+        assert_eq!(autocorrelation_time(&[1.0; 50]), 1.0);
+        assert_eq!(autocorrelation_time(&white[..10]), 1.0);
+    }
 
     #[test]
     fn hand_computed_values() {

@@ -206,7 +206,7 @@ fn run_samples(args: &Args, samples: &std::path::Path) -> Result<(), CliError> {
         outcome.model.write_file(path)?;
     }
     if let Some(path) = &args.errors_csv {
-        let text = errors_csv(&fused, &outcome.errors[0], &outcome.errors[2]);
+        let text = errors_csv(&fused, &outcome.errors);
         write_bytes_atomic(path, text.as_bytes())?;
     }
     let mut s = table(
