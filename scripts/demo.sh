@@ -4,7 +4,10 @@
 #   2. simulate a Katana 450 with random geometric errors + joint tilting (known truth);
 #   3. calibrate it (standard vs tilting-first) on 118 ISO-9283 poses, validate on held-out poses;
 #   4. diagnose: look for effects the declared model lacks (here: an undeclared encoder harmonic);
-#   5. an HTML report with the plots.
+#   5. the low-cost rig on the same robot: a simulated session per sheet (circle, line: joint log,
+#      board recording, 600 dpi scan), trace -> pot calibration -> fusion -> calibrate --samples
+#      (thesis fig. 5.12 path error) -> diagnose --samples (circle), held out on the line;
+#   6. an HTML report with the plots.
 # Results go to runs/demo/ (or the folder given as $1).
 set -euo pipefail
 cd "$(dirname "$0")/.."
@@ -29,6 +32,22 @@ echo "== calibrate (tilting first, the default)"
 echo "== diagnose: what does the declared model lack?"
 "$rigctl" diagnose --poses "$out/cal.csv" --validate "$out/val.csv" \
   --json "$out/diagnose.json" --out "$out/extended.toml" --plots "$out/plots"
+
+echo "== the low-cost rig: pencil sessions drawn by the same robot (truth: encoder harmonic on joint 2)"
+for path in circle line; do
+  s="$out/session_$path"
+  "$rigctl" simulate --session "$path" --seed 7 --effect 'encoder_harmonic:j2:h1=0.03,40' --out "$s"
+  "$rigctl" trace "$s/scan.png" --out "$s/trace.csv"
+  "$rigctl" potcal --points "$s/potjig.csv" --out "$s/pot.toml"
+  "$rigctl" fuse --joints "$s/joints.csv" --recording "$s/pot.rec" --trace "$s/trace.csv" \
+    --placement "$s/placement.toml" --pot "$s/pot.toml" --out "$s/fused.csv"
+done
+echo "== calibrate --samples (circle): measured path error before / standard / tilting"
+"$rigctl" calibrate --samples "$out/session_circle/fused.csv" \
+  --errors-csv "$out/path_errors.csv" --plot "$out/path_errors.svg" --json "$out/calibrate_samples.json"
+echo "== diagnose --samples (circle), held out on the line"
+"$rigctl" diagnose --samples "$out/session_circle/fused.csv" --validate "$out/session_line/fused.csv" \
+  --json "$out/diagnose_samples.json"
 
 echo "== report"
 "$rigctl" report "$out" --html "$out/report.html"

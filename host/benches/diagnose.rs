@@ -16,6 +16,7 @@ fn dataset(poses: &[SimPose]) -> Dataset {
             xyz_mm: poses.iter().map(|p| p.measured_mm).collect(),
         },
         t_s: Some(poses.iter().map(|p| p.t_s).collect()),
+        ..Dataset::default()
     }
 }
 

@@ -142,6 +142,28 @@ fn katana_jacobian_matches_finite_differences() {
             })
             .collect();
         check(&m, &q, Tilt::Moments(&ext), "external moments");
+        // static moments plus fixed extra (inertial) ones: the static part is differentiated
+        let extra: Vec<Vector3<f64>> = ext.iter().map(|e| e * 0.02).collect();
+        let total_clear = m
+            .moments_kgfm(&q)
+            .unwrap()
+            .iter()
+            .zip(&extra)
+            .all(|(s, e)| (s + e).iter().all(|c| c.abs() > 1e-4));
+        if total_clear {
+            let n_plus = check(&m, &q, Tilt::StaticPlus(&extra), "static plus extra");
+            assert!(
+                n_plus > n_off,
+                "tilting values and payload act through the static part"
+            );
+            let (a, b) = (
+                m.fk(&q, Tilt::StaticPlus(&extra)).unwrap(),
+                m.fk(&q, Tilt::Static).unwrap(),
+            );
+            for ((ma, mb), e) in a.moments_kgfm.iter().zip(&b.moments_kgfm).zip(&extra) {
+                assert!((ma - mb - e).norm() < 1e-12);
+            }
+        }
         checked += 1;
     }
     assert!(checked >= 8, "only {checked} poses clear of the sign steps");

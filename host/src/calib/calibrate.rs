@@ -153,12 +153,47 @@ pub struct Outcome {
     pub validation_errors: [Vec<Vector3<f64>>; 3],
 }
 
-fn values_of(model: &Model, cols: &[usize]) -> NamedValues {
-    NamedValues(
-        cols.iter()
-            .map(|&c| (model.params()[c].name.clone(), model.params()[c].value))
-            .collect(),
-    )
+/// The `calibrate --json` document of the chosen `fit`: its parameters (fitted and fixed, in
+/// `selection` order), sigmas and identifiability, with the error statistics given.
+pub(super) fn fit_report(
+    fit: &Fit,
+    selection: &[usize],
+    method: &str,
+    calibration: BeforeAfter,
+    validation: Option<BeforeAfter>,
+    standard: StandardSummary,
+    tilting_applied: bool,
+) -> CalibrateReport {
+    let params = fit.model.params();
+    let name = |c: usize| params.get(c).map_or_else(String::new, |p| p.name.clone());
+    let mut reported: Vec<usize> = fit.fitted.iter().chain(&fit.fixed).copied().collect();
+    reported.sort_unstable_by_key(|c| selection.iter().position(|s| s == c));
+    CalibrateReport {
+        method: method.to_string(),
+        calibration,
+        validation,
+        parameters: NamedValues(
+            reported
+                .iter()
+                .filter_map(|&c| params.get(c).map(|p| (p.name.clone(), p.value)))
+                .collect(),
+        ),
+        unidentifiable: fit.unidentifiable.clone(),
+        condition_number: fit.condition_number,
+        standard,
+        sigma: NamedValues(
+            fit.fitted
+                .iter()
+                .zip(&fit.sigma)
+                .map(|(&c, &s)| (name(c), s))
+                .collect(),
+        ),
+        fixed: fit.fixed.iter().map(|&c| name(c)).collect(),
+        rank: fit.rank,
+        iterations: fit.iterations,
+        converged: fit.converged,
+        tilting_applied,
+    }
 }
 
 /// Calibrates `nominal` on `cal` (and evaluates on `val`): the standard identification always
@@ -201,43 +236,24 @@ pub fn calibrate(
         ],
         None => [Vec::new(), Vec::new(), Vec::new()],
     };
-    let mut reported: Vec<usize> = chosen.fitted.iter().chain(&chosen.fixed).copied().collect();
-    reported.sort_unstable_by_key(|c| selection.iter().position(|s| s == c));
-    let report = CalibrateReport {
-        method: opts.method.as_str().to_string(),
-        calibration: BeforeAfter {
+    let report = fit_report(
+        &chosen,
+        &selection,
+        opts.method.as_str(),
+        BeforeAfter {
             before: Stats::from_errors(&cal_errors[0]),
             after: Stats::from_errors(&cal_errors[2]),
         },
-        validation: val.map(|_| BeforeAfter {
+        val.map(|_| BeforeAfter {
             before: Stats::from_errors(&val_errors[0]),
             after: Stats::from_errors(&val_errors[2]),
         }),
-        parameters: values_of(&chosen.model, &reported),
-        unidentifiable: chosen.unidentifiable.clone(),
-        condition_number: chosen.condition_number,
-        standard: StandardSummary {
+        StandardSummary {
             calibration: Stats::from_errors(&cal_errors[1]),
             validation: val.map(|_| Stats::from_errors(&val_errors[1])),
         },
-        sigma: NamedValues(
-            chosen
-                .fitted
-                .iter()
-                .zip(&chosen.sigma)
-                .map(|(&c, &s)| (chosen.model.params()[c].name.clone(), s))
-                .collect(),
-        ),
-        fixed: chosen
-            .fixed
-            .iter()
-            .map(|&c| nominal.params()[c].name.clone())
-            .collect(),
-        rank: chosen.rank,
-        iterations: chosen.iterations,
-        converged: chosen.converged,
-        tilting_applied: tilt,
-    };
+        tilt,
+    );
     Ok(Outcome {
         model: chosen.model,
         tilt,

@@ -22,7 +22,7 @@
 use nalgebra::{DVector, Matrix3};
 
 use super::error::CalibError;
-use super::problem::{position_errors, Poses};
+use super::problem::{param_vector, position_errors, set_params, Poses};
 use crate::model::{Model, Tilt, Unit};
 
 /// Settings of the influence-based identification.
@@ -92,14 +92,14 @@ pub fn fit_influence(
     let deviation: Vec<f64> = cols
         .iter()
         .map(|&c| {
-            if start.params()[c].unit == Unit::Deg {
+            if start.params().get(c).is_some_and(|p| p.unit == Unit::Deg) {
                 cfg.angular_deviation_deg
             } else {
                 cfg.linear_deviation_mm
             }
         })
         .collect();
-    let x0 = DVector::from_iterator(n, cols.iter().map(|&c| start.params()[c].value));
+    let x0 = param_vector(start, cols);
     let mut per_pose: Vec<DVector<f64>> = Vec::with_capacity(poses.len());
     let mut iterations = 0;
     let mut poses_converged = 0;
@@ -107,9 +107,7 @@ pub fn fit_influence(
     for (q, measured) in poses.q_deg.iter().zip(&poses.xyz_mm) {
         let mut x = x0.clone();
         for it in 0..=cfg.max_iterations {
-            for (&c, &v) in cols.iter().zip(x.iter()) {
-                model.set_param_at(c, v)?;
-            }
+            set_params(&mut model, cols, &x)?;
             let (fk, j) = model.param_jacobian(q, Tilt::Off, cols)?;
             let dp = measured - fk.position_mm;
             if dp.norm() < cfg.tolerance_mm {
@@ -152,9 +150,7 @@ pub fn fit_influence(
     let mut best: Option<(f64, Model, &'static str)> = None;
     for (cand, label) in [(mean, "mean"), (med, "median")] {
         let mut m = start.clone();
-        for (&c, &v) in cols.iter().zip(cand.iter()) {
-            m.set_param_at(c, v)?;
-        }
+        set_params(&mut m, cols, &cand)?;
         let e = position_errors(&m, poses, false)?;
         let mean_mm = e.iter().map(|v| v.norm()).sum::<f64>() / e.len() as f64;
         if best.as_ref().is_none_or(|(b, _, _)| mean_mm < *b) {

@@ -187,10 +187,138 @@ impl ScaledSvd {
         );
         &self.v * coef
     }
+
+    /// Gain ratio: the actual decrease of the cost over the decrease `-(Js y).r - |Js y|^2 / 2`
+    /// the linear model predicts for the scaled step `y` (1 when it predicts none).
+    fn gain_ratio(&self, y: &DVector<f64>, actual_decrease: f64) -> f64 {
+        let jy = {
+            let lin: DVector<f64> = self.v.transpose() * y;
+            lin.component_mul(&self.s)
+        };
+        let predicted = -(jy.dot(&self.ut_r)) - 0.5 * jy.norm_squared();
+        if predicted > 0.0 {
+            actual_decrease / predicted
+        } else {
+            1.0
+        }
+    }
+}
+
+/// Damping `lambda` and its growth factor `nu` (Nielsen 1999); `lambda = 0` is Gauss-Newton.
+struct Damping {
+    lambda: f64,
+    nu: f64,
+}
+
+impl Damping {
+    /// After a step that decreased the cost with gain ratio `rho`.
+    fn accepted(&mut self, rho: f64) {
+        if self.lambda > 0.0 {
+            self.lambda *= (1.0 - (2.0 * rho - 1.0).powi(3)).max(1.0 / 3.0);
+        }
+        self.nu = 2.0;
+    }
+
+    /// After a step that did not decrease the cost: more damping, or (Gauss-Newton) half the
+    /// step length `gn_scale`.
+    fn rejected(&mut self, gn_scale: &mut f64) {
+        if self.lambda > 0.0 {
+            self.lambda *= self.nu;
+            self.nu *= 2.0;
+        } else {
+            *gn_scale *= 0.5;
+        }
+    }
+}
+
+/// The problem with a count of its evaluations.
+struct Counted<'p, P> {
+    problem: &'p mut P,
+    evaluations: usize,
+}
+
+impl<P: Problem> Counted<'_, P> {
+    fn evaluate(
+        &mut self,
+        x: &DVector<f64>,
+        r: &mut DVector<f64>,
+        jac: Option<&mut DMatrix<f64>>,
+    ) -> Result<(), LmError<P::Error>> {
+        self.evaluations += 1;
+        self.problem.evaluate(x, r, jac).map_err(LmError::Problem)
+    }
+}
+
+/// A trial step that decreased the cost.
+struct Accepted {
+    x: DVector<f64>,
+    residuals: DVector<f64>,
+    cost: f64,
+    /// Norm of the scaled step.
+    step_norm: f64,
 }
 
 fn all_finite<'a>(it: impl IntoIterator<Item = &'a f64>) -> bool {
     it.into_iter().all(|v| v.is_finite())
+}
+
+/// Whether a scaled step of norm `step_norm` is negligible at a point of scaled norm `xs_norm`.
+fn negligible(step_norm: f64, xs_norm: f64, xtol: f64) -> bool {
+    step_norm <= xtol * (xs_norm + xtol)
+}
+
+/// Updates the column scaling `diag` (running max of the column norms, 1 for a zero column)
+/// with `jac`, and returns the scaled Jacobian `J D^-1`.
+fn scale_columns(jac: &DMatrix<f64>, diag: &mut DVector<f64>) -> DMatrix<f64> {
+    for (j, d) in diag.iter_mut().enumerate() {
+        let c = jac.column(j).norm();
+        *d = d.max(c);
+        if *d == 0.0 {
+            *d = 1.0;
+        }
+    }
+    let mut js = jac.clone();
+    for (j, d) in diag.iter().enumerate() {
+        js.column_mut(j).unscale_mut(*d);
+    }
+    js
+}
+
+/// Inner loop of an iteration: tries steps from `x` (cost `cost`), adapting the damping, until
+/// one decreases the cost. `None` when the step became negligible or 40 trials gave no
+/// decrease.
+fn find_decrease<P: Problem>(
+    problem: &mut Counted<'_, P>,
+    svd: &ScaledSvd,
+    damping: &mut Damping,
+    x: &DVector<f64>,
+    diag: &DVector<f64>,
+    cost: f64,
+    cfg: &LmConfig,
+) -> Result<Option<Accepted>, LmError<P::Error>> {
+    let mut r_try = DVector::zeros(problem.problem.n_residuals());
+    let xs_norm = x.component_mul(diag).norm();
+    let mut gn_scale = 1.0;
+    for _ in 0..40 {
+        let y = svd.step(damping.lambda, cfg.rank_rtol) * gn_scale;
+        if negligible(y.norm(), xs_norm, cfg.xtol) {
+            return Ok(None);
+        }
+        let x_try = x + y.component_div(diag);
+        problem.evaluate(&x_try, &mut r_try, None)?;
+        let cost_try = 0.5 * r_try.norm_squared();
+        if cost_try.is_finite() && cost_try < cost {
+            damping.accepted(svd.gain_ratio(&y, cost - cost_try));
+            return Ok(Some(Accepted {
+                x: x_try,
+                residuals: r_try,
+                cost: cost_try,
+                step_norm: y.norm(),
+            }));
+        }
+        damping.rejected(&mut gn_scale);
+    }
+    Ok(None)
 }
 
 /// Solves `problem` from `x0` with Levenberg-Marquardt (or Gauss-Newton, see
@@ -213,39 +341,27 @@ pub fn solve<P: Problem>(
             params: n,
         });
     }
+    let mut problem = Counted {
+        problem,
+        evaluations: 0,
+    };
     let mut x = x0;
     let mut r = DVector::zeros(m);
     let mut jac = DMatrix::zeros(m, n);
-    problem
-        .evaluate(&x, &mut r, Some(&mut jac))
-        .map_err(LmError::Problem)?;
-    let mut evaluations = 1;
+    problem.evaluate(&x, &mut r, Some(&mut jac))?;
     if !all_finite(r.iter()) || !all_finite(jac.iter()) {
         return Err(LmError::NonFiniteStart);
     }
     let mut cost = 0.5 * r.norm_squared();
     let initial_cost = cost;
     let mut diag: DVector<f64> = DVector::from_element(n, 0.0);
-    let mut lambda = -1.0;
-    let mut nu = 2.0;
-    let mut r_try = DVector::zeros(m);
+    let mut damping: Option<Damping> = None;
     let mut iterations = 1;
     let termination = loop {
         if cost == 0.0 {
             break Termination::GradientConverged;
         }
-        // Column scaling: running max of the column norms (1 for a zero column).
-        for (j, d) in diag.iter_mut().enumerate() {
-            let c = jac.column(j).norm();
-            *d = d.max(c);
-            if *d == 0.0 {
-                *d = 1.0;
-            }
-        }
-        let mut js = jac.clone();
-        for (j, d) in diag.iter().enumerate() {
-            js.column_mut(j).unscale_mut(*d);
-        }
+        let js = scale_columns(&jac, &mut diag);
         let grad_inf = (js.transpose() * &r).amax() / r.norm();
         if grad_inf < cfg.gtol {
             break Termination::GradientConverged;
@@ -253,70 +369,27 @@ pub fn solve<P: Problem>(
         let Some(svd) = ScaledSvd::new(js, &r) else {
             break Termination::NoFurtherDecrease;
         };
-        if lambda < 0.0 {
-            lambda = cfg.initial_damping * svd.max_sv().powi(2);
-        }
-        let xs_norm = x.component_mul(&diag).norm();
-        // Inner loop: find a damping value that decreases the cost.
-        let mut accepted = None;
-        let mut gn_scale = 1.0;
-        for _ in 0..40 {
-            let y = svd.step(lambda, cfg.rank_rtol) * gn_scale;
-            let dx = y.component_div(&diag);
-            if y.norm() <= cfg.xtol * (xs_norm + cfg.xtol) {
-                break;
-            }
-            let x_try = &x + &dx;
-            problem
-                .evaluate(&x_try, &mut r_try, None)
-                .map_err(LmError::Problem)?;
-            evaluations += 1;
-            let cost_try = 0.5 * r_try.norm_squared();
-            if cost_try.is_finite() && cost_try < cost {
-                // Gain ratio rho = actual / predicted decrease.
-                let jy = {
-                    let lin: DVector<f64> = svd.v.transpose() * &y;
-                    lin.component_mul(&svd.s)
-                };
-                let predicted = -(jy.dot(&svd.ut_r)) - 0.5 * jy.norm_squared();
-                let rho = if predicted > 0.0 {
-                    (cost - cost_try) / predicted
-                } else {
-                    1.0
-                };
-                if lambda > 0.0 {
-                    lambda *= (1.0 - (2.0 * rho - 1.0).powi(3)).max(1.0 / 3.0);
-                }
-                nu = 2.0;
-                accepted = Some((x_try, cost_try, y.norm()));
-                break;
-            }
-            if lambda > 0.0 {
-                lambda *= nu;
-                nu *= 2.0;
-            } else {
-                gn_scale *= 0.5;
-            }
-        }
-        let Some((x_new, cost_new, step_norm)) = accepted else {
+        let damping = damping.get_or_insert_with(|| Damping {
+            lambda: cfg.initial_damping * svd.max_sv().powi(2),
+            nu: 2.0,
+        });
+        let found = find_decrease(&mut problem, &svd, damping, &x, &diag, cost, cfg)?;
+        let Some(step) = found else {
             break if iterations == 1 && cost == initial_cost {
                 Termination::NoFurtherDecrease
             } else {
                 Termination::StepConverged
             };
         };
-        let rel_decrease = (cost - cost_new) / cost;
-        x = x_new;
-        std::mem::swap(&mut r, &mut r_try);
-        cost = cost_new;
-        problem
-            .evaluate(&x, &mut r, Some(&mut jac))
-            .map_err(LmError::Problem)?;
-        evaluations += 1;
+        let rel_decrease = (cost - step.cost) / cost;
+        x = step.x;
+        r = step.residuals;
+        cost = step.cost;
+        problem.evaluate(&x, &mut r, Some(&mut jac))?;
         if rel_decrease < cfg.ftol {
             break Termination::CostConverged;
         }
-        if step_norm <= cfg.xtol * (x.component_mul(&diag).norm() + cfg.xtol) {
+        if negligible(step.step_norm, x.component_mul(&diag).norm(), cfg.xtol) {
             break Termination::StepConverged;
         }
         if iterations >= cfg.max_iterations {
@@ -331,7 +404,7 @@ pub fn solve<P: Problem>(
         cost,
         initial_cost,
         iterations,
-        evaluations,
+        evaluations: problem.evaluations,
         termination,
     })
 }

@@ -86,38 +86,55 @@ pub fn position_errors(
         .collect()
 }
 
-/// Geometric identification: unknowns are the values of the parameters `cols` (model indices,
-/// parameter units); residuals are `model - measured` (x, y, z of every pose, mm).
-pub struct PositionProblem<'a> {
-    model: Model,
-    poses: &'a Poses,
-    cols: Vec<usize>,
-    tilt: bool,
+/// The values of the parameters `cols` of `model`, as a vector (NaN for an index that is not a
+/// parameter: writing it back then fails with [`ModelError::ParamIndex`]).
+pub fn param_vector(model: &Model, cols: &[usize]) -> DVector<f64> {
+    let params = model.params();
+    DVector::from_iterator(
+        cols.len(),
+        cols.iter()
+            .map(|&c| params.get(c).map_or(f64::NAN, |p| p.value)),
+    )
 }
 
-impl<'a> PositionProblem<'a> {
-    /// A problem on a copy of `model` (all other parameters stay at their values in `model`).
-    pub fn new(model: &Model, poses: &'a Poses, cols: Vec<usize>, tilt: bool) -> Self {
+/// Writes `x` into the parameters `cols` of `model` (in order).
+pub fn set_params(model: &mut Model, cols: &[usize], x: &DVector<f64>) -> Result<(), ModelError> {
+    for (&c, &v) in cols.iter().zip(x.iter()) {
+        model.set_param_at(c, v)?;
+    }
+    Ok(())
+}
+
+/// The unknowns of an identification: a copy of a model whose parameters `cols` (model
+/// indices, parameter units) are the unknowns; all others stay at their values.
+#[derive(Debug, Clone)]
+pub struct Unknowns {
+    model: Model,
+    cols: Vec<usize>,
+}
+
+impl Unknowns {
+    /// The parameters `cols` of a copy of `model`.
+    pub fn new(model: &Model, cols: Vec<usize>) -> Self {
         Self {
             model: model.clone(),
-            poses,
             cols,
-            tilt,
         }
     }
 
-    /// Current values of the unknowns in the model.
-    pub fn start(&self) -> DVector<f64> {
-        let v = self.model.param_values();
-        DVector::from_iterator(self.cols.len(), self.cols.iter().map(|&c| v[c]))
+    /// The model with the unknowns last set.
+    pub fn model(&self) -> &Model {
+        &self.model
+    }
+
+    /// The unknowns' model indices.
+    pub fn cols(&self) -> &[usize] {
+        &self.cols
     }
 
     /// Writes `x` into the model.
     pub fn set(&mut self, x: &DVector<f64>) -> Result<(), ModelError> {
-        for (&c, &v) in self.cols.iter().zip(x.iter()) {
-            self.model.set_param_at(c, v)?;
-        }
-        Ok(())
+        set_params(&mut self.model, &self.cols, x)
     }
 
     /// The model with the unknowns last set.
@@ -126,11 +143,43 @@ impl<'a> PositionProblem<'a> {
     }
 }
 
+/// A least-squares [`Problem`] whose unknowns are parameters of a model ([`Unknowns`]), as
+/// solved by [`super::fit::fit_problem`].
+pub trait ModelProblem: Problem<Error = ModelError> {
+    /// Gives the model and its unknowns back.
+    fn into_unknowns(self) -> Unknowns;
+}
+
+/// Geometric identification: unknowns are the values of the parameters `cols` (model indices,
+/// parameter units); residuals are `model - measured` (x, y, z of every pose, mm).
+pub struct PositionProblem<'a> {
+    unknowns: Unknowns,
+    poses: &'a Poses,
+    tilt: bool,
+}
+
+impl<'a> PositionProblem<'a> {
+    /// A problem on a copy of `model` (all other parameters stay at their values in `model`).
+    pub fn new(model: &Model, poses: &'a Poses, cols: Vec<usize>, tilt: bool) -> Self {
+        Self {
+            unknowns: Unknowns::new(model, cols),
+            poses,
+            tilt,
+        }
+    }
+}
+
+impl ModelProblem for PositionProblem<'_> {
+    fn into_unknowns(self) -> Unknowns {
+        self.unknowns
+    }
+}
+
 impl Problem for PositionProblem<'_> {
     type Error = ModelError;
 
     fn n_params(&self) -> usize {
-        self.cols.len()
+        self.unknowns.cols.len()
     }
 
     fn n_residuals(&self) -> usize {
@@ -143,26 +192,47 @@ impl Problem for PositionProblem<'_> {
         r: &mut DVector<f64>,
         jac: Option<&mut DMatrix<f64>>,
     ) -> Result<(), ModelError> {
-        self.set(x)?;
-        let tilt = tilt_mode(self.tilt);
-        match jac {
-            Some(jac) => {
-                for (i, (q, m)) in self.poses.q_deg.iter().zip(&self.poses.xyz_mm).enumerate() {
-                    let (fk, j) = self.model.param_jacobian(q, tilt, &self.cols)?;
-                    r.fixed_rows_mut::<3>(3 * i)
-                        .copy_from(&(fk.position_mm - m));
-                    jac.view_mut((3 * i, 0), (3, self.cols.len())).copy_from(&j);
-                }
-            }
-            None => {
-                for (i, (q, m)) in self.poses.q_deg.iter().zip(&self.poses.xyz_mm).enumerate() {
-                    let p = self.model.position_mm(q, tilt)?;
-                    r.fixed_rows_mut::<3>(3 * i).copy_from(&(p - m));
-                }
+        self.unknowns.set(x)?;
+        position_rows(
+            &self.unknowns.model,
+            self.poses,
+            &self.unknowns.cols,
+            self.tilt,
+            r,
+            jac,
+        )
+    }
+}
+
+/// Residuals `model - measured` of every pose (3 rows per pose, mm) into `r`, and with `jac`
+/// their Jacobian wrt the parameters `cols` (`r` and `jac` have `3 * poses.len()` rows).
+fn position_rows(
+    model: &Model,
+    poses: &Poses,
+    cols: &[usize],
+    tilt: bool,
+    r: &mut DVector<f64>,
+    jac: Option<&mut DMatrix<f64>>,
+) -> Result<(), ModelError> {
+    let tilt = tilt_mode(tilt);
+    let rows = poses.q_deg.iter().zip(&poses.xyz_mm).enumerate();
+    match jac {
+        Some(jac) => {
+            for (i, (q, m)) in rows {
+                let (fk, j) = model.param_jacobian(q, tilt, cols)?;
+                r.fixed_rows_mut::<3>(3 * i)
+                    .copy_from(&(fk.position_mm - m));
+                jac.view_mut((3 * i, 0), (3, cols.len())).copy_from(&j);
             }
         }
-        Ok(())
+        None => {
+            for (i, (q, m)) in rows {
+                let p = model.position_mm(q, tilt)?;
+                r.fixed_rows_mut::<3>(3 * i).copy_from(&(p - m));
+            }
+        }
     }
+    Ok(())
 }
 
 /// The stacked identification Jacobian (3 rows per pose) of `model` wrt `cols`.
@@ -172,10 +242,15 @@ pub fn stacked_jacobian(
     cols: &[usize],
     tilt: bool,
 ) -> Result<DMatrix<f64>, ModelError> {
-    let mut jac = DMatrix::zeros(3 * poses.len(), cols.len());
-    for (i, q) in poses.q_deg.iter().enumerate() {
-        let (_, j) = model.param_jacobian(q, tilt_mode(tilt), cols)?;
-        jac.view_mut((3 * i, 0), (3, cols.len())).copy_from(&j);
-    }
+    let rows = 3 * poses.len();
+    let mut jac = DMatrix::zeros(rows, cols.len());
+    position_rows(
+        model,
+        poses,
+        cols,
+        tilt,
+        &mut DVector::zeros(rows),
+        Some(&mut jac),
+    )?;
     Ok(jac)
 }

@@ -19,13 +19,13 @@
 
 use nalgebra::{DMatrix, DVector, Vector3};
 
-use super::calibrate::{resolve_selection, CalibrateOptions};
+use super::calibrate::{fit_report, resolve_selection, CalibrateOptions};
 use super::error::CalibError;
-use super::fit::{parameter_sigmas, Fit};
-use super::identifiability::analyse;
-use super::lm::{solve, LmConfig, Problem};
-use super::report::{BeforeAfter, CalibrateReport, NamedValues, StandardSummary};
-use super::stats::Stats;
+use super::fit::{fit_problem, Fit};
+use super::lm::{LmConfig, Problem};
+use super::problem::{ModelProblem, Unknowns};
+use super::report::{BeforeAfter, CalibrateReport, StandardSummary};
+use super::stats::{self, Stats};
 use crate::fusion::motion::moments_in_motion;
 use crate::fusion::FusedSample;
 use crate::model::{Model, ModelError, Tilt};
@@ -102,6 +102,19 @@ impl ProjectedData {
         Ok(self)
     }
 
+    /// The model's tool point at every sample (mm).
+    fn positions_mm(
+        &self,
+        model: &Model,
+        mode: SampleTilt,
+    ) -> Result<Vec<Vector3<f64>>, ModelError> {
+        self.q_deg
+            .iter()
+            .enumerate()
+            .map(|(k, q)| model.position_mm(q, self.tilt(k, mode)))
+            .collect()
+    }
+
     fn tilt(&self, k: usize, mode: SampleTilt) -> Tilt<'_> {
         match mode {
             SampleTilt::Off => Tilt::Off,
@@ -120,10 +133,7 @@ pub fn measured_errors(
     data: &ProjectedData,
     tilt: SampleTilt,
 ) -> Result<Vec<Vector3<f64>>, ModelError> {
-    let mut pos = Vec::with_capacity(data.len());
-    for (k, q) in data.q_deg.iter().enumerate() {
-        pos.push(model.position_mm(q, data.tilt(k, tilt))?);
-    }
+    let pos = data.positions_mm(model, tilt)?;
     let mut err = vec![Vector3::zeros(); data.len()];
     for r in &data.rows {
         if let (Some(e), Some(p)) = (err.get_mut(r.sample), pos.get(r.sample)) {
@@ -158,9 +168,8 @@ pub fn projected_jacobian(
 /// The identification on projected measurements as a least-squares [`Problem`]: unknowns are
 /// the parameters `cols`, residuals `d . p_model - value` (mm).
 pub struct ProjectedProblem<'a> {
-    model: Model,
+    unknowns: Unknowns,
     data: &'a ProjectedData,
-    cols: Vec<usize>,
     tilt: SampleTilt,
 }
 
@@ -168,30 +177,16 @@ impl<'a> ProjectedProblem<'a> {
     /// A problem on a copy of `model`.
     pub fn new(model: &Model, data: &'a ProjectedData, cols: Vec<usize>, tilt: SampleTilt) -> Self {
         Self {
-            model: model.clone(),
+            unknowns: Unknowns::new(model, cols),
             data,
-            cols,
             tilt,
         }
     }
+}
 
-    /// Current values of the unknowns.
-    pub fn start(&self) -> DVector<f64> {
-        let v = self.model.param_values();
-        DVector::from_iterator(self.cols.len(), self.cols.iter().map(|&c| v[c]))
-    }
-
-    /// Writes `x` into the model.
-    pub fn set(&mut self, x: &DVector<f64>) -> Result<(), ModelError> {
-        for (&c, &v) in self.cols.iter().zip(x.iter()) {
-            self.model.set_param_at(c, v)?;
-        }
-        Ok(())
-    }
-
-    /// The model with the unknowns last set.
-    pub fn into_model(self) -> Model {
-        self.model
+impl ModelProblem for ProjectedProblem<'_> {
+    fn into_unknowns(self) -> Unknowns {
+        self.unknowns
     }
 }
 
@@ -199,7 +194,7 @@ impl Problem for ProjectedProblem<'_> {
     type Error = ModelError;
 
     fn n_params(&self) -> usize {
-        self.cols.len()
+        self.unknowns.cols().len()
     }
 
     fn n_residuals(&self) -> usize {
@@ -212,29 +207,22 @@ impl Problem for ProjectedProblem<'_> {
         r: &mut DVector<f64>,
         jac: Option<&mut DMatrix<f64>>,
     ) -> Result<(), ModelError> {
-        self.set(x)?;
-        let mut pos = Vec::with_capacity(self.data.len());
-        for (k, q) in self.data.q_deg.iter().enumerate() {
-            pos.push(self.model.position_mm(q, self.data.tilt(k, self.tilt))?);
-        }
-        for (i, row) in self.data.rows.iter().enumerate() {
-            r[i] = row.direction.dot(&pos[row.sample]) - row.value_mm;
+        self.unknowns.set(x)?;
+        let model = self.unknowns.model();
+        for (ri, v) in r.iter_mut().zip(residuals(model, self.data, self.tilt)?) {
+            *ri = v;
         }
         if let Some(jac) = jac {
-            jac.copy_from(&projected_jacobian(
-                &self.model,
-                self.data,
-                &self.cols,
-                self.tilt,
-            )?);
+            let cols = self.unknowns.cols();
+            jac.copy_from(&projected_jacobian(model, self.data, cols, self.tilt)?);
         }
         Ok(())
     }
 }
 
-/// Identifies the parameters `selection` of `start` from projected measurements (the same steps
-/// as [`super::fit::fit_parameters`]: identifiability at the start, LM on the identifiable
-/// parameters, sigmas and condition number at the solution).
+/// Identifies the parameters `selection` of `start` from projected measurements
+/// ([`super::fit::fit_problem`] on [`ProjectedProblem`]: identifiability at the start, LM on
+/// the identifiable parameters, sigmas and condition number at the solution).
 pub fn fit_projected(
     start: &Model,
     data: &ProjectedData,
@@ -246,34 +234,15 @@ pub fn fit_projected(
     if data.is_empty() {
         return Err(CalibError::NoPoses);
     }
-    let names: Vec<&str> = start.param_names().collect();
     let jac0 = projected_jacobian(start, data, selection, tilt)?;
-    let id = analyse(&jac0, rtol);
-    let sel_names: Vec<&str> = selection.iter().map(|&c| names[c]).collect();
-    let unidentifiable = id.combinations.iter().map(|c| c.name(&sel_names)).collect();
-    let fitted: Vec<usize> = id.kept.iter().map(|&k| selection[k]).collect();
-    let fixed: Vec<usize> = id.fixed.iter().map(|&k| selection[k]).collect();
-    if fitted.is_empty() {
-        return Err(CalibError::NothingToFit);
-    }
-    let mut problem = ProjectedProblem::new(start, data, fitted.clone(), tilt);
-    let x0 = problem.start();
-    let rep = solve(&mut problem, x0, lm).map_err(CalibError::from_lm)?;
-    problem.set(&rep.x)?;
-    let model = problem.into_model();
-    let sigma = parameter_sigmas(&rep.jacobian, rep.residuals.norm_squared(), rtol);
-    let condition_number = analyse(&rep.jacobian, rtol).condition_number;
-    Ok(Fit {
-        model,
-        fitted,
-        fixed,
-        unidentifiable,
-        sigma,
-        condition_number,
-        rank: id.rank,
-        iterations: rep.iterations,
-        converged: rep.termination.converged(),
-    })
+    fit_problem(
+        start,
+        selection,
+        &jac0,
+        |cols| ProjectedProblem::new(start, data, cols, tilt),
+        lm,
+        rtol,
+    )
 }
 
 /// Residuals `d . p_model - value` of every measurement (mm).
@@ -282,10 +251,7 @@ pub fn residuals(
     data: &ProjectedData,
     tilt: SampleTilt,
 ) -> Result<Vec<f64>, ModelError> {
-    let mut pos = Vec::with_capacity(data.len());
-    for (k, q) in data.q_deg.iter().enumerate() {
-        pos.push(model.position_mm(q, data.tilt(k, tilt))?);
-    }
+    let pos = data.positions_mm(model, tilt)?;
     Ok(data
         .rows
         .iter()
@@ -293,10 +259,9 @@ pub fn residuals(
         .collect())
 }
 
-/// Integrated autocorrelation time `1 + 2 sum_k rho_k` of the residuals, each measurement
-/// slot (the first, second, ... projection of a sample: across the path, out of plane) taken as
-/// a series in sample order; the sum stops at the first lag whose correlation is below 0.05 (or
-/// at a tenth of the series). The largest over the slots; at least 1. Residuals of a traced
+/// Integrated autocorrelation time ([`stats::autocorrelation_time`]) of the residuals, each
+/// measurement slot (the first, second, ... projection of a sample: across the path, out of
+/// plane) taken as a series in sample order. The largest over the slots; at least 1. Residuals of a traced
 /// path are serially correlated (the tracer's error and unmodelled effects vary slowly along
 /// the path), so `sqrt` of this inflates the white-noise parameter sigmas.
 pub fn autocorrelation_time(data: &ProjectedData, r: &[f64]) -> f64 {
@@ -310,37 +275,17 @@ pub fn autocorrelation_time(data: &ProjectedData, r: &[f64]) -> f64 {
         slot_of.push(c);
     }
     let slots = slot_of.iter().copied().max().map_or(0, |m| m + 1);
-    let mut tau_max: f64 = 1.0;
-    for slot in 0..slots {
-        let x: Vec<f64> = r
-            .iter()
-            .zip(&slot_of)
-            .filter(|(_, &s)| s == slot)
-            .map(|(v, _)| *v)
-            .collect();
-        let n = x.len();
-        if n < 20 {
-            continue;
-        }
-        let mean = x.iter().sum::<f64>() / n as f64;
-        let var = x.iter().map(|v| (v - mean).powi(2)).sum::<f64>() / n as f64;
-        if var <= 0.0 {
-            continue;
-        }
-        let mut tau = 1.0;
-        for lag in 1..n / 10 {
-            let c = (0..n - lag)
-                .map(|i| (x[i] - mean) * (x[i + lag] - mean))
-                .sum::<f64>()
-                / (n as f64 * var);
-            if c < 0.05 {
-                break;
-            }
-            tau += 2.0 * c;
-        }
-        tau_max = tau_max.max(tau);
-    }
-    tau_max
+    (0..slots)
+        .map(|slot| {
+            let series: Vec<f64> = r
+                .iter()
+                .zip(&slot_of)
+                .filter(|(_, &s)| s == slot)
+                .map(|(v, _)| *v)
+                .collect();
+            stats::autocorrelation_time(&series)
+        })
+        .fold(1.0, f64::max)
 }
 
 /// Default outlier threshold of [`fit_projected_robust`], in robust standard deviations.
@@ -462,47 +407,25 @@ pub fn calibrate_projected(
         measured_errors(&standard.model, data, SampleTilt::Off)?,
         measured_errors(&chosen.model, &moved, tilt)?,
     ];
-    let mut reported: Vec<usize> = chosen.fitted.iter().chain(&chosen.fixed).copied().collect();
-    reported.sort_unstable_by_key(|c| selection.iter().position(|s| s == c));
-    let name = |c: usize| chosen.model.params()[c].name.clone();
-    let report = CalibrateReport {
-        method: if tilt == SampleTilt::Off {
+    let report = fit_report(
+        &chosen,
+        &selection,
+        if tilt == SampleTilt::Off {
             "standard"
         } else {
             "tilting"
-        }
-        .to_string(),
-        calibration: BeforeAfter {
+        },
+        BeforeAfter {
             before: Stats::from_errors(&errors[0]),
             after: Stats::from_errors(&errors[2]),
         },
-        validation: None,
-        parameters: NamedValues(
-            reported
-                .iter()
-                .map(|&c| (name(c), chosen.model.params()[c].value))
-                .collect(),
-        ),
-        unidentifiable: chosen.unidentifiable.clone(),
-        condition_number: chosen.condition_number,
-        standard: StandardSummary {
+        None,
+        StandardSummary {
             calibration: Stats::from_errors(&errors[1]),
             validation: None,
         },
-        sigma: NamedValues(
-            chosen
-                .fitted
-                .iter()
-                .zip(&chosen.sigma)
-                .map(|(&c, &s)| (name(c), s))
-                .collect(),
-        ),
-        fixed: chosen.fixed.iter().map(|&c| name(c)).collect(),
-        rank: chosen.rank,
-        iterations: chosen.iterations,
-        converged: chosen.converged,
-        tilting_applied: tilt != SampleTilt::Off,
-    };
+        tilt != SampleTilt::Off,
+    );
     Ok(ProjectedOutcome {
         model: chosen.model.clone(),
         tilt,

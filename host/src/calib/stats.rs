@@ -103,7 +103,7 @@ pub fn autocorrelation_time(series: &[f64]) -> f64 {
     }
     let mean = series.iter().sum::<f64>() / n as f64;
     let var = series.iter().map(|v| (v - mean).powi(2)).sum::<f64>() / n as f64;
-    if !(var > 0.0) || !var.is_finite() {
+    if var.is_nan() || var <= 0.0 || var.is_infinite() {
         return 1.0;
     }
     let mut tau = 1.0;

@@ -3,7 +3,8 @@
 //! [--set NAME=VALUE ...] [--params a,b,c] [--base]`: identifies the model's parameters and
 //! prints a thesis-table-4.5 style summary.
 //!
-//! `rigctl calibrate --samples FUSED.csv [--method standard|tilting] [--errors-csv FILE] ...`:
+//! `rigctl calibrate --samples FUSED.csv [--method standard|tilting] [--errors-csv FILE]
+//! [--plot FILE.svg] ...`:
 //! the same from the partial measurements of the low-cost rig (`rigctl fuse` output,
 //! `rigctl::calib::projected`); with `tilting` the declared tilting is driven by the moments in
 //! motion along the logged joint trajectory.
@@ -15,8 +16,9 @@ use nalgebra::Vector3;
 use rigctl::calib::stats::AxisExtremes;
 use rigctl::calib::{calibrate, CalibrateOptions, Method, Poses};
 use rigctl::io::atomic::write_bytes_atomic;
-use rigctl::model::{choose_model, ModelChoice};
+use rigctl::model::KATANA_PENCIL_TOOL_MM;
 
+use super::model_args::ModelArgs;
 use super::CliError;
 
 #[derive(clap::Args, Debug)]
@@ -32,6 +34,10 @@ pub struct Args {
     /// With --samples: write the per-sample measured errors before/after (CSV).
     #[arg(long, value_name = "ERRORS.csv", requires = "samples")]
     pub errors_csv: Option<PathBuf>,
+    /// With --samples: plot the path error along the drawn path before calibration, after the
+    /// standard one and after the chosen method (thesis fig. 5.12 style, SVG).
+    #[arg(long, value_name = "FILE.svg", requires = "samples")]
+    pub plot: Option<PathBuf>,
     /// Held-out poses, only evaluated.
     #[arg(long, value_name = "VAL.csv")]
     pub validate: Option<PathBuf>,
@@ -44,18 +50,9 @@ pub struct Args {
     /// Write the calibrated model (TOML, loadable with --model).
     #[arg(long, value_name = "MODEL.toml")]
     pub out: Option<PathBuf>,
-    /// Built-in robot: katana450 (default) or ur5.
-    #[arg(long, value_name = "NAME", conflicts_with = "model")]
-    pub robot: Option<String>,
-    /// Model file (TOML), e.g. one written by `calibrate --out`.
-    #[arg(long, value_name = "FILE.toml")]
-    pub model: Option<PathBuf>,
-    /// Katana tool length d5 in mm (200 bare, 330 with the pencil holder).
-    #[arg(long, value_name = "L")]
-    pub tool_mm: Option<f64>,
-    /// Set a nominal parameter before calibrating (deg / mm), e.g. tool_dz=31; repeatable.
-    #[arg(long = "set", value_name = "NAME=VALUE")]
-    pub sets: Vec<String>,
+    // The model choice: --robot NAME | --model FILE.toml, --tool-mm L, --set NAME=VALUE.
+    #[command(flatten)]
+    pub model: ModelArgs,
     /// Parameters to identify, comma separated (default: the Katana's 12 geometric ones, or for
     /// other robots all joint offsets, twists, lengths and the tool point).
     #[arg(long, value_name = "a,b,c", value_delimiter = ',')]
@@ -81,12 +78,7 @@ pub fn run(args: Args) -> Result<(), CliError> {
         .poses
         .as_deref()
         .ok_or_else(|| CliError::bad_input("--poses or --samples is required"))?;
-    let model = choose_model(&ModelChoice {
-        robot: args.robot.as_deref(),
-        model_file: args.model.as_deref(),
-        tool_mm: args.tool_mm,
-        sets: &args.sets,
-    })?;
+    let model = args.model.choose()?;
     let cal = Poses::read(poses, &model)?;
     let val = args
         .validate
@@ -168,16 +160,9 @@ fn summary(o: &rigctl::calib::Outcome, with_val: bool) -> String {
 /// `calibrate --samples`: identification from partial (projected) measurements.
 fn run_samples(args: &Args, samples: &std::path::Path) -> Result<(), CliError> {
     use rigctl::calib::projected::{calibrate_projected, errors_csv, ProjectedData, SampleTilt};
-    let tool_mm = match (&args.model, args.tool_mm) {
-        (None, None) => Some(rigctl::model::KATANA_PENCIL_TOOL_MM),
-        (_, t) => t,
-    };
-    let model = choose_model(&ModelChoice {
-        robot: args.robot.as_deref(),
-        model_file: args.model.as_deref(),
-        tool_mm,
-        sets: &args.sets,
-    })?;
+    let model = args
+        .model
+        .choose_with_default_tool(Some(KATANA_PENCIL_TOOL_MM))?;
     let fused = rigctl::fusion::read_fused(samples, model.n_joints())?;
     let data = ProjectedData::from_fused(&fused);
     let (data, tilt) = match args.method {
@@ -205,9 +190,14 @@ fn run_samples(args: &Args, samples: &std::path::Path) -> Result<(), CliError> {
     if let Some(path) = &args.out {
         outcome.model.write_file(path)?;
     }
+    let csv = errors_csv(&fused, &outcome.errors);
     if let Some(path) = &args.errors_csv {
-        let text = errors_csv(&fused, &outcome.errors);
-        write_bytes_atomic(path, text.as_bytes())?;
+        write_bytes_atomic(path, csv.as_bytes())?;
+    }
+    if let Some(path) = &args.plot {
+        let errors = rigctl::plot::path_errors::parse_path_errors(&csv, "calibrate --samples")?;
+        let svg = rigctl::plot::path_errors::path_errors_svg(&errors)?;
+        write_bytes_atomic(path, svg.as_bytes())?;
     }
     let mut s = table(
         "Fused samples, measured components only (|dP| = sqrt(dev_u^2 + dev_n^2); along the path not measured)",

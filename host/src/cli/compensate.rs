@@ -5,9 +5,10 @@
 use std::path::PathBuf;
 
 use rigctl::compensate::{compensate, read_path, write_joints_csv};
-use rigctl::model::{choose_model, preset, ModelChoice};
+use rigctl::model::preset;
 use rigctl::sim::ik::IkTilt;
 
+use super::model_args::ModelArgs;
 use super::CliError;
 
 #[derive(clap::Args, Debug)]
@@ -15,18 +16,9 @@ pub struct Args {
     /// Desired path: columns x,y,z (mm, frame R), optional ax,ay,az (tool axis) and t (s).
     #[arg(long, value_name = "PATH.csv")]
     pub path: PathBuf,
-    /// Built-in robot: katana450 (default).
-    #[arg(long, value_name = "NAME", conflicts_with = "model")]
-    pub robot: Option<String>,
-    /// Calibrated model file (TOML), e.g. written by `calibrate --out` or `joints --out`.
-    #[arg(long, value_name = "FILE.toml")]
-    pub model: Option<PathBuf>,
-    /// Katana tool length d5 in mm (preset only).
-    #[arg(long, value_name = "L")]
-    pub tool_mm: Option<f64>,
-    /// Override a model parameter, e.g. payload_kg=0.5; repeatable.
-    #[arg(long = "set", value_name = "NAME=VALUE")]
-    pub sets: Vec<String>,
+    // The model choice: --robot NAME | --model FILE.toml, --tool-mm L, --set NAME=VALUE.
+    #[command(flatten)]
+    pub model: ModelArgs,
     /// Solve with static joint tilting (the default; accepted for explicitness).
     #[arg(long, overrides_with = "no_tilt")]
     pub tilt: bool,
@@ -42,12 +34,7 @@ pub struct Args {
 }
 
 pub fn run(args: Args) -> Result<(), CliError> {
-    let model = choose_model(&ModelChoice {
-        robot: args.robot.as_deref(),
-        model_file: args.model.as_deref(),
-        tool_mm: args.tool_mm,
-        sets: &args.sets,
-    })?;
+    let model = args.model.choose()?;
     let points = read_path(&args.path)?;
     let nominal = if args.no_nominal {
         None

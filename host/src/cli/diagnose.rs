@@ -2,26 +2,37 @@
 //! [--plots DIR] [--robot NAME | --model FILE.toml] [--tool-mm L] [--set NAME=VALUE ...]`:
 //! fits the declared model, adds the missing effects the data establish (see
 //! `rigctl::diagnose`), prints a table, and writes the JSON report, the extended model and plots.
+//!
+//! The low-cost rig's partial measurements work the same way: `--samples FUSED.csv`
+//! (repeatable; `rigctl fuse` output, with or without `--poses`) for the calibration set, and
+//! `--validate` takes a pose file or a fused file (recognised by its `# rigctl-fused/1` line).
 
 use std::fmt::Write as _;
-use std::path::PathBuf;
+use std::path::{Path, PathBuf};
 
 use rigctl::diagnose::data::Dataset;
 use rigctl::diagnose::plots::write_plots;
 use rigctl::diagnose::{diagnose, DiagnoseOptions};
 use rigctl::io::atomic::write_bytes_atomic;
-use rigctl::model::{choose_model, ModelChoice};
+use rigctl::model::KATANA_PENCIL_TOOL_MM;
 
+use super::model_args::ModelArgs;
 use super::CliError;
 
 #[derive(clap::Args, Debug)]
 pub struct Args {
     /// Calibration poses (q1..qN, x, y, z [, t]).
-    #[arg(long, value_name = "CAL.csv")]
-    pub poses: PathBuf,
-    /// Validation poses (held out; reported before/after every effect).
-    #[arg(long, value_name = "VAL.csv")]
-    pub validate: PathBuf,
+    #[arg(long, value_name = "CAL.csv", required_unless_present = "samples")]
+    pub poses: Option<PathBuf>,
+    /// Calibration samples of the low-cost rig (`rigctl fuse` output: only the components
+    /// across the path and out of the sheet are measured); repeatable, one file per sheet.
+    /// Without --model the Katana's tool length defaults to 330 mm (the pencil holder).
+    #[arg(long = "samples", value_name = "FUSED.csv")]
+    pub samples: Vec<PathBuf>,
+    /// Held-out set (reported before/after every effect): a pose file, or a fused file of
+    /// another sheet (repeatable).
+    #[arg(long, value_name = "VAL.csv", required = true)]
+    pub validate: Vec<PathBuf>,
     /// Write the JSON report (FORMATS.md "diagnose --json").
     #[arg(long, value_name = "OUT.json")]
     pub json: Option<PathBuf>,
@@ -31,32 +42,44 @@ pub struct Args {
     /// Write SVG plots of the residual against the regressor of every added effect.
     #[arg(long, value_name = "DIR")]
     pub plots: Option<PathBuf>,
-    /// Built-in robot: katana450 (default) or ur5.
-    #[arg(long, value_name = "NAME", conflicts_with = "model")]
-    pub robot: Option<String>,
-    /// Model file (TOML).
-    #[arg(long, value_name = "FILE.toml")]
-    pub model: Option<PathBuf>,
-    /// Katana tool length d5 in mm.
-    #[arg(long, value_name = "L")]
-    pub tool_mm: Option<f64>,
-    /// Override a model parameter before the diagnosis, e.g. tool_dz=31; repeatable.
-    #[arg(long = "set", value_name = "NAME=VALUE")]
-    pub sets: Vec<String>,
+    // The model choice: --robot NAME | --model FILE.toml, --tool-mm L, --set NAME=VALUE.
+    #[command(flatten)]
+    pub model: ModelArgs,
     /// Seed of the cross-validation folds.
     #[arg(long, default_value_t = 1)]
     pub seed: u64,
 }
 
 pub fn run(args: Args) -> Result<(), CliError> {
-    let model = choose_model(&ModelChoice {
-        robot: args.robot.as_deref(),
-        model_file: args.model.as_deref(),
-        tool_mm: args.tool_mm,
-        sets: &args.sets,
-    })?;
-    let cal = Dataset::read(&args.poses, &model)?;
-    let val = Dataset::read(&args.validate, &model)?;
+    // the pencil holder is on the arm when the rig's samples are measured
+    let default_tool_mm = (!args.samples.is_empty()).then_some(KATANA_PENCIL_TOOL_MM);
+    let model = args.model.choose_with_default_tool(default_tool_mm)?;
+    let mut cal: Option<Dataset> = args
+        .poses
+        .as_deref()
+        .map(|p| Dataset::read(p, &model))
+        .transpose()?;
+    for path in &args.samples {
+        let d = read_samples(path, &model)?;
+        cal = Some(match cal {
+            Some(c) => c.concat(d),
+            None => d,
+        });
+    }
+    let cal = cal.ok_or_else(|| CliError::bad_input("--poses or --samples is required"))?;
+    let mut val: Option<Dataset> = None;
+    for path in &args.validate {
+        let d = if is_fused(path) {
+            read_samples(path, &model)?
+        } else {
+            Dataset::read(path, &model)?
+        };
+        val = Some(match val {
+            Some(v) => v.concat(d),
+            None => d,
+        });
+    }
+    let val = val.ok_or_else(|| CliError::bad_input("--validate is required"))?;
     let mut opts = DiagnoseOptions::default();
     opts.decide.seed = args.seed;
     let diag = diagnose(&model, &cal, &val, &opts)?;
@@ -108,4 +131,22 @@ pub fn run(args: Args) -> Result<(), CliError> {
     }
     print!("{}", diag.report.table());
     Ok(())
+}
+
+/// Whether `path` is a fused-samples file (its first line names the format).
+fn is_fused(path: &Path) -> bool {
+    std::fs::File::open(path)
+        .ok()
+        .and_then(|f| {
+            let mut line = String::new();
+            std::io::BufRead::read_line(&mut std::io::BufReader::new(f), &mut line).ok()?;
+            Some(line.contains(rigctl::fusion::fuse::FUSED_FORMAT))
+        })
+        .unwrap_or(false)
+}
+
+/// One sheet's fused samples as partial measurements (moments in motion of `model`).
+fn read_samples(path: &Path, model: &rigctl::model::Model) -> Result<Dataset, CliError> {
+    let fused = rigctl::fusion::read_fused(path, model.n_joints())?;
+    Ok(Dataset::from_fused(&fused, model)?)
 }

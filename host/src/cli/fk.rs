@@ -7,8 +7,9 @@ use std::io::Write as _;
 use std::path::PathBuf;
 
 use rigctl::io::pose_csv::{read_poses, PoseSpec};
-use rigctl::model::{choose_model, ModelChoice, ModelError, Tilt};
+use rigctl::model::{ModelError, Tilt};
 
+use super::model_args::ModelArgs;
 use super::CliError;
 
 #[derive(clap::Args, Debug)]
@@ -19,27 +20,13 @@ pub struct Args {
     /// Add joint tilting with the declared values (MODEL.md).
     #[arg(long)]
     pub tilt: bool,
-    /// Katana tool length d5 in mm (200 bare, 330 with the pencil holder).
-    #[arg(long, value_name = "L")]
-    pub tool_mm: Option<f64>,
-    /// Override a model parameter (deg for angles, mm for lengths), e.g. dth2=0.03; repeatable.
-    #[arg(long = "set", value_name = "NAME=VALUE")]
-    pub sets: Vec<String>,
-    /// Built-in robot: katana450 (default) or ur5.
-    #[arg(long, value_name = "NAME", conflicts_with = "model")]
-    pub robot: Option<String>,
-    /// Model file (TOML), e.g. one written by `calibrate --out`.
-    #[arg(long, value_name = "FILE.toml")]
-    pub model: Option<PathBuf>,
+    // The model choice: --robot NAME | --model FILE.toml, --tool-mm L, --set NAME=VALUE.
+    #[command(flatten)]
+    pub model: ModelArgs,
 }
 
 pub fn run(args: Args) -> Result<(), CliError> {
-    let model = choose_model(&ModelChoice {
-        robot: args.robot.as_deref(),
-        model_file: args.model.as_deref(),
-        tool_mm: args.tool_mm,
-        sets: &args.sets,
-    })?;
+    let model = args.model.choose()?;
     if args.tilt && !model.has_tilt() {
         return Err(ModelError::NoTiltData {
             model: model.name().to_string(),

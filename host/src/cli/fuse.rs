@@ -9,8 +9,9 @@ use rigctl::fusion::pot::{read_pot_samples, TravelSeries};
 use rigctl::fusion::{
     fuse, write_fused, FuseOptions, JointSamples, PotCalibration, SheetPlacement,
 };
-use rigctl::model::{choose_model, ModelChoice, KATANA_PENCIL_TOOL_MM};
+use rigctl::model::KATANA_PENCIL_TOOL_MM;
 
+use super::model_args::ModelArgs;
 use super::CliError;
 
 #[derive(clap::Args, Debug)]
@@ -30,18 +31,9 @@ pub struct Args {
     /// Potentiometer calibration (`rigctl potcal` output).
     #[arg(long, value_name = "POT.toml")]
     pub pot: PathBuf,
-    /// Built-in robot: katana450 (default) or ur5.
-    #[arg(long, value_name = "NAME", conflicts_with = "model")]
-    pub robot: Option<String>,
-    /// Model file (TOML), e.g. one written by `calibrate --out`.
-    #[arg(long, value_name = "FILE.toml")]
-    pub model: Option<PathBuf>,
-    /// Katana tool length d5 in mm (default 330: the pencil holder).
-    #[arg(long, value_name = "L")]
-    pub tool_mm: Option<f64>,
-    /// Set a model parameter (deg / mm); repeatable.
-    #[arg(long = "set", value_name = "NAME=VALUE")]
-    pub sets: Vec<String>,
+    // The model choice: --robot NAME | --model FILE.toml, --tool-mm L, --set NAME=VALUE.
+    #[command(flatten)]
+    pub model: ModelArgs,
     /// Largest in-plane distance from the trace, mm.
     #[arg(long, default_value_t = 3.0)]
     pub max_in_plane_mm: f64,
@@ -51,16 +43,9 @@ pub struct Args {
 }
 
 pub fn run(args: Args) -> Result<(), CliError> {
-    let tool_mm = match (&args.model, args.tool_mm) {
-        (None, None) => Some(KATANA_PENCIL_TOOL_MM),
-        (_, t) => t,
-    };
-    let model = choose_model(&ModelChoice {
-        robot: args.robot.as_deref(),
-        model_file: args.model.as_deref(),
-        tool_mm,
-        sets: &args.sets,
-    })?;
+    let model = args
+        .model
+        .choose_with_default_tool(Some(KATANA_PENCIL_TOOL_MM))?;
     if !(args.max_in_plane_mm > 0.0 && args.max_in_plane_mm.is_finite()) {
         return Err(CliError::bad_input(
             "--max-in-plane-mm must be a positive number",

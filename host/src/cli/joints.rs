@@ -5,8 +5,8 @@
 use std::path::PathBuf;
 
 use rigctl::joints::{identify, read_readings, report_json, JointsError};
-use rigctl::model::{choose_model, ModelChoice};
 
+use super::model_args::ModelArgs;
 use super::CliError;
 
 #[derive(clap::Args, Debug)]
@@ -14,18 +14,9 @@ pub struct Args {
     /// Inclinometer readings: joint,config,q1..qN,payload_kg,incl_x_deg,incl_y_deg,incl_z_deg.
     #[arg(long, value_name = "FILE.csv")]
     pub readings: PathBuf,
-    /// Built-in robot: katana450 (default).
-    #[arg(long, value_name = "NAME", conflicts_with = "model")]
-    pub robot: Option<String>,
-    /// Model file (TOML) to start from, e.g. one written by `calibrate --out`.
-    #[arg(long, value_name = "FILE.toml")]
-    pub model: Option<PathBuf>,
-    /// Katana tool length d5 in mm.
-    #[arg(long, value_name = "L")]
-    pub tool_mm: Option<f64>,
-    /// Override a model parameter, e.g. payload_kg=0.5; repeatable.
-    #[arg(long = "set", value_name = "NAME=VALUE")]
-    pub sets: Vec<String>,
+    // The model choice: --robot NAME | --model FILE.toml, --tool-mm L, --set NAME=VALUE.
+    #[command(flatten)]
+    pub model: ModelArgs,
     /// The model file to write, with clearance_j<i>, backlash_j<i>, stiffness_j<i> identified.
     #[arg(long, value_name = "MODEL.toml")]
     pub out: PathBuf,
@@ -35,12 +26,7 @@ pub struct Args {
 }
 
 pub fn run(args: Args) -> Result<(), CliError> {
-    let model = choose_model(&ModelChoice {
-        robot: args.robot.as_deref(),
-        model_file: args.model.as_deref(),
-        tool_mm: args.tool_mm,
-        sets: &args.sets,
-    })?;
+    let model = args.model.choose()?;
     let readings = read_readings(&args.readings, &model)?;
     let result = identify(&model, &readings)?;
     for f in &result.fits {

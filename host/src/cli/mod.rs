@@ -10,6 +10,7 @@ mod export;
 mod fk;
 mod fuse;
 mod joints;
+mod model_args;
 mod ports;
 mod potcal;
 mod record;
@@ -129,5 +130,14 @@ impl<E: Classify + std::fmt::Display> From<E> for CliError {
             kind: e.kind(),
             message: e.to_string(),
         }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    /// Clap's own consistency checks (ids, `conflicts_with`/`requires` targets, flattened args).
+    #[test]
+    fn cli_definition_is_consistent() {
+        <super::Cli as clap::CommandFactory>::command().debug_assert();
     }
 }

@@ -3,12 +3,13 @@
 
 use std::path::PathBuf;
 
-use rigctl::model::{choose_model, ModelChoice};
+use rigctl::model::KATANA_PENCIL_TOOL_MM;
 use rigctl::sim::effects::parse_effect;
 use rigctl::sim::output::write_outputs;
 use rigctl::sim::session::{simulate_session, write_session, SessionConfig, SessionPath};
 use rigctl::sim::simulate::{simulate, SimConfig};
 
+use super::model_args::ModelArgs;
 use super::CliError;
 
 /// Writes cal.csv (118 ISO 9283 poses), val.csv, truth.toml and truth.json into DIR.
@@ -32,18 +33,9 @@ pub struct Args {
     /// Standard deviation of the random geometric errors (deg) on the 12 geometric parameters.
     #[arg(long, default_value_t = 0.05, allow_negative_numbers = true)]
     pub geometric_sigma_deg: f64,
-    /// Built-in robot (declared model): katana450 (default) or ur5.
-    #[arg(long, value_name = "NAME", conflicts_with = "model")]
-    pub robot: Option<String>,
-    /// Declared model from a model file instead of a preset.
-    #[arg(long, value_name = "FILE.toml")]
-    pub model: Option<PathBuf>,
-    /// Tool length d5 of the katana450 preset (mm; 330 with the pencil holder).
-    #[arg(long, value_name = "L")]
-    pub tool_mm: Option<f64>,
-    /// Override a parameter of the declared model, NAME=VALUE (repeatable).
-    #[arg(long = "set", value_name = "NAME=VALUE")]
-    pub sets: Vec<String>,
+    // The model choice: --robot NAME | --model FILE.toml, --tool-mm L, --set NAME=VALUE.
+    #[command(flatten)]
+    pub model: ModelArgs,
     /// Number of validation poses.
     #[arg(long = "val", value_name = "N", default_value_t = 60)]
     pub n_val: usize,
@@ -51,8 +43,9 @@ pub struct Args {
     /// the 45-degree plane; writes joints.csv, pot.rec, potjig.csv, scan.png, placement.toml and
     /// the truth (truth.toml, truth_path.csv, session.json; see rigctl::sim::session). The same
     /// --seed gives the same robot for both paths. Without --model the Katana's tool length
-    /// defaults to 330 mm (the pencil holder).
-    #[arg(long, value_name = "circle|line", value_parser = parse_session, conflicts_with = "effects")]
+    /// defaults to 330 mm (the pencil holder). `--effect`s with model parameters apply to the
+    /// session's truth robot (time drifts are refused: a session lasts seconds).
+    #[arg(long, value_name = "circle|line", value_parser = parse_session)]
     pub session: Option<SessionPath>,
     /// With --session: the board clock's reading at robot time 0, s.
     #[arg(long, value_name = "S", requires = "session")]
@@ -65,20 +58,19 @@ fn parse_session(s: &str) -> Result<SessionPath, String> {
 
 /// `simulate --session`.
 fn run_session(args: &Args, path: SessionPath) -> Result<(), CliError> {
-    let tool_mm = match (&args.model, args.tool_mm) {
-        (None, None) => Some(rigctl::model::KATANA_PENCIL_TOOL_MM),
-        (_, t) => t,
-    };
-    let declared = choose_model(&ModelChoice {
-        robot: args.robot.as_deref(),
-        model_file: args.model.as_deref(),
-        tool_mm,
-        sets: &args.sets,
-    })?;
+    let declared = args
+        .model
+        .choose_with_default_tool(Some(KATANA_PENCIL_TOOL_MM))?;
+    let effects = args
+        .effects
+        .iter()
+        .map(|e| parse_effect(e))
+        .collect::<Result<Vec<_>, _>>()?;
     let mut cfg = SessionConfig {
         path,
         seed: args.seed,
         geometric_sigma_deg: args.geometric_sigma_deg,
+        effects,
         ..SessionConfig::default()
     };
     if let Some(off) = args.clock_offset_s {
@@ -106,12 +98,7 @@ pub fn run(args: Args) -> Result<(), CliError> {
         .iter()
         .map(|e| parse_effect(e))
         .collect::<Result<Vec<_>, _>>()?;
-    let declared = choose_model(&ModelChoice {
-        robot: args.robot.as_deref(),
-        model_file: args.model.as_deref(),
-        tool_mm: args.tool_mm,
-        sets: &args.sets,
-    })?;
+    let declared = args.model.choose()?;
     let cfg = SimConfig {
         seed: args.seed,
         noise_mm: args.noise_mm,

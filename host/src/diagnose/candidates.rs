@@ -262,6 +262,7 @@ mod tests {
         let data = Dataset {
             poses: Poses::default(),
             t_s: Some(vec![0.0, 10.0]),
+            ..Dataset::default()
         };
         let ids: Vec<String> = library(&ext, &[], &data)
             .into_iter()

@@ -39,11 +39,12 @@ use rand_chacha::ChaCha8Rng;
 
 use super::candidates::{library, Candidate};
 use super::data::Dataset;
-use super::extended::{fit, ExtFit, Unknown};
+use super::extended::{fit, ExtFit, ExtModel, Unknown};
 use super::polish::{needs_polish, polish};
 use super::residual::screen;
 use super::stat::{delta_bic, nested_f_test};
 use crate::calib::lm::LmConfig;
+use crate::calib::stats::autocorrelation_time;
 use crate::calib::CalibError;
 
 /// Settings of the selection.
@@ -167,11 +168,48 @@ pub fn fold_assignment(n: usize, k: usize, seed: u64) -> Vec<usize> {
     fold
 }
 
-/// Held-out error (mm) of every pose under k-fold cross-validation of `fit`'s unknowns.
+/// Fold of every sample of a serially correlated dataset: `k` contiguous blocks in sample order
+/// (a randomly drawn fold would leave each held-out sample's neighbours, which carry nearly the
+/// same error, in the training set).
+pub fn block_fold_assignment(n: usize, k: usize) -> Vec<usize> {
+    let k = k.max(1);
+    (0..n).map(|i| (i * k / n.max(1)).min(k - 1)).collect()
+}
+
+/// Integrated autocorrelation time of the residuals of `ext` on `data`
+/// ([`crate::calib::stats::autocorrelation_time`] of each measured component's series in sample
+/// order; the largest), 1 for independent poses (full positions). The statistics of the
+/// selection count `residuals / tau` independent residuals.
+pub fn serial_tau(ext: &ExtModel, data: &Dataset) -> Result<f64, CalibError> {
+    if !data.is_serial() {
+        return Ok(1.0);
+    }
+    let mut series: Vec<Vec<f64>> = Vec::new();
+    for k in 0..data.len() {
+        let e = data.poses.xyz_mm[k] - ext.predict_pose(data, k)?;
+        for (slot, c) in data.components(k, &e).into_iter().enumerate() {
+            if series.len() <= slot {
+                series.push(Vec::new());
+            }
+            series[slot].push(c);
+        }
+    }
+    Ok(series
+        .iter()
+        .map(|s| autocorrelation_time(s))
+        .fold(1.0, f64::max))
+}
+
+/// Held-out error (mm, the measured part) of every pose under k-fold cross-validation of
+/// `fit`'s unknowns (contiguous folds for serial data, [`block_fold_assignment`]).
 pub fn cv_errors(f: &ExtFit, data: &Dataset, cfg: &DecideConfig) -> Result<Vec<f64>, CalibError> {
     let n = data.len();
     let k = cfg.folds.clamp(2, n.max(2));
-    let fold = fold_assignment(n, k, cfg.seed);
+    let fold = if data.is_serial() {
+        block_fold_assignment(n, k)
+    } else {
+        fold_assignment(n, k, cfg.seed)
+    };
     let mut out = vec![0.0; n];
     for g in 0..k {
         let train: Vec<usize> = (0..n).filter(|&i| fold[i] != g).collect();
@@ -182,15 +220,17 @@ pub fn cv_errors(f: &ExtFit, data: &Dataset, cfg: &DecideConfig) -> Result<Vec<f
         let sub = data.subset(&train);
         let refit = fit(&f.ext, &sub, &f.fitted, &cfg.lm_cv, cfg.rtol, true)?;
         for &i in &test {
-            let p = refit.ext.predict_mm(&data.poses.q_deg[i], data.t(i))?;
-            out[i] = (data.poses.xyz_mm[i] - p).norm();
+            let p = refit.ext.predict_pose(data, i)?;
+            out[i] = data.measured_part(i, &(data.poses.xyz_mm[i] - p)).norm();
         }
     }
     Ok(out)
 }
 
-/// Mean of `e0 - e1`, relative to mean `e0`, and the paired t statistic.
-fn paired_gain(e0: &[f64], e1: &[f64]) -> (f64, f64, f64, f64) {
+/// Mean of `e0 - e1`, relative to mean `e0`, and the paired t statistic; with `serial` the
+/// differences are a series along a path and the t statistic is divided by the square root of
+/// its autocorrelation time.
+fn paired_gain(e0: &[f64], e1: &[f64], serial: bool) -> (f64, f64, f64, f64) {
     let n = e0.len().min(e1.len());
     if n < 2 {
         return (f64::NAN, f64::NAN, 0.0, 0.0);
@@ -208,6 +248,11 @@ fn paired_gain(e0: &[f64], e1: &[f64]) -> (f64, f64, f64, f64) {
     } else {
         0.0
     };
+    let t = if serial {
+        t / autocorrelation_time(&d).sqrt()
+    } else {
+        t
+    };
     let rel = if m0 > 0.0 { md / m0 } else { 0.0 };
     (m0, m1, rel, t)
 }
@@ -222,6 +267,7 @@ fn rank_contenders<'a>(
     errs: &[Vec<f64>],
     candidate: impl Fn(usize) -> &'a Candidate,
     cfg: &DecideConfig,
+    serial: bool,
 ) -> Vec<usize> {
     let mean = |e: &[f64]| e.iter().sum::<f64>() / e.len().max(1) as f64;
     let Some(best) = (0..ids.len()).min_by(|&a, &b| mean(&errs[a]).total_cmp(&mean(&errs[b])))
@@ -229,7 +275,7 @@ fn rank_contenders<'a>(
         return Vec::new();
     };
     let (mut equivalent, mut worse): (Vec<usize>, Vec<usize>) = (0..ids.len()).partition(|&k| {
-        let t = paired_gain(&errs[k], &errs[best]).3;
+        let t = paired_gain(&errs[k], &errs[best], serial).3;
         t.is_nan() || t < cfg.cv_t_min
     });
     equivalent.sort_by_key(|&k| simplicity(candidate(ids[k])));
@@ -261,7 +307,7 @@ pub fn forward_selection(
     data: &Dataset,
     cfg: &DecideConfig,
 ) -> Result<Selection, CalibError> {
-    let m = 3 * data.len();
+    let serial = data.is_serial();
     let mut cur = declared;
     let mut requested: Vec<Unknown> = declared_unknowns.to_vec();
     let mut steps: Vec<Accepted> = Vec::new();
@@ -273,6 +319,9 @@ pub fn forward_selection(
         }
         let screens = screen(&cur.ext, data, &cur.fitted, &cands, cfg.rtol)?;
         let rss0 = cur.rss_mm2;
+        // independent residuals: all of them for full positions, fewer along a traced path
+        let m_eff = |tau: f64| ((data.n_residuals() as f64 / tau).round() as usize).max(1);
+        let m = m_eff(serial_tau(&cur.ext, data)?);
         let mut ranked: Vec<(usize, usize, f64)> = screens
             .iter()
             .filter(|s| s.added > 0)
@@ -328,6 +377,9 @@ pub fn forward_selection(
                 after = polish(after, &cur.ext, &cand.unknowns, data, cfg)?;
             }
             let added = after.fitted.len().saturating_sub(cur.fitted.len());
+            // the tests count the independent residuals of the refit: under the null hypothesis
+            // its residual is the noise, whose serial correlation sets the count
+            let m = m_eff(serial_tau(&after.ext, data)?);
             let dof = m.saturating_sub(after.fitted.len());
             let (f, p) = nested_f_test(rss0, after.rss_mm2, added, dof);
             let dbic = if added > 0 {
@@ -369,7 +421,8 @@ pub fn forward_selection(
                 errs.push(e1.clone());
                 cv_cache[i] = Some(e1);
             }
-            let ranked = rank_contenders(&contenders, &errs, |i| &refits[i].0.candidate, cfg);
+            let ranked =
+                rank_contenders(&contenders, &errs, |i| &refits[i].0.candidate, cfg, serial);
             // Contenders first (see `rank_contenders`); then the rest in BIC order.
             let order: Vec<usize> = ranked
                 .into_iter()
@@ -409,7 +462,7 @@ pub fn forward_selection(
                     Some(e1) => e1,
                     None => cv_errors(&after, data, cfg)?,
                 };
-                let (m0, m1, rel, t) = paired_gain(e0, &e1);
+                let (m0, m1, rel, t) = paired_gain(e0, &e1, serial);
                 trial.cv_mean_mm = [m0, m1];
                 trial.cv_t = t;
                 if rel >= cfg.cv_min_gain && t >= cfg.cv_t_min {
@@ -492,11 +545,7 @@ pub fn onset_candidates(
 
 /// The current model moved by the Gauss-Newton step of its fitted unknowns plus `cand`'s
 /// (minimum-norm least squares on column-scaled Jacobians), or `None` if it cannot be computed.
-fn linear_start(
-    cur: &ExtFit,
-    data: &Dataset,
-    cand: &Candidate,
-) -> Option<super::extended::ExtModel> {
+fn linear_start(cur: &ExtFit, data: &Dataset, cand: &Candidate) -> Option<ExtModel> {
     let mut unknowns = cur.fitted.clone();
     unknowns.extend(
         cand.unknowns
@@ -558,7 +607,7 @@ mod tests {
             .enumerate()
             .map(|(k, e)| 0.5 * e + 0.001 * (k % 3) as f64)
             .collect();
-        let (_, _, rel, t) = paired_gain(&e0, &e1);
+        let (_, _, rel, t) = paired_gain(&e0, &e1, false);
         assert!(rel > 0.45 && t > 10.0, "{rel} {t}");
     }
 }

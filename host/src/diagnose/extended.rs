@@ -88,7 +88,17 @@ impl ExtModel {
         }
     }
 
-    fn tilt_mode(&self) -> Tilt<'static> {
+    /// The tilting applied at pose `k` of `data`: none, or the static moments plus the dataset's
+    /// inertial ones when it carries them.
+    fn tilt_at<'d>(&self, data: &'d Dataset, k: usize) -> Tilt<'d> {
+        match (self.tilt, data.moments(k)) {
+            (false, _) => Tilt::Off,
+            (true, Some(m)) => Tilt::StaticPlus(m),
+            (true, None) => Tilt::Static,
+        }
+    }
+
+    fn static_tilt(&self) -> Tilt<'static> {
         if self.tilt {
             Tilt::Static
         } else {
@@ -170,23 +180,38 @@ impl ExtModel {
         Ok((q_eff, tau))
     }
 
-    /// Predicted measured position (mm, R) of a pose.
+    /// Predicted measured position (mm, R) of joint readings `q_deg` at time `t_s`, with the
+    /// static tilting.
     pub fn predict_mm(&self, q_deg: &[f64], t_s: f64) -> Result<Vector3<f64>, ModelError> {
-        let with_tau = self.compliance_deg_per_kgfm.iter().any(|c| *c != 0.0);
-        let (q_eff, _) = self.effective_joints(q_deg, t_s, with_tau)?;
-        Ok(self.model.position_mm(&q_eff, self.tilt_mode())?
-            + self.drift_mm_per_h * (t_s / S_PER_H))
+        self.predict_with(q_deg, t_s, self.static_tilt())
     }
 
-    /// Predicted position and its Jacobian (3 x unknowns, mm per unit) of a pose.
-    pub fn predict_with_jacobian(
+    /// Predicted measured position (mm, R) of pose `k` of `data` (with its moments, if any).
+    pub fn predict_pose(&self, data: &Dataset, k: usize) -> Result<Vector3<f64>, ModelError> {
+        self.predict_with(&data.poses.q_deg[k], data.t(k), self.tilt_at(data, k))
+    }
+
+    fn predict_with(
         &self,
         q_deg: &[f64],
         t_s: f64,
+        tilt: Tilt<'_>,
+    ) -> Result<Vector3<f64>, ModelError> {
+        let with_tau = self.compliance_deg_per_kgfm.iter().any(|c| *c != 0.0);
+        let (q_eff, _) = self.effective_joints(q_deg, t_s, with_tau)?;
+        Ok(self.model.position_mm(&q_eff, tilt)? + self.drift_mm_per_h * (t_s / S_PER_H))
+    }
+
+    /// Predicted position of pose `k` of `data` and its Jacobian (3 x unknowns, mm per unit).
+    pub fn predict_with_jacobian(
+        &self,
+        data: &Dataset,
+        k: usize,
         unknowns: &[Unknown],
     ) -> Result<(Vector3<f64>, DMatrix<f64>), ModelError> {
+        let t_s = data.t(k);
         let with_tau = self.needs_torques(unknowns);
-        let (q_eff, tau) = self.effective_joints(q_deg, t_s, with_tau)?;
+        let (q_eff, tau) = self.effective_joints(&data.poses.q_deg[k], t_s, with_tau)?;
         let mut wrt: Vec<Wrt> = Vec::with_capacity(unknowns.len());
         let mut slot = Vec::with_capacity(unknowns.len());
         for u in unknowns {
@@ -202,7 +227,7 @@ impl ExtModel {
         }
         let (fk, jm) = self
             .model
-            .position_jacobian(&q_eff, self.tilt_mode(), &wrt)?;
+            .position_jacobian(&q_eff, self.tilt_at(data, k), &wrt)?;
         let mut jac = DMatrix::zeros(3, unknowns.len());
         for (c, u) in unknowns.iter().enumerate() {
             let col: Vector3<f64> = match (*u, slot[c]) {
@@ -235,35 +260,53 @@ impl ExtModel {
         let mut out = Vec::with_capacity(3 * data.len() * self.model.n_joints());
         for k in 0..data.len() {
             let (q_eff, _) = self.effective_joints(&data.poses.q_deg[k], data.t(k), with_tau)?;
-            for eta in self.model.moments_kgfm(&q_eff)? {
+            let mut moments = self.model.moments_kgfm(&q_eff)?;
+            if let Some(extra) = data.moments(k) {
+                for (m, e) in moments.iter_mut().zip(extra) {
+                    *m += e;
+                }
+            }
+            for eta in moments {
                 out.extend(eta.iter().map(|x| sign_1e9(*x) as i8));
             }
         }
         Ok(out)
     }
 
-    /// Errors `measured - predicted` of every pose (mm).
+    /// Errors `measured - predicted` of every pose (mm): the measured part for partial
+    /// measurements ([`Dataset::measured_part`]).
     pub fn errors(&self, data: &Dataset) -> Result<Vec<Vector3<f64>>, ModelError> {
         (0..data.len())
-            .map(|k| Ok(data.poses.xyz_mm[k] - self.predict_mm(&data.poses.q_deg[k], data.t(k))?))
+            .map(|k| {
+                let e = data.poses.xyz_mm[k] - self.predict_pose(data, k)?;
+                Ok(data.measured_part(k, &e))
+            })
             .collect()
     }
 
-    /// Stacked Jacobian (3 rows per pose) wrt `unknowns`, and the stacked errors
-    /// `measured - predicted`.
+    /// Stacked Jacobian (one row per measured component: 3 per full position, one per measured
+    /// direction of a partial one) wrt `unknowns`, and the stacked errors `measured - predicted`.
     pub fn stacked(
         &self,
         data: &Dataset,
         unknowns: &[Unknown],
     ) -> Result<(DMatrix<f64>, DVector<f64>), ModelError> {
-        let n = data.len();
-        let mut jac = DMatrix::zeros(3 * n, unknowns.len());
-        let mut err = DVector::zeros(3 * n);
-        for k in 0..n {
-            let (p, j) = self.predict_with_jacobian(&data.poses.q_deg[k], data.t(k), unknowns)?;
-            jac.view_mut((3 * k, 0), (3, unknowns.len())).copy_from(&j);
-            err.fixed_rows_mut::<3>(3 * k)
-                .copy_from(&(data.poses.xyz_mm[k] - p));
+        let mut jac = DMatrix::zeros(data.n_residuals(), unknowns.len());
+        let mut err = DVector::zeros(data.n_residuals());
+        let mut row = 0;
+        for k in 0..data.len() {
+            let (p, j) = self.predict_with_jacobian(data, k, unknowns)?;
+            let rows = data.rows(k);
+            jac.view_mut((row, 0), (rows, unknowns.len()))
+                .copy_from(&data.jacobian_rows(k, &j));
+            for (i, c) in data
+                .components(k, &(data.poses.xyz_mm[k] - p))
+                .into_iter()
+                .enumerate()
+            {
+                err[row + i] = c;
+            }
+            row += rows;
         }
         Ok((jac, err))
     }
@@ -293,7 +336,7 @@ impl Problem for ExtProblem<'_> {
     }
 
     fn n_residuals(&self) -> usize {
-        3 * self.data.len()
+        self.data.n_residuals()
     }
 
     fn evaluate(
@@ -310,12 +353,14 @@ impl Problem for ExtProblem<'_> {
                 r.copy_from(&(-e));
             }
             None => {
+                let mut row = 0;
                 for k in 0..self.data.len() {
-                    let p = self
-                        .ext
-                        .predict_mm(&self.data.poses.q_deg[k], self.data.t(k))?;
-                    r.fixed_rows_mut::<3>(3 * k)
-                        .copy_from(&(p - self.data.poses.xyz_mm[k]));
+                    let p = self.ext.predict_pose(self.data, k)?;
+                    let e = self.data.components(k, &(p - self.data.poses.xyz_mm[k]));
+                    for (i, c) in e.into_iter().enumerate() {
+                        r[row + i] = c;
+                    }
+                    row += self.data.rows(k);
                 }
             }
         }
@@ -338,7 +383,7 @@ pub struct ExtFit {
     pub sigma: Vec<f64>,
     /// Residual sum of squares over all coordinates (mm^2).
     pub rss_mm2: f64,
-    /// Number of residual coordinates (3 per pose).
+    /// Number of residuals (measured components: 3 per full position).
     pub n_residuals: usize,
 }
 
@@ -383,7 +428,7 @@ pub fn fit(
                 .collect::<Vec<_>>(),
         )
     };
-    let n_res = 3 * data.len();
+    let n_res = data.n_residuals();
     if fitted.is_empty() {
         let rss = start.errors(data)?.iter().map(|e| e.norm_squared()).sum();
         return Ok(ExtFit {

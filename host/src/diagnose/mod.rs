@@ -48,7 +48,7 @@ use data::Dataset;
 use decide::{contribution, forward_selection, DecideConfig, Selection};
 use extended::{ExtFit, ExtModel, Unknown};
 use report::{DiagnoseReport, EffectReport, NoiseReport, SetStats, TrialReport, Unexplained};
-use residual::{best_regressor, explain, regressors};
+use residual::{best_regressor, explain, explain_with, regressors};
 
 /// Smallest share of the final residual a regressor must explain to call it structured.
 pub const STRUCTURE_MIN_R2: f64 = 0.05;
@@ -129,6 +129,20 @@ pub fn declared_fit(
 ) -> Result<(ExtFit, Vec<Unknown>), DiagnoseError> {
     let selection = default_selection(model, false);
     let tilt = model.has_tilt();
+    let requested: Vec<Unknown> = selection.iter().copied().map(Unknown::Param).collect();
+    if cal.directions.is_some() || cal.moments_kgfm.is_some() {
+        // partial measurements (or moments in motion): the same identification on the extended
+        // problem, which projects on the measured directions
+        let fit = extended::fit(
+            &ExtModel::new(model.clone()),
+            cal,
+            &requested,
+            &cfg.lm,
+            cfg.rtol,
+            false,
+        )?;
+        return Ok((fit, requested));
+    }
     let f = fit_parameters(model, &cal.poses, &selection, tilt, &cfg.lm, cfg.rtol)?;
     let mut ext = ExtModel::new(f.model.clone());
     ext.tilt = tilt;
@@ -140,9 +154,93 @@ pub fn declared_fit(
         unidentifiable: f.unidentifiable.clone(),
         sigma: f.sigma.clone(),
         rss_mm2: rss,
-        n_residuals: 3 * cal.len(),
+        n_residuals: cal.n_residuals(),
     };
-    Ok((fit, selection.into_iter().map(Unknown::Param).collect()))
+    Ok((fit, requested))
+}
+
+/// Outlier threshold of [`trim_outliers`], in robust standard deviations.
+pub const OUTLIER_SIGMAS: f64 = 5.0;
+/// Half width (samples) of the running median of [`trim_outliers`].
+pub const OUTLIER_HALF_WINDOW: usize = 5;
+
+/// Samples along a traced path whose declared-fit residual is a **spike** are left out of the
+/// calibration set and the fit repeated (at most 3 passes): in some measured component the
+/// residual departs from its running median over the neighbouring samples (+-
+/// [`OUTLIER_HALF_WINDOW`]) by more than [`OUTLIER_SIGMAS`] robust standard deviations
+/// (`1.4826 median |departure|`). Such spikes are expected with the declared tilting law: where
+/// a joint moment is near zero its sign, hence the side of the clearance, can differ between the
+/// arm and the model for a sample or two. A missing effect changes the residual smoothly along
+/// the path and is kept. Full positions (independent poses) are never left out, nor is the
+/// validation set. Returns the kept set and the number left out.
+pub fn trim_outliers(
+    model: &Model,
+    cal: &Dataset,
+    cfg: &DecideConfig,
+) -> Result<(Dataset, usize), DiagnoseError> {
+    if !cal.is_serial() {
+        return Ok((cal.clone(), 0));
+    }
+    let mut kept: Vec<usize> = (0..cal.len()).collect();
+    for _ in 0..3 {
+        let sub = cal.subset(&kept);
+        let (fit, _) = declared_fit(model, &sub, cfg)?;
+        let mut spikes = vec![false; kept.len()];
+        let comps: Vec<Vec<f64>> = (0..sub.len())
+            .map(|k| {
+                let p = fit.ext.predict_pose(&sub, k)?;
+                Ok(sub.components(k, &(sub.poses.xyz_mm[k] - p)))
+            })
+            .collect::<Result<_, ModelError>>()?;
+        let slots = comps.iter().map(Vec::len).max().unwrap_or(0);
+        for slot in 0..slots {
+            let series: Vec<(usize, f64)> = comps
+                .iter()
+                .enumerate()
+                .filter_map(|(k, c)| c.get(slot).map(|v| (k, *v)))
+                .collect();
+            for (k, bad) in running_median_spikes(&series) {
+                if bad {
+                    spikes[k] = true;
+                }
+            }
+        }
+        let next: Vec<usize> = kept
+            .iter()
+            .zip(&spikes)
+            .filter(|(_, s)| !**s)
+            .map(|(k, _)| *k)
+            .collect();
+        if next.len() == kept.len() || next.len() < 2 * cfg.folds.max(2) {
+            break;
+        }
+        kept = next;
+    }
+    Ok((cal.subset(&kept), cal.len() - kept.len()))
+}
+
+/// For each `(index, value)` of a series: whether it departs from the running median of its
+/// neighbours by more than [`OUTLIER_SIGMAS`] robust standard deviations of the departures.
+fn running_median_spikes(series: &[(usize, f64)]) -> Vec<(usize, bool)> {
+    let n = series.len();
+    let median = |v: &mut Vec<f64>| {
+        v.sort_by(f64::total_cmp);
+        v.get(v.len() / 2).copied().unwrap_or(0.0)
+    };
+    let dep: Vec<f64> = (0..n)
+        .map(|i| {
+            let lo = i.saturating_sub(OUTLIER_HALF_WINDOW);
+            let hi = (i + OUTLIER_HALF_WINDOW + 1).min(n);
+            let mut w: Vec<f64> = series[lo..hi].iter().map(|x| x.1).collect();
+            series[i].1 - median(&mut w)
+        })
+        .collect();
+    let sigma = 1.4826 * median(&mut dep.iter().map(|d| d.abs()).collect());
+    series
+        .iter()
+        .zip(&dep)
+        .map(|((k, _), d)| (*k, sigma > 0.0 && d.abs() > OUTLIER_SIGMAS * sigma))
+        .collect()
 }
 
 fn mean_norm(e: &[Vector3<f64>]) -> f64 {
@@ -172,6 +270,8 @@ pub fn diagnose(
             min: 1,
         });
     }
+    let (cal, outliers) = trim_outliers(model, cal, cfg)?;
+    let cal = &cal;
     let (declared, requested) = declared_fit(model, cal, cfg)?;
     let declared_cal = declared.ext.errors(cal)?;
     let declared_val = declared.ext.errors(val)?;
@@ -267,9 +367,17 @@ pub fn diagnose(
     let sigma = (last.rss_mm2 / dof as f64).sqrt();
     let noise = NoiseReport {
         sigma_mm: sigma,
-        expected_mean_mm: stat::expected_mean_norm(sigma),
+        expected_mean_mm: stat::expected_mean_norm_dims(sigma, cal.measured_dims()),
     };
-    let unexplained = unexplained(&final_cal, &final_val, &regs, &noise, &selection);
+    let tau = decide::serial_tau(&last.ext, cal)?;
+    let unexplained = unexplained(
+        &final_cal,
+        &final_val,
+        &regs,
+        &noise,
+        &selection,
+        (cal.measured_dims(), tau),
+    );
     let report = DiagnoseReport {
         declared: SetStats {
             calibration: Stats::from_errors(&declared_cal),
@@ -291,6 +399,13 @@ pub fn diagnose(
             .map(TrialReport::from_trial)
             .collect(),
         rule: report::rule_text(cfg),
+        measurements: if cal.is_serial() {
+            "partial"
+        } else {
+            "positions"
+        }
+        .to_string(),
+        outliers_left_out: outliers,
     };
     Ok(Diagnosis {
         report,
@@ -307,11 +422,12 @@ fn unexplained(
     regs: &[residual::Regressor],
     noise: &NoiseReport,
     sel: &Selection,
+    (dims, tau): (usize, f64),
 ) -> Unexplained {
     let n_tests = regs.len().max(1) as f64;
     let best = regs
         .iter()
-        .map(|r| explain(cal, r))
+        .map(|r| explain_with(cal, r, dims, tau))
         .max_by(|a, b| a.r2.total_cmp(&b.r2));
     let val_mean = mean_norm(val);
     let ratio = if noise.expected_mean_mm > 0.0 {

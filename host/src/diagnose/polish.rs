@@ -54,7 +54,7 @@ pub fn crossed_steps(
 /// objective still sloping (a change of 1 moves one parameter's confidence region by one
 /// standard deviation).
 pub fn predicted_decrease(f: &ExtFit, data: &Dataset, rank_rtol: f64) -> Result<f64, ModelError> {
-    let m = 3 * data.len();
+    let m = data.n_residuals();
     let dof = m.saturating_sub(f.fitted.len());
     if f.fitted.is_empty() || dof == 0 || f.rss_mm2 <= 0.0 {
         return Ok(0.0);
@@ -122,7 +122,7 @@ impl Profile<'_> {
                     unidentifiable: Vec::new(),
                     sigma: Vec::new(),
                     rss_mm2: rss,
-                    n_residuals: 3 * self.data.len(),
+                    n_residuals: self.data.n_residuals(),
                 }
             })
         } else {
@@ -324,7 +324,7 @@ mod tests {
                 q_deg: out.cal.iter().map(|p| p.q_deg.clone()).collect(),
                 xyz_mm: out.cal.iter().map(|p| p.measured_mm).collect(),
             },
-            t_s: None,
+            ..Dataset::default()
         };
         let cfg = DecideConfig::default();
         let (f, _) = crate::diagnose::declared_fit(&declared, &data, &cfg).expect("fit");

@@ -131,6 +131,12 @@ pub struct DiagnoseReport {
     pub declared_unidentifiable: Vec<String>,
     pub rejected: Vec<TrialReport>,
     pub rule: String,
+    /// What the calibration set measures: `"positions"` (full 3-D positions) or `"partial"`
+    /// (traced samples: across the path and out of the sheet; stats over those components).
+    pub measurements: String,
+    /// Calibration samples left out as outliers of the declared tilting law
+    /// ([`super::trim_outliers`]; always 0 for full positions).
+    pub outliers_left_out: usize,
 }
 
 /// One-line statement of the decision rule in force.
@@ -159,7 +165,7 @@ impl DiagnoseReport {
         let mut s = String::new();
         let _ = writeln!(
             s,
-            "diagnose: {} ({}), {} calibration / {} validation poses",
+            "diagnose: {} ({}), {} calibration / {} validation poses{}",
             self.robot,
             if self.tilting {
                 "declared tilting"
@@ -167,7 +173,15 @@ impl DiagnoseReport {
                 "rigid"
             },
             self.declared.calibration.n,
-            self.declared.validation.n
+            self.declared.validation.n,
+            if self.measurements == "partial" {
+                format!(
+                    " (partial measurements: errors across the path and out of the sheet; {} outlier samples left out)",
+                    self.outliers_left_out
+                )
+            } else {
+                String::new()
+            }
         );
         let _ = writeln!(
             s,

@@ -146,8 +146,16 @@ pub struct Explained {
     pub p_value: f64,
 }
 
-/// Regresses each coordinate of `v` on `[1, reg.columns]`.
+/// Regresses each coordinate of `v` on `[1, reg.columns]` (independent full positions; see
+/// [`explain_with`]).
 pub fn explain(v: &[Vector3<f64>], reg: &Regressor) -> Explained {
+    explain_with(v, reg, 3, 1.0)
+}
+
+/// [`explain`] for vectors with `dims` measured components per pose (2 for traced samples,
+/// whose errors lie in the measured plane) that are serially correlated with integrated
+/// autocorrelation time `tau`: the F-test counts `dims n / tau` independent residuals.
+pub fn explain_with(v: &[Vector3<f64>], reg: &Regressor, dims: usize, tau: f64) -> Explained {
     let n = v.len();
     let c = reg.columns.len();
     let total: f64 = v.iter().map(|e| e.norm_squared()).sum();
@@ -177,7 +185,12 @@ pub fn explain(v: &[Vector3<f64>], reg: &Regressor) -> Explained {
         rss_fit += (&y - &x * beta).norm_squared();
     }
     let gain = (rss_mean - rss_fit).max(0.0);
-    let (d1, d2) = ((3 * c) as f64, (3 * n - 3 * (c + 1)) as f64);
+    let dims = dims.clamp(1, 3) as f64;
+    let n_eff = dims * n as f64 / tau.max(1.0);
+    let (d1, d2) = (dims * c as f64, n_eff - dims * (c + 1) as f64);
+    if d2 < 1.0 {
+        return none;
+    }
     let f = if rss_fit > 0.0 {
         (gain / d1) / (rss_fit / d2)
     } else {

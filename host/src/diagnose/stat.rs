@@ -117,6 +117,15 @@ pub fn expected_mean_norm(sigma: f64) -> f64 {
     sigma * (8.0 / std::f64::consts::PI).sqrt()
 }
 
+/// Mean length of a `dims`-dimensional isotropic Gaussian vector of standard deviation `sigma`
+/// per coordinate: `sigma sqrt(2) Gamma((dims + 1) / 2) / Gamma(dims / 2)` (chi distribution;
+/// `sigma sqrt(pi / 2)` for the two measured components of a traced sample, and
+/// [`expected_mean_norm`] for 3).
+pub fn expected_mean_norm_dims(sigma: f64, dims: usize) -> f64 {
+    let k = dims.max(1) as f64;
+    sigma * std::f64::consts::SQRT_2 * (ln_gamma((k + 1.0) / 2.0) - ln_gamma(k / 2.0)).exp()
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -160,5 +169,9 @@ mod tests {
         assert!(delta_bic(300, 2.0, 1.0, 1) < 0.0);
         assert!(delta_bic(300, 1.0, 0.999, 1) > 0.0);
         assert!((expected_mean_norm(1.0) - 1.595_769).abs() < 1e-6);
+        assert!((expected_mean_norm_dims(1.0, 3) - expected_mean_norm(1.0)).abs() < 1e-12);
+        // Rayleigh mean sqrt(pi / 2); half-normal mean sqrt(2 / pi)
+        assert!((expected_mean_norm_dims(2.0, 2) - 2.0 * 1.253_314_137).abs() < 1e-8);
+        assert!((expected_mean_norm_dims(1.0, 1) - 0.797_884_561).abs() < 1e-8);
     }
 }

@@ -1,5 +1,10 @@
 //! The traced curve (`rigctl trace` output, sheet mm): closest point and local in-plane normal.
 
+use std::path::Path;
+
+use super::FusionError;
+use crate::io::table::Table;
+
 /// The closest point of the curve to a query point.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct Closest {
@@ -132,57 +137,31 @@ impl TracedCurve {
     }
 }
 
+/// What a trace with fewer than two points lacks.
+const TOO_FEW_POINTS: &str = "a trace needs at least 2 points";
+
 /// Reads a trace file (`rigctl trace` output, FORMATS.md: CSV `x,y` in sheet mm, a header row,
-/// `#` comment lines).
-pub fn read_trace_csv(path: &std::path::Path) -> Result<Vec<[f64; 2]>, super::FusionError> {
-    use super::FusionError;
-    let text = std::fs::read_to_string(path).map_err(|source| FusionError::Read {
-        path: path.to_path_buf(),
-        source,
-    })?;
-    let err = |line: usize, column: &str, reason: String| FusionError::Csv {
-        path: path.to_path_buf(),
-        line,
-        column: column.into(),
-        reason,
-    };
-    let mut rows = text
-        .lines()
-        .enumerate()
-        .map(|(i, l)| (i + 1, l.trim()))
-        .filter(|(_, l)| !l.is_empty() && !l.starts_with('#'));
-    let (hl, header) = rows
-        .next()
-        .ok_or_else(|| err(1, "header", "no header row".into()))?;
-    let cols: Vec<&str> = header.split(',').map(str::trim).collect();
-    let ix = cols
+/// `#` comment lines; at least 2 points).
+pub fn read_trace_csv(path: &Path) -> Result<Vec<[f64; 2]>, FusionError> {
+    let table_err = |e| FusionError::from_table(e, path, TOO_FEW_POINTS);
+    let table = Table::read(path).map_err(table_err)?;
+    let (ix, iy) = (
+        table.need("x").map_err(table_err)?,
+        table.need("y").map_err(table_err)?,
+    );
+    let pts = table
+        .rows
         .iter()
-        .position(|c| *c == "x")
-        .ok_or_else(|| err(hl, "x", "column missing from the header".into()))?;
-    let iy = cols
-        .iter()
-        .position(|c| *c == "y")
-        .ok_or_else(|| err(hl, "y", "column missing from the header".into()))?;
-    let mut pts = Vec::new();
-    for (line, row) in rows {
-        let f: Vec<&str> = row.split(',').map(str::trim).collect();
-        if f.len() != cols.len() {
-            return Err(err(
-                line,
-                "row",
-                format!("{} fields, the header has {}", f.len(), cols.len()),
-            ));
-        }
-        let num = |i: usize, name: &str| {
-            f[i].parse::<f64>()
-                .ok()
-                .filter(|v| v.is_finite())
-                .ok_or_else(|| err(line, name, format!("not a finite number (`{}`)", f[i])))
-        };
-        pts.push([num(ix, "x")?, num(iy, "y")?]);
-    }
+        .map(|row| table.numbers(row, [ix, iy]))
+        .collect::<Result<Vec<_>, _>>()
+        .map_err(table_err)?;
     if pts.len() < 2 {
-        return Err(err(hl, "rows", "a trace needs at least 2 points".into()));
+        return Err(FusionError::csv(
+            path,
+            table.header_line,
+            "rows",
+            TOO_FEW_POINTS,
+        ));
     }
     Ok(pts)
 }
@@ -190,6 +169,50 @@ pub fn read_trace_csv(path: &std::path::Path) -> Result<Vec<[f64; 2]>, super::Fu
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::error::{Classify, ErrorKind};
+
+    #[test]
+    fn trace_file_rows_and_errors() {
+        let dir = tempfile::tempdir().unwrap();
+        let write = |name: &str, text: &str| {
+            let p = dir.path().join(name);
+            std::fs::write(&p, text).unwrap();
+            p
+        };
+        let p = write("ok.csv", "# trace\ny,x\n1,2\n\n3.5,-4\n");
+        assert_eq!(read_trace_csv(&p).unwrap(), [[2.0, 1.0], [-4.0, 3.5]]);
+        let cases = [
+            ("nan.csv", "x,y\n1,2\n3,nan\n", ":3: y: NaN (`nan`)"),
+            ("noy.csv", "# c\nx,z\n1,2\n3,4\n", ":2: y: column missing"),
+            (
+                "short.csv",
+                "x,y\n1,2\n3\n",
+                ":3: row: 1 fields, the header has 2",
+            ),
+            (
+                "one.csv",
+                "x,y\n1,2\n",
+                ":1: rows: a trace needs at least 2 points",
+            ),
+            (
+                "none.csv",
+                "x,y\n",
+                ":1: rows: a trace needs at least 2 points",
+            ),
+            ("empty.csv", "# c\n", ":1: header: no header row"),
+        ];
+        for (name, text, want) in cases {
+            let e = read_trace_csv(&write(name, text)).unwrap_err();
+            assert_eq!(e.kind(), ErrorKind::BadInput);
+            let msg = e.to_string();
+            assert!(
+                msg.contains(&format!("{name}{want}")),
+                "`{msg}` vs `{want}`"
+            );
+        }
+        let e = read_trace_csv(&dir.path().join("absent.csv")).unwrap_err();
+        assert!(e.to_string().contains("absent.csv"), "{e}");
+    }
 
     #[test]
     fn circle_normal_is_radial_and_distance_exact() {

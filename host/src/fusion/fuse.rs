@@ -69,6 +69,7 @@ use super::placement::SheetPlacement;
 use super::pot::TravelSeries;
 use crate::io::atomic::write_bytes_atomic;
 use crate::io::pose_csv::{read_poses, PoseSpec};
+use crate::io::table::{Table, TableError};
 use crate::model::{Model, Tilt};
 
 /// Format tag in the first comment line of `FUSED.csv`.
@@ -90,19 +91,16 @@ impl JointSamples {
         let file = read_poses(path, &PoseSpec::for_model(model, false))?;
         let mut out = Self::default();
         for p in &file.poses {
-            let t = p.t_s.ok_or_else(|| FusionError::Csv {
-                path: path.to_path_buf(),
-                line: p.line,
-                column: "t".into(),
-                reason: "a time is required in every row".into(),
+            let t = p.t_s.ok_or_else(|| {
+                FusionError::csv(path, p.line, "t", "a time is required in every row")
             })?;
             if out.t_s.last().is_some_and(|&prev| t <= prev) {
-                return Err(FusionError::Csv {
-                    path: path.to_path_buf(),
-                    line: p.line,
-                    column: "t".into(),
-                    reason: format!("time {t} s does not increase"),
-                });
+                return Err(FusionError::csv(
+                    path,
+                    p.line,
+                    "t",
+                    format!("time {t} s does not increase"),
+                ));
             }
             out.t_s.push(t);
             out.q_deg.push(p.q.clone());
@@ -406,64 +404,103 @@ pub fn write_fused(path: &Path, samples: &[FusedSample]) -> Result<(), FusionErr
     Ok(())
 }
 
+impl FusionError {
+    /// A [`FusionError::Csv`] at `line` of `path`.
+    pub(crate) fn csv(path: &Path, line: usize, column: &str, reason: impl Into<String>) -> Self {
+        Self::Csv {
+            path: path.to_path_buf(),
+            line,
+            column: column.into(),
+            reason: reason.into(),
+        }
+    }
+
+    /// The fusion's form of a problem the table reader found in the CSV file `path`;
+    /// `no_rows` says what a file with a header and no data row lacks.
+    pub(crate) fn from_table(e: TableError, path: &Path, no_rows: &str) -> Self {
+        let csv = |line, column: &str, reason: String| Self::csv(path, line, column, reason);
+        match e {
+            TableError::Read { source, .. } => Self::Read {
+                path: path.to_path_buf(),
+                source,
+            },
+            TableError::NoHeader { .. } => csv(1, "header", "no header row".into()),
+            TableError::NoRows { line, .. } => csv(line, "rows", no_rows.into()),
+            TableError::MissingColumn { line, column, .. } => {
+                csv(line, &column, "column missing from the header".into())
+            }
+            TableError::DuplicateColumn { line, column, .. } => {
+                csv(line, &column, "column appears twice in the header".into())
+            }
+            TableError::FieldCount {
+                line,
+                expected,
+                found,
+                ..
+            } => csv(
+                line,
+                "row",
+                format!("{found} fields, the header has {expected}"),
+            ),
+            TableError::BadValue {
+                line,
+                column,
+                value,
+                problem,
+                ..
+            } => csv(line, &column, format!("{problem} (`{value}`)")),
+        }
+    }
+}
+
+/// What a `FUSED.csv` without sample rows lacks.
+const NO_FUSED_ROWS: &str = "no sample rows";
+
 /// Parses the text of `FUSED.csv` with `n_joints` joints (`path` names it in errors).
 pub fn parse_fused(
     text: &str,
     path: &Path,
     n_joints: usize,
 ) -> Result<Vec<FusedSample>, FusionError> {
-    let err = |line: usize, column: &str, reason: String| FusionError::Csv {
-        path: path.to_path_buf(),
-        line,
-        column: column.into(),
-        reason,
-    };
-    let mut rows = text
-        .lines()
-        .enumerate()
-        .map(|(i, l)| (i + 1, l.trim()))
-        .filter(|(_, l)| !l.is_empty() && !l.starts_with('#'));
-    let (hl, header) = rows
-        .next()
-        .ok_or_else(|| err(1, "header", "no header row".into()))?;
-    let cols: Vec<&str> = header.split(',').map(str::trim).collect();
-    let want = fused_header(n_joints);
-    let idx: Vec<usize> = want
+    let table = Table::parse(text, &path.display().to_string())
+        .map_err(|e| FusionError::from_table(e, path, NO_FUSED_ROWS))?;
+    fused_from_table(&table, path, n_joints)
+}
+
+/// Reads `FUSED.csv`.
+pub fn read_fused(path: &Path, n_joints: usize) -> Result<Vec<FusedSample>, FusionError> {
+    let table = Table::read(path).map_err(|e| FusionError::from_table(e, path, NO_FUSED_ROWS))?;
+    fused_from_table(&table, path, n_joints)
+}
+
+/// The samples of a parsed `FUSED.csv` table (every column of [`fused_header`] required,
+/// finite; `u` and `n` unit vectors).
+fn fused_from_table(
+    table: &Table,
+    path: &Path,
+    n_joints: usize,
+) -> Result<Vec<FusedSample>, FusionError> {
+    let table_err = |e| FusionError::from_table(e, path, NO_FUSED_ROWS);
+    let cols: Vec<usize> = fused_header(n_joints)
         .split(',')
-        .map(|name| {
-            cols.iter()
-                .position(|c| *c == name)
-                .ok_or_else(|| err(hl, name, "column missing from the header".into()))
-        })
-        .collect::<Result<_, _>>()?;
-    let names: Vec<&str> = want.split(',').collect();
-    let mut out = Vec::new();
-    for (line, row) in rows {
-        let f: Vec<&str> = row.split(',').map(str::trim).collect();
-        if f.len() != cols.len() {
-            return Err(err(
-                line,
-                "row",
-                format!("{} fields, the header has {}", f.len(), cols.len()),
-            ));
-        }
-        let v: Vec<f64> = idx
+        .map(|name| table.need(name))
+        .collect::<Result<_, _>>()
+        .map_err(table_err)?;
+    let mut out = Vec::with_capacity(table.rows.len());
+    for row in &table.rows {
+        let v: Vec<f64> = cols
             .iter()
-            .zip(&names)
-            .map(|(&i, name)| {
-                f[i].parse::<f64>()
-                    .ok()
-                    .filter(|x| x.is_finite())
-                    .ok_or_else(|| err(line, name, format!("not a finite number (`{}`)", f[i])))
-            })
-            .collect::<Result<_, _>>()?;
+            .map(|&c| table.number(row, c))
+            .collect::<Result<_, _>>()
+            .map_err(table_err)?;
         let at = |k: usize| v[1 + n_joints + k];
         let u = Vector3::new(at(4), at(5), at(6));
         let n = Vector3::new(at(8), at(9), at(10));
         for (dir, name) in [(u, "u_x"), (n, "n_x")] {
             if (dir.norm() - 1.0).abs() > 1e-6 {
-                return Err(err(
-                    line,
+                return Err(FusionError::csv(
+                    path,
+                    row.line,
                     name,
                     format!("direction of length {} is not a unit vector", dir.norm()),
                 ));
@@ -479,24 +516,13 @@ pub fn parse_fused(
             n,
         });
     }
-    if out.is_empty() {
-        return Err(err(hl, "rows", "no sample rows".into()));
-    }
     Ok(out)
-}
-
-/// Reads `FUSED.csv`.
-pub fn read_fused(path: &Path, n_joints: usize) -> Result<Vec<FusedSample>, FusionError> {
-    let text = std::fs::read_to_string(path).map_err(|source| FusionError::Read {
-        path: path.to_path_buf(),
-        source,
-    })?;
-    parse_fused(&text, path, n_joints)
 }
 
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::error::Classify;
 
     #[test]
     fn fused_file_round_trip_and_errors() {
@@ -521,5 +547,34 @@ mod tests {
             .unwrap_err()
             .to_string();
         assert!(msg.contains("f.csv:3") && msg.contains("dev_u"), "{msg}");
+        // every problem is bad input naming the file, the line and the column
+        let cases = [
+            (
+                text.replace("dev_u,", "dev_v,"),
+                "f.csv:2: dev_u: column missing",
+            ),
+            (
+                text.replace(",-0.123,", ",,"),
+                "f.csv:3: dev_u: missing value",
+            ),
+            (
+                text.replace(",-0.123,", ","),
+                "f.csv:3: row: 16 fields, the header has 17",
+            ),
+            (
+                text.replace(",1,0,0,", ",1,0,0.5,"),
+                "f.csv:3: u_x: direction of length",
+            ),
+            (
+                format!("# c\n{}\n", fused_header(5)),
+                "f.csv:2: rows: no sample rows",
+            ),
+            ("# only\n".into(), "f.csv:1: header: no header row"),
+        ];
+        for (bad, want) in cases {
+            let e = parse_fused(&bad, Path::new("f.csv"), 5).unwrap_err();
+            assert_eq!(e.kind(), crate::error::ErrorKind::BadInput);
+            assert!(e.to_string().starts_with(want), "`{e}` vs `{want}`");
+        }
     }
 }

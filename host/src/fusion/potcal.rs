@@ -42,6 +42,7 @@ use serde::{Deserialize, Serialize};
 use super::error::FusionError;
 use super::pot::PotSample;
 use crate::io::atomic::write_bytes_atomic;
+use crate::io::table::{Table, TableError};
 
 /// Format tag of the calibration file.
 pub const POTCAL_FORMAT: &str = "rigctl-potcal/1";
@@ -283,96 +284,72 @@ impl PotCalibration {
     }
 }
 
+/// What a jig file without data rows lacks.
+const NO_JIG_ROWS: &str = "no jig rows";
+
 /// Parses a jig file's text (see the module documentation).
 pub fn parse_jig_csv(text: &str, path: &Path) -> Result<JigFile, FusionError> {
-    let csv_err = |line: usize, column: &str, reason: String| FusionError::Csv {
-        path: path.to_path_buf(),
-        line,
-        column: column.to_string(),
-        reason,
-    };
-    let mut rows = text
-        .lines()
-        .enumerate()
-        .map(|(i, l)| (i + 1, l.trim()))
-        .filter(|(_, l)| !l.is_empty() && !l.starts_with('#'));
-    let (hline, header) = rows
-        .next()
-        .ok_or_else(|| csv_err(1, "header", "no header row".into()))?;
-    let cols: Vec<&str> = header.split(',').map(str::trim).collect();
-    let find = |name: &str| cols.iter().position(|c| *c == name);
-    let travel = find("travel_mm")
-        .ok_or_else(|| csv_err(hline, "travel_mm", "column missing from the header".into()))?;
-    let windows = match (find("raw"), find("start_s"), find("end_s")) {
-        (Some(r), _, _) => Err(r),
-        (None, Some(s), Some(e)) => Ok((s, e)),
-        _ => {
-            return Err(csv_err(
-                hline,
-                "raw",
-                "the header needs `raw` or `start_s,end_s`".into(),
-            ))
-        }
-    };
-    let mut points = Vec::new();
-    let mut wins = Vec::new();
-    for (line, row) in rows {
-        let fields: Vec<&str> = row.split(',').map(str::trim).collect();
-        if fields.len() != cols.len() {
-            return Err(csv_err(
-                line,
-                "row",
-                format!("{} fields, the header has {}", fields.len(), cols.len()),
-            ));
-        }
-        let num = |i: usize| -> Result<f64, FusionError> {
-            fields[i]
-                .parse::<f64>()
-                .ok()
-                .filter(|v| v.is_finite())
-                .ok_or_else(|| {
-                    csv_err(
-                        line,
-                        cols[i],
-                        format!("not a finite number (`{}`)", fields[i]),
-                    )
-                })
-        };
-        let t = num(travel)?;
-        match windows {
-            Err(r) => points.push(JigPoint {
-                raw: num(r)?,
-                travel_mm: t,
-            }),
-            Ok((s, e)) => {
-                let (s_v, e_v) = (num(s)?, num(e)?);
-                if e_v <= s_v {
-                    return Err(csv_err(line, "end_s", "must be after start_s".into()));
-                }
-                wins.push(JigWindow {
-                    start_s: s_v,
-                    end_s: e_v,
-                    travel_mm: t,
-                });
-            }
-        }
-    }
-    if points.is_empty() && wins.is_empty() {
-        return Err(csv_err(hline, "rows", "no jig rows".into()));
-    }
-    Ok(match windows {
-        Err(_) => JigFile::Points(points),
-        Ok(_) => JigFile::Windows(wins),
-    })
+    let table = Table::parse(text, &path.display().to_string())
+        .map_err(|e| FusionError::from_table(e, path, NO_JIG_ROWS))?;
+    jig_from_table(&table, path)
 }
 
 /// Reads a jig file.
 pub fn read_jig_csv(path: &Path) -> Result<JigFile, FusionError> {
-    let text = std::fs::read_to_string(path).map_err(|source| FusionError::Read {
-        path: path.to_path_buf(),
-        source,
-    })?;
-    parse_jig_csv(&text, path)
+    let table = Table::read(path).map_err(|e| FusionError::from_table(e, path, NO_JIG_ROWS))?;
+    jig_from_table(&table, path)
+}
+
+/// The gauges of a parsed jig table: `travel_mm` and either `raw` or `start_s,end_s`.
+fn jig_from_table(table: &Table, path: &Path) -> Result<JigFile, FusionError> {
+    let table_err = |e| FusionError::from_table(e, path, NO_JIG_ROWS);
+    let travel = table.need("travel_mm").map_err(table_err)?;
+    match (
+        table.find("raw"),
+        table.find("start_s"),
+        table.find("end_s"),
+    ) {
+        (Some(raw), _, _) => {
+            let points = table
+                .rows
+                .iter()
+                .map(|row| {
+                    let [travel_mm, raw] = table.numbers(row, [travel, raw])?;
+                    Ok(JigPoint { raw, travel_mm })
+                })
+                .collect::<Result<_, TableError>>()
+                .map_err(table_err)?;
+            Ok(JigFile::Points(points))
+        }
+        (None, Some(start), Some(end)) => {
+            let mut windows = Vec::with_capacity(table.rows.len());
+            for row in &table.rows {
+                let [travel_mm, start_s, end_s] = table
+                    .numbers(row, [travel, start, end])
+                    .map_err(table_err)?;
+                if end_s <= start_s {
+                    return Err(FusionError::csv(
+                        path,
+                        row.line,
+                        "end_s",
+                        "must be after start_s",
+                    ));
+                }
+                windows.push(JigWindow {
+                    start_s,
+                    end_s,
+                    travel_mm,
+                });
+            }
+            Ok(JigFile::Windows(windows))
+        }
+        _ => Err(FusionError::csv(
+            path,
+            table.header_line,
+            "raw",
+            "the header needs `raw` or `start_s,end_s`",
+        )),
+    }
 }
 
 /// Jig points from recording windows: the mean count of the samples inside each window (times
@@ -415,6 +392,7 @@ pub fn points_from_windows(
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::error::Classify;
 
     #[test]
     fn two_point_jig_is_exact_and_has_no_residual() {
@@ -516,6 +494,43 @@ mod tests {
             err.contains("jig.csv:2") && err.contains("travel_mm"),
             "{err}"
         );
+        // every problem is bad input naming the file, the line and the column
+        let cases = [
+            (
+                "# c\nraw,travel_mm\n1000,\n",
+                "jig.csv:3: travel_mm: missing value",
+            ),
+            (
+                "raw,travel_mm\n1000,1\nx,2\n",
+                "jig.csv:3: raw: not a number (`x`)",
+            ),
+            (
+                "raw,travel\n1000,1\n",
+                "jig.csv:1: travel_mm: column missing",
+            ),
+            (
+                "start_s,travel_mm\n1,1\n",
+                "jig.csv:1: raw: the header needs `raw`",
+            ),
+            (
+                "start_s,end_s,travel_mm\n1,1,1\n",
+                "jig.csv:2: end_s: must be after start_s",
+            ),
+            (
+                "raw,travel_mm\n1,2,3\n",
+                "jig.csv:2: row: 3 fields, the header has 2",
+            ),
+            ("raw,travel_mm\n", "jig.csv:1: rows: no jig rows"),
+            (
+                "raw,travel_mm,raw\n1,2,3\n",
+                "jig.csv:1: raw: column appears twice in the header",
+            ),
+        ];
+        for (text, want) in cases {
+            let e = parse_jig_csv(text, p).unwrap_err();
+            assert_eq!(e.kind(), crate::error::ErrorKind::BadInput);
+            assert!(e.to_string().starts_with(want), "`{e}` vs `{want}`");
+        }
         let samples: Vec<PotSample> = (0..3000u64)
             .map(|k| PotSample {
                 t_us: 5_000_000 + 1000 * k,

@@ -8,6 +8,7 @@
 
 use std::path::Path;
 
+use super::table::{Table, TableError};
 use crate::error::{Classify, ErrorKind};
 use crate::model::Model;
 
@@ -119,7 +120,7 @@ pub enum PoseCsvError {
         line: usize,
         column: String,
         value: String,
-        problem: &'static str,
+        problem: String,
     },
     #[error(
         "{file}:{line}: column `{column}`: joint value {value} outside the limits [{min}, {max}]"
@@ -137,6 +138,48 @@ pub enum PoseCsvError {
 impl Classify for PoseCsvError {
     fn kind(&self) -> ErrorKind {
         ErrorKind::BadInput
+    }
+}
+
+/// The shared table reader's errors in the pose file's terms (one to one; no data rows is
+/// [`PoseCsvError::NoPoses`]).
+impl From<TableError> for PoseCsvError {
+    fn from(e: TableError) -> Self {
+        match e {
+            TableError::Read { file, source } => Self::Read { file, source },
+            TableError::NoHeader { file } => Self::NoHeader { file },
+            TableError::NoRows { file, .. } => Self::NoPoses { file },
+            TableError::MissingColumn { file, line, column } => {
+                Self::MissingColumn { file, line, column }
+            }
+            TableError::DuplicateColumn { file, line, column } => {
+                Self::DuplicateColumn { file, line, column }
+            }
+            TableError::FieldCount {
+                file,
+                line,
+                expected,
+                found,
+            } => Self::FieldCount {
+                file,
+                line,
+                expected,
+                found,
+            },
+            TableError::BadValue {
+                file,
+                line,
+                column,
+                value,
+                problem,
+            } => Self::BadValue {
+                file,
+                line,
+                column,
+                value,
+                problem,
+            },
+        }
     }
 }
 
@@ -159,120 +202,53 @@ struct Layout {
     extra: Vec<usize>,
 }
 
-fn layout(
-    header: &[String],
-    file: &str,
-    line: usize,
-    spec: &PoseSpec,
-) -> Result<Layout, PoseCsvError> {
-    for (i, h) in header.iter().enumerate() {
-        if header[..i].contains(h) {
-            return Err(PoseCsvError::DuplicateColumn {
-                file: file.into(),
-                line,
-                column: h.clone(),
-            });
-        }
-    }
-    let find = |name: &str| header.iter().position(|h| h == name);
-    let need = |name: &str| {
-        find(name).ok_or_else(|| PoseCsvError::MissingColumn {
-            file: file.into(),
-            line,
-            column: name.into(),
+impl Layout {
+    fn new(table: &Table, spec: &PoseSpec) -> Result<Self, TableError> {
+        let q = (1..=spec.n_joints)
+            .map(|i| table.need(&format!("q{i}")))
+            .collect::<Result<Vec<_>, _>>()?;
+        let xyz = match (table.find("x"), table.find("y"), table.find("z")) {
+            (Some(x), Some(y), Some(z)) => Some([x, y, z]),
+            (None, None, None) if !spec.require_xyz => None,
+            _ => Some([table.need("x")?, table.need("y")?, table.need("z")?]),
+        };
+        let (t, id) = (table.find("t"), table.find("id"));
+        let used: Vec<usize> = q
+            .iter()
+            .copied()
+            .chain(xyz.into_iter().flatten())
+            .chain(t)
+            .chain(id)
+            .collect();
+        let extra = (0..table.header.len())
+            .filter(|i| !used.contains(i))
+            .collect();
+        Ok(Self {
+            q,
+            xyz,
+            t,
+            id,
+            extra,
         })
-    };
-    let q = (1..=spec.n_joints)
-        .map(|i| need(&format!("q{i}")))
-        .collect::<Result<Vec<_>, _>>()?;
-    let xyz = match (find("x"), find("y"), find("z")) {
-        (Some(x), Some(y), Some(z)) => Some([x, y, z]),
-        (None, None, None) if !spec.require_xyz => None,
-        _ => Some([need("x")?, need("y")?, need("z")?]),
-    };
-    let (t, id) = (find("t"), find("id"));
-    let used: Vec<usize> = q
-        .iter()
-        .copied()
-        .chain(xyz.into_iter().flatten())
-        .chain(t)
-        .chain(id)
-        .collect();
-    let extra = (0..header.len()).filter(|i| !used.contains(i)).collect();
-    Ok(Layout {
-        q,
-        xyz,
-        t,
-        id,
-        extra,
-    })
-}
-
-fn number(
-    fields: &[&str],
-    col: usize,
-    header: &[String],
-    file: &str,
-    line: usize,
-) -> Result<f64, PoseCsvError> {
-    let raw = fields[col];
-    let bad = |problem| PoseCsvError::BadValue {
-        file: file.into(),
-        line,
-        column: header[col].clone(),
-        value: raw.to_string(),
-        problem,
-    };
-    if raw.is_empty() {
-        return Err(bad("missing value"));
-    }
-    let v: f64 = raw.parse().map_err(|_| bad("not a number"))?;
-    if v.is_nan() {
-        Err(bad("NaN"))
-    } else if v.is_infinite() {
-        Err(bad("infinite"))
-    } else {
-        Ok(v)
     }
 }
 
-/// Parses pose-file text; `file` names it in messages.
+/// Parses pose-file text (a leading byte-order mark is ignored); `file` names it in messages.
 pub fn parse_poses(text: &str, file: &str, spec: &PoseSpec) -> Result<PoseFile, PoseCsvError> {
     let text = text.strip_prefix('\u{feff}').unwrap_or(text);
-    let mut rows = text
-        .lines()
-        .enumerate()
-        .map(|(i, l)| (i + 1, l.trim_end_matches('\r')))
-        .filter(|(_, l)| !l.trim().is_empty() && !l.trim_start().starts_with('#'));
-    let (header_line, header_text) = rows
-        .next()
-        .ok_or_else(|| PoseCsvError::NoHeader { file: file.into() })?;
-    let header: Vec<String> = header_text
-        .split(',')
-        .map(|h| h.trim().to_string())
-        .collect();
-    let lay = layout(&header, file, header_line, spec)?;
-    let mut poses = Vec::new();
-    for (line, row) in rows {
-        let fields: Vec<&str> = row.split(',').map(str::trim).collect();
-        if fields.len() != header.len() {
-            return Err(PoseCsvError::FieldCount {
-                file: file.into(),
-                line,
-                expected: header.len(),
-                found: fields.len(),
-            });
-        }
-        let num = |col| number(&fields, col, &header, file, line);
+    let table = Table::parse(text, file)?;
+    let lay = Layout::new(&table, spec)?;
+    let mut poses = Vec::with_capacity(table.rows.len());
+    for row in &table.rows {
         let mut q = Vec::with_capacity(lay.q.len());
         for (j, &col) in lay.q.iter().enumerate() {
-            let v = num(col)?;
+            let v = table.number(row, col)?;
             if let Some(&[min, max]) = spec.limits.get(j) {
                 if v < min || v > max {
                     return Err(PoseCsvError::JointLimit {
-                        file: file.into(),
-                        line,
-                        column: header[col].clone(),
+                        file: table.file.clone(),
+                        line: row.line,
+                        column: table.header[col].clone(),
                         value: v,
                         min,
                         max,
@@ -281,27 +257,21 @@ pub fn parse_poses(text: &str, file: &str, spec: &PoseSpec) -> Result<PoseFile, 
             }
             q.push(v);
         }
-        let xyz_mm = match lay.xyz {
-            Some([x, y, z]) => Some([num(x)?, num(y)?, num(z)?]),
-            None => None,
-        };
-        let t_s = lay.t.map(num).transpose()?;
+        let xyz_mm = lay.xyz.map(|cols| table.numbers(row, cols)).transpose()?;
+        let t_s = lay.t.map(|c| table.number(row, c)).transpose()?;
         poses.push(Pose {
-            line,
+            line: row.line,
             q,
             xyz_mm,
             t_s,
-            id: lay.id.map(|c| fields[c].to_string()),
-            extra: lay.extra.iter().map(|&c| fields[c].to_string()).collect(),
+            id: lay.id.map(|c| row.fields[c].clone()),
+            extra: lay.extra.iter().map(|&c| row.fields[c].clone()).collect(),
         });
     }
-    if poses.is_empty() {
-        return Err(PoseCsvError::NoPoses { file: file.into() });
-    }
     Ok(PoseFile {
-        source: file.into(),
-        extra_columns: lay.extra.iter().map(|&c| header[c].clone()).collect(),
-        header,
+        extra_columns: lay.extra.iter().map(|&c| table.header[c].clone()).collect(),
+        source: table.file,
+        header: table.header,
         poses,
     })
 }

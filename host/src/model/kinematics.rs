@@ -21,6 +21,11 @@ pub enum Tilt<'a> {
     /// Tilting from externally supplied moments (kgf.m in joint frame i, one per joint), e.g.
     /// from recursive Newton-Euler along a trajectory.
     Moments(&'a [Vector3<f64>]),
+    /// Tilting from the static gravity moments of this pose **plus** supplied extra moments
+    /// (kgf.m in joint frame i, one per joint; e.g. the inertial part of the moments in motion).
+    /// The static part follows the model's parameters (payload, base tilt) and the joints, and
+    /// is differentiated like `Static`; the extra part is held fixed.
+    StaticPlus(&'a [Vector3<f64>]),
 }
 
 /// World (frame R) placement of every frame of the chain: entry `k` is the frame after
@@ -278,6 +283,27 @@ impl Model {
             Tilt::Static => {
                 let fr = self.frames(q_deg, None)?;
                 let moments_kgfm = self.moments_from_frames(&fr);
+                let tilts_deg = self.tilts_deg(&moments_kgfm)?;
+                Ok(TiltState {
+                    moments_kgfm,
+                    tilts_deg,
+                    untilted: Some(fr),
+                })
+            }
+            Tilt::StaticPlus(extra) => {
+                if extra.len() != self.n_joints() {
+                    return Err(ModelError::JointCount {
+                        expected: self.n_joints(),
+                        found: extra.len(),
+                    });
+                }
+                let fr = self.frames(q_deg, None)?;
+                let moments_kgfm: Vec<Vector3<f64>> = self
+                    .moments_from_frames(&fr)
+                    .iter()
+                    .zip(extra)
+                    .map(|(a, b)| a + b)
+                    .collect();
                 let tilts_deg = self.tilts_deg(&moments_kgfm)?;
                 Ok(TiltState {
                     moments_kgfm,

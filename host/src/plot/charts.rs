@@ -1,6 +1,15 @@
 //! The chart types of [`crate::plot`]: plain data in, drawing on any plotters backend.
+//!
+//! Every chart is built from the same crate-internal scaffolding: `Axes::draw` (caption,
+//! margins, label areas, mesh and axis descriptions), `labelled_series` (a series with its
+//! legend swatch: `bar_swatch`, `dot_swatch`, `line_swatch`) and `legend_box`.
 
+use std::borrow::Borrow;
+use std::ops::Range;
+
+use plotters::coord::types::RangedCoordf64;
 use plotters::coord::Shift;
+use plotters::element::{Drawable, PointCollection};
 use plotters::prelude::*;
 
 use super::{draw_err, Chart, PlotError, FONT_FAMILY};
@@ -42,29 +51,43 @@ impl Series {
     }
 }
 
-fn data_err(title: &str, message: impl Into<String>) -> PlotError {
+pub(crate) fn data_err(title: &str, message: impl Into<String>) -> PlotError {
     PlotError::Data {
         title: title.to_string(),
         message: message.into(),
     }
 }
 
-/// Finite range of `values`, widened so that it is never empty; `None` if nothing is finite.
-fn finite_range<'a>(values: impl IntoIterator<Item = &'a f64>) -> Option<(f64, f64)> {
+/// Smallest and largest finite value of `values`; `None` if nothing is finite.
+fn finite_bounds<'a>(values: impl IntoIterator<Item = &'a f64>) -> Option<(f64, f64)> {
     let (mut lo, mut hi) = (f64::INFINITY, f64::NEG_INFINITY);
     for &v in values.into_iter().filter(|v| v.is_finite()) {
         lo = lo.min(v);
         hi = hi.max(v);
     }
-    if lo > hi {
-        return None;
-    }
+    (lo <= hi).then_some((lo, hi))
+}
+
+/// Finite range of `values`, widened so that it is never empty; `None` if nothing is finite.
+pub(crate) fn finite_range<'a>(values: impl IntoIterator<Item = &'a f64>) -> Option<(f64, f64)> {
+    let (lo, hi) = finite_bounds(values)?;
     let pad = if hi > lo {
         0.05 * (hi - lo)
     } else {
         lo.abs().max(1.0) * 0.05
     };
     Some((lo - pad, hi + pad))
+}
+
+/// X range of a line plot: the exact finite extent (lines end at the frame), padded only when
+/// it is a single value.
+pub(crate) fn line_x_range<'a>(
+    values: impl IntoIterator<Item = &'a f64> + Clone,
+) -> Option<(f64, f64)> {
+    match finite_bounds(values.clone())? {
+        (lo, hi) if hi > lo => Some((lo, hi)),
+        _ => finite_range(values),
+    }
 }
 
 fn check_before_after(title: &str, before: &[f64], after: &[f64]) -> Result<(), PlotError> {
@@ -80,7 +103,102 @@ fn check_before_after(title: &str, before: &[f64], after: &[f64]) -> Result<(), 
     Ok(())
 }
 
-fn legend_box<'a, DB: DrawingBackend + 'a, CT: CoordTranslate>(
+/// A chart context with `f64` axes.
+pub(crate) type XyChart<'a, DB> = ChartContext<'a, DB, Cartesian2d<RangedCoordf64, RangedCoordf64>>;
+
+/// The axes of one plot: ranges, descriptions and layout. [`Axes::draw`] is the scaffolding
+/// every chart shares.
+pub(crate) struct Axes<'s> {
+    /// Caption above the plotting area (`None` when the area is already titled).
+    pub caption: Option<&'s str>,
+    /// X range.
+    pub x: Range<f64>,
+    /// Y range.
+    pub y: Range<f64>,
+    /// X axis description (with unit).
+    pub x_desc: &'s str,
+    /// Y axis description (with unit).
+    pub y_desc: &'s str,
+    /// Width of the y label area, px.
+    pub y_label_px: u32,
+    /// Draw vertical grid lines.
+    pub x_mesh: bool,
+}
+
+impl Axes<'_> {
+    /// Builds the coordinate system on `area` and draws the mesh and axis descriptions;
+    /// `title` names the chart in errors.
+    pub(crate) fn draw<'a, DB: DrawingBackend>(
+        &self,
+        area: &DrawingArea<DB, Shift>,
+        title: &str,
+    ) -> Result<XyChart<'a, DB>, PlotError> {
+        let mut builder = ChartBuilder::on(area);
+        if let Some(caption) = self.caption {
+            builder.caption(caption, (FONT_FAMILY, 18));
+        }
+        let mut chart = builder
+            .margin(10)
+            .x_label_area_size(35)
+            .y_label_area_size(self.y_label_px)
+            .build_cartesian_2d(self.x.clone(), self.y.clone())
+            .map_err(draw_err(title))?;
+        let mut mesh = chart.configure_mesh();
+        if !self.x_mesh {
+            mesh.disable_x_mesh();
+        }
+        mesh.x_desc(self.x_desc)
+            .y_desc(self.y_desc)
+            .label_style((FONT_FAMILY, 12))
+            .draw()
+            .map_err(draw_err(title))?;
+        Ok(chart)
+    }
+}
+
+/// Legend swatch of bars: a filled box.
+pub(crate) fn bar_swatch(color: RGBColor) -> impl Fn((i32, i32)) -> Rectangle<(i32, i32)> {
+    move |(x, y)| Rectangle::new([(x, y - 5), (x + 14, y + 5)], color.filled())
+}
+
+/// Legend swatch of scatter points: a dot.
+pub(crate) fn dot_swatch(color: RGBColor) -> impl Fn((i32, i32)) -> Circle<(i32, i32), i32> {
+    move |(x, y)| Circle::new((x + 7, y), 3, color.filled())
+}
+
+/// Legend swatch of a line series: a short line.
+pub(crate) fn line_swatch(color: RGBColor) -> impl Fn((i32, i32)) -> PathElement<(i32, i32)> {
+    move |(x, y)| PathElement::new(vec![(x, y), (x + 18, y)], color.stroke_width(2))
+}
+
+/// Draws `elements` on `chart` and registers them in the legend as `label`, shown by
+/// `swatch` (one of [`bar_swatch`], [`dot_swatch`], [`line_swatch`]).
+pub(crate) fn labelled_series<'a, DB, E, R, S, L, LE>(
+    chart: &mut XyChart<'a, DB>,
+    title: &str,
+    elements: S,
+    label: &str,
+    swatch: L,
+) -> Result<(), PlotError>
+where
+    DB: DrawingBackend + 'a,
+    S: IntoIterator<Item = R>,
+    R: Borrow<E>,
+    E: Drawable<DB>,
+    for<'b> &'b E: PointCollection<'b, (f64, f64)>,
+    L: Fn((i32, i32)) -> LE + 'a,
+    LE: IntoDynElement<'a, DB, (i32, i32)>,
+{
+    chart
+        .draw_series(elements)
+        .map_err(draw_err(title))?
+        .label(label)
+        .legend(swatch);
+    Ok(())
+}
+
+/// Draws the legend of `chart` (upper right, white box).
+pub(crate) fn legend_box<'a, DB: DrawingBackend + 'a, CT: CoordTranslate>(
     chart: &mut ChartContext<'a, DB, CT>,
     title: &str,
 ) -> Result<(), PlotError> {
@@ -122,22 +240,16 @@ impl Chart for PoseErrorBars {
         order.sort_by(|&a, &b| self.before_mm[b].total_cmp(&self.before_mm[a]));
         let (_, hi) = finite_range(self.before_mm.iter().chain(&self.after_mm))
             .ok_or_else(|| data_err(t, "no finite value"))?;
-        let n = order.len();
-        let mut chart = ChartBuilder::on(area)
-            .caption(t, (FONT_FAMILY, 18))
-            .margin(10)
-            .x_label_area_size(35)
-            .y_label_area_size(60)
-            .build_cartesian_2d(0.0..n as f64, 0.0..hi.max(1e-9))
-            .map_err(draw_err(t))?;
-        chart
-            .configure_mesh()
-            .disable_x_mesh()
-            .x_desc("pose (sorted by error before)")
-            .y_desc("|dP| (mm)")
-            .label_style((FONT_FAMILY, 12))
-            .draw()
-            .map_err(draw_err(t))?;
+        let mut chart = Axes {
+            caption: Some(t),
+            x: 0.0..order.len() as f64,
+            y: 0.0..hi.max(1e-9),
+            x_desc: "pose (sorted by error before)",
+            y_desc: "|dP| (mm)",
+            y_label_px: 60,
+            x_mesh: false,
+        }
+        .draw(area, t)?;
         let bar = |values: &[f64], inset: f64, color: RGBColor| {
             order
                 .iter()
@@ -152,16 +264,13 @@ impl Chart for PoseErrorBars {
                 })
                 .collect::<Vec<_>>()
         };
-        chart
-            .draw_series(bar(&self.before_mm, 0.05, BEFORE))
-            .map_err(draw_err(t))?
-            .label(self.labels[0].as_str())
-            .legend(|(x, y)| Rectangle::new([(x, y - 5), (x + 14, y + 5)], BEFORE.filled()));
-        chart
-            .draw_series(bar(&self.after_mm, 0.25, AFTER))
-            .map_err(draw_err(t))?
-            .label(self.labels[1].as_str())
-            .legend(|(x, y)| Rectangle::new([(x, y - 5), (x + 14, y + 5)], AFTER.filled()));
+        for (values, inset, label, color) in [
+            (&self.before_mm, 0.05, &self.labels[0], BEFORE),
+            (&self.after_mm, 0.25, &self.labels[1], AFTER),
+        ] {
+            let bars = bar(values, inset, color);
+            labelled_series(&mut chart, t, bars, label, bar_swatch(color))?;
+        }
         legend_box(&mut chart, t)
     }
 }
@@ -221,21 +330,16 @@ impl Chart for ErrorHistogram {
         let ca = Self::counts(&self.after_mm, bins, max_mm);
         let top = cb.iter().chain(&ca).copied().max().unwrap_or(1).max(1) as f64 * 1.1;
         let w = max_mm / bins as f64;
-        let mut chart = ChartBuilder::on(area)
-            .caption(t, (FONT_FAMILY, 18))
-            .margin(10)
-            .x_label_area_size(35)
-            .y_label_area_size(50)
-            .build_cartesian_2d(0.0..max_mm, 0.0..top)
-            .map_err(draw_err(t))?;
-        chart
-            .configure_mesh()
-            .disable_x_mesh()
-            .x_desc("|dP| (mm)")
-            .y_desc("poses")
-            .label_style((FONT_FAMILY, 12))
-            .draw()
-            .map_err(draw_err(t))?;
+        let mut chart = Axes {
+            caption: Some(t),
+            x: 0.0..max_mm,
+            y: 0.0..top,
+            x_desc: "|dP| (mm)",
+            y_desc: "poses",
+            y_label_px: 50,
+            x_mesh: false,
+        }
+        .draw(area, t)?;
         let bars = |c: &[usize], half: f64, color: RGBColor| {
             c.iter()
                 .enumerate()
@@ -245,16 +349,13 @@ impl Chart for ErrorHistogram {
                 })
                 .collect::<Vec<_>>()
         };
-        chart
-            .draw_series(bars(&cb, 0.0, BEFORE))
-            .map_err(draw_err(t))?
-            .label(self.labels[0].as_str())
-            .legend(|(x, y)| Rectangle::new([(x, y - 5), (x + 14, y + 5)], BEFORE.filled()));
-        chart
-            .draw_series(bars(&ca, 1.0, AFTER))
-            .map_err(draw_err(t))?
-            .label(self.labels[1].as_str())
-            .legend(|(x, y)| Rectangle::new([(x, y - 5), (x + 14, y + 5)], AFTER.filled()));
+        for (counts, half, label, color) in [
+            (&cb, 0.0, &self.labels[0], BEFORE),
+            (&ca, 1.0, &self.labels[1], AFTER),
+        ] {
+            let elements = bars(counts, half, color);
+            labelled_series(&mut chart, t, elements, label, bar_swatch(color))?;
+        }
         legend_box(&mut chart, t)
     }
 }
@@ -357,28 +458,12 @@ impl Chart for LineChart {
         if self.x.is_empty() || self.panels.is_empty() {
             return Err(data_err(t, "no values"));
         }
-        let (x0, x1) = finite_range(&self.x).ok_or_else(|| data_err(t, "no finite x"))?;
         let (x0, x1) = if self.markers {
-            (x0, x1)
+            finite_range(&self.x)
         } else {
-            let lo = self
-                .x
-                .iter()
-                .copied()
-                .filter(|v| v.is_finite())
-                .fold(f64::INFINITY, f64::min);
-            let hi = self
-                .x
-                .iter()
-                .copied()
-                .filter(|v| v.is_finite())
-                .fold(f64::NEG_INFINITY, f64::max);
-            if hi > lo {
-                (lo, hi)
-            } else {
-                (x0, x1)
-            }
-        };
+            line_x_range(&self.x)
+        }
+        .ok_or_else(|| data_err(t, "no finite x"))?;
         let titled = area.titled(t, (FONT_FAMILY, 18)).map_err(draw_err(t))?;
         let parts = titled.split_evenly((self.panels.len(), 1));
         for (panel, part) in self.panels.iter().zip(&parts) {
@@ -399,19 +484,16 @@ impl Chart for LineChart {
                 finite_range(panel.series.iter().flat_map(|s| &s.values)).ok_or_else(|| {
                     data_err(t, format!("panel {:?}: no finite value", panel.y_label))
                 })?;
-            let mut chart = ChartBuilder::on(part)
-                .margin(10)
-                .x_label_area_size(35)
-                .y_label_area_size(65)
-                .build_cartesian_2d(x0..x1, y0..y1)
-                .map_err(draw_err(t))?;
-            chart
-                .configure_mesh()
-                .x_desc(self.x_label.as_str())
-                .y_desc(panel.y_label.as_str())
-                .label_style((FONT_FAMILY, 12))
-                .draw()
-                .map_err(draw_err(t))?;
+            let mut chart = Axes {
+                caption: None,
+                x: x0..x1,
+                y: y0..y1,
+                x_desc: &self.x_label,
+                y_desc: &panel.y_label,
+                y_label_px: 65,
+                x_mesh: true,
+            }
+            .draw(part, t)?;
             for (k, s) in panel.series.iter().enumerate() {
                 let color = PALETTE[k % PALETTE.len()];
                 let pts: Vec<(f64, f64)> = self
@@ -421,13 +503,8 @@ impl Chart for LineChart {
                     .filter(|(x, y)| x.is_finite() && y.is_finite())
                     .map(|(x, y)| (*x, *y))
                     .collect();
-                chart
-                    .draw_series(LineSeries::new(pts.clone(), color.stroke_width(2)))
-                    .map_err(draw_err(t))?
-                    .label(s.label.as_str())
-                    .legend(move |(x, y)| {
-                        PathElement::new(vec![(x, y), (x + 18, y)], color.stroke_width(2))
-                    });
+                let line = LineSeries::new(pts.clone(), color.stroke_width(2));
+                labelled_series(&mut chart, t, line, &s.label, line_swatch(color))?;
                 if self.markers {
                     chart
                         .draw_series(pts.into_iter().map(|p| Circle::new(p, 2, color.filled())))
@@ -478,20 +555,16 @@ impl Chart for Scatter {
         let (x0, x1) = finite_range(&self.x).ok_or_else(|| data_err(t, "no finite x"))?;
         let (y0, y1) = finite_range(self.before.iter().chain(&self.after).chain(&[0.0]))
             .ok_or_else(|| data_err(t, "no finite value"))?;
-        let mut chart = ChartBuilder::on(area)
-            .caption(t, (FONT_FAMILY, 18))
-            .margin(10)
-            .x_label_area_size(35)
-            .y_label_area_size(65)
-            .build_cartesian_2d(x0..x1, y0..y1)
-            .map_err(draw_err(t))?;
-        chart
-            .configure_mesh()
-            .x_desc(self.x_label.as_str())
-            .y_desc(self.y_label.as_str())
-            .label_style((FONT_FAMILY, 12))
-            .draw()
-            .map_err(draw_err(t))?;
+        let mut chart = Axes {
+            caption: Some(t),
+            x: x0..x1,
+            y: y0..y1,
+            x_desc: &self.x_label,
+            y_desc: &self.y_label,
+            y_label_px: 65,
+            x_mesh: true,
+        }
+        .draw(area, t)?;
         let pts = |ys: &[f64], color: RGBColor| {
             self.x
                 .iter()
@@ -500,16 +573,97 @@ impl Chart for Scatter {
                 .map(move |(x, y)| Circle::new((*x, *y), 3, color.filled()))
                 .collect::<Vec<_>>()
         };
-        chart
-            .draw_series(pts(&self.before, BEFORE))
-            .map_err(draw_err(t))?
-            .label(self.labels[0].as_str())
-            .legend(|(x, y)| Circle::new((x + 7, y), 3, BEFORE.filled()));
-        chart
-            .draw_series(pts(&self.after, AFTER))
-            .map_err(draw_err(t))?
-            .label(self.labels[1].as_str())
-            .legend(|(x, y)| Circle::new((x + 7, y), 3, AFTER.filled()));
+        for (ys, label, color) in [
+            (&self.before, &self.labels[0], BEFORE),
+            (&self.after, &self.labels[1], AFTER),
+        ] {
+            let dots = pts(ys, color);
+            labelled_series(&mut chart, t, dots, label, dot_swatch(color))?;
+        }
         legend_box(&mut chart, t)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::plot::svg_string;
+
+    #[test]
+    fn ranges_pad_by_five_percent_and_never_collapse() {
+        let (lo, hi) = finite_range(&[2.0, f64::NAN, 4.0]).unwrap();
+        assert!(
+            (lo - 1.9).abs() < 1e-12 && (hi - 4.1).abs() < 1e-12,
+            "{lo} {hi}"
+        );
+        // a single value: +-5 % of max(|v|, 1)
+        assert_eq!(finite_range(&[0.0]), Some((-0.05, 0.05)));
+        assert_eq!(finite_range(&[f64::NAN]), None);
+        // lines use the exact extent unless it is a single value
+        assert_eq!(line_x_range(&[3.0, 1.0, f64::INFINITY]), Some((1.0, 3.0)));
+        assert_eq!(line_x_range(&[2.0, 2.0]), finite_range(&[2.0]));
+    }
+
+    #[test]
+    fn histogram_counts_by_hand() {
+        // bins of width 1 over 0..4; 4.0 goes to the last bin, negatives and NaN are dropped
+        let c = ErrorHistogram::counts(&[0.0, 0.5, 1.0, 3.9, 4.0, -1.0, f64::NAN], 4, 4.0);
+        assert_eq!(c, vec![2, 1, 0, 2]);
+    }
+
+    #[test]
+    fn every_chart_draws_its_legend_labels() {
+        let before = vec![1.0, 3.0, 2.0];
+        let after = vec![0.5, 0.25, 0.125];
+        let labels = ["lbl-before".to_string(), "lbl-after".to_string()];
+        let svgs = [
+            svg_string(&PoseErrorBars {
+                title: "bars".into(),
+                before_mm: before.clone(),
+                after_mm: after.clone(),
+                labels: labels.clone(),
+            }),
+            svg_string(&ErrorHistogram {
+                title: "hist".into(),
+                before_mm: before.clone(),
+                after_mm: after.clone(),
+                bins: 3,
+                labels: labels.clone(),
+            }),
+            svg_string(&Scatter {
+                title: "scatter".into(),
+                x_label: "q1 (deg)".into(),
+                y_label: "|dP| (mm)".into(),
+                x: vec![1.0, 2.0, 3.0],
+                before: before.clone(),
+                after: after.clone(),
+                labels: labels.clone(),
+            }),
+            svg_string(&LineChart::path_error(
+                vec![0.0, 1.0, 2.0],
+                before.clone(),
+                after.clone(),
+                ["lbl-before", "lbl-after"],
+            )),
+        ];
+        for svg in svgs {
+            let svg = svg.unwrap_or_else(|e| panic!("{e}"));
+            assert!(svg.contains("lbl-before") && svg.contains("lbl-after"));
+        }
+    }
+
+    #[test]
+    fn bad_data_is_a_data_error() {
+        let bars = PoseErrorBars {
+            title: "bars".into(),
+            before_mm: vec![1.0, 2.0],
+            after_mm: vec![1.0],
+            labels: ["a".into(), "b".into()],
+        };
+        assert!(matches!(svg_string(&bars), Err(PlotError::Data { .. })));
+        let mut line = LineChart::path_error(vec![0.0, 1.0], vec![1.0], vec![1.0, 2.0], ["a", "b"]);
+        assert!(matches!(svg_string(&line), Err(PlotError::Data { .. })));
+        line.x = vec![f64::NAN, f64::NAN];
+        assert!(matches!(svg_string(&line), Err(PlotError::Data { .. })));
     }
 }

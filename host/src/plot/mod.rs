@@ -9,8 +9,9 @@
 //! | [`ErrorHistogram`] | histogram of the pose errors before / after |
 //! | [`LineChart`] | one or more stacked panels of series over a common x: error along a path (fig. 5.12), influence of each parameter over the poses (fig. 3.8), joint moments and tilts along a trajectory (fig. 5.8-5.10) |
 //! | [`Scatter`] | residual against a regressor, before / after (diagnose) |
+//! | [`PathErrorsChart`] | thesis fig. 5.12 from the low-cost rig: `|dP|` before / standard / after and the two measured deviations along the drawn path, from a `calibrate --errors-csv` file (see [`path_errors`]) |
 //!
-//! [`write`]`(path, &chart)` picks the format from the extension (`.png` or `.svg`) and writes
+//! [`write()`]`(path, &chart)` picks the format from the extension (`.png` or `.svg`) and writes
 //! the file atomically; [`svg_string`] returns the SVG document. Text in PNG files is drawn
 //! with the embedded DejaVu Sans (assets/DejaVuSans.ttf, Bitstream Vera licence), registered on
 //! first use: no system font is looked up.
@@ -24,8 +25,13 @@ use crate::error::{Classify, ErrorKind};
 use crate::io::atomic::{write_bytes_atomic, AtomicWriteError};
 
 pub mod charts;
+pub mod path_errors;
 
 pub use charts::{ErrorHistogram, LineChart, Panel, PoseErrorBars, Scatter, Series};
+pub use path_errors::{
+    parse_path_errors, path_errors_svg, read_path_errors, PathErrorSummary, PathErrors,
+    PathErrorsChart, PathErrorsError,
+};
 
 /// The font family name every chart uses.
 pub const FONT_FAMILY: &str = "sans-serif";
@@ -99,7 +105,7 @@ pub trait Chart {
     fn draw<DB: DrawingBackend>(&self, area: &DrawingArea<DB, Shift>) -> Result<(), PlotError>;
 }
 
-/// Registers the embedded font under [`FONT_FAMILY`] once per process. Called by [`write`] and
+/// Registers the embedded font under [`FONT_FAMILY`] once per process. Called by [`write()`] and
 /// [`svg_string`]; any other code drawing text with plotters must call it first.
 pub fn register_fonts() -> Result<(), PlotError> {
     static DONE: std::sync::OnceLock<bool> = std::sync::OnceLock::new();

@@ -6,6 +6,7 @@ use super::analysis::{
     demo_trajectory, evaluate, influence_names, moments_and_tilts, most_correlated_joint,
     parameter_influence, path_error, Evaluated,
 };
+use super::path_errors::path_errors_section;
 use super::run_dir::RunDir;
 use super::table::{tables_from_calibrate_json, Column, ErrorTable};
 use super::{
@@ -235,8 +236,20 @@ pub fn build_report(dir: &std::path::Path, opts: &ReportOptions) -> Result<Repor
     if let Some((name, doc)) = &run.diagnose {
         report.diagnose = Some(diagnose_section(name, doc));
     }
+    if let Some(path) = &run.path_errors {
+        let method = run
+            .calibrate
+            .first()
+            .and_then(|(_, d)| d.get("method"))
+            .and_then(Value::as_str);
+        report.path_errors = path_errors_section(path, method, &mut notes);
+    }
     // the demonstration trajectory alone (nominal model only) is not a report of this run
-    if report.tables.is_empty() && report.parameters.is_empty() && report.diagnose.is_none() {
+    if report.tables.is_empty()
+        && report.parameters.is_empty()
+        && report.diagnose.is_none()
+        && report.path_errors.is_none()
+    {
         return Err(ReportError::NothingUsable {
             path: dir.to_path_buf(),
             notes,

@@ -3,7 +3,7 @@
 use std::fmt::Write as _;
 
 use super::table::ErrorTable;
-use super::Report;
+use super::{Figure, Report};
 
 /// `text` with `& < > " '` escaped for HTML text and attribute values.
 pub fn escape(text: &str) -> String {
@@ -68,6 +68,16 @@ fn inline_svg(svg: &str) -> &str {
         Some(i) => &svg[i..],
         None => svg,
     }
+}
+
+/// Appends `f` as a `<figure>` (inline SVG and caption).
+pub(crate) fn figure(s: &mut String, f: &Figure) {
+    let _ = writeln!(
+        s,
+        "<figure>{}<figcaption>{}</figcaption></figure>",
+        inline_svg(&f.svg),
+        escape(&f.caption)
+    );
 }
 
 /// The whole page.
@@ -155,14 +165,12 @@ pub fn render_html(r: &Report) -> String {
             }
         }
     }
+    if let Some(p) = &r.path_errors {
+        super::path_errors::render(&mut s, p);
+    }
     s.push_str("<h2 id=\"figures\">Figures</h2>\n");
     for f in &r.figures {
-        let _ = writeln!(
-            s,
-            "<figure>{}<figcaption>{}</figcaption></figure>",
-            inline_svg(&f.svg),
-            escape(&f.caption)
-        );
+        figure(&mut s, f);
     }
     s.push_str("<h2 id=\"provenance\">Data provenance</h2>\n");
     let _ = writeln!(

@@ -3,9 +3,10 @@
 //!
 //! | module | holds |
 //! |---|---|
-//! | [`run_dir`] | the files understood (`cal.csv`, `val.csv`, `truth.json`, `truth.toml`, `calibrate*.json`, `diagnose*.json`, other `*.toml` = calibrated models, `commands.txt` / `*.cmd`) and their SHA-256 |
+//! | [`run_dir`] | the files understood (`cal.csv`, `val.csv`, `truth.json`, `truth.toml`, `calibrate*.json`, `diagnose*.json`, `path_errors.csv`, other `*.toml` = calibrated models, `commands.txt` / `*.cmd`) and their SHA-256 |
 //! | [`table`] | thesis table 4.5 (min / max / average of abs(dX) abs(dY) abs(dZ) abs(dP)) from JSON stats or error vectors |
 //! | [`analysis`] | recomputed numbers: per-pose errors, parameter influence (fig. 3.8), moments and tilts (fig. 5.8-5.10), path error (fig. 5.12) |
+//! | [`path_errors`] | the section "Path error along the drawn path (thesis fig. 5.12)" from `path_errors.csv`: the per-sample errors of the low-cost rig that `rigctl calibrate --samples FUSED.csv --errors-csv path_errors.csv` writes (columns `t,q1..qN,dev_u_before,dev_n_before,dp_before,dev_u_after,dev_n_after,dp_after,dev_u_standard,dev_n_standard,dp_standard`, mm; see [`crate::plot::path_errors`]), as a chart and a table of RMS / max / mean before, after the standard calibration and after the chosen method (named from `calibrate*.json`'s `method`) |
 //! | [`build`] | [`build_report`]: run directory -> [`Report`] |
 //! | [`html`] | [`render_html`]: [`Report`] -> page |
 //!
@@ -15,6 +16,7 @@
 pub mod analysis;
 pub mod build;
 pub mod html;
+pub mod path_errors;
 pub mod run_dir;
 pub mod table;
 
@@ -22,6 +24,7 @@ use std::path::{Path, PathBuf};
 
 pub use build::build_report;
 pub use html::render_html;
+pub use path_errors::PathErrorsSection;
 pub use run_dir::{FileInfo, RunDir};
 pub use table::ErrorTable;
 
@@ -39,7 +42,7 @@ pub enum ReportError {
         source: std::io::Error,
     },
     /// Nothing in the directory could be used.
-    #[error("{path}: nothing to report (expected cal.csv, val.csv, calibrate*.json or diagnose*.json){}", notes_suffix(.notes))]
+    #[error("{path}: nothing to report (expected cal.csv, val.csv, calibrate*.json, diagnose*.json or path_errors.csv){}", notes_suffix(.notes))]
     NothingUsable { path: PathBuf, notes: Vec<String> },
     /// The page could not be written.
     #[error(transparent)]
@@ -154,6 +157,8 @@ pub struct Report {
     pub parameters: Vec<ParamTable>,
     /// Diagnosis.
     pub diagnose: Option<DiagnoseSection>,
+    /// Path error along the drawn path (thesis fig. 5.12), from `path_errors.csv`.
+    pub path_errors: Option<PathErrorsSection>,
     /// Facts from `truth.json`.
     pub simulation: Vec<(String, String)>,
     /// Recorded command lines (file, text).

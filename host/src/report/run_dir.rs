@@ -39,6 +39,8 @@ pub struct RunDir {
     pub calibrate: Vec<(String, Value)>,
     /// `diagnose*.json`, parsed (the first by name).
     pub diagnose: Option<(String, Value)>,
+    /// `path_errors.csv` (per-sample errors of `calibrate --samples --errors-csv`).
+    pub path_errors: Option<PathBuf>,
     /// Every other `*.toml` (calibrated models), sorted by name.
     pub models: Vec<PathBuf>,
     /// Recorded command lines (`commands.txt`, `*.cmd`), (file name, text).
@@ -121,6 +123,9 @@ impl RunDir {
                     }
                 }
                 "diagnose result"
+            } else if lower == super::path_errors::PATH_ERRORS_FILE {
+                run.path_errors = Some(path.clone());
+                "path errors along the drawn path"
             } else if lower.ends_with(".toml") {
                 run.models.push(path.clone());
                 "model"

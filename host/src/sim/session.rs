@@ -6,7 +6,8 @@
 //! # The robot
 //! * Truth model: the declared model (katana450 with the 330 mm pencil holder) with random
 //!   geometric errors (normal, `geometric_sigma_deg`, the same draw as `rigctl simulate` for the
-//!   same seed: [`super::simulate::truth_model`]) and the declared joint tilting driven by the
+//!   same seed: [`super::simulate::truth_model`]), plus any undeclared effects
+//!   ([`SessionConfig::effects`], e.g. `encoder_harmonic:j1:h1`), and the declared joint tilting driven by the
 //!   moments **in motion** (RNEA, [`super::dynamics::moments_kgfm`], slender-rod links; joint
 //!   rates and accelerations by central differences over +-10 ms of the 1 kHz joint path).
 //! * Commands: the controller knows only the nominal model, so the joint trajectory is the IK of
@@ -53,6 +54,7 @@ use rand_distr::{Distribution, Normal};
 use rig_protocol::{encode_device, DeviceMsg, PotBatch, DEVICE_FRAME_MAX};
 
 use super::dynamics::{moments_kgfm, Inertia};
+use super::effects::{Effect, EffectKind};
 use super::ik::{solve, IkError, IkTilt};
 use super::paths::{quintic_profile, ToolTarget};
 use super::plan::KATANA_SEED_DEG;
@@ -188,6 +190,9 @@ pub struct SessionConfig {
     pub placement: Option<SheetPlacement>,
     /// Pencil (tool) axis while drawing, unit, frame R (`None`: [`default_pencil_axis`]).
     pub pencil_axis: Option<Vector3<f64>>,
+    /// Effects the declared model lacks, applied to the truth (model-parameter effects only:
+    /// a session lasts seconds, so time drifts are refused).
+    pub effects: Vec<Effect>,
 }
 
 impl Default for SessionConfig {
@@ -212,6 +217,7 @@ impl Default for SessionConfig {
             inertia: Inertia::default(),
             placement: None,
             pencil_axis: None,
+            effects: Vec::new(),
         }
     }
 }
@@ -387,6 +393,16 @@ fn check(cfg: &SessionConfig) -> Result<(), SessionError> {
     {
         return bad("session settings out of range (offset >= 1 s, lift above the pencil stop, dpi >= 300, ...)".into());
     }
+    if let Some(e) = cfg
+        .effects
+        .iter()
+        .find(|e| !matches!(e.kind, EffectKind::Params(_)))
+    {
+        return bad(format!(
+            "effect {}: time drifts are not simulated in a session (it lasts seconds); use `rigctl simulate` poses",
+            e.id
+        ));
+    }
     Ok(())
 }
 
@@ -398,6 +414,7 @@ pub fn simulate_session(declared: &Model, cfg: &SessionConfig) -> Result<Session
         &SimConfig {
             seed: cfg.seed,
             geometric_sigma_deg: cfg.geometric_sigma_deg,
+            effects: cfg.effects.clone(),
             ..SimConfig::default()
         },
     )?;
@@ -667,6 +684,11 @@ pub fn write_session(dir: &Path, s: &Session, cfg: &SessionConfig) -> Result<(),
         "dpi": cfg.dpi,
         "scan_rotation_deg": cfg.scan_rotation_deg,
         "geometric_errors_deg": errors,
+        "effects": cfg
+            .effects
+            .iter()
+            .map(|e| serde_json::json!({"id": e.id, "values": e.values}))
+            .collect::<Vec<_>>(),
     });
     let text = serde_json::to_string_pretty(&json).unwrap_or_default();
     write_bytes_atomic(&dir.join("session.json"), format!("{text}\n").as_bytes())?;
