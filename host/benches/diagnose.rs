@@ -1,12 +1,15 @@
 //! Runtime of `diagnose` on a simulated session of 118 calibration + 60 validation poses (the
-//! ISO 9283 sequence), clean and with one undeclared encoder harmonic.
+//! ISO 9283 sequence), clean and with one undeclared encoder harmonic; and on the partial
+//! measurements of the low-cost rig (ideal fused samples of the circle sheet, held out on the
+//! line sheet, about 600 samples each) with the same harmonic.
 
 use criterion::{criterion_group, criterion_main, Criterion};
 use rigctl::calib::Poses;
 use rigctl::diagnose::data::Dataset;
 use rigctl::diagnose::{diagnose, DiagnoseOptions};
-use rigctl::model::katana450;
+use rigctl::model::{katana450, KATANA_PENCIL_TOOL_MM};
 use rigctl::sim::effects::parse_effect;
+use rigctl::sim::session::{simulate_session, SessionConfig, SessionPath};
 use rigctl::sim::simulate::{simulate, SimConfig, SimPose};
 
 fn dataset(poses: &[SimPose]) -> Dataset {
@@ -43,6 +46,25 @@ fn bench(c: &mut Criterion) {
             })
         });
     }
+    g.finish();
+
+    let pencil = katana450(KATANA_PENCIL_TOOL_MM).expect("preset");
+    let sheet = |path| {
+        let cfg = SessionConfig {
+            path,
+            effects: vec![parse_effect("encoder_harmonic:j2:h1=0.05,30").expect("effect")],
+            ..SessionConfig::default()
+        };
+        let s = simulate_session(&pencil, &cfg).expect("session");
+        let f = s.ideal_fused_samples(&pencil, 0.003, 1).expect("samples");
+        Dataset::from_fused(&f, &pencil).expect("dataset")
+    };
+    let (cal, val) = (sheet(SessionPath::Circle), sheet(SessionPath::Line));
+    let mut g = c.benchmark_group("diagnose_samples_circle_line");
+    g.sample_size(10);
+    g.bench_function("harmonic_j2_h1", |b| {
+        b.iter(|| diagnose(&pencil, &cal, &val, &DiagnoseOptions::default()).expect("diagnose"))
+    });
     g.finish();
 }
 

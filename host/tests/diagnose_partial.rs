@@ -1,26 +1,21 @@
 //! `diagnose` on partial measurements (the low-cost rig's fused samples), without the image
 //! pipeline: simulated sessions give the joint log and the true tool point; each drawing sample
 //! becomes a fused sample measuring only the error across the path (in the sheet plane) and out
-//! of the sheet, with white noise. An undeclared effect in the truth must be named and its
+//! of the sheet, with white noise ([`Session::ideal_fused_samples`]). An undeclared effect in the truth must be named and its
 //! values recovered; held-out numbers come from the other sheet (calibrate on the circle,
 //! validate on the line).
 
-use nalgebra::Vector3;
-use rand::SeedableRng;
-use rand_chacha::ChaCha8Rng;
-use rand_distr::{Distribution, Normal};
 use rigctl::diagnose::data::Dataset;
 use rigctl::diagnose::{diagnose, DiagnoseOptions};
 use rigctl::fusion::FusedSample;
-use rigctl::model::{katana450, Model, Tilt, KATANA_PENCIL_TOOL_MM};
+use rigctl::model::{katana450, Model, KATANA_PENCIL_TOOL_MM};
 use rigctl::sim::effects::parse_effect;
-use rigctl::sim::session::{simulate_session, SessionConfig, SessionPath};
+use rigctl::sim::session::{simulate_session, Session, SessionConfig, SessionPath};
 
 /// Noise of each measured component, mm (about what trace + potentiometer give).
 const NOISE_MM: f64 = 0.003;
 
-/// Fused samples of one simulated sheet: drawing samples only (nominal point on the sheet,
-/// moving), deviations `truth - nominal` along `u` (across the path) and `n` (sheet normal).
+/// Fused samples of one simulated sheet with an ideal tracer ([`Session::ideal_fused_samples`]).
 fn fused_sheet(
     declared: &Model,
     path: SessionPath,
@@ -34,34 +29,7 @@ fn fused_sheet(
         ..SessionConfig::default()
     };
     let s = simulate_session(declared, &cfg).expect("session");
-    let n = s.placement.normal();
-    let nominal: Vec<Vector3<f64>> = s
-        .q_deg
-        .iter()
-        .map(|q| declared.position_mm(q, Tilt::Off).unwrap())
-        .collect();
-    let noise = Normal::new(0.0, NOISE_MM).unwrap();
-    let mut rng = ChaCha8Rng::seed_from_u64(seed);
-    let mut out = Vec::new();
-    for k in 1..s.t_s.len() - 1 {
-        let v = (nominal[k + 1] - nominal[k - 1]) / (s.t_s[k + 1] - s.t_s[k - 1]);
-        let v_plane = v - n * n.dot(&v);
-        if s.placement.height_mm(&nominal[k]).abs() > 0.05 || v_plane.norm() < 5.0 {
-            continue;
-        }
-        let u = n.cross(&v_plane).normalize();
-        let e = s.truth_mm[k] - nominal[k];
-        out.push(FusedSample {
-            t_s: s.t_s[k],
-            q_deg: s.q_deg[k].clone(),
-            nominal_mm: nominal[k],
-            dev_u_mm: u.dot(&e) + noise.sample(&mut rng),
-            u,
-            dev_n_mm: n.dot(&e) + noise.sample(&mut rng),
-            n,
-        });
-    }
-    out
+    s.ideal_fused_samples(declared, NOISE_MM, seed).unwrap()
 }
 
 fn run(effects: &[&str]) -> rigctl::diagnose::Diagnosis {

@@ -307,6 +307,52 @@ pub struct Session {
     pub jig: Vec<JigPoint>,
 }
 
+impl Session {
+    /// The fused samples an ideal trace and potentiometer would give for this session (no image
+    /// or clock-alignment step): every joint sample while drawing (the `declared` model's point
+    /// within 0.05 mm of the sheet and moving at 5 mm/s or more in its plane) with the true
+    /// tool point's deviation from the nominal rigid one across the path (`u`, in the sheet
+    /// plane, to the left of the motion) and out of the sheet (`n`), each plus white noise of
+    /// `noise_mm`. For studying calibration and diagnosis on partial measurements apart from
+    /// the tracer; `rigctl fuse` gives the real thing.
+    pub fn ideal_fused_samples(
+        &self,
+        declared: &Model,
+        noise_mm: f64,
+        seed: u64,
+    ) -> Result<Vec<crate::fusion::FusedSample>, SessionError> {
+        let noise = Normal::new(0.0, noise_mm)
+            .map_err(|e| SessionError::Config(format!("noise {noise_mm} mm: {e}")))?;
+        let mut rng = ChaCha8Rng::seed_from_u64(seed);
+        let n = self.placement.normal();
+        let nominal = self
+            .q_deg
+            .iter()
+            .map(|q| declared.position_mm(q, Tilt::Off))
+            .collect::<Result<Vec<_>, _>>()?;
+        let mut out = Vec::new();
+        for k in 1..self.t_s.len().saturating_sub(1) {
+            let v = (nominal[k + 1] - nominal[k - 1]) / (self.t_s[k + 1] - self.t_s[k - 1]);
+            let v_plane = v - n * n.dot(&v);
+            if self.placement.height_mm(&nominal[k]).abs() > 0.05 || v_plane.norm() < 5.0 {
+                continue;
+            }
+            let u = n.cross(&v_plane).normalize();
+            let e = self.truth_mm[k] - nominal[k];
+            out.push(crate::fusion::FusedSample {
+                t_s: self.t_s[k],
+                q_deg: self.q_deg[k].clone(),
+                nominal_mm: nominal[k],
+                dev_u_mm: u.dot(&e) + noise.sample(&mut rng),
+                u,
+                dev_n_mm: n.dot(&e) + noise.sample(&mut rng),
+                n,
+            });
+        }
+        Ok(out)
+    }
+}
+
 /// The planned target at robot time `t`: path parameter and height above the paper (mm).
 fn timeline(cfg: &SessionConfig, t: f64) -> (f64, f64) {
     let dip = |tau: f64| -cfg.dip_mm * (std::f64::consts::PI * tau).sin().powi(2);
