@@ -1,7 +1,7 @@
 //! `diagnose` on partial measurements (the low-cost rig's fused samples), without the image
 //! pipeline: simulated sessions give the joint log and the true tool point; each drawing sample
 //! becomes a fused sample measuring only the error across the path (in the sheet plane) and out
-//! of the sheet, with white noise ([`Session::ideal_fused_samples`]). An undeclared effect in the truth must be named and its
+//! of the sheet, with white noise (`Session::ideal_fused_samples`). An undeclared effect in the truth must be named and its
 //! values recovered; held-out numbers come from the other sheet (calibrate on the circle,
 //! validate on the line).
 
@@ -10,12 +10,12 @@ use rigctl::diagnose::{diagnose, DiagnoseOptions};
 use rigctl::fusion::FusedSample;
 use rigctl::model::{katana450, Model, KATANA_PENCIL_TOOL_MM};
 use rigctl::sim::effects::parse_effect;
-use rigctl::sim::session::{simulate_session, Session, SessionConfig, SessionPath};
+use rigctl::sim::session::{simulate_session, SessionConfig, SessionPath};
 
 /// Noise of each measured component, mm (about what trace + potentiometer give).
 const NOISE_MM: f64 = 0.003;
 
-/// Fused samples of one simulated sheet with an ideal tracer ([`Session::ideal_fused_samples`]).
+/// Fused samples of one simulated sheet with an ideal tracer (`Session::ideal_fused_samples`).
 fn fused_sheet(
     declared: &Model,
     path: SessionPath,
