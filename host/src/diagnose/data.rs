@@ -103,8 +103,8 @@ impl Dataset {
     }
 
     /// `self` followed by `other` (e.g. the samples of two sheets, or poses and samples). Times
-    /// and moments are kept only when both have them; directions are kept when either has
-    /// them (full positions get all three axes).
+    /// are kept only when both have them; directions and inertial moments when either has them
+    /// (full positions get all three axes, poses at rest zero inertial moments).
     pub fn concat(mut self, other: Dataset) -> Self {
         let (n0, n1) = (self.len(), other.len());
         self.t_s = match (self.t_s.take(), other.t_s) {
@@ -122,12 +122,27 @@ impl Dataset {
                 Some(d)
             }
         };
+        // poses without inertial moments are at rest: zero extra moments (static tilting)
+        let zeros = |n: usize, like: &Vec<Vec<Vector3<f64>>>| {
+            let nj = like.first().map_or(0, Vec::len);
+            vec![vec![Vector3::zeros(); nj]; n]
+        };
         self.moments_kgfm = match (self.moments_kgfm.take(), other.moments_kgfm) {
+            (None, None) => None,
             (Some(mut a), Some(b)) => {
                 a.extend(b);
                 Some(a)
             }
-            _ => None,
+            (Some(mut a), None) => {
+                let z = zeros(n1, &a);
+                a.extend(z);
+                Some(a)
+            }
+            (None, Some(b)) => {
+                let mut a = zeros(n0, &b);
+                a.extend(b);
+                Some(a)
+            }
         };
         self.poses.q_deg.extend(other.poses.q_deg);
         self.poses.xyz_mm.extend(other.poses.xyz_mm);
@@ -303,7 +318,10 @@ mod tests {
         assert_eq!(both.n_residuals(), 13);
         assert_eq!(both.measured_dims(), 3);
         assert_eq!(both.measured_part(5, &along), along);
-        assert!(both.t_s.is_none() && both.moments_kgfm.is_none());
+        assert!(both.t_s.is_none());
+        let m = both.moments_kgfm.as_ref().unwrap();
+        assert_eq!(m.len(), 6);
+        assert!(m[5].len() == 5 && m[5].iter().all(|v| v.norm() == 0.0));
         let sub = both.subset(&[5, 0]);
         assert_eq!(sub.rows(0), 3);
         assert_eq!(sub.rows(1), 2);
