@@ -3,6 +3,7 @@
 
 use rigctl::error::{Classify, ErrorKind};
 use rigctl::io::pose_csv::{parse_poses, read_poses, PoseCsvError, PoseSpec};
+use rigctl::io::table::TableError;
 use rigctl::model::katana450;
 
 fn spec(require_xyz: bool) -> PoseSpec {
@@ -129,7 +130,7 @@ fn empty_files_and_missing_files() {
     for text in ["", "# only a comment\n"] {
         assert!(matches!(
             parse_poses(text, "e.csv", &spec(false)),
-            Err(PoseCsvError::NoHeader { .. })
+            Err(PoseCsvError::Table(TableError::NoHeader { .. }))
         ));
     }
     assert!(matches!(

@@ -91,37 +91,12 @@ pub enum PoseCsvError {
         #[source]
         source: std::io::Error,
     },
-    #[error("{file}: no header row")]
-    NoHeader { file: String },
+    /// The shared table reader's errors (header, columns, field counts, numbers), with its
+    /// messages naming the file, line and column.
+    #[error(transparent)]
+    Table(TableError),
     #[error("{file}: no pose rows")]
     NoPoses { file: String },
-    #[error("{file}:{line}: column `{column}` is missing from the header")]
-    MissingColumn {
-        file: String,
-        line: usize,
-        column: String,
-    },
-    #[error("{file}:{line}: column `{column}` appears twice in the header")]
-    DuplicateColumn {
-        file: String,
-        line: usize,
-        column: String,
-    },
-    #[error("{file}:{line}: {found} fields, the header has {expected}")]
-    FieldCount {
-        file: String,
-        line: usize,
-        expected: usize,
-        found: usize,
-    },
-    #[error("{file}:{line}: column `{column}`: {problem} (`{value}`)")]
-    BadValue {
-        file: String,
-        line: usize,
-        column: String,
-        value: String,
-        problem: String,
-    },
     #[error(
         "{file}:{line}: column `{column}`: joint value {value} outside the limits [{min}, {max}]"
     )]
@@ -141,44 +116,12 @@ impl Classify for PoseCsvError {
     }
 }
 
-/// The shared table reader's errors in the pose file's terms (one to one; no data rows is
-/// [`PoseCsvError::NoPoses`]).
+/// The shared table reader's errors; a file with no data rows is [`PoseCsvError::NoPoses`].
 impl From<TableError> for PoseCsvError {
     fn from(e: TableError) -> Self {
         match e {
-            TableError::Read { file, source } => Self::Read { file, source },
-            TableError::NoHeader { file } => Self::NoHeader { file },
             TableError::NoRows { file, .. } => Self::NoPoses { file },
-            TableError::MissingColumn { file, line, column } => {
-                Self::MissingColumn { file, line, column }
-            }
-            TableError::DuplicateColumn { file, line, column } => {
-                Self::DuplicateColumn { file, line, column }
-            }
-            TableError::FieldCount {
-                file,
-                line,
-                expected,
-                found,
-            } => Self::FieldCount {
-                file,
-                line,
-                expected,
-                found,
-            },
-            TableError::BadValue {
-                file,
-                line,
-                column,
-                value,
-                problem,
-            } => Self::BadValue {
-                file,
-                line,
-                column,
-                value,
-                problem,
-            },
+            e => Self::Table(e),
         }
     }
 }
