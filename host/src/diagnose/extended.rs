@@ -98,14 +98,6 @@ impl ExtModel {
         }
     }
 
-    fn static_tilt(&self) -> Tilt<'static> {
-        if self.tilt {
-            Tilt::Static
-        } else {
-            Tilt::Off
-        }
-    }
-
     /// Current value of an unknown.
     pub fn value(&self, u: Unknown) -> f64 {
         match u {
@@ -178,12 +170,6 @@ impl ExtModel {
             })
             .collect();
         Ok((q_eff, tau))
-    }
-
-    /// Predicted measured position (mm, R) of joint readings `q_deg` at time `t_s`, with the
-    /// static tilting.
-    pub fn predict_mm(&self, q_deg: &[f64], t_s: f64) -> Result<Vector3<f64>, ModelError> {
-        self.predict_with(q_deg, t_s, self.static_tilt())
     }
 
     /// Predicted measured position (mm, R) of pose `k` of `data` (with its moments, if any).

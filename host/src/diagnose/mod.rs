@@ -164,27 +164,29 @@ pub const OUTLIER_SIGMAS: f64 = 5.0;
 /// Half width (samples) of the running median of [`trim_outliers`].
 pub const OUTLIER_HALF_WINDOW: usize = 5;
 
-/// Samples along a traced path whose declared-fit residual is a **spike** are left out of the
-/// calibration set and the fit repeated (at most 3 passes): in some measured component the
-/// residual departs from its running median over the neighbouring samples (+-
-/// [`OUTLIER_HALF_WINDOW`]) by more than [`OUTLIER_SIGMAS`] robust standard deviations
-/// (`1.4826 median |departure|`). Such spikes are expected with the declared tilting law: where
-/// a joint moment is near zero its sign, hence the side of the clearance, can differ between the
-/// arm and the model for a sample or two. A missing effect changes the residual smoothly along
-/// the path and is kept. Full positions (independent poses) are never left out, nor is the
-/// validation set. Returns the kept set and the number left out.
+/// The declared fit ([`declared_fit`]) of the calibration set, after leaving out the samples
+/// along a traced path whose declared-fit residual is a **spike** (at most 3 passes, each
+/// refitting): in some measured component the residual departs from its running median over
+/// the neighbouring samples (+- [`OUTLIER_HALF_WINDOW`]) by more than [`OUTLIER_SIGMAS`] robust
+/// standard deviations (`1.4826 median |departure|`). Such spikes are expected with the
+/// declared tilting law: where a joint moment is near zero its sign, hence the side of the
+/// clearance, can differ between the arm and the model for a sample or two. A missing effect
+/// changes the residual smoothly along the path and is kept. Full positions (independent poses)
+/// are never left out, nor is the validation set. Returns the kept set, the number left out,
+/// and the declared fit on the kept set with its requested unknowns.
 pub fn trim_outliers(
     model: &Model,
     cal: &Dataset,
     cfg: &DecideConfig,
-) -> Result<(Dataset, usize), DiagnoseError> {
+) -> Result<(Dataset, usize, ExtFit, Vec<Unknown>), DiagnoseError> {
     if !cal.is_serial() {
-        return Ok((cal.clone(), 0));
+        let (fit, requested) = declared_fit(model, cal, cfg)?;
+        return Ok((cal.clone(), 0, fit, requested));
     }
     let mut kept: Vec<usize> = (0..cal.len()).collect();
+    let mut sub = cal.clone();
+    let (mut fit, mut requested) = declared_fit(model, &sub, cfg)?;
     for _ in 0..3 {
-        let sub = cal.subset(&kept);
-        let (fit, _) = declared_fit(model, &sub, cfg)?;
         let mut spikes = vec![false; kept.len()];
         let comps: Vec<Vec<f64>> = (0..sub.len())
             .map(|k| {
@@ -215,8 +217,10 @@ pub fn trim_outliers(
             break;
         }
         kept = next;
+        sub = cal.subset(&kept);
+        (fit, requested) = declared_fit(model, &sub, cfg)?;
     }
-    Ok((cal.subset(&kept), cal.len() - kept.len()))
+    Ok((sub, cal.len() - kept.len(), fit, requested))
 }
 
 /// For each `(index, value)` of a series: whether it departs from the running median of its
@@ -270,9 +274,8 @@ pub fn diagnose(
             min: 1,
         });
     }
-    let (cal, outliers) = trim_outliers(model, cal, cfg)?;
+    let (cal, outliers, declared, requested) = trim_outliers(model, cal, cfg)?;
     let cal = &cal;
-    let (declared, requested) = declared_fit(model, cal, cfg)?;
     let declared_cal = declared.ext.errors(cal)?;
     let declared_val = declared.ext.errors(val)?;
     let selection = forward_selection(declared.clone(), &requested, cal, cfg)?;
