@@ -45,6 +45,11 @@ pub struct Args {
     // The model choice: --robot NAME | --model FILE.toml, --tool-mm L, --set NAME=VALUE.
     #[command(flatten)]
     pub model: ModelArgs,
+    /// One-sigma accuracy per coordinate of the measuring instrument (mm; a laser tracker ~0.01,
+    /// a mocap system ~0.2): the floor the final residual is judged against (with the
+    /// repeatability of poses measured more than once).
+    #[arg(long = "instrument-mm", value_name = "SIGMA")]
+    pub instrument_mm: Option<f64>,
     /// Seed of the cross-validation folds.
     #[arg(long, default_value_t = 1)]
     pub seed: u64,
@@ -82,6 +87,14 @@ pub fn run(args: Args) -> Result<(), CliError> {
     let val = val.ok_or_else(|| CliError::bad_input("--validate is required"))?;
     let mut opts = DiagnoseOptions::default();
     opts.decide.seed = args.seed;
+    if let Some(s) = args.instrument_mm {
+        if !(s.is_finite() && s > 0.0) {
+            return Err(CliError::bad_input(format!(
+                "--instrument-mm {s}: must be a finite number > 0"
+            )));
+        }
+        opts.instrument_mm = Some(s);
+    }
     let diag = diagnose(&model, &cal, &val, &opts)?;
     if let Some(path) = &args.json {
         let text = serde_json::to_string_pretty(&diag.report)
@@ -103,6 +116,33 @@ pub fn run(args: Args) -> Result<(), CliError> {
                     .enumerate()
                     .filter(|(_, v)| **v != 0.0)
                     .map(|(j, v)| format!("joint {} compliance {v:.6} deg per kgf.m", j + 1)),
+            )
+            .chain(
+                ext.joint_scale
+                    .iter()
+                    .enumerate()
+                    .filter(|(_, v)| **v != 0.0)
+                    .map(|(j, v)| format!("joint {} transmission-ratio error s = {v:.9}", j + 1)),
+            )
+            .chain(ext.coupling.iter().enumerate().flat_map(|(i, row)| {
+                row.iter()
+                    .enumerate()
+                    .filter(|(_, v)| **v != 0.0)
+                    .map(move |(k, v)| {
+                        format!("joint {} += {v:.9} x joint {} (deg/deg)", i + 1, k + 1)
+                    })
+            }))
+            .chain(
+                ext.hysteresis_deg
+                    .iter()
+                    .enumerate()
+                    .filter(|(_, v)| **v != 0.0)
+                    .map(|(j, v)| {
+                        format!(
+                            "joint {} hysteresis {v:.6} deg by direction of approach",
+                            j + 1
+                        )
+                    }),
             )
             .chain((ext.drift_mm_per_h.norm() > 0.0).then(|| {
                 let d = ext.drift_mm_per_h;

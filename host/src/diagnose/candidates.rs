@@ -14,6 +14,9 @@
 //! | `time_drift` (pose files with varying `t`) | position drift x, y, z | `vx_mm_per_h vy_mm_per_h vz_mm_per_h` |
 //! | `time_drift:j<i>` (same) | joint-offset drift | `deg_per_h` |
 //! | `compliance:j<i>` (models without tilting but with link masses, e.g. `ur5`) | deflection per gravity torque | `deg_per_kgfm` |
+//! | `joint_scale:j<i>` (every joint) | transmission-ratio error `q_i += s q_i` | `s` (dimensionless) |
+//! | `joint_coupling:j<i>:j<k>` (every ordered pair) | `q_i += c q_k` | `c` (deg/deg) |
+//! | `hysteresis:j<i>` (pose files whose joints move) | `q_i += b d_i`, `d_i` the direction of approach (pose order) | `b` (deg) |
 //!
 //! Unknowns that the declared fit already frees are dropped from a candidate (e.g. the UR5's
 //! link lengths and tool point are declared parameters), and a candidate with nothing left is not
@@ -134,6 +137,32 @@ pub fn library(ext: &ExtModel, current: &[Unknown], data: &Dataset) -> Vec<Candi
         vec![Some(Unknown::Param(model.scale_param()))],
         None,
     );
+    let n = model.n_joints();
+    for j in 0..n {
+        push(
+            format!("joint_scale:j{}", j + 1),
+            vec![Some(Unknown::JointScale(j))],
+            Some(j),
+        );
+    }
+    for i in 0..n {
+        for k in (0..n).filter(|&k| k != i) {
+            push(
+                format!("joint_coupling:j{}:j{}", i + 1, k + 1),
+                vec![Some(Unknown::Coupling(i, k))],
+                Some(k),
+            );
+        }
+    }
+    if data.has_approach() {
+        for j in 0..n {
+            push(
+                format!("hysteresis:j{}", j + 1),
+                vec![Some(Unknown::Hysteresis(j))],
+                Some(j),
+            );
+        }
+    }
     if data.has_time() {
         push(
             "time_drift".into(),
@@ -236,6 +265,9 @@ pub fn effect_values(cand: &Candidate, before: &ExtModel, fit: &ExtFit) -> Effec
                 "scale" => "ppm",
                 "time_drift" => "deg_per_h",
                 "compliance" => "deg_per_kgfm",
+                "joint_scale" => "s",
+                "joint_coupling" => "c",
+                "hysteresis" => "b",
                 _ => "value",
             };
             if let [one] = u.as_slice() {

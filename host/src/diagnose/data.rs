@@ -40,6 +40,48 @@ pub struct Dataset {
     /// follow its payload and base tilt) plus these ([`crate::model::Tilt::StaticPlus`]);
     /// `None`: static moments only.
     pub moments_kgfm: Option<Vec<Vec<Vector3<f64>>>>,
+    /// Direction in which every joint last moved before each pose (+1 up, -1 down, 0 no
+    /// history), from the pose order ([`approach_directions`]); `None` until computed
+    /// ([`Dataset::with_approach`]). Kept through [`Dataset::subset`], so a fold keeps the
+    /// history of the full visit order.
+    pub approach: Option<Vec<Vec<f64>>>,
+    /// Pose names (`id` column), when every row has one: poses measured more than once
+    /// ([`super::floor::repeatability_mm`]).
+    pub ids: Option<Vec<String>>,
+}
+
+/// Joint-motion threshold (deg, or mm for a prismatic joint) below which a joint did not move
+/// between two poses.
+pub const APPROACH_MIN_MOVE: f64 = 1e-9;
+
+/// Direction in which each joint last moved before each pose (FORMATS.md pose order): the
+/// poses are visited in the order of `t_s` when given (ties in file order), else in file order;
+/// for joint i at pose k the sign of the last non-zero change of `q_i` up to k (+1 up, -1
+/// down), 0 for the first pose and while the joint has not moved yet.
+pub fn approach_directions(q_deg: &[Vec<f64>], t_s: Option<&[f64]>) -> Vec<Vec<f64>> {
+    let n = q_deg.len();
+    let mut order: Vec<usize> = (0..n).collect();
+    if let Some(t) = t_s.filter(|t| t.len() == n) {
+        order.sort_by(|&a, &b| t[a].total_cmp(&t[b]));
+    }
+    let nj = q_deg.first().map_or(0, Vec::len);
+    let mut out = vec![vec![0.0; nj]; n];
+    let mut dir = vec![0.0; nj];
+    let mut prev: Option<&Vec<f64>> = None;
+    for &k in &order {
+        if let Some(p) = prev {
+            for (j, d) in dir.iter_mut().enumerate() {
+                let delta =
+                    q_deg[k].get(j).copied().unwrap_or(0.0) - p.get(j).copied().unwrap_or(0.0);
+                if delta.abs() > APPROACH_MIN_MOVE {
+                    *d = delta.signum();
+                }
+            }
+        }
+        out[k] = dir.clone();
+        prev = Some(&q_deg[k]);
+    }
+    out
 }
 
 impl Dataset {
@@ -57,11 +99,14 @@ impl Dataset {
         let file = read_poses(path, &PoseSpec::for_model(model, true))?;
         let poses = Poses::from_pose_file(&file).unwrap_or_default();
         let t: Option<Vec<f64>> = file.poses.iter().map(|p| p.t_s).collect();
+        let ids: Option<Vec<String>> = file.poses.iter().map(|p| p.id.clone()).collect();
         Ok(Self {
             poses,
             t_s: t,
+            ids,
             ..Self::default()
-        })
+        }
+        .with_approach())
     }
 
     /// Partial measurements from fused samples (one path): two measured directions per sample
@@ -99,7 +144,10 @@ impl Dataset {
             t_s: Some(t_s),
             directions: Some(directions),
             moments_kgfm: Some(moments),
-        })
+            approach: None,
+            ids: None,
+        }
+        .with_approach())
     }
 
     /// `self` followed by `other` (e.g. the samples of two sheets, or poses and samples). Times
@@ -107,6 +155,8 @@ impl Dataset {
     /// (full positions get all three axes, poses at rest zero inertial moments).
     pub fn concat(mut self, other: Dataset) -> Self {
         let (n0, n1) = (self.len(), other.len());
+        let a0 = self.approach_or_computed();
+        let a1 = other.approach_or_computed();
         self.t_s = match (self.t_s.take(), other.t_s) {
             (Some(mut a), Some(b)) => {
                 a.extend(b);
@@ -144,9 +194,50 @@ impl Dataset {
                 Some(a)
             }
         };
+        // each file keeps its own history (its first pose has none)
+        self.approach = Some(a0.into_iter().chain(a1).collect());
+        self.ids = match (self.ids.take(), other.ids) {
+            (Some(mut a), Some(b)) => {
+                a.extend(b);
+                Some(a)
+            }
+            _ => None,
+        };
         self.poses.q_deg.extend(other.poses.q_deg);
         self.poses.xyz_mm.extend(other.poses.xyz_mm);
         self
+    }
+
+    /// `self` with [`Dataset::approach`] computed from the pose order when it is not set.
+    pub fn with_approach(mut self) -> Self {
+        if self.approach.as_ref().map(Vec::len) != Some(self.len()) {
+            self.approach = Some(self.approach_or_computed());
+        }
+        self
+    }
+
+    fn approach_or_computed(&self) -> Vec<Vec<f64>> {
+        match &self.approach {
+            Some(a) if a.len() == self.len() => a.clone(),
+            _ => approach_directions(&self.poses.q_deg, self.t_s.as_deref()),
+        }
+    }
+
+    /// Direction joint `j` last moved before pose `k` (+1, -1, 0).
+    pub fn approach(&self, k: usize, j: usize) -> f64 {
+        self.approach
+            .as_ref()
+            .and_then(|a| a.get(k))
+            .and_then(|d| d.get(j))
+            .copied()
+            .unwrap_or(0.0)
+    }
+
+    /// Whether some joint has a known direction of approach at some pose.
+    pub fn has_approach(&self) -> bool {
+        self.approach
+            .as_ref()
+            .is_some_and(|a| a.iter().any(|d| d.iter().any(|x| *x != 0.0)))
     }
 
     /// Number of poses.
@@ -268,6 +359,14 @@ impl Dataset {
                 .map(|t| indices.iter().map(|&k| t[k]).collect()),
             directions: self.directions.as_ref().map(pick),
             moments_kgfm: self.moments_kgfm.as_ref().map(pick),
+            approach: self
+                .approach
+                .as_ref()
+                .map(|a| indices.iter().map(|&k| a[k].clone()).collect()),
+            ids: self
+                .ids
+                .as_ref()
+                .map(|v| indices.iter().map(|&k| v[k].clone()).collect()),
         }
     }
 }

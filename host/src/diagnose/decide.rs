@@ -80,6 +80,10 @@ pub struct DecideConfig {
     /// Step (in each unknown's own unit) of the probe that looks for sign steps a candidate
     /// switches on ([`onset_candidates`]).
     pub onset_probe: f64,
+    /// A known floor (one sigma per coordinate, mm: the larger of the instrument's and the
+    /// repeatability, [`super::floor`]). While the current residual is significantly above it,
+    /// a candidate needs only a significant cross-validated gain (no minimum relative gain).
+    pub floor_mm: Option<f64>,
 }
 
 impl Default for DecideConfig {
@@ -102,6 +106,7 @@ impl Default for DecideConfig {
             polish_max_evals: 100,
             bic_tie: 10.0,
             onset_probe: 1e-3,
+            floor_mm: None,
         }
     }
 }
@@ -142,6 +147,8 @@ pub struct Accepted {
     pub before: ExtFit,
     /// The fit with it.
     pub after: ExtFit,
+    /// Candidates equivalent to it on these poses (near ties within noise).
+    pub equivalent: Vec<String>,
 }
 
 /// Result of [`forward_selection`].
@@ -268,11 +275,11 @@ fn rank_contenders<'a>(
     candidate: impl Fn(usize) -> &'a Candidate,
     cfg: &DecideConfig,
     serial: bool,
-) -> Vec<usize> {
+) -> (Vec<usize>, Vec<usize>) {
     let mean = |e: &[f64]| e.iter().sum::<f64>() / e.len().max(1) as f64;
     let Some(best) = (0..ids.len()).min_by(|&a, &b| mean(&errs[a]).total_cmp(&mean(&errs[b])))
     else {
-        return Vec::new();
+        return (Vec::new(), Vec::new());
     };
     let (mut equivalent, mut worse): (Vec<usize>, Vec<usize>) = (0..ids.len()).partition(|&k| {
         let t = paired_gain(&errs[k], &errs[best], serial).3;
@@ -280,11 +287,15 @@ fn rank_contenders<'a>(
     });
     equivalent.sort_by_key(|&k| simplicity(candidate(ids[k])));
     worse.sort_by(|&a, &b| mean(&errs[a]).total_cmp(&mean(&errs[b])));
-    equivalent
-        .into_iter()
-        .chain(worse)
-        .map(|k| ids[k])
-        .collect()
+    let eq: Vec<usize> = equivalent.iter().map(|&k| ids[k]).collect();
+    (
+        equivalent
+            .into_iter()
+            .chain(worse)
+            .map(|k| ids[k])
+            .collect(),
+        eq,
+    )
 }
 
 /// Occam's order of a candidate: its number of unknowns, then its harmonic order (a first
@@ -403,6 +414,23 @@ pub fn forward_selection(
             refits.push((trial, after));
         }
         refits.sort_by(|a, b| a.0.delta_bic.total_cmp(&b.0.delta_bic));
+        let mut equivalent_ids: Vec<String> = Vec::new();
+        // above a known floor, any significant cross-validated gain counts
+        let min_gain = match cfg.floor_mm {
+            Some(fl) if fl > 0.0 => {
+                let dof = m.saturating_sub(cur.fitted.len()).max(1) as f64;
+                let p = super::floor::chi2_upper_p(
+                    rss0 * m as f64 / data.n_residuals().max(1) as f64 / (fl * fl),
+                    dof,
+                );
+                if p < super::floor::FLOOR_ALPHA {
+                    0.0
+                } else {
+                    cfg.cv_min_gain
+                }
+            }
+            _ => cfg.cv_min_gain,
+        };
         let mut cv_before: Option<Vec<f64>> = None;
         let mut cv_cache: Vec<Option<Vec<f64>>> = vec![None; refits.len()];
         let passes = |t: &Trial| t.added > 0 && t.p_value < cfg.alpha && t.delta_bic < 0.0;
@@ -421,8 +449,14 @@ pub fn forward_selection(
                 errs.push(e1.clone());
                 cv_cache[i] = Some(e1);
             }
-            let ranked =
+            let (ranked, eq) =
                 rank_contenders(&contenders, &errs, |i| &refits[i].0.candidate, cfg, serial);
+            if eq.len() > 1 {
+                equivalent_ids = eq
+                    .iter()
+                    .map(|&i| refits[i].0.candidate.id.clone())
+                    .collect();
+            }
             // Contenders first (see `rank_contenders`); then the rest in BIC order.
             let order: Vec<usize> = ranked
                 .into_iter()
@@ -465,7 +499,7 @@ pub fn forward_selection(
                 let (m0, m1, rel, t) = paired_gain(e0, &e1, serial);
                 trial.cv_mean_mm = [m0, m1];
                 trial.cv_t = t;
-                if rel >= cfg.cv_min_gain && t >= cfg.cv_t_min {
+                if rel >= min_gain && rel > 0.0 && t >= cfg.cv_t_min {
                     trial.accepted = true;
                     chosen = Some((trial.clone(), after));
                     continue;
@@ -473,7 +507,7 @@ pub fn forward_selection(
                 trial.reason = format!(
                     "cross-validation: mean {m0:.4} -> {m1:.4} mm ({:+.1} %, t = {t:.2}; needs >= {:.0} % and t >= {:.2})",
                     -100.0 * rel,
-                    100.0 * cfg.cv_min_gain,
+                    100.0 * min_gain,
                     cfg.cv_t_min
                 );
             }
@@ -483,10 +517,20 @@ pub fn forward_selection(
             Some((trial, after)) => {
                 requested.extend(trial.candidate.unknowns.iter().copied());
                 let before = std::mem::replace(&mut cur, after.clone());
+                let equivalent = if equivalent_ids.contains(&trial.candidate.id) {
+                    equivalent_ids
+                        .iter()
+                        .filter(|i| **i != trial.candidate.id)
+                        .cloned()
+                        .collect()
+                } else {
+                    Vec::new()
+                };
                 steps.push(Accepted {
                     trial,
                     before,
                     after,
+                    equivalent,
                 });
             }
             None => {

@@ -36,6 +36,14 @@ pub enum Unknown {
     JointDrift(usize),
     /// Compliance of joint j (0-based): deflection per gravity torque, deg per kgf.m.
     Compliance(usize),
+    /// Transmission-ratio error of joint j (0-based): `q_j += s q_j` (dimensionless).
+    JointScale(usize),
+    /// Coupling of joint i's angle to joint k's command (0-based `(i, k)`): `q_i += c q_k`
+    /// (deg/deg).
+    Coupling(usize, usize),
+    /// Hysteresis of joint j (0-based): `q_j += b d_j`, `d_j` the direction in which joint j
+    /// last moved before the pose (+1, -1, 0; [`Dataset::approach`]), deg.
+    Hysteresis(usize),
 }
 
 impl Unknown {
@@ -51,6 +59,22 @@ impl Unknown {
             Unknown::PositionDrift(a) => format!("drift_{}_mm_per_h", ["x", "y", "z"][a.min(2)]),
             Unknown::JointDrift(j) => format!("drift_j{}_deg_per_h", j + 1),
             Unknown::Compliance(j) => format!("compliance_j{}_deg_per_kgfm", j + 1),
+            Unknown::JointScale(j) => format!("joint_scale_j{}", j + 1),
+            Unknown::Coupling(i, k) => format!("coupling_j{}_j{}_deg_per_deg", i + 1, k + 1),
+            Unknown::Hysteresis(j) => format!("hysteresis_j{}_deg", j + 1),
+        }
+    }
+
+    /// The joint (0-based) whose angle this unknown moves, for unknowns that act on a joint
+    /// angle before the chain.
+    pub fn joint(&self) -> Option<usize> {
+        match *self {
+            Unknown::JointDrift(j)
+            | Unknown::Compliance(j)
+            | Unknown::JointScale(j)
+            | Unknown::Coupling(j, _)
+            | Unknown::Hysteresis(j) => Some(j),
+            Unknown::Param(_) | Unknown::PositionDrift(_) => None,
         }
     }
 }
@@ -70,6 +94,37 @@ pub struct ExtModel {
     pub compliance_deg_per_kgfm: Vec<f64>,
     /// Link masses for the compliance torques (None: no compliance possible).
     pub gravity: Option<GravityModel>,
+    /// Transmission-ratio error per joint (dimensionless): `q_j += s_j q_j`.
+    pub joint_scale: Vec<f64>,
+    /// Joint coupling, row i column k (deg/deg): `q_i += c_ik q_k`.
+    pub coupling: Vec<Vec<f64>>,
+    /// Hysteresis per joint (deg): `q_j += b_j d_j` with the direction of approach `d_j`.
+    pub hysteresis_deg: Vec<f64>,
+}
+
+/// The transmission terms of joint angles (FORMATS.md `joint_scale`, `joint_coupling`,
+/// `hysteresis`): `q_eff_i = q_i + s_i q_i + sum_k c_ik q_k + b_i d_i`, with `d_i` the
+/// direction of approach of joint i (+1, -1, 0). `scale`, `coupling` (rows i, columns k) and
+/// `hysteresis_deg` may be empty (no term); returns the increments per joint.
+pub fn transmission_increments(
+    q_deg: &[f64],
+    approach: &[f64],
+    scale: &[f64],
+    coupling: &[Vec<f64>],
+    hysteresis_deg: &[f64],
+) -> Vec<f64> {
+    (0..q_deg.len())
+        .map(|i| {
+            let s = scale.get(i).copied().unwrap_or(0.0) * q_deg[i];
+            let c: f64 = coupling
+                .get(i)
+                .map(|row| row.iter().zip(q_deg).map(|(c, q)| c * q).sum())
+                .unwrap_or(0.0);
+            let h = hysteresis_deg.get(i).copied().unwrap_or(0.0)
+                * approach.get(i).copied().unwrap_or(0.0);
+            s + c + h
+        })
+        .collect()
 }
 
 impl ExtModel {
@@ -85,6 +140,9 @@ impl ExtModel {
             joint_drift_deg_per_h: vec![0.0; n],
             compliance_deg_per_kgfm: vec![0.0; n],
             gravity,
+            joint_scale: vec![0.0; n],
+            coupling: vec![vec![0.0; n]; n],
+            hysteresis_deg: vec![0.0; n],
         }
     }
 
@@ -105,6 +163,14 @@ impl ExtModel {
             Unknown::PositionDrift(a) => self.drift_mm_per_h[a.min(2)],
             Unknown::JointDrift(j) => self.joint_drift_deg_per_h.get(j).copied().unwrap_or(0.0),
             Unknown::Compliance(j) => self.compliance_deg_per_kgfm.get(j).copied().unwrap_or(0.0),
+            Unknown::JointScale(j) => self.joint_scale.get(j).copied().unwrap_or(0.0),
+            Unknown::Coupling(i, k) => self
+                .coupling
+                .get(i)
+                .and_then(|r| r.get(k))
+                .copied()
+                .unwrap_or(0.0),
+            Unknown::Hysteresis(j) => self.hysteresis_deg.get(j).copied().unwrap_or(0.0),
         }
     }
 
@@ -126,6 +192,21 @@ impl ExtModel {
             }
             Unknown::Compliance(j) => {
                 if let Some(x) = self.compliance_deg_per_kgfm.get_mut(j) {
+                    *x = v;
+                }
+            }
+            Unknown::JointScale(j) => {
+                if let Some(x) = self.joint_scale.get_mut(j) {
+                    *x = v;
+                }
+            }
+            Unknown::Coupling(i, k) => {
+                if let Some(x) = self.coupling.get_mut(i).and_then(|r| r.get_mut(k)) {
+                    *x = v;
+                }
+            }
+            Unknown::Hysteresis(j) => {
+                if let Some(x) = self.hysteresis_deg.get_mut(j) {
                     *x = v;
                 }
             }
@@ -151,6 +232,7 @@ impl ExtModel {
         &self,
         q_deg: &[f64],
         t_s: f64,
+        approach: &[f64],
         with_torques: bool,
     ) -> Result<(Vec<f64>, Vec<f64>), ModelError> {
         let tau = if with_torques {
@@ -158,6 +240,13 @@ impl ExtModel {
         } else {
             Vec::new()
         };
+        let trans = transmission_increments(
+            q_deg,
+            approach,
+            &self.joint_scale,
+            &self.coupling,
+            &self.hysteresis_deg,
+        );
         let q_eff = q_deg
             .iter()
             .enumerate()
@@ -166,25 +255,40 @@ impl ExtModel {
                     self.joint_drift_deg_per_h.get(j).copied().unwrap_or(0.0) * t_s / S_PER_H;
                 let comp = self.compliance_deg_per_kgfm.get(j).copied().unwrap_or(0.0)
                     * tau.get(j).copied().unwrap_or(0.0);
-                q + drift + comp
+                q + drift + comp + trans[j]
             })
             .collect();
         Ok((q_eff, tau))
     }
 
+    fn approach_of(data: &Dataset, k: usize) -> Vec<f64> {
+        data.approach
+            .as_ref()
+            .and_then(|a| a.get(k))
+            .cloned()
+            .unwrap_or_default()
+    }
+
     /// Predicted measured position (mm, R) of pose `k` of `data` (with its moments, if any).
     pub fn predict_pose(&self, data: &Dataset, k: usize) -> Result<Vector3<f64>, ModelError> {
-        self.predict_with(&data.poses.q_deg[k], data.t(k), self.tilt_at(data, k))
+        let approach = Self::approach_of(data, k);
+        self.predict_with(
+            &data.poses.q_deg[k],
+            data.t(k),
+            &approach,
+            self.tilt_at(data, k),
+        )
     }
 
     fn predict_with(
         &self,
         q_deg: &[f64],
         t_s: f64,
+        approach: &[f64],
         tilt: Tilt<'_>,
     ) -> Result<Vector3<f64>, ModelError> {
         let with_tau = self.compliance_deg_per_kgfm.iter().any(|c| *c != 0.0);
-        let (q_eff, _) = self.effective_joints(q_deg, t_s, with_tau)?;
+        let (q_eff, _) = self.effective_joints(q_deg, t_s, approach, with_tau)?;
         Ok(self.model.position_mm(&q_eff, tilt)? + self.drift_mm_per_h * (t_s / S_PER_H))
     }
 
@@ -197,13 +301,19 @@ impl ExtModel {
     ) -> Result<(Vector3<f64>, DMatrix<f64>), ModelError> {
         let t_s = data.t(k);
         let with_tau = self.needs_torques(unknowns);
-        let (q_eff, tau) = self.effective_joints(&data.poses.q_deg[k], t_s, with_tau)?;
+        let approach = Self::approach_of(data, k);
+        let q = &data.poses.q_deg[k];
+        let (q_eff, tau) = self.effective_joints(q, t_s, &approach, with_tau)?;
         let mut wrt: Vec<Wrt> = Vec::with_capacity(unknowns.len());
         let mut slot = Vec::with_capacity(unknowns.len());
         for u in unknowns {
             let w = match *u {
                 Unknown::Param(i) => Some(Wrt::Param(i)),
-                Unknown::JointDrift(j) | Unknown::Compliance(j) => Some(Wrt::Joint(j)),
+                Unknown::JointDrift(j)
+                | Unknown::Compliance(j)
+                | Unknown::JointScale(j)
+                | Unknown::Coupling(j, _)
+                | Unknown::Hysteresis(j) => Some(Wrt::Joint(j)),
                 Unknown::PositionDrift(_) => None,
             };
             slot.push(w.map(|w| {
@@ -226,6 +336,15 @@ impl ExtModel {
                 (Unknown::Compliance(j), Some(s)) => {
                     jm.column(s) * tau.get(j).copied().unwrap_or(0.0)
                 }
+                (Unknown::JointScale(j), Some(s)) => {
+                    jm.column(s) * q.get(j).copied().unwrap_or(0.0)
+                }
+                (Unknown::Coupling(_, k), Some(s)) => {
+                    jm.column(s) * q.get(k).copied().unwrap_or(0.0)
+                }
+                (Unknown::Hysteresis(j), Some(s)) => {
+                    jm.column(s) * approach.get(j).copied().unwrap_or(0.0)
+                }
                 (_, Some(s)) => jm.column(s).into_owned(),
                 (_, None) => Vector3::zeros(),
             };
@@ -245,7 +364,9 @@ impl ExtModel {
         let with_tau = self.compliance_deg_per_kgfm.iter().any(|c| *c != 0.0);
         let mut out = Vec::with_capacity(3 * data.len() * self.model.n_joints());
         for k in 0..data.len() {
-            let (q_eff, _) = self.effective_joints(&data.poses.q_deg[k], data.t(k), with_tau)?;
+            let approach = Self::approach_of(data, k);
+            let (q_eff, _) =
+                self.effective_joints(&data.poses.q_deg[k], data.t(k), &approach, with_tau)?;
             let mut moments = self.model.moments_kgfm(&q_eff)?;
             if let Some(extra) = data.moments(k) {
                 for (m, e) in moments.iter_mut().zip(extra) {

@@ -11,6 +11,8 @@
 //! | [`decide`] | greedy forward selection: F-test + BIC + k-fold cross-validation |
 //! | [`polish`] | derivative-free polish of a refit across the sign steps of the tilting law |
 //! | [`stat`] | F distribution, BIC, noise statistics |
+//! | [`floor`] | the independent floor (`--instrument-mm`, repeatability) and its tests |
+//! | [`alias`] | pairs of effects/parameters these poses cannot tell apart |
 //! | [`report`] | the `diagnose --json` document and the text table |
 //! | [`plots`] | SVG plots of the residual against the regressor that traced each effect |
 //!
@@ -26,10 +28,12 @@
 //! [`STRUCTURE_MIN_R2`] of it with a Bonferroni-corrected p-value below
 //! [`STRUCTURE_ALPHA`] — then something systematic remains that no candidate explained.
 
+pub mod alias;
 pub mod candidates;
 pub mod data;
 pub mod decide;
 pub mod extended;
+pub mod floor;
 pub mod gravity;
 pub mod plots;
 pub mod polish;
@@ -88,6 +92,9 @@ impl Classify for DiagnoseError {
 pub struct DiagnoseOptions {
     /// Selection rule settings.
     pub decide: DecideConfig,
+    /// One-sigma accuracy per coordinate of the measuring instrument (mm), when known
+    /// (`--instrument-mm`).
+    pub instrument_mm: Option<f64>,
 }
 
 /// One accepted effect with what the plots need.
@@ -274,7 +281,21 @@ pub fn diagnose(
             min: 1,
         });
     }
-    let (cal, outliers, declared, requested) = trim_outliers(model, cal, cfg)?;
+    let repeat = floor::repeatability_mm(cal);
+    let known_floor = match (opts.instrument_mm.filter(|s| *s > 0.0), repeat) {
+        (Some(i), Some((r, _))) => Some(i.max(r)),
+        (Some(i), None) => Some(i),
+        (None, Some((r, _))) => Some(r),
+        (None, None) => None,
+    };
+    let cfg_owned = DecideConfig {
+        floor_mm: known_floor,
+        ..cfg.clone()
+    };
+    let cfg = &cfg_owned;
+    let cal = cal.clone().with_approach();
+    let val = &val.clone().with_approach();
+    let (cal, outliers, declared, requested) = trim_outliers(model, &cal, cfg)?;
     let cal = &cal;
     let declared_cal = declared.ext.errors(cal)?;
     let declared_val = declared.ext.errors(val)?;
@@ -292,6 +313,7 @@ pub fn diagnose(
         let contrib = contribution(&step.before, &step.after, cal)?;
         let (ri, ex) = best_regressor(&contrib, &regs).unwrap_or((0, explain(&contrib, &regs[0])));
         let values = effect_values(&t.candidate, &step.before.ext, &step.after);
+        let final_values = effect_values(&t.candidate, &step.before.ext, &selection.last);
         let share = if t.rss_before_mm2 > 0.0 {
             1.0 - t.rss_after_mm2 / t.rss_before_mm2
         } else {
@@ -326,13 +348,27 @@ pub fn diagnose(
                 new_combos.join(", ")
             ));
         }
+        if !step.equivalent.is_empty() {
+            evidence.push_str(&format!(
+                "; equivalent on these poses (explain the same residual within noise): {}",
+                step.equivalent.join(", ")
+            ));
+        }
+        let opt = |v: &[(String, f64)]| -> report::Ordered<Option<f64>> {
+            v.iter()
+                .map(|(n, s)| (n.clone(), if s.is_finite() { Some(*s) } else { None }))
+                .collect()
+        };
         effects.push(EffectReport {
             id: t.candidate.id.clone(),
-            parameters: values.values.iter().cloned().collect(),
+            parameters: final_values.values.iter().cloned().collect(),
+            sigma: opt(&final_values.sigma),
+            parameters_at_entry: values.values.iter().cloned().collect(),
             validation_mean_mm_before: mean_norm(&vb),
             validation_mean_mm_after: mean_norm(&va),
             evidence,
-            uncertainty: values
+            equivalent: step.equivalent.clone(),
+            uncertainty: final_values
                 .sigma
                 .iter()
                 .map(|(n, s)| (n.clone(), if s.is_finite() { Some(*s) } else { None }))
@@ -373,7 +409,21 @@ pub fn diagnose(
         expected_mean_mm: stat::expected_mean_norm_dims(sigma, cal.measured_dims()),
     };
     let tau = decide::serial_tau(&last.ext, cal)?;
-    let unexplained = unexplained(
+    let val_dims: usize = (0..val.len()).map(|k| val.rows(k)).sum();
+    let floor = floor::judge(
+        &floor::FinalResidual {
+            rss_mm2: last.rss_mm2,
+            n_residuals: last.n_residuals,
+            n_params: last.fitted.len(),
+            tau,
+            n_poses: cal.len(),
+            val_ss_mm2: final_val.iter().map(|e| e.norm_squared()).sum(),
+            val_residuals: val_dims,
+        },
+        opts.instrument_mm,
+        repeat,
+    );
+    let mut unexplained = unexplained(
         &final_cal,
         &final_val,
         &regs,
@@ -381,6 +431,28 @@ pub fn diagnose(
         &selection,
         (cal.measured_dims(), tau),
     );
+    unexplained.note = format!("{}; {}", floor::verdict(&floor), unexplained.note);
+    unexplained.structured |= floor.above;
+    let accepted: Vec<candidates::Candidate> = selection
+        .steps
+        .iter()
+        .map(|s| s.trial.candidate.clone())
+        .collect();
+    let others = candidates::library(&last.ext, &selection.requested, cal);
+    let aliased = alias::aliased(last, &requested, &accepted, &others, cal)?;
+    for e in effects.iter_mut() {
+        let stand_in: Vec<&str> = aliased
+            .iter()
+            .filter(|a| a.a == e.id)
+            .map(|a| a.b.as_str())
+            .collect();
+        if !stand_in.is_empty() {
+            e.evidence.push_str(&format!(
+                "; not separable on these poses from {}: its value may be a stand-in",
+                stand_in.join(", ")
+            ));
+        }
+    }
     let report = DiagnoseReport {
         declared: SetStats {
             calibration: Stats::from_errors(&declared_cal),
@@ -392,6 +464,8 @@ pub fn diagnose(
             validation: Stats::from_errors(&final_val),
         },
         unexplained,
+        floor,
+        aliased,
         noise,
         robot: model.name().to_string(),
         tilting: last.ext.tilt,
@@ -469,5 +543,11 @@ fn unexplained(
         }
         None => false,
     };
-    Unexplained { structured, note }
+    Unexplained {
+        structured,
+        note,
+        // RESIDUAL-PROBE: the residual probe (diagnose/probe*.rs) fills these
+        depends_on: Vec::new(),
+        explainable_share: None,
+    }
 }

@@ -7,7 +7,10 @@
 //! `cv_mean_mm_before/after`, `p_value`, `f_statistic`, `delta_bic`, `added_parameters`,
 //! `regressor`, `unidentifiable`, `model_parameters` (fitted model values); at the top `noise`,
 //! `robot`, `tilting`, `declared_unidentifiable`, `rejected` (candidates refitted at the last
-//! step and why they failed), `rule`.
+//! step and why they failed), `rule`. Also FORMATS.md: per effect `sigma` and
+//! `parameters_at_entry` (`parameters` are the final values), `unexplained{depends_on,
+//! explainable_share}`, `floor` ([`super::floor`]), `aliased` ([`super::alias`]); extra per
+//! effect `equivalent` (near ties).
 
 use std::fmt::Write as _;
 
@@ -55,10 +58,18 @@ pub struct SetStats {
 #[derive(Debug, Clone, PartialEq, Serialize)]
 pub struct EffectReport {
     pub id: String,
+    /// Values in the final fit (with every accepted effect).
     pub parameters: Ordered<f64>,
+    /// One sigma of each, final fit (null when held fixed).
+    pub sigma: Ordered<Option<f64>>,
+    /// Values when the effect was added.
+    pub parameters_at_entry: Ordered<f64>,
     pub validation_mean_mm_before: f64,
     pub validation_mean_mm_after: f64,
     pub evidence: String,
+    /// Candidates that explained the same residual within noise when it was added
+    /// (statistically equivalent on these poses).
+    pub equivalent: Vec<String>,
     pub uncertainty: Ordered<Option<f64>>,
     pub calibration_mean_mm_before: f64,
     pub calibration_mean_mm_after: f64,
@@ -78,6 +89,12 @@ pub struct EffectReport {
 pub struct Unexplained {
     pub structured: bool,
     pub note: String,
+    /// Joints or joint pairs a smooth function of the joints fitted to the final residual
+    /// depends on. RESIDUAL-PROBE: filled by the residual probe (`diagnose/probe*.rs`, another
+    /// change); empty until then.
+    pub depends_on: Vec<String>,
+    /// Share of the residual variance that probe explains out of sample (null until then).
+    pub explainable_share: Option<f64>,
 }
 
 /// The noise estimated from the final calibration residual.
@@ -125,6 +142,8 @@ pub struct DiagnoseReport {
     #[serde(rename = "final")]
     pub final_: SetStats,
     pub unexplained: Unexplained,
+    pub floor: super::floor::FloorReport,
+    pub aliased: Vec<super::alias::AliasReport>,
     pub noise: NoiseReport,
     pub robot: String,
     pub tilting: bool,
@@ -215,6 +234,16 @@ impl DiagnoseReport {
                 fmt_params(&e.parameters)
             );
         }
+        for e in &self.effects {
+            if !e.equivalent.is_empty() {
+                let _ = writeln!(
+                    s,
+                    "  {} and {} explain the same residual within noise: equivalent on these poses (the simplest was taken)",
+                    e.id,
+                    e.equivalent.join(", ")
+                );
+            }
+        }
         if self.effects.is_empty() {
             let _ = writeln!(
                 s,
@@ -226,6 +255,16 @@ impl DiagnoseReport {
             "{:<28} {:>12.4} {:>12.4}",
             "final", self.final_.calibration.mean_mm, self.final_.validation.mean_mm
         );
+        let _ = writeln!(s, "floor: {}", super::floor::verdict(&self.floor));
+        if !self.aliased.is_empty() {
+            let _ = writeln!(
+                s,
+                "not separable on these poses (more poses are needed: rigctl plan --from-diagnose):"
+            );
+            for a in &self.aliased {
+                let _ = writeln!(s, "  {} ~ {}: {}", a.a, a.b, a.note);
+            }
+        }
         let _ = writeln!(
             s,
             "unexplained: structured = {}; {}",

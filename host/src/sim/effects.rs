@@ -15,6 +15,10 @@
 //! | `backlash:j<i>` `clearance:j<i>` | delta deg | **added** to the declared `backlash_j<i>` / `clearance_j<i>` |
 //! | `time_drift` | `vx,vy,vz` mm per hour (one value `v` means `0,0,v`) | measured position += v t / 3600 (a thermal drift of the instrument or base, linear in the pose time `t`) |
 //! | `time_drift:j<i>` | deg per hour | joint i's offset grows by rate x t / 3600 (thermal drift of the encoder zero) |
+//! | `joint_scale:j<i>` | `s` (dimensionless) | transmission-ratio error: joint i turns `(1 + s) q_i` |
+//! | `joint_coupling:j<i>:j<k>` | `c` deg/deg | joint i's angle += `c q_k` |
+//! | `hysteresis:j<i>` | `b` deg | joint i's angle += `b` when it last moved up before the pose, `- b` when down, 0 before its first move (pose order of each file, FORMATS.md) |
+//! | `compliance:j<i>` | deg per kgf.m | joint i's angle += value x the gravity torque about its axis (link masses of the model, [`crate::diagnose::gravity`]) |
 //!
 //! Deltas (not absolute values) are used throughout so that an effect's VALUE is its size.
 
@@ -29,7 +33,7 @@ pub enum EffectError {
     #[error("effect `{0}`: expected ID=VALUE")]
     Syntax(String),
     /// An effect id this simulator does not know.
-    #[error("unknown effect id `{id}`; known: link_length:a2|a3|d4|d5, encoder_harmonic:j<i>:h<n>, tool_offset, base_offset, base_tilt, payload, scale, stiffness:j<i>, backlash:j<i>, clearance:j<i>, time_drift, time_drift:j<i>")]
+    #[error("unknown effect id `{id}`; known: link_length:a2|a3|d4|d5, encoder_harmonic:j<i>:h<n>, tool_offset, base_offset, base_tilt, payload, scale, stiffness:j<i>, backlash:j<i>, clearance:j<i>, time_drift, time_drift:j<i>, joint_scale:j<i>, joint_coupling:j<i>:j<k>, hysteresis:j<i>, compliance:j<i>")]
     UnknownId { id: String },
     /// A value that is not a finite number, or the wrong number of values.
     #[error("effect `{id}`: value `{value}`: {reason}")]
@@ -62,6 +66,32 @@ pub enum EffectKind {
     PositionDrift(Vector3<f64>),
     /// Joint offset drift of joint index (0-based), deg per hour.
     JointDrift(usize, f64),
+    /// A term on the joint angles before the chain (transmission, hysteresis, compliance).
+    Joint(JointTerm),
+}
+
+/// A joint-angle term of the truth, 0-based joint indices.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum JointTerm {
+    /// `q_i += s q_i`.
+    Scale(usize, f64),
+    /// `q_i += c q_k` as `(i, k, c)`.
+    Coupling(usize, usize, f64),
+    /// `q_i += b d_i` (direction of approach).
+    Hysteresis(usize, f64),
+    /// `q_i += c tau_i` (gravity torque about the axis, kgf.m).
+    Compliance(usize, f64),
+}
+
+impl JointTerm {
+    fn joints(&self) -> [usize; 2] {
+        match *self {
+            JointTerm::Scale(j, _) | JointTerm::Hysteresis(j, _) | JointTerm::Compliance(j, _) => {
+                [j, j]
+            }
+            JointTerm::Coupling(i, k, _) => [i, k],
+        }
+    }
 }
 
 /// One parsed `--effect`.
@@ -177,6 +207,26 @@ pub fn parse_effect(arg: &str) -> Result<Effect, EffectError> {
             };
             EffectKind::PositionDrift(v)
         }
+        ["joint_scale", j] => {
+            expect_count(id, raw, &values, &[1])?;
+            EffectKind::Joint(JointTerm::Scale(joint_index(id, j)? - 1, values[0]))
+        }
+        ["joint_coupling", i, k] => {
+            expect_count(id, raw, &values, &[1])?;
+            let (i, k) = (joint_index(id, i)? - 1, joint_index(id, k)? - 1);
+            if i == k {
+                return Err(EffectError::UnknownId { id: id.to_string() });
+            }
+            EffectKind::Joint(JointTerm::Coupling(i, k, values[0]))
+        }
+        ["hysteresis", j] => {
+            expect_count(id, raw, &values, &[1])?;
+            EffectKind::Joint(JointTerm::Hysteresis(joint_index(id, j)? - 1, values[0]))
+        }
+        ["compliance", j] => {
+            expect_count(id, raw, &values, &[1])?;
+            EffectKind::Joint(JointTerm::Compliance(joint_index(id, j)? - 1, values[0]))
+        }
         ["time_drift", j] => {
             let ji = joint_index(id, j)?;
             expect_count(id, raw, &values, &[1])?;
@@ -213,6 +263,27 @@ impl Effect {
                 Ok(())
             }
             EffectKind::PositionDrift(_) => Ok(()),
+            EffectKind::Joint(term) => {
+                for j in term.joints() {
+                    if j >= model.n_joints() {
+                        return Err(err(ModelError::JointIndex {
+                            index: j,
+                            count: model.n_joints(),
+                        }));
+                    }
+                }
+                if matches!(term, JointTerm::Compliance(..))
+                    && crate::diagnose::gravity::GravityModel::for_model(model).is_none()
+                {
+                    return Err(EffectError::BadValue {
+                        id: self.id.clone(),
+                        value: format!("{:?}", self.values),
+                        reason: "the model has no link masses ([[mass]] rows) for gravity torques"
+                            .into(),
+                    });
+                }
+                Ok(())
+            }
             EffectKind::JointDrift(j, _) => {
                 if *j >= model.n_joints() {
                     return Err(err(ModelError::JointIndex {
@@ -273,5 +344,89 @@ impl TimeEffects {
     /// Position drift at time `t_s`, mm in R.
     pub fn position_offset_mm(&self, t_s: f64) -> Vector3<f64> {
         self.position_mm_per_h * (t_s / 3600.0)
+    }
+}
+
+/// The joint-angle terms of the truth, applied pose by pose.
+#[derive(Debug, Clone, Default, PartialEq)]
+pub struct JointEffects {
+    /// Transmission-ratio error per joint.
+    pub scale: Vec<f64>,
+    /// Coupling, row i column k (deg/deg).
+    pub coupling: Vec<Vec<f64>>,
+    /// Hysteresis per joint (deg).
+    pub hysteresis_deg: Vec<f64>,
+    /// Compliance per joint (deg per kgf.m).
+    pub compliance_deg_per_kgfm: Vec<f64>,
+}
+
+impl JointEffects {
+    /// Collects the joint terms of `effects` for `n_joints` joints.
+    pub fn from_effects(effects: &[Effect], n_joints: usize) -> Self {
+        let mut out = Self {
+            scale: vec![0.0; n_joints],
+            coupling: vec![vec![0.0; n_joints]; n_joints],
+            hysteresis_deg: vec![0.0; n_joints],
+            compliance_deg_per_kgfm: vec![0.0; n_joints],
+        };
+        for e in effects {
+            let EffectKind::Joint(term) = e.kind else {
+                continue;
+            };
+            if term.joints().iter().any(|&j| j >= n_joints) {
+                continue;
+            }
+            match term {
+                JointTerm::Scale(j, v) => out.scale[j] += v,
+                JointTerm::Coupling(i, k, v) => out.coupling[i][k] += v,
+                JointTerm::Hysteresis(j, v) => out.hysteresis_deg[j] += v,
+                JointTerm::Compliance(j, v) => out.compliance_deg_per_kgfm[j] += v,
+            }
+        }
+        out
+    }
+
+    /// Whether any term is non-zero.
+    pub fn is_active(&self) -> bool {
+        self.scale
+            .iter()
+            .chain(self.coupling.iter().flatten())
+            .chain(&self.hysteresis_deg)
+            .chain(&self.compliance_deg_per_kgfm)
+            .any(|v| *v != 0.0)
+    }
+
+    /// The angles the joints really take for the readings `q_deg` with directions of approach
+    /// `approach` (compliance torques from the masses of `model`).
+    pub fn true_joints(
+        &self,
+        model: &Model,
+        q_deg: &[f64],
+        approach: &[f64],
+    ) -> Result<Vec<f64>, ModelError> {
+        let trans = crate::diagnose::extended::transmission_increments(
+            q_deg,
+            approach,
+            &self.scale,
+            &self.coupling,
+            &self.hysteresis_deg,
+        );
+        let tau = if self.compliance_deg_per_kgfm.iter().any(|c| *c != 0.0) {
+            match crate::diagnose::gravity::GravityModel::for_model(model) {
+                Some(g) => g.axis_torques_kgfm(model, q_deg)?,
+                None => vec![0.0; q_deg.len()],
+            }
+        } else {
+            vec![0.0; q_deg.len()]
+        };
+        Ok(q_deg
+            .iter()
+            .enumerate()
+            .map(|(j, q)| {
+                q + trans[j]
+                    + self.compliance_deg_per_kgfm.get(j).copied().unwrap_or(0.0)
+                        * tau.get(j).copied().unwrap_or(0.0)
+            })
+            .collect())
     }
 }

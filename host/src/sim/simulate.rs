@@ -25,10 +25,11 @@ use rand::SeedableRng;
 use rand_chacha::ChaCha8Rng;
 use rand_distr::{Distribution, Normal};
 
-use super::effects::{Effect, EffectError, TimeEffects};
+use super::effects::{Effect, EffectError, JointEffects, TimeEffects};
 use super::ik::ArmGeometry;
 use super::iso9283::{Cube, ISO_POSE_COUNT};
 use super::plan::{iso_calibration_sequence, random_poses, PlanError, PlannedPose};
+use crate::diagnose::data::approach_directions;
 use crate::model::{Model, ModelError, ParamKind, Tilt, KATANA_GEOMETRIC_PARAMS};
 
 /// Settings of a simulated session.
@@ -205,6 +206,7 @@ pub fn simulate(declared: &Model, cfg: &SimConfig) -> Result<SimOutput, SimError
     }
     let (truth, geometric_errors) = truth_model(declared, cfg)?;
     let time_effects = TimeEffects::from_effects(&cfg.effects, declared.n_joints());
+    let joint_effects = JointEffects::from_effects(&cfg.effects, declared.n_joints());
     let tilt = truth.has_tilt();
     let cal_plan: Vec<PlannedPose> = if ArmGeometry::of(declared).is_ok() {
         iso_calibration_sequence(declared, &Cube::thesis_frontal())?
@@ -223,38 +225,46 @@ pub fn simulate(declared: &Model, cfg: &SimConfig) -> Result<SimOutput, SimError
     let noise =
         Normal::new(0.0, cfg.noise_mm).map_err(|e| SimError::Config(format!("--noise-mm: {e}")))?;
     let mut noise_rng = rng(cfg.seed, 3);
-    let mut measure = |plan: &[PlannedPose],
-                       first_index: usize|
-     -> Result<Vec<SimPose>, SimError> {
-        plan.iter()
-            .enumerate()
-            .map(|(k, p)| {
-                let t_s = (first_index + k) as f64 * cfg.pose_interval_s;
-                let q = as_written(&p.q_deg);
-                let model_t;
-                let m = if time_effects.has_joint_drift() {
-                    model_t = time_effects.drifted_model(&truth, t_s)?;
-                    &model_t
-                } else {
-                    &truth
-                };
-                let truth_mm = m.position_mm(&q, if tilt { Tilt::Static } else { Tilt::Off })?;
-                let n = Vector3::new(
-                    noise.sample(&mut noise_rng),
-                    noise.sample(&mut noise_rng),
-                    noise.sample(&mut noise_rng),
-                );
-                let measured_mm = truth_mm + time_effects.position_offset_mm(t_s) + n;
-                Ok(SimPose {
-                    id: p.id.clone(),
-                    q_deg: q,
-                    truth_mm,
-                    measured_mm,
-                    t_s,
+    let mut measure =
+        |plan: &[PlannedPose], first_index: usize| -> Result<Vec<SimPose>, SimError> {
+            // each file is its own visit order: its first pose has no history (FORMATS.md)
+            let written: Vec<Vec<f64>> = plan.iter().map(|p| as_written(&p.q_deg)).collect();
+            let approach = approach_directions(&written, None);
+            plan.iter()
+                .enumerate()
+                .map(|(k, p)| {
+                    let t_s = (first_index + k) as f64 * cfg.pose_interval_s;
+                    let q = written[k].clone();
+                    let model_t;
+                    let m = if time_effects.has_joint_drift() {
+                        model_t = time_effects.drifted_model(&truth, t_s)?;
+                        &model_t
+                    } else {
+                        &truth
+                    };
+                    let q_true = if joint_effects.is_active() {
+                        joint_effects.true_joints(m, &q, &approach[k])?
+                    } else {
+                        q.clone()
+                    };
+                    let truth_mm =
+                        m.position_mm(&q_true, if tilt { Tilt::Static } else { Tilt::Off })?;
+                    let n = Vector3::new(
+                        noise.sample(&mut noise_rng),
+                        noise.sample(&mut noise_rng),
+                        noise.sample(&mut noise_rng),
+                    );
+                    let measured_mm = truth_mm + time_effects.position_offset_mm(t_s) + n;
+                    Ok(SimPose {
+                        id: p.id.clone(),
+                        q_deg: q,
+                        truth_mm,
+                        measured_mm,
+                        t_s,
+                    })
                 })
-            })
-            .collect()
-    };
+                .collect()
+        };
     let cal = measure(&cal_plan, 0)?;
     let val = measure(&val_plan, cal_plan.len())?;
     Ok(SimOutput {

@@ -1,0 +1,233 @@
+//! Aliasing (FORMATS.md `aliased`): effects or parameters that these poses cannot tell apart, so
+//! that a value is never reported as found when it is only a stand-in.
+//!
+//! At the final fit, the stacked Jacobian (measured part, one row per measured component) of
+//! every fitted unknown and of every candidate's unknowns is column-scaled to unit norm. Then:
+//!
+//! * **pairs**: an accepted effect's column and a declared parameter's, another accepted
+//!   effect's or a candidate's with `|correlation| >=` [`ALIAS_MIN`] (the cosine of the two
+//!   scaled columns: the residuals are absolute errors, not centred);
+//! * **reproduced**: a candidate not accepted whose every column lies in the span of the fitted
+//!   columns (declared parameters + accepted effects) with cosine `>=` [`ALIAS_MIN`] while the
+//!   declared parameters alone reproduce it by less: the accepted effects stand in for it. It is
+//!   paired with the accepted effect that carries the largest share of the reproduction.
+//!
+//! Candidates that the declared parameters alone reproduce are not listed: they could never be
+//! found on these poses and are already reported as adding no identifiable direction.
+
+use nalgebra::{DMatrix, DVector};
+
+use super::candidates::Candidate;
+use super::data::Dataset;
+use super::extended::{ExtFit, Unknown};
+use crate::calib::CalibError;
+
+/// Smallest |correlation| (or cosine to a span) of two columns that the poses cannot separate.
+pub const ALIAS_MIN: f64 = 0.9;
+
+/// One aliased pair.
+#[derive(Debug, Clone, PartialEq, serde::Serialize)]
+pub struct AliasReport {
+    /// An accepted effect id or a declared parameter name.
+    pub a: String,
+    /// Another effect id or parameter name.
+    pub b: String,
+    /// |correlation| of their columns, or the cosine of `b`'s column to the span of the fitted
+    /// columns.
+    pub correlation: f64,
+    /// What it means.
+    pub note: String,
+}
+
+/// A group of columns: a name and the unknowns it covers.
+struct Group {
+    name: String,
+    unknowns: Vec<Unknown>,
+    accepted: bool,
+}
+
+/// The aliased pairs at the final fit `last` (declared unknowns `declared`, accepted effects
+/// `accepted`, other candidates `others`) on `data`.
+pub fn aliased(
+    last: &ExtFit,
+    declared: &[Unknown],
+    accepted: &[Candidate],
+    others: &[Candidate],
+    data: &Dataset,
+) -> Result<Vec<AliasReport>, CalibError> {
+    let model = &last.ext.model;
+    let mut groups: Vec<Group> = Vec::new();
+    for u in declared.iter().filter(|u| last.fitted.contains(u)) {
+        groups.push(Group {
+            name: u.name(model),
+            unknowns: vec![*u],
+            accepted: false,
+        });
+    }
+    for c in accepted {
+        groups.push(Group {
+            name: c.id.clone(),
+            unknowns: c.unknowns.clone(),
+            accepted: true,
+        });
+    }
+    let n_fitted_groups = groups.len();
+    for c in others {
+        groups.push(Group {
+            name: c.id.clone(),
+            unknowns: c.unknowns.clone(),
+            accepted: false,
+        });
+    }
+    let mut all: Vec<Unknown> = Vec::new();
+    for g in &groups {
+        for u in &g.unknowns {
+            if !all.contains(u) {
+                all.push(*u);
+            }
+        }
+    }
+    let (mut jac, _) = last.ext.stacked(data, &all)?;
+    let norms: Vec<f64> = (0..jac.ncols()).map(|k| jac.column(k).norm()).collect();
+    let top = norms.iter().copied().fold(0.0, f64::max);
+    for (k, n) in norms.iter().enumerate() {
+        if *n > 1e-12 * top && *n > 0.0 {
+            jac.column_mut(k).unscale_mut(*n);
+        }
+    }
+    let live = |u: &Unknown| -> Option<usize> {
+        all.iter()
+            .position(|a| a == u)
+            .filter(|&k| norms[k] > 1e-12 * top && norms[k] > 0.0)
+    };
+    let cols = |g: &Group| -> Vec<usize> { g.unknowns.iter().filter_map(live).collect() };
+    let mut out: Vec<AliasReport> = Vec::new();
+    // pairs involving an accepted effect
+    for (ai, a) in groups.iter().enumerate().filter(|(_, g)| g.accepted) {
+        for (bi, b) in groups.iter().enumerate() {
+            if bi == ai || (b.accepted && bi < ai) {
+                continue;
+            }
+            let mut best = 0.0f64;
+            for &ka in &cols(a) {
+                for &kb in &cols(b) {
+                    if ka != kb {
+                        best = best.max(jac.column(ka).dot(&jac.column(kb)).abs());
+                    }
+                }
+            }
+            if best >= ALIAS_MIN {
+                let what = if bi < n_fitted_groups {
+                    "both fitted; their values trade off and each is uncertain"
+                } else {
+                    "the poses cannot tell them apart: the accepted effect may stand in for the other"
+                };
+                out.push(AliasReport {
+                    a: a.name.clone(),
+                    b: b.name.clone(),
+                    correlation: best,
+                    note: format!("|correlation| {best:.3} of their columns: {what}"),
+                });
+            }
+        }
+    }
+    // candidates reproduced by the fitted columns, thanks to the accepted effects
+    let fitted_cols: Vec<usize> = groups[..n_fitted_groups]
+        .iter()
+        .flat_map(|g| cols(g))
+        .collect();
+    let declared_cols: Vec<usize> = groups[..n_fitted_groups]
+        .iter()
+        .filter(|g| !g.accepted)
+        .flat_map(|g| cols(g))
+        .collect();
+    if fitted_cols.len() == declared_cols.len() {
+        return Ok(out);
+    }
+    let basis_all = Span::new(sub(&jac, &fitted_cols));
+    let basis_decl = Span::new(sub(&jac, &declared_cols));
+    for b in &groups[n_fitted_groups..] {
+        let bc = cols(b);
+        if bc.is_empty() || out.iter().any(|r| r.b == b.name) {
+            continue;
+        }
+        let mut cos_all = f64::INFINITY;
+        let mut cos_decl = 0.0f64;
+        let mut share = vec![0.0; fitted_cols.len()];
+        for &k in &bc {
+            let v = jac.column(k).into_owned();
+            let (c_all, coef) = basis_all.reproduce(&v);
+            cos_all = cos_all.min(c_all);
+            cos_decl = cos_decl.max(basis_decl.reproduce(&v).0);
+            for (s, c) in share.iter_mut().zip(coef.iter()) {
+                *s += c.abs();
+            }
+        }
+        if cos_all < ALIAS_MIN || cos_decl >= ALIAS_MIN {
+            continue;
+        }
+        // the accepted effect carrying the largest share of the reproduction
+        let mut best: Option<(f64, &str)> = None;
+        let mut k0 = 0;
+        for g in &groups[..n_fitted_groups] {
+            let n = cols(g).len();
+            if g.accepted {
+                let s: f64 = share[k0..k0 + n].iter().sum();
+                if best.is_none_or(|(bs, _)| s > bs) {
+                    best = Some((s, &g.name));
+                }
+            }
+            k0 += n;
+        }
+        if let Some((_, a)) = best {
+            out.push(AliasReport {
+                a: a.to_string(),
+                b: b.name.clone(),
+                correlation: cos_all,
+                note: format!(
+                    "the accepted effects with the declared parameters reproduce {} (cosine {cos_all:.3}; the declared ones alone {cos_decl:.3}): {a} may be a stand-in for it",
+                    b.name
+                ),
+            });
+        }
+    }
+    Ok(out)
+}
+
+fn sub(jac: &DMatrix<f64>, cols: &[usize]) -> DMatrix<f64> {
+    let mut m = DMatrix::zeros(jac.nrows(), cols.len());
+    for (i, &k) in cols.iter().enumerate() {
+        m.set_column(i, &jac.column(k));
+    }
+    m
+}
+
+/// A column space with its pseudo-inverse.
+struct Span {
+    basis: DMatrix<f64>,
+    pinv: Option<DMatrix<f64>>,
+}
+
+impl Span {
+    fn new(basis: DMatrix<f64>) -> Self {
+        let pinv = if basis.ncols() == 0 {
+            None
+        } else {
+            let svd = basis.clone().svd(true, true);
+            let top = svd.singular_values.iter().copied().fold(0.0, f64::max);
+            svd.pseudo_inverse(1e-9 * top).ok()
+        };
+        Self { basis, pinv }
+    }
+
+    /// Cosine of `v` to the span, and the least-squares coefficients.
+    fn reproduce(&self, v: &DVector<f64>) -> (f64, DVector<f64>) {
+        let Some(pinv) = &self.pinv else {
+            return (0.0, DVector::zeros(self.basis.ncols()));
+        };
+        let c = pinv * v;
+        let p = &self.basis * &c;
+        let n = v.norm();
+        ((if n > 0.0 { p.norm() / n } else { 0.0 }).min(1.0), c)
+    }
+}

@@ -1,0 +1,314 @@
+//! The floor the final residual is judged against (FORMATS.md `diagnose --instrument-mm`):
+//! an independent one when known, the residual itself only as the last resort.
+//!
+//! * **instrument**: the one-sigma accuracy per coordinate of the measuring instrument, given by
+//!   the user (`--instrument-mm`); known exactly.
+//! * **repeatability**: the pooled per-coordinate standard deviation of the poses measured more
+//!   than once (the same `id`, or the same joint readings within [`SAME_JOINTS_TOL`]):
+//!   `sqrt(sum_groups sum_poses |p - mean_group|^2 / (dims (sum_groups (n_g - 1))))`, estimated
+//!   with `dims (sum (n_g - 1))` degrees of freedom.
+//! * **residual**: `sqrt(RSS / (m - p))` of the final fit, when neither is known; then the test
+//!   cannot tell a missing effect from noise, and the output says so.
+//!
+//! The floor used is the larger known one. The final calibration residual is tested against it:
+//! `RSS / sigma_floor^2` is chi-square with `(m - p) / tau` degrees of freedom (`tau` the
+//! serial-correlation time along a traced path, 1 for independent poses) when the instrument
+//! sets the floor, an F ratio with the repeatability's own degrees of freedom when the
+//! repeatability does. The held-out residual is tested the same way
+//! (`sum |e|^2 / (sigma_floor^2 (1 + p / n))` over `dims n_val` degrees of freedom, the factor
+//! for the uncertainty of the fitted parameters).
+
+use serde::Serialize;
+
+use super::data::Dataset;
+use super::stat::f_test_p_value;
+
+/// Joint readings that agree within this (deg, mm) are the same pose.
+pub const SAME_JOINTS_TOL: f64 = 1e-6;
+/// Significance level of the floor tests.
+pub const FLOOR_ALPHA: f64 = 1e-3;
+
+/// The `floor` object of the diagnose JSON (FORMATS.md).
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct FloorReport {
+    /// `--instrument-mm`, if given.
+    pub instrument_mm: Option<f64>,
+    /// Repeatability from repeated poses, if any.
+    pub repeatability_mm: Option<f64>,
+    /// One sigma per coordinate of the final calibration residual (mm).
+    pub residual_mm: f64,
+    /// `"instrument"`, `"repeatability"` or `"residual"`.
+    pub used: String,
+    /// `residual_mm` over the floor used.
+    pub final_over_floor: f64,
+    /// p-value of the calibration residual against the floor (extra key; null for the
+    /// residual floor).
+    pub p_value: Option<f64>,
+    /// Held-out residual per coordinate (mm, extra key) and its ratio to the floor.
+    pub validation_rms_mm: f64,
+    /// `validation_rms_mm` over the floor used (extra key).
+    pub validation_over_floor: f64,
+    /// p-value of the held-out residual against the floor (extra key; null for the residual
+    /// floor).
+    pub validation_p_value: Option<f64>,
+    /// Whether the residual is significantly above a known floor (extra key).
+    pub above: bool,
+}
+
+/// Pooled repeatability (mm per coordinate) and its degrees of freedom, from the poses of
+/// `data` measured more than once; `None` without repeated poses.
+pub fn repeatability_mm(data: &Dataset) -> Option<(f64, usize)> {
+    let n = data.len();
+    let mut group: Vec<Option<usize>> = vec![None; n];
+    let mut next = 0;
+    for i in 0..n {
+        if group[i].is_some() {
+            continue;
+        }
+        let mut members = vec![i];
+        for k in (i + 1)..n {
+            if group[k].is_none() && same_pose(data, i, k) {
+                members.push(k);
+            }
+        }
+        if members.len() > 1 {
+            for m in members {
+                group[m] = Some(next);
+            }
+            next += 1;
+        }
+    }
+    let dims = data.measured_dims();
+    let (mut ss, mut dof) = (0.0, 0usize);
+    for g in 0..next {
+        let idx: Vec<usize> = (0..n).filter(|&k| group[k] == Some(g)).collect();
+        let mean = idx
+            .iter()
+            .map(|&k| data.poses.xyz_mm[k])
+            .sum::<nalgebra::Vector3<f64>>()
+            / idx.len() as f64;
+        for &k in &idx {
+            let d = data.measured_part(k, &(data.poses.xyz_mm[k] - mean));
+            ss += d.norm_squared();
+        }
+        dof += dims * (idx.len() - 1);
+    }
+    (dof > 0).then(|| ((ss / dof as f64).sqrt(), dof))
+}
+
+fn same_pose(data: &Dataset, a: usize, b: usize) -> bool {
+    if let Some(ids) = &data.ids {
+        if let (Some(x), Some(y)) = (ids.get(a), ids.get(b)) {
+            if !x.is_empty() && x == y {
+                return true;
+            }
+        }
+    }
+    let (qa, qb) = (&data.poses.q_deg[a], &data.poses.q_deg[b]);
+    qa.len() == qb.len()
+        && qa
+            .iter()
+            .zip(qb)
+            .all(|(x, y)| (x - y).abs() <= SAME_JOINTS_TOL)
+}
+
+/// Upper tail `P(X > x)` of a chi-square variable with `dof` degrees of freedom
+/// (Wilson-Hilferty cube-root normal approximation; accurate to a few 1e-3 in p for dof >= 10,
+/// which is all the floor tests use).
+pub fn chi2_upper_p(x: f64, dof: f64) -> f64 {
+    if !(dof > 0.0) || !x.is_finite() {
+        return f64::NAN;
+    }
+    if x <= 0.0 {
+        return 1.0;
+    }
+    let v = 2.0 / (9.0 * dof);
+    let z = ((x / dof).cbrt() - (1.0 - v)) / v.sqrt();
+    0.5 * erfc(z / std::f64::consts::SQRT_2)
+}
+
+/// Complementary error function (Numerical Recipes' Chebyshev fit, relative error < 1.2e-7).
+pub fn erfc(x: f64) -> f64 {
+    let z = x.abs();
+    let t = 1.0 / (1.0 + 0.5 * z);
+    let r = t
+        * (-z * z - 1.26551223
+            + t * (1.00002368
+                + t * (0.37409196
+                    + t * (0.09678418
+                        + t * (-0.18628806
+                            + t * (0.27886807
+                                + t * (-1.13520398
+                                    + t * (1.48851587 + t * (-0.82215223 + t * 0.17087277)))))))))
+            .exp();
+    if x >= 0.0 {
+        r
+    } else {
+        2.0 - r
+    }
+}
+
+/// What [`judge`] needs of the final fit.
+#[derive(Debug, Clone, Copy)]
+pub struct FinalResidual {
+    /// Calibration residual sum of squares (mm^2).
+    pub rss_mm2: f64,
+    /// Number of calibration residuals.
+    pub n_residuals: usize,
+    /// Number of fitted unknowns.
+    pub n_params: usize,
+    /// Serial-correlation time (1 for independent poses).
+    pub tau: f64,
+    /// Number of calibration poses.
+    pub n_poses: usize,
+    /// Held-out sum of squared errors (mm^2) and number of held-out residuals.
+    pub val_ss_mm2: f64,
+    /// Number of held-out residuals.
+    pub val_residuals: usize,
+}
+
+/// The floor report of a final fit `r`, with the instrument sigma and repeatability when known.
+pub fn judge(
+    r: &FinalResidual,
+    instrument_mm: Option<f64>,
+    repeat: Option<(f64, usize)>,
+) -> FloorReport {
+    let dof = r.n_residuals.saturating_sub(r.n_params).max(1) as f64;
+    let residual_mm = (r.rss_mm2 / dof).sqrt();
+    let tau = r.tau.max(1.0);
+    let inflation = 1.0 + r.n_params as f64 / r.n_residuals.max(1) as f64;
+    let val_dof = r.val_residuals.max(1) as f64;
+    let validation_rms_mm = (r.val_ss_mm2 / val_dof).sqrt();
+    let instrument = instrument_mm.filter(|s| *s > 0.0 && s.is_finite());
+    let rep = repeat.filter(|(s, _)| *s > 0.0);
+    let (used, floor, floor_dof) = match (instrument, rep) {
+        (Some(i), Some((r, d))) if r > i => ("repeatability", r, Some(d as f64)),
+        (Some(i), _) => ("instrument", i, None),
+        (None, Some((r, d))) => ("repeatability", r, Some(d as f64)),
+        (None, None) => ("residual", residual_mm, None),
+    };
+    let test = |ss: f64, d: f64| -> f64 {
+        let stat = ss / (floor * floor);
+        match floor_dof {
+            // the floor is itself an estimate: F ratio of the two variances
+            Some(d2) => f_test_p_value(stat / d, d, d2),
+            None => chi2_upper_p(stat, d),
+        }
+    };
+    let (p, vp) = if used == "residual" {
+        (None, None)
+    } else {
+        (
+            Some(test(r.rss_mm2 / tau, dof / tau)),
+            Some(test(r.val_ss_mm2 / inflation, val_dof)),
+        )
+    };
+    let above = p.is_some_and(|p| p < FLOOR_ALPHA) || vp.is_some_and(|p| p < FLOOR_ALPHA);
+    FloorReport {
+        instrument_mm: instrument,
+        repeatability_mm: rep.map(|r| r.0),
+        residual_mm,
+        used: used.to_string(),
+        final_over_floor: residual_mm / floor,
+        p_value: p,
+        validation_rms_mm,
+        validation_over_floor: validation_rms_mm / floor,
+        validation_p_value: vp,
+        above,
+    }
+}
+
+/// The plain-language verdict of a floor report.
+pub fn verdict(f: &FloorReport) -> String {
+    let fmt_p = |p: Option<f64>| p.map_or("-".to_string(), |p| format!("{p:.1e}"));
+    match f.used.as_str() {
+        "residual" => format!(
+            "no independent floor (no --instrument-mm, no pose measured twice): the noise is estimated from the final residual itself ({:.4} mm per coordinate), so the diagnosis cannot tell a missing effect from noise; held-out residual {:.4} mm per coordinate",
+            f.residual_mm, f.validation_rms_mm
+        ),
+        used => {
+            let floor = if used == "instrument" {
+                f.instrument_mm
+            } else {
+                f.repeatability_mm
+            }
+            .unwrap_or(f64::NAN);
+            let head = if f.above {
+                "the model still lacks something"
+            } else {
+                "at the floor"
+            };
+            format!(
+                "{head}: final calibration residual {:.4} mm per coordinate = {:.2} x the {used} floor {floor:.4} mm (p = {}), held out {:.4} mm = {:.2} x (p = {})",
+                f.residual_mm,
+                f.final_over_floor,
+                fmt_p(f.p_value),
+                f.validation_rms_mm,
+                f.validation_over_floor,
+                fmt_p(f.validation_p_value)
+            )
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::calib::Poses;
+    use nalgebra::Vector3;
+
+    #[test]
+    fn chi2_tail_matches_known_quantiles() {
+        // chi2(100): 99.9 % quantile 149.449, median 99.334
+        assert!((chi2_upper_p(149.449, 100.0) - 1e-3).abs() < 2e-4);
+        assert!((chi2_upper_p(99.334, 100.0) - 0.5).abs() < 5e-3);
+    }
+
+    #[test]
+    fn repeatability_pools_repeated_poses() {
+        let q = vec![
+            vec![1.0, 2.0],
+            vec![1.0, 2.0],
+            vec![3.0, 4.0],
+            vec![5.0, 6.0],
+        ];
+        let xyz = vec![
+            Vector3::new(0.0, 0.0, 0.0),
+            Vector3::new(0.2, 0.0, 0.0),
+            Vector3::zeros(),
+            Vector3::zeros(),
+        ];
+        let d = Dataset::from_poses(Poses {
+            q_deg: q,
+            xyz_mm: xyz,
+        });
+        let (s, dof) = repeatability_mm(&d).expect("one repeated pose");
+        assert_eq!(dof, 3);
+        // deviations +-0.1 on x: ss = 0.02 over 3 dof
+        assert!((s - (0.02f64 / 3.0).sqrt()).abs() < 1e-12);
+        let none = d.subset(&[0, 2, 3]);
+        assert!(repeatability_mm(&none).is_none());
+    }
+
+    #[test]
+    fn judge_uses_the_larger_floor_and_flags_excess() {
+        let r = FinalResidual {
+            rss_mm2: 300.0 * 0.02f64.powi(2),
+            n_residuals: 300,
+            n_params: 0,
+            tau: 1.0,
+            n_poses: 100,
+            val_ss_mm2: 90.0 * 0.02f64.powi(2),
+            val_residuals: 90,
+        };
+        let f = judge(&r, Some(0.01), None);
+        assert_eq!(f.used, "instrument");
+        assert!((f.final_over_floor - 2.0).abs() < 1e-9 && f.above);
+        let g = judge(&r, Some(0.02), Some((0.01, 20)));
+        assert_eq!(g.used, "instrument");
+        assert!(!g.above, "{g:?}");
+        let h = judge(&r, None, None);
+        assert_eq!(h.used, "residual");
+        assert!(!h.above && (h.final_over_floor - 1.0).abs() < 1e-12);
+    }
+}
