@@ -7,10 +7,10 @@
 //! * **pairs**: an accepted effect's column and a declared parameter's, another accepted
 //!   effect's or a candidate's with `|correlation| >=` [`ALIAS_MIN`] (the cosine of the two
 //!   scaled columns: the residuals are absolute errors, not centred);
-//! * **reproduced**: a candidate not accepted whose every column lies in the span of the fitted
-//!   columns (declared parameters + accepted effects) with cosine `>=` [`ALIAS_MIN`] while the
-//!   declared parameters alone reproduce it by less: the accepted effects stand in for it. It is
-//!   paired with the accepted effect that carries the largest share of the reproduction.
+//! * **reproduced**: a candidate not accepted whose columns' parts that the declared parameters
+//!   cannot reproduce (projected off their span) lie in the span of the accepted effects' (also
+//!   projected off it) with cosine `>=` [`ALIAS_MIN`]: the accepted effects stand in for it.
+//!   It is paired with the accepted effect that carries the largest share of the reproduction.
 //!
 //! Candidates that the declared parameters alone reproduce are not listed: they could never be
 //! found on these poses and are already reported as adding no identifiable direction.
@@ -132,64 +132,74 @@ pub fn aliased(
         }
     }
     // candidates reproduced by the fitted columns, thanks to the accepted effects
-    let fitted_cols: Vec<usize> = groups[..n_fitted_groups]
-        .iter()
-        .flat_map(|g| cols(g))
-        .collect();
     let declared_cols: Vec<usize> = groups[..n_fitted_groups]
         .iter()
         .filter(|g| !g.accepted)
         .flat_map(|g| cols(g))
         .collect();
-    if fitted_cols.len() == declared_cols.len() {
+    let basis_decl = Span::new(sub(&jac, &declared_cols));
+    // the accepted effects' columns with the declared span projected out
+    let acc_groups: Vec<&Group> = groups[..n_fitted_groups]
+        .iter()
+        .filter(|g| g.accepted)
+        .collect();
+    let mut acc_cols: Vec<(usize, DVector<f64>)> = Vec::new();
+    for (gi, g) in acc_groups.iter().enumerate() {
+        for k in cols(g) {
+            let v = jac.column(k).into_owned();
+            let r = &v - basis_decl.project(&v);
+            if r.norm() > 1e-6 {
+                acc_cols.push((gi, r));
+            }
+        }
+    }
+    if acc_cols.is_empty() {
         return Ok(out);
     }
-    let basis_all = Span::new(sub(&jac, &fitted_cols));
-    let basis_decl = Span::new(sub(&jac, &declared_cols));
+    let mut acc_basis = DMatrix::zeros(jac.nrows(), acc_cols.len());
+    for (i, (_, c)) in acc_cols.iter().enumerate() {
+        acc_basis.set_column(i, c);
+    }
+    let basis_acc = Span::new(acc_basis);
     for b in &groups[n_fitted_groups..] {
         let bc = cols(b);
         if bc.is_empty() || out.iter().any(|r| r.b == b.name) {
             continue;
         }
-        let mut cos_all = f64::INFINITY;
-        let mut cos_decl = 0.0f64;
-        let mut share = vec![0.0; fitted_cols.len()];
+        // every column of the candidate: its part the declared parameters cannot reproduce
+        // must be reproduced by the accepted effects
+        let mut cos_min = f64::INFINITY;
+        let mut share = vec![0.0; acc_groups.len()];
+        let mut decl_only = true;
         for &k in &bc {
             let v = jac.column(k).into_owned();
-            let (c_all, coef) = basis_all.reproduce(&v);
-            cos_all = cos_all.min(c_all);
-            cos_decl = cos_decl.max(basis_decl.reproduce(&v).0);
-            for (s, c) in share.iter_mut().zip(coef.iter()) {
-                *s += c.abs();
+            let r = &v - basis_decl.project(&v);
+            if r.norm() < (1.0 - ALIAS_MIN * ALIAS_MIN).sqrt() {
+                continue; // the declared parameters reproduce this column already
+            }
+            decl_only = false;
+            let (c, coef) = basis_acc.reproduce(&r);
+            cos_min = cos_min.min(c);
+            for ((gi, col), x) in acc_cols.iter().zip(coef.iter()) {
+                share[*gi] += (x * col.norm()).abs();
             }
         }
-        if cos_all < ALIAS_MIN || cos_decl >= ALIAS_MIN {
+        if decl_only || cos_min < ALIAS_MIN {
             continue;
         }
-        // the accepted effect carrying the largest share of the reproduction
-        let mut best: Option<(f64, &str)> = None;
-        let mut k0 = 0;
-        for g in &groups[..n_fitted_groups] {
-            let n = cols(g).len();
-            if g.accepted {
-                let s: f64 = share[k0..k0 + n].iter().sum();
-                if best.is_none_or(|(bs, _)| s > bs) {
-                    best = Some((s, &g.name));
-                }
-            }
-            k0 += n;
-        }
-        if let Some((_, a)) = best {
-            out.push(AliasReport {
-                a: a.to_string(),
-                b: b.name.clone(),
-                correlation: cos_all,
-                note: format!(
-                    "the accepted effects with the declared parameters reproduce {} (cosine {cos_all:.3}; the declared ones alone {cos_decl:.3}): {a} may be a stand-in for it",
-                    b.name
-                ),
-            });
-        }
+        let Some(gi) = (0..share.len()).max_by(|&a, &c| share[a].total_cmp(&share[c])) else {
+            continue;
+        };
+        let a = &acc_groups[gi].name;
+        out.push(AliasReport {
+            a: a.clone(),
+            b: b.name.clone(),
+            correlation: cos_min,
+            note: format!(
+                "what the declared parameters cannot reproduce of {} the accepted effects do (cosine {cos_min:.3}): {a} may be a stand-in for it",
+                b.name
+            ),
+        });
     }
     Ok(out)
 }
@@ -218,6 +228,14 @@ impl Span {
             svd.pseudo_inverse(1e-9 * top).ok()
         };
         Self { basis, pinv }
+    }
+
+    /// The projection of `v` on the span.
+    fn project(&self, v: &DVector<f64>) -> DVector<f64> {
+        match &self.pinv {
+            Some(p) => &self.basis * (p * v),
+            None => DVector::zeros(v.len()),
+        }
     }
 
     /// Cosine of `v` to the span, and the least-squares coefficients.
