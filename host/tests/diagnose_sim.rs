@@ -282,9 +282,10 @@ fn near_aliases_and_sign_onsets_on_other_seeds() {
         );
         assert!(
             final_val(&r) <= 1.5 * r.floor_mm,
-            "{effect} seed {seed}: validation mean {:.4} mm > 1.5 x floor {:.4} mm",
+            "{effect} seed {seed}: validation mean {:.4} mm > 1.5 x floor {:.4} mm\n{}",
             final_val(&r),
-            r.floor_mm
+            r.floor_mm,
+            r.diag.report.table()
         );
     }
 }

@@ -264,24 +264,6 @@ fn paired_gain(e0: &[f64], e1: &[f64], serial: bool) -> (f64, f64, f64, f64) {
     (m0, m1, rel, t)
 }
 
-/// The paired-t threshold of the cross-validation when `n_candidates` were screened: the
-/// one-sided normal level of `t_min` divided by `n_candidates` (Bonferroni), never below `t_min`.
-pub fn cv_t_threshold(t_min: f64, n_candidates: usize) -> f64 {
-    let alpha = 0.5 * super::floor::erfc(t_min / std::f64::consts::SQRT_2);
-    let target = alpha / n_candidates.max(1) as f64;
-    // bisection of the upper normal tail
-    let (mut lo, mut hi) = (t_min, 40.0);
-    for _ in 0..100 {
-        let mid = 0.5 * (lo + hi);
-        if 0.5 * super::floor::erfc(mid / std::f64::consts::SQRT_2) > target {
-            lo = mid;
-        } else {
-            hi = mid;
-        }
-    }
-    hi
-}
-
 /// Order of near-tied candidates (indices `ids`, cross-validated per-pose errors `errs`): the
 /// ones the best cross-validated candidate does not beat significantly (paired t below
 /// [`DecideConfig::cv_t_min`]) are statistically equivalent, and among them the simplest comes
@@ -317,8 +299,15 @@ fn rank_contenders<'a>(
 }
 
 /// Occam's order of a candidate: its number of unknowns, then its harmonic order (a first
-/// harmonic is smoother than a second one; 0 for effects that are not harmonics).
+/// harmonic is smoother than a second one; 0 for effects that are not harmonics). The
+/// transmission terms (`joint_scale`, `joint_coupling`, `hysteresis`) come after the others in a
+/// tie: they are n + n(n-1) + n more hypotheses of one unknown each, so one of them fits a given
+/// residual by chance far more often than a single named effect does.
 fn simplicity(c: &Candidate) -> (usize, u32) {
+    let family = c.id.split(':').next().unwrap_or("");
+    if matches!(family, "joint_scale" | "joint_coupling" | "hysteresis") {
+        return (usize::MAX, 0);
+    }
     let order =
         c.id.rsplit(':')
             .next()
@@ -437,9 +426,7 @@ pub fn forward_selection(
         // every significant cross-validated gain above the floor added effects that made the
         // held-out error worse (0.0886 -> 0.0951 mm). The floor judges the final residual.
         let min_gain = cfg.cv_min_gain;
-        // the candidates reached the cross-validation through a screen of the whole library:
-        // the one-sided level of `cv_t_min` is Bonferroni-corrected for the library's size
-        let t_min = cv_t_threshold(cfg.cv_t_min, cands.len());
+        let t_min = cfg.cv_t_min;
         let mut cv_before: Option<Vec<f64>> = None;
         let mut cv_cache: Vec<Option<Vec<f64>>> = vec![None; refits.len()];
         let passes = |t: &Trial| t.added > 0 && t.p_value < cfg.alpha && t.delta_bic < 0.0;

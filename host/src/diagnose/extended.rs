@@ -568,3 +568,55 @@ pub fn fit(
         n_residuals: n_res,
     })
 }
+
+#[cfg(test)]
+mod transmission_tests {
+    use super::*;
+    use crate::calib::Poses;
+    use crate::model::katana450;
+
+    /// The analytic columns of the transmission unknowns match central differences.
+    #[test]
+    fn transmission_jacobian_matches_finite_differences() {
+        let mut ext = ExtModel::new(katana450(200.0).expect("preset"));
+        let q = vec![
+            vec![10.0, 80.0, -60.0, 20.0, 30.0],
+            vec![-20.0, 95.0, -80.0, -10.0, 60.0],
+            vec![35.0, 70.0, -40.0, 40.0, -30.0],
+        ];
+        let data = Dataset::from_poses(Poses {
+            xyz_mm: vec![Vector3::zeros(); q.len()],
+            q_deg: q,
+        })
+        .with_approach();
+        let unknowns = [
+            Unknown::JointScale(1),
+            Unknown::Coupling(2, 1),
+            Unknown::Hysteresis(3),
+        ];
+        for (u, v) in unknowns.iter().zip([1e-3, 2e-3, 0.05]) {
+            ext.set_value(*u, v).expect("set");
+        }
+        for k in 0..data.len() {
+            let (_, jac) = ext
+                .predict_with_jacobian(&data, k, &unknowns)
+                .expect("jacobian");
+            for (c, u) in unknowns.iter().enumerate() {
+                let h = 1e-6;
+                let mut plus = ext.clone();
+                plus.set_value(*u, ext.value(*u) + h).expect("set");
+                let mut minus = ext.clone();
+                minus.set_value(*u, ext.value(*u) - h).expect("set");
+                let fd = (plus.predict_pose(&data, k).expect("p")
+                    - minus.predict_pose(&data, k).expect("p"))
+                    / (2.0 * h);
+                let an: Vector3<f64> = jac.column(c).into_owned();
+                let scale = fd.norm().max(an.norm()).max(1e-9);
+                assert!(
+                    (fd - an).norm() <= 1e-5 * scale,
+                    "pose {k} {u:?}: fd {fd:?} analytic {an:?}"
+                );
+            }
+        }
+    }
+}

@@ -17,7 +17,7 @@ use std::path::Path;
 
 use serde_json::{json, Map, Value};
 
-use super::effects::EffectKind;
+use super::effects::{EffectKind, JointTerm};
 use super::simulate::{SimConfig, SimError, SimOutput, SimPose};
 use crate::io::atomic::write_bytes_atomic;
 
@@ -56,6 +56,19 @@ pub fn truth_json(out: &SimOutput, cfg: &SimConfig) -> Value {
             let params: Map<String, Value> = match &e.kind {
                 EffectKind::Params(list) => {
                     list.iter().map(|(n, d)| (n.clone(), json!(d))).collect()
+                }
+                EffectKind::Joint(term) => {
+                    let (name, v) = match *term {
+                        JointTerm::Scale(j, v) => (format!("joint_scale_j{}", j + 1), v),
+                        JointTerm::Coupling(i, k, v) => {
+                            (format!("coupling_j{}_j{}_deg_per_deg", i + 1, k + 1), v)
+                        }
+                        JointTerm::Hysteresis(j, v) => (format!("hysteresis_j{}_deg", j + 1), v),
+                        JointTerm::Compliance(j, v) => {
+                            (format!("compliance_j{}_deg_per_kgfm", j + 1), v)
+                        }
+                    };
+                    std::iter::once((name, json!(v))).collect()
                 }
                 _ => Map::new(),
             };

@@ -445,7 +445,7 @@ fn check(cfg: &SessionConfig) -> Result<(), SessionError> {
         .find(|e| !matches!(e.kind, EffectKind::Params(_)))
     {
         return bad(format!(
-            "effect {}: time drifts are not simulated in a session (it lasts seconds); use `rigctl simulate` poses",
+            "effect {}: time drifts and joint-angle terms are not simulated in a session; use `rigctl simulate` poses",
             e.id
         ));
     }
