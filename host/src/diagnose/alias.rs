@@ -135,7 +135,7 @@ pub fn aliased(
     let declared_cols: Vec<usize> = groups[..n_fitted_groups]
         .iter()
         .filter(|g| !g.accepted)
-        .flat_map(|g| cols(g))
+        .flat_map(&cols)
         .collect();
     let basis_decl = Span::new(sub(&jac, &declared_cols));
     // the accepted effects' columns with the declared span projected out

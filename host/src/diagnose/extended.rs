@@ -610,7 +610,7 @@ mod transmission_tests {
                 let fd = (plus.predict_pose(&data, k).expect("p")
                     - minus.predict_pose(&data, k).expect("p"))
                     / (2.0 * h);
-                let an: Vector3<f64> = jac.column(c).into_owned();
+                let an = Vector3::new(jac[(0, c)], jac[(1, c)], jac[(2, c)]);
                 let scale = fd.norm().max(an.norm()).max(1e-9);
                 assert!(
                     (fd - an).norm() <= 1e-5 * scale,

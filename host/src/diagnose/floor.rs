@@ -66,8 +66,8 @@ pub fn repeatability_mm(data: &Dataset) -> Option<(f64, usize)> {
             continue;
         }
         let mut members = vec![i];
-        for k in (i + 1)..n {
-            if group[k].is_none() && same_pose(data, i, k) {
+        for (k, g) in group.iter().enumerate().skip(i + 1) {
+            if g.is_none() && same_pose(data, i, k) {
                 members.push(k);
             }
         }
@@ -116,7 +116,7 @@ fn same_pose(data: &Dataset, a: usize, b: usize) -> bool {
 /// (Wilson-Hilferty cube-root normal approximation; accurate to a few 1e-3 in p for dof >= 10,
 /// which is all the floor tests use).
 pub fn chi2_upper_p(x: f64, dof: f64) -> f64 {
-    if !(dof > 0.0) || !x.is_finite() {
+    if dof.is_nan() || dof <= 0.0 || !x.is_finite() {
         return f64::NAN;
     }
     if x <= 0.0 {
