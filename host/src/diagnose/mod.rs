@@ -13,6 +13,7 @@
 //! | [`stat`] | F distribution, BIC, noise statistics |
 //! | [`report`] | the `diagnose --json` document and the text table |
 //! | [`plots`] | SVG plots of the residual against the regressor that traced each effect |
+//! | [`probe`] | a smooth function of the joint angles fitted to the final residual under cross-validation: where the unexplained error lives |
 //!
 //! The starting point is the declared model (MODEL.md) fitted exactly as `calibrate --method
 //! tilting`: [`crate::calib::fit::fit_parameters`] on [`crate::calib::default_selection`] (the
@@ -33,6 +34,7 @@ pub mod extended;
 pub mod gravity;
 pub mod plots;
 pub mod polish;
+pub mod probe;
 pub mod report;
 pub mod residual;
 pub mod stat;
@@ -88,6 +90,8 @@ impl Classify for DiagnoseError {
 pub struct DiagnoseOptions {
     /// Selection rule settings.
     pub decide: DecideConfig,
+    /// Settings of the probe of the final residual (its folds and seed are the selection's).
+    pub probe: probe::ProbeConfig,
 }
 
 /// One accepted effect with what the plots need.
@@ -118,6 +122,8 @@ pub struct Diagnosis {
     pub regressors: Vec<residual::Regressor>,
     /// Per accepted effect, the data of its plot.
     pub traces: Vec<EffectTrace>,
+    /// The probe of the final calibration residual.
+    pub probe: probe::ProbeResult,
 }
 
 /// The declared fit (as `calibrate --method tilting`) as an extended fit, and the requested
@@ -373,7 +379,7 @@ pub fn diagnose(
         expected_mean_mm: stat::expected_mean_norm_dims(sigma, cal.measured_dims()),
     };
     let tau = decide::serial_tau(&last.ext, cal)?;
-    let unexplained = unexplained(
+    let mut unexplained = unexplained(
         &final_cal,
         &final_val,
         &regs,
@@ -381,6 +387,14 @@ pub fn diagnose(
         &selection,
         (cal.measured_dims(), tau),
     );
+    let probe_cfg = probe::ProbeConfig {
+        folds: cfg.folds,
+        seed: cfg.seed,
+        ..opts.probe.clone()
+    };
+    let jac = probe::jacobians(&last.ext, cal, &last.fitted)?;
+    let probe = probe::probe_dataset(cal, &final_cal, &jac, &probe_cfg);
+    unexplained.add_probe(&probe);
     let report = DiagnoseReport {
         declared: SetStats {
             calibration: Stats::from_errors(&declared_cal),
@@ -409,6 +423,8 @@ pub fn diagnose(
         }
         .to_string(),
         outliers_left_out: outliers,
+        probe: probe.report(&probe_cfg),
+        residual_model: None,
     };
     Ok(Diagnosis {
         report,
@@ -416,6 +432,7 @@ pub fn diagnose(
         selection,
         regressors: regs,
         traces,
+        probe,
     })
 }
 
@@ -469,5 +486,10 @@ fn unexplained(
         }
         None => false,
     };
-    Unexplained { structured, note }
+    Unexplained {
+        structured,
+        note,
+        depends_on: Vec::new(),
+        explainable_share: 0.0,
+    }
 }

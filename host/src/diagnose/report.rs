@@ -7,7 +7,9 @@
 //! `cv_mean_mm_before/after`, `p_value`, `f_statistic`, `delta_bic`, `added_parameters`,
 //! `regressor`, `unidentifiable`, `model_parameters` (fitted model values); at the top `noise`,
 //! `robot`, `tilting`, `declared_unidentifiable`, `rejected` (candidates refitted at the last
-//! step and why they failed), `rule`.
+//! step and why they failed), `rule`, `probe` (the probe's terms and cross-validated RMS,
+//! [`super::probe`]) and, with `--residual-model`, `residual_model` (the hybrid correction and
+//! its held-out statistics). `unexplained` also carries `depends_on` and `explainable_share`.
 
 use std::fmt::Write as _;
 
@@ -78,6 +80,22 @@ pub struct EffectReport {
 pub struct Unexplained {
     pub structured: bool,
     pub note: String,
+    /// Joints (`q2`) and joint pairs (`q1:q3`) the probe's smooth function depends on.
+    pub depends_on: Vec<String>,
+    /// Share of the residual variance the probe explains out of sample.
+    pub explainable_share: f64,
+}
+
+impl Unexplained {
+    /// Adds the probe's finding ([`super::probe`]): `depends_on`, `explainable_share`, the
+    /// sentence, and `structured` when it found out-of-sample structure.
+    pub fn add_probe(&mut self, probe: &super::probe::ProbeResult) {
+        self.depends_on = probe.depends_on.clone();
+        self.explainable_share = probe.explainable_share;
+        self.structured |= probe.structured;
+        self.note.push_str("; probe: ");
+        self.note.push_str(&probe.sentence());
+    }
 }
 
 /// The noise estimated from the final calibration residual.
@@ -137,6 +155,12 @@ pub struct DiagnoseReport {
     /// Calibration samples left out as outliers of the declared tilting law
     /// ([`super::trim_outliers`]; always 0 for full positions).
     pub outliers_left_out: usize,
+    /// The probe of the final residual: its terms and cross-validated RMS.
+    pub probe: super::probe::ProbeReport,
+    /// With `--residual-model`: the probe's function as a correction (a hybrid model, never in
+    /// `effects`) and its held-out statistics.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub residual_model: Option<super::probe::HybridReport>,
 }
 
 /// One-line statement of the decision rule in force.
@@ -226,6 +250,16 @@ impl DiagnoseReport {
             "{:<28} {:>12.4} {:>12.4}",
             "final", self.final_.calibration.mean_mm, self.final_.validation.mean_mm
         );
+        if let Some(h) = &self.residual_model {
+            let _ = writeln!(
+                s,
+                "{:<28} {:>12} {:>12.4}  (residual model {}, not a physical effect)",
+                "hybrid",
+                "-",
+                h.validation_hybrid.mean_mm,
+                h.terms.join(" + ")
+            );
+        }
         let _ = writeln!(
             s,
             "unexplained: structured = {}; {}",
