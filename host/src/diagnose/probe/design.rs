@@ -414,7 +414,9 @@ mod tests {
             let cols = d.columns(&[0, 1]);
             let e = d.cv_residuals(&cols).unwrap();
             let worst = e.iter().map(|v| v.norm()).fold(0.0, f64::max);
-            assert!(worst < 1e-3, "partial {partial}: {worst}");
+            // the ridge (RIDGE_REL of the mean diagonal) shrinks the coefficients slightly:
+            // within 3 % of the 0.3 mm function
+            assert!(worst < 0.01, "partial {partial}: {worst}");
             let null: f64 = d.null_residuals().iter().map(|v| v.norm_squared()).sum();
             assert!(null > 1.0);
         }
