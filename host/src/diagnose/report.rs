@@ -257,7 +257,11 @@ impl DiagnoseReport {
                 "hybrid",
                 "-",
                 h.validation_hybrid.mean_mm,
-                h.terms.join(" + ")
+                if h.terms.is_empty() {
+                    "with no term".to_string()
+                } else {
+                    h.terms.join(" + ")
+                }
             );
         }
         let _ = writeln!(
