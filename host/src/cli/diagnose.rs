@@ -1,5 +1,6 @@
 //! `rigctl diagnose --poses CAL.csv --validate VAL.csv [--json OUT.json] [--out MODEL.toml]
-//! [--plots DIR] [--robot NAME | --model FILE.toml] [--tool-mm L] [--set NAME=VALUE ...]`:
+//! [--plots DIR] [--residual-model] [--robot NAME | --model FILE.toml] [--tool-mm L]
+//! [--set NAME=VALUE ...]`:
 //! fits the declared model, adds the missing effects the data establish (see
 //! `rigctl::diagnose`), prints a table, and writes the JSON report, the extended model and plots.
 //!
@@ -12,6 +13,8 @@ use std::path::{Path, PathBuf};
 
 use rigctl::diagnose::data::Dataset;
 use rigctl::diagnose::plots::write_plots;
+use rigctl::diagnose::probe::plot::write_probe_plots;
+use rigctl::diagnose::probe::{hybrid_report, jacobians};
 use rigctl::diagnose::{diagnose, DiagnoseOptions};
 use rigctl::io::atomic::write_bytes_atomic;
 use rigctl::model::KATANA_PENCIL_TOOL_MM;
@@ -50,6 +53,11 @@ pub struct Args {
     /// repeatability of poses measured more than once).
     #[arg(long = "instrument-mm", value_name = "SIGMA")]
     pub instrument_mm: Option<f64>,
+    /// Keep the probe's smooth function of the joint angles as a correction (a hybrid model):
+    /// its held-out statistics are reported apart (JSON key `residual_model`, table line
+    /// `hybrid`), never as a physical effect.
+    #[arg(long)]
+    pub residual_model: bool,
     /// Seed of the cross-validation folds.
     #[arg(long, default_value_t = 1)]
     pub seed: u64,
@@ -95,7 +103,20 @@ pub fn run(args: Args) -> Result<(), CliError> {
         }
         opts.instrument_mm = Some(s);
     }
-    let diag = diagnose(&model, &cal, &val, &opts)?;
+    let mut diag = diagnose(&model, &cal, &val, &opts)?;
+    if args.residual_model {
+        let physical = diag.model.errors(&val)?;
+        let fitted = &diag.selection.last.fitted;
+        let jac = jacobians(&diag.model, &val, fitted)?;
+        let names: Vec<String> = fitted.iter().map(|u| u.name(&diag.model.model)).collect();
+        diag.report.residual_model = Some(hybrid_report(
+            &diag.probe.model,
+            &val,
+            &physical,
+            &jac,
+            &names,
+        ));
+    }
     if let Some(path) = &args.json {
         let text = serde_json::to_string_pretty(&diag.report)
             .map_err(|e| CliError::failure(format!("serialising the report: {e}")))?;
@@ -168,6 +189,7 @@ pub fn run(args: Args) -> Result<(), CliError> {
     }
     if let Some(dir) = &args.plots {
         write_plots(dir, &diag)?;
+        write_probe_plots(dir, &diag.probe)?;
     }
     print!("{}", diag.report.table());
     Ok(())

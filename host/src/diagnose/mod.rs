@@ -15,6 +15,7 @@
 //! | [`alias`] | pairs of effects/parameters these poses cannot tell apart |
 //! | [`report`] | the `diagnose --json` document and the text table |
 //! | [`plots`] | SVG plots of the residual against the regressor that traced each effect |
+//! | [`probe`] | a smooth function of the joint angles fitted to the final residual under cross-validation: where the unexplained error lives |
 //!
 //! The starting point is the declared model (MODEL.md) fitted exactly as `calibrate --method
 //! tilting`: [`crate::calib::fit::fit_parameters`] on [`crate::calib::default_selection`] (the
@@ -37,6 +38,7 @@ pub mod floor;
 pub mod gravity;
 pub mod plots;
 pub mod polish;
+pub mod probe;
 pub mod report;
 pub mod residual;
 pub mod stat;
@@ -95,6 +97,8 @@ pub struct DiagnoseOptions {
     /// One-sigma accuracy per coordinate of the measuring instrument (mm), when known
     /// (`--instrument-mm`).
     pub instrument_mm: Option<f64>,
+    /// Settings of the probe of the final residual (its folds and seed are the selection's).
+    pub probe: probe::ProbeConfig,
 }
 
 /// One accepted effect with what the plots need.
@@ -125,6 +129,8 @@ pub struct Diagnosis {
     pub regressors: Vec<residual::Regressor>,
     /// Per accepted effect, the data of its plot.
     pub traces: Vec<EffectTrace>,
+    /// The probe of the final calibration residual.
+    pub probe: probe::ProbeResult,
 }
 
 /// The declared fit (as `calibrate --method tilting`) as an extended fit, and the requested
@@ -453,6 +459,14 @@ pub fn diagnose(
             ));
         }
     }
+    let probe_cfg = probe::ProbeConfig {
+        folds: cfg.folds,
+        seed: cfg.seed,
+        ..opts.probe.clone()
+    };
+    let jac = probe::jacobians(&last.ext, cal, &last.fitted)?;
+    let probe = probe::probe_dataset(cal, &final_cal, &jac, &probe_cfg);
+    unexplained.add_probe(&probe);
     let report = DiagnoseReport {
         declared: SetStats {
             calibration: Stats::from_errors(&declared_cal),
@@ -483,6 +497,8 @@ pub fn diagnose(
         }
         .to_string(),
         outliers_left_out: outliers,
+        probe: probe.report(&probe_cfg),
+        residual_model: None,
     };
     Ok(Diagnosis {
         report,
@@ -490,6 +506,7 @@ pub fn diagnose(
         selection,
         regressors: regs,
         traces,
+        probe,
     })
 }
 
@@ -546,8 +563,7 @@ fn unexplained(
     Unexplained {
         structured,
         note,
-        // RESIDUAL-PROBE: the residual probe (diagnose/probe*.rs) fills these
         depends_on: Vec::new(),
-        explainable_share: None,
+        explainable_share: 0.0,
     }
 }

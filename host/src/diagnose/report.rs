@@ -10,7 +10,9 @@
 //! step and why they failed), `rule`. Also FORMATS.md: per effect `sigma` and
 //! `parameters_at_entry` (`parameters` are the final values), `unexplained{depends_on,
 //! explainable_share}`, `floor` ([`super::floor`]), `aliased` ([`super::alias`]); extra per
-//! effect `equivalent` (near ties).
+//! effect `equivalent` (near ties); at the top `probe` (the probe's terms and cross-validated
+//! RMS, [`super::probe`]) and, with `--residual-model`, `residual_model` (the hybrid correction
+//! and its held-out statistics).
 
 use std::fmt::Write as _;
 
@@ -89,12 +91,22 @@ pub struct EffectReport {
 pub struct Unexplained {
     pub structured: bool,
     pub note: String,
-    /// Joints or joint pairs a smooth function of the joints fitted to the final residual
-    /// depends on. RESIDUAL-PROBE: filled by the residual probe (`diagnose/probe*.rs`, another
-    /// change); empty until then.
+    /// Joints (`q2`) and joint pairs (`q1:q3`) the probe's smooth function depends on.
     pub depends_on: Vec<String>,
-    /// Share of the residual variance that probe explains out of sample (null until then).
-    pub explainable_share: Option<f64>,
+    /// Share of the residual variance the probe explains out of sample.
+    pub explainable_share: f64,
+}
+
+impl Unexplained {
+    /// Adds the probe's finding ([`super::probe`]): `depends_on`, `explainable_share`, the
+    /// sentence, and `structured` when it found out-of-sample structure.
+    pub fn add_probe(&mut self, probe: &super::probe::ProbeResult) {
+        self.depends_on = probe.depends_on.clone();
+        self.explainable_share = probe.explainable_share;
+        self.structured |= probe.structured;
+        self.note.push_str("; probe: ");
+        self.note.push_str(&probe.sentence());
+    }
 }
 
 /// The noise estimated from the final calibration residual.
@@ -156,6 +168,12 @@ pub struct DiagnoseReport {
     /// Calibration samples left out as outliers of the declared tilting law
     /// ([`super::trim_outliers`]; always 0 for full positions).
     pub outliers_left_out: usize,
+    /// The probe of the final residual: its terms and cross-validated RMS.
+    pub probe: super::probe::ProbeReport,
+    /// With `--residual-model`: the probe's function as a correction (a hybrid model, never in
+    /// `effects`) and its held-out statistics.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub residual_model: Option<super::probe::HybridReport>,
 }
 
 /// One-line statement of the decision rule in force.
@@ -264,6 +282,20 @@ impl DiagnoseReport {
             for a in &self.aliased {
                 let _ = writeln!(s, "  {} ~ {}: {}", a.a, a.b, a.note);
             }
+        }
+        if let Some(h) = &self.residual_model {
+            let _ = writeln!(
+                s,
+                "{:<28} {:>12} {:>12.4}  (residual model {}, not a physical effect)",
+                "hybrid",
+                "-",
+                h.validation_hybrid.mean_mm,
+                if h.terms.is_empty() {
+                    "with no term".to_string()
+                } else {
+                    h.terms.join(" + ")
+                }
+            );
         }
         let _ = writeln!(
             s,
