@@ -26,6 +26,7 @@ use crate::io::atomic::{write_bytes_atomic, AtomicWriteError};
 
 pub mod charts;
 pub mod path_errors;
+pub mod plan;
 
 pub use charts::{ErrorHistogram, LineChart, Panel, PoseErrorBars, Scatter, Series};
 pub use path_errors::{
