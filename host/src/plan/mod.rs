@@ -8,6 +8,7 @@
 //! | [`metrics`] | expected sigmas, condition number, O1; the random baseline |
 //! | [`aliased`] | `--from-diagnose`: the aliased pairs of a diagnose JSON as unknowns to separate |
 //! | [`output`] | `plan.csv` and `plan.json` |
+//! | [`evaluate`] | a plan checked on a simulated truth: held-out error against the noise floor |
 //!
 //! The parameters are those the calibration identifies ([`crate::calib::default_selection`],
 //! the thesis's 12 on the Katana), linearised at the declared model with its declared static
@@ -20,6 +21,7 @@
 pub mod aliased;
 pub mod candidates;
 pub mod design;
+pub mod evaluate;
 pub mod metrics;
 pub mod output;
 pub mod setup;
