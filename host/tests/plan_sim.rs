@@ -235,3 +235,68 @@ fn bad_input_is_exit_2_naming_the_field() {
         "nothing half-written"
     );
 }
+
+/// End to end: a truth with `payload` and `link_length:a3` measured on 12 random poses, plus the
+/// poses `--from-diagnose` plans for that pair; `diagnose` on the union names both with values
+/// within 3 sigma of the truth.
+#[test]
+fn diagnose_names_both_effects_after_the_planned_poses() {
+    use rigctl::calib::Poses;
+    use rigctl::diagnose::data::Dataset;
+    use rigctl::diagnose::{diagnose, DiagnoseOptions};
+    use rigctl::plan::evaluate::measure;
+    use rigctl::sim::effects::parse_effect;
+
+    let declared = katana450(KATANA_TOOL_MM).unwrap();
+    let sim = SimConfig {
+        seed: 3,
+        ..SimConfig::default()
+    };
+    let (mut truth, _) = truth_model(&declared, &sim).unwrap();
+    for e in ["payload=0.5", "link_length:a3=0.3"] {
+        parse_effect(e).unwrap().apply(&mut truth).unwrap();
+    }
+    let json = r#"{"effects": [], "aliased": [{"a": "payload", "b": "link_length:a3",
+        "correlation": 0.9, "note": "test"}]}"#;
+    let from = FromDiagnose::parse("D.json", json).unwrap();
+    let mut cfg = PlanConfig::new(&declared, 20);
+    let mut rng = <rand_chacha::ChaCha8Rng as rand::SeedableRng>::seed_from_u64(11);
+    let draw = |n: usize, rng: &mut rand_chacha::ChaCha8Rng| -> Vec<Vec<f64>> {
+        rigctl::plan::draw_candidates(&declared, n, &cfg.workspace, rng)
+            .unwrap()
+            .into_iter()
+            .map(|c| c.q_deg)
+            .collect()
+    };
+    let existing = draw(12, &mut rng);
+    let val_q = draw(40, &mut rng);
+    cfg.existing_q = existing.clone();
+    let p = plan(&declared, &cfg, Some(&from)).unwrap();
+    let mut all_q = existing;
+    all_q.extend(p.poses.iter().map(|c| c.q_deg.clone()));
+    let cal: Poses = measure(&truth, &all_q, 0.01, &mut rng).unwrap();
+    let val: Poses = measure(&truth, &val_q, 0.01, &mut rng).unwrap();
+    let d = diagnose(
+        &declared,
+        &Dataset::from_poses(cal),
+        &Dataset::from_poses(val),
+        &DiagnoseOptions::default(),
+    )
+    .unwrap();
+    let ids: Vec<&str> = d.report.effects.iter().map(|e| e.id.as_str()).collect();
+    eprintln!("effects {ids:?}");
+    for (id, key, want) in [
+        ("payload", "mass_kg", 0.5),
+        ("link_length:a3", "delta_mm", 0.3),
+    ] {
+        let e = d.report.effects.iter().find(|e| e.id == id);
+        let e = e.unwrap_or_else(|| panic!("{id} not named: {ids:?}"));
+        let v = e.parameters.get(key).unwrap();
+        let s = e.uncertainty.get(key).flatten().unwrap_or(f64::INFINITY);
+        eprintln!("{id}: {v} +- {s} (truth {want})");
+        assert!(
+            (v - want).abs() <= 3.0 * s,
+            "{id}: {v} +- {s}, truth {want}"
+        );
+    }
+}

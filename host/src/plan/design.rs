@@ -292,8 +292,8 @@ pub fn exchange_from(
     let mut exchanges = 0;
     for _ in 0..MAX_PASSES {
         let mut improved = false;
-        for k in 0..chosen.len() {
-            let old = chosen[k];
+        for slot in chosen.iter_mut() {
+            let old = *slot;
             full.update(b, old, -1.0);
             nui.update(b, old, -1.0);
             taken[old] = false;
@@ -307,7 +307,7 @@ pub fn exchange_from(
                 _ => old,
             };
             taken[best] = true;
-            chosen[k] = best;
+            *slot = best;
             full.update(b, best, 1.0);
             nui.update(b, best, 1.0);
         }
