@@ -45,6 +45,9 @@ pub struct Args {
     /// with --from-diagnose restricted to the effects to separate (As / Ds).
     #[arg(long, value_name = "a|d", default_value = "a", value_parser = parse_criterion)]
     pub criterion: Criterion,
+    /// Exchange runs from random starts besides the greedy one (more: slower, slightly better).
+    #[arg(long, value_name = "COUNT", default_value_t = 1)]
+    pub restarts: usize,
     /// Random designs of N poses drawn for the baseline.
     #[arg(long, value_name = "COUNT", default_value_t = 25)]
     pub random_draws: usize,
@@ -96,6 +99,7 @@ pub fn run(args: Args) -> Result<(), CliError> {
     cfg.candidates = args.candidates;
     cfg.random_draws = args.random_draws;
     cfg.criterion = args.criterion;
+    cfg.restarts = args.restarts;
     if let Some(b) = &args.box_mm {
         let b: [f64; 6] = b
             .as_slice()

@@ -116,7 +116,7 @@ impl PlanConfig {
             noise_mm: 0.01,
             random_draws: 25,
             criterion: Criterion::default(),
-            restarts: 4,
+            restarts: 1,
             existing_q: Vec::new(),
         }
     }
