@@ -9,6 +9,7 @@
 //! | [`calib`] | identification (`rigctl calibrate`): solvers, identifiability, statistics |
 //! | [`compensate`] | trajectory correction (`rigctl compensate`, eq. 5.22): joints that put the calibrated, tilting arm on a path |
 //! | [`diagnose`] | `rigctl diagnose`: residual analysis, candidate effects, forward selection |
+//! | [`plan`] | `rigctl plan`: optimal calibration poses (D- / Ds-optimal designs), expected sigmas vs random poses |
 //! | [`daq`] | the acquisition path: recordings, `record`, `export`, the virtual board |
 //! | [`sheet`] | the printable trace sheet's geometry and SVG |
 //! | [`trace`] | scanned pencil traces -> centreline in sheet mm; simulated scans |
@@ -27,6 +28,7 @@ pub mod fusion;
 pub mod io;
 pub mod joints;
 pub mod model;
+pub mod plan;
 pub mod plot;
 pub mod report;
 pub mod sheet;

@@ -11,6 +11,7 @@ mod fk;
 mod fuse;
 mod joints;
 mod model_args;
+mod plan;
 mod ports;
 mod potcal;
 mod record;
@@ -65,6 +66,9 @@ pub enum Command {
     Joints(joints::Args),
     /// Joints that put the calibrated, tilting arm on a Cartesian path (eq. 5.22).
     Compensate(compensate::Args),
+    /// Choose the calibration poses that identify the model best (D-optimal), or that separate
+    /// the effects a diagnosis found aliased.
+    Plan(plan::Args),
 }
 
 pub fn run(cli: Cli) -> Result<(), CliError> {
@@ -85,6 +89,7 @@ pub fn run(cli: Cli) -> Result<(), CliError> {
         Command::Urdf2model(a) => urdf2model::run(a),
         Command::Joints(a) => joints::run(a),
         Command::Compensate(a) => compensate::run(a),
+        Command::Plan(a) => plan::run(a),
     }
 }
 

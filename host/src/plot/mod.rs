@@ -9,6 +9,7 @@
 //! | [`ErrorHistogram`] | histogram of the pose errors before / after |
 //! | [`LineChart`] | one or more stacked panels of series over a common x: error along a path (fig. 5.12), influence of each parameter over the poses (fig. 3.8), joint moments and tilts along a trajectory (fig. 5.8-5.10) |
 //! | [`Scatter`] | residual against a regressor, before / after (diagnose) |
+//! | [`plan::PlanPoses`] | the poses of a calibration plan over the candidates, top and side views (`rigctl plan --plot`, [`plan::poses_svg`]) |
 //! | [`PathErrorsChart`] | thesis fig. 5.12 from the low-cost rig: `|dP|` before / standard / after and the two measured deviations along the drawn path, from a `calibrate --errors-csv` file (see [`path_errors`]) |
 //!
 //! [`write()`]`(path, &chart)` picks the format from the extension (`.png` or `.svg`) and writes
@@ -26,6 +27,7 @@ use crate::io::atomic::{write_bytes_atomic, AtomicWriteError};
 
 pub mod charts;
 pub mod path_errors;
+pub mod plan;
 
 pub use charts::{ErrorHistogram, LineChart, Panel, PoseErrorBars, Scatter, Series};
 pub use path_errors::{

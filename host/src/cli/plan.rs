@@ -1,0 +1,164 @@
+//! `rigctl plan --robot NAME | --model FILE --n N --out PLAN.csv [--seed S] [--json PLAN.json]
+//! [--plot PLAN.svg] [--noise-mm 0.01] [--candidates 5000] [--box X0,Y0,Z0,X1,Y1,Z1]
+//! [--visible-from X,Y,Z [--cone-deg 60]] [--min-z-mm Z] [--poses CAL.csv]
+//! [--from-diagnose D.json]`: chooses the N calibration poses that identify the model best
+//! (`rigctl::plan`) and prints their expected parameter sigmas against random poses.
+
+use std::path::PathBuf;
+
+use nalgebra::Vector3;
+use rigctl::io::atomic::write_bytes_atomic;
+use rigctl::io::pose_csv::{read_poses, PoseSpec};
+use rigctl::plan::output::{plan_csv, plan_json, summary_table};
+use rigctl::plan::{plan, Criterion, FromDiagnose, PlanConfig};
+use rigctl::plot::plan::poses_svg;
+
+use super::model_args::ModelArgs;
+use super::CliError;
+
+#[derive(clap::Args, Debug)]
+pub struct Args {
+    #[command(flatten)]
+    pub model: ModelArgs,
+    /// Number of poses to choose.
+    #[arg(long, value_name = "N")]
+    pub n: usize,
+    /// The plan (CSV q1..qN,nom_x,nom_y,nom_z: joints in deg, nominal tool point in mm).
+    #[arg(long, value_name = "PLAN.csv")]
+    pub out: PathBuf,
+    /// Seed of the candidate set and of the random baseline.
+    #[arg(long, default_value_t = 1)]
+    pub seed: u64,
+    /// Write the plan's expected sigmas, condition number and baseline (JSON).
+    #[arg(long, value_name = "PLAN.json")]
+    pub json: Option<PathBuf>,
+    /// Plot the planned tool points over the candidates (top and side views, .svg or .png).
+    #[arg(long, value_name = "PLAN.svg")]
+    pub plot: Option<PathBuf>,
+    /// Measurement noise per coordinate (mm) for the expected sigmas.
+    #[arg(long, value_name = "MM", default_value_t = 0.01)]
+    pub noise_mm: f64,
+    /// Number of random candidate configurations.
+    #[arg(long, value_name = "COUNT", default_value_t = 5000)]
+    pub candidates: usize,
+    /// Optimality criterion: a (sum of squared scaled sigmas, the default) or d (determinant);
+    /// with --from-diagnose restricted to the effects to separate (As / Ds).
+    #[arg(long, value_name = "a|d", default_value = "a", value_parser = parse_criterion)]
+    pub criterion: Criterion,
+    /// Exchange runs from random starts besides the greedy one (more: slower, slightly better).
+    #[arg(long, value_name = "COUNT", default_value_t = 1)]
+    pub restarts: usize,
+    /// Random designs of N poses drawn for the baseline.
+    #[arg(long, value_name = "COUNT", default_value_t = 25)]
+    pub random_draws: usize,
+    /// Workspace box the tool point must lie in (mm, frame R).
+    #[arg(
+        long = "box",
+        value_name = "X0,Y0,Z0,X1,Y1,Z1",
+        value_delimiter = ',',
+        num_args = 6
+    )]
+    pub box_mm: Option<Vec<f64>>,
+    /// A tracker at this point (mm, R) must see the tool: the direction to it lies within
+    /// --cone-deg of the tool's z axis.
+    #[arg(long, value_name = "X,Y,Z", value_delimiter = ',', num_args = 3)]
+    pub visible_from: Option<Vec<f64>>,
+    /// Acceptance half-angle of the tracker target, deg.
+    #[arg(
+        long,
+        value_name = "DEG",
+        default_value_t = 60.0,
+        requires = "visible_from"
+    )]
+    pub cone_deg: f64,
+    /// Lowest tool-point height (z in R, mm); default 40 for the Katana (table), none otherwise.
+    #[arg(long, value_name = "MM")]
+    pub min_z_mm: Option<f64>,
+    /// Poses already measured (pose CSV; only the joints are used): the plan adds to them.
+    #[arg(long, value_name = "CAL.csv")]
+    pub poses: Option<PathBuf>,
+    /// A diagnose JSON: choose poses that separate its `aliased` pairs (and pin down its
+    /// effects with large sigmas), given --poses.
+    #[arg(long, value_name = "D.json")]
+    pub from_diagnose: Option<PathBuf>,
+}
+
+fn parse_criterion(s: &str) -> Result<Criterion, String> {
+    match s.to_ascii_lowercase().as_str() {
+        "a" => Ok(Criterion::A),
+        "d" => Ok(Criterion::D),
+        _ => Err(format!("unknown criterion `{s}` (a, d)")),
+    }
+}
+
+pub fn run(args: Args) -> Result<(), CliError> {
+    let model = args.model.choose()?;
+    let mut cfg = PlanConfig::new(&model, args.n);
+    cfg.seed = args.seed;
+    cfg.noise_mm = args.noise_mm;
+    cfg.candidates = args.candidates;
+    cfg.random_draws = args.random_draws;
+    cfg.criterion = args.criterion;
+    cfg.restarts = args.restarts;
+    if let Some(b) = &args.box_mm {
+        let b: [f64; 6] = b
+            .as_slice()
+            .try_into()
+            .map_err(|_| CliError::bad_input("--box needs 6 numbers X0,Y0,Z0,X1,Y1,Z1"))?;
+        cfg.workspace.box_mm = Some(b);
+    }
+    if let Some(v) = &args.visible_from {
+        if v.len() != 3 {
+            return Err(CliError::bad_input("--visible-from needs 3 numbers X,Y,Z"));
+        }
+        cfg.workspace.visible_from_mm = Some(Vector3::new(v[0], v[1], v[2]));
+        cfg.workspace.cone_half_angle_deg = args.cone_deg;
+    }
+    if let Some(z) = args.min_z_mm {
+        cfg.workspace.min_z_mm = Some(z);
+    }
+    if let Some(p) = &args.poses {
+        let file = read_poses(p, &PoseSpec::for_model(&model, false))?;
+        cfg.existing_q = file.joints();
+    }
+    let from = match &args.from_diagnose {
+        Some(p) => Some(FromDiagnose::read(p)?),
+        None => None,
+    };
+    let result = plan(&model, &cfg, from.as_ref())?;
+    if let Some(path) = &args.plot {
+        let planned: Vec<[f64; 3]> = result.poses.iter().map(|p| p.nominal_mm.into()).collect();
+        // the candidates are not kept in the plan: redraw a light background of the same seed
+        let mut rng = <rand_chacha::ChaCha8Rng as rand::SeedableRng>::seed_from_u64(cfg.seed);
+        let cands = rigctl::plan::draw_candidates(
+            &model,
+            1500.min(cfg.candidates),
+            &cfg.workspace,
+            &mut rng,
+        )?;
+        let background: Vec<[f64; 3]> = cands.iter().map(|c| c.nominal_mm.into()).collect();
+        let title = format!("{} planned poses, {}", result.poses.len(), result.robot);
+        let bytes = if path
+            .extension()
+            .is_some_and(|e| e.eq_ignore_ascii_case("svg"))
+        {
+            poses_svg(&title, &planned, &background)?.into_bytes()
+        } else {
+            rigctl::plot::png_bytes(&rigctl::plot::plan::PlanPoses {
+                title,
+                planned_mm: planned,
+                candidates_mm: background,
+            })?
+        };
+        write_bytes_atomic(path, &bytes)?;
+    }
+    if let Some(path) = &args.json {
+        let doc = plan_json(&result, cfg.noise_mm, cfg.seed, None);
+        let text = serde_json::to_string_pretty(&doc)
+            .map_err(|e| CliError::failure(format!("JSON: {e}")))?;
+        write_bytes_atomic(path, format!("{text}\n").as_bytes())?;
+    }
+    write_bytes_atomic(&args.out, plan_csv(&result).as_bytes())?;
+    print!("{}", summary_table(&result, cfg.noise_mm));
+    Ok(())
+}

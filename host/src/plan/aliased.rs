@@ -1,0 +1,307 @@
+//! `rigctl plan --from-diagnose D.json [--poses CAL.csv]`: extra poses that separate what a
+//! diagnosis could not tell apart.
+//!
+//! Read from the diagnose JSON (FORMATS.md): `aliased[{a, b, correlation, note}]` (effect ids
+//! or declared parameter names) and `effects[{id, parameters, sigma | uncertainty}]`. The
+//! unknowns are the declared ones, then those of every accepted effect, then those of every
+//! aliased effect (the diagnose candidate library maps an effect id to its unknowns). The
+//! columns of interest are the aliased effects' unknowns and those of accepted effects whose
+//! sigma is large (more than [`LOOSE_RELATIVE_SIGMA`] of the value); the design is Ds-optimal
+//! for them, added to the poses already measured (`--poses`).
+
+use std::path::Path;
+
+use nalgebra::DMatrix;
+use serde_json::Value;
+
+use super::candidates::CandidatePose;
+use super::setup::Setup;
+use super::PlanError;
+use crate::calib::default_selection;
+use crate::diagnose::candidates::library;
+use crate::diagnose::data::Dataset;
+use crate::diagnose::extended::{ExtModel, Unknown};
+use crate::model::Model;
+
+/// An accepted effect is pinned down by the plan too when a parameter's sigma exceeds this
+/// fraction of its value.
+pub const LOOSE_RELATIVE_SIGMA: f64 = 0.1;
+
+/// One aliased pair of the diagnosis.
+#[derive(Debug, Clone, PartialEq)]
+pub struct AliasedPair {
+    /// Effect id or parameter name.
+    pub a: String,
+    /// Effect id or parameter name.
+    pub b: String,
+    /// Correlation the diagnosis reported (NaN when absent).
+    pub correlation: f64,
+}
+
+/// What `--from-diagnose` read, with the poses already measured.
+#[derive(Debug, Clone, PartialEq)]
+pub struct FromDiagnose {
+    /// The JSON file (for messages).
+    pub path: String,
+    /// Aliased pairs.
+    pub pairs: Vec<AliasedPair>,
+    /// Accepted effect ids.
+    pub effects: Vec<String>,
+    /// Accepted effects with a large sigma.
+    pub loose: Vec<String>,
+}
+
+/// A pair after planning.
+#[derive(Debug, Clone, PartialEq)]
+pub struct PairReport {
+    pub a: String,
+    pub b: String,
+    /// As reported by the diagnosis.
+    pub correlation_diagnose: f64,
+    /// Largest |correlation| between the two effects' estimates on the poses already measured
+    /// (NaN without them).
+    pub correlation_before: f64,
+    /// The same with the planned poses added.
+    pub correlation_after: f64,
+}
+
+/// The `from_diagnose` object of `plan.json`.
+#[derive(Debug, Clone, PartialEq)]
+pub struct FromDiagnoseReport {
+    pub file: String,
+    pub pairs: Vec<PairReport>,
+    pub effects: Vec<String>,
+    /// Names of the unknowns the design separates.
+    pub interest: Vec<String>,
+    pub existing_poses: usize,
+}
+
+fn field_err(path: &str, message: String) -> PlanError {
+    PlanError::Diagnose {
+        path: path.to_string(),
+        message,
+    }
+}
+
+fn is_loose(effect: &Value) -> bool {
+    let values = effect.get("parameters").and_then(Value::as_object);
+    let sigmas = effect
+        .get("sigma")
+        .or_else(|| effect.get("uncertainty"))
+        .and_then(Value::as_object);
+    let (Some(values), Some(sigmas)) = (values, sigmas) else {
+        return false;
+    };
+    values.iter().any(|(k, v)| {
+        let (Some(v), Some(s)) = (v.as_f64(), sigmas.get(k).and_then(Value::as_f64)) else {
+            return false;
+        };
+        s > LOOSE_RELATIVE_SIGMA * v.abs()
+    })
+}
+
+impl FromDiagnose {
+    /// Parses the diagnose JSON text `text` (named `path` in messages).
+    pub fn parse(path: &str, text: &str) -> Result<Self, PlanError> {
+        let doc: Value = serde_json::from_str(text).map_err(|e| {
+            field_err(
+                path,
+                format!("line {}, column {}: {e}", e.line(), e.column()),
+            )
+        })?;
+        let mut pairs = Vec::new();
+        if let Some(list) = doc.get("aliased") {
+            let list = list
+                .as_array()
+                .ok_or_else(|| field_err(path, "field `aliased`: not an array".into()))?;
+            for (k, item) in list.iter().enumerate() {
+                let name = |f: &str| {
+                    item.get(f)
+                        .and_then(Value::as_str)
+                        .map(str::to_string)
+                        .ok_or_else(|| {
+                            field_err(
+                                path,
+                                format!("field `aliased[{k}].{f}`: missing or not a string"),
+                            )
+                        })
+                };
+                pairs.push(AliasedPair {
+                    a: name("a")?,
+                    b: name("b")?,
+                    correlation: item
+                        .get("correlation")
+                        .and_then(Value::as_f64)
+                        .unwrap_or(f64::NAN),
+                });
+            }
+        }
+        let mut effects = Vec::new();
+        let mut loose = Vec::new();
+        if let Some(list) = doc.get("effects").and_then(Value::as_array) {
+            for (k, e) in list.iter().enumerate() {
+                let id = e.get("id").and_then(Value::as_str).ok_or_else(|| {
+                    field_err(
+                        path,
+                        format!("field `effects[{k}].id`: missing or not a string"),
+                    )
+                })?;
+                effects.push(id.to_string());
+                if is_loose(e) {
+                    loose.push(id.to_string());
+                }
+            }
+        }
+        if pairs.is_empty() && loose.is_empty() {
+            return Err(field_err(
+                path,
+                "no `aliased` pair and no effect with a large sigma: nothing to separate (plan without --from-diagnose)".into(),
+            ));
+        }
+        Ok(Self {
+            path: path.to_string(),
+            pairs,
+            effects,
+            loose,
+        })
+    }
+
+    /// Reads the diagnose JSON `path`.
+    pub fn read(path: &Path) -> Result<Self, PlanError> {
+        let shown = path.display().to_string();
+        let text = std::fs::read_to_string(path)
+            .map_err(|e| field_err(&shown, format!("cannot read: {e}")))?;
+        Self::parse(&shown, &text)
+    }
+
+    /// The unknowns of an effect id or a parameter name.
+    fn unknowns_of(
+        &self,
+        ext: &ExtModel,
+        id: &str,
+        field: &str,
+    ) -> Result<Vec<Unknown>, PlanError> {
+        if let Some(c) = library(ext, &[], &Dataset::default())
+            .into_iter()
+            .find(|c| c.id == id)
+        {
+            return Ok(c.unknowns);
+        }
+        match ext.model.param_index(id) {
+            Some(i) => Ok(vec![Unknown::Param(i)]),
+            None => Err(field_err(
+                &self.path,
+                format!("field `{field}`: `{id}` is neither an effect id of this model nor one of its parameters"),
+            )),
+        }
+    }
+
+    /// The design problem (see the module docs).
+    pub fn setup(
+        &self,
+        model: &Model,
+        cands: &[CandidatePose],
+        existing_q: &[Vec<f64>],
+    ) -> Result<Setup, PlanError> {
+        let ext = ExtModel::new(model.clone());
+        let mut requested: Vec<Unknown> = default_selection(model, false)
+            .into_iter()
+            .map(Unknown::Param)
+            .collect();
+        let push = |us: Vec<Unknown>, requested: &mut Vec<Unknown>| {
+            for u in us {
+                if !requested.contains(&u) {
+                    requested.push(u);
+                }
+            }
+        };
+        let mut interest = Vec::new();
+        for (k, id) in self.effects.iter().enumerate() {
+            let us = self.unknowns_of(&ext, id, &format!("effects[{k}].id"))?;
+            if self.loose.contains(id) {
+                interest.extend(us.iter().copied());
+            }
+            push(us, &mut requested);
+        }
+        for (k, p) in self.pairs.iter().enumerate() {
+            for (f, id) in [("a", &p.a), ("b", &p.b)] {
+                let us = self.unknowns_of(&ext, id, &format!("aliased[{k}].{f}"))?;
+                interest.extend(us.iter().copied());
+                push(us, &mut requested);
+            }
+        }
+        Setup::build(ext, cands, &requested, &interest, existing_q)
+    }
+
+    /// The report after planning `chosen` (candidate indices of `setup`).
+    pub fn report(&self, setup: &Setup, chosen: &[usize]) -> FromDiagnoseReport {
+        let ext = &setup.ext;
+        let cols_of = |id: &str| -> Vec<usize> {
+            self.unknowns_of(ext, id, "")
+                .unwrap_or_default()
+                .iter()
+                .filter_map(|u| setup.unknowns.iter().position(|v| v == u))
+                .collect()
+        };
+        let after_rows = super::metrics::stack_rows(
+            &setup.b,
+            &vec![1.0; setup.b.ncols()],
+            &setup.prior_rows,
+            chosen,
+        );
+        let pairs = self
+            .pairs
+            .iter()
+            .map(|p| {
+                let (ca, cb) = (cols_of(&p.a), cols_of(&p.b));
+                PairReport {
+                    a: p.a.clone(),
+                    b: p.b.clone(),
+                    correlation_diagnose: p.correlation,
+                    correlation_before: if setup.prior_rows.nrows() == 0 {
+                        f64::NAN
+                    } else {
+                        max_correlation(&setup.prior_rows, &ca, &cb)
+                    },
+                    correlation_after: max_correlation(&after_rows, &ca, &cb),
+                }
+            })
+            .collect();
+        FromDiagnoseReport {
+            file: self.path.clone(),
+            pairs,
+            effects: self.effects.clone(),
+            interest: setup
+                .interest
+                .iter()
+                .map(|&c| setup.names[c].clone())
+                .collect(),
+            existing_poses: setup.prior_rows.nrows() / 3,
+        }
+    }
+}
+
+/// Largest |correlation| between the estimates of any column of `a` and any of `b` from the
+/// rows `jac` (covariance `(J^T J + ridge)^-1`, the ridge making an exact alias read 1).
+pub fn max_correlation(jac: &DMatrix<f64>, a: &[usize], b: &[usize]) -> f64 {
+    let p = jac.ncols();
+    let m = jac.transpose() * jac;
+    let ridge = 1e-10 * (m.trace() / p.max(1) as f64).max(f64::MIN_POSITIVE);
+    let Some(cov) = (m + DMatrix::identity(p, p) * ridge)
+        .cholesky()
+        .map(|c| c.inverse())
+    else {
+        return f64::NAN;
+    };
+    let mut worst: f64 = 0.0;
+    for &i in a {
+        for &j in b {
+            if i == j {
+                return 1.0;
+            }
+            let r = cov[(i, j)] / (cov[(i, i)] * cov[(j, j)]).sqrt();
+            worst = worst.max(r.abs());
+        }
+    }
+    worst
+}

@@ -1,0 +1,152 @@
+//! The candidate set of `rigctl plan`: random joint configurations within the joint limits that
+//! satisfy the workspace constraints (table clearance, an optional box, an optional line of
+//! sight to a tracker).
+
+use nalgebra::Vector3;
+use rand::Rng;
+
+use super::PlanError;
+use crate::model::{Model, Tilt};
+
+/// Tool-tip height above the table (z in frame R) that the Katana must keep, mm (FORMATS.md).
+pub const KATANA_TABLE_CLEARANCE_MM: f64 = 40.0;
+
+/// Joint angles are drawn this far inside each limit, deg (a pose right on a limit is not
+/// commanded safely).
+pub const LIMIT_MARGIN_DEG: f64 = 2.0;
+
+/// Tries per wanted candidate before giving up on the constraints.
+const TRIES_PER_CANDIDATE: usize = 200;
+
+/// Where a calibration pose may be.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Workspace {
+    /// Lowest allowed tool-point height (z in R), mm; `None`: no table.
+    pub min_z_mm: Option<f64>,
+    /// Axis-aligned box `[x0, y0, z0, x1, y1, z1]` (mm, R) the tool point must lie in.
+    pub box_mm: Option<[f64; 6]>,
+    /// A tracker at this point (mm, R) must see the tool point: the direction from the tool
+    /// point to it lies within `cone_half_angle_deg` of the tool's z axis.
+    pub visible_from_mm: Option<Vector3<f64>>,
+    /// Acceptance half-angle of the target (e.g. a reflector on the tool), deg.
+    pub cone_half_angle_deg: f64,
+}
+
+impl Workspace {
+    /// The default constraints for `model`: the Katana keeps its tool tip
+    /// [`KATANA_TABLE_CLEARANCE_MM`] above the table; other robots have none.
+    pub fn for_model(model: &Model) -> Self {
+        let katana = model.name().to_ascii_lowercase().starts_with("katana");
+        Self {
+            min_z_mm: katana.then_some(KATANA_TABLE_CLEARANCE_MM),
+            box_mm: None,
+            visible_from_mm: None,
+            cone_half_angle_deg: 60.0,
+        }
+    }
+
+    /// Whether a tool point `p` with tool z axis `axis` satisfies the constraints.
+    pub fn admits(&self, p: &Vector3<f64>, axis: &Vector3<f64>) -> bool {
+        if self.min_z_mm.is_some_and(|z| p.z < z) {
+            return false;
+        }
+        if let Some(b) = self.box_mm {
+            let inside = (0..3).all(|i| p[i] >= b[i].min(b[i + 3]) && p[i] <= b[i].max(b[i + 3]));
+            if !inside {
+                return false;
+            }
+        }
+        if let Some(t) = self.visible_from_mm {
+            let d = t - p;
+            let (dn, an) = (d.norm(), axis.norm());
+            if dn <= 0.0 || an <= 0.0 {
+                return false;
+            }
+            let cos = d.dot(axis) / (dn * an);
+            if cos < self.cone_half_angle_deg.to_radians().cos() {
+                return false;
+            }
+        }
+        true
+    }
+}
+
+/// One candidate pose: joint readings and the nominal (declared, rigid) tool point.
+#[derive(Debug, Clone, PartialEq)]
+pub struct CandidatePose {
+    /// Joint readings, deg.
+    pub q_deg: Vec<f64>,
+    /// Nominal tool point of the declared model without tilting, mm (frame R).
+    pub nominal_mm: Vector3<f64>,
+}
+
+/// `count` random configurations, joints uniform within the limits (less
+/// [`LIMIT_MARGIN_DEG`]), kept when the declared model's tool point satisfies `ws`.
+pub fn draw_candidates(
+    model: &Model,
+    count: usize,
+    ws: &Workspace,
+    rng: &mut impl Rng,
+) -> Result<Vec<CandidatePose>, PlanError> {
+    let limits = model.joint_limits();
+    let mut out = Vec::with_capacity(count);
+    let max_tries = TRIES_PER_CANDIDATE * count.max(1);
+    let mut tries = 0usize;
+    while out.len() < count {
+        tries += 1;
+        if tries > max_tries {
+            return Err(PlanError::Candidates {
+                wanted: count,
+                found: out.len(),
+                tries: max_tries,
+            });
+        }
+        let q: Vec<f64> = limits
+            .iter()
+            .map(|l| {
+                let (lo, hi) = (l[0] + LIMIT_MARGIN_DEG, l[1] - LIMIT_MARGIN_DEG);
+                if hi > lo {
+                    rng.gen_range(lo..hi)
+                } else {
+                    0.5 * (l[0] + l[1])
+                }
+            })
+            .collect();
+        let fk = model.fk(&q, Tilt::Off)?;
+        let axis = fk.rotation.column(2).into_owned();
+        if ws.admits(&fk.position_mm, &axis) {
+            out.push(CandidatePose {
+                q_deg: q,
+                nominal_mm: fk.position_mm,
+            });
+        }
+    }
+    Ok(out)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn box_table_and_cone() {
+        let ws = Workspace {
+            min_z_mm: Some(40.0),
+            box_mm: Some([0.0, 0.0, 0.0, 100.0, 100.0, 100.0]),
+            visible_from_mm: Some(Vector3::new(50.0, 50.0, 1000.0)),
+            cone_half_angle_deg: 30.0,
+        };
+        let up = Vector3::z();
+        assert!(ws.admits(&Vector3::new(50.0, 50.0, 50.0), &up));
+        assert!(!ws.admits(&Vector3::new(50.0, 50.0, 30.0), &up), "table");
+        assert!(!ws.admits(&Vector3::new(150.0, 50.0, 50.0), &up), "box");
+        assert!(
+            !ws.admits(&Vector3::new(50.0, 50.0, 50.0), &-up),
+            "facing away"
+        );
+        assert!(
+            !ws.admits(&Vector3::new(50.0, 50.0, 50.0), &Vector3::x()),
+            "cone"
+        );
+    }
+}

@@ -1,0 +1,166 @@
+//! What a design is expected to give: parameter sigmas for a given measurement noise, the
+//! condition number and the observability index O1 of the column-scaled identification
+//! Jacobian; and the same for random designs of the same size (the baseline).
+
+use nalgebra::DMatrix;
+use rand::seq::index::sample;
+use rand::Rng;
+
+use crate::calib::fit::parameter_sigmas;
+use crate::calib::identifiability::{scaled_svd, DEFAULT_RTOL};
+
+/// Expected quality of a design.
+#[derive(Debug, Clone, PartialEq)]
+pub struct DesignStats {
+    /// One sigma of each parameter (parameter units) for the noise given; infinite when the
+    /// design does not identify it.
+    pub sigma: Vec<f64>,
+    /// Condition number of the column-scaled Jacobian (infinite when rank deficient).
+    pub condition_number: f64,
+    /// Smallest singular value of the column-scaled Jacobian.
+    pub min_singular_value: f64,
+    /// Observability index O1 (Sun & Hollerbach): geometric mean of the singular values of the
+    /// column-scaled Jacobian over the square root of the number of poses.
+    pub o1: f64,
+}
+
+/// Stacks rows `3c..3c+3` of `b` for every `c` of `chosen` under `prior_rows`, with the column
+/// scale `scale` undone (parameter units).
+pub fn stack_rows(
+    b: &DMatrix<f64>,
+    scale: &[f64],
+    prior_rows: &DMatrix<f64>,
+    chosen: &[usize],
+) -> DMatrix<f64> {
+    let p = b.ncols();
+    let m0 = prior_rows.nrows();
+    DMatrix::from_fn(m0 + 3 * chosen.len(), p, |r, c| {
+        let v = if r < m0 {
+            prior_rows[(r, c)]
+        } else {
+            let k = r - m0;
+            b[(3 * chosen[k / 3] + k % 3, c)]
+        };
+        v * scale[c]
+    })
+}
+
+/// Expected sigmas (noise `noise_mm` per coordinate), condition number and O1 of the Jacobian
+/// `jac` (parameter units) of `poses` poses.
+pub fn design_stats(jac: &DMatrix<f64>, poses: usize, noise_mm: f64) -> DesignStats {
+    let (m, n) = (jac.nrows(), jac.ncols());
+    let dof = m.saturating_sub(n).max(1) as f64;
+    let sigma = parameter_sigmas(jac, noise_mm * noise_mm * dof, DEFAULT_RTOL);
+    let (_, s, _) = scaled_svd(jac);
+    let lo = s.get(n.saturating_sub(1)).copied().unwrap_or(0.0);
+    let hi = s.first().copied().unwrap_or(0.0);
+    let cut = DEFAULT_RTOL * hi;
+    let full = s.len() >= n && lo > cut;
+    let o1 = if full && n > 0 {
+        (s.iter().take(n).map(|x| x.ln()).sum::<f64>() / n as f64).exp()
+            / (poses.max(1) as f64).sqrt()
+    } else {
+        0.0
+    };
+    DesignStats {
+        sigma,
+        condition_number: if full { hi / lo } else { f64::INFINITY },
+        min_singular_value: if s.len() >= n { lo } else { 0.0 },
+        o1,
+    }
+}
+
+/// Median of finite-or-infinite values (`total_cmp` order); NaN for none.
+pub fn median(values: &[f64]) -> f64 {
+    let mut v: Vec<f64> = values.iter().copied().filter(|x| !x.is_nan()).collect();
+    if v.is_empty() {
+        return f64::NAN;
+    }
+    v.sort_by(f64::total_cmp);
+    let k = v.len();
+    if k % 2 == 1 {
+        v[k / 2]
+    } else {
+        let (a, b) = (v[k / 2 - 1], v[k / 2]);
+        if a.is_infinite() || b.is_infinite() {
+            b
+        } else {
+            0.5 * (a + b)
+        }
+    }
+}
+
+/// The random baseline: `draws` designs of `n` distinct random candidates (plus the prior
+/// rows); per parameter the median sigma over the draws, and the median condition number.
+pub fn random_baseline(
+    b: &DMatrix<f64>,
+    scale: &[f64],
+    prior_rows: &DMatrix<f64>,
+    n: usize,
+    draws: usize,
+    noise_mm: f64,
+    rng: &mut impl Rng,
+) -> DesignStats {
+    let n_cand = b.nrows() / 3;
+    let p = b.ncols();
+    let prior_poses = prior_rows.nrows() / 3;
+    let mut sig: Vec<Vec<f64>> = vec![Vec::with_capacity(draws); p];
+    let (mut conds, mut mins, mut o1s) = (Vec::new(), Vec::new(), Vec::new());
+    for _ in 0..draws.max(1) {
+        let pick = sample(rng, n_cand, n.min(n_cand)).into_vec();
+        let jac = stack_rows(b, scale, prior_rows, &pick);
+        let st = design_stats(&jac, prior_poses + pick.len(), noise_mm);
+        for (k, s) in st.sigma.iter().enumerate() {
+            sig[k].push(*s);
+        }
+        conds.push(st.condition_number);
+        mins.push(st.min_singular_value);
+        o1s.push(st.o1);
+    }
+    DesignStats {
+        sigma: sig.iter().map(|v| median(v)).collect(),
+        condition_number: median(&conds),
+        min_singular_value: median(&mins),
+        o1: median(&o1s),
+    }
+}
+
+/// Median over parameters of `planned / random` sigma (parameters with an infinite random
+/// sigma count as ratio 0, those never identified are left out).
+pub fn median_ratio(planned: &[f64], random: &[f64]) -> f64 {
+    let r: Vec<f64> = planned
+        .iter()
+        .zip(random)
+        .filter(|(p, _)| p.is_finite())
+        .map(|(p, r)| {
+            if r.is_finite() && *r > 0.0 {
+                p / r
+            } else {
+                0.0
+            }
+        })
+        .collect();
+    median(&r)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn sigmas_follow_the_noise_and_the_pose_count() {
+        let jac = DMatrix::from_fn(30, 3, |r, c| {
+            ((r * (c + 1)) as f64 * 0.37).sin() + 0.1 * c as f64
+        });
+        let a = design_stats(&jac, 10, 0.01);
+        let b = design_stats(&jac, 10, 0.02);
+        for (x, y) in a.sigma.iter().zip(&b.sigma) {
+            assert!((y / x - 2.0).abs() < 1e-9);
+        }
+        assert!(a.condition_number.is_finite() && a.condition_number >= 1.0);
+        assert!(a.o1 > 0.0);
+        assert_eq!(median(&[3.0, 1.0, 2.0]), 2.0);
+        assert_eq!(median(&[1.0, f64::INFINITY]), f64::INFINITY);
+        assert!((median_ratio(&[1.0, 2.0, 3.0], &[2.0, 4.0, 6.0]) - 0.5).abs() < 1e-12);
+    }
+}

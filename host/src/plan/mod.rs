@@ -1,0 +1,232 @@
+//! `rigctl plan`: choose the calibration poses that identify the model best.
+//!
+//! | module | holds |
+//! |---|---|
+//! | [`candidates`] | random reachable configurations within the limits and workspace constraints |
+//! | [`setup`] | the identification Jacobian of every candidate (declared tilting on), identifiability, column scaling |
+//! | [`design`] | D- / Ds-optimal designs: greedy start + exchange with rank-3 updates |
+//! | [`metrics`] | expected sigmas, condition number, O1; the random baseline |
+//! | [`aliased`] | `--from-diagnose`: the aliased pairs of a diagnose JSON as unknowns to separate |
+//! | [`output`] | `plan.csv` and `plan.json` |
+//! | [`evaluate`] | a plan checked on a simulated truth: held-out error against the noise floor |
+//!
+//! The parameters are those the calibration identifies ([`crate::calib::default_selection`],
+//! the thesis's 12 on the Katana), linearised at the declared model with its declared static
+//! tilting, restricted to the combinations identifiable on the whole candidate set (the others
+//! are listed as `unidentifiable`). Columns are scaled to unit RMS over the candidates so that
+//! degrees and millimetres compare; the design maximises `log det` of the scaled information
+//! (D-optimality, invariant to that scaling anyway) or, with `--from-diagnose`, the
+//! log-determinant of the Schur complement of the aliased effects' columns (Ds-optimality).
+
+pub mod aliased;
+pub mod candidates;
+pub mod design;
+pub mod evaluate;
+pub mod metrics;
+pub mod output;
+pub mod setup;
+
+use rand::SeedableRng;
+use rand_chacha::ChaCha8Rng;
+
+use crate::error::{Classify, ErrorKind};
+use crate::model::{Model, ModelError};
+pub use aliased::{FromDiagnose, FromDiagnoseReport};
+pub use candidates::{draw_candidates, CandidatePose, Workspace};
+pub use design::{exchange_from, optimal_design, Criterion, Design};
+pub use metrics::{design_stats, median_ratio, random_baseline, DesignStats};
+pub use setup::Setup;
+
+/// Everything that can stop a plan.
+#[derive(Debug, thiserror::Error)]
+pub enum PlanError {
+    /// The workspace constraints admit too few configurations.
+    #[error("only {found} of {wanted} candidate poses satisfy the workspace constraints after {tries} random configurations (loosen --box / --visible-from)")]
+    Candidates {
+        wanted: usize,
+        found: usize,
+        tries: usize,
+    },
+    /// More poses asked than candidates.
+    #[error("--n {n} is more than the {candidates} candidates")]
+    TooFewCandidates { n: usize, candidates: usize },
+    /// Too few poses for the parameters.
+    #[error("--n {n}: {n} poses give {rows} measured coordinates for {params} identifiable parameters; use at least {min}")]
+    TooFewPoses {
+        n: usize,
+        rows: usize,
+        params: usize,
+        min: usize,
+    },
+    /// A bad setting.
+    #[error("{0}")]
+    Config(String),
+    /// A bad `--from-diagnose` file.
+    #[error("{path}: {message}")]
+    Diagnose { path: String, message: String },
+    /// Linear algebra failed.
+    #[error("numerical failure: {0}")]
+    Numerical(&'static str),
+    /// The model failed.
+    #[error(transparent)]
+    Model(#[from] ModelError),
+}
+
+impl Classify for PlanError {
+    fn kind(&self) -> ErrorKind {
+        match self {
+            PlanError::Candidates { .. } | PlanError::Numerical(_) => ErrorKind::Failure,
+            PlanError::Model(e) => e.kind(),
+            _ => ErrorKind::BadInput,
+        }
+    }
+}
+
+/// Settings of [`plan`].
+#[derive(Debug, Clone, PartialEq)]
+pub struct PlanConfig {
+    /// Poses to choose.
+    pub n: usize,
+    /// Size of the candidate set.
+    pub candidates: usize,
+    /// Seed of the candidates and of the random baseline.
+    pub seed: u64,
+    /// Workspace constraints.
+    pub workspace: Workspace,
+    /// Measurement noise per coordinate (mm) for the expected sigmas.
+    pub noise_mm: f64,
+    /// Random designs drawn for the baseline.
+    pub random_draws: usize,
+    /// Optimality criterion.
+    pub criterion: Criterion,
+    /// Exchange runs from random starts besides the greedy one (the best design is kept).
+    pub restarts: usize,
+    /// Joint readings of poses already measured (their information is added to the plan's).
+    pub existing_q: Vec<Vec<f64>>,
+}
+
+impl PlanConfig {
+    /// Defaults for `model`: 5000 candidates, seed 1, noise 0.01 mm, 25 random draws.
+    pub fn new(model: &Model, n: usize) -> Self {
+        Self {
+            n,
+            candidates: 5000,
+            seed: 1,
+            workspace: Workspace::for_model(model),
+            noise_mm: 0.01,
+            random_draws: 25,
+            criterion: Criterion::default(),
+            restarts: 1,
+            existing_q: Vec::new(),
+        }
+    }
+}
+
+/// A plan and what it is expected to give.
+#[derive(Debug, Clone)]
+pub struct Plan {
+    /// Robot (model) name.
+    pub robot: String,
+    /// `"D-optimal"` or `"Ds-optimal"`.
+    pub criterion: String,
+    /// Number of candidates.
+    pub candidates: usize,
+    /// The chosen poses, in the order chosen.
+    pub poses: Vec<CandidatePose>,
+    /// Identifiable parameters (unknown names), in the order of the sigmas.
+    pub parameters: Vec<String>,
+    /// Unidentifiable parameters or combinations on the whole candidate set.
+    pub unidentifiable: Vec<String>,
+    /// Expected quality of the plan (with the poses already measured, if any).
+    pub planned: DesignStats,
+    /// Median quality of random designs of the same size (same prior poses).
+    pub random: DesignStats,
+    /// Median over parameters of planned / random sigma.
+    pub median_sigma_ratio: f64,
+    /// The `--from-diagnose` part.
+    pub from_diagnose: Option<FromDiagnoseReport>,
+    /// Exchanges made after the greedy start.
+    pub exchanges: usize,
+}
+
+/// Plans `cfg.n` poses for `model` (see the module docs); with `from`, the extra poses that
+/// separate the aliased effects of a diagnosis, given the poses already measured.
+pub fn plan(
+    model: &Model,
+    cfg: &PlanConfig,
+    from: Option<&FromDiagnose>,
+) -> Result<Plan, PlanError> {
+    if !(cfg.noise_mm > 0.0 && cfg.noise_mm.is_finite()) {
+        return Err(PlanError::Config(format!(
+            "--noise-mm {}: must be a positive number",
+            cfg.noise_mm
+        )));
+    }
+    if cfg.n == 0 {
+        return Err(PlanError::Config("--n must be at least 1".into()));
+    }
+    let mut rng = ChaCha8Rng::seed_from_u64(cfg.seed);
+    let cands = draw_candidates(model, cfg.candidates.max(cfg.n), &cfg.workspace, &mut rng)?;
+    let setup = match from {
+        None => Setup::declared(model, &cands, &cfg.existing_q)?,
+        Some(f) => f.setup(model, &cands, &cfg.existing_q)?,
+    };
+    let p = setup.names.len();
+    let prior_poses = setup.prior_rows.nrows() / 3;
+    let rows = 3 * (cfg.n + prior_poses);
+    if rows < p {
+        return Err(PlanError::TooFewPoses {
+            n: cfg.n,
+            rows,
+            params: p,
+            min: p.div_ceil(3).saturating_sub(prior_poses).max(1),
+        });
+    }
+    let prior = setup.prior_rows.transpose() * &setup.prior_rows;
+    // greedy start, then exchanges from a few random starts too; the best design is kept
+    let mut design = optimal_design(&setup.b, &prior, cfg.n, &setup.interest, cfg.criterion)?;
+    let n_cand = setup.b.nrows() / 3;
+    for _ in 0..cfg.restarts {
+        let start = rand::seq::index::sample(&mut rng, n_cand, cfg.n.min(n_cand)).into_vec();
+        let d = exchange_from(
+            &setup.b,
+            &prior,
+            cfg.n,
+            &setup.interest,
+            cfg.criterion,
+            &start,
+        )?;
+        if d.criterion > design.criterion {
+            design = d;
+        }
+    }
+    let jac = metrics::stack_rows(&setup.b, &setup.scale, &setup.prior_rows, &design.chosen);
+    let planned = design_stats(&jac, prior_poses + cfg.n, cfg.noise_mm);
+    let random = random_baseline(
+        &setup.b,
+        &setup.scale,
+        &setup.prior_rows,
+        cfg.n,
+        cfg.random_draws,
+        cfg.noise_mm,
+        &mut rng,
+    );
+    let median_sigma_ratio = median_ratio(&planned.sigma, &random.sigma);
+    let from_diagnose = match from {
+        Some(f) => Some(f.report(&setup, &design.chosen)),
+        None => None,
+    };
+    Ok(Plan {
+        robot: model.name().to_string(),
+        criterion: cfg.criterion.name(!setup.interest.is_empty()).into(),
+        candidates: cands.len(),
+        poses: design.chosen.iter().map(|&c| cands[c].clone()).collect(),
+        parameters: setup.names.clone(),
+        unidentifiable: setup.unidentifiable.clone(),
+        planned,
+        random,
+        median_sigma_ratio,
+        from_diagnose,
+        exchanges: design.exchanges,
+    })
+}

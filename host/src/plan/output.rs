@@ -1,0 +1,132 @@
+//! `plan.csv` (FORMATS.md: `q1..qN,nom_x,nom_y,nom_z`) and `plan.json` (the conventions'
+//! schema; non-finite numbers are written as `null`).
+
+use std::fmt::Write as _;
+
+use serde_json::{json, Map, Value};
+
+use super::aliased::FromDiagnoseReport;
+use super::Plan;
+
+/// The plan as CSV: joints with 9 decimals (deg), nominal tool point with 6 (mm).
+pub fn plan_csv(plan: &Plan) -> String {
+    let n_joints = plan.poses.first().map_or(0, |p| p.q_deg.len());
+    let mut out = String::new();
+    let header: Vec<String> = (1..=n_joints).map(|j| format!("q{j}")).collect();
+    let _ = writeln!(out, "{},nom_x,nom_y,nom_z", header.join(","));
+    for p in &plan.poses {
+        let q: Vec<String> = p.q_deg.iter().map(|v| format!("{v:.9}")).collect();
+        let _ = writeln!(
+            out,
+            "{},{:.6},{:.6},{:.6}",
+            q.join(","),
+            p.nominal_mm.x,
+            p.nominal_mm.y,
+            p.nominal_mm.z
+        );
+    }
+    out
+}
+
+fn num(v: f64) -> Value {
+    serde_json::Number::from_f64(v).map_or(Value::Null, Value::Number)
+}
+
+fn named(names: &[String], values: &[f64]) -> Value {
+    let mut m = Map::new();
+    for (n, v) in names.iter().zip(values) {
+        m.insert(n.clone(), num(*v));
+    }
+    Value::Object(m)
+}
+
+fn from_diagnose_json(f: &FromDiagnoseReport) -> Value {
+    json!({
+        "file": f.file,
+        "existing_poses": f.existing_poses,
+        "effects": f.effects,
+        "separated": f.interest,
+        "aliased": f.pairs.iter().map(|p| json!({
+            "a": p.a,
+            "b": p.b,
+            "correlation_diagnose": num(p.correlation_diagnose),
+            "correlation_before": num(p.correlation_before),
+            "correlation_after": num(p.correlation_after),
+        })).collect::<Vec<_>>(),
+    })
+}
+
+/// The `plan --json` document; `sheets`: the `--sheets` ranking when asked.
+pub fn plan_json(plan: &Plan, noise_mm: f64, seed: u64, sheets: Option<Value>) -> Value {
+    json!({
+        "robot": plan.robot,
+        "n": plan.poses.len(),
+        "criterion": plan.criterion,
+        "candidates": plan.candidates,
+        "parameters": plan.parameters,
+        "expected_sigma": named(&plan.parameters, &plan.planned.sigma),
+        "random_sigma": named(&plan.parameters, &plan.random.sigma),
+        "condition_number": num(plan.planned.condition_number),
+        "random_condition_number": num(plan.random.condition_number),
+        "median_sigma_ratio": num(plan.median_sigma_ratio),
+        "unidentifiable": plan.unidentifiable,
+        "from_diagnose": plan.from_diagnose.as_ref().map(from_diagnose_json),
+        "sheets": sheets,
+        "noise_mm": noise_mm,
+        "seed": seed,
+        "o1": num(plan.planned.o1),
+        "random_o1": num(plan.random.o1),
+        "min_singular_value": num(plan.planned.min_singular_value),
+        "random_min_singular_value": num(plan.random.min_singular_value),
+        "exchanges": plan.exchanges,
+    })
+}
+
+/// The table printed on stdout.
+pub fn summary_table(plan: &Plan, noise_mm: f64) -> String {
+    let mut out = String::new();
+    let _ = writeln!(
+        out,
+        "{} {} poses of {} candidates on {} ({} parameters), noise {noise_mm} mm",
+        plan.criterion,
+        plan.poses.len(),
+        plan.candidates,
+        plan.robot,
+        plan.parameters.len()
+    );
+    let _ = writeln!(
+        out,
+        "{:<28} {:>14} {:>14} {:>7}",
+        "parameter", "sigma planned", "sigma random", "ratio"
+    );
+    for (k, name) in plan.parameters.iter().enumerate() {
+        let (p, r) = (plan.planned.sigma[k], plan.random.sigma[k]);
+        let _ = writeln!(out, "{name:<28} {p:>14.6} {r:>14.6} {:>7.3}", p / r);
+    }
+    let _ = writeln!(
+        out,
+        "condition number {:.2} (random {:.2}), O1 {:.4} (random {:.4}), median sigma ratio {:.3}",
+        plan.planned.condition_number,
+        plan.random.condition_number,
+        plan.planned.o1,
+        plan.random.o1,
+        plan.median_sigma_ratio
+    );
+    if !plan.unidentifiable.is_empty() {
+        let _ = writeln!(
+            out,
+            "unidentifiable on any pose: {}",
+            plan.unidentifiable.join(", ")
+        );
+    }
+    if let Some(f) = &plan.from_diagnose {
+        for p in &f.pairs {
+            let _ = writeln!(
+                out,
+                "aliased {} / {}: correlation {:.3} on the {} measured poses -> {:.3} with the plan",
+                p.a, p.b, p.correlation_before, f.existing_poses, p.correlation_after
+            );
+        }
+    }
+    out
+}

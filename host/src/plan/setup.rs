@@ -1,0 +1,121 @@
+//! The identification Jacobian of every candidate pose, restricted to what the whole candidate
+//! set can identify, with its columns scaled.
+
+use nalgebra::{DMatrix, Vector3};
+
+use super::candidates::CandidatePose;
+use super::PlanError;
+use crate::calib::default_selection;
+use crate::calib::identifiability::{analyse, DEFAULT_RTOL};
+use crate::calib::Poses;
+use crate::diagnose::data::Dataset;
+use crate::diagnose::extended::{ExtModel, Unknown};
+use crate::model::Model;
+
+/// The design problem: scaled Jacobian blocks of the candidates (and of the poses already
+/// measured), the unknowns and their names.
+#[derive(Debug, Clone)]
+pub struct Setup {
+    /// The model (with the declared tilting when it has tilting data) the Jacobians are taken at.
+    pub ext: ExtModel,
+    /// The identifiable unknowns, in column order.
+    pub unknowns: Vec<Unknown>,
+    /// Their names (model parameter names; `compliance_j2_deg_per_kgfm` for compliance).
+    pub names: Vec<String>,
+    /// Unidentifiable parameters or combinations on the whole candidate set (`"dth5+be4"`).
+    pub unidentifiable: Vec<String>,
+    /// Column scale: RMS norm of each column's 3-row block over the candidates (unknown units
+    /// to "per pose").
+    pub scale: Vec<f64>,
+    /// Scaled Jacobian of the candidates, 3 rows per candidate.
+    pub b: DMatrix<f64>,
+    /// Scaled Jacobian of the poses already measured (0 rows for none).
+    pub prior_rows: DMatrix<f64>,
+    /// Columns whose separation is wanted (Ds-optimality); empty: all (D-optimality).
+    pub interest: Vec<usize>,
+}
+
+/// The poses `q` as a dataset (positions unused).
+pub fn joints_dataset(q: &[Vec<f64>]) -> Dataset {
+    Dataset::from_poses(Poses {
+        q_deg: q.to_vec(),
+        xyz_mm: vec![Vector3::zeros(); q.len()],
+    })
+}
+
+impl Setup {
+    /// The declared identification: [`default_selection`] with the declared tilting.
+    pub fn declared(
+        model: &Model,
+        cands: &[CandidatePose],
+        prior_q: &[Vec<f64>],
+    ) -> Result<Self, PlanError> {
+        let requested: Vec<Unknown> = default_selection(model, false)
+            .into_iter()
+            .map(Unknown::Param)
+            .collect();
+        Self::build(
+            ExtModel::new(model.clone()),
+            cands,
+            &requested,
+            &[],
+            prior_q,
+        )
+    }
+
+    /// The problem for the unknowns `requested` (earlier ones are kept when a combination is
+    /// unidentifiable), wanting to separate `interest`, given poses `prior_q` already measured.
+    pub fn build(
+        ext: ExtModel,
+        cands: &[CandidatePose],
+        requested: &[Unknown],
+        interest: &[Unknown],
+        prior_q: &[Vec<f64>],
+    ) -> Result<Self, PlanError> {
+        let q: Vec<Vec<f64>> = cands.iter().map(|c| c.q_deg.clone()).collect();
+        let (jac_all, _) = ext.stacked(&joints_dataset(&q), requested)?;
+        let id = analyse(&jac_all, DEFAULT_RTOL);
+        let names_all: Vec<String> = requested.iter().map(|u| u.name(&ext.model)).collect();
+        let name_refs: Vec<&str> = names_all.iter().map(String::as_str).collect();
+        let unidentifiable = id.combinations.iter().map(|c| c.name(&name_refs)).collect();
+        let kept = id.kept;
+        let n_cand = cands.len().max(1) as f64;
+        let scale: Vec<f64> = kept
+            .iter()
+            .map(|&k| {
+                let s = jac_all.column(k).norm() / n_cand.sqrt();
+                if s > 0.0 && s.is_finite() {
+                    s
+                } else {
+                    1.0
+                }
+            })
+            .collect();
+        let scaled = |jac: &DMatrix<f64>| {
+            DMatrix::from_fn(jac.nrows(), kept.len(), |r, c| jac[(r, kept[c])] / scale[c])
+        };
+        let b = scaled(&jac_all);
+        let prior_rows = if prior_q.is_empty() {
+            DMatrix::zeros(0, kept.len())
+        } else {
+            scaled(&ext.stacked(&joints_dataset(prior_q), requested)?.0)
+        };
+        let unknowns: Vec<Unknown> = kept.iter().map(|&k| requested[k]).collect();
+        let interest_cols = unknowns
+            .iter()
+            .enumerate()
+            .filter(|(_, u)| interest.contains(u))
+            .map(|(c, _)| c)
+            .collect();
+        Ok(Self {
+            names: unknowns.iter().map(|u| u.name(&ext.model)).collect(),
+            unknowns,
+            unidentifiable,
+            scale,
+            b,
+            prior_rows,
+            interest: interest_cols,
+            ext,
+        })
+    }
+}
