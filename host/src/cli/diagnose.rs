@@ -17,6 +17,7 @@ use rigctl::io::atomic::write_bytes_atomic;
 use rigctl::model::KATANA_PENCIL_TOOL_MM;
 
 use super::model_args::ModelArgs;
+use super::out::out;
 use super::CliError;
 
 #[derive(clap::Args, Debug)]
@@ -51,6 +52,7 @@ pub struct Args {
 }
 
 pub fn run(args: Args) -> Result<(), CliError> {
+    super::check_outputs([args.json.as_deref(), args.out.as_deref()])?;
     // the pencil holder is on the arm when the rig's samples are measured
     let default_tool_mm = (!args.samples.is_empty()).then_some(KATANA_PENCIL_TOOL_MM);
     let model = args.model.choose_with_default_tool(default_tool_mm)?;
@@ -129,7 +131,7 @@ pub fn run(args: Args) -> Result<(), CliError> {
     if let Some(dir) = &args.plots {
         write_plots(dir, &diag)?;
     }
-    print!("{}", diag.report.table());
+    out!("{}", diag.report.table())?;
     Ok(())
 }
 
