@@ -84,7 +84,23 @@ pub fn run(args: Args) -> Result<(), CliError> {
     let val = val.ok_or_else(|| CliError::bad_input("--validate is required"))?;
     let mut opts = DiagnoseOptions::default();
     opts.decide.seed = args.seed;
-    let diag = diagnose(&model, &cal, &val, &opts)?;
+    // Progress on stderr while the candidates are fitted (drawn only when stderr is a terminal).
+    let spinner =
+        indicatif::ProgressBar::with_draw_target(None, indicatif::ProgressDrawTarget::stderr());
+    if let Ok(style) =
+        indicatif::ProgressStyle::with_template("{spinner} diagnose: {msg} ({elapsed})")
+    {
+        spinner.set_style(style);
+    }
+    spinner.set_message(format!(
+        "declared fit, candidate effects, cross-validation on {} + {} measurements",
+        cal.len(),
+        val.len()
+    ));
+    spinner.enable_steady_tick(std::time::Duration::from_millis(200));
+    let diag = diagnose(&model, &cal, &val, &opts);
+    spinner.finish_and_clear();
+    let diag = diag?;
     if let Some(path) = &args.json {
         let text = serde_json::to_string_pretty(&diag.report)
             .map_err(|e| CliError::failure(format!("serialising the report: {e}")))?;

@@ -58,10 +58,14 @@ pub fn run(args: Args) -> Result<(), CliError> {
     }
     let joints = JointSamples::read(&args.joints, &model)?;
     let cal = PotCalibration::read(&args.pot)?;
-    let pot = TravelSeries::new(
-        &read_pot_samples(&args.recording, args.strict, &mut note_damage)?,
-        |r| cal.travel_mm(r),
-    );
+    let samples = read_pot_samples(&args.recording, args.strict, &mut note_damage)?;
+    if samples.is_empty() {
+        return Err(
+            CliError::bad_input("the recording has no potentiometer sample")
+                .in_file(&args.recording),
+        );
+    }
+    let pot = TravelSeries::new(&samples, |r| cal.travel_mm(r));
     let opts = FuseOptions {
         max_in_plane_mm: args.max_in_plane_mm,
         ..FuseOptions::default()

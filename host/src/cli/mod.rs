@@ -141,6 +141,14 @@ impl CliError {
         }
     }
 
+    /// The same error with its message prefixed by the file it is about.
+    pub fn in_file(self, path: &std::path::Path) -> Self {
+        Self {
+            message: format!("{}: {}", path.display(), self.message),
+            ..self
+        }
+    }
+
     /// An ending without a message, with exit status `code`.
     pub fn quiet(code: u8) -> Self {
         Self {

@@ -40,7 +40,8 @@ pub fn run(args: Args) -> Result<(), CliError> {
                     args.points.display()
                 ))
             })?;
-            points_from_windows(&read_pot_samples(rec, args.strict, &mut note_damage)?, &w)?
+            let samples = read_pot_samples(rec, args.strict, &mut note_damage)?;
+            points_from_windows(&samples, &w).map_err(|e| CliError::from(e).in_file(rec))?
         }
     };
     let cal = PotCalibration::fit(&points, args.degree)?;

@@ -54,10 +54,10 @@ pub fn run(args: Args) -> Result<(), CliError> {
     };
     let trace = trace_image(&img, &opts, &progress);
     progress.finish_and_clear();
-    let trace = trace?;
+    let trace = trace.map_err(|e| CliError::from(e).in_file(&args.scan))?;
     let main = trace
         .main_stroke()
-        .ok_or_else(|| CliError::bad_input("no pencil trace found"))?;
+        .ok_or_else(|| CliError::bad_input("no pencil trace found").in_file(&args.scan))?;
     write_csv(&args.out, &main.points_mm)?;
     errln!(
         "rigctl trace: {} points, {:.1} mm{}{} ({:.1} px/mm{})",

@@ -137,23 +137,26 @@ pub fn salvage(
     let mut frames = Vec::new();
     let mut damaged = Vec::new();
     let mut pending: Option<(usize, Option<(u64, u64)>)> = None; // damage start, pot grid end
+    let mut open_loss: Option<(usize, (u64, u64))> = None; // region index, pot grid end
     let mut pos = 0;
     let mut truncated_tail_bytes = 0;
     while pos < body.len() {
         if let Some((rx, msg, end)) = record_at(body, pos) {
             if let Some((start, grid)) = pending.take() {
-                let lost = match (&msg, grid) {
-                    (DeviceMsg::Pot(b), Some((next_t_us, period))) if b.t0_us > next_t_us => {
-                        (b.t0_us - next_t_us + period / 2) / period
-                    }
-                    _ => 0,
-                };
                 damaged.push(DamagedRegion {
                     offset: header_len + start,
                     bytes: pos - start,
                     after_record: frames.len(),
-                    pot_samples_lost: lost,
+                    pot_samples_lost: 0,
                 });
+                // The loss is known at the next pot batch (other records may come first).
+                open_loss = grid.map(|g| (damaged.len() - 1, g));
+            }
+            if let (DeviceMsg::Pot(b), Some((i, (next_t_us, period)))) = (&msg, open_loss) {
+                if b.t0_us > next_t_us {
+                    damaged[i].pot_samples_lost = (b.t0_us - next_t_us + period / 2) / period;
+                }
+                open_loss = None;
             }
             frames.push((rx, msg));
             pos = end;
