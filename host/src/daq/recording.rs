@@ -31,6 +31,10 @@
 //! second. A record cut short by such an event is the only damage possible, and the reader
 //! tolerates it: [`parse_recording`] returns every complete record and reports the length of the
 //! incomplete tail in [`Recording::truncated_tail_bytes`].
+//!
+//! Damage inside the file (a flipped byte on disk) is handled by [`super::salvage`]: the damaged
+//! record is recognised by its frame's CRC, skipped and reported, and reading resynchronises on
+//! the next record; `export`, `fuse` and `potcal` read recordings that way.
 
 use serde::{Deserialize, Serialize};
 use std::fs::{File, OpenOptions};
