@@ -3,13 +3,12 @@
 //! PATH (behaviour in `rigctl::daq::board_sim`). Prints what it sent on stdout when it ends.
 
 use std::path::PathBuf;
-use std::sync::atomic::{AtomicBool, Ordering};
-use std::sync::Arc;
 use std::time::Duration;
 
 use rigctl::daq::board_sim::{serve, SimConfig};
 use rigctl::daq::pty::{Pty, PtyLink};
 
+use super::out::{errln, outln};
 use super::CliError;
 
 #[derive(clap::Args, Debug)]
@@ -57,21 +56,18 @@ pub fn run(args: Args) -> Result<(), CliError> {
         duration: args.duration_s.map(Duration::from_secs_f64),
         speed: args.speed,
     };
-    let stop = Arc::new(AtomicBool::new(false));
-    let handler_flag = Arc::clone(&stop);
-    if let Err(e) = ctrlc::set_handler(move || handler_flag.store(true, Ordering::Relaxed)) {
-        eprintln!("rigctl board-sim: Ctrl-C will not remove the link ({e})");
-    }
+    // Ctrl-C and SIGTERM end the run cleanly: the link is removed.
+    let stop = rigctl::io::interrupt::cooperative_stop();
     let mut pty = Pty::open()?;
     let link = PtyLink::create(&args.link, pty.slave_path())?;
-    eprintln!(
+    errln!(
         "rigctl board-sim: serving on {} -> {} (waiting for the host)",
         link.path().display(),
         pty.slave_path().display()
     );
     let (report, end) = serve(&mut pty, &cfg, &stop)?;
     drop(link);
-    eprintln!("rigctl board-sim: ended ({end:?})");
-    println!("{report}");
+    errln!("rigctl board-sim: ended ({end:?})");
+    outln!("{report}")?;
     Ok(())
 }

@@ -19,6 +19,7 @@ use rigctl::io::atomic::write_bytes_atomic;
 use rigctl::model::KATANA_PENCIL_TOOL_MM;
 
 use super::model_args::ModelArgs;
+use super::out::out;
 use super::CliError;
 
 #[derive(clap::Args, Debug)]
@@ -62,8 +63,16 @@ pub struct Args {
     pub base: bool,
     /// Identifiability threshold: directions whose scaled singular value is below RTOL times the
     /// largest are reported unidentifiable and kept nominal.
-    #[arg(long, value_name = "RTOL", default_value_t = rigctl::calib::identifiability::DEFAULT_RTOL)]
+    #[arg(long, value_name = "RTOL", default_value_t = rigctl::calib::identifiability::DEFAULT_RTOL, value_parser = parse_rtol)]
     pub rtol: f64,
+}
+
+/// A relative threshold strictly between 0 and 1 (NaN and infinities refused).
+fn parse_rtol(s: &str) -> Result<f64, String> {
+    match s.parse::<f64>() {
+        Ok(v) if v.is_finite() && v > 0.0 && v < 1.0 => Ok(v),
+        _ => Err(format!("`{s}` is not a relative tolerance in (0, 1)")),
+    }
 }
 
 fn parse_method(s: &str) -> Result<Method, String> {
@@ -71,6 +80,12 @@ fn parse_method(s: &str) -> Result<Method, String> {
 }
 
 pub fn run(args: Args) -> Result<(), CliError> {
+    super::check_outputs([
+        args.json.as_deref(),
+        args.out.as_deref(),
+        args.errors_csv.as_deref(),
+        args.plot.as_deref(),
+    ])?;
     if let Some(samples) = &args.samples {
         return run_samples(&args, samples);
     }
@@ -101,7 +116,7 @@ pub fn run(args: Args) -> Result<(), CliError> {
     if let Some(path) = &args.out {
         outcome.model.write_file(path)?;
     }
-    print!("{}", summary(&outcome, val.is_some()));
+    out!("{}", summary(&outcome, val.is_some()))?;
     Ok(())
 }
 
@@ -212,7 +227,7 @@ fn run_samples(args: &Args, samples: &std::path::Path) -> Result<(), CliError> {
         data.rows.len(),
         rigctl::calib::projected::OUTLIER_SIGMAS
     );
-    print!("{s}");
+    out!("{s}")?;
     Ok(())
 }
 

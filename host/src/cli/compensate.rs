@@ -9,6 +9,7 @@ use rigctl::model::preset;
 use rigctl::sim::ik::IkTilt;
 
 use super::model_args::ModelArgs;
+use super::out::errln;
 use super::CliError;
 
 #[derive(clap::Args, Debug)]
@@ -34,6 +35,7 @@ pub struct Args {
 }
 
 pub fn run(args: Args) -> Result<(), CliError> {
+    super::check_outputs([Some(args.out.as_path())])?;
     let model = args.model.choose()?;
     let points = read_path(&args.path)?;
     let nominal = if args.no_nominal {
@@ -54,6 +56,6 @@ pub fn run(args: Args) -> Result<(), CliError> {
     let file = args.path.display().to_string();
     let out = compensate(&model, nominal.as_ref(), &points, tilt, &file)?;
     write_joints_csv(&args.out, model.n_joints(), &out)?;
-    eprintln!("{} path points -> {}", out.len(), args.out.display());
+    errln!("{} path points -> {}", out.len(), args.out.display());
     Ok(())
 }

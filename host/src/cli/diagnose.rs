@@ -20,6 +20,7 @@ use rigctl::io::atomic::write_bytes_atomic;
 use rigctl::model::KATANA_PENCIL_TOOL_MM;
 
 use super::model_args::ModelArgs;
+use super::out::out;
 use super::CliError;
 
 #[derive(clap::Args, Debug)]
@@ -64,6 +65,7 @@ pub struct Args {
 }
 
 pub fn run(args: Args) -> Result<(), CliError> {
+    super::check_outputs([args.json.as_deref(), args.out.as_deref()])?;
     // the pencil holder is on the arm when the rig's samples are measured
     let default_tool_mm = (!args.samples.is_empty()).then_some(KATANA_PENCIL_TOOL_MM);
     let model = args.model.choose_with_default_tool(default_tool_mm)?;
@@ -103,7 +105,23 @@ pub fn run(args: Args) -> Result<(), CliError> {
         }
         opts.instrument_mm = Some(s);
     }
-    let mut diag = diagnose(&model, &cal, &val, &opts)?;
+    // Progress on stderr while the candidates are fitted (drawn only when stderr is a terminal).
+    let spinner =
+        indicatif::ProgressBar::with_draw_target(None, indicatif::ProgressDrawTarget::stderr());
+    if let Ok(style) =
+        indicatif::ProgressStyle::with_template("{spinner} diagnose: {msg} ({elapsed})")
+    {
+        spinner.set_style(style);
+    }
+    spinner.set_message(format!(
+        "declared fit, candidate effects, cross-validation on {} + {} measurements",
+        cal.len(),
+        val.len()
+    ));
+    spinner.enable_steady_tick(std::time::Duration::from_millis(200));
+    let diag = diagnose(&model, &cal, &val, &opts);
+    spinner.finish_and_clear();
+    let mut diag = diag?;
     if args.residual_model {
         let physical = diag.model.errors(&val)?;
         let fitted = &diag.selection.last.fitted;
@@ -191,7 +209,7 @@ pub fn run(args: Args) -> Result<(), CliError> {
         write_plots(dir, &diag)?;
         write_probe_plots(dir, &diag.probe)?;
     }
-    print!("{}", diag.report.table());
+    out!("{}", diag.report.table())?;
     Ok(())
 }
 

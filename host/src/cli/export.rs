@@ -5,6 +5,7 @@ use std::path::PathBuf;
 
 use rigctl::daq::export::export_csv;
 
+use super::out::errln;
 use super::CliError;
 
 #[derive(clap::Args, Debug)]
@@ -15,18 +16,24 @@ pub struct Args {
     /// Directory for pot.csv, tilt.csv and status.csv (created if missing).
     #[arg(long, value_name = "DIR")]
     pub csv: PathBuf,
+    /// Refuse a damaged recording (exit 2) instead of skipping its damaged records.
+    #[arg(long)]
+    pub strict: bool,
 }
 
 pub fn run(args: Args) -> Result<(), CliError> {
-    let summary = export_csv(&args.file, &args.csv)?;
+    let summary = export_csv(&args.file, &args.csv, args.strict)?;
+    for d in &summary.damaged {
+        errln!("rigctl export: {}: skipped {d}", args.file.display());
+    }
     if summary.truncated_tail_bytes > 0 {
-        eprintln!(
+        errln!(
             "rigctl export: {}: ignored an incomplete last record ({} bytes; the run was cut short)",
             args.file.display(),
             summary.truncated_tail_bytes
         );
     }
-    eprintln!(
+    errln!(
         "rigctl export: {}: pot.csv {} rows, tilt.csv {} rows, status.csv {} rows ({} samples dropped)",
         args.csv.display(),
         summary.pot_rows,

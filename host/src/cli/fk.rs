@@ -3,7 +3,6 @@
 //! `x,y,z,phi,theta,psi` (mm in frame R, ZXZ Euler angles in deg) on stdout.
 
 use std::fmt::Write as _;
-use std::io::Write as _;
 use std::path::PathBuf;
 
 use rigctl::io::pose_csv::{read_poses, PoseSpec};
@@ -46,9 +45,5 @@ pub fn run(args: Args) -> Result<(), CliError> {
             p.x, p.y, p.z
         );
     }
-    let mut stdout = std::io::stdout().lock();
-    stdout
-        .write_all(out.as_bytes())
-        .and_then(|()| stdout.flush())
-        .map_err(|e| CliError::failure(format!("writing to stdout: {e}")))
+    super::out::stdout_bytes(out.as_bytes())
 }

@@ -12,7 +12,8 @@ use rigctl::fusion::{
 use rigctl::model::KATANA_PENCIL_TOOL_MM;
 
 use super::model_args::ModelArgs;
-use super::CliError;
+use super::out::outln;
+use super::{note_damage, CliError};
 
 #[derive(clap::Args, Debug)]
 pub struct Args {
@@ -40,9 +41,13 @@ pub struct Args {
     /// Output: the fused samples (CSV, format rigctl-fused/1).
     #[arg(long, value_name = "FUSED.csv")]
     pub out: PathBuf,
+    /// Refuse a damaged recording (exit 2) instead of skipping its damaged records.
+    #[arg(long)]
+    pub strict: bool,
 }
 
 pub fn run(args: Args) -> Result<(), CliError> {
+    super::check_outputs([Some(args.out.as_path())])?;
     let model = args
         .model
         .choose_with_default_tool(Some(KATANA_PENCIL_TOOL_MM))?;
@@ -53,7 +58,14 @@ pub fn run(args: Args) -> Result<(), CliError> {
     }
     let joints = JointSamples::read(&args.joints, &model)?;
     let cal = PotCalibration::read(&args.pot)?;
-    let pot = TravelSeries::new(&read_pot_samples(&args.recording)?, |r| cal.travel_mm(r));
+    let samples = read_pot_samples(&args.recording, args.strict, &mut note_damage)?;
+    if samples.is_empty() {
+        return Err(
+            CliError::bad_input("the recording has no potentiometer sample")
+                .in_file(&args.recording),
+        );
+    }
+    let pot = TravelSeries::new(&samples, |r| cal.travel_mm(r));
     let opts = FuseOptions {
         max_in_plane_mm: args.max_in_plane_mm,
         ..FuseOptions::default()
@@ -64,25 +76,29 @@ pub fn run(args: Args) -> Result<(), CliError> {
     let fused = fuse(&model, &joints, &pot, &curve, &placement, &opts)?;
     write_fused(&args.out, &fused.samples)?;
     let a = &fused.alignment;
-    println!(
+    outln!(
         "clock: board = robot {} {:.6} s, drift {:+.2} ppm ({} markers)",
         if a.offset_s < 0.0 { "-" } else { "+" },
         a.offset_s.abs(),
         a.drift_ppm,
         a.markers.len()
-    );
+    )?;
     for m in &a.markers {
-        println!(
+        outln!(
             "  marker {:.2}..{:.2} s: offset {:.6} s, level {:+.3} mm, misfit rms {:.4} mm",
-            m.start_s, m.end_s, m.offset_s, m.level_mm, m.rms_mm
-        );
+            m.start_s,
+            m.end_s,
+            m.offset_s,
+            m.level_mm,
+            m.rms_mm
+        )?;
     }
     let n = fused.samples.len() as f64;
     let rms = |f: &dyn Fn(&rigctl::fusion::FusedSample) -> f64| {
         (fused.samples.iter().map(|s| f(s).powi(2)).sum::<f64>() / n).sqrt()
     };
     let sk = fused.skipped;
-    println!(
+    outln!(
         "fused {} of {} joint samples (skipped: {} not drawing, {} ambiguous, {} at a trace kink, \
          {} outside the recording, {} pencil off the paper, {} off the trace, {} near a trace end)",
         fused.samples.len(),
@@ -94,13 +110,13 @@ pub fn run(args: Args) -> Result<(), CliError> {
         sk.off_paper,
         sk.off_trace,
         sk.near_trace_end
-    );
-    println!(
+    )?;
+    outln!(
         "measured deviation from the nominal model: rms across the path {:.4} mm, out of plane {:.4} mm \
          (along the path: not measured); pencil stop {:.3} mm",
         rms(&|s| s.dev_u_mm),
         rms(&|s| s.dev_n_mm),
         fused.stop_mm
-    );
+    )?;
     Ok(())
 }

@@ -7,6 +7,7 @@ use std::path::PathBuf;
 use rigctl::joints::{identify, read_readings, report_json, JointsError};
 
 use super::model_args::ModelArgs;
+use super::out::errln;
 use super::CliError;
 
 #[derive(clap::Args, Debug)]
@@ -26,6 +27,7 @@ pub struct Args {
 }
 
 pub fn run(args: Args) -> Result<(), CliError> {
+    super::check_outputs([Some(args.out.as_path()), args.json.as_deref()])?;
     let model = args.model.choose()?;
     let readings = read_readings(&args.readings, &model)?;
     let result = identify(&model, &readings)?;
@@ -34,7 +36,7 @@ pub fn run(args: Args) -> Result<(), CliError> {
             Some(e) => format!("{:.6} +- {:.6}", e.value, e.sigma),
             None => "kept".to_string(),
         };
-        eprintln!(
+        errln!(
             "joint {}: {} readings, C = {} deg, b = {} deg, k = {} kgf.m/deg",
             f.joint,
             f.rows,
@@ -43,7 +45,7 @@ pub fn run(args: Args) -> Result<(), CliError> {
             show(f.stiffness_kgfm_per_deg)
         );
         for n in &f.notes {
-            eprintln!("  joint {}: {n}", f.joint);
+            errln!("  joint {}: {n}", f.joint);
         }
     }
     result.model.write_file(&args.out)?;

@@ -11,6 +11,7 @@ mod fk;
 mod fuse;
 mod joints;
 mod model_args;
+pub mod out;
 mod plan;
 mod ports;
 mod potcal;
@@ -93,15 +94,36 @@ pub fn run(cli: Cli) -> Result<(), CliError> {
     }
 }
 
+/// Checks every output path of a command before its work, so that an unwritable one cannot
+/// leave the others written (the issue-15 "all or none" rule).
+pub fn check_outputs<'a>(
+    paths: impl IntoIterator<Item = Option<&'a std::path::Path>>,
+) -> Result<(), CliError> {
+    rigctl::io::atomic::check_outputs(paths.into_iter().flatten())?;
+    Ok(())
+}
+
+/// Reports on stderr what a damaged recording lost (it was skipped, the run goes on).
+pub fn note_damage(rec: &rigctl::daq::salvage::SalvagedRecording) {
+    for d in &rec.damaged {
+        out::errln!("rigctl: recording: skipped {d}");
+    }
+}
+
 /// An error on its way to the exit code: the message and its class.
 #[derive(Debug)]
 pub struct CliError {
     pub kind: ErrorKind,
     pub message: String,
+    /// Set for an ending that prints nothing (stdout's reader gone): this exit status.
+    pub quiet_exit: Option<u8>,
 }
 
 impl CliError {
     pub fn exit_code(&self) -> u8 {
+        if let Some(code) = self.quiet_exit {
+            return code;
+        }
         match self.kind {
             ErrorKind::BadInput => 2,
             ErrorKind::Failure => 1,
@@ -112,6 +134,7 @@ impl CliError {
         Self {
             kind: ErrorKind::BadInput,
             message: message.into(),
+            quiet_exit: None,
         }
     }
 
@@ -119,6 +142,24 @@ impl CliError {
         Self {
             kind: ErrorKind::Failure,
             message: message.into(),
+            quiet_exit: None,
+        }
+    }
+
+    /// The same error with its message prefixed by the file it is about.
+    pub fn in_file(self, path: &std::path::Path) -> Self {
+        Self {
+            message: format!("{}: {}", path.display(), self.message),
+            ..self
+        }
+    }
+
+    /// An ending without a message, with exit status `code`.
+    pub fn quiet(code: u8) -> Self {
+        Self {
+            kind: ErrorKind::Failure,
+            message: String::new(),
+            quiet_exit: Some(code),
         }
     }
 }
@@ -134,6 +175,7 @@ impl<E: Classify + std::fmt::Display> From<E> for CliError {
         Self {
             kind: e.kind(),
             message: e.to_string(),
+            quiet_exit: None,
         }
     }
 }

@@ -14,6 +14,7 @@ use rigctl::plan::{plan, Criterion, FromDiagnose, PlanConfig};
 use rigctl::plot::plan::poses_svg;
 
 use super::model_args::ModelArgs;
+use super::out::out;
 use super::CliError;
 
 #[derive(clap::Args, Debug)]
@@ -92,6 +93,11 @@ fn parse_criterion(s: &str) -> Result<Criterion, String> {
 }
 
 pub fn run(args: Args) -> Result<(), CliError> {
+    super::check_outputs([
+        Some(args.out.as_path()),
+        args.json.as_deref(),
+        args.plot.as_deref(),
+    ])?;
     let model = args.model.choose()?;
     let mut cfg = PlanConfig::new(&model, args.n);
     cfg.seed = args.seed;
@@ -159,6 +165,6 @@ pub fn run(args: Args) -> Result<(), CliError> {
         write_bytes_atomic(path, format!("{text}\n").as_bytes())?;
     }
     write_bytes_atomic(&args.out, plan_csv(&result).as_bytes())?;
-    print!("{}", summary_table(&result, cfg.noise_mm));
+    out!("{}", summary_table(&result, cfg.noise_mm))?;
     Ok(())
 }

@@ -1,5 +1,6 @@
 //! `rigctl ports`: the serial ports the OS knows, one per line (`PATH<TAB>DESCRIPTION`).
 
+use super::out::{errln, outln};
 use super::CliError;
 
 #[derive(clap::Args, Debug)]
@@ -8,10 +9,10 @@ pub struct Args {}
 pub fn run(_args: Args) -> Result<(), CliError> {
     let ports = rigctl::daq::link::list_ports()?;
     if ports.is_empty() {
-        eprintln!("rigctl ports: no serial ports found (is the board plugged in?)");
+        errln!("rigctl ports: no serial ports found (is the board plugged in?)");
     }
     for port in ports {
-        println!("{}\t{}", port.path, port.description);
+        outln!("{}\t{}", port.path, port.description)?;
     }
     Ok(())
 }

@@ -7,7 +7,8 @@ use std::path::PathBuf;
 use rigctl::fusion::pot::read_pot_samples;
 use rigctl::fusion::potcal::{points_from_windows, read_jig_csv, JigFile, PotCalibration};
 
-use super::CliError;
+use super::out::{errln, outln};
+use super::{note_damage, CliError};
 
 #[derive(clap::Args, Debug)]
 pub struct Args {
@@ -23,9 +24,13 @@ pub struct Args {
     /// Output calibration (TOML).
     #[arg(long, value_name = "POT.toml")]
     pub out: PathBuf,
+    /// Refuse a damaged recording (exit 2) instead of skipping its damaged records.
+    #[arg(long)]
+    pub strict: bool,
 }
 
 pub fn run(args: Args) -> Result<(), CliError> {
+    super::check_outputs([Some(args.out.as_path())])?;
     let points = match read_jig_csv(&args.points)? {
         JigFile::Points(p) => p,
         JigFile::Windows(w) => {
@@ -35,28 +40,29 @@ pub fn run(args: Args) -> Result<(), CliError> {
                     args.points.display()
                 ))
             })?;
-            points_from_windows(&read_pot_samples(rec)?, &w)?
+            let samples = read_pot_samples(rec, args.strict, &mut note_damage)?;
+            points_from_windows(&samples, &w).map_err(|e| CliError::from(e).in_file(rec))?
         }
     };
     let cal = PotCalibration::fit(&points, args.degree)?;
     cal.write(&args.out)?;
-    println!(
+    outln!(
         "potcal: {} points, degree {}, {:.6} mm/count at the centre, counts {:.1}..{:.1}",
         cal.points,
         cal.coefficients.len() - 1,
         cal.mm_per_count(),
         cal.raw_min,
         cal.raw_max
-    );
+    )?;
     match (cal.rms_residual_mm, cal.max_residual_mm) {
-        (Some(rms), Some(max)) => println!("residuals: rms {rms:.4} mm, max {max:.4} mm"),
-        _ => println!(
+        (Some(rms), Some(max)) => outln!("residuals: rms {rms:.4} mm, max {max:.4} mm")?,
+        _ => outln!(
             "residuals: none (exact fit through {} points; add points to check)",
             cal.points
-        ),
+        )?,
     }
     if let Some(w) = PotCalibration::nonlinearity(&points).filter(|_| args.degree == 1) {
-        eprintln!("rigctl potcal: warning: {w}");
+        errln!("rigctl potcal: warning: {w}");
     }
     Ok(())
 }

@@ -5,8 +5,6 @@
 
 use std::ops::RangeInclusive;
 use std::path::PathBuf;
-use std::sync::atomic::{AtomicBool, Ordering};
-use std::sync::Arc;
 use std::time::Duration;
 
 use indicatif::{ProgressBar, ProgressDrawTarget, ProgressStyle};
@@ -14,6 +12,7 @@ use rig_protocol::device::{POT_RATE_HZ, TILT_RATE_HZ};
 use rigctl::daq::session::{record, RecordConfig, Timing};
 use rigctl::daq::tally::Tally;
 
+use super::out::outln;
 use super::CliError;
 
 #[derive(clap::Args, Debug)]
@@ -103,11 +102,8 @@ impl Live {
 }
 
 pub fn run(args: Args) -> Result<(), CliError> {
-    let stop = Arc::new(AtomicBool::new(false));
-    let handler_flag = Arc::clone(&stop);
-    if let Err(e) = ctrlc::set_handler(move || handler_flag.store(true, Ordering::Relaxed)) {
-        eprintln!("rigctl record: Ctrl-C will not stop cleanly ({e})");
-    }
+    // Ctrl-C and SIGTERM stop the recording cleanly: summary, exit 0.
+    let stop = rigctl::io::interrupt::cooperative_stop();
     let cfg = RecordConfig {
         port: args.port,
         out: args.out,
@@ -124,12 +120,13 @@ pub fn run(args: Args) -> Result<(), CliError> {
     live.bar.finish_and_clear();
     match result {
         Ok(tally) => {
-            println!("{}", tally.summary_line());
+            outln!("{}", tally.summary_line())?;
             Ok(())
         }
         Err(e) => {
             if let Some(tally) = e.tally() {
-                println!("{}", tally.summary_line());
+                // The run's error matters more than a failed summary.
+                let _ = outln!("{}", tally.summary_line());
             }
             Err(e.into())
         }

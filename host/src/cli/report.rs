@@ -5,6 +5,7 @@ use std::path::PathBuf;
 
 use rigctl::report::{write_report, ReportOptions};
 
+use super::out::{errln, outln};
 use super::CliError;
 
 #[derive(clap::Args, Debug)]
@@ -25,20 +26,21 @@ pub struct Args {
 }
 
 pub fn run(args: Args) -> Result<(), CliError> {
+    super::check_outputs([Some(args.html.as_path())])?;
     let opts = ReportOptions {
         robot: args.robot,
         tool_mm: args.tool_mm,
     };
     let report = write_report(&args.run_dir, &args.html, &opts)?;
-    println!(
+    outln!(
         "report: {} tables, {} figures, {} notes written to {}",
         report.tables.len(),
         report.figures.len(),
         report.notes.len(),
         args.html.display()
-    );
+    )?;
     for n in &report.notes {
-        eprintln!("note: {n}");
+        errln!("note: {n}");
     }
     Ok(())
 }

@@ -1,5 +1,6 @@
 //! `rigctl sheet`: writes the printable trace sheet (SVG, A4, user units mm).
 
+use super::out::errln;
 use super::CliError;
 use rigctl::io::atomic::{write_atomic, AtomicWriteError};
 use rigctl::sheet::{svg::render_svg, ReferencePath};
@@ -25,6 +26,7 @@ pub enum PathKind {
 }
 
 pub fn run(args: Args) -> Result<(), CliError> {
+    super::check_outputs([Some(args.out.as_path())])?;
     let paths: Vec<ReferencePath> = args
         .paths
         .iter()
@@ -41,7 +43,7 @@ pub fn run(args: Args) -> Result<(), CliError> {
                 source,
             })
     })?;
-    eprintln!(
+    errln!(
         "rigctl sheet: wrote {} (print at 100 %, then measure the corner discs' spacing)",
         args.out.display()
     );

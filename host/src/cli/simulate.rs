@@ -10,6 +10,7 @@ use rigctl::sim::session::{simulate_session, write_session, SessionConfig, Sessi
 use rigctl::sim::simulate::{simulate, SimConfig};
 
 use super::model_args::ModelArgs;
+use super::out::outln;
 use super::CliError;
 
 /// Writes cal.csv (118 ISO 9283 poses), val.csv, truth.toml and truth.json into DIR.
@@ -78,14 +79,14 @@ fn run_session(args: &Args, path: SessionPath) -> Result<(), CliError> {
     }
     let session = simulate_session(&declared, &cfg)?;
     write_session(&args.out, &session, &cfg)?;
-    println!(
+    outln!(
         "simulate: {} session, {} joint samples, {} potentiometer frames, scan at {} dpi written to {}",
         path.as_str(),
         session.t_s.len(),
         session.frames.len(),
         cfg.dpi,
         args.out.display()
-    );
+    )?;
     Ok(())
 }
 
@@ -109,11 +110,11 @@ pub fn run(args: Args) -> Result<(), CliError> {
     };
     let out = simulate(&declared, &cfg)?;
     write_outputs(&args.out, &out, &cfg)?;
-    println!(
+    outln!(
         "simulate: {} calibration and {} validation poses written to {}",
         out.cal.len(),
         out.val.len(),
         args.out.display()
-    );
+    )?;
     Ok(())
 }

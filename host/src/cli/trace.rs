@@ -1,5 +1,6 @@
 //! `rigctl trace`: the pencil centreline of a scanned sheet as CSV `x,y` (sheet mm).
 
+use super::out::errln;
 use super::CliError;
 use indicatif::{ProgressBar, ProgressDrawTarget, ProgressStyle};
 use rigctl::trace::{load_scan, trace_image, write_csv, Mapping, TraceOptions};
@@ -27,6 +28,7 @@ pub struct Args {
 }
 
 pub fn run(args: Args) -> Result<(), CliError> {
+    super::check_outputs([Some(args.out.as_path())])?;
     let mapping = match (args.no_fiducials, args.mm_per_px) {
         (true, Some(mm_per_px)) => Mapping::Scale { mm_per_px },
         (true, None) => return Err(CliError::bad_input("--no-fiducials needs --mm-per-px")),
@@ -52,12 +54,12 @@ pub fn run(args: Args) -> Result<(), CliError> {
     };
     let trace = trace_image(&img, &opts, &progress);
     progress.finish_and_clear();
-    let trace = trace?;
+    let trace = trace.map_err(|e| CliError::from(e).in_file(&args.scan))?;
     let main = trace
         .main_stroke()
-        .ok_or_else(|| CliError::bad_input("no pencil trace found"))?;
+        .ok_or_else(|| CliError::bad_input("no pencil trace found").in_file(&args.scan))?;
     write_csv(&args.out, &main.points_mm)?;
-    eprintln!(
+    errln!(
         "rigctl trace: {} points, {:.1} mm{}{} ({:.1} px/mm{})",
         main.points_mm.len(),
         main.length_mm(),
@@ -75,7 +77,7 @@ pub fn run(args: Args) -> Result<(), CliError> {
     );
     if trace.strokes.len() > 1 {
         let rest: f64 = trace.strokes[1..].iter().map(|s| s.length_mm()).sum();
-        eprintln!(
+        errln!(
             "rigctl trace: warning: {} other stroke(s), {rest:.1} mm in all, not written (only the longest is)",
             trace.strokes.len() - 1
         );

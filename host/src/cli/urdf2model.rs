@@ -6,6 +6,7 @@ use std::path::PathBuf;
 
 use rigctl::urdf::{import_chain, ImportOptions, Urdf};
 
+use super::out::errln;
 use super::CliError;
 
 #[derive(clap::Args, Debug)]
@@ -28,6 +29,7 @@ pub struct Args {
 }
 
 pub fn run(args: Args) -> Result<(), CliError> {
+    super::check_outputs([Some(args.out.as_path())])?;
     let tool_mm = match args.tool_mm.as_deref() {
         None => [0.0; 3],
         Some(&[x, y, z]) if [x, y, z].iter().all(|v| v.is_finite()) => [x, y, z],
@@ -47,7 +49,7 @@ pub fn run(args: Args) -> Result<(), CliError> {
         },
     )?;
     imported.model.write_file(&args.out)?;
-    eprintln!(
+    errln!(
         "{}: {} joints ({}) -> {}",
         args.urdf.display(),
         imported.joint_names.len(),

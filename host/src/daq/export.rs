@@ -11,7 +11,8 @@
 //! that fails means the file was damaged after recording, which is bad input.
 
 use super::link::decode_stored;
-use super::recording::{read_recording, Recording, RecordingError};
+use super::recording::{Recording, RecordingError};
+use super::salvage::{read_salvaged, DamagedRegion};
 use super::tally::Tally;
 use crate::io::atomic::{write_atomic, AtomicWriteError};
 use rig_protocol::{CorruptReason, DeviceMsg};
@@ -69,6 +70,8 @@ pub struct ExportSummary {
     pub tally: Tally,
     /// Bytes of an incomplete last record that were ignored.
     pub truncated_tail_bytes: usize,
+    /// Damaged stretches skipped (empty for an intact file).
+    pub damaged: Vec<DamagedRegion>,
 }
 
 /// The decoded frames of a recording, with their receive times.
@@ -93,23 +96,24 @@ pub fn decode_recording(
         .collect()
 }
 
-/// Exports the recording at `path` into `dir` (created if missing).
-pub fn export_csv(path: &Path, dir: &Path) -> Result<ExportSummary, ExportError> {
-    let recording = read_recording(path)?;
-    let frames = decode_recording(path, &recording)?;
+/// Exports the recording at `path` into `dir` (created if missing). Damaged records are
+/// skipped and reported in [`ExportSummary::damaged`]; with `strict` they are an error.
+pub fn export_csv(path: &Path, dir: &Path, strict: bool) -> Result<ExportSummary, ExportError> {
+    let salvaged = read_salvaged(path, strict)?;
+    let frames = &salvaged.frames;
     std::fs::create_dir_all(dir).map_err(|source| ExportError::Dir {
         path: dir.to_path_buf(),
         source,
     })?;
     let mut tally = Tally::new();
-    for (_, msg) in &frames {
+    for (_, msg) in frames {
         tally.on_message(msg);
     }
 
     let pot_path = dir.join("pot.csv");
     let pot_rows = write_csv(&pot_path, POT_HEADER, |w| {
         let mut rows = 0u64;
-        for (_, msg) in &frames {
+        for (_, msg) in frames {
             if let DeviceMsg::Pot(b) = msg {
                 for (i, raw) in b.samples.iter().enumerate() {
                     let t_us = b.t0_us + i as u64 * u64::from(b.period_us);
@@ -123,7 +127,7 @@ pub fn export_csv(path: &Path, dir: &Path) -> Result<ExportSummary, ExportError>
     let tilt_path = dir.join("tilt.csv");
     let tilt_rows = write_csv(&tilt_path, TILT_HEADER, |w| {
         let mut rows = 0u64;
-        for (_, msg) in &frames {
+        for (_, msg) in frames {
             if let DeviceMsg::Tilt(r) = msg {
                 writeln!(
                     w,
@@ -138,7 +142,7 @@ pub fn export_csv(path: &Path, dir: &Path) -> Result<ExportSummary, ExportError>
     let status_path = dir.join("status.csv");
     let status_rows = write_csv(&status_path, STATUS_HEADER, |w| {
         let mut rows = 0u64;
-        for (host_rx_us, msg) in &frames {
+        for (host_rx_us, msg) in frames {
             if let DeviceMsg::Status(s) = msg {
                 writeln!(
                     w,
@@ -160,7 +164,8 @@ pub fn export_csv(path: &Path, dir: &Path) -> Result<ExportSummary, ExportError>
         tilt_rows,
         status_rows,
         tally,
-        truncated_tail_bytes: recording.truncated_tail_bytes,
+        truncated_tail_bytes: salvaged.truncated_tail_bytes,
+        damaged: salvaged.damaged.clone(),
     })
 }
 
@@ -253,7 +258,7 @@ mod tests {
             ],
         );
         let out = dir.path().join("csv");
-        let summary = export_csv(&rec, &out).unwrap();
+        let summary = export_csv(&rec, &out, false).unwrap();
         assert_eq!(
             std::fs::read_to_string(out.join("pot.csv")).unwrap(),
             "seq,t_us,raw\n0,1000,10\n0,1250,11\n0,1500,12\n2,2000,4095\n"
@@ -275,7 +280,7 @@ mod tests {
     }
 
     #[test]
-    fn damaged_frame_is_bad_input_naming_the_record() {
+    fn damaged_frame_is_refused_with_strict_and_skipped_without() {
         let dir = tempfile::tempdir().unwrap();
         let rec = dir.path().join("run.rigrec");
         write_recording(&rec, &[batch(0, 0, &[1, 2]), batch(1, 500, &[3])]);
@@ -284,10 +289,17 @@ mod tests {
         bytes[last] ^= 0x40;
         std::fs::write(&rec, &bytes).unwrap();
         let out = dir.path().join("csv");
-        match export_csv(&rec, &out) {
-            Err(ExportError::BadFrame { index, .. }) => assert_eq!(index, 1),
-            other => panic!("expected BadFrame, got {other:?}"),
+        match export_csv(&rec, &out, true) {
+            Err(ExportError::Recording(RecordingError::Damaged { .. })) => {}
+            other => panic!("expected Damaged, got {other:?}"),
         }
         assert!(!out.join("pot.csv").exists());
+        let summary = export_csv(&rec, &out, false).unwrap();
+        assert_eq!(summary.pot_rows, 2);
+        assert_eq!(summary.damaged.len(), 1);
+        assert_eq!(
+            std::fs::read_to_string(out.join("pot.csv")).unwrap(),
+            "seq,t_us,raw\n0,0,1\n0,250,2\n"
+        );
     }
 }

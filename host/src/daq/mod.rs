@@ -13,6 +13,7 @@
 //! | module | holds |
 //! |---|---|
 //! | [`recording`] | the recording file format (header + length-prefixed raw frames), writer and tolerant reader |
+//! | [`salvage`] | reading a damaged recording: skip damaged records (CRC), resynchronise, report what was lost |
 //! | [`link`] | opening/listing serial ports; cutting the byte stream into frames, keeping each frame's raw bytes |
 //! | [`session`] | a `record` session: handshake (`GetInfo`/`Hello`, version check), `Start`, run, `Stop`, drain |
 //! | [`tally`] | the counts `frames`, `samples`, `dropped`, `crc_errors` and their exact definitions |
@@ -26,6 +27,7 @@ pub mod export;
 pub mod link;
 pub mod pty;
 pub mod recording;
+pub mod salvage;
 pub mod session;
 pub mod signals;
 pub mod tally;

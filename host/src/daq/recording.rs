@@ -31,6 +31,10 @@
 //! second. A record cut short by such an event is the only damage possible, and the reader
 //! tolerates it: [`parse_recording`] returns every complete record and reports the length of the
 //! incomplete tail in [`Recording::truncated_tail_bytes`].
+//!
+//! Damage inside the file (a flipped byte on disk) is handled by [`super::salvage`]: the damaged
+//! record is recognised by its frame's CRC, skipped and reported, and reading resynchronises on
+//! the next record; `export`, `fuse` and `potcal` read recordings that way.
 
 use serde::{Deserialize, Serialize};
 use std::fs::{File, OpenOptions};
@@ -47,7 +51,7 @@ pub const MAX_FRAME_LEN: usize = 4096;
 /// Longest accepted metadata line, bytes.
 const MAX_HEADER_LEN: usize = 64 * 1024;
 /// Bytes before a record's frame: length + receive time.
-const RECORD_PREFIX_LEN: usize = 4 + 8;
+pub const RECORD_PREFIX_LEN: usize = 4 + 8;
 /// How often the writer asks the OS to put the file on disk.
 const SYNC_INTERVAL: Duration = Duration::from_secs(1);
 
@@ -146,6 +150,8 @@ pub enum RecordingError {
         offset: usize,
         len: u64,
     },
+    #[error("{path}: damaged record at byte {offset} (frame does not decode; without --strict it is skipped and reported)")]
+    Damaged { path: PathBuf, offset: usize },
 }
 
 impl crate::error::Classify for RecordingError {
@@ -158,7 +164,8 @@ impl crate::error::Classify for RecordingError {
             | Self::NotARecording { .. }
             | Self::UnsupportedVersion { .. }
             | Self::BadHeader { .. }
-            | Self::CorruptRecord { .. } => ErrorKind::BadInput,
+            | Self::CorruptRecord { .. }
+            | Self::Damaged { .. } => ErrorKind::BadInput,
         }
     }
 }
@@ -297,30 +304,8 @@ pub fn read_recording(path: &Path) -> Result<Recording, RecordingError> {
 /// truncated last record is reported in [`Recording::truncated_tail_bytes`]; a truncated header is
 /// an error.
 pub fn parse_recording(path: &Path, bytes: &[u8]) -> Result<Recording, RecordingError> {
-    let bad_header = |reason: String| RecordingError::BadHeader {
-        path: path.to_path_buf(),
-        reason,
-    };
-    if !bytes.starts_with(MAGIC) {
-        return Err(RecordingError::NotARecording {
-            path: path.to_path_buf(),
-        });
-    }
-    let (version_line, rest) = split_line(&bytes[MAGIC.len()..], 16)
-        .ok_or_else(|| bad_header("the version line is incomplete".into()))?;
-    let version = String::from_utf8_lossy(version_line).into_owned();
-    if version != FORMAT_VERSION.to_string() {
-        return Err(RecordingError::UnsupportedVersion {
-            path: path.to_path_buf(),
-            version,
-        });
-    }
-    let (meta_line, body) = split_line(rest, MAX_HEADER_LEN)
-        .ok_or_else(|| bad_header("the metadata line is incomplete".into()))?;
-    let meta: RecordingMeta =
-        serde_json::from_slice(meta_line).map_err(|e| bad_header(format!("metadata JSON: {e}")))?;
-    let header_len = bytes.len() - body.len();
-
+    let (meta, header_len) = parse_header(path, bytes)?;
+    let body = &bytes[header_len..];
     let mut records = Vec::new();
     let mut pos = 0usize;
     while body.len() - pos >= RECORD_PREFIX_LEN {
@@ -351,14 +336,44 @@ pub fn parse_recording(path: &Path, bytes: &[u8]) -> Result<Recording, Recording
     })
 }
 
+/// Parses the magic, version and metadata lines; returns the metadata and the header's length.
+/// Lines may end in CRLF (a file that went through a text-mode transfer).
+pub fn parse_header(path: &Path, bytes: &[u8]) -> Result<(RecordingMeta, usize), RecordingError> {
+    let bad_header = |reason: String| RecordingError::BadHeader {
+        path: path.to_path_buf(),
+        reason,
+    };
+    if !bytes.starts_with(MAGIC) {
+        return Err(RecordingError::NotARecording {
+            path: path.to_path_buf(),
+        });
+    }
+    let (version_line, rest) = split_line(&bytes[MAGIC.len()..], 16)
+        .ok_or_else(|| bad_header("the version line is incomplete".into()))?;
+    let version = String::from_utf8_lossy(version_line).into_owned();
+    if version != FORMAT_VERSION.to_string() {
+        return Err(RecordingError::UnsupportedVersion {
+            path: path.to_path_buf(),
+            version: version.escape_debug().to_string(),
+        });
+    }
+    let (meta_line, body) = split_line(rest, MAX_HEADER_LEN)
+        .ok_or_else(|| bad_header("the metadata line is incomplete".into()))?;
+    let meta: RecordingMeta =
+        serde_json::from_slice(meta_line).map_err(|e| bad_header(format!("metadata JSON: {e}")))?;
+    Ok((meta, bytes.len() - body.len()))
+}
+
 /// Splits off the first `\n`-terminated line (without the `\n`) if it ends within `max` bytes.
 fn split_line(bytes: &[u8], max: usize) -> Option<(&[u8], &[u8])> {
     let end = bytes.iter().take(max).position(|&b| b == b'\n')?;
-    Some((&bytes[..end], &bytes[end + 1..]))
+    let line = &bytes[..end];
+    let line = line.strip_suffix(b"\r").unwrap_or(line);
+    Some((line, &bytes[end + 1..]))
 }
 
 /// `N` bytes at `pos`; the caller has checked that they exist.
-fn read_array<const N: usize>(bytes: &[u8], pos: usize) -> [u8; N] {
+pub(crate) fn read_array<const N: usize>(bytes: &[u8], pos: usize) -> [u8; N] {
     let mut out = [0u8; N];
     out.copy_from_slice(&bytes[pos..pos + N]);
     out

@@ -23,6 +23,11 @@
 //!      `Start`), which also covers queue drops after the last received batch.
 //!
 //!   Both counts see a queue drop in the middle of the run, so they are not added.
+//!
+//!   To these are added the *inclinometer readings missing from the stream*: each sensor's
+//!   readings lie on its own grid (the smallest interval seen between two of its readings);
+//!   between two consecutive received readings of a sensor `round(dt / period) - 1` are
+//!   missing (readings lost to a corrupt frame, not only counted in `crc_errors`).
 
 use rig_protocol::{DeviceMsg, PotBatch, Status};
 
@@ -47,7 +52,13 @@ pub struct Tally {
     pub first_seq: Option<u32>,
     /// The last `Status` received.
     pub last_status: Option<Status>,
+    /// Inclinometer readings missing between received readings of the same sensor.
+    pub tilt_gap_readings: u64,
     last_pot: Option<PotEnd>,
+    /// Per sensor: last reading time and the smallest interval seen, us.
+    tilt_grid: Vec<(u64, Option<u64>)>,
+    /// Readings of each sensor since its last gap count (counted once the period is known).
+    tilt_unresolved: Vec<Vec<u64>>,
 }
 
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -68,7 +79,7 @@ impl Tally {
         self.frames += 1;
         match msg {
             DeviceMsg::Pot(batch) => self.on_pot(batch),
-            DeviceMsg::Tilt(_) => self.tilt_readings += 1,
+            DeviceMsg::Tilt(r) => self.on_tilt(r.sensor, r.t_us),
             DeviceMsg::Status(status) => self.last_status = Some(*status),
             DeviceMsg::Hello(_)
             | DeviceMsg::Pong { .. }
@@ -100,12 +111,47 @@ impl Tally {
         });
     }
 
+    fn on_tilt(&mut self, sensor: u8, t_us: u64) {
+        self.tilt_readings += 1;
+        let s = usize::from(sensor);
+        if self.tilt_grid.len() <= s {
+            self.tilt_grid.resize(s + 1, (0, None));
+            self.tilt_unresolved.resize(s + 1, Vec::new());
+        }
+        let (last, period) = &mut self.tilt_grid[s];
+        if *last > 0 && t_us > *last {
+            let dt = t_us - *last;
+            let pending = &mut self.tilt_unresolved[s];
+            let count = |dt: u64, p: u64| ((dt + p / 2) / p).saturating_sub(1);
+            match *period {
+                // The first two intervals wait: their smaller one is the grid.
+                None if pending.is_empty() => pending.push(dt),
+                None => {
+                    pending.push(dt);
+                    let p = pending.iter().copied().min().unwrap_or(dt).max(1);
+                    *period = Some(p);
+                    for dt in pending.drain(..) {
+                        self.tilt_gap_readings += count(dt, p);
+                    }
+                }
+                Some(p) => {
+                    let p = p.min(dt);
+                    *period = Some(p);
+                    self.tilt_gap_readings += count(dt, p);
+                }
+            }
+        }
+        *last = t_us;
+    }
+
     /// The board acknowledged a new `Start`: its `seq` and counters restart, so batches from
     /// before (a previous run still streaming) do not make a gap.
     pub fn start_run(&mut self) {
         self.last_pot = None;
         self.first_seq = None;
         self.last_status = None;
+        self.tilt_grid.clear();
+        self.tilt_unresolved.clear();
     }
 
     /// Samples estimated lost before the first received batch.
@@ -124,7 +170,7 @@ impl Tally {
     pub fn dropped(&self) -> u64 {
         let stream = self.gap_samples + self.leading_samples();
         let board = self.last_status.map_or(0, |s| u64::from(s.dropped_samples));
-        stream.max(board)
+        stream.max(board) + self.tilt_gap_readings
     }
 
     /// The summary line: `frames N, samples N, dropped N, crc_errors N`.

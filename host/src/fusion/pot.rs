@@ -5,8 +5,7 @@ use std::path::Path;
 use rig_protocol::DeviceMsg;
 
 use super::error::FusionError;
-use crate::daq::export::decode_recording;
-use crate::daq::recording::read_recording;
+use crate::daq::salvage::{read_salvaged, SalvagedRecording};
 
 /// One potentiometer sample.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -18,12 +17,19 @@ pub struct PotSample {
 }
 
 /// Every potentiometer sample of the recording at `path`, in board-time order (a sample time
-/// recorded twice keeps its first value).
-pub fn read_pot_samples(path: &Path) -> Result<Vec<PotSample>, FusionError> {
-    let rec = read_recording(path)?;
-    let frames = decode_recording(path, &rec)?;
+/// recorded twice keeps its first value). Damaged records are skipped (see
+/// [`crate::daq::salvage`]) and reported through `on_damage`; with `strict` they are an error.
+pub fn read_pot_samples(
+    path: &Path,
+    strict: bool,
+    on_damage: &mut dyn FnMut(&SalvagedRecording),
+) -> Result<Vec<PotSample>, FusionError> {
+    let rec = read_salvaged(path, strict)?;
+    if !rec.damaged.is_empty() {
+        on_damage(&rec);
+    }
     let mut out = Vec::new();
-    for (_, msg) in &frames {
+    for (_, msg) in &rec.frames {
         if let DeviceMsg::Pot(b) = msg {
             for (i, &raw) in b.samples.iter().enumerate() {
                 out.push(PotSample {

@@ -1,9 +1,25 @@
-//! Output files are written under a temporary name beside the target and renamed when complete,
-//! so an interrupted run never leaves a half-written file under the final name (FORMATS.md).
+//! The one mechanism by which `rigctl` writes its output files (FORMATS.md: nothing
+//! half-written under the final name).
+//!
+//! - A **new path or a regular file** is written under a temporary name in the same directory
+//!   (`.NAME.tmp-PID`), flushed, synced and renamed over the target only when complete.
+//! - A **symbolic link** is resolved (chains included, relative to the link's directory) and the
+//!   file it points to is written as above: the link stays a link.
+//! - A **character/block device, FIFO or socket** (`/dev/stdout`, `/dev/null`, a named pipe) is
+//!   opened and written directly: it is never replaced by a regular file, and its reader gets the
+//!   data.
+//!
+//! Live temporary files are kept in a registry that [`crate::io::interrupt`] empties on SIGINT /
+//! SIGTERM; temporary files left by a process that no longer exists (kill -9, power cut) are
+//! removed the next time `rigctl` writes into the same directory ([`clean_stale_temps`]).
+//! Commands with several outputs call [`check_output`] on each before the work, so that an
+//! unwritable last output cannot leave the first ones written.
 
-use std::fs::File;
+use std::fs::{File, OpenOptions};
 use std::io::{BufWriter, Write};
 use std::path::{Path, PathBuf};
+
+use crate::io::interrupt;
 
 #[derive(Debug, thiserror::Error)]
 pub enum AtomicWriteError {
@@ -13,11 +29,82 @@ pub enum AtomicWriteError {
         #[source]
         source: std::io::Error,
     },
+    #[error("cannot write {path}: {reason}")]
+    Unusable { path: PathBuf, reason: String },
 }
 
 impl crate::error::Classify for AtomicWriteError {
     fn kind(&self) -> crate::error::ErrorKind {
         crate::error::ErrorKind::Failure
+    }
+}
+
+/// Most symbolic links followed before giving up (as the kernel's ELOOP limit).
+const MAX_LINK_HOPS: usize = 40;
+
+/// What is at an output path once links are resolved.
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub enum OutputTarget {
+    /// A regular file or nothing yet: temp + rename at this (resolved) path.
+    Replace(PathBuf),
+    /// A device, FIFO or socket: written in place.
+    Direct(PathBuf),
+}
+
+impl OutputTarget {
+    pub fn path(&self) -> &Path {
+        match self {
+            Self::Replace(p) | Self::Direct(p) => p,
+        }
+    }
+}
+
+/// Follows symbolic links from `path` to the file that would be written.
+pub fn resolve_output(path: &Path) -> Result<OutputTarget, AtomicWriteError> {
+    let unusable = |reason: String| AtomicWriteError::Unusable {
+        path: path.to_path_buf(),
+        reason,
+    };
+    let mut current = path.to_path_buf();
+    for _ in 0..MAX_LINK_HOPS {
+        let meta = match std::fs::symlink_metadata(&current) {
+            Ok(m) => m,
+            Err(e) if e.kind() == std::io::ErrorKind::NotFound => {
+                return Ok(OutputTarget::Replace(current))
+            }
+            Err(source) => {
+                return Err(AtomicWriteError::Io {
+                    path: path.to_path_buf(),
+                    source,
+                })
+            }
+        };
+        let ft = meta.file_type();
+        if ft.is_symlink() {
+            let link = std::fs::read_link(&current).map_err(|source| AtomicWriteError::Io {
+                path: path.to_path_buf(),
+                source,
+            })?;
+            current = match current.parent() {
+                Some(dir) if link.is_relative() => dir.join(link),
+                _ => link,
+            };
+        } else if ft.is_dir() {
+            return Err(unusable(format!("{} is a directory", current.display())));
+        } else if ft.is_file() {
+            return Ok(OutputTarget::Replace(current));
+        } else {
+            return Ok(OutputTarget::Direct(current));
+        }
+    }
+    Err(unusable("too many levels of symbolic links".into()))
+}
+
+/// The directory a new file at `path` goes into (`.` for a bare file name).
+fn parent_dir(path: &Path) -> PathBuf {
+    match path.parent() {
+        Some(p) if !p.as_os_str().is_empty() => p.to_path_buf(),
+        _ => PathBuf::from("."),
     }
 }
 
@@ -29,9 +116,91 @@ fn temp_path(path: &Path) -> PathBuf {
     path.with_file_name(format!(".{name}.tmp-{}", std::process::id()))
 }
 
-/// Writes `path` atomically: `fill` writes into a buffered temporary file, which is flushed,
-/// synced and renamed over `path` only if `fill` succeeds. On any error the temporary file is
-/// removed and `path` is untouched.
+/// The PID in a temporary name `.NAME.tmp-PID`, if `name` is one.
+fn temp_owner(name: &str) -> Option<u32> {
+    if !name.starts_with('.') {
+        return None;
+    }
+    let (_, pid) = name.rsplit_once(".tmp-")?;
+    pid.parse().ok()
+}
+
+fn process_alive(pid: u32) -> bool {
+    if pid == std::process::id() {
+        return true;
+    }
+    Path::new("/proc").join(pid.to_string()).exists()
+}
+
+/// Removes the temporary files (`.NAME.tmp-PID`) in `dir` whose process is gone; returns how
+/// many were removed. Errors (unreadable directory, a file already gone) are ignored: this is
+/// housekeeping.
+pub fn clean_stale_temps(dir: &Path) -> usize {
+    if !Path::new("/proc/self").exists() {
+        return 0; // no way to tell live processes from dead ones
+    }
+    let Ok(entries) = std::fs::read_dir(dir) else {
+        return 0;
+    };
+    let mut removed = 0;
+    for entry in entries.flatten() {
+        let name = entry.file_name();
+        let Some(pid) = temp_owner(&name.to_string_lossy()) else {
+            continue;
+        };
+        let is_file = entry.file_type().map(|t| t.is_file()).unwrap_or(false);
+        if is_file && !process_alive(pid) && std::fs::remove_file(entry.path()).is_ok() {
+            removed += 1;
+        }
+    }
+    removed
+}
+
+/// Checks, before any work, that `path` can be written: its directory exists and is writable
+/// (a probe file is created and removed), it is not a directory, a device or FIFO is writable.
+pub fn check_output(path: &Path) -> Result<(), AtomicWriteError> {
+    match resolve_output(path)? {
+        OutputTarget::Direct(target) => {
+            let access = nix::unistd::access(&target, nix::unistd::AccessFlags::W_OK);
+            access.map_err(|e| AtomicWriteError::Io {
+                path: path.to_path_buf(),
+                source: std::io::Error::from(e),
+            })
+        }
+        OutputTarget::Replace(target) => {
+            let dir = parent_dir(&target);
+            if !dir.is_dir() {
+                return Err(AtomicWriteError::Unusable {
+                    path: path.to_path_buf(),
+                    reason: format!("directory {} does not exist", dir.display()),
+                });
+            }
+            let probe = temp_path(&target);
+            let file = OpenOptions::new()
+                .write(true)
+                .create_new(true)
+                .open(&probe)
+                .map_err(|source| AtomicWriteError::Io {
+                    path: path.to_path_buf(),
+                    source,
+                })?;
+            drop(file);
+            let _ = std::fs::remove_file(&probe);
+            Ok(())
+        }
+    }
+}
+
+/// [`check_output`] on every path given.
+pub fn check_outputs<'a>(
+    paths: impl IntoIterator<Item = &'a Path>,
+) -> Result<(), AtomicWriteError> {
+    paths.into_iter().try_for_each(check_output)
+}
+
+/// Writes `path`: `fill` writes into a buffered writer; see the module documentation for what
+/// happens with regular files, links, devices and FIFOs. On any error with a regular file the
+/// temporary file is removed and `path` is untouched.
 pub fn write_atomic<E>(
     path: &Path,
     fill: impl FnOnce(&mut dyn Write) -> Result<(), E>,
@@ -39,23 +208,40 @@ pub fn write_atomic<E>(
 where
     E: From<AtomicWriteError>,
 {
-    let tmp = temp_path(path);
     let io_err = |source| AtomicWriteError::Io {
         path: path.to_path_buf(),
         source,
     };
-    let file = File::create(&tmp).map_err(io_err)?;
-    let mut w = BufWriter::new(file);
-    let result = fill(&mut w).and_then(|()| {
-        let file = w.into_inner().map_err(|e| io_err(e.into_error()))?;
-        file.sync_all().map_err(io_err)?;
-        std::fs::rename(&tmp, path).map_err(io_err)?;
-        Ok(())
-    });
-    if result.is_err() {
-        let _ = std::fs::remove_file(&tmp);
+    match resolve_output(path)? {
+        OutputTarget::Direct(target) => {
+            let file = OpenOptions::new()
+                .write(true)
+                .open(&target)
+                .map_err(io_err)?;
+            let mut w = BufWriter::new(file);
+            fill(&mut w)?;
+            w.flush().map_err(io_err)?;
+            Ok(())
+        }
+        OutputTarget::Replace(target) => {
+            clean_stale_temps(&parent_dir(&target));
+            let tmp = temp_path(&target);
+            let file = File::create(&tmp).map_err(io_err)?;
+            interrupt::register_temp(&tmp);
+            let mut w = BufWriter::new(file);
+            let result = fill(&mut w).and_then(|()| {
+                let file = w.into_inner().map_err(|e| io_err(e.into_error()))?;
+                file.sync_all().map_err(io_err)?;
+                std::fs::rename(&tmp, &target).map_err(io_err)?;
+                Ok(())
+            });
+            if result.is_err() {
+                let _ = std::fs::remove_file(&tmp);
+            }
+            interrupt::unregister_temp(&tmp);
+            result
+        }
     }
-    result
 }
 
 /// Convenience: write a whole byte string atomically.
@@ -94,5 +280,12 @@ mod tests {
         let path = dir.path().join("out.csv");
         write_bytes_atomic(&path, b"x,y\n1,2\n").unwrap();
         assert_eq!(std::fs::read(&path).unwrap(), b"x,y\n1,2\n");
+    }
+
+    #[test]
+    fn temp_names_carry_their_pid() {
+        assert_eq!(temp_owner(".cal.csv.tmp-1234"), Some(1234));
+        assert_eq!(temp_owner("cal.csv.tmp-1234"), None);
+        assert_eq!(temp_owner(".cal.csv"), None);
     }
 }

@@ -11,6 +11,7 @@
 use std::path::Path;
 
 use crate::error::{Classify, ErrorKind};
+use crate::io::ranges::Quantity;
 
 /// A problem with a CSV table (always bad input, exit code 2).
 #[derive(Debug, thiserror::Error)]
@@ -102,6 +103,8 @@ impl Table {
 
     /// Parses table text; `file` names it in messages.
     pub fn parse(text: &str, file: &str) -> Result<Self, TableError> {
+        // A UTF-8 byte-order mark (spreadsheet exports) is not part of the header.
+        let text = text.strip_prefix('\u{feff}').unwrap_or(text);
         let split =
             |l: &str| -> Vec<String> { l.split(',').map(|f| f.trim().to_string()).collect() };
         let mut lines = text
@@ -176,7 +179,9 @@ impl Table {
     }
 
     /// The finite number in `row`'s column `col`; an empty field is `None`. A field that does
-    /// not parse is "not a number"; NaN and infinities are refused as "NaN" / "infinite".
+    /// not parse is "not a number"; NaN and infinities are refused as "NaN" / "infinite", and a
+    /// value outside the physical range of the column's kind ([`Quantity::of_column`]) as "out
+    /// of physical range".
     pub fn optional_number(&self, row: &Row, col: usize) -> Result<Option<f64>, TableError> {
         let raw = &row.fields[col];
         if raw.is_empty() {
@@ -189,6 +194,8 @@ impl Table {
             Err(self.bad(row, col, "NaN"))
         } else if v.is_infinite() {
             Err(self.bad(row, col, "infinite"))
+        } else if let Some(problem) = Quantity::of_column(&self.header[col]).check(v) {
+            Err(self.bad(row, col, problem))
         } else {
             Ok(Some(v))
         }

@@ -161,9 +161,10 @@ fn build(file: ModelFile) -> Result<Model, String> {
         }
     }
     let joint_info = |j: usize| -> Result<([f64; 2], Option<TiltValues>), String> {
-        let e = file
-            .joint
-            .get(j - 1)
+        // `joint = 0` in a file is refused here, not an underflow (found by fuzzing).
+        let e = j
+            .checked_sub(1)
+            .and_then(|i| file.joint.get(i))
             .ok_or_else(|| format!("joint {j} has no [[joint]] entry (limits)"))?;
         let tilt = match (e.clearance_deg, e.backlash_deg, e.stiffness_kgfm_per_deg) {
             (None, None, None) => None,

@@ -198,6 +198,20 @@ impl Urdf {
                 return Err(self.tree_err(format!("link `{}` has two parent joints", j.child)));
             }
         }
+        // A URDF is a tree: a loop anywhere is refused, even when the chain asked for avoids it.
+        for start in &self.links {
+            let mut link = start.as_str();
+            let mut steps = 0;
+            while let Some(&i) = by_child.get(link) {
+                steps += 1;
+                if steps > self.joints.len() {
+                    return Err(self.tree_err(format!(
+                        "the joints form a loop through link `{start}` (a URDF must be a tree)"
+                    )));
+                }
+                link = &self.joints[i].parent;
+            }
+        }
         let mut out = Vec::new();
         let mut link = tip;
         while link != base {

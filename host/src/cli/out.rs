@@ -1,0 +1,70 @@
+//! stdout and stderr for every subcommand: never a panic on a closed or full stream.
+//!
+//! - stdout closed by its reader (`rigctl ... | head -1`, EPIPE): the command ends quietly with
+//!   exit status 141 (as a Unix tool killed by SIGPIPE), removing any temporary output file.
+//! - stdout on a full disk (`> /dev/full`) or any other write error: exit 1 with a message on
+//!   stderr.
+//! - stderr errors are ignored (there is nowhere left to report them).
+
+use std::fmt;
+use std::io::Write;
+
+use super::CliError;
+
+/// Exit status when stdout's reader has gone (128 + SIGPIPE).
+pub const BROKEN_PIPE_EXIT: u8 = 141;
+
+/// Writes `args` to stdout and flushes.
+pub fn stdout_fmt(args: fmt::Arguments<'_>) -> Result<(), CliError> {
+    let mut out = std::io::stdout().lock();
+    out.write_fmt(args)
+        .and_then(|()| out.flush())
+        .map_err(stdout_error)
+}
+
+/// Writes bytes to stdout and flushes.
+pub fn stdout_bytes(bytes: &[u8]) -> Result<(), CliError> {
+    let mut out = std::io::stdout().lock();
+    out.write_all(bytes)
+        .and_then(|()| out.flush())
+        .map_err(stdout_error)
+}
+
+/// The error for a failed write to stdout.
+pub fn stdout_error(e: std::io::Error) -> CliError {
+    if e.kind() == std::io::ErrorKind::BrokenPipe {
+        CliError::quiet(BROKEN_PIPE_EXIT)
+    } else {
+        CliError::failure(format!("cannot write to stdout: {e}"))
+    }
+}
+
+/// Writes `args` to stderr, ignoring errors.
+pub fn stderr_fmt(args: fmt::Arguments<'_>) {
+    let mut err = std::io::stderr().lock();
+    let _ = err.write_fmt(args);
+    let _ = err.flush();
+}
+
+/// `println!` that returns a [`CliError`] instead of panicking (use with `?`).
+macro_rules! outln {
+    ($($arg:tt)*) => {
+        $crate::cli::out::stdout_fmt(format_args!("{}\n", format_args!($($arg)*)))
+    };
+}
+
+/// `print!` that returns a [`CliError`] instead of panicking (use with `?`).
+macro_rules! out {
+    ($($arg:tt)*) => {
+        $crate::cli::out::stdout_fmt(format_args!($($arg)*))
+    };
+}
+
+/// `eprintln!` that ignores a closed or full stderr.
+macro_rules! errln {
+    ($($arg:tt)*) => {
+        $crate::cli::out::stderr_fmt(format_args!("{}\n", format_args!($($arg)*)))
+    };
+}
+
+pub(crate) use {errln, out, outln};

@@ -1,0 +1,65 @@
+//! SIGINT / SIGTERM for the whole process (installed once by the binary).
+//!
+//! By default an interrupted command removes the temporary files of the outputs it was writing
+//! (registered by [`crate::io::atomic`]) and exits with 130. Commands that must end cleanly on
+//! a signal (`record` prints its summary and keeps the recording, `board-sim` removes its link)
+//! ask for [`cooperative_stop`]: the signal then only raises the returned flag.
+
+use std::path::{Path, PathBuf};
+use std::sync::atomic::{AtomicBool, Ordering};
+use std::sync::{Arc, Mutex, OnceLock};
+
+/// Exit status after SIGINT/SIGTERM (128 + SIGINT, as shells report it).
+pub const INTERRUPTED_EXIT: i32 = 130;
+
+static LIVE_TEMPS: Mutex<Vec<PathBuf>> = Mutex::new(Vec::new());
+static COOPERATIVE: AtomicBool = AtomicBool::new(false);
+static STOP: OnceLock<Arc<AtomicBool>> = OnceLock::new();
+
+fn stop_flag() -> &'static Arc<AtomicBool> {
+    STOP.get_or_init(|| Arc::new(AtomicBool::new(false)))
+}
+
+/// Records a temporary file being written, to be removed if the process is interrupted.
+pub fn register_temp(path: &Path) {
+    if let Ok(mut live) = LIVE_TEMPS.lock() {
+        live.push(path.to_path_buf());
+    }
+}
+
+/// The temporary file was renamed or removed.
+pub fn unregister_temp(path: &Path) {
+    if let Ok(mut live) = LIVE_TEMPS.lock() {
+        live.retain(|p| p != path);
+    }
+}
+
+/// Removes every registered temporary file (on interruption or a fatal output error).
+pub fn remove_live_temps() {
+    if let Ok(mut live) = LIVE_TEMPS.lock() {
+        for p in live.drain(..) {
+            let _ = std::fs::remove_file(p);
+        }
+    }
+}
+
+/// Installs the SIGINT/SIGTERM/SIGHUP handler. Returns an error message when another handler
+/// is already installed.
+pub fn install() -> Result<(), String> {
+    let stop = Arc::clone(stop_flag());
+    ctrlc::set_handler(move || {
+        if COOPERATIVE.load(Ordering::SeqCst) {
+            stop.store(true, Ordering::SeqCst);
+        } else {
+            remove_live_temps();
+            std::process::exit(INTERRUPTED_EXIT);
+        }
+    })
+    .map_err(|e| e.to_string())
+}
+
+/// Switches the process to cooperative mode and returns the flag that SIGINT/SIGTERM raise.
+pub fn cooperative_stop() -> Arc<AtomicBool> {
+    COOPERATIVE.store(true, Ordering::SeqCst);
+    Arc::clone(stop_flag())
+}
