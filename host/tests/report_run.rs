@@ -98,8 +98,8 @@ fn report_of_a_simulated_and_calibrated_run() {
         labels,
         [
             "nominal model",
-            "calibrated, standard",
-            "calibrated, tilting"
+            "calibrated model (standard)",
+            "calibrated model (tilting)"
         ]
     );
     let val = r.validation.as_ref().expect("validation stats");

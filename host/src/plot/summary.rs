@@ -102,7 +102,15 @@ impl Chart for StageBars {
                 });
             chart.draw_series(texts).map_err(draw_err(t))?;
         }
-        legend_box(&mut chart, t)
+        // lower right: the longest bars (before) are at the top
+        chart
+            .configure_series_labels()
+            .position(SeriesLabelPosition::LowerRight)
+            .background_style(WHITE.mix(0.85))
+            .border_style(BLACK)
+            .label_font((FONT_FAMILY, 13))
+            .draw()
+            .map_err(draw_err(t))
     }
 }
 

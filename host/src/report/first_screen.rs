@@ -34,10 +34,7 @@ fn about(
         match t.get("effects") {
             Some(Value::Array(a)) if !a.is_empty() => facts.push(format!(
                 "undeclared effects put in: {}",
-                a.iter()
-                    .map(super::docs::compact)
-                    .collect::<Vec<_>>()
-                    .join(", ")
+                a.iter().map(effect_text).collect::<Vec<_>>().join(", ")
             )),
             Some(Value::Object(o)) if !o.is_empty() => facts.push(format!(
                 "undeclared effects put in: {}",
@@ -102,6 +99,24 @@ fn about(
     out
 }
 
+/// A `truth.json` effect: `id=values` when it has them, else the JSON as written.
+fn effect_text(e: &Value) -> String {
+    match (
+        e.get("id").and_then(Value::as_str),
+        e.get("values").and_then(Value::as_array),
+    ) {
+        (Some(id), Some(v)) => format!(
+            "{id}={}",
+            v.iter()
+                .map(super::docs::compact)
+                .collect::<Vec<_>>()
+                .join(",")
+        ),
+        (Some(id), None) => id.to_string(),
+        _ => super::docs::compact(e),
+    }
+}
+
 fn path_error_headline(report: &Report) -> Option<Headline> {
     let p = report.path_errors.as_ref()?;
     let s = &p.summary;
@@ -120,9 +135,12 @@ fn path_error_headline(report: &Report) -> Option<Headline> {
         n: s.n_samples,
         stages: vec![
             stage("nominal model", &s.before),
-            stage("calibrated, standard", &s.standard),
+            stage("calibrated model (standard)", &s.standard),
             stage(
-                &format!("calibrated {}", p.after_label.trim_start_matches("after ")),
+                &format!(
+                    "calibrated model {}",
+                    p.after_label.trim_start_matches("after ")
+                ),
                 &s.after,
             ),
         ],

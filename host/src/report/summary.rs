@@ -144,7 +144,8 @@ fn headline<'a>(
 }
 
 /// Stages from the calibrate documents (nominal, standard, chosen method), then from the
-/// diagnosis (declared fit, with the effects found); `noun` is "poses" or "samples".
+/// diagnosis (declared fit, with the effects found); held-out sets first, then the fitted set
+/// of documents that held nothing out; `noun_of(n)` is "poses" or "samples".
 pub fn headlines(
     calibrate: &[(String, Value)],
     diagnose: &[(String, Value)],
@@ -157,6 +158,10 @@ pub fn headlines(
                 .get("method")
                 .and_then(Value::as_str)
                 .unwrap_or("chosen");
+            // the fitted set only for documents that held nothing out
+            if !held_out && doc.get("validation").is_some() {
+                continue;
+            }
             let Some(ba) = doc.get(set) else { continue };
             let Some(before) = stats(ba.get("before")) else {
                 continue;
@@ -165,14 +170,22 @@ pub fn headlines(
             push_stage(h, "nominal model", before, name);
             if method != "standard" {
                 if let Some(st) = stats(doc.get("standard").and_then(|s| s.get(set))) {
-                    push_stage(h, "calibrated, standard", st, name);
+                    push_stage(h, "calibrated model (standard)", st, name);
                 }
             }
             if let Some(st) = stats(ba.get("after")) {
-                push_stage(h, &format!("calibrated, {method}"), st, name);
+                push_stage(h, &format!("calibrated model ({method})"), st, name);
             }
         }
         for (name, doc) in diagnose {
+            if !held_out
+                && doc
+                    .get("declared")
+                    .and_then(|d| d.get("validation"))
+                    .is_some()
+            {
+                continue;
+            }
             let Some(decl) = stats(doc.get("declared").and_then(|d| d.get(set))) else {
                 continue;
             };
@@ -197,10 +210,6 @@ pub fn headlines(
                 }
             }
         }
-    }
-    // a calibration-set headline only when nothing was held out
-    if out.iter().any(|h| h.held_out) {
-        out.retain(|h| h.held_out);
     }
     out.retain(|h| !h.stages.is_empty());
     out
@@ -309,7 +318,11 @@ fn evidence_words(e: &Value) -> String {
         parts.push(format!("cross-validated {} -> {} mm", fmt_mm(b), fmt_mm(a)));
     }
     if let Some(p) = f(e, "p_value") {
-        parts.push(format!("F-test p = {p:.1e}"));
+        if p < 1e-16 {
+            parts.push("F-test p < 1e-16".to_string());
+        } else {
+            parts.push(format!("F-test p = {p:.1e}"));
+        }
     }
     if let Some(d) = f(e, "delta_bic") {
         parts.push(format!("BIC {d:+.1}"));
