@@ -42,58 +42,70 @@ fn run_dir() -> (tempfile::TempDir, rigctl::calib::Outcome) {
 fn report_of_a_simulated_and_calibrated_run() {
     let (dir, outcome) = run_dir();
     let report = build_report(dir.path(), &ReportOptions::default()).unwrap();
-    // tables from the JSON: before / standard / tilting, both pose sets
-    let json_cal = report
+    // one table per pose set: the pose file recomputed with the nominal model and every model
+    // file, plus the calibrate JSON's columns that are not the same model again
+    let cal = report
         .tables
         .iter()
-        .find(|t| t.title == "Calibration poses" && t.source == "calibrate.json")
-        .expect("calibration table from the JSON");
+        .find(|t| t.title == "Calibration poses")
+        .expect("calibration table");
+    assert_eq!(cal.source, "cal.csv, calibrate.json");
     assert_eq!(
-        json_cal.columns,
-        ["before", "after standard", "after tilting"]
+        cal.columns,
+        [
+            "nominal model",
+            "calibrated.toml (tilting)",
+            "after standard"
+        ]
     );
+    assert_eq!(cal.noun, "poses");
     let r = &outcome.report;
-    // (through JSON text: equal to the last bit or two)
-    let close = |a: Option<f64>, b: f64| a.is_some_and(|a| (a - b).abs() <= 1e-12 * b.abs());
-    assert!(close(
-        json_cal.get("Average", "|dP|", 0),
-        r.calibration.before.mean_mm
-    ));
-    assert!(close(
-        json_cal.get("Average", "|dP|", 2),
-        r.calibration.after.mean_mm
-    ));
-    assert!(close(
-        json_cal.get("Average", "|dP|", 1),
-        r.standard.calibration.mean_mm
-    ));
-    // recomputed from the pose files: the nominal column equals calibrate's "before", and the
-    // calibrated model (evaluated in its best tilt mode) reproduces calibrate's "after"
-    let rec = report
-        .tables
-        .iter()
-        .find(|t| t.title == "Calibration poses (recomputed)")
-        .expect("recomputed table");
-    let before = rec.get("Average", "|dP|", 0).unwrap();
+    // recomputed: the nominal column equals calibrate's "before", and the calibrated model
+    // (evaluated in its best tilt mode) reproduces calibrate's "after"
+    let before = cal.get("Average", "|dP|", 0).unwrap();
     assert!(
         (before - r.calibration.before.mean_mm).abs() < 1e-9,
         "{before}"
     );
-    let after = rec.get("Average", "|dP|", 1).unwrap();
+    let after = cal.get("Average", "|dP|", 1).unwrap();
     assert!(
         (after - r.calibration.after.mean_mm).abs() < 1e-6,
         "{after} vs {}",
         r.calibration.after.mean_mm
     );
-    assert_eq!(rec.columns[1], "calibrated (tilting)");
+    // the standard column from the JSON (through JSON text: equal to the last bit or two)
+    let std_mean = cal.get("Average", "|dP|", 2).unwrap();
+    assert!((std_mean - r.standard.calibration.mean_mm).abs() <= 1e-12 * std_mean);
     assert!(
-        rec.get("Maximum", "|dX|", 1).is_some(),
+        cal.get("Maximum", "|dX|", 1).is_some(),
         "per-axis extremes are recomputed"
     );
+    assert_eq!(
+        cal.get("Maximum", "|dX|", 2),
+        None,
+        "not in the JSON: a gap, not a number"
+    );
+    assert_eq!(report.tables.len(), 2, "one table per pose set");
     assert!(report
         .tables
         .iter()
-        .any(|t| t.title == "Validation poses (recomputed)"));
+        .any(|t| t.title == "Held-out poses" && t.n == 20));
+    // the first screen: held-out error at each stage, from the calibrate document
+    let h = &report.summary.headlines[0];
+    assert!(h.held_out && h.n == 20, "{h:?}");
+    let labels: Vec<&str> = h.stages.iter().map(|s| s.label.as_str()).collect();
+    assert_eq!(
+        labels,
+        [
+            "nominal model",
+            "calibrated model (standard)",
+            "calibrated model (tilting)"
+        ]
+    );
+    let val = r.validation.as_ref().expect("validation stats");
+    assert!((h.stages[0].mean_mm - val.before.mean_mm).abs() <= 1e-12 * val.before.mean_mm);
+    assert!((h.stages[2].rms_mm - val.after.rms_mm).abs() <= 1e-12 * val.after.rms_mm);
+    assert!(report.summary.figure.is_some(), "{:?}", report.notes);
     // parameters with sigma and truth
     let p = &report.parameters[0];
     assert_eq!(p.method, "tilting");
@@ -106,7 +118,7 @@ fn report_of_a_simulated_and_calibrated_run() {
         "fig. 5.8-5.10",
         "fig. 5.12",
         "histogram",
-        "sorted by the error before",
+        "sorted by its error",
     ] {
         assert!(
             caps.iter().any(|c| c.contains(want)),
@@ -120,6 +132,14 @@ fn report_of_a_simulated_and_calibrated_run() {
         .any(|f| f.name == "cal.csv" && f.sha256.len() == 64));
     let html = render_html(&report);
     assert!(!html.contains("<script"));
+    // the answer comes before any table: held-out numbers, 3 significant digits
+    let first = &html[..html.find("<table").expect("a table")];
+    assert!(
+        first.contains("On 20 held-out poses the mean error goes from"),
+        "{first}"
+    );
+    assert!(first.contains(&rigctl::plot::summary::fmt_mm(val.after.mean_mm)));
+    assert!(first.contains("What to do next") && first.contains("rigctl diagnose"));
     assert!(html.contains("rigctl simulate --seed 7"));
     assert!(html.contains(&format!("{:.4}", r.calibration.after.mean_mm)));
 }

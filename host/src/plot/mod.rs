@@ -10,6 +10,8 @@
 //! | [`LineChart`] | one or more stacked panels of series over a common x: error along a path (fig. 5.12), influence of each parameter over the poses (fig. 3.8), joint moments and tilts along a trajectory (fig. 5.8-5.10) |
 //! | [`Scatter`] | residual against a regressor, before / after (diagnose) |
 //! | [`plan::PlanPoses`] | the poses of a calibration plan over the candidates, top and side views (`rigctl plan --plot`, [`plan::poses_svg`]) |
+//! | [`StageBars`] | held-out error (mean, RMS) at each stage: nominal, calibrated, with the effects found (report's first screen) |
+//! | [`WorkspaceViews`] | points in the workspace from above (x-y) and the side (x-z): planned poses |
 //! | [`PathErrorsChart`] | thesis fig. 5.12 from the low-cost rig: `|dP|` before / standard / after and the two measured deviations along the drawn path, from a `calibrate --errors-csv` file (see [`path_errors`]) |
 //!
 //! [`write()`]`(path, &chart)` picks the format from the extension (`.png` or `.svg`) and writes
@@ -28,12 +30,14 @@ use crate::io::atomic::{write_bytes_atomic, AtomicWriteError};
 pub mod charts;
 pub mod path_errors;
 pub mod plan;
+pub mod summary;
 
 pub use charts::{ErrorHistogram, LineChart, Panel, PoseErrorBars, Scatter, Series};
 pub use path_errors::{
     parse_path_errors, path_errors_svg, read_path_errors, PathErrorSummary, PathErrors,
     PathErrorsChart, PathErrorsError,
 };
+pub use summary::{StageBars, WorkspaceViews};
 
 /// The font family name every chart uses.
 pub const FONT_FAMILY: &str = "sans-serif";

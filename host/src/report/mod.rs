@@ -3,29 +3,40 @@
 //!
 //! | module | holds |
 //! |---|---|
-//! | [`run_dir`] | the files understood (`cal.csv`, `val.csv`, `truth.json`, `truth.toml`, `calibrate*.json`, `diagnose*.json`, `path_errors.csv`, other `*.toml` = calibrated models, `commands.txt` / `*.cmd`) and their SHA-256 |
-//! | [`table`] | thesis table 4.5 (min / max / average of abs(dX) abs(dY) abs(dZ) abs(dP)) from JSON stats or error vectors |
+//! | [`run_dir`] | the files understood (`cal.csv`, `val.csv`, `truth.json`, `truth.toml`, `calibrate*.json`, `diagnose*.json`, `path_errors.csv`, `plan.csv`, `plan.json`, `*overlay*.png`, other `*.toml` = calibrated models, `commands.txt` / `*.cmd`) and their SHA-256 |
+//! | [`summary`] | the first screen as data: error at each stage per set, effects found in words, floor verdict, aliased pairs (every newer diagnose key optional) |
+//! | [`first_screen`] | builds the [`Summary`] (robot, data, next steps, the stage bar chart) and renders it |
+//! | [`table`] | thesis table 4.5 (min / max / average of abs(dX) abs(dY) abs(dZ) abs(dP)) from JSON stats or error vectors; tables of one set merged, each model once |
+//! | `docs`, `pose_sets` | parameters, diagnosis and simulation facts from the JSON documents; the pose files recomputed with every model, before / after figures |
+//! | [`extras`] | the plan section (`plan.csv` poses in the workspace, `plan.json` expected vs achieved sigma) and the trace overlays (PNG embedded, downscaled) |
 //! | [`analysis`] | recomputed numbers: per-pose errors, parameter influence (fig. 3.8), moments and tilts (fig. 5.8-5.10), path error (fig. 5.12) |
 //! | [`path_errors`] | the section "Path error along the drawn path (thesis fig. 5.12)" from `path_errors.csv`: the per-sample errors of the low-cost rig that `rigctl calibrate --samples FUSED.csv --errors-csv path_errors.csv` writes (columns `t,q1..qN,dev_u_before,dev_n_before,dp_before,dev_u_after,dev_n_after,dp_after,dev_u_standard,dev_n_standard,dp_standard`, mm; see [`crate::plot::path_errors`]), as a chart and a table of RMS / max / mean before, after the standard calibration and after the chosen method (named from `calibrate*.json`'s `method`) |
 //! | [`build`] | [`build_report`]: run directory -> [`Report`] |
-//! | [`html`] | [`render_html`]: [`Report`] -> page |
+//! | [`html`] | [`render_html`]: [`Report`] -> page: the first screen, a table of contents, then the details; A4 print styles |
 //!
 //! Missing or unreadable pieces become notes on the page; a directory with nothing usable is
 //! [`ReportError::NothingUsable`] (bad input, exit 2).
 
 pub mod analysis;
 pub mod build;
+mod docs;
+pub mod extras;
+pub mod first_screen;
 pub mod html;
 pub mod path_errors;
+mod pose_sets;
 pub mod run_dir;
+pub mod summary;
 pub mod table;
 
 use std::path::{Path, PathBuf};
 
 pub use build::build_report;
+pub use extras::{ImageFigure, PlanSection, SigmaRow};
 pub use html::render_html;
 pub use path_errors::PathErrorsSection;
 pub use run_dir::{FileInfo, RunDir};
+pub use summary::Summary;
 pub use table::ErrorTable;
 
 use crate::error::{Classify, ErrorKind};
@@ -97,6 +108,8 @@ pub struct ParamRow {
     pub nominal: Option<f64>,
     /// Value in the simulation truth (truth.toml), if present.
     pub truth: Option<f64>,
+    /// Unit ("deg", "mm", ...) from the declared model, if it has the parameter.
+    pub unit: Option<String>,
 }
 
 /// The parameters of one `calibrate --json` document.
@@ -155,8 +168,14 @@ pub struct Report {
     pub figures: Vec<Figure>,
     /// Identified parameters.
     pub parameters: Vec<ParamTable>,
-    /// Diagnosis.
-    pub diagnose: Option<DiagnoseSection>,
+    /// The first screen: the answer, before any table.
+    pub summary: Summary,
+    /// Diagnoses, one per `diagnose*.json`.
+    pub diagnose: Vec<DiagnoseSection>,
+    /// Planned poses (`plan.csv`, `plan.json`), when present.
+    pub plan: Option<PlanSection>,
+    /// Trace overlays (`*overlay*.png`), embedded.
+    pub overlays: Vec<ImageFigure>,
     /// Path error along the drawn path (thesis fig. 5.12), from `path_errors.csv`.
     pub path_errors: Option<PathErrorsSection>,
     /// Facts from `truth.json`.

@@ -78,11 +78,10 @@ type Statistic = fn(&SetSummary) -> f64;
 
 /// Appends the section to the page.
 pub(crate) fn render(s: &mut String, sec: &PathErrorsSection) {
-    let _ = writeln!(s, "<h2 id=\"path-errors\">{}</h2>", escape(HEADING));
     let sum = &sec.summary;
     let _ = writeln!(
         s,
-        "<table class=\"path-errors\"><tr><th>mm</th><th>{}</th><th>{}</th><th>{}</th></tr>",
+        "<table class=\"path-errors\"><tr><th>statistic</th><th class=\"num\">{}, mm</th><th class=\"num\">{}, mm</th><th class=\"num\">{}, mm</th></tr>",
         escape(BEFORE_LABEL),
         escape(STANDARD_LABEL),
         escape(&sec.after_label)
@@ -147,7 +146,7 @@ mod tests {
         assert!(!file.role.is_empty());
         let html = render_html(&r);
         assert!(html.contains(HEADING));
-        assert!(html.contains("<th>after (tilting)</th>"));
+        assert!(html.contains("<th class=\"num\">after (tilting), mm</th>"));
         // RMS |dP| row, then Maximum |dP| row: before / standard / after
         assert!(html.contains(
             "<th>RMS |dP|</th><td class=\"num\">3.6056</td><td class=\"num\">1.0000</td><td class=\"num\">0.3606</td>"

@@ -37,8 +37,14 @@ pub struct RunDir {
     pub truth_toml: Option<PathBuf>,
     /// Every `calibrate*.json`, parsed: (file name, document).
     pub calibrate: Vec<(String, Value)>,
-    /// `diagnose*.json`, parsed (the first by name).
-    pub diagnose: Option<(String, Value)>,
+    /// Every `diagnose*.json`, parsed, sorted by name.
+    pub diagnose: Vec<(String, Value)>,
+    /// `plan.csv` (from `rigctl plan --out`: `q1..qN,nom_x,nom_y,nom_z`).
+    pub plan_csv: Option<PathBuf>,
+    /// `plan.json` (from `rigctl plan --json`), parsed.
+    pub plan_json: Option<(String, Value)>,
+    /// Every `*overlay*.png` (from `rigctl trace --overlay`), sorted by name.
+    pub overlays: Vec<PathBuf>,
     /// `path_errors.csv` (per-sample errors of `calibrate --samples --errors-csv`).
     pub path_errors: Option<PathBuf>,
     /// Every other `*.toml` (calibrated models), sorted by name.
@@ -117,15 +123,30 @@ impl RunDir {
                     None => "",
                 }
             } else if lower.starts_with("diagnose") && lower.ends_with(".json") {
-                if run.diagnose.is_none() {
-                    if let Some(v) = read_json(&path, &name, &mut run.notes) {
-                        run.diagnose = Some((name.clone(), v));
+                match read_json(&path, &name, &mut run.notes) {
+                    Some(v) => {
+                        run.diagnose.push((name.clone(), v));
+                        "diagnose result"
                     }
+                    None => "",
                 }
-                "diagnose result"
             } else if lower == super::path_errors::PATH_ERRORS_FILE {
                 run.path_errors = Some(path.clone());
                 "path errors along the drawn path"
+            } else if lower == "plan.csv" {
+                run.plan_csv = Some(path.clone());
+                "planned poses"
+            } else if lower == "plan.json" {
+                match read_json(&path, &name, &mut run.notes) {
+                    Some(v) => {
+                        run.plan_json = Some((name.clone(), v));
+                        "plan summary"
+                    }
+                    None => "",
+                }
+            } else if lower.contains("overlay") && lower.ends_with(".png") {
+                run.overlays.push(path.clone());
+                "trace overlay"
             } else if lower.ends_with(".toml") {
                 run.models.push(path.clone());
                 "model"

@@ -13,8 +13,10 @@ pub const QUANTITIES: [&str; 4] = ["|dX|", "|dY|", "|dZ|", "|dP|"];
 pub struct ErrorTable {
     /// Caption (which poses).
     pub title: String,
-    /// Number of poses.
+    /// Number of poses or samples.
     pub n: usize,
+    /// What is counted: "poses" or "samples" (fused files).
+    pub noun: &'static str,
     /// Column headings (before, after standard, after chosen...).
     pub columns: Vec<String>,
     /// Rows: (statistic, quantity, one value per column).
@@ -108,9 +110,56 @@ impl ErrorTable {
         Self {
             title: title.to_string(),
             n: columns.first().map_or(0, |(_, c)| c.stats.n),
+            noun: "poses",
             columns: columns.iter().map(|(h, _)| h.clone()).collect(),
             rows,
             source: source.to_string(),
+        }
+    }
+
+    /// The table counting `noun` ("poses", "samples").
+    pub fn with_noun(mut self, noun: &'static str) -> Self {
+        self.noun = noun;
+        self
+    }
+
+    /// Rows with at least one value (what was not computed is left out).
+    pub fn computed_rows(&self) -> impl Iterator<Item = &TableRow> {
+        self.rows
+            .iter()
+            .filter(|r| r.values.iter().any(Option::is_some))
+    }
+
+    /// Whether column `a` and column `b` hold the same numbers (mean and RMS of |dP| within
+    /// 1e-4 relative, which a model file rounded to its printed digits keeps): the same model reached by two routes.
+    fn same_column(&self, a: usize, other: &ErrorTable, b: usize) -> bool {
+        ["Average", "RMS"].iter().all(|st| {
+            match (self.get(st, "|dP|", a), other.get(st, "|dP|", b)) {
+                (Some(x), Some(y)) => (x - y).abs() <= 1e-4 * x.abs().max(y.abs()).max(1e-12),
+                _ => false,
+            }
+        })
+    }
+
+    /// Appends the columns of `other` (same rows) that are not already here.
+    fn absorb(&mut self, other: &ErrorTable) {
+        let mut added = false;
+        for c in 0..other.columns.len() {
+            if (0..self.columns.len()).any(|k| self.same_column(k, other, c)) {
+                continue;
+            }
+            let mut label = other.columns[c].clone();
+            if self.columns.contains(&label) {
+                label = format!("{label} ({})", other.source);
+            }
+            self.columns.push(label);
+            for (row, src) in self.rows.iter_mut().zip(&other.rows) {
+                row.values.push(src.values.get(c).copied().flatten());
+            }
+            added = true;
+        }
+        if added && !self.source.split(", ").any(|s| s == other.source) {
+            self.source = format!("{}, {}", self.source, other.source);
         }
     }
 
@@ -133,15 +182,16 @@ pub fn tables_from_calibrate_json(file: &str, doc: &Value) -> Vec<ErrorTable> {
     let mut out = Vec::new();
     for (set, title) in [
         ("calibration", "Calibration poses"),
-        ("validation", "Validation poses"),
+        ("validation", "Held-out poses"),
     ] {
         let Some(ba) = doc.get(set) else { continue };
         let mut cols = Vec::new();
         if let Some(c) = ba.get("before").and_then(Column::from_json) {
             cols.push(("before".to_string(), c));
         }
-        if let Some(c) = doc
-            .get("standard")
+        if let Some(c) = (method != "standard")
+            .then(|| doc.get("standard"))
+            .flatten()
             .and_then(|s| s.get(set))
             .and_then(Column::from_json)
         {
@@ -152,6 +202,22 @@ pub fn tables_from_calibrate_json(file: &str, doc: &Value) -> Vec<ErrorTable> {
         }
         if !cols.is_empty() {
             out.push(ErrorTable::new(title, file, &cols));
+        }
+    }
+    out
+}
+
+/// One table per pose set: tables with the same title and count are merged into the first,
+/// keeping each distinct column once (the recomputed columns, listed first, win).
+pub fn merge_tables(tables: Vec<ErrorTable>) -> Vec<ErrorTable> {
+    let mut out: Vec<ErrorTable> = Vec::new();
+    for t in tables {
+        match out
+            .iter_mut()
+            .find(|o| o.title == t.title && o.n == t.n && o.rows.len() == t.rows.len())
+        {
+            Some(o) => o.absorb(&t),
+            None => out.push(t),
         }
     }
     out
@@ -179,6 +245,49 @@ mod tests {
         assert_eq!(t.get("Maximum", "|dY|", 1), None);
         assert!((t.get("RMS", "|dP|", 0).unwrap() - 13f64.sqrt()).abs() < 1e-12);
         assert_eq!(t.n, 2);
+    }
+
+    #[test]
+    fn merged_tables_keep_each_model_once_and_name_clashes() {
+        let a = Column::from_errors(&[Vector3::new(1.0, 0.0, 0.0)]);
+        let b = Column::from_errors(&[Vector3::new(0.5, 0.0, 0.0)]);
+        // as read from a JSON document: no per-axis extremes
+        let c = Column::from_json(
+            &serde_json::to_value(Column::from_errors(&[Vector3::new(0.2, 0.0, 0.0)]).stats)
+                .unwrap(),
+        )
+        .unwrap();
+        let rec = ErrorTable::new(
+            "Validation poses",
+            "val.csv",
+            &[("nominal".into(), a), ("cal".into(), b)],
+        );
+        let json = ErrorTable::new(
+            "Validation poses",
+            "calibrate.json",
+            &[("before".into(), a), ("cal".into(), c)],
+        );
+        let other = ErrorTable::new("Calibration poses", "cal.csv", &[("nominal".into(), a)]);
+        let m = merge_tables(vec![rec, json, other]);
+        assert_eq!(m.len(), 2);
+        assert_eq!(m[0].columns, ["nominal", "cal", "cal (calibrate.json)"]);
+        assert_eq!(m[0].source, "val.csv, calibrate.json");
+        assert_eq!(m[0].get("Average", "|dP|", 2), Some(0.2));
+        // the JSON column has no per-axis extremes: that row keeps a gap, not a made-up value
+        assert_eq!(m[0].get("Maximum", "|dX|", 2), None);
+        assert_eq!(m[0].get("Maximum", "|dX|", 1), Some(0.5));
+    }
+
+    #[test]
+    fn a_standard_document_has_no_second_standard_column() {
+        let st = serde_json::to_value(Column::from_errors(&[Vector3::new(1.0, 0.0, 0.0)]).stats)
+            .unwrap();
+        let doc = serde_json::json!({"method": "standard",
+            "calibration": {"before": st, "after": st}, "standard": {"calibration": st}});
+        let t = tables_from_calibrate_json("c.json", &doc);
+        assert_eq!(t[0].columns, ["before", "after standard"]);
+        // JSON tables have no per-axis extremes: those rows are left out when shown
+        assert_eq!(t[0].computed_rows().count(), 7);
     }
 
     #[test]

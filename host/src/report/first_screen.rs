@@ -1,0 +1,349 @@
+//! The first screen of the page, before any table: the robot and the data, the error before ->
+//! after as sentences and a small bar chart, each effect found with its values, sigma and
+//! evidence in words, the floor verdict, aliased pairs, and what to do next.
+
+use std::fmt::Write as _;
+
+use serde_json::Value;
+
+use super::build::figure;
+use super::html::{escape, figure as render_figure};
+use super::run_dir::RunDir;
+use super::summary::{
+    aliased, found_effects, headline_sentence, headlines, verdict, Diagnosis, Headline, Stage,
+    Summary,
+};
+use super::Report;
+use crate::plot::StageBars;
+
+fn about(
+    run: &RunDir,
+    robot: Option<&str>,
+    noun_of: &dyn Fn(usize) -> &'static str,
+) -> Vec<String> {
+    let mut out = Vec::new();
+    let mut r = format!("Robot: {}", robot.unwrap_or("katana450 (default)"));
+    if let Some(t) = &run.truth_json {
+        let mut facts = Vec::new();
+        if let Some(s) = t.get("seed") {
+            facts.push(format!("seed {s}"));
+        }
+        if let Some(n) = t.get("noise_mm").and_then(Value::as_f64) {
+            facts.push(format!("noise {n} mm"));
+        }
+        match t.get("effects") {
+            Some(Value::Array(a)) if !a.is_empty() => facts.push(format!(
+                "undeclared effects put in: {}",
+                a.iter().map(effect_text).collect::<Vec<_>>().join(", ")
+            )),
+            Some(Value::Object(o)) if !o.is_empty() => facts.push(format!(
+                "undeclared effects put in: {}",
+                o.iter()
+                    .map(|(k, v)| format!("{k}={}", super::docs::compact(v)))
+                    .collect::<Vec<_>>()
+                    .join(", ")
+            )),
+            _ => {}
+        }
+        let _ = write!(r, ", simulated ({})", facts.join(", "));
+    }
+    r.push('.');
+    out.push(r);
+    let n_of = |d: &Value, set: &str, k: &str| {
+        d.get(k)
+            .and_then(|v| v.get(set))
+            .and_then(|s| s.get("n"))
+            .and_then(Value::as_u64)
+    };
+    for (name, d) in &run.calibrate {
+        let method = d.get("method").and_then(Value::as_str).unwrap_or("?");
+        let Some(n) = n_of(d, "before", "calibration").or_else(|| {
+            d.get("calibration")
+                .and_then(|c| c.get("before"))
+                .and_then(|s| s.get("n"))
+                .and_then(Value::as_u64)
+        }) else {
+            continue;
+        };
+        let n = n as usize;
+        let v = d
+            .get("validation")
+            .and_then(|c| c.get("before"))
+            .and_then(|s| s.get("n"))
+            .and_then(Value::as_u64);
+        out.push(format!(
+            "{name}: {method} calibration on {n} {}{}.",
+            noun_of(n),
+            v.map_or_else(
+                || ", nothing held out".to_string(),
+                |m| format!(", checked on {m} held-out {}", noun_of(m as usize))
+            )
+        ));
+    }
+    for (name, d) in &run.diagnose {
+        let partial = d.get("measurements").and_then(Value::as_str) == Some("partial");
+        let noun = if partial {
+            "samples (partial measurements along a drawn path)"
+        } else {
+            "poses"
+        };
+        let c = n_of(d, "calibration", "declared");
+        let v = n_of(d, "validation", "declared");
+        if let Some(c) = c {
+            out.push(format!(
+                "{name}: diagnosis on {c} {noun}{}.",
+                v.map_or_else(String::new, |v| format!(", {v} held out"))
+            ));
+        }
+    }
+    out
+}
+
+/// A `truth.json` effect: `id=values` when it has them, else the JSON as written.
+fn effect_text(e: &Value) -> String {
+    match (
+        e.get("id").and_then(Value::as_str),
+        e.get("values").and_then(Value::as_array),
+    ) {
+        (Some(id), Some(v)) => format!(
+            "{id}={}",
+            v.iter()
+                .map(super::docs::compact)
+                .collect::<Vec<_>>()
+                .join(",")
+        ),
+        (Some(id), None) => id.to_string(),
+        _ => super::docs::compact(e),
+    }
+}
+
+fn path_error_headline(report: &Report) -> Option<Headline> {
+    let p = report.path_errors.as_ref()?;
+    let s = &p.summary;
+    let stage = |label: &str, x: &crate::plot::path_errors::SetSummary| Stage {
+        label: label.to_string(),
+        mean_mm: x.dp_mean_mm,
+        rms_mm: x.dp_rms_mm,
+        source: p.source.clone(),
+    };
+    Some(Headline {
+        set: format!(
+            "{} calibration samples along the drawn path (fitted, not held out)",
+            s.n_samples
+        ),
+        held_out: false,
+        n: s.n_samples,
+        stages: vec![
+            stage("nominal model", &s.before),
+            stage("calibrated model (standard)", &s.standard),
+            stage(
+                &format!(
+                    "calibrated model {}",
+                    p.after_label.trim_start_matches("after ")
+                ),
+                &s.after,
+            ),
+        ],
+    })
+}
+
+fn next_steps(
+    run: &RunDir,
+    robot: Option<&str>,
+    report: &Report,
+    diags: &[Diagnosis],
+    held_out_missing: bool,
+) -> Vec<String> {
+    let mut out = Vec::new();
+    let robot = robot.unwrap_or("katana450");
+    for d in diags {
+        let lacking = d
+            .verdict
+            .as_deref()
+            .is_some_and(|v| v.starts_with("The model still lacks"));
+        if !d.aliased.is_empty() || lacking {
+            out.push(format!(
+                "Measure poses that separate what {} leaves open: `rigctl plan --robot {robot} --n 60 --from-diagnose {} --out plan.csv`, then measure them and run diagnose again.",
+                d.source, d.source
+            ));
+        }
+    }
+    let extended: Vec<&str> = run
+        .models
+        .iter()
+        .filter_map(|p| p.file_name().and_then(|n| n.to_str()))
+        .filter(|n| n.contains("extended"))
+        .collect();
+    if diags.iter().any(|d| !d.effects.is_empty()) {
+        if let Some(m) = extended.first() {
+            out.push(format!("Use the extended model `{m}` (the declared model plus the effects found) instead of the calibrated one."));
+        }
+    }
+    let unident: Vec<&str> = report
+        .parameters
+        .iter()
+        .flat_map(|p| p.unidentifiable.iter().map(String::as_str))
+        .collect();
+    if !unident.is_empty() {
+        out.push(format!(
+            "Not identifiable from these poses: {}; `rigctl plan --robot {robot} --n 60 --out plan.csv` chooses poses that identify them.",
+            unident.join(", ")
+        ));
+    }
+    if run.diagnose.is_empty() && (run.cal_csv.is_some() || !run.calibrate.is_empty()) {
+        out.push("Look for effects the declared model lacks: `rigctl diagnose --poses cal.csv --validate val.csv --json diagnose.json`.".into());
+    }
+    if held_out_missing {
+        out.push("Nothing was held out: measure a second set (poses or another sheet) and pass it as `--validate`, so that the error to expect is known.".into());
+    }
+    if out.is_empty() && !diags.is_empty() {
+        out.push("Nothing left to find in these data: the model explains them down to the measurement floor.".into());
+    }
+    out
+}
+
+/// The first screen of `report`'s run directory `run`.
+pub(crate) fn build_summary(
+    run: &RunDir,
+    robot: Option<&str>,
+    report: &Report,
+    noun_of: &dyn Fn(usize) -> &'static str,
+    notes: &mut Vec<String>,
+) -> Summary {
+    let mut heads = headlines(&run.calibrate, &run.diagnose, noun_of);
+    if heads.is_empty() {
+        heads.extend(path_error_headline(report));
+    }
+    let fig = heads.first().and_then(|h| {
+        figure(
+            format!(
+                "Error on {} at each stage: the bars should shrink from top to bottom.",
+                h.set
+            ),
+            &StageBars {
+                title: format!("Error on {}", h.set),
+                stages: h.stages.iter().map(|s| s.label.clone()).collect(),
+                mean_mm: h.stages.iter().map(|s| s.mean_mm).collect(),
+                rms_mm: h.stages.iter().map(|s| s.rms_mm).collect(),
+            },
+            notes,
+        )
+    });
+    let diagnoses: Vec<Diagnosis> = run
+        .diagnose
+        .iter()
+        .map(|(name, doc)| Diagnosis {
+            source: name.clone(),
+            noun: if doc.get("measurements").and_then(Value::as_str) == Some("partial") {
+                "samples"
+            } else {
+                "poses"
+            },
+            effects: found_effects(doc),
+            verdict: verdict(doc),
+            aliased: aliased(doc),
+        })
+        .collect();
+    let held_out_missing = !heads.iter().any(|h| h.held_out);
+    let next = next_steps(run, robot, report, &diagnoses, held_out_missing);
+    Summary {
+        about: about(run, robot, noun_of),
+        headlines: heads,
+        figure: fig,
+        diagnoses,
+        next_steps: next,
+    }
+}
+
+/// Backquoted spans as `<code>`, the rest escaped.
+fn with_code(text: &str) -> String {
+    text.split('`')
+        .enumerate()
+        .map(|(k, part)| {
+            if k % 2 == 1 {
+                format!("<code>{}</code>", escape(part))
+            } else {
+                escape(part)
+            }
+        })
+        .collect()
+}
+
+fn value_text(v: f64, sigma: Option<f64>) -> String {
+    let digits = |x: f64| if x.abs() >= 1.0 { 3 } else { 4 };
+    match sigma {
+        Some(s) => format!("{v:.d$} &plusmn; {s:.d$}", d = digits(s).max(digits(v))),
+        None => format!("{v:.d$}", d = digits(v)),
+    }
+}
+
+/// Appends the first screen.
+pub(crate) fn render(out: &mut String, s: &Summary) {
+    out.push_str("<section id=\"answer\" class=\"answer\">\n");
+    for a in &s.about {
+        let _ = writeln!(out, "<p class=\"about\">{}</p>", escape(a));
+    }
+    out.push_str("<div class=\"headline\"><div class=\"words\">\n");
+    if s.headlines.is_empty() {
+        out.push_str("<p class=\"lead\">No error statistics in this run directory.</p>\n");
+    }
+    for h in &s.headlines {
+        let _ = writeln!(
+            out,
+            "<p class=\"lead\">{}</p>",
+            escape(&headline_sentence(h))
+        );
+    }
+    for d in &s.diagnoses {
+        let _ = writeln!(out, "<h3>Found by <code>{}</code></h3>", escape(&d.source));
+        if d.effects.is_empty() {
+            out.push_str("<p>No effect the declared model lacks could be established.</p>\n");
+        } else {
+            out.push_str("<ol class=\"found\">\n");
+            for e in &d.effects {
+                let vals: Vec<String> = e
+                    .values
+                    .iter()
+                    .map(|(n, v, sg)| format!("{} = {}", escape(n), value_text(*v, *sg)))
+                    .collect();
+                let _ = writeln!(
+                    out,
+                    "<li><code>{}</code> {}<br><span class=\"evidence\">{}</span></li>",
+                    escape(&e.id),
+                    vals.join(", "),
+                    escape(&e.evidence)
+                );
+            }
+            out.push_str("</ol>\n");
+        }
+        if let Some(v) = &d.verdict {
+            let _ = writeln!(out, "<p class=\"verdict\">{}</p>", escape(v));
+        }
+        for a in &d.aliased {
+            let _ = writeln!(
+                out,
+                "<p class=\"aliased\">Aliased: <code>{}</code> and <code>{}</code>{} cannot be told apart by these {}{}.</p>",
+                escape(&a.a),
+                escape(&a.b),
+                a.correlation.map_or_else(String::new, |c| format!(" (correlation {c:.2})")),
+                d.noun,
+                if a.note.is_empty() { String::new() } else { format!(": {}", escape(&a.note)) }
+            );
+        }
+    }
+    out.push_str("</div>\n");
+    if let Some(f) = &s.figure {
+        out.push_str("<div class=\"chart\">");
+        render_figure(out, f);
+        out.push_str("</div>");
+    }
+    out.push_str("</div>\n");
+    if !s.next_steps.is_empty() {
+        out.push_str("<h3>What to do next</h3>\n<ul class=\"next\">\n");
+        for n in &s.next_steps {
+            let _ = writeln!(out, "<li>{}</li>", with_code(n));
+        }
+        out.push_str("</ul>\n");
+    }
+    out.push_str("</section>\n");
+}

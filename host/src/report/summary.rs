@@ -1,0 +1,426 @@
+//! The first screen of the report, as data: the robot and the data, the held-out error at each
+//! stage (nominal, calibrated, with the effects found), each effect with its values, sigma and
+//! evidence in words, the floor verdict, aliased pairs and what to do next. Built from the
+//! `calibrate*.json` and `diagnose*.json` documents; every key newer than the first FORMATS.md
+//! (`floor`, `aliased`, `unexplained.depends_on`, `effects[].sigma`, ...) is optional.
+
+use serde_json::Value;
+
+use super::Figure;
+use crate::plot::summary::fmt_mm;
+
+/// Mean and RMS error of one model on one pose or sample set.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Stage {
+    /// What the model is ("nominal model", "calibrated (tilting)", ...).
+    pub label: String,
+    /// Mean Euclidean error (mm).
+    pub mean_mm: f64,
+    /// RMS error (mm).
+    pub rms_mm: f64,
+    /// File the numbers come from.
+    pub source: String,
+}
+
+/// The error on one set at each stage, in order.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Headline {
+    /// The set, e.g. "60 held-out poses".
+    pub set: String,
+    /// Whether the set was held out of every fit.
+    pub held_out: bool,
+    /// Number of poses or samples.
+    pub n: usize,
+    /// Stages, first = before.
+    pub stages: Vec<Stage>,
+}
+
+/// One effect found by `diagnose`, in words.
+#[derive(Debug, Clone, PartialEq)]
+pub struct FoundEffect {
+    /// Effect id (FORMATS.md).
+    pub id: String,
+    /// `(name, value, sigma)` in the final fit.
+    pub values: Vec<(String, f64, Option<f64>)>,
+    /// The evidence in a sentence.
+    pub evidence: String,
+}
+
+/// A pair of effects or parameters the data cannot tell apart.
+#[derive(Debug, Clone, PartialEq)]
+pub struct AliasedPair {
+    /// First (an accepted effect or a declared parameter).
+    pub a: String,
+    /// Second.
+    pub b: String,
+    /// Correlation of their columns, if given.
+    pub correlation: Option<f64>,
+    /// Why it matters.
+    pub note: String,
+}
+
+/// What one diagnosis found.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Diagnosis {
+    /// File name.
+    pub source: String,
+    /// "poses" or "samples".
+    pub noun: &'static str,
+    /// Effects found, in the order added (empty: nothing found).
+    pub effects: Vec<FoundEffect>,
+    /// The floor verdict in a sentence.
+    pub verdict: Option<String>,
+    /// Pairs the data cannot tell apart.
+    pub aliased: Vec<AliasedPair>,
+}
+
+/// The answer, shown before any table.
+#[derive(Debug, Clone, Default, PartialEq)]
+pub struct Summary {
+    /// Robot and where the data come from, one sentence each.
+    pub about: Vec<String>,
+    /// Error before -> after, one per set (held-out sets first).
+    pub headlines: Vec<Headline>,
+    /// The chart of the first headline.
+    pub figure: Option<Figure>,
+    /// One per diagnose document.
+    pub diagnoses: Vec<Diagnosis>,
+    /// What to do next, one sentence each.
+    pub next_steps: Vec<String>,
+}
+
+fn f(v: &Value, k: &str) -> Option<f64> {
+    v.get(k).and_then(Value::as_f64)
+}
+
+fn stats(v: Option<&Value>) -> Option<(usize, f64, f64)> {
+    let v = v?;
+    Some((
+        v.get("n")?.as_u64()? as usize,
+        f(v, "mean_mm")?,
+        f(v, "rms_mm")?,
+    ))
+}
+
+fn push_stage(h: &mut Headline, label: &str, st: (usize, f64, f64), source: &str) {
+    // the same numbers reached by another route (e.g. the declared fit in diagnose and the
+    // calibrated declared model) are shown once
+    let same = h
+        .stages
+        .iter()
+        .any(|s| (s.mean_mm - st.1).abs() <= 0.02 * s.mean_mm.abs().max(1e-12));
+    if !same {
+        h.stages.push(Stage {
+            label: label.to_string(),
+            mean_mm: st.1,
+            rms_mm: st.2,
+            source: source.to_string(),
+        });
+    }
+}
+
+fn headline<'a>(
+    list: &'a mut Vec<Headline>,
+    n: usize,
+    held_out: bool,
+    noun: &str,
+) -> &'a mut Headline {
+    let pos = list.iter().position(|h| h.n == n && h.held_out == held_out);
+    let k = pos.unwrap_or_else(|| {
+        let set = if held_out {
+            format!("{n} held-out {noun}")
+        } else {
+            format!("{n} calibration {noun} (fitted, not held out)")
+        };
+        list.push(Headline {
+            set,
+            held_out,
+            n,
+            stages: Vec::new(),
+        });
+        list.len() - 1
+    });
+    &mut list[k]
+}
+
+/// Stages from the calibrate documents (nominal, standard, chosen method), then from the
+/// diagnosis (declared fit, with the effects found); held-out sets first, then the fitted set
+/// of documents that held nothing out; `noun_of(n)` is "poses" or "samples".
+pub fn headlines(
+    calibrate: &[(String, Value)],
+    diagnose: &[(String, Value)],
+    noun_of: &dyn Fn(usize) -> &'static str,
+) -> Vec<Headline> {
+    let mut out: Vec<Headline> = Vec::new();
+    for (held_out, set) in [(true, "validation"), (false, "calibration")] {
+        for (name, doc) in calibrate {
+            let method = doc
+                .get("method")
+                .and_then(Value::as_str)
+                .unwrap_or("chosen");
+            // the fitted set only for documents that held nothing out
+            if !held_out && doc.get("validation").is_some() {
+                continue;
+            }
+            let Some(ba) = doc.get(set) else { continue };
+            let Some(before) = stats(ba.get("before")) else {
+                continue;
+            };
+            let h = headline(&mut out, before.0, held_out, noun_of(before.0));
+            push_stage(h, "nominal model", before, name);
+            if method != "standard" {
+                if let Some(st) = stats(doc.get("standard").and_then(|s| s.get(set))) {
+                    push_stage(h, "calibrated model (standard)", st, name);
+                }
+            }
+            if let Some(st) = stats(ba.get("after")) {
+                push_stage(h, &format!("calibrated model ({method})"), st, name);
+            }
+        }
+        for (name, doc) in diagnose {
+            if !held_out
+                && doc
+                    .get("declared")
+                    .and_then(|d| d.get("validation"))
+                    .is_some()
+            {
+                continue;
+            }
+            let Some(decl) = stats(doc.get("declared").and_then(|d| d.get(set))) else {
+                continue;
+            };
+            let noun = if doc.get("measurements").and_then(Value::as_str) == Some("partial") {
+                "samples"
+            } else {
+                noun_of(decl.0)
+            };
+            let h = headline(&mut out, decl.0, held_out, noun);
+            push_stage(h, "calibrated declared model", decl, name);
+            let n_eff = doc
+                .get("effects")
+                .and_then(Value::as_array)
+                .map_or(0, Vec::len);
+            if let Some(fin) = stats(doc.get("final").and_then(|d| d.get(set))) {
+                if n_eff > 0 {
+                    let label = format!(
+                        "with the {n_eff} effect{} found",
+                        if n_eff == 1 { "" } else { "s" }
+                    );
+                    push_stage(h, &label, fin, name);
+                }
+            }
+        }
+    }
+    out.retain(|h| !h.stages.is_empty());
+    out
+}
+
+/// The sentence of a headline: "On 60 held-out poses the error goes from 1.12 mm (mean;
+/// RMS 1.30) with the nominal model to 0.0155 mm (RMS 0.0190) with ...".
+pub fn headline_sentence(h: &Headline) -> String {
+    let (Some(first), Some(last)) = (h.stages.first(), h.stages.last()) else {
+        return String::new();
+    };
+    if h.stages.len() == 1 {
+        return format!(
+            "On {}: mean error {} mm, RMS {} mm ({}).",
+            h.set,
+            fmt_mm(first.mean_mm),
+            fmt_mm(first.rms_mm),
+            first.label
+        );
+    }
+    let mid: Vec<String> = h.stages[1..h.stages.len() - 1]
+        .iter()
+        .map(|s| format!("{} {} mm", s.label, fmt_mm(s.mean_mm)))
+        .collect();
+    format!(
+        "On {} the mean error goes from {} mm (RMS {}) with the {} to {} mm (RMS {}) {}{}.",
+        h.set,
+        fmt_mm(first.mean_mm),
+        fmt_mm(first.rms_mm),
+        first.label,
+        fmt_mm(last.mean_mm),
+        fmt_mm(last.rms_mm),
+        if last.label.starts_with("with") {
+            last.label.clone()
+        } else {
+            format!("with the {}", last.label)
+        },
+        if mid.is_empty() {
+            String::new()
+        } else {
+            format!(" (in between: {})", mid.join("; "))
+        }
+    )
+}
+
+fn pct(before: f64, after: f64) -> Option<f64> {
+    (before > 0.0 && after.is_finite()).then(|| 100.0 * (before - after) / before)
+}
+
+/// The effects of a diagnose document, each with its evidence in words.
+pub fn found_effects(doc: &Value) -> Vec<FoundEffect> {
+    let Some(list) = doc.get("effects").and_then(Value::as_array) else {
+        return Vec::new();
+    };
+    list.iter()
+        .map(|e| {
+            let sigma = e
+                .get("sigma")
+                .or_else(|| e.get("uncertainty"))
+                .and_then(Value::as_object);
+            let values = e
+                .get("parameters")
+                .and_then(Value::as_object)
+                .map(|o| {
+                    o.iter()
+                        .filter_map(|(k, v)| {
+                            let s = sigma.and_then(|s| s.get(k)).and_then(Value::as_f64);
+                            Some((k.clone(), v.as_f64()?, s))
+                        })
+                        .collect()
+                })
+                .unwrap_or_default();
+            FoundEffect {
+                id: e
+                    .get("id")
+                    .and_then(Value::as_str)
+                    .unwrap_or("?")
+                    .to_string(),
+                values,
+                evidence: evidence_words(e),
+            }
+        })
+        .collect()
+}
+
+fn evidence_words(e: &Value) -> String {
+    let mut parts = Vec::new();
+    if let (Some(b), Some(a)) = (
+        f(e, "validation_mean_mm_before"),
+        f(e, "validation_mean_mm_after"),
+    ) {
+        match pct(b, a) {
+            Some(p) if p >= 0.0 => parts.push(format!(
+                "removes {p:.0} % of the held-out mean error ({} -> {} mm)",
+                fmt_mm(b),
+                fmt_mm(a)
+            )),
+            _ => parts.push(format!(
+                "held-out mean error {} -> {} mm (not lower)",
+                fmt_mm(b),
+                fmt_mm(a)
+            )),
+        }
+    }
+    if let (Some(b), Some(a)) = (f(e, "cv_mean_mm_before"), f(e, "cv_mean_mm_after")) {
+        parts.push(format!("cross-validated {} -> {} mm", fmt_mm(b), fmt_mm(a)));
+    }
+    if let Some(p) = f(e, "p_value") {
+        if p < 1e-16 {
+            parts.push("F-test p < 1e-16".to_string());
+        } else {
+            parts.push(format!("F-test p = {p:.1e}"));
+        }
+    }
+    if let Some(d) = f(e, "delta_bic") {
+        parts.push(format!("BIC {d:+.1}"));
+    }
+    if parts.is_empty() {
+        e.get("evidence")
+            .and_then(Value::as_str)
+            .unwrap_or("")
+            .to_string()
+    } else {
+        parts.join("; ")
+    }
+}
+
+/// The floor verdict of a diagnose document: at the floor, or what the model still lacks.
+pub fn verdict(doc: &Value) -> Option<String> {
+    let un = doc.get("unexplained");
+    let structured = un
+        .and_then(|u| u.get("structured"))
+        .and_then(Value::as_bool);
+    let depends: Vec<String> = un
+        .and_then(|u| u.get("depends_on"))
+        .and_then(Value::as_array)
+        .map(|a| {
+            a.iter()
+                .filter_map(Value::as_str)
+                .map(String::from)
+                .collect()
+        })
+        .unwrap_or_default();
+    let share = un.and_then(|u| f(u, "explainable_share"));
+    let floor = doc.get("floor");
+    let ratio = floor.and_then(|fl| f(fl, "final_over_floor"));
+    let used = floor
+        .and_then(|fl| fl.get("used"))
+        .and_then(Value::as_str)
+        .unwrap_or("noise");
+    let floor_mm = floor.and_then(|fl| match used {
+        "instrument" => f(fl, "instrument_mm"),
+        "repeatability" => f(fl, "repeatability_mm"),
+        _ => f(fl, "residual_mm"),
+    });
+    let floor_words = match (ratio, floor_mm) {
+        (Some(r), Some(m)) => format!(
+            " (final residual {r:.2} x the {used} floor of {} mm)",
+            fmt_mm(m)
+        ),
+        (Some(r), None) => format!(" (final residual {r:.2} x the {used} floor)"),
+        _ => doc
+            .get("noise")
+            .and_then(|n| f(n, "sigma_mm"))
+            .map(|s| format!(" (residual sigma {} mm per coordinate)", fmt_mm(s)))
+            .unwrap_or_default(),
+    };
+    let structured = structured?;
+    if !structured {
+        return Some(format!(
+            "At the {used} floor: the residual left has no structure{floor_words}."
+        ));
+    }
+    let mut s = String::from("The model still lacks something");
+    if !depends.is_empty() {
+        s.push_str(&format!(": the residual depends on {}", depends.join(", ")));
+        if let Some(x) = share {
+            s.push_str(&format!(
+                " ({:.0} % of it explainable out of sample)",
+                100.0 * x
+            ));
+        }
+    } else if let Some(note) = un.and_then(|u| u.get("note")).and_then(Value::as_str) {
+        if !note.is_empty() {
+            s.push_str(&format!(": {note}"));
+        }
+    }
+    s.push_str(&floor_words);
+    s.push('.');
+    Some(s)
+}
+
+/// The aliased pairs of a diagnose document.
+pub fn aliased(doc: &Value) -> Vec<AliasedPair> {
+    doc.get("aliased")
+        .and_then(Value::as_array)
+        .map(|a| {
+            a.iter()
+                .filter_map(|p| {
+                    Some(AliasedPair {
+                        a: p.get("a")?.as_str()?.to_string(),
+                        b: p.get("b")?.as_str()?.to_string(),
+                        correlation: f(p, "correlation"),
+                        note: p
+                            .get("note")
+                            .and_then(Value::as_str)
+                            .unwrap_or("")
+                            .to_string(),
+                    })
+                })
+                .collect()
+        })
+        .unwrap_or_default()
+}
