@@ -8,10 +8,10 @@
 //!   geometric errors (normal, `geometric_sigma_deg`, the same draw as `rigctl simulate` for the
 //!   same seed: [`super::simulate::truth_model`]), plus any undeclared effects
 //!   ([`SessionConfig::effects`], e.g. `encoder_harmonic:j1:h1`), and the declared joint tilting driven by the
-//!   moments **in motion** (RNEA, [`super::dynamics::moments_kgfm`], slender-rod links; joint
+//!   moments **in motion** (RNEA, [`crate::model::dynamics::moments_kgfm`], slender-rod links; joint
 //!   rates and accelerations by central differences over +-10 ms of the 1 kHz joint path).
 //! * Commands: the controller knows only the nominal model, so the joint trajectory is the IK of
-//!   the **nominal** rigid model ([`super::ik::solve`]) of the planned targets (tool axis fixed,
+//!   the **nominal** rigid model ([`crate::model::ik::solve`]) of the planned targets (tool axis fixed,
 //!   [`default_pencil_axis`]: 22.5 deg from the sheet normal), computed at 1 kHz; the arm follows it exactly in joint space and the
 //!   joint readings are logged at `robot_rate_hz` (`joints.csv`: `t,q1..q5`, robot clock from 0).
 //!
@@ -53,15 +53,15 @@ use rand_chacha::ChaCha8Rng;
 use rand_distr::{Distribution, Normal};
 use rig_protocol::{encode_device, DeviceMsg, PotBatch, DEVICE_FRAME_MAX};
 
-use super::dynamics::{moments_kgfm, Inertia};
 use super::effects::{Effect, EffectKind};
-use super::ik::{solve, IkError, IkTilt};
-use super::paths::{quintic_profile, ToolTarget};
+use super::paths::quintic_profile;
 use super::plan::KATANA_SEED_DEG;
 use super::simulate::{truth_model, SimConfig, SimError};
 use crate::daq::recording::{RecordingError, RecordingMeta, RecordingWriter};
 use crate::fusion::{FusionError, JigPoint, SheetPlacement};
 use crate::io::atomic::{write_bytes_atomic, AtomicWriteError};
+use crate::model::dynamics::{moments_kgfm, Inertia};
+use crate::model::ik::{solve, IkError, IkTilt, ToolTarget};
 use crate::model::{Model, ModelError, Tilt};
 use crate::sheet::{ReferencePath, CIRCLE_RADIUS_MM};
 use crate::trace::{render_scan, RenderSpec};
