@@ -2,20 +2,19 @@
 //! grid poses fit, 20 random poses held out. Published (P. Jacobi 2025, hybrid MDH + neural
 //! network): mean 2.5664 mm before, 0.1549 mm after on the 20 test poses.
 
+mod common;
+
 use rigctl::calib::{calibrate, CalibrateOptions, Method, Poses};
 use rigctl::model::{ur5, UR5_SMR_TOOL_MM};
 
 #[test]
 fn ur5_held_out_mean_beats_the_published_value() {
-    let Some(shared) = rigctl::shared_dir() else {
-        eprintln!("SKIP: shared directory absent (set RIG_SHARED_DIR)");
+    let Some(dir) = common::shared_file(
+        "ur5_held_out_mean_beats_the_published_value",
+        "data/real/ur5_laser_tracker",
+    ) else {
         return;
     };
-    let dir = shared.join("data/real/ur5_laser_tracker");
-    if !dir.is_dir() {
-        eprintln!("SKIP: {} absent", dir.display());
-        return;
-    }
     let mut model = ur5().unwrap();
     for (name, v) in ["tool_dx", "tool_dy", "tool_dz"]
         .iter()

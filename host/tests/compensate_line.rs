@@ -7,8 +7,8 @@ use std::process::{Command, Output};
 use nalgebra::Vector3;
 use rigctl::compensate::{compensate, parse_path, PathPoint};
 use rigctl::joints::table::Table;
+use rigctl::model::ik::{tool_target, IkTilt};
 use rigctl::model::{katana450, Model, Tilt};
-use rigctl::sim::ik::{tool_target, IkTilt};
 use rigctl::sim::paths::{Line, Path as _};
 
 const N_POINTS: usize = 21;

@@ -3,24 +3,20 @@
 //! Reference bar: the published hybrid MDH + neural-network result on the same 20 poses,
 //! 0.1549 mm mean (README of the data set).
 
+mod common;
+
 use rigctl::diagnose::data::Dataset;
 use rigctl::diagnose::{diagnose, DiagnoseOptions};
 use rigctl::model::{ur5, UR5_SMR_TOOL_MM};
 
 #[test]
 fn ur5_laser_tracker_effects_lower_the_held_out_error() {
-    let Some(shared) = rigctl::shared_dir() else {
-        eprintln!("SKIPPED ur5_laser_tracker_effects_lower_the_held_out_error: shared data absent");
+    let Some(dir) = common::shared_file(
+        "ur5_laser_tracker_effects_lower_the_held_out_error",
+        "data/real/ur5_laser_tracker",
+    ) else {
         return;
     };
-    let dir = shared.join("data/real/ur5_laser_tracker");
-    if !dir.join("grid.csv").is_file() {
-        eprintln!(
-            "SKIPPED ur5_laser_tracker_effects_lower_the_held_out_error: {} absent",
-            dir.display()
-        );
-        return;
-    }
     let mut model = ur5().unwrap();
     for (name, v) in ["tool_dx", "tool_dy", "tool_dz"]
         .iter()

@@ -2,6 +2,8 @@
 //! tilt flag and tool length), the output format, and bad input (exit code 2, message naming
 //! the line or listing the valid names).
 
+mod common;
+
 use std::collections::BTreeMap;
 use std::process::{Command, Output};
 
@@ -40,11 +42,13 @@ fn parse_output(out: &Output) -> Vec<[f64; 6]> {
 
 #[test]
 fn fk_prints_the_reference_rows() {
-    let Some(shared) = rigctl::shared_dir() else {
-        eprintln!("SKIPPED fk_prints_the_reference_rows: ../shared is absent");
+    let Some(path) = common::shared_file(
+        "fk_prints_the_reference_rows",
+        "data/reference/katana_fk.csv",
+    ) else {
         return;
     };
-    let text = std::fs::read_to_string(shared.join("data/reference/katana_fk.csv")).unwrap();
+    let text = std::fs::read_to_string(path).unwrap();
     let mut lines = text.lines().filter(|l| !l.starts_with('#'));
     let header = lines.next().unwrap();
     // (set, tilt, tool_mm) -> rows

@@ -1,6 +1,8 @@
 //! Pose CSV reading (FORMATS.md): what is accepted, and every bad-input rule with the file,
 //! line and column it must name.
 
+mod common;
+
 use rigctl::error::{Classify, ErrorKind};
 use rigctl::io::pose_csv::{parse_poses, read_poses, PoseCsvError, PoseSpec};
 use rigctl::io::table::TableError;
@@ -144,16 +146,14 @@ fn empty_files_and_missing_files() {
 
 #[test]
 fn reads_the_shared_ur5_pose_files() {
-    let Some(shared) = rigctl::shared_dir() else {
-        eprintln!("SKIPPED reads_the_shared_ur5_pose_files: ../shared is absent");
+    let Some(shared) = common::shared_file(
+        "reads_the_shared_ur5_pose_files",
+        "data/real/ur5_laser_tracker",
+    ) else {
         return;
     };
     let model = rigctl::model::ur5().unwrap();
-    let f = read_poses(
-        &shared.join("data/real/ur5_laser_tracker/grid.csv"),
-        &PoseSpec::for_model(&model, true),
-    )
-    .unwrap();
+    let f = read_poses(&shared.join("grid.csv"), &PoseSpec::for_model(&model, true)).unwrap();
     assert_eq!(f.poses.len(), 1000);
     assert!(f.poses.iter().all(|p| p.id.is_some() && p.xyz_mm.is_some()));
 }

@@ -9,6 +9,8 @@
 //! rounding, `5e-7 * sum_j |dy/dq_j|`; (3) the tilting increment `y(tilt) - y(no tilt)` of each
 //! row pair, where that rounding cancels, must match within 1e-6.
 
+mod common;
+
 use rigctl::model::{katana450, Model, Tilt};
 
 const TOL: f64 = 1e-6;
@@ -22,11 +24,7 @@ struct Table {
 
 impl Table {
     fn read(name: &str) -> Option<Table> {
-        let Some(shared) = rigctl::shared_dir() else {
-            eprintln!("SKIPPED {name}: ../shared (or $RIG_SHARED_DIR) is absent");
-            return None;
-        };
-        let path = shared.join("data/reference").join(name);
+        let path = common::shared_file(name, &format!("data/reference/{name}"))?;
         let text =
             std::fs::read_to_string(&path).unwrap_or_else(|e| panic!("{}: {e}", path.display()));
         let mut lines = text

@@ -3,14 +3,16 @@
 //! that the published work reports before calibration (mean 2.5664 mm on random.csv), which
 //! checks the DH convention, the joint order and the units.
 
+mod common;
+
 use rigctl::io::pose_csv::{read_poses, PoseSpec};
 use rigctl::model::{ur5, Tilt, UR5_SMR_TOOL_MM};
 
 fn mean_error_mm(file: &str) -> Option<f64> {
-    let Some(shared) = rigctl::shared_dir() else {
-        eprintln!("SKIPPED UR5 {file}: ../shared is absent");
-        return None;
-    };
+    let path = common::shared_file(
+        &format!("UR5 {file}"),
+        &format!("data/real/ur5_laser_tracker/{file}"),
+    )?;
     let mut model = ur5().unwrap();
     for (name, v) in ["tool_dx", "tool_dy", "tool_dz"]
         .iter()
@@ -18,11 +20,7 @@ fn mean_error_mm(file: &str) -> Option<f64> {
     {
         model.set_param(name, v).unwrap();
     }
-    let poses = read_poses(
-        &shared.join("data/real/ur5_laser_tracker").join(file),
-        &PoseSpec::for_model(&model, true),
-    )
-    .unwrap();
+    let poses = read_poses(&path, &PoseSpec::for_model(&model, true)).unwrap();
     let sum: f64 = poses
         .poses
         .iter()

@@ -4,10 +4,11 @@
 use nalgebra::Vector3;
 use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
+use rigctl::model::dynamics::{moments_kgfm, Inertia};
+use rigctl::model::rnea::G_M_S2;
 use rigctl::model::{katana450, Tilt};
-use rigctl::sim::dynamics::{joint_trajectory, moments_kgfm, positions_in_motion, Inertia};
 use rigctl::sim::paths::{Line, Path};
-use rigctl::sim::rnea::G_M_S2;
+use rigctl::sim::trajectory::{joint_trajectory, positions_in_motion};
 
 #[test]
 fn at_rest_rnea_equals_the_statics_moments() {

@@ -1,11 +1,13 @@
 //! Inverse kinematics round trips: FK(IK(target)) = target over the workspace, for the nominal
 //! Katana, a calibrated (perturbed) one and the tilted chain.
 
+mod common;
+
 use nalgebra::Vector3;
 use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
+use rigctl::model::ik::{solve, tool_target, IkTilt};
 use rigctl::model::{katana450, Model, KATANA_GEOMETRIC_PARAMS};
-use rigctl::sim::ik::{solve, tool_target, IkTilt};
 
 fn random_q(rng: &mut ChaCha8Rng, model: &Model) -> Vec<f64> {
     model
@@ -98,18 +100,18 @@ fn tilted_model_round_trip_is_exact() {
 #[test]
 fn unreachable_target_is_an_error_not_a_panic() {
     let model = katana450(200.0).unwrap();
-    let target = rigctl::sim::paths::ToolTarget {
+    let target = rigctl::model::ik::ToolTarget {
         position_mm: Vector3::new(2000.0, 0.0, 200.0),
         axis: -Vector3::z(),
     };
     assert!(solve(&model, &target, &[0.0; 5], IkTilt::Off).is_err());
     // degenerate targets: no tool axis, a NaN coordinate
-    let zero_axis = rigctl::sim::paths::ToolTarget {
+    let zero_axis = rigctl::model::ik::ToolTarget {
         position_mm: Vector3::new(300.0, 0.0, 300.0),
         axis: Vector3::zeros(),
     };
     assert!(solve(&model, &zero_axis, &[0.0; 5], IkTilt::Off).is_err());
-    let nan = rigctl::sim::paths::ToolTarget {
+    let nan = rigctl::model::ik::ToolTarget {
         position_mm: Vector3::new(f64::NAN, 0.0, 300.0),
         axis: -Vector3::z(),
     };
@@ -124,14 +126,13 @@ fn unreachable_target_is_an_error_not_a_panic() {
 /// its tool point is the reference position.
 #[test]
 fn ik_recovers_the_reference_joints() {
-    let Some(shared) = rigctl::shared_dir() else {
-        eprintln!("SKIPPED ik_recovers_the_reference_joints: ../shared is absent");
+    let Some(path) = common::shared_file(
+        "ik_recovers_the_reference_joints",
+        "data/reference/katana_fk.csv",
+    ) else {
         return;
     };
-    let Ok(text) = std::fs::read_to_string(shared.join("data/reference/katana_fk.csv")) else {
-        eprintln!("SKIPPED ik_recovers_the_reference_joints: reference file absent");
-        return;
-    };
+    let text = std::fs::read_to_string(&path).expect("read katana_fk.csv");
     let model = katana450(200.0).unwrap();
     let mut checked = 0;
     for line in text.lines().filter(|l| !l.starts_with('#')).skip(1) {
@@ -154,7 +155,7 @@ fn ik_recovers_the_reference_joints() {
             theta.cos(),
         );
         let seed: Vec<f64> = q.iter().map(|x| x + 15.0).collect();
-        let target = rigctl::sim::paths::ToolTarget {
+        let target = rigctl::model::ik::ToolTarget {
             position_mm: p,
             axis,
         };

@@ -1,8 +1,8 @@
 //! The ISO 9283 calibration sequence and the reachability of the thesis's circle.
 
 use nalgebra::Vector3;
+use rigctl::model::ik::{solve, IkTilt};
 use rigctl::model::{katana450, Tilt};
-use rigctl::sim::ik::{solve, IkTilt};
 use rigctl::sim::iso9283::{Cube, ISO_POSE_COUNT};
 use rigctl::sim::paths::{Circle, Path};
 use rigctl::sim::plan::{iso_calibration_sequence, KATANA_SEED_DEG};

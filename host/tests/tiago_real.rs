@@ -5,19 +5,13 @@
 //! the training data, reach 3.19 mm; adding gravity-compliance terms (chosen by training
 //! cross-validation) goes below FIGAROH's 3.07 mm.
 
+mod common;
+
 use rigctl::tiago::levels::{run_level, run_selected, Level, TiagoData, MARKER};
 use rigctl::tiago::markers::fit_markers;
 
 fn data() -> Option<TiagoData> {
-    let Some(shared) = rigctl::shared_dir() else {
-        eprintln!("SKIP: shared directory absent");
-        return None;
-    };
-    let dir = TiagoData::dir_in(&shared);
-    if !dir.is_dir() {
-        eprintln!("SKIP: {} absent", dir.display());
-        return None;
-    }
+    let dir = common::shared_file("TIAGo data", rigctl::tiago::levels::DATA_DIR)?;
     Some(TiagoData::load(&dir).expect("the shared TIAGo data loads"))
 }
 

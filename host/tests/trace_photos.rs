@@ -1,25 +1,23 @@
 //! Real photographs of plotter drawings (BrachioGraph docs, shared/data/real): they carry no
 //! fiducials, so `trace` must say so; with a plain scale the strokes are still extracted.
 
+mod common;
+
 use indicatif::ProgressBar;
 use rigctl::trace::{load_scan, trace_image, Mapping, TraceError, TraceOptions};
 
 fn photos() -> Option<Vec<std::path::PathBuf>> {
-    let Some(shared) = rigctl::shared_dir() else {
-        eprintln!("skipped: shared/ directory not found (set RIG_SHARED_DIR)");
-        return None;
-    };
-    let dir = shared.join("data/real/evildmp__BrachioGraph/docs/images");
+    let dir = common::shared_file(
+        "BrachioGraph photos",
+        "data/real/evildmp__BrachioGraph/docs/images",
+    )?;
     let mut files: Vec<_> = std::fs::read_dir(&dir)
         .ok()?
         .filter_map(|e| e.ok().map(|e| e.path()))
         .filter(|p| p.extension().is_some_and(|x| x.eq_ignore_ascii_case("jpg")))
         .collect();
     files.sort();
-    if files.is_empty() {
-        eprintln!("skipped: no photos in {}", dir.display());
-        return None;
-    }
+    assert!(!files.is_empty(), "no photos in {}", dir.display());
     Some(files)
 }
 

@@ -1,6 +1,8 @@
 //! URDF import: the imported model's forward kinematics against an independent 4x4-matrix FK
 //! computed here straight from the URDF XML, and a DH-form UR5 URDF against the `ur5` preset.
 
+mod common;
+
 use nalgebra::{Matrix3, Matrix4, Rotation3, Unit, Vector3};
 use rand::{Rng, SeedableRng};
 use rigctl::model::{ur5, Tilt};
@@ -158,17 +160,15 @@ fn sub_chain_from_an_inner_base_link() {
 
 #[test]
 fn tiago_chain_matches_matrix_fk() {
-    let Some(shared) = rigctl::shared_dir() else {
-        eprintln!("SKIP: shared directory absent");
+    let rel = format!(
+        "{}/{}",
+        rigctl::tiago::levels::DATA_DIR,
+        rigctl::tiago::levels::URDF_FILE
+    );
+    let Some(path) = common::shared_file("tiago_chain_matches_matrix_fk", &rel) else {
         return;
     };
-    let path = shared
-        .join(rigctl::tiago::levels::DATA_DIR)
-        .join(rigctl::tiago::levels::URDF_FILE);
-    let Ok(xml) = std::fs::read_to_string(&path) else {
-        eprintln!("SKIP: {} absent", path.display());
-        return;
-    };
+    let xml = std::fs::read_to_string(&path).expect("read the TIAGo URDF");
     check_against_reference(
         &xml,
         "base_footprint",

@@ -59,4 +59,4 @@ pub use frame::{
     FRAME_BUDGET, HOST_FRAME_MAX, HOST_RAW_MAX,
 };
 pub use messages::*;
-pub use schema::{check_hello, HelloMismatch, SCHEMA, SCHEMA_HASH};
+pub use schema::{check_hello, schema_hash, HelloMismatch, SCHEMA_HASH, SCHEMA_NAME};

@@ -3,6 +3,7 @@
 //! update the frozen byte vectors in the tests on purpose.
 
 use postcard::experimental::max_size::MaxSize;
+use postcard_schema::Schema;
 use serde::{Deserialize, Serialize};
 
 /// Version of the wire format; the board sends it in [`Hello`] and the host refuses a mismatch.
@@ -12,7 +13,7 @@ pub const PROTOCOL_VERSION: u16 = 1;
 pub const POT_BATCH_MAX: usize = 64;
 
 /// Board -> host.
-#[derive(Serialize, Deserialize, MaxSize, Debug, Clone, PartialEq)]
+#[derive(Serialize, Deserialize, Schema, MaxSize, Debug, Clone, PartialEq)]
 #[cfg_attr(feature = "defmt", derive(defmt::Format))]
 pub enum DeviceMsg {
     /// Sent at power-up and in answer to [`HostMsg::GetInfo`].
@@ -40,7 +41,7 @@ pub enum DeviceMsg {
 }
 
 /// Host -> board.
-#[derive(Serialize, Deserialize, MaxSize, Debug, Clone, Copy, PartialEq, Eq)]
+#[derive(Serialize, Deserialize, Schema, MaxSize, Debug, Clone, Copy, PartialEq, Eq)]
 #[cfg_attr(feature = "defmt", derive(defmt::Format))]
 pub enum HostMsg {
     /// Start sampling: potentiometer at `pot_rate_hz` (100..=10000), each inclinometer at
@@ -62,7 +63,7 @@ pub enum HostMsg {
     GetInfo,
 }
 
-#[derive(Serialize, Deserialize, MaxSize, Debug, Clone, Copy, PartialEq, Eq)]
+#[derive(Serialize, Deserialize, Schema, MaxSize, Debug, Clone, Copy, PartialEq, Eq)]
 #[cfg_attr(feature = "defmt", derive(defmt::Format))]
 /// Which command an `Ack`/`Nack` answers.
 pub enum CommandKind {
@@ -76,7 +77,7 @@ pub enum CommandKind {
     GetInfo,
 }
 
-#[derive(Serialize, Deserialize, MaxSize, Debug, Clone, Copy, PartialEq, Eq)]
+#[derive(Serialize, Deserialize, Schema, MaxSize, Debug, Clone, Copy, PartialEq, Eq)]
 #[cfg_attr(feature = "defmt", derive(defmt::Format))]
 /// Why a command was refused.
 pub enum NackReason {
@@ -89,7 +90,7 @@ pub enum NackReason {
 }
 
 /// First message after power-up and the answer to `GetInfo`.
-#[derive(Serialize, Deserialize, MaxSize, Debug, Clone, Copy, PartialEq, Eq)]
+#[derive(Serialize, Deserialize, Schema, MaxSize, Debug, Clone, Copy, PartialEq, Eq)]
 #[cfg_attr(feature = "defmt", derive(defmt::Format))]
 pub struct Hello {
     /// The board's [`PROTOCOL_VERSION`].
@@ -105,7 +106,7 @@ pub struct Hello {
 }
 
 /// A run of potentiometer samples taken at a constant period.
-#[derive(Serialize, Deserialize, Debug, Clone, PartialEq)]
+#[derive(Serialize, Deserialize, Schema, Debug, Clone, PartialEq)]
 #[cfg_attr(feature = "defmt", derive(defmt::Format))]
 pub struct PotBatch {
     /// Counts batches since `Start`; a gap means batches were dropped.
@@ -119,7 +120,7 @@ pub struct PotBatch {
 }
 
 /// One reading of one inclinometer.
-#[derive(Serialize, Deserialize, MaxSize, Debug, Clone, Copy, PartialEq, Eq)]
+#[derive(Serialize, Deserialize, Schema, MaxSize, Debug, Clone, Copy, PartialEq, Eq)]
 #[cfg_attr(feature = "defmt", derive(defmt::Format))]
 pub struct TiltReading {
     /// 0-based chip-select index.
@@ -139,7 +140,7 @@ pub struct TiltReading {
 }
 
 /// Health counters, sent periodically while running and after `Stop`.
-#[derive(Serialize, Deserialize, MaxSize, Debug, Clone, Copy, PartialEq, Eq, Default)]
+#[derive(Serialize, Deserialize, Schema, MaxSize, Debug, Clone, Copy, PartialEq, Eq, Default)]
 #[cfg_attr(feature = "defmt", derive(defmt::Format))]
 pub struct Status {
     /// Board time when the status was made, microseconds since boot.

@@ -2,31 +2,23 @@
 //! [`Hello::schema_hash`] so that the host refuses to talk to firmware built from different
 //! message types even when [`PROTOCOL_VERSION`] was not bumped.
 //!
-//! The fingerprint is the 32-bit FNV-1a hash of [`SCHEMA`], a hand-written description of every
-//! type in postcard order. Whoever changes `messages.rs` must change `SCHEMA` alongside; the
-//! frozen byte vectors in `tests/frozen_vectors.rs` and the frozen hash in `tests/schema.rs`
-//! break on purpose to remind them.
+//! The fingerprint is derived from the types themselves: every wire type derives
+//! [`postcard_schema::Schema`], whose const FNV-1a-64 key of a type covers its name, every field
+//! and variant name and every field type, recursively. [`SCHEMA_HASH`] folds the keys of the two
+//! top-level messages ([`DeviceMsg`], [`HostMsg`]) and [`POT_BATCH_MAX`] (a capacity, which the
+//! derived schema does not see) into 32 bits with FNV-1a. Nothing is written by hand, so the
+//! hash cannot drift from the types; the frozen byte vectors in `tests/frozen_vectors.rs` and the
+//! frozen hash in `tests/schema.rs` break on purpose when a message changes.
 
-use crate::messages::{Hello, PROTOCOL_VERSION};
+use postcard_schema::key::hash::fnv1a64::hash_ty_path;
 
-/// Description of the wire types, field by field, in serialization order.
-pub const SCHEMA: &str = "\
-rig-protocol/1;\
-DeviceMsg=enum{Hello(Hello),Pot(PotBatch),Tilt(TiltReading),Status(Status),\
-Pong{nonce:u32},Ack(CommandKind),Nack{command:CommandKind,reason:NackReason}};\
-HostMsg=enum{Start{pot_rate_hz:u32,tilt_rate_hz:u32},Stop,Ping{nonce:u32},GetInfo};\
-CommandKind=enum{Start,Stop,Ping,GetInfo};\
-NackReason=enum{RateOutOfRange,AlreadyRunning,NotRunning};\
-Hello=struct{protocol_version:u16,firmware_version:[u8;3],board_id:[u8;12],\
-schema_hash:u32,tilt_sensors:u8};\
-PotBatch=struct{seq:u32,t0_us:u64,period_us:u32,samples:seq<u16;64>};\
-TiltReading=struct{sensor:u8,t_us:u64,x:i16,y:i16,z:i16,temp:i16,status:u8};\
-Status=struct{uptime_us:u64,dropped_samples:u32,dropped_frames:u32,overruns:u32,\
-sensor_errors:u32,rx_errors:u32};";
+use crate::messages::{DeviceMsg, Hello, HostMsg, POT_BATCH_MAX, PROTOCOL_VERSION};
 
-/// 32-bit FNV-1a (offset basis 0x811C9DC5, prime 0x01000193).
-pub const fn fnv1a32(bytes: &[u8]) -> u32 {
-    let mut hash: u32 = 0x811C_9DC5;
+/// Name of the schema the keys are computed under (part of the hash).
+pub const SCHEMA_NAME: &str = "rig-protocol/1";
+
+/// 32-bit FNV-1a (offset basis 0x811C9DC5, prime 0x01000193), continuing from `hash`.
+pub const fn fnv1a32_update(mut hash: u32, bytes: &[u8]) -> u32 {
     let mut i = 0;
     while i < bytes.len() {
         hash ^= bytes[i] as u32;
@@ -36,8 +28,24 @@ pub const fn fnv1a32(bytes: &[u8]) -> u32 {
     hash
 }
 
-/// [`fnv1a32`] of [`SCHEMA`]: the value the board puts in [`Hello::schema_hash`].
-pub const SCHEMA_HASH: u32 = fnv1a32(SCHEMA.as_bytes());
+/// 32-bit FNV-1a of `bytes`.
+pub const fn fnv1a32(bytes: &[u8]) -> u32 {
+    fnv1a32_update(0x811C_9DC5, bytes)
+}
+
+/// The schema hash for a given potentiometer batch capacity: FNV-1a-32 over the derived
+/// FNV-1a-64 keys of `DeviceMsg` and `HostMsg` (under [`SCHEMA_NAME`]) and `pot_batch_max` as
+/// little-endian u32.
+pub const fn schema_hash(pot_batch_max: u32) -> u32 {
+    let device = hash_ty_path::<DeviceMsg>(SCHEMA_NAME);
+    let host = hash_ty_path::<HostMsg>(SCHEMA_NAME);
+    let h = fnv1a32_update(0x811C_9DC5, &device);
+    let h = fnv1a32_update(h, &host);
+    fnv1a32_update(h, &pot_batch_max.to_le_bytes())
+}
+
+/// [`schema_hash`] of this crate's types: the value the board puts in [`Hello::schema_hash`].
+pub const SCHEMA_HASH: u32 = schema_hash(POT_BATCH_MAX as u32);
 
 /// Why the host refuses a board.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]

@@ -5,8 +5,9 @@
 //! with zlib's crc32, postcard bytes read field by field. They are checked byte-exactly.
 //!
 //! DO NOT regenerate them to make a failing test pass. A failure here means the wire format
-//! changed: if that is intended, bump `PROTOCOL_VERSION`, update `SCHEMA` (and the frozen hash
-//! in tests/schema.rs), then replace these vectors on purpose, in the same commit.
+//! changed: if that is intended, bump `PROTOCOL_VERSION`, update the frozen schema hash
+//! (tests/schema.rs, derived from the types), then replace these vectors on purpose, in the
+//! same commit.
 
 mod common;
 

@@ -24,11 +24,16 @@ pub fn rigctl_path() -> PathBuf {
     bin
 }
 
-/// `../shared` beside the checkout, or `None` with a message saying the test is skipped.
+/// `../shared` beside the checkout, or `None` with a message saying the test is skipped. With
+/// `CI=true` its absence fails the test instead: CI runs with `../shared` beside the clone, so a
+/// missing shared directory there is a broken setup, never a reason to pass.
 pub fn shared_or_skip(test: &str) -> Option<PathBuf> {
     let dir = rigctl::shared_dir();
     if dir.is_none() {
-        eprintln!("SKIPPED {test}: ../shared (or $RIG_SHARED_DIR) is absent");
+        let msg = format!("{test}: ../shared (or $RIG_SHARED_DIR) is absent");
+        let ci = std::env::var("CI").is_ok_and(|v| v.eq_ignore_ascii_case("true") || v == "1");
+        assert!(!ci, "{msg}; with CI=true the shared data is required");
+        eprintln!("SKIPPED {msg}");
     }
     dir
 }

@@ -5,8 +5,8 @@
 use std::path::PathBuf;
 
 use rigctl::compensate::{compensate, read_path, write_joints_csv};
+use rigctl::model::ik::IkTilt;
 use rigctl::model::preset;
-use rigctl::sim::ik::IkTilt;
 
 use super::model_args::ModelArgs;
 use super::out::errln;

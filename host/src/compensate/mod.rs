@@ -5,7 +5,7 @@
 //! `dtheta = J^T (J J^T)^-1 (P_tilting-geom - P_theor)` (eq. 5.22), and notes that the step can be
 //! avoided by planning with the calibrated kinematics and the tilting directly. This module does
 //! the latter: for every path point it solves the inverse kinematics on the calibrated model
-//! ([`crate::sim::ik::solve`], Gauss-Newton to convergence, i.e. eq. 5.22 iterated), with static
+//! ([`crate::model::ik::solve`], Gauss-Newton to convergence, i.e. eq. 5.22 iterated), with static
 //! tilting on by default, seeded with the previous point's solution. The nominal model's rigid IK
 //! joints (what an uncalibrated controller would command) are given alongside for comparison.
 //!
@@ -28,9 +28,9 @@ use nalgebra::Vector3;
 
 use crate::error::{Classify, ErrorKind};
 use crate::joints::table::{Table, TableError};
+use crate::model::ik::ToolTarget;
+use crate::model::ik::{solve, IkError, IkTilt};
 use crate::model::{Model, ModelError};
-use crate::sim::ik::{solve, IkError, IkTilt};
-use crate::sim::paths::ToolTarget;
 use crate::sim::plan::KATANA_SEED_DEG;
 
 /// Tool axis used when the path file has no `ax, ay, az` columns: straight down (-z of R).

@@ -2,14 +2,14 @@
 
 use nalgebra::Vector3;
 
+use crate::model::dynamics::{moments_kgfm, Inertia};
 use crate::model::{Model, ModelError};
-use crate::sim::dynamics::{moments_kgfm, Inertia};
 
 /// Joint moments in motion (kgf.m, joint frames) of `model` at every logged sample: joint rates
 /// and accelerations by central differences over the neighbouring samples when both lie within
 /// 1.5 times the median sample interval (one-sided rate and zero acceleration when only one
 /// does, the arm at rest when none does), then recursive Newton-Euler with slender-rod links
-/// ([`crate::sim::dynamics`]).
+/// ([`crate::model::dynamics`]).
 pub fn moments_in_motion(
     model: &Model,
     t_s: &[f64],

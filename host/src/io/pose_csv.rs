@@ -10,9 +10,9 @@ use std::path::Path;
 
 use super::table::{Table, TableError};
 use crate::error::{Classify, ErrorKind};
-use crate::model::Model;
 
-/// What a reader expects of a pose file.
+/// What a reader expects of a pose file (`PoseSpec::for_model` builds it from a model, in
+/// `crate::model`, so that this reader does not depend on the model).
 #[derive(Debug, Clone, PartialEq)]
 pub struct PoseSpec {
     /// Number of joint columns `q1..qN` required.
@@ -21,17 +21,6 @@ pub struct PoseSpec {
     pub limits: Vec<[f64; 2]>,
     /// Whether `x, y, z` must be present.
     pub require_xyz: bool,
-}
-
-impl PoseSpec {
-    /// The model's joint count and limits.
-    pub fn for_model(model: &Model, require_xyz: bool) -> Self {
-        Self {
-            n_joints: model.n_joints(),
-            limits: model.joint_limits(),
-            require_xyz,
-        }
-    }
 }
 
 /// One row of a pose file.

@@ -50,16 +50,24 @@
 //! (error lists the valid names), [`Model::param`], [`Model::set_param`], [`Model::set_param_at`],
 //! [`Model::param_values`], [`Model::set_param_values`], [`Model::params_of_kind`] ([`ParamKind`]).
 //!
+//! # Physics beyond the chain
+//! [`dynamics`] (joint moments in motion by recursive Newton-Euler, [`rnea`], with the model's
+//! link masses), [`ik`] (inverse kinematics of the 5-DOF Katana on any model's FK).
+//!
 //! # Model files
 //! [`Model::from_toml_str`], [`Model::from_file`], [`Model::to_toml_string`],
 //! [`Model::write_file`]; the format is documented in [`toml_file`].
 
 mod chain;
+pub mod dynamics;
 mod error;
+pub mod ik;
 pub mod jacobian;
 mod kinematics;
 mod param;
+mod pose_spec;
 mod presets;
+pub mod rnea;
 mod tilt;
 pub mod toml_file;
 

@@ -5,11 +5,10 @@
 use nalgebra::Vector3;
 
 use crate::calib::{position_errors, Poses};
+use crate::model::dynamics::{moments_kgfm, Inertia};
 use crate::model::{Model, ModelError, ParamKind, Tilt, Unit};
-use crate::sim::dynamics::{
-    joint_trajectory, moments_kgfm, positions_in_motion, Inertia, JointTrajectory,
-};
 use crate::sim::paths::{quintic_profile, Circle, Line, Path};
+use crate::sim::trajectory::{joint_trajectory, positions_in_motion, JointTrajectory};
 
 /// Parameter step of thesis fig. 3.8 for angles (deg).
 pub const INFLUENCE_STEP_DEG: f64 = 0.05;

@@ -3,14 +3,7 @@
 
 use nalgebra::Vector3;
 
-/// A Cartesian target: a tool-point position (mm, frame R) and the tool-axis direction (unit).
-#[derive(Debug, Clone, Copy, PartialEq)]
-pub struct ToolTarget {
-    /// Tool point, mm in frame R.
-    pub position_mm: Vector3<f64>,
-    /// Unit vector along the tool (from the wrist towards the tool point).
-    pub axis: Vector3<f64>,
-}
+use crate::model::ik::ToolTarget;
 
 /// A path with a tool axis: `at(s)` for `s` in 0..1.
 pub trait Path {

@@ -17,9 +17,9 @@
 use nalgebra::Vector3;
 use rand::Rng;
 
-use super::ik::{solve, tool_target, IkError, IkTilt};
 use super::iso9283::{distinct_positions, Cube};
-use super::paths::ToolTarget;
+use crate::model::ik::ToolTarget;
+use crate::model::ik::{solve, tool_target, IkError, IkTilt};
 use crate::model::{Model, ModelError};
 
 /// A planned pose: its name, the commanded joints and the Cartesian target they reach on the

@@ -8,10 +8,10 @@
 //!   geometric errors (normal, `geometric_sigma_deg`, the same draw as `rigctl simulate` for the
 //!   same seed: [`super::simulate::truth_model`]), plus any undeclared effects
 //!   ([`SessionConfig::effects`], e.g. `encoder_harmonic:j1:h1`), and the declared joint tilting driven by the
-//!   moments **in motion** (RNEA, [`super::dynamics::moments_kgfm`], slender-rod links; joint
+//!   moments **in motion** (RNEA, [`crate::model::dynamics::moments_kgfm`], slender-rod links; joint
 //!   rates and accelerations by central differences over +-10 ms of the 1 kHz joint path).
 //! * Commands: the controller knows only the nominal model, so the joint trajectory is the IK of
-//!   the **nominal** rigid model ([`super::ik::solve`]) of the planned targets (tool axis fixed,
+//!   the **nominal** rigid model ([`crate::model::ik::solve`]) of the planned targets (tool axis fixed,
 //!   [`default_pencil_axis`]: 22.5 deg from the sheet normal), computed at 1 kHz; the arm follows it exactly in joint space and the
 //!   joint readings are logged at `robot_rate_hz` (`joints.csv`: `t,q1..q5`, robot clock from 0).
 //!
@@ -53,15 +53,15 @@ use rand_chacha::ChaCha8Rng;
 use rand_distr::{Distribution, Normal};
 use rig_protocol::{encode_device, DeviceMsg, PotBatch, DEVICE_FRAME_MAX};
 
-use super::dynamics::{moments_kgfm, Inertia};
 use super::effects::{Effect, EffectKind};
-use super::ik::{solve, IkError, IkTilt};
-use super::paths::{quintic_profile, ToolTarget};
+use super::paths::quintic_profile;
 use super::plan::KATANA_SEED_DEG;
 use super::simulate::{truth_model, SimConfig, SimError};
 use crate::daq::recording::{RecordingError, RecordingMeta, RecordingWriter};
 use crate::fusion::{FusionError, JigPoint, SheetPlacement};
 use crate::io::atomic::{write_bytes_atomic, AtomicWriteError};
+use crate::model::dynamics::{moments_kgfm, Inertia};
+use crate::model::ik::{solve, IkError, IkTilt, ToolTarget};
 use crate::model::{Model, ModelError, Tilt};
 use crate::sheet::{ReferencePath, CIRCLE_RADIUS_MM};
 use crate::trace::{render_scan, RenderSpec};
@@ -474,33 +474,97 @@ pub fn simulate_session(declared: &Model, cfg: &SessionConfig) -> Result<Session
             "the pencil axis must point into the sheet, within 60 deg of its normal".into(),
         ));
     }
-    let dt = 1e-3;
-    let steps = (session_duration_s(cfg) / dt).round() as usize;
-    // 1. commanded joints at 1 kHz: IK of the nominal rigid model
+    let steps = (session_duration_s(cfg) / STEP_S).round() as usize;
+    let q_all = commanded_joints(declared, cfg, &placement, &pencil_axis, steps)?;
+    let motion = truth_in_motion(&truth, cfg, &placement, &q_all)?;
+    // the joint log at the robot's rate
+    let every = (1000 / cfg.robot_rate_hz) as usize;
+    let idx: Vec<usize> = (0..=steps).step_by(every).collect();
+    let t_s: Vec<f64> = idx.iter().map(|&k| k as f64 * STEP_S).collect();
+    let q_deg: Vec<Vec<f64>> = idx.iter().map(|&k| round_q(&q_all[k])).collect();
+    let truth_mm: Vec<Vector3<f64>> = idx.iter().map(|&k| motion.p_true[k]).collect();
+    let mut rng = ChaCha8Rng::seed_from_u64(cfg.seed);
+    rng.set_stream(7);
+    let noise = Normal::new(0.0, cfg.pot_noise_counts.max(1e-12))
+        .map_err(|e| SessionError::Config(format!("pot noise: {e}")))?;
+    let pot = pot_recording(cfg, &motion.travel, &noise, &mut rng)?;
+    let jig = gauge_jig(cfg, &noise, &mut rng);
+    Ok(Session {
+        truth,
+        geometric_errors,
+        placement,
+        t_s,
+        q_deg,
+        truth_mm,
+        frames: pot.frames,
+        board_t0_us: pot.board_t0_us,
+        pot_period_us: pot.period_us,
+        pot_raw: pot.raws,
+        pencil_mm: motion.pencil_mm,
+        jig,
+    })
+}
+
+/// Time step of the simulation (s): joints, moments and positions at 1 kHz.
+const STEP_S: f64 = 1e-3;
+
+/// Step 1: the commanded joints at every step, IK of the nominal rigid model along the path.
+fn commanded_joints(
+    declared: &Model,
+    cfg: &SessionConfig,
+    placement: &SheetPlacement,
+    pencil_axis: &Vector3<f64>,
+    steps: usize,
+) -> Result<Vec<Vec<f64>>, SessionError> {
+    let n = placement.normal();
     let mut seed = KATANA_SEED_DEG.to_vec();
     seed.truncate(declared.n_joints());
     seed.resize(declared.n_joints(), 0.0);
     let mut q_all: Vec<Vec<f64>> = Vec::with_capacity(steps + 1);
     for k in 0..=steps {
-        let (s, h) = timeline(cfg, k as f64 * dt);
+        let (s, h) = timeline(cfg, k as f64 * STEP_S);
         let target = ToolTarget {
             position_mm: placement.to_r_mm(cfg.path.sheet_point(s)) + n * h,
-            axis: pencil_axis,
+            axis: *pencil_axis,
         };
         let q = solve(declared, &target, &seed, IkTilt::Off)?;
         seed.clone_from(&q);
         q_all.push(q);
     }
-    // 2. the truth in motion: rates by central differences, RNEA moments, tilted FK
-    let nj = declared.n_joints();
-    let mut p_true = Vec::with_capacity(steps + 1);
-    let mut travel = Vec::with_capacity(steps + 1);
-    let mut pencil_mm: Vec<[f64; 2]> = Vec::new();
+    Ok(q_all)
+}
+
+/// What the truth did at every step: tool point, pencil travel, and the drawn line.
+struct Motion {
+    /// True tool point (mm, frame R) per step.
+    p_true: Vec<Vector3<f64>>,
+    /// Pencil travel (mm) per step.
+    travel: Vec<f64>,
+    /// The pencil's line on the sheet (sheet mm), points >= 0.05 mm apart.
+    pencil_mm: Vec<[f64; 2]>,
+}
+
+/// Step 2: the truth in motion: rates by central differences, RNEA moments, tilted FK, the
+/// pencil's travel and where it touches the sheet.
+fn truth_in_motion(
+    truth: &Model,
+    cfg: &SessionConfig,
+    placement: &SheetPlacement,
+    q_all: &[Vec<f64>],
+) -> Result<Motion, SessionError> {
+    let n = placement.normal();
+    let nj = truth.n_joints();
+    let steps = q_all.len() - 1;
+    let mut out = Motion {
+        p_true: Vec::with_capacity(steps + 1),
+        travel: Vec::with_capacity(steps + 1),
+        pencil_mm: Vec::new(),
+    };
     for k in 0..=steps {
         // rates over +-10 ms: the IK's round-off would swamp second differences over 1 ms
         let w = DIFF_STEPS.min(k).min(steps - k);
         let (a, b) = (k - w, k + w);
-        let h = w as f64 * dt;
+        let h = w as f64 * STEP_S;
         let (qd, qdd): (Vec<f64>, Vec<f64>) = if w == 0 {
             (vec![0.0; nj], vec![0.0; nj])
         } else {
@@ -513,7 +577,7 @@ pub fn simulate_session(declared: &Model, cfg: &SessionConfig) -> Result<Session
                 })
                 .unzip()
         };
-        let m = moments_kgfm(&truth, &q_all[k], &qd, &qdd, cfg.inertia)?;
+        let m = moments_kgfm(truth, &q_all[k], &qd, &qdd, cfg.inertia)?;
         let fk = truth.fk(&q_all[k], Tilt::Moments(&m))?;
         let axis = fk.rotation.column(2).into_owned();
         let free = -placement.height_mm(&fk.position_mm) / n.dot(&axis);
@@ -521,39 +585,49 @@ pub fn simulate_session(declared: &Model, cfg: &SessionConfig) -> Result<Session
         if d.is_nan() || d <= -cfg.lift_mm {
             return Err(SessionError::PencilRange {
                 travel_mm: d,
-                t_s: k as f64 * dt,
+                t_s: k as f64 * STEP_S,
             });
         }
         if free <= cfg.pencil_stop_mm {
             let tip = placement.to_sheet_mm(&(fk.position_mm + axis * d));
-            let far = pencil_mm
+            let far = out
+                .pencil_mm
                 .last()
                 .is_none_or(|l| (l[0] - tip[0]).hypot(l[1] - tip[1]) >= 0.05);
             if far {
-                pencil_mm.push(tip);
+                out.pencil_mm.push(tip);
             }
         }
-        p_true.push(fk.position_mm);
-        travel.push(d);
+        out.p_true.push(fk.position_mm);
+        out.travel.push(d);
     }
-    // 3. joint log
-    let every = (1000 / cfg.robot_rate_hz) as usize;
-    let idx: Vec<usize> = (0..=steps).step_by(every).collect();
-    let t_s: Vec<f64> = idx.iter().map(|&k| k as f64 * dt).collect();
-    let q_deg: Vec<Vec<f64>> = idx.iter().map(|&k| round_q(&q_all[k])).collect();
-    let truth_mm: Vec<Vector3<f64>> = idx.iter().map(|&k| p_true[k]).collect();
-    // 4. potentiometer on the board clock
-    let mut rng = ChaCha8Rng::seed_from_u64(cfg.seed);
-    rng.set_stream(7);
-    let noise = Normal::new(0.0, cfg.pot_noise_counts.max(1e-12))
-        .map_err(|e| SessionError::Config(format!("pot noise: {e}")))?;
+    Ok(out)
+}
+
+/// The board's potentiometer recording: raw counts and their frames.
+struct PotRecording {
+    raws: Vec<u16>,
+    frames: Vec<(u64, Vec<u8>)>,
+    board_t0_us: u64,
+    period_us: u32,
+}
+
+/// Step 3: the potentiometer sampled on the board clock (offset, drift, noise), batched and
+/// framed as the board sends it.
+fn pot_recording(
+    cfg: &SessionConfig,
+    travel: &[f64],
+    noise: &Normal<f64>,
+    rng: &mut ChaCha8Rng,
+) -> Result<PotRecording, SessionError> {
+    let steps = travel.len() - 1;
     let rate = 1.0 + cfg.clock_drift_ppm * 1e-6;
     let period_us = 1_000_000 / cfg.pot_rate_hz;
     let board_t0_us = ((-0.3 * rate + cfg.clock_offset_s) * 1e6).round() as u64;
     let board_t1_us = (((session_duration_s(cfg) + 0.3) * rate + cfg.clock_offset_s) * 1e6) as u64;
     let n_pot = ((board_t1_us - board_t0_us) / u64::from(period_us)) as usize;
     let travel_at = |tr: f64| {
-        let x = (tr / dt).clamp(0.0, steps as f64);
+        let x = (tr / STEP_S).clamp(0.0, steps as f64);
         let i = (x.floor() as usize).min(steps.saturating_sub(1));
         let f = x - i as f64;
         travel[i] + f * (travel[(i + 1).min(steps)] - travel[i])
@@ -562,7 +636,7 @@ pub fn simulate_session(declared: &Model, cfg: &SessionConfig) -> Result<Session
     for j in 0..n_pot {
         let tb = (board_t0_us + j as u64 * u64::from(period_us)) as f64 * 1e-6;
         let tr = (tb - cfg.clock_offset_s) / rate;
-        let c = cfg.counts_at_zero + cfg.counts_per_mm * travel_at(tr) + noise.sample(&mut rng);
+        let c = cfg.counts_at_zero + cfg.counts_per_mm * travel_at(tr) + noise.sample(rng);
         raws.push(c.round().clamp(0.0, 4095.0) as u16);
     }
     let mut frames = Vec::new();
@@ -583,14 +657,21 @@ pub fn simulate_session(declared: &Model, cfg: &SessionConfig) -> Result<Session
         let last_us = t0_us + (chunk.len() as u64 - 1) * u64::from(period_us);
         frames.push((last_us - board_t0_us + 1500, stored));
     }
-    // 5. gauge-block jig
-    let jig = (-3..=2)
+    Ok(PotRecording {
+        raws,
+        frames,
+        board_t0_us,
+        period_us,
+    })
+}
+
+/// Step 4: the gauge-block jig: mean counts of 100 readings at -3..2 mm of travel.
+fn gauge_jig(cfg: &SessionConfig, noise: &Normal<f64>, rng: &mut ChaCha8Rng) -> Vec<JigPoint> {
+    (-3..=2)
         .map(|k| {
             let travel_mm = f64::from(k);
             let mean: f64 = (0..100)
-                .map(|_| {
-                    cfg.counts_at_zero + cfg.counts_per_mm * travel_mm + noise.sample(&mut rng)
-                })
+                .map(|_| cfg.counts_at_zero + cfg.counts_per_mm * travel_mm + noise.sample(rng))
                 .map(|c| c.round())
                 .sum::<f64>()
                 / 100.0;
@@ -599,21 +680,7 @@ pub fn simulate_session(declared: &Model, cfg: &SessionConfig) -> Result<Session
                 travel_mm,
             }
         })
-        .collect();
-    Ok(Session {
-        truth,
-        geometric_errors,
-        placement,
-        t_s,
-        q_deg,
-        truth_mm,
-        frames,
-        board_t0_us,
-        pot_period_us: period_us,
-        pot_raw: raws,
-        pencil_mm,
-        jig,
-    })
+        .collect()
 }
 
 impl Session {

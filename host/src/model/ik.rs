@@ -27,8 +27,16 @@
 
 use nalgebra::{DMatrix, DVector, Vector3};
 
-use super::paths::ToolTarget;
-use crate::model::{Model, ModelError, Tilt};
+use super::{Model, ModelError, Tilt};
+
+/// A Cartesian target: a tool-point position (mm, frame R) and the tool-axis direction (unit).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct ToolTarget {
+    /// Tool point, mm in frame R.
+    pub position_mm: Vector3<f64>,
+    /// Unit vector along the tool (from the wrist towards the tool point).
+    pub axis: Vector3<f64>,
+}
 
 /// Weight of the tool-axis residual relative to the position residual (mm per unit vector).
 const AXIS_WEIGHT_MM: f64 = 100.0;

@@ -1,0 +1,15 @@
+//! The pose-file expectations of a model: its joint count and limits (FORMATS.md "Pose files").
+
+use super::Model;
+use crate::io::pose_csv::PoseSpec;
+
+impl PoseSpec {
+    /// The model's joint count and limits.
+    pub fn for_model(model: &Model, require_xyz: bool) -> Self {
+        Self {
+            n_joints: model.n_joints(),
+            limits: model.joint_limits(),
+            require_xyz,
+        }
+    }
+}

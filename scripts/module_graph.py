@@ -1,0 +1,141 @@
+#!/usr/bin/env python3
+"""Lists the imports between the top-level modules of host/src (crate `rigctl`) and fails on a
+cycle, and checks that the README's host module table names exactly the modules of the tree.
+
+    python3 scripts/module_graph.py            # print the graph, exit 1 on a cycle or mismatch
+    python3 scripts/module_graph.py --dot      # the graph in Graphviz dot
+
+An import is any `crate::NAME` path in a module's files (use statements and qualified paths),
+outside comments; `super::` stays inside the module. `cli` (the binary's commands) may use every
+module and is left out of the cycle check, as are `lib.rs` and `main.rs`.
+"""
+import pathlib
+import re
+import sys
+
+ROOT = pathlib.Path(__file__).resolve().parent.parent
+SRC = ROOT / "host" / "src"
+IGNORED = {"cli"}
+
+
+def modules():
+    mods = {}
+    for p in sorted(SRC.iterdir()):
+        if p.is_dir():
+            mods[p.name] = sorted(p.rglob("*.rs"))
+        elif p.suffix == ".rs" and p.stem not in ("lib", "main"):
+            mods[p.stem] = [p]
+    return mods
+
+
+def strip_comments(text):
+    """The code of a file without comments and without its unit-test module (`#[cfg(test)] mod
+    tests { ... }`, at the end of a file by convention): tests may use anything."""
+    test_mod = re.search(r"^#\[cfg\(test\)\]\s*\n\s*mod tests\b", text, flags=re.M)
+    if test_mod:
+        text = text[: test_mod.start()]
+    text = re.sub(r"/\*.*?\*/", "", text, flags=re.S)
+    return "\n".join(line.split("//", 1)[0] for line in text.splitlines())
+
+
+def graph(mods):
+    edges = {m: {} for m in mods}
+    for m, files in mods.items():
+        for f in files:
+            body = strip_comments(f.read_text(encoding="utf-8"))
+            # crate::x paths, and the brace form `use crate::{a::..., b::...}`
+            targets = set(re.findall(r"\bcrate::([a-z_][a-z0-9_]*)", body))
+            for group in re.findall(r"\bcrate::\{([^}]*)\}", body, flags=re.S):
+                targets |= set(re.findall(r"(?:^|[,{\s])([a-z_][a-z0-9_]*)\s*(?:::|,|$)", group))
+            for t in targets:
+                if t in mods and t != m:
+                    edges[m].setdefault(t, set()).add(f.relative_to(SRC).as_posix())
+    return edges
+
+
+def cycles(edges):
+    """Strongly connected components with more than one module (Tarjan)."""
+    index, low, stack, on, out, counter = {}, {}, [], set(), [], [0]
+
+    def visit(v):
+        index[v] = low[v] = counter[0]
+        counter[0] += 1
+        stack.append(v)
+        on.add(v)
+        for w in edges[v]:
+            if w not in index:
+                visit(w)
+                low[v] = min(low[v], low[w])
+            elif w in on:
+                low[v] = min(low[v], index[w])
+        if low[v] == index[v]:
+            comp = []
+            while True:
+                w = stack.pop()
+                on.discard(w)
+                comp.append(w)
+                if w == v:
+                    break
+            if len(comp) > 1:
+                out.append(sorted(comp))
+
+    for v in edges:
+        if v not in index:
+            visit(v)
+    return out
+
+
+def readme_modules():
+    text = (ROOT / "README.md").read_text(encoding="utf-8")
+    start = text.find("Host library modules")
+    if start < 0:
+        return None
+    names = set()
+    for line in text[start:].splitlines()[1:]:
+        if line.startswith("|"):
+            cell = line.split("|")[1]
+            names |= set(re.findall(r"`([a-z_][a-z0-9_]*)/?`", cell))
+        elif names:
+            break
+    return names
+
+
+def main():
+    mods = modules()
+    edges = graph(mods)
+    checked = {m: {t: f for t, f in e.items() if t not in IGNORED} for m, e in edges.items() if m not in IGNORED}
+    if "--dot" in sys.argv:
+        print("digraph rigctl {")
+        for m, e in sorted(checked.items()):
+            for t in sorted(e):
+                print(f'  "{m}" -> "{t}";')
+        print("}")
+        return 0
+    for m, e in sorted(checked.items()):
+        print(f"{m:10} -> {', '.join(sorted(e)) or '(nothing)'}")
+    bad = 0
+    for comp in cycles(checked):
+        bad = 1
+        print(f"\nCYCLE between {', '.join(comp)}:")
+        for m in comp:
+            for t in comp:
+                if t in checked[m]:
+                    print(f"  {m} -> {t}: {', '.join(sorted(checked[m][t]))}")
+    listed = readme_modules()
+    tree = set(mods) - IGNORED
+    if listed is None:
+        print("\nREADME.md has no 'Host library modules' table")
+        bad = 1
+    elif listed != tree:
+        bad = 1
+        if tree - listed:
+            print(f"\nREADME module table lacks: {', '.join(sorted(tree - listed))}")
+        if listed - tree:
+            print(f"\nREADME module table names modules not in host/src: {', '.join(sorted(listed - tree))}")
+    if not bad:
+        print("\nno import cycle between host/src modules; the README module table matches the tree")
+    return bad
+
+
+if __name__ == "__main__":
+    sys.exit(main())
