@@ -21,6 +21,7 @@ use crate::calib::Poses;
 use crate::fusion::motion::moments_in_motion;
 use crate::fusion::FusedSample;
 use crate::io::pose_csv::{read_poses, PoseCsvError, PoseSpec};
+use crate::model::transmission::approach_directions;
 use crate::model::{Model, ModelError};
 
 /// Measured poses and, when known, the time of each measurement (s since the start of the
@@ -41,47 +42,13 @@ pub struct Dataset {
     /// `None`: static moments only.
     pub moments_kgfm: Option<Vec<Vec<Vector3<f64>>>>,
     /// Direction in which every joint last moved before each pose (+1 up, -1 down, 0 no
-    /// history), from the pose order ([`approach_directions`]); `None` until computed
+    /// history), from the pose order ([`crate::model::transmission::approach_directions`]); `None` until computed
     /// ([`Dataset::with_approach`]). Kept through [`Dataset::subset`], so a fold keeps the
     /// history of the full visit order.
     pub approach: Option<Vec<Vec<f64>>>,
     /// Pose names (`id` column), when every row has one: poses measured more than once
     /// ([`super::floor::repeatability_mm`]).
     pub ids: Option<Vec<String>>,
-}
-
-/// Joint-motion threshold (deg, or mm for a prismatic joint) below which a joint did not move
-/// between two poses.
-pub const APPROACH_MIN_MOVE: f64 = 1e-9;
-
-/// Direction in which each joint last moved before each pose (FORMATS.md pose order): the
-/// poses are visited in the order of `t_s` when given (ties in file order), else in file order;
-/// for joint i at pose k the sign of the last non-zero change of `q_i` up to k (+1 up, -1
-/// down), 0 for the first pose and while the joint has not moved yet.
-pub fn approach_directions(q_deg: &[Vec<f64>], t_s: Option<&[f64]>) -> Vec<Vec<f64>> {
-    let n = q_deg.len();
-    let mut order: Vec<usize> = (0..n).collect();
-    if let Some(t) = t_s.filter(|t| t.len() == n) {
-        order.sort_by(|&a, &b| t[a].total_cmp(&t[b]));
-    }
-    let nj = q_deg.first().map_or(0, Vec::len);
-    let mut out = vec![vec![0.0; nj]; n];
-    let mut dir = vec![0.0; nj];
-    let mut prev: Option<&Vec<f64>> = None;
-    for &k in &order {
-        if let Some(p) = prev {
-            for (j, d) in dir.iter_mut().enumerate() {
-                let delta =
-                    q_deg[k].get(j).copied().unwrap_or(0.0) - p.get(j).copied().unwrap_or(0.0);
-                if delta.abs() > APPROACH_MIN_MOVE {
-                    *d = delta.signum();
-                }
-            }
-        }
-        out[k] = dir.clone();
-        prev = Some(&q_deg[k]);
-    }
-    out
 }
 
 impl Dataset {

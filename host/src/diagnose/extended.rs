@@ -16,10 +16,11 @@
 use nalgebra::{DMatrix, DVector, Vector3};
 
 use super::data::Dataset;
-use super::gravity::GravityModel;
 use crate::calib::identifiability::analyse;
 use crate::calib::lm::{solve, LmConfig, Problem};
 use crate::calib::CalibError;
+use crate::model::gravity::GravityModel;
+use crate::model::transmission::transmission_increments;
 use crate::model::{sign_1e9, Model, ModelError, Tilt, Wrt};
 
 /// Seconds per hour (drift rates are per hour).
@@ -100,31 +101,6 @@ pub struct ExtModel {
     pub coupling: Vec<Vec<f64>>,
     /// Hysteresis per joint (deg): `q_j += b_j d_j` with the direction of approach `d_j`.
     pub hysteresis_deg: Vec<f64>,
-}
-
-/// The transmission terms of joint angles (FORMATS.md `joint_scale`, `joint_coupling`,
-/// `hysteresis`): `q_eff_i = q_i + s_i q_i + sum_k c_ik q_k + b_i d_i`, with `d_i` the
-/// direction of approach of joint i (+1, -1, 0). `scale`, `coupling` (rows i, columns k) and
-/// `hysteresis_deg` may be empty (no term); returns the increments per joint.
-pub fn transmission_increments(
-    q_deg: &[f64],
-    approach: &[f64],
-    scale: &[f64],
-    coupling: &[Vec<f64>],
-    hysteresis_deg: &[f64],
-) -> Vec<f64> {
-    (0..q_deg.len())
-        .map(|i| {
-            let s = scale.get(i).copied().unwrap_or(0.0) * q_deg[i];
-            let c: f64 = coupling
-                .get(i)
-                .map(|row| row.iter().zip(q_deg).map(|(c, q)| c * q).sum())
-                .unwrap_or(0.0);
-            let h = hysteresis_deg.get(i).copied().unwrap_or(0.0)
-                * approach.get(i).copied().unwrap_or(0.0);
-            s + c + h
-        })
-        .collect()
 }
 
 impl ExtModel {

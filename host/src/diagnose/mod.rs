@@ -5,7 +5,6 @@
 //! |---|---|
 //! | [`data`] | measured poses with their times |
 //! | [`extended`] | the model plus non-parameter effects (time drift, compliance); the extended fit |
-//! | [`gravity`] | link masses for the gravity torques of `compliance:j<i>` (UR5 published masses) |
 //! | [`candidates`] | the effect library (FORMATS.md effect ids) and effect-unit parameters |
 //! | [`residual`] | regressors, linearised screening, structure tests |
 //! | [`decide`] | greedy forward selection: F-test + BIC + k-fold cross-validation |
@@ -35,7 +34,6 @@ pub mod data;
 pub mod decide;
 pub mod extended;
 pub mod floor;
-pub mod gravity;
 pub mod plots;
 pub mod polish;
 pub mod probe;

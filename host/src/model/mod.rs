@@ -52,7 +52,10 @@
 //!
 //! # Physics beyond the chain
 //! [`dynamics`] (joint moments in motion by recursive Newton-Euler, [`rnea`], with the model's
-//! link masses), [`ik`] (inverse kinematics of the 5-DOF Katana on any model's FK).
+//! link masses), [`gravity`] (gravity torque about each joint axis, for compliance; the UR5's
+//! published masses), [`transmission`] (gear-ratio, coupling and hysteresis terms on the joint
+//! angles, and the direction of approach from the pose order), [`ik`] (inverse kinematics of
+//! the 5-DOF Katana on any model's FK).
 //!
 //! # Model files
 //! [`Model::from_toml_str`], [`Model::from_file`], [`Model::to_toml_string`],
@@ -61,6 +64,7 @@
 mod chain;
 pub mod dynamics;
 mod error;
+pub mod gravity;
 pub mod ik;
 pub mod jacobian;
 mod kinematics;
@@ -70,6 +74,7 @@ mod presets;
 pub mod rnea;
 mod tilt;
 pub mod toml_file;
+pub mod transmission;
 
 pub use chain::*;
 pub use error::ModelError;

@@ -18,7 +18,7 @@
 //! | `joint_scale:j<i>` | `s` (dimensionless) | transmission-ratio error: joint i turns `(1 + s) q_i` |
 //! | `joint_coupling:j<i>:j<k>` | `c` deg/deg | joint i's angle += `c q_k` |
 //! | `hysteresis:j<i>` | `b` deg | joint i's angle += `b` when it last moved up before the pose, `- b` when down, 0 before its first move (pose order of each file, FORMATS.md) |
-//! | `compliance:j<i>` | deg per kgf.m | joint i's angle += value x the gravity torque about its axis (link masses of the model, [`crate::diagnose::gravity`]) |
+//! | `compliance:j<i>` | deg per kgf.m | joint i's angle += value x the gravity torque about its axis (link masses of the model, [`crate::model::gravity`]) |
 //!
 //! Deltas (not absolute values) are used throughout so that an effect's VALUE is its size.
 
@@ -273,7 +273,7 @@ impl Effect {
                     }
                 }
                 if matches!(term, JointTerm::Compliance(..))
-                    && crate::diagnose::gravity::GravityModel::for_model(model).is_none()
+                    && crate::model::gravity::GravityModel::for_model(model).is_none()
                 {
                     return Err(EffectError::BadValue {
                         id: self.id.clone(),
@@ -404,7 +404,7 @@ impl JointEffects {
         q_deg: &[f64],
         approach: &[f64],
     ) -> Result<Vec<f64>, ModelError> {
-        let trans = crate::diagnose::extended::transmission_increments(
+        let trans = crate::model::transmission::transmission_increments(
             q_deg,
             approach,
             &self.scale,
@@ -412,7 +412,7 @@ impl JointEffects {
             &self.hysteresis_deg,
         );
         let tau = if self.compliance_deg_per_kgfm.iter().any(|c| *c != 0.0) {
-            match crate::diagnose::gravity::GravityModel::for_model(model) {
+            match crate::model::gravity::GravityModel::for_model(model) {
                 Some(g) => g.axis_torques_kgfm(model, q_deg)?,
                 None => vec![0.0; q_deg.len()],
             }

@@ -28,8 +28,8 @@ use rand_distr::{Distribution, Normal};
 use super::effects::{Effect, EffectError, JointEffects, TimeEffects};
 use super::iso9283::{Cube, ISO_POSE_COUNT};
 use super::plan::{iso_calibration_sequence, random_poses, PlanError, PlannedPose};
-use crate::diagnose::data::approach_directions;
 use crate::model::ik::ArmGeometry;
+use crate::model::transmission::approach_directions;
 use crate::model::{Model, ModelError, ParamKind, Tilt, KATANA_GEOMETRIC_PARAMS};
 
 /// Settings of a simulated session.

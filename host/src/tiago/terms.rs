@@ -16,7 +16,7 @@ use super::select::forward_select;
 use crate::calib::lm::{solve, LmConfig, Problem};
 use crate::calib::problem::stacked_jacobian;
 use crate::calib::{CalibError, Poses};
-use crate::diagnose::gravity::GravityModel;
+use crate::model::gravity::GravityModel;
 use crate::model::{Model, ModelError, ParamKind, Tilt};
 
 /// What a joint term is proportional to.

@@ -266,7 +266,7 @@ pub fn import_chain(urdf: &Urdf, opts: &ImportOptions) -> Result<Imported, UrdfE
 /// link below it up to the next movable joint of the chain (joints off the chain, e.g. gripper
 /// fingers, count at zero; links below the tip count with the last joint). Links before the
 /// first movable joint are not carried. Used for gravity torques
-/// ([`crate::diagnose::gravity::GravityModel::for_model`]).
+/// ([`crate::model::gravity::GravityModel::for_model`]).
 pub fn import_chain_with_masses(urdf: &Urdf, opts: &ImportOptions) -> Result<Imported, UrdfError> {
     import(urdf, opts, true)
 }
