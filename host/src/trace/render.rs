@@ -11,9 +11,9 @@
 //! not depend on the order of the work.
 
 use crate::sheet::{
-    fiducial_centres_mm, orientation_dot_mm, scale_bar_rects_mm, ReferencePath,
+    fiducial_centres_mm, orientation_dot_mm, ring_dots_mm, scale_bar_rects_mm, ReferencePath,
     FIDUCIAL_DIAMETER_MM, FIDUCIAL_SPACING_MM, ORIENTATION_DOT_DIAMETER_MM, PAGE_HEIGHT_MM,
-    PAGE_WIDTH_MM,
+    PAGE_WIDTH_MM, RING_DOT_DIAMETER_MM,
 };
 use image::{Rgb, RgbImage};
 
@@ -53,6 +53,19 @@ pub struct RenderSpec {
     pub paper_noise: f64,
     /// Seed of the noise.
     pub seed: u64,
+    /// Print the sheet-v2 ring of 43 dots.
+    pub ring: bool,
+    /// Pencil skips: arc-length intervals `[s0, s1]` (mm from the path's start) left unwritten.
+    pub skips_mm: Vec<[f64; 2]>,
+    /// Faint graphite: `[s0, s1, darkness]`, the pencil's mean darkness over that arc-length
+    /// interval.
+    pub faint_mm: Vec<[f64; 3]>,
+    /// Dust specks `[x, y, radius]` (sheet mm), dark grey-black.
+    pub dust_mm: Vec<[f64; 3]>,
+    /// Paper fibres `[x0, y0, x1, y1]` (sheet mm): thin grey segments 0.08 mm wide.
+    pub fibres_mm: Vec<[f64; 4]>,
+    /// Level (0..1) of whatever the scanner sees outside the page (desk, lid); `None`: paper.
+    pub desk_level: Option<f64>,
 }
 
 impl Default for RenderSpec {
@@ -73,6 +86,12 @@ impl Default for RenderSpec {
             paper_level: 0.94,
             paper_noise: 0.012,
             seed: 1,
+            ring: false,
+            skips_mm: Vec::new(),
+            faint_mm: Vec::new(),
+            dust_mm: Vec::new(),
+            fibres_mm: Vec::new(),
+            desk_level: None,
         }
     }
 }
@@ -110,7 +129,7 @@ pub fn render_scan(spec: &RenderSpec) -> RgbImage {
             0.5 * REFERENCE_WIDTH_MM * scale,
         );
         let raw: &mut [u8] = img.as_mut();
-        for (idx, c) in cov {
+        for (idx, c, _) in cov {
             let i = 3 * idx as usize;
             for ch in 0..3 {
                 raw[i + ch] = mul(raw[i + ch], 1.0 - c * (1.0 - RED_INK[ch]));
@@ -125,14 +144,47 @@ pub fn render_scan(spec: &RenderSpec) -> RgbImage {
             spec.pencil_closed,
             0.5 * spec.pencil_width_mm,
         );
+        let arc = cumulative_arc(&spec.pencil_mm);
         let raw: &mut [u8] = img.as_mut();
-        for (idx, c) in cov {
+        for (idx, c, seg) in cov {
+            let s_mm = arc[seg];
+            if spec.skips_mm.iter().any(|k| s_mm >= k[0] && s_mm <= k[1]) {
+                continue;
+            }
+            let mean = spec
+                .faint_mm
+                .iter()
+                .find(|f| s_mm >= f[0] && s_mm <= f[1])
+                .map_or(spec.pencil_darkness, |f| f[2]);
             let n = triangular(hash(spec.seed ^ 0x5bd1_e995, idx as u64));
-            let dark = (spec.pencil_darkness * (1.0 + spec.pencil_grain * n)).clamp(0.0, 0.97);
+            let dark = (mean * (1.0 + spec.pencil_grain * n)).clamp(0.0, 0.97);
             let i = 3 * idx as usize;
             for ch in 0..3 {
                 raw[i + ch] = mul(raw[i + ch], 1.0 - c * dark);
             }
+        }
+    }
+    for f in &spec.fibres_mm {
+        let cov = stroke_coverage(&img, &place, &[[f[0], f[1]], [f[2], f[3]]], false, 0.04);
+        let raw: &mut [u8] = img.as_mut();
+        for (idx, c, _) in cov {
+            let i = 3 * idx as usize;
+            for ch in 0..3 {
+                raw[i + ch] = mul(raw[i + ch], 1.0 - c * 0.45);
+            }
+        }
+    }
+    for d in &spec.dust_mm {
+        disc(&mut img, &place, [d[0], d[1]], d[2]);
+    }
+    if spec.ring && spec.fiducials {
+        for c in ring_dots_mm(FIDUCIAL_SPACING_MM * spec.print_scale) {
+            disc(
+                &mut img,
+                &place,
+                c,
+                0.5 * RING_DOT_DIAMETER_MM * spec.print_scale,
+            );
         }
     }
     if spec.fiducials {
@@ -152,7 +204,49 @@ pub fn render_scan(spec: &RenderSpec) -> RgbImage {
             rect(&mut img, &place, min, max);
         }
     }
+    if let Some(level) = spec.desk_level {
+        desk(&mut img, &place, level);
+    }
     img
+}
+
+/// Arc length at the start of every segment of a polyline, mm.
+fn cumulative_arc(pts: &[[f64; 2]]) -> Vec<f64> {
+    let mut out = Vec::with_capacity(pts.len());
+    let mut s = 0.0;
+    for i in 0..pts.len() {
+        out.push(s);
+        let j = (i + 1) % pts.len();
+        s += (pts[j][0] - pts[i][0]).hypot(pts[j][1] - pts[i][1]);
+    }
+    out
+}
+
+/// Replaces everything outside the page by a desk at `level` with a soft 1 mm shadow along the
+/// page's edge.
+fn desk(img: &mut RgbImage, place: &Placement, level: f64) {
+    let (w, h) = (img.width(), img.height());
+    let v = (255.0 * level).round().clamp(0.0, 255.0) as u8;
+    for y in 0..h {
+        for x in 0..w {
+            let s = place.sheet([x as f64 + 0.5, y as f64 + 0.5]);
+            let out_x = (s[0].abs() - PAGE_WIDTH_MM / 2.0).max(0.0);
+            let out_y = (s[1].abs() - PAGE_HEIGHT_MM / 2.0).max(0.0);
+            let inside_edge = (PAGE_WIDTH_MM / 2.0 - s[0].abs())
+                .min(PAGE_HEIGHT_MM / 2.0 - s[1].abs())
+                .max(0.0);
+            if out_x > 0.0 || out_y > 0.0 {
+                img.put_pixel(x, y, Rgb([v, v, v]));
+            } else if inside_edge < 1.5 {
+                let f = 0.55 + 0.45 * inside_edge / 1.5;
+                let Rgb(mut p) = *img.get_pixel(x, y);
+                for c in p.iter_mut() {
+                    *c = mul(*c, f);
+                }
+                img.put_pixel(x, y, Rgb(p));
+            }
+        }
+    }
 }
 
 /// The page's placement: affine maps between pixel coordinates (pixel `(c, r)` covers
@@ -254,7 +348,7 @@ fn paper(img: &mut RgbImage, spec: &RenderSpec) {
     }
 }
 
-/// Coverage `(pixel index, coverage)` of a stroke of half width `half_w_mm` around a polyline,
+/// Coverage `(pixel index, coverage, segment)` of a stroke of half width `half_w_mm` around a polyline,
 /// one entry per pixel (the largest over the segments, i.e. from the nearest segment).
 fn stroke_coverage(
     img: &RgbImage,
@@ -262,8 +356,8 @@ fn stroke_coverage(
     pts: &[[f64; 2]],
     closed: bool,
     half_w_mm: f64,
-) -> Vec<(u32, f64)> {
-    let mut cov: Vec<(u32, f32)> = Vec::new();
+) -> Vec<(u32, f64, usize)> {
+    let mut cov: Vec<(u32, f32, u32)> = Vec::new();
     let margin = half_w_mm + 2.0 / place.ppmm;
     let n = pts.len();
     let segs = if closed { n } else { n.saturating_sub(1) };
@@ -279,14 +373,16 @@ fn stroke_coverage(
                 let d = segment_distance(s, a, b);
                 let c = (0.5 - (d - half_w_mm) * place.ppmm).clamp(0.0, 1.0);
                 if c > 0.0 {
-                    cov.push((y * width + x, c as f32));
+                    cov.push((y * width + x, c as f32, i as u32));
                 }
             }
         }
     }
     cov.sort_unstable_by(|p, q| p.0.cmp(&q.0).then(q.1.total_cmp(&p.1)));
     cov.dedup_by_key(|p| p.0);
-    cov.into_iter().map(|(i, c)| (i, c as f64)).collect()
+    cov.into_iter()
+        .map(|(i, c, seg)| (i, c as f64, seg as usize))
+        .collect()
 }
 
 fn disc(img: &mut RgbImage, place: &Placement, centre: [f64; 2], radius_mm: f64) {
