@@ -75,7 +75,7 @@ fn better(a: &Labelling, b: &Labelling) -> bool {
     a.ring.len() > b.ring.len() || (a.ring.len() == b.ring.len() && a.dot_err_mm < b.dot_err_mm)
 }
 
-/// Four discs of similar size forming a convex quadrilateral whose sides are 10..60 disc
+/// Four discs of similar size (within 2.5x: perspective) forming a convex quadrilateral whose sides are 10..60 disc
 /// diameters, ordered clockwise on screen (image y down).
 fn plausible_quad(q: [Disc; 4]) -> Option<[Disc; 4]> {
     let dmax = q.iter().map(|d| d.diameter_px).fold(0.0, f64::max);
@@ -83,7 +83,7 @@ fn plausible_quad(q: [Disc; 4]) -> Option<[Disc; 4]> {
         .iter()
         .map(|d| d.diameter_px)
         .fold(f64::INFINITY, f64::min);
-    if dmin <= 0.0 || dmax / dmin > 1.8 {
+    if dmin <= 0.0 || dmax / dmin > 2.5 {
         return None;
     }
     let cx = q.iter().map(|d| d.centre_px[0]).sum::<f64>() / 4.0;
