@@ -31,6 +31,7 @@ mod paper;
 pub mod path;
 mod raster;
 pub mod render;
+mod render_extras;
 pub mod render_photo;
 
 pub use camera::{CameraModel, FitQuality};

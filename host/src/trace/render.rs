@@ -10,6 +10,7 @@
 //! stroke is unbiased. Noise is a hash of (seed, pixel), so a render is deterministic and does
 //! not depend on the order of the work.
 
+use super::render_extras::{cumulative_arc, desk};
 use crate::sheet::{
     fiducial_centres_mm, orientation_dot_mm, ring_dots_mm, scale_bar_rects_mm, ReferencePath,
     FIDUCIAL_DIAMETER_MM, FIDUCIAL_SPACING_MM, ORIENTATION_DOT_DIAMETER_MM, PAGE_HEIGHT_MM,
@@ -210,48 +211,9 @@ pub fn render_scan(spec: &RenderSpec) -> RgbImage {
     img
 }
 
-/// Arc length at the start of every segment of a polyline, mm.
-fn cumulative_arc(pts: &[[f64; 2]]) -> Vec<f64> {
-    let mut out = Vec::with_capacity(pts.len());
-    let mut s = 0.0;
-    for i in 0..pts.len() {
-        out.push(s);
-        let j = (i + 1) % pts.len();
-        s += (pts[j][0] - pts[i][0]).hypot(pts[j][1] - pts[i][1]);
-    }
-    out
-}
-
-/// Replaces everything outside the page by a desk at `level` with a soft 1 mm shadow along the
-/// page's edge.
-fn desk(img: &mut RgbImage, place: &Placement, level: f64) {
-    let (w, h) = (img.width(), img.height());
-    let v = (255.0 * level).round().clamp(0.0, 255.0) as u8;
-    for y in 0..h {
-        for x in 0..w {
-            let s = place.sheet([x as f64 + 0.5, y as f64 + 0.5]);
-            let out_x = (s[0].abs() - PAGE_WIDTH_MM / 2.0).max(0.0);
-            let out_y = (s[1].abs() - PAGE_HEIGHT_MM / 2.0).max(0.0);
-            let inside_edge = (PAGE_WIDTH_MM / 2.0 - s[0].abs())
-                .min(PAGE_HEIGHT_MM / 2.0 - s[1].abs())
-                .max(0.0);
-            if out_x > 0.0 || out_y > 0.0 {
-                img.put_pixel(x, y, Rgb([v, v, v]));
-            } else if inside_edge < 1.5 {
-                let f = 0.55 + 0.45 * inside_edge / 1.5;
-                let Rgb(mut p) = *img.get_pixel(x, y);
-                for c in p.iter_mut() {
-                    *c = mul(*c, f);
-                }
-                img.put_pixel(x, y, Rgb(p));
-            }
-        }
-    }
-}
-
 /// The page's placement: affine maps between pixel coordinates (pixel `(c, r)` covers
 /// `[c, c+1) x [r, r+1)`) and sheet mm.
-struct Placement {
+pub(super) struct Placement {
     /// sheet = a * pixel + b
     to_sheet: [[f64; 3]; 2],
     /// pixel = a * sheet + b
@@ -291,7 +253,7 @@ impl Placement {
         }
     }
 
-    fn sheet(&self, px: [f64; 2]) -> [f64; 2] {
+    pub(super) fn sheet(&self, px: [f64; 2]) -> [f64; 2] {
         apply(&self.to_sheet, px)
     }
 
@@ -426,7 +388,7 @@ fn darken(img: &mut RgbImage, x: u32, y: u32, coverage: f64) {
     img.put_pixel(x, y, Rgb(v));
 }
 
-fn mul(v: u8, f: f64) -> u8 {
+pub(super) fn mul(v: u8, f: f64) -> u8 {
     (v as f64 * f).round().clamp(0.0, 255.0) as u8
 }
 

@@ -41,14 +41,31 @@ pub(crate) fn identify(discs: &[Disc], spacing_mm: f64) -> Result<Fiducials, Tra
                         continue;
                     };
                     any_quad = true;
+                    // One homography per quad; the eight labellings are the square's
+                    // symmetries applied to its sheet coordinates.
+                    let px: Vec<[f64; 2]> = quad.iter().map(|d| d.centre_px).collect();
+                    let base = fiducial_centres_mm(spacing_mm);
+                    let Some(h) = Homography::fit(&px, &base) else {
+                        continue;
+                    };
+                    let mapped: Vec<[f64; 2]> =
+                        discs.iter().map(|d| h.apply(d.centre_px)).collect();
                     for mirrored in [false, true] {
                         for rot in 0..4 {
-                            let mut q = quad;
+                            let mut order = [0usize, 1, 2, 3];
                             if mirrored {
-                                q.reverse();
+                                order.reverse();
                             }
-                            q.rotate_left(rot);
-                            if let Some(l) = label(q, mirrored, discs, spacing_mm) {
+                            order.rotate_left(rot);
+                            // order[k] is the quad index labelled as corner k: the linear map
+                            // taking base[order[k]] to base[k].
+                            let m = symmetry(&base, &order);
+                            let q = order.map(|i| quad[i]);
+                            let sheet: Vec<[f64; 2]> = mapped
+                                .iter()
+                                .map(|p| [m[0] * p[0] + m[1] * p[1], m[2] * p[0] + m[3] * p[1]])
+                                .collect();
+                            if let Some(l) = label(q, mirrored, discs, &sheet, spacing_mm) {
                                 if best.as_ref().is_none_or(|b| better(&l, b)) {
                                     best = Some(l);
                                 }
@@ -113,10 +130,31 @@ fn plausible_quad(q: [Disc; 4]) -> Option<[Disc; 4]> {
     Some(q)
 }
 
-/// Tries `q` as (top-left, top-right, bottom-right, bottom-left).
-fn label(q: [Disc; 4], mirrored: bool, discs: &[Disc], spacing_mm: f64) -> Option<Labelling> {
-    let px: Vec<[f64; 2]> = q.iter().map(|d| d.centre_px).collect();
-    let h = Homography::fit(&px, &fiducial_centres_mm(spacing_mm))?;
+/// The 2 x 2 matrix (row-major) of the square's symmetry taking `base[order[k]]` to `base[k]`.
+fn symmetry(base: &[[f64; 2]; 4], order: &[usize; 4]) -> [f64; 4] {
+    // Solve M [b0 b1] = [n0 n1] with b = base[order[0..2]], n = base[0..2].
+    let (b0, b1) = (base[order[0]], base[order[1]]);
+    let (n0, n1) = (base[0], base[1]);
+    let det = b0[0] * b1[1] - b1[0] * b0[1];
+    let inv = [b1[1] / det, -b1[0] / det, -b0[1] / det, b0[0] / det];
+    // M = N * B^-1, N = [[n0x n1x], [n0y n1y]], B^-1 = [[inv0 inv1], [inv2 inv3]]
+    [
+        n0[0] * inv[0] + n1[0] * inv[2],
+        n0[0] * inv[1] + n1[0] * inv[3],
+        n0[1] * inv[0] + n1[1] * inv[2],
+        n0[1] * inv[1] + n1[1] * inv[3],
+    ]
+}
+
+/// Tries `q` as (top-left, top-right, bottom-right, bottom-left); `sheet[i]` is disc `i` in the
+/// sheet coordinates of that labelling.
+fn label(
+    q: [Disc; 4],
+    mirrored: bool,
+    discs: &[Disc],
+    sheet: &[[f64; 2]],
+    spacing_mm: f64,
+) -> Option<Labelling> {
     let f = spacing_mm / FIDUCIAL_SPACING_MM;
     let tol = MATCH_TOL_MM * f;
     let dot_mm = orientation_dot_mm(spacing_mm);
@@ -125,17 +163,19 @@ fn label(q: [Disc; 4], mirrored: bool, discs: &[Disc], spacing_mm: f64) -> Optio
     let dot_ratio = ORIENTATION_DOT_DIAMETER_MM / FIDUCIAL_DIAMETER_MM;
     let (dot, dot_err_mm) = discs
         .iter()
-        .filter(|d| !is_corner(d))
-        .filter(|d| (d.diameter_px / corner_d / dot_ratio - 1.0).abs() < 0.4)
-        .map(|d| (*d, dist(h.apply(d.centre_px), dot_mm)))
+        .zip(sheet)
+        .filter(|(d, _)| !is_corner(d))
+        .filter(|(d, _)| (d.diameter_px / corner_d / dot_ratio - 1.0).abs() < 0.4)
+        .map(|(d, s)| (*d, dist(*s, dot_mm)))
         .filter(|(_, e)| *e < tol)
         .min_by(|a, b| a.1.total_cmp(&b.1))?;
     let ring_ratio = RING_DOT_DIAMETER_MM / FIDUCIAL_DIAMETER_MM;
     let small: Vec<(Disc, [f64; 2])> = discs
         .iter()
-        .filter(|d| !is_corner(d) && d.centre_px != dot.centre_px)
-        .filter(|d| (d.diameter_px / corner_d / ring_ratio - 1.0).abs() < 0.6)
-        .map(|d| (*d, h.apply(d.centre_px)))
+        .zip(sheet)
+        .filter(|(d, _)| !is_corner(d) && d.centre_px != dot.centre_px)
+        .filter(|(d, _)| (d.diameter_px / corner_d / ring_ratio - 1.0).abs() < 0.6)
+        .map(|(d, s)| (*d, *s))
         .collect();
     let ring = ring_dots_mm(spacing_mm)
         .into_iter()
