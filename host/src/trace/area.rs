@@ -96,7 +96,7 @@ pub(crate) fn seed_mask(
     let mut mask = vec![false; map.min_red.len()];
     for (i, &v) in map.min_red.iter().enumerate() {
         let c = map.block_centre_px(i % map.w, i / map.w);
-        let level = paper.at(c[0], c[1])[0];
+        let level = paper.red_near(c[0], c[1]);
         let dark_max = (level * (1.0 - opts.min_darkness)).max(0.0);
         let black = if exclude_black { level * 0.22 } else { -1.0 };
         let v = v as f32;

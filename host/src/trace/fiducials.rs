@@ -69,7 +69,7 @@ pub(crate) fn candidate_discs(img: &RgbImage, map: &CoarseMap, paper: &PaperMap)
         .enumerate()
         .map(|(i, &v)| {
             let c = map.block_centre_px(i % map.w, i / map.w);
-            (v as f32) < paper.at(c[0], c[1])[0] * BLACK_FRACTION
+            (v as f32) < paper.red_near(c[0], c[1]) * BLACK_FRACTION
         })
         .collect();
     let (_, comps) = components(&mask, map.w, map.h);

@@ -37,6 +37,10 @@ impl InkModel {
         for y in (0..h).step_by(step) {
             let row = &raw[3 * w * y..3 * w * (y + 1)];
             for (i, px) in row.chunks_exact(3).enumerate().step_by(step) {
+                // Only strongly red pixels matter: skip the rest before the local paper lookup.
+                if 2 * px[1] as u32 >= px[0] as u32 {
+                    continue;
+                }
                 let local = paper_map.at(i as f64 + 0.5, y as f64 + 0.5);
                 let r = px[0] as f32 / local[0];
                 let g = px[1] as f32 / local[1];

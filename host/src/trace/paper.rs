@@ -71,6 +71,15 @@ impl PaperMap {
         (img.width().min(img.height()) as usize / 150).max(8)
     }
 
+    /// Red paper level of the block holding pixel coordinates `(x, y)` (no interpolation: for
+    /// thresholds).
+    #[inline]
+    pub fn red_near(&self, x: f64, y: f64) -> f32 {
+        let bx = ((x.max(0.0) as usize) / self.block).min(self.w - 1);
+        let by = ((y.max(0.0) as usize) / self.block).min(self.h - 1);
+        self.level[by * self.w + bx][0]
+    }
+
     /// Paper level at pixel coordinates `(x, y)` (pixel centres at `i + 0.5`).
     #[inline]
     pub fn at(&self, x: f64, y: f64) -> [f32; 3] {
