@@ -146,9 +146,9 @@ pub(crate) fn assemble(
     }
     let mut closed = false;
     if let (Some(p), Some(first), Some(last)) = (period, accepted.first(), accepted.last()) {
-        let g = gap(last, first, p, max_gap_mm);
-        closed = g.bridged;
-        gaps.push(g);
+        gaps.push(gap(last, first, p, max_gap_mm));
+        // Closed only when every gap, the wrap-around included, is bridged.
+        closed = gaps.iter().all(|g| g.bridged);
     }
     let bridged_mm = gaps
         .iter()
