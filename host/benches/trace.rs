@@ -1,5 +1,6 @@
 //! `trace` on an A4 scan at 600 dpi (4961 x 7016 px, a 100 mm-radius pencil circle, rotated
-//! 2 degrees): PNG decoding and tracing measured separately.
+//! 2 degrees) and on a 12 MP phone photo (JPEG, 30 degrees tilt, k1 = -0.08, shading): decoding
+//! and tracing measured separately.
 //!
 //! The bench also leaves the scan and its truth in `target/tmp/trace_bench/` (`scan600.png`,
 //! `truth.csv` = the pencil centreline, closed, x,y mm in sheet coordinates) for the OpenCV
@@ -7,7 +8,10 @@
 
 use criterion::{criterion_group, criterion_main, Criterion};
 use indicatif::ProgressBar;
-use rigctl::trace::{load_scan, render_scan, trace_image, RenderSpec, TraceOptions};
+use rigctl::trace::render_photo::jpeg_bytes;
+use rigctl::trace::{
+    load_scan, render_photo, render_scan, trace_image, PhotoSpec, RenderSpec, TraceOptions,
+};
 use std::io::Write;
 use std::path::PathBuf;
 use std::time::Duration;
@@ -65,5 +69,44 @@ fn trace_a4_600dpi(c: &mut Criterion) {
     g.finish();
 }
 
-criterion_group!(benches, trace_a4_600dpi);
+fn trace_photo_12mp(c: &mut Criterion) {
+    let sheet = RenderSpec {
+        pencil_mm: truth(),
+        pencil_closed: true,
+        ring: true,
+        seed: 12,
+        ..RenderSpec::default()
+    };
+    let photo = PhotoSpec {
+        tilt_deg: 30.0,
+        k1: -0.08,
+        jpeg_quality: None,
+        ..PhotoSpec::default()
+    };
+    let img = render_photo(&sheet, &photo);
+    let dir = bench_dir();
+    let jpg = dir.join("photo12mp.jpg");
+    let written = std::fs::create_dir_all(&dir).is_ok()
+        && jpeg_bytes(&img, 92).is_some_and(|b| std::fs::write(&jpg, b).is_ok());
+    if !written {
+        eprintln!("could not write {}", jpg.display());
+        return;
+    }
+    let Ok(decoded) = load_scan(&jpg) else {
+        eprintln!("could not decode {}", jpg.display());
+        return;
+    };
+    let mut g = c.benchmark_group("trace");
+    g.sample_size(10).measurement_time(Duration::from_secs(8));
+    g.bench_function("decode_jpeg_12mp", |b| {
+        b.iter(|| load_scan(&jpg).map(|i| i.width()))
+    });
+    let opts = TraceOptions::default();
+    g.bench_function("trace_photo_12mp", |b| {
+        b.iter(|| trace_image(&decoded, &opts, &ProgressBar::hidden()).map(|t| t.strokes.len()))
+    });
+    g.finish();
+}
+
+criterion_group!(benches, trace_a4_600dpi, trace_photo_12mp);
 criterion_main!(benches);

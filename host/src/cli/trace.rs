@@ -1,14 +1,18 @@
-//! `rigctl trace`: the pencil centreline of a scanned sheet as CSV `x,y` (sheet mm).
+//! `rigctl trace`: the pencil centreline of a scanned or photographed sheet as CSV `x,y`
+//! (sheet mm). Exit 0 only when the written trace is the whole drawn path; 1 when part of it is
+//! missing (nothing is written then but the overlay); 2 for unusable input.
 
 use super::out::errln;
 use super::CliError;
 use indicatif::{ProgressBar, ProgressDrawTarget, ProgressStyle};
-use rigctl::trace::{load_scan, trace_image, write_csv, Mapping, TraceOptions};
+use rigctl::sheet::ReferencePath;
+use rigctl::trace::overlay::{render_overlay, write_overlay};
+use rigctl::trace::{load_scan, trace_image, write_csv, Mapping, PathChoice, Trace, TraceOptions};
 use std::path::PathBuf;
 
 #[derive(clap::Args, Debug)]
 pub struct Args {
-    /// The scan (PNG or JPEG), at least 300 dpi.
+    /// The scan (>= 300 dpi) or phone photo (PNG or JPEG).
     pub scan: PathBuf,
     /// Measured centre-to-centre spacing of the corner fiducials, mm.
     #[arg(long, default_value_t = 180.0)]
@@ -22,13 +26,28 @@ pub struct Args {
     /// Scale for --no-fiducials, mm per pixel.
     #[arg(long, requires = "no_fiducials")]
     pub mm_per_px: Option<f64>,
-    /// Join stroke pieces whose ends are at most this far apart, mm.
-    #[arg(long, default_value_t = 2.0)]
+    /// The printed path the pencil followed (auto: whichever the pencil runs along; free: no
+    /// printed path, the longest stroke is written).
+    #[arg(long, value_enum, default_value = "auto")]
+    pub path: PathArg,
+    /// Pencil skips up to this long (along the path) are bridged; longer gaps fail, mm.
+    #[arg(long, default_value_t = 10.0)]
     pub max_gap_mm: f64,
+    /// Also write the overlay (trace and fitted marks drawn on the input) as PNG.
+    #[arg(long)]
+    pub overlay: Option<PathBuf>,
+}
+
+#[derive(clap::ValueEnum, Clone, Copy, Debug, PartialEq, Eq)]
+pub enum PathArg {
+    Auto,
+    Circle,
+    Line,
+    Free,
 }
 
 pub fn run(args: Args) -> Result<(), CliError> {
-    super::check_outputs([Some(args.out.as_path())])?;
+    super::check_outputs([Some(args.out.as_path()), args.overlay.as_deref()])?;
     let mapping = match (args.no_fiducials, args.mm_per_px) {
         (true, Some(mm_per_px)) => Mapping::Scale { mm_per_px },
         (true, None) => return Err(CliError::bad_input("--no-fiducials needs --mm-per-px")),
@@ -36,9 +55,21 @@ pub fn run(args: Args) -> Result<(), CliError> {
             spacing_mm: args.fiducial_spacing_mm,
         },
     };
+    if !(args.max_gap_mm.is_finite() && args.max_gap_mm >= 0.0) {
+        return Err(CliError::bad_input(format!(
+            "invalid --max-gap-mm {}: expected a length >= 0 mm",
+            args.max_gap_mm
+        )));
+    }
     let opts = TraceOptions {
         mapping,
         max_gap_mm: args.max_gap_mm,
+        path: match args.path {
+            PathArg::Auto => PathChoice::Auto,
+            PathArg::Circle => PathChoice::Known(ReferencePath::Circle),
+            PathArg::Line => PathChoice::Known(ReferencePath::Line),
+            PathArg::Free => PathChoice::Free,
+        },
         ..TraceOptions::default()
     };
     let img = load_scan(&args.scan)?;
@@ -55,32 +86,90 @@ pub fn run(args: Args) -> Result<(), CliError> {
     let trace = trace_image(&img, &opts, &progress);
     progress.finish_and_clear();
     let trace = trace.map_err(|e| CliError::from(e).in_file(&args.scan))?;
+    if let Some(path) = &args.overlay {
+        write_overlay(
+            path,
+            &render_overlay(&img, &trace, args.fiducial_spacing_mm),
+        )?;
+    }
+    report(&trace);
+    if !trace.is_whole() {
+        return Err(CliError::failure(missing_message(&trace)));
+    }
     let main = trace
         .main_stroke()
         .ok_or_else(|| CliError::bad_input("no pencil trace found").in_file(&args.scan))?;
     write_csv(&args.out, &main.points_mm)?;
+    Ok(())
+}
+
+fn report(trace: &Trace) {
+    let Some(main) = trace.main_stroke() else {
+        return;
+    };
+    if trace.px_per_mm < 300.0 / 25.4 * 0.97 {
+        errln!(
+            "rigctl trace: warning: {:.0} dpi on the sheet, below the 300 dpi the tracer is made for; expect a coarser trace",
+            trace.px_per_mm * 25.4
+        );
+    }
+    let camera = match (&trace.camera_fit, &trace.camera) {
+        (Some(q), Some(c)) => format!(
+            ", camera check {:.3} mm RMS ({:.3} max) on {} of {} marks, k1 {:.4} k2 {:.4}",
+            q.rms_mm, q.max_mm, q.used, q.found, c.k1, c.k2
+        ),
+        _ => trace
+            .dot_residual_mm
+            .map(|r| format!(", fiducial check {r:.3} mm"))
+            .unwrap_or_default(),
+    };
     errln!(
-        "rigctl trace: {} points, {:.1} mm{}{} ({:.1} px/mm{})",
+        "rigctl trace: {} points, {:.1} mm{}{} ({:.1} px/mm{camera})",
         main.points_mm.len(),
         main.length_mm(),
         if main.closed { ", closed" } else { "" },
         if main.bridged_mm > 0.0 {
-            format!(", {:.2} mm of gaps bridged", main.bridged_mm)
+            format!(", {:.2} mm of skips bridged", main.bridged_mm)
         } else {
             String::new()
         },
         trace.px_per_mm,
-        trace
-            .dot_residual_mm
-            .map(|r| format!(", fiducial check {r:.3} mm"))
-            .unwrap_or_default(),
     );
-    if trace.strokes.len() > 1 {
-        let rest: f64 = trace.strokes[1..].iter().map(|s| s.length_mm()).sum();
-        errln!(
-            "rigctl trace: warning: {} other stroke(s), {rest:.1} mm in all, not written (only the longest is)",
-            trace.strokes.len() - 1
-        );
+    match &trace.assembly {
+        Some((path, a)) => errln!(
+            "rigctl trace: along the printed {}: {:.1} of {:.1} mm covered by pencil, {} skip(s) bridged, {:.1} mm of other marks left out",
+            if *path == ReferencePath::Circle { "circle" } else { "line" },
+            a.covered_mm,
+            a.reference_mm,
+            a.gaps.iter().filter(|g| g.bridged).count(),
+            a.unused_mm
+        ),
+        None if trace.strokes.len() > 1 => {
+            let rest: f64 = trace.strokes[1..].iter().map(|s| s.length_mm()).sum();
+            errln!(
+                "rigctl trace: warning: {} other stroke(s), {rest:.1} mm in all, not written (only the longest is)",
+                trace.strokes.len() - 1
+            );
+        }
+        None => {}
     }
-    Ok(())
+}
+
+fn missing_message(trace: &Trace) -> String {
+    let Some((_, a)) = &trace.assembly else {
+        return String::from("the trace is incomplete");
+    };
+    let parts: Vec<String> = a
+        .missing()
+        .map(|g| {
+            format!(
+                "{:.1} mm from ({:.1}, {:.1}) to ({:.1}, {:.1}) mm",
+                g.length_mm, g.from_mm[0], g.from_mm[1], g.to_mm[0], g.to_mm[1]
+            )
+        })
+        .collect();
+    format!(
+        "the pencil trace is not the whole drawn path: missing {} (gaps longer than --max-gap-mm); nothing written",
+        parts.join("; ")
+    )
 }

@@ -49,6 +49,30 @@ pub fn orientation_dot_mm(spacing_mm: f64) -> [f64; 2] {
     [ORIENTATION_DOT_MM[0] * f, ORIENTATION_DOT_MM[1] * f]
 }
 
+/// Diameter of the sheet-v2 ring dots, mm.
+pub const RING_DOT_DIAMETER_MM: f64 = 1.5;
+/// Pitch of the sheet-v2 ring dots along the fiducial square's sides, mm (nominal print).
+pub const RING_PITCH_MM: f64 = 15.0;
+
+/// The 43 ring dots of sheet v2 (FORMATS.md "Scanned sheets"), sheet mm, for a square of side
+/// `spacing_mm`: at `(t, +-h)` and `(+-h, t)` for `t = -75, -60, ..., 75` (scaled with the print),
+/// leaving out the orientation dot's place `(-h, 75)`.
+pub fn ring_dots_mm(spacing_mm: f64) -> Vec<[f64; 2]> {
+    let f = spacing_mm / FIDUCIAL_SPACING_MM;
+    let h = spacing_mm / 2.0;
+    let dot = orientation_dot_mm(spacing_mm);
+    let mut out = Vec::with_capacity(43);
+    for i in -5i32..=5 {
+        let t = i as f64 * RING_PITCH_MM * f;
+        for p in [[t, h], [t, -h], [h, t], [-h, t]] {
+            if (p[0] - dot[0]).abs() + (p[1] - dot[1]).abs() > 1e-9 {
+                out.push(p);
+            }
+        }
+    }
+    out
+}
+
 /// Sheet mm -> page mm (origin top-left, y down).
 pub fn sheet_to_page_mm(p: [f64; 2]) -> [f64; 2] {
     [PAGE_WIDTH_MM / 2.0 + p[0], PAGE_HEIGHT_MM / 2.0 - p[1]]
@@ -198,6 +222,18 @@ mod tests {
         let dot = orientation_dot_mm(FIDUCIAL_SPACING_MM);
         assert_eq!(dot, ORIENTATION_DOT_MM);
         assert!((tl[1] - dot[1] - 15.0).abs() < 1e-12 && tl[0] == dot[0]);
+    }
+
+    #[test]
+    fn ring_has_43_dots_on_the_square_without_the_orientation_dot() {
+        let ring = ring_dots_mm(FIDUCIAL_SPACING_MM);
+        assert_eq!(ring.len(), 43);
+        for p in &ring {
+            assert!((p[0].abs() - 90.0).abs() < 1e-9 || (p[1].abs() - 90.0).abs() < 1e-9);
+            assert!(p[0].abs() <= 90.0 && p[1].abs() <= 90.0);
+            assert!((p[0] + 90.0).abs() + (p[1] - 75.0).abs() > 1.0);
+        }
+        assert!(ring.contains(&[-90.0, 60.0]) && ring.contains(&[75.0, -90.0]));
     }
 
     #[test]

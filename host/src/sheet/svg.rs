@@ -1,9 +1,9 @@
 //! The printable sheet as SVG: an A4 page whose user units are millimetres.
 
 use super::{
-    fiducial_centres_mm, orientation_dot_mm, scale_bar_rects_mm, sheet_to_page_mm, ReferencePath,
-    FIDUCIAL_DIAMETER_MM, FIDUCIAL_SPACING_MM, ORIENTATION_DOT_DIAMETER_MM, PAGE_HEIGHT_MM,
-    PAGE_WIDTH_MM, SCALE_BAR_LENGTH_MM, SCALE_BAR_Y_MM,
+    fiducial_centres_mm, orientation_dot_mm, ring_dots_mm, scale_bar_rects_mm, sheet_to_page_mm,
+    ReferencePath, FIDUCIAL_DIAMETER_MM, FIDUCIAL_SPACING_MM, ORIENTATION_DOT_DIAMETER_MM,
+    PAGE_HEIGHT_MM, PAGE_WIDTH_MM, RING_DOT_DIAMETER_MM, SCALE_BAR_LENGTH_MM, SCALE_BAR_Y_MM,
 };
 use std::fmt::Write as _;
 
@@ -37,6 +37,13 @@ pub fn render_svg(paths: &[ReferencePath]) -> String {
         orientation_dot_mm(FIDUCIAL_SPACING_MM),
         ORIENTATION_DOT_DIAMETER_MM / 2.0,
     );
+    let _ = writeln!(
+        s,
+        "<!-- sheet v2 ring: 43 dots of 1.5 mm every 15 mm along the square's sides -->"
+    );
+    for c in ring_dots_mm(FIDUCIAL_SPACING_MM) {
+        circle(&mut s, c, RING_DOT_DIAMETER_MM / 2.0);
+    }
 
     for path in paths {
         let _ = writeln!(s, "<!-- reference path: {} -->", path.description());
@@ -144,6 +151,9 @@ mod tests {
             svg.contains(r##"<circle cx="105" cy="148.5" r="100" fill="none" stroke="#ff0000""##)
         );
         assert!(svg.contains("expected 180.0 mm"));
+        // sheet v2 ring: 43 dots of 1.5 mm
+        assert_eq!(svg.matches(r#"r="0.75" fill="black""#).count(), 43);
+        assert!(svg.contains(r#"<circle cx="30" cy="58.5" r="0.75" fill="black"/>"#));
         assert!(svg.contains("--fiducial-spacing-mm"));
         let line = render_svg(&[ReferencePath::Line]);
         assert!(line.contains(r#"<line x1="5" y1="148.5" x2="205" y2="148.5""#));

@@ -5,6 +5,7 @@
 //! round pencil tip leaves a round cap). Work is confined to windows around the stroke.
 
 use super::ink::InkModel;
+use super::paper::PaperMap;
 use super::raster::CoarseMap;
 use image::RgbImage;
 use indicatif::ProgressBar;
@@ -25,6 +26,24 @@ pub(crate) struct TrackParams {
     pub max_width_px: f64,
     /// Smallest accepted mass per unit length (weight x pixels).
     pub min_mass: f64,
+}
+
+/// Darkness above which a pixel is print or dust, never graphite: a window holding one is
+/// occluded.
+const BLACK_DARKNESS: f32 = 0.82;
+
+/// Printed marks (ring dots) in pixel coordinates that the pencil may cross: windows touching
+/// them are occluded, the stroke is bridged across them.
+#[derive(Debug, Clone, Default)]
+pub(crate) struct Occluders {
+    /// `(centre, radius)`, pixels.
+    pub discs: Vec<([f64; 2], f64)>,
+}
+
+impl Occluders {
+    fn touches(&self, c: [f64; 2], reach: f64) -> bool {
+        self.discs.iter().any(|(p, r)| dist(*p, c) < r + reach)
+    }
 }
 
 struct Section {
@@ -50,9 +69,12 @@ enum End {
 
 /// Tracks every stroke whose coarse blocks are set in `seeds` (a mask over `map`), keeping the
 /// centre of every window inside `roi`.
+#[allow(clippy::too_many_arguments)]
 pub(crate) fn track_all(
     img: &RgbImage,
     ink: &InkModel,
+    paper: &PaperMap,
+    occluders: &Occluders,
     map: &CoarseMap,
     seeds: &[bool],
     roi: &dyn Fn([f64; 2]) -> bool,
@@ -62,6 +84,8 @@ pub(crate) fn track_all(
     let mut tracker = Tracker {
         img,
         ink,
+        paper,
+        occluders,
         map,
         visited: vec![0; seeds.len()],
         roi,
@@ -91,6 +115,8 @@ pub(crate) fn track_all(
 struct Tracker<'a> {
     img: &'a RgbImage,
     ink: &'a InkModel,
+    paper: &'a PaperMap,
+    occluders: &'a Occluders,
     map: &'a CoarseMap,
     visited: Vec<u32>,
     roi: &'a dyn Fn([f64; 2]) -> bool,
@@ -269,6 +295,10 @@ impl Tracker<'_> {
         let n = [-t[1], t[0]];
         let ex = t[0].abs() * half_len + n[0].abs() * half_w;
         let ey = t[1].abs() * half_len + n[1].abs() * half_w;
+        if self.occluders.touches(c, half_len.hypot(half_w)) {
+            return None;
+        }
+        let paper = self.paper.at(c[0], c[1]);
         let (w, h) = (self.img.width() as i64, self.img.height() as i64);
         let x0 = ((c[0] - ex - 0.5).floor() as i64).clamp(0, w);
         let x1 = ((c[0] + ex + 0.5).ceil() as i64).clamp(0, w);
@@ -287,7 +317,11 @@ impl Tracker<'_> {
                     continue;
                 }
                 let i = 3 * x as usize;
-                let wgt = self.ink.weight(&row[i..i + 3]) as f64;
+                let dark = self.ink.darkness_on(&row[i..i + 3], paper);
+                if dark > BLACK_DARKNESS {
+                    return None;
+                }
+                let wgt = (dark - self.ink.floor).max(0.0) as f64;
                 sw += wgt;
                 sb += wgt * across;
                 sbb += wgt * across * across;

@@ -11,6 +11,7 @@
 //! with `Rp, Gp` the paper level and `Tr, Tg` the red ink's transmittances, estimated from the
 //! scan's most saturated pixels.
 
+use super::paper::PaperMap;
 use image::RgbImage;
 
 /// Darkness below which a pixel counts as paper (weights are `darkness - floor`).
@@ -19,8 +20,6 @@ pub(crate) const DEFAULT_FLOOR: f32 = 0.12;
 /// The per-pixel graphite model of one scan.
 #[derive(Debug, Clone, Copy)]
 pub(crate) struct InkModel {
-    /// Paper level per channel, 0..255.
-    pub paper: [f32; 3],
     /// Red ink transmittance `[red, green]` relative to paper, if red ink was found.
     pub red_ink: Option<[f32; 2]>,
     /// Darkness treated as zero weight.
@@ -29,17 +28,22 @@ pub(crate) struct InkModel {
 
 impl InkModel {
     /// Estimates the red ink from the strongly red pixels among every `step`-th pixel of every
-    /// `step`-th row.
-    pub fn estimate(img: &RgbImage, paper: [f32; 3], floor: f32, step: usize) -> Self {
+    /// `step`-th row, each relative to its local paper level.
+    pub fn estimate(img: &RgbImage, paper_map: &PaperMap, floor: f32, step: usize) -> Self {
         let step = step.max(1);
         let (w, h) = (img.width() as usize, img.height() as usize);
         let raw = img.as_raw();
         let mut samples: Vec<[f32; 2]> = Vec::new();
         for y in (0..h).step_by(step) {
             let row = &raw[3 * w * y..3 * w * (y + 1)];
-            for px in row.chunks_exact(3).step_by(step) {
-                let r = px[0] as f32 / paper[0];
-                let g = px[1] as f32 / paper[1];
+            for (i, px) in row.chunks_exact(3).enumerate().step_by(step) {
+                // Only strongly red pixels matter: skip the rest before the local paper lookup.
+                if 2 * px[1] as u32 >= px[0] as u32 {
+                    continue;
+                }
+                let local = paper_map.at(i as f64 + 0.5, y as f64 + 0.5);
+                let r = px[0] as f32 / local[0];
+                let g = px[1] as f32 / local[1];
                 if r > 0.6 && g < 0.5 * r {
                     samples.push([r, g]);
                 }
@@ -55,20 +59,16 @@ impl InkModel {
             let tg = core[mid][1];
             [tr.min(1.0), tg.clamp(0.0, 0.5)]
         });
-        Self {
-            paper,
-            red_ink,
-            floor,
-        }
+        Self { red_ink, floor }
     }
 
-    /// Graphite darkness of one pixel, 0 (paper, red ink) .. 1 (black).
+    /// Graphite darkness of one pixel on paper of level `paper`, 0 (paper, red ink) .. 1 (black).
     #[inline]
-    pub fn darkness(&self, px: &[u8]) -> f32 {
-        let r = px[0] as f32 / self.paper[0];
+    pub fn darkness_on(&self, px: &[u8], paper: [f32; 3]) -> f32 {
+        let r = px[0] as f32 / paper[0];
         let mut graphite = r;
         if let Some([tr, tg]) = self.red_ink {
-            let g = px[1] as f32 / self.paper[1];
+            let g = px[1] as f32 / paper[1];
             if r > 1e-3 {
                 let rho = g / r;
                 if rho < 0.98 {
@@ -82,12 +82,6 @@ impl InkModel {
         }
         (1.0 - graphite).clamp(0.0, 1.0)
     }
-
-    /// Centroid weight of one pixel: darkness above the paper floor.
-    #[inline]
-    pub fn weight(&self, px: &[u8]) -> f32 {
-        (self.darkness(px) - self.floor).max(0.0)
-    }
 }
 
 #[cfg(test)]
@@ -98,7 +92,6 @@ mod tests {
     fn red_ink_is_removed_and_graphite_kept() {
         let paper = [240.0, 240.0, 240.0];
         let model = InkModel {
-            paper,
             red_ink: Some([0.9, 0.12]),
             floor: 0.0,
         };
@@ -113,7 +106,7 @@ mod tests {
         };
         for cov in [0.0, 0.3, 0.7, 1.0] {
             for graphite in [1.0, 0.45] {
-                let d = model.darkness(&mix(cov, graphite));
+                let d = model.darkness_on(&mix(cov, graphite), paper);
                 assert!(
                     (d - (1.0 - graphite)).abs() < 0.02,
                     "cov {cov} g {graphite}: {d}"

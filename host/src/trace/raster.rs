@@ -5,6 +5,7 @@
 use image::RgbImage;
 
 /// Per-channel paper level (median of a regular sample of pixels), 0..255.
+#[cfg(test)]
 pub(crate) fn paper_level(img: &RgbImage) -> [f32; 3] {
     let (w, h) = (img.width() as usize, img.height() as usize);
     let step = (w.min(h) / 512).clamp(1, 8);

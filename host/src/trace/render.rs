@@ -10,10 +10,11 @@
 //! stroke is unbiased. Noise is a hash of (seed, pixel), so a render is deterministic and does
 //! not depend on the order of the work.
 
+use super::render_extras::{cumulative_arc, desk};
 use crate::sheet::{
-    fiducial_centres_mm, orientation_dot_mm, scale_bar_rects_mm, ReferencePath,
+    fiducial_centres_mm, orientation_dot_mm, ring_dots_mm, scale_bar_rects_mm, ReferencePath,
     FIDUCIAL_DIAMETER_MM, FIDUCIAL_SPACING_MM, ORIENTATION_DOT_DIAMETER_MM, PAGE_HEIGHT_MM,
-    PAGE_WIDTH_MM,
+    PAGE_WIDTH_MM, RING_DOT_DIAMETER_MM,
 };
 use image::{Rgb, RgbImage};
 
@@ -53,6 +54,19 @@ pub struct RenderSpec {
     pub paper_noise: f64,
     /// Seed of the noise.
     pub seed: u64,
+    /// Print the sheet-v2 ring of 43 dots.
+    pub ring: bool,
+    /// Pencil skips: arc-length intervals `[s0, s1]` (mm from the path's start) left unwritten.
+    pub skips_mm: Vec<[f64; 2]>,
+    /// Faint graphite: `[s0, s1, darkness]`, the pencil's mean darkness over that arc-length
+    /// interval.
+    pub faint_mm: Vec<[f64; 3]>,
+    /// Dust specks `[x, y, radius]` (sheet mm), dark grey-black.
+    pub dust_mm: Vec<[f64; 3]>,
+    /// Paper fibres `[x0, y0, x1, y1]` (sheet mm): thin grey segments 0.08 mm wide.
+    pub fibres_mm: Vec<[f64; 4]>,
+    /// Level (0..1) of whatever the scanner sees outside the page (desk, lid); `None`: paper.
+    pub desk_level: Option<f64>,
 }
 
 impl Default for RenderSpec {
@@ -73,6 +87,12 @@ impl Default for RenderSpec {
             paper_level: 0.94,
             paper_noise: 0.012,
             seed: 1,
+            ring: false,
+            skips_mm: Vec::new(),
+            faint_mm: Vec::new(),
+            dust_mm: Vec::new(),
+            fibres_mm: Vec::new(),
+            desk_level: None,
         }
     }
 }
@@ -110,7 +130,7 @@ pub fn render_scan(spec: &RenderSpec) -> RgbImage {
             0.5 * REFERENCE_WIDTH_MM * scale,
         );
         let raw: &mut [u8] = img.as_mut();
-        for (idx, c) in cov {
+        for (idx, c, _) in cov {
             let i = 3 * idx as usize;
             for ch in 0..3 {
                 raw[i + ch] = mul(raw[i + ch], 1.0 - c * (1.0 - RED_INK[ch]));
@@ -125,14 +145,47 @@ pub fn render_scan(spec: &RenderSpec) -> RgbImage {
             spec.pencil_closed,
             0.5 * spec.pencil_width_mm,
         );
+        let arc = cumulative_arc(&spec.pencil_mm);
         let raw: &mut [u8] = img.as_mut();
-        for (idx, c) in cov {
+        for (idx, c, seg) in cov {
+            let s_mm = arc[seg];
+            if spec.skips_mm.iter().any(|k| s_mm >= k[0] && s_mm <= k[1]) {
+                continue;
+            }
+            let mean = spec
+                .faint_mm
+                .iter()
+                .find(|f| s_mm >= f[0] && s_mm <= f[1])
+                .map_or(spec.pencil_darkness, |f| f[2]);
             let n = triangular(hash(spec.seed ^ 0x5bd1_e995, idx as u64));
-            let dark = (spec.pencil_darkness * (1.0 + spec.pencil_grain * n)).clamp(0.0, 0.97);
+            let dark = (mean * (1.0 + spec.pencil_grain * n)).clamp(0.0, 0.97);
             let i = 3 * idx as usize;
             for ch in 0..3 {
                 raw[i + ch] = mul(raw[i + ch], 1.0 - c * dark);
             }
+        }
+    }
+    for f in &spec.fibres_mm {
+        let cov = stroke_coverage(&img, &place, &[[f[0], f[1]], [f[2], f[3]]], false, 0.04);
+        let raw: &mut [u8] = img.as_mut();
+        for (idx, c, _) in cov {
+            let i = 3 * idx as usize;
+            for ch in 0..3 {
+                raw[i + ch] = mul(raw[i + ch], 1.0 - c * 0.45);
+            }
+        }
+    }
+    for d in &spec.dust_mm {
+        disc(&mut img, &place, [d[0], d[1]], d[2]);
+    }
+    if spec.ring && spec.fiducials {
+        for c in ring_dots_mm(FIDUCIAL_SPACING_MM * spec.print_scale) {
+            disc(
+                &mut img,
+                &place,
+                c,
+                0.5 * RING_DOT_DIAMETER_MM * spec.print_scale,
+            );
         }
     }
     if spec.fiducials {
@@ -152,12 +205,15 @@ pub fn render_scan(spec: &RenderSpec) -> RgbImage {
             rect(&mut img, &place, min, max);
         }
     }
+    if let Some(level) = spec.desk_level {
+        desk(&mut img, &place, level);
+    }
     img
 }
 
 /// The page's placement: affine maps between pixel coordinates (pixel `(c, r)` covers
 /// `[c, c+1) x [r, r+1)`) and sheet mm.
-struct Placement {
+pub(super) struct Placement {
     /// sheet = a * pixel + b
     to_sheet: [[f64; 3]; 2],
     /// pixel = a * sheet + b
@@ -197,7 +253,7 @@ impl Placement {
         }
     }
 
-    fn sheet(&self, px: [f64; 2]) -> [f64; 2] {
+    pub(super) fn sheet(&self, px: [f64; 2]) -> [f64; 2] {
         apply(&self.to_sheet, px)
     }
 
@@ -254,7 +310,7 @@ fn paper(img: &mut RgbImage, spec: &RenderSpec) {
     }
 }
 
-/// Coverage `(pixel index, coverage)` of a stroke of half width `half_w_mm` around a polyline,
+/// Coverage `(pixel index, coverage, segment)` of a stroke of half width `half_w_mm` around a polyline,
 /// one entry per pixel (the largest over the segments, i.e. from the nearest segment).
 fn stroke_coverage(
     img: &RgbImage,
@@ -262,8 +318,8 @@ fn stroke_coverage(
     pts: &[[f64; 2]],
     closed: bool,
     half_w_mm: f64,
-) -> Vec<(u32, f64)> {
-    let mut cov: Vec<(u32, f32)> = Vec::new();
+) -> Vec<(u32, f64, usize)> {
+    let mut cov: Vec<(u32, f32, u32)> = Vec::new();
     let margin = half_w_mm + 2.0 / place.ppmm;
     let n = pts.len();
     let segs = if closed { n } else { n.saturating_sub(1) };
@@ -279,14 +335,16 @@ fn stroke_coverage(
                 let d = segment_distance(s, a, b);
                 let c = (0.5 - (d - half_w_mm) * place.ppmm).clamp(0.0, 1.0);
                 if c > 0.0 {
-                    cov.push((y * width + x, c as f32));
+                    cov.push((y * width + x, c as f32, i as u32));
                 }
             }
         }
     }
     cov.sort_unstable_by(|p, q| p.0.cmp(&q.0).then(q.1.total_cmp(&p.1)));
     cov.dedup_by_key(|p| p.0);
-    cov.into_iter().map(|(i, c)| (i, c as f64)).collect()
+    cov.into_iter()
+        .map(|(i, c, seg)| (i, c as f64, seg as usize))
+        .collect()
 }
 
 fn disc(img: &mut RgbImage, place: &Placement, centre: [f64; 2], radius_mm: f64) {
@@ -330,7 +388,7 @@ fn darken(img: &mut RgbImage, x: u32, y: u32, coverage: f64) {
     img.put_pixel(x, y, Rgb(v));
 }
 
-fn mul(v: u8, f: f64) -> u8 {
+pub(super) fn mul(v: u8, f: f64) -> u8 {
     (v as f64 * f).round().clamp(0.0, 255.0) as u8
 }
 

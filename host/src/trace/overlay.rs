@@ -1,0 +1,154 @@
+//! The overlay image: the input (reduced to at most 2400 px on its long side) with the fitted
+//! printed marks (blue rings where the camera model puts them, magenta crosses where they were
+//! measured), the written trace (green) and the missing stretches of the printed path (red), so
+//! that a person can check a trace at a glance.
+
+use super::{Trace, TraceError};
+use crate::io::atomic::{write_atomic, AtomicWriteError};
+use crate::sheet::{
+    fiducial_centres_mm, orientation_dot_mm, ring_dots_mm, FIDUCIAL_DIAMETER_MM,
+    ORIENTATION_DOT_DIAMETER_MM, RING_DOT_DIAMETER_MM,
+};
+use image::{Rgb, RgbImage};
+use std::path::Path;
+
+const GREEN: Rgb<u8> = Rgb([0, 170, 0]);
+const BLUE: Rgb<u8> = Rgb([20, 60, 255]);
+const MAGENTA: Rgb<u8> = Rgb([220, 0, 220]);
+const RED: Rgb<u8> = Rgb([255, 0, 0]);
+
+/// Draws the overlay of `trace` on `img` (the traced image). `spacing_mm` is the fiducial
+/// spacing used.
+pub fn render_overlay(img: &RgbImage, trace: &Trace, spacing_mm: f64) -> RgbImage {
+    let long = img.width().max(img.height()) as usize;
+    let step = long.div_ceil(2400).max(1);
+    let mut out = downsample(img, step);
+    let scale = 1.0 / step as f64;
+    let px = |p: [f64; 2]| [p[0] * scale, p[1] * scale];
+    if let Some(cam) = &trace.camera {
+        let mut marks: Vec<([f64; 2], f64)> = fiducial_centres_mm(spacing_mm)
+            .iter()
+            .map(|c| (*c, FIDUCIAL_DIAMETER_MM))
+            .collect();
+        marks.push((orientation_dot_mm(spacing_mm), ORIENTATION_DOT_DIAMETER_MM));
+        marks.extend(
+            ring_dots_mm(spacing_mm)
+                .into_iter()
+                .map(|c| (c, RING_DOT_DIAMETER_MM)),
+        );
+        for (c, d) in marks {
+            let r_mm = 0.5 * d + 1.0;
+            let ring: Vec<[f64; 2]> = (0..=48)
+                .map(|i| {
+                    let a = std::f64::consts::TAU * i as f64 / 48.0;
+                    px(cam.to_px([c[0] + r_mm * a.cos(), c[1] + r_mm * a.sin()]))
+                })
+                .collect();
+            polyline(&mut out, &ring, BLUE, 1);
+        }
+        if let Some(f) = &trace.fiducials {
+            let measured = f
+                .corners
+                .iter()
+                .chain(std::iter::once(&f.dot))
+                .chain(f.ring.iter().map(|(d, _)| d));
+            for d in measured {
+                let c = px(d.centre_px);
+                polyline(
+                    &mut out,
+                    &[[c[0] - 4.0, c[1]], [c[0] + 4.0, c[1]]],
+                    MAGENTA,
+                    0,
+                );
+                polyline(
+                    &mut out,
+                    &[[c[0], c[1] - 4.0], [c[0], c[1] + 4.0]],
+                    MAGENTA,
+                    0,
+                );
+            }
+        }
+        for s in &trace.strokes {
+            let mut pts: Vec<[f64; 2]> = s.points_mm.iter().map(|p| px(cam.to_px(*p))).collect();
+            if s.closed {
+                if let Some(&first) = pts.first() {
+                    pts.push(first);
+                }
+            }
+            polyline(&mut out, &pts, GREEN, 1);
+        }
+        if let Some((_, a)) = &trace.assembly {
+            for g in a.missing() {
+                let seg = [px(cam.to_px(g.from_mm)), px(cam.to_px(g.to_mm))];
+                polyline(&mut out, &seg, RED, 3);
+            }
+        }
+    }
+    out
+}
+
+/// Writes the overlay as PNG, atomically.
+pub fn write_overlay(path: &Path, overlay: &RgbImage) -> Result<(), TraceError> {
+    let mut buf = Vec::new();
+    let enc = image::codecs::png::PngEncoder::new(&mut buf);
+    overlay
+        .write_with_encoder(enc)
+        .map_err(|e| TraceError::Write {
+            path: path.to_path_buf(),
+            source: std::io::Error::other(e.to_string()),
+        })?;
+    write_atomic(path, |w| {
+        w.write_all(&buf).map_err(|source| {
+            TraceError::Atomic(AtomicWriteError::Io {
+                path: path.to_path_buf(),
+                source,
+            })
+        })
+    })
+}
+
+/// Box-filter reduction by an integer factor.
+fn downsample(img: &RgbImage, step: usize) -> RgbImage {
+    if step <= 1 {
+        return img.clone();
+    }
+    let (w, h) = (img.width() as usize / step, img.height() as usize / step);
+    let mut out = RgbImage::new(w.max(1) as u32, h.max(1) as u32);
+    for y in 0..h {
+        for x in 0..w {
+            let mut acc = [0u32; 3];
+            for yy in y * step..(y + 1) * step {
+                for xx in x * step..(x + 1) * step {
+                    let p = img.get_pixel(xx as u32, yy as u32);
+                    for c in 0..3 {
+                        acc[c] += p[c] as u32;
+                    }
+                }
+            }
+            let n = (step * step) as u32;
+            out.put_pixel(x as u32, y as u32, Rgb(acc.map(|v| (v / n) as u8)));
+        }
+    }
+    out
+}
+
+/// Draws a polyline with square pens of half width `half` pixels.
+fn polyline(img: &mut RgbImage, pts: &[[f64; 2]], colour: Rgb<u8>, half: i64) {
+    let (w, h) = (img.width() as i64, img.height() as i64);
+    for seg in pts.windows(2) {
+        let (a, b) = (seg[0], seg[1]);
+        let n = ((b[0] - a[0]).abs().max((b[1] - a[1]).abs()).ceil() as usize).clamp(1, 100_000);
+        for i in 0..=n {
+            let t = i as f64 / n as f64;
+            let x = (a[0] + t * (b[0] - a[0])).round() as i64;
+            let y = (a[1] + t * (b[1] - a[1])).round() as i64;
+            for yy in y - half..=y + half {
+                for xx in x - half..=x + half {
+                    if xx >= 0 && yy >= 0 && xx < w && yy < h {
+                        img.put_pixel(xx as u32, yy as u32, colour);
+                    }
+                }
+            }
+        }
+    }
+}
