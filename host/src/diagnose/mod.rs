@@ -457,9 +457,16 @@ pub fn diagnose(
             ));
         }
     }
+    // an independent floor (instrument, repeatability) also sets the smallest term worth naming
+    let known_floor_mm = match floor.used.as_str() {
+        "instrument" => floor.instrument_mm,
+        "repeatability" => floor.repeatability_mm,
+        _ => None,
+    };
     let probe_cfg = probe::ProbeConfig {
         folds: cfg.folds,
         seed: cfg.seed,
+        floor_mm: opts.probe.floor_mm.or(known_floor_mm),
         ..opts.probe.clone()
     };
     let jac = probe::jacobians(&last.ext, cal, &last.fitted)?;
