@@ -28,7 +28,7 @@
 //!      folds drawn with a seeded ChaCha8 permutation): every fold is refitted (from the full-data
 //!      solution, same unknowns) and predicts its held-out poses; with per-pose held-out errors
 //!      `e0` (without the candidate) and `e1` (with it), the mean must drop by at least
-//!      [`DecideConfig::cv_min_gain`] (relative, default 1 %) and the paired one-sided t statistic
+//!      [`DecideConfig::cv_min_gain`] (relative, default 2 %) and the paired one-sided t statistic
 //!      of `e0 - e1` must exceed [`DecideConfig::cv_t_min`] (default 2.326, p < 0.01).
 //! 4. Repeat until no candidate passes (or [`DecideConfig::max_effects`]).
 
@@ -92,7 +92,7 @@ impl Default for DecideConfig {
             alpha: 1e-3,
             folds: 5,
             seed: 1,
-            cv_min_gain: 0.01,
+            cv_min_gain: 0.02,
             cv_t_min: 2.326,
             refit_top: 4,
             max_effects: 8,
