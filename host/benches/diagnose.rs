@@ -10,18 +10,7 @@ use rigctl::diagnose::{diagnose, DiagnoseOptions};
 use rigctl::model::{katana450, KATANA_PENCIL_TOOL_MM};
 use rigctl::sim::effects::parse_effect;
 use rigctl::sim::session::{simulate_session, SessionConfig, SessionPath};
-use rigctl::sim::simulate::{simulate, SimConfig, SimPose};
-
-fn dataset(poses: &[SimPose]) -> Dataset {
-    Dataset {
-        poses: Poses {
-            q_deg: poses.iter().map(|p| p.q_deg.clone()).collect(),
-            xyz_mm: poses.iter().map(|p| p.measured_mm).collect(),
-        },
-        t_s: Some(poses.iter().map(|p| p.t_s).collect()),
-        ..Dataset::default()
-    }
-}
+use rigctl::sim::simulate::{simulate, SimConfig};
 
 fn bench(c: &mut Criterion) {
     let declared = katana450(200.0).expect("preset");
@@ -39,7 +28,10 @@ fn bench(c: &mut Criterion) {
             ..SimConfig::default()
         };
         let out = simulate(&declared, &cfg).expect("simulate");
-        let (cal, val) = (dataset(&out.cal), dataset(&out.val));
+        let (cal, val) = (
+            Dataset::from_sim_poses(&out.cal),
+            Dataset::from_sim_poses(&out.val),
+        );
         g.bench_function(name, |b| {
             b.iter(|| {
                 diagnose(&declared, &cal, &val, &DiagnoseOptions::default()).expect("diagnose")

@@ -37,6 +37,12 @@ pub mod tiago;
 pub mod trace;
 pub mod urdf;
 
+/// Whether this run is CI (`CI=true`, as CI sets it): tests then require the shared data
+/// instead of skipping without it.
+pub fn in_ci() -> bool {
+    std::env::var("CI").is_ok_and(|v| v.eq_ignore_ascii_case("true") || v == "1")
+}
+
 /// Where the shared documents and data live: `$RIG_SHARED_DIR`, else `../shared` beside the
 /// repository checkout. `None` when neither exists.
 pub fn shared_dir() -> Option<std::path::PathBuf> {

@@ -4,28 +4,16 @@
 //! 1.5x of the noise floor (the held-out mean error of the true model, i.e. the mean length of
 //! the validation noise).
 
-use rigctl::calib::Poses;
 use rigctl::diagnose::data::Dataset;
 use rigctl::diagnose::{diagnose, DiagnoseOptions, Diagnosis};
 use rigctl::model::katana450;
 use rigctl::sim::effects::parse_effect;
-use rigctl::sim::simulate::{simulate, SimConfig, SimPose};
+use rigctl::sim::simulate::{simulate, SimConfig};
 
 struct Run {
     diag: Diagnosis,
     /// Held-out mean error of the true model (mm).
     floor_mm: f64,
-}
-
-fn dataset(poses: &[SimPose]) -> Dataset {
-    Dataset {
-        poses: Poses {
-            q_deg: poses.iter().map(|p| p.q_deg.clone()).collect(),
-            xyz_mm: poses.iter().map(|p| p.measured_mm).collect(),
-        },
-        t_s: Some(poses.iter().map(|p| p.t_s).collect()),
-        ..Dataset::default()
-    }
 }
 
 fn run(effects: &[&str], seed: u64) -> Run {
@@ -44,8 +32,8 @@ fn run(effects: &[&str], seed: u64) -> Run {
         / out.val.len() as f64;
     let diag = diagnose(
         &declared,
-        &dataset(&out.cal),
-        &dataset(&out.val),
+        &Dataset::from_sim_poses(&out.cal),
+        &Dataset::from_sim_poses(&out.val),
         &DiagnoseOptions::default(),
     )
     .unwrap();

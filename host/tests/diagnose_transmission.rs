@@ -2,25 +2,13 @@
 //! `hysteresis`), the independent floor (`--instrument-mm`), the final values and aliasing, on
 //! the simulated Katana (118 ISO 9283 poses to calibrate, 60 held out, 0.01 mm noise).
 
-use rigctl::calib::Poses;
 use rigctl::diagnose::data::Dataset;
 use rigctl::diagnose::{diagnose, DiagnoseOptions, Diagnosis};
 use rigctl::model::katana450;
 use rigctl::sim::effects::parse_effect;
-use rigctl::sim::simulate::{simulate, SimConfig, SimPose};
+use rigctl::sim::simulate::{simulate, SimConfig};
 
 const NOISE_MM: f64 = 0.01;
-
-fn dataset(poses: &[SimPose]) -> Dataset {
-    Dataset {
-        poses: Poses {
-            q_deg: poses.iter().map(|p| p.q_deg.clone()).collect(),
-            xyz_mm: poses.iter().map(|p| p.measured_mm).collect(),
-        },
-        t_s: Some(poses.iter().map(|p| p.t_s).collect()),
-        ..Dataset::default()
-    }
-}
 
 struct Run {
     diag: Diagnosis,
@@ -43,7 +31,13 @@ fn run_with(effects: &[&str], seed: u64, opts: &DiagnoseOptions) -> Run {
         .map(|p| (p.measured_mm - p.truth_mm).norm())
         .sum::<f64>()
         / out.val.len() as f64;
-    let diag = diagnose(&declared, &dataset(&out.cal), &dataset(&out.val), opts).unwrap();
+    let diag = diagnose(
+        &declared,
+        &Dataset::from_sim_poses(&out.cal),
+        &Dataset::from_sim_poses(&out.val),
+        opts,
+    )
+    .unwrap();
     Run { diag, floor_mm }
 }
 
@@ -164,7 +158,7 @@ fn a_residual_above_the_instrument_floor_says_the_model_lacks_something() {
     };
     let out = simulate(&declared, &cfg).unwrap();
     // drop the repeated pose so that no repeatability is known either
-    let mut cal = dataset(&out.cal);
+    let mut cal = Dataset::from_sim_poses(&out.cal);
     let n = cal.len();
     let keep: Vec<usize> = (0..n)
         .filter(|&k| {
@@ -177,7 +171,7 @@ fn a_residual_above_the_instrument_floor_says_the_model_lacks_something() {
         })
         .collect();
     cal = cal.subset(&keep);
-    let d = diagnose(&declared, &cal, &dataset(&out.val), &opts).unwrap();
+    let d = diagnose(&declared, &cal, &Dataset::from_sim_poses(&out.val), &opts).unwrap();
     assert_eq!(d.report.floor.used, "residual", "{:?}", d.report.floor);
     assert!(d
         .report

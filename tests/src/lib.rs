@@ -31,8 +31,10 @@ pub fn shared_or_skip(test: &str) -> Option<PathBuf> {
     let dir = rigctl::shared_dir();
     if dir.is_none() {
         let msg = format!("{test}: ../shared (or $RIG_SHARED_DIR) is absent");
-        let ci = std::env::var("CI").is_ok_and(|v| v.eq_ignore_ascii_case("true") || v == "1");
-        assert!(!ci, "{msg}; with CI=true the shared data is required");
+        assert!(
+            !rigctl::in_ci(),
+            "{msg}; with CI=true the shared data is required"
+        );
         eprintln!("SKIPPED {msg}");
     }
     dir

@@ -3,11 +3,6 @@
 
 use std::path::PathBuf;
 
-/// Whether this run is CI (`CI=true`, as CI sets it).
-pub fn in_ci() -> bool {
-    std::env::var("CI").is_ok_and(|v| v.eq_ignore_ascii_case("true") || v == "1")
-}
-
 /// `rel` (a file or folder) under the shared directory (`rigctl::shared_dir()`: `$RIG_SHARED_DIR`
 /// or `../shared`), or `None` after a `SKIPPED` message when it is absent. With `CI=true` its
 /// absence fails the test instead: CI runs with `../shared` beside the clone, so a missing file
@@ -18,7 +13,7 @@ pub fn shared_file(test: &str, rel: &str) -> Option<PathBuf> {
         return Some(p);
     }
     let msg = format!("{test}: ../shared/{rel} is absent (or set RIG_SHARED_DIR)");
-    if in_ci() {
+    if rigctl::in_ci() {
         panic!("{msg}; with CI=true the shared data is required");
     }
     eprintln!("SKIPPED {msg}");
