@@ -3,9 +3,11 @@
 
 use nalgebra::DMatrix;
 
+use super::accumulate::{normal_equations, PositionNormalProblem};
 use super::error::CalibError;
 use super::identifiability::{analyse, scaled_svd};
 use super::lm::{solve, LmConfig};
+use super::normal::{solve_normal, use_normal_equations};
 use super::problem::{param_vector, stacked_jacobian, ModelProblem, Poses, PositionProblem};
 use crate::model::Model;
 
@@ -36,7 +38,19 @@ pub struct Fit {
 /// Standard deviations `sqrt(diag(s^2 (J^T J)^-1))` with `s^2 = |r|^2 / (m - n)`, through the
 /// SVD of the column-scaled Jacobian (directions below `rtol * s_max` count as infinite).
 pub fn parameter_sigmas(jac: &DMatrix<f64>, residual_norm_sq: f64, rtol: f64) -> Vec<f64> {
-    let (m, n) = (jac.nrows(), jac.ncols());
+    parameter_sigmas_m(jac, jac.nrows(), residual_norm_sq, rtol)
+}
+
+/// [`parameter_sigmas`] for a Jacobian given by any matrix with the same `J^T J` (e.g. the
+/// square root of the normal matrix, [`super::normal::Normal::jacobian_root`]) and `m`
+/// residuals.
+pub fn parameter_sigmas_m(
+    jac: &DMatrix<f64>,
+    m: usize,
+    residual_norm_sq: f64,
+    rtol: f64,
+) -> Vec<f64> {
+    let n = jac.ncols();
     if n == 0 {
         return Vec::new();
     }
@@ -73,6 +87,9 @@ pub fn fit_parameters(
     if poses.is_empty() {
         return Err(CalibError::NoPoses);
     }
+    if use_normal_equations(rtol) {
+        return fit_parameters_normal(start, poses, selection, tilt, lm, rtol);
+    }
     let jac0 = stacked_jacobian(start, poses, selection, tilt)?;
     fit_problem(
         start,
@@ -84,20 +101,59 @@ pub fn fit_parameters(
     )
 }
 
-/// The identification common to every kind of measurement: the identifiability analysis of
-/// `jac0` (the Jacobian of the residuals wrt `selection` at `start`, one column per selected
-/// parameter) splits the selection into fitted and fixed parameters; `make_problem` builds the
-/// least-squares problem on a copy of `start` with the fitted ones (model indices) as unknowns,
-/// which Levenberg-Marquardt solves from their values in `start`; the sigmas and the condition
-/// number are those of the Jacobian at the solution.
-pub fn fit_problem<P: ModelProblem>(
+/// [`fit_parameters`] on normal equations accumulated per pose (bounded memory, see
+/// [`super::normal`]): the identifiability analysis and the sigmas work on the square root of
+/// `J^T J`, which has the tall Jacobian's column norms and singular values.
+pub fn fit_parameters_normal(
     start: &Model,
+    poses: &Poses,
     selection: &[usize],
-    jac0: &DMatrix<f64>,
-    make_problem: impl FnOnce(Vec<usize>) -> P,
+    tilt: bool,
     lm: &LmConfig,
     rtol: f64,
 ) -> Result<Fit, CalibError> {
+    if poses.is_empty() {
+        return Err(CalibError::NoPoses);
+    }
+    let root0 = normal_equations(start, poses, selection, tilt)?.jacobian_root();
+    let split = split_selection(start, selection, &root0, rtol)?;
+    let x0 = param_vector(start, &split.fitted);
+    let mut problem = PositionNormalProblem::new(start, poses, split.fitted.clone(), tilt);
+    let rep = solve_normal(&mut problem, x0, lm).map_err(CalibError::from_lm)?;
+    let mut unknowns = problem.into_unknowns();
+    unknowns.set(&rep.x)?;
+    let root = rep.normal.jacobian_root();
+    let sigma = parameter_sigmas_m(&root, rep.normal.m, rep.normal.rtr, rtol);
+    let condition_number = analyse(&root, rtol).condition_number;
+    Ok(Fit {
+        model: unknowns.into_model(),
+        fitted: split.fitted,
+        fixed: split.fixed,
+        unidentifiable: split.unidentifiable,
+        sigma,
+        condition_number,
+        rank: split.rank,
+        iterations: rep.iterations,
+        converged: rep.termination.converged(),
+    })
+}
+
+/// The selection split by the identifiability analysis of its start Jacobian.
+struct Split {
+    fitted: Vec<usize>,
+    fixed: Vec<usize>,
+    unidentifiable: Vec<String>,
+    rank: usize,
+}
+
+/// Splits `selection` into fitted and fixed parameters by the identifiability analysis of
+/// `jac0` (one column per selected parameter); [`CalibError::NothingToFit`] when none is left.
+fn split_selection(
+    start: &Model,
+    selection: &[usize],
+    jac0: &DMatrix<f64>,
+    rtol: f64,
+) -> Result<Split, CalibError> {
     if jac0.ncols() != selection.len() {
         return Err(CalibError::Solver(format!(
             "start Jacobian has {} columns for {} selected parameters",
@@ -117,6 +173,34 @@ pub fn fit_problem<P: ModelProblem>(
     if fitted.is_empty() {
         return Err(CalibError::NothingToFit);
     }
+    Ok(Split {
+        fitted,
+        fixed,
+        unidentifiable,
+        rank: id.rank,
+    })
+}
+
+/// The identification common to every kind of measurement: the identifiability analysis of
+/// `jac0` (the Jacobian of the residuals wrt `selection` at `start`, one column per selected
+/// parameter) splits the selection into fitted and fixed parameters; `make_problem` builds the
+/// least-squares problem on a copy of `start` with the fitted ones (model indices) as unknowns,
+/// which Levenberg-Marquardt solves from their values in `start`; the sigmas and the condition
+/// number are those of the Jacobian at the solution.
+pub fn fit_problem<P: ModelProblem>(
+    start: &Model,
+    selection: &[usize],
+    jac0: &DMatrix<f64>,
+    make_problem: impl FnOnce(Vec<usize>) -> P,
+    lm: &LmConfig,
+    rtol: f64,
+) -> Result<Fit, CalibError> {
+    let Split {
+        fitted,
+        fixed,
+        unidentifiable,
+        rank,
+    } = split_selection(start, selection, jac0, rtol)?;
     let x0 = param_vector(start, &fitted);
     let mut problem = make_problem(fitted.clone());
     let rep = solve(&mut problem, x0, lm).map_err(CalibError::from_lm)?;
@@ -132,7 +216,7 @@ pub fn fit_problem<P: ModelProblem>(
         unidentifiable,
         sigma,
         condition_number,
-        rank: id.rank,
+        rank,
         iterations: rep.iterations,
         converged: rep.termination.converged(),
     })

@@ -143,13 +143,18 @@ pub struct LmReport {
 }
 
 /// The SVD of the column-scaled Jacobian, kept as `V`, `s` and `U^T r`.
-struct ScaledSvd {
+pub(super) struct ScaledSvd {
     v: DMatrix<f64>,
     s: DVector<f64>,
     ut_r: DVector<f64>,
 }
 
 impl ScaledSvd {
+    /// From `V`, the singular values and `U^T r` directly.
+    pub(super) fn from_parts(v: DMatrix<f64>, s: DVector<f64>, ut_r: DVector<f64>) -> Self {
+        Self { v, s, ut_r }
+    }
+
     /// QR of `js` (m x n, m >= n), then SVD of `R`; `U^T r = U_R^T (Q^T r)`.
     fn new(js: DMatrix<f64>, r: &DVector<f64>) -> Option<Self> {
         let n = js.ncols();
@@ -168,12 +173,12 @@ impl ScaledSvd {
         })
     }
 
-    fn max_sv(&self) -> f64 {
+    pub(super) fn max_sv(&self) -> f64 {
         self.s.iter().copied().fold(0.0, f64::max)
     }
 
     /// Scaled step `y = -V diag(s / (s^2 + lambda)) U^T r` (dropping tiny singular values).
-    fn step(&self, lambda: f64, rank_rtol: f64) -> DVector<f64> {
+    pub(super) fn step(&self, lambda: f64, rank_rtol: f64) -> DVector<f64> {
         let cut = rank_rtol * self.max_sv();
         let coef = DVector::from_iterator(
             self.s.len(),
@@ -190,7 +195,7 @@ impl ScaledSvd {
 
     /// Gain ratio: the actual decrease of the cost over the decrease `-(Js y).r - |Js y|^2 / 2`
     /// the linear model predicts for the scaled step `y` (1 when it predicts none).
-    fn gain_ratio(&self, y: &DVector<f64>, actual_decrease: f64) -> f64 {
+    pub(super) fn gain_ratio(&self, y: &DVector<f64>, actual_decrease: f64) -> f64 {
         let jy = {
             let lin: DVector<f64> = self.v.transpose() * y;
             lin.component_mul(&self.s)
@@ -205,14 +210,14 @@ impl ScaledSvd {
 }
 
 /// Damping `lambda` and its growth factor `nu` (Nielsen 1999); `lambda = 0` is Gauss-Newton.
-struct Damping {
-    lambda: f64,
-    nu: f64,
+pub(super) struct Damping {
+    pub(super) lambda: f64,
+    pub(super) nu: f64,
 }
 
 impl Damping {
     /// After a step that decreased the cost with gain ratio `rho`.
-    fn accepted(&mut self, rho: f64) {
+    pub(super) fn accepted(&mut self, rho: f64) {
         if self.lambda > 0.0 {
             self.lambda *= (1.0 - (2.0 * rho - 1.0).powi(3)).max(1.0 / 3.0);
         }
@@ -221,7 +226,7 @@ impl Damping {
 
     /// After a step that did not decrease the cost: more damping, or (Gauss-Newton) half the
     /// step length `gn_scale`.
-    fn rejected(&mut self, gn_scale: &mut f64) {
+    pub(super) fn rejected(&mut self, gn_scale: &mut f64) {
         if self.lambda > 0.0 {
             self.lambda *= self.nu;
             self.nu *= 2.0;
@@ -263,7 +268,7 @@ fn all_finite<'a>(it: impl IntoIterator<Item = &'a f64>) -> bool {
 }
 
 /// Whether a scaled step of norm `step_norm` is negligible at a point of scaled norm `xs_norm`.
-fn negligible(step_norm: f64, xs_norm: f64, xtol: f64) -> bool {
+pub(super) fn negligible(step_norm: f64, xs_norm: f64, xtol: f64) -> bool {
     step_norm <= xtol * (xs_norm + xtol)
 }
 

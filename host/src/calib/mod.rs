@@ -3,21 +3,25 @@
 //! | module | holds |
 //! |---|---|
 //! | [`lm`] | Levenberg-Marquardt / Gauss-Newton on a generic least-squares problem |
+//! | [`normal`] | the same iteration on normal equations accumulated per measurement (bounded memory, many poses) |
 //! | [`identifiability`] | rank, condition number, unidentifiable parameters and their names |
 //! | [`stats`] | the error statistics object of FORMATS.md |
 //! | [`report`] | the `calibrate --json` document |
+//! | [`accumulate`] | the geometric identification on normal equations: per-pose accumulation in reusable model workspaces, chunked on two threads |
 //! | [`problem`] | measured poses, position errors, the identification as a least-squares problem |
 //! | [`projected`] | identification from partial measurements (projections on known directions, `calibrate --samples`) |
 //! | [`fit`] | identifiability + LM + covariance on a parameter subset |
 //! | [`influence`] | influence-based identification (thesis eq. 3.7-3.8) |
 //! | [`calibrate`] | the whole `calibrate` command: selection, methods, report |
 
+pub mod accumulate;
 pub mod calibrate;
 pub mod error;
 pub mod fit;
 pub mod identifiability;
 pub mod influence;
 pub mod lm;
+pub mod normal;
 pub mod problem;
 pub mod projected;
 pub mod report;

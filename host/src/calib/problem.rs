@@ -4,7 +4,7 @@
 use nalgebra::{DMatrix, DVector, Vector3};
 
 use super::lm::Problem;
-use crate::model::{Model, ModelError, Tilt};
+use crate::model::{Data, Model, ModelError, Tilt, Wrt};
 
 /// Measured poses: joint readings (deg, one vector per pose) and the measured tool point
 /// (mm, frame R).
@@ -78,11 +78,15 @@ pub fn position_errors(
     poses: &Poses,
     tilt: bool,
 ) -> Result<Vec<Vector3<f64>>, ModelError> {
+    let mut d = Data::new(model);
     poses
         .q_deg
         .iter()
         .zip(&poses.xyz_mm)
-        .map(|(q, m)| Ok(m - model.position_mm(q, tilt_mode(tilt))?))
+        .map(|(q, m)| {
+            model.fk_with(&mut d, q, tilt_mode(tilt))?;
+            Ok(m - d.position_mm())
+        })
         .collect()
 }
 
@@ -216,19 +220,24 @@ fn position_rows(
 ) -> Result<(), ModelError> {
     let tilt = tilt_mode(tilt);
     let rows = poses.q_deg.iter().zip(&poses.xyz_mm).enumerate();
+    let mut d = Data::new(model);
     match jac {
         Some(jac) => {
+            let wrt: Vec<Wrt> = cols.iter().map(|&c| Wrt::Param(c)).collect();
             for (i, (q, m)) in rows {
-                let (fk, j) = model.param_jacobian(q, tilt, cols)?;
+                model.jacobian_with(&mut d, q, tilt, &wrt)?;
                 r.fixed_rows_mut::<3>(3 * i)
-                    .copy_from(&(fk.position_mm - m));
-                jac.view_mut((3 * i, 0), (3, cols.len())).copy_from(&j);
+                    .copy_from(&(d.position_mm() - m));
+                for (k, col) in d.jacobian().iter().enumerate() {
+                    jac.fixed_view_mut::<3, 1>(3 * i, k).copy_from(col);
+                }
             }
         }
         None => {
             for (i, (q, m)) in rows {
-                let p = model.position_mm(q, tilt)?;
-                r.fixed_rows_mut::<3>(3 * i).copy_from(&(p - m));
+                model.fk_with(&mut d, q, tilt)?;
+                r.fixed_rows_mut::<3>(3 * i)
+                    .copy_from(&(d.position_mm() - m));
             }
         }
     }

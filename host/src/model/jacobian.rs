@@ -6,14 +6,19 @@
 //! derivative is included). The `sign()` steps of the tilt law (MODEL.md eq. 5.17-5.19) are
 //! piecewise constant and count as flat. With `Tilt::Moments` the supplied moments are held
 //! fixed (derivative 0); only the tilting values act through them.
+//!
+//! [`Model::jacobian_with`] works in a reusable [`Data`] workspace (no heap allocation per
+//! pose); [`Model::position_jacobian`], [`Model::joint_jacobian`] and [`Model::param_jacobian`]
+//! are wrappers that allocate a workspace per call.
 
 use nalgebra::{Matrix3, Matrix3xX, Vector3};
 use std::f64::consts::PI;
 
 use super::chain::{Model, Motion};
+use super::data::{Data, ParamEffect};
 use super::error::ModelError;
-use super::kinematics::{axis_rotation, Fk, Frames, Tilt, TiltState, GRAVITY_KGF_PER_KG};
-use super::tilt::{tilt_partials, TiltPartials};
+use super::kinematics::{with_workspace, Fk, Tilt, GRAVITY_KGF_PER_KG};
+use super::tilt::tilt_partials;
 
 const DEG: f64 = PI / 180.0;
 
@@ -26,92 +31,77 @@ pub enum Wrt {
     Param(usize),
 }
 
-/// Moments data of the untilted chain, kept for the moment derivatives.
-struct MomentData {
-    frames: Frames,
-    /// (frame index, kg, world point mm) of every mass, payload included when non-zero.
-    points: Vec<(usize, f64, Vector3<f64>)>,
-    /// Per joint: `sum (c - o_i) x m g` in R (kgf.m).
-    sums: Vec<Vector3<f64>>,
+/// Twist of element `e` moved at `rate` in the frames `rot` / `pos`: `(w rad, v mm)` with point
+/// velocity `w x x + v`.
+fn elem_twist(
+    model: &Model,
+    rot: &[Matrix3<f64>],
+    pos: &[Vector3<f64>],
+    e: usize,
+    rate: f64,
+) -> (Vector3<f64>, Vector3<f64>) {
+    let ax = model.elems[e].axis.index();
+    let (axis, p) = if e == 0 {
+        (Vector3::ith(ax, 1.0), Vector3::zeros())
+    } else {
+        (rot[e - 1].column(ax).into_owned(), pos[e - 1])
+    };
+    match model.elems[e].motion {
+        Motion::Rot => {
+            let w = axis * (rate * DEG);
+            (w, -w.cross(&p))
+        }
+        Motion::Trans => (Vector3::zeros(), axis * rate),
+    }
 }
 
 impl Model {
     /// The element a coordinate moves directly, and its rate (deg or mm per unit).
-    fn direct_effect(&self, wrt: Wrt, q_deg: &[f64]) -> Option<(usize, f64)> {
+    fn direct_effect(&self, d: &Data, wrt: Wrt, q_deg: &[f64]) -> Option<(usize, f64)> {
         match wrt {
-            Wrt::Joint(j) => Some((self.joints[j].elem, self.joint_value(j, q_deg[j]).1)),
-            Wrt::Param(i) => {
-                if let Some(e) = self.elems.iter().position(|e| e.param == i) {
-                    return Some((e, 1.0));
+            Wrt::Joint(j) => Some((self.joints[j].elem, d.joint_dv[j])),
+            Wrt::Param(i) => match d.effects[i] {
+                ParamEffect::None => None,
+                ParamEffect::Elem(e) => Some((e, 1.0)),
+                ParamEffect::Harmonic { joint, order, sin } => {
+                    let (s, c) = (f64::from(order) * q_deg[joint]).to_radians().sin_cos();
+                    Some((self.joints[joint].elem, if sin { s } else { c }))
                 }
-                self.joints.iter().enumerate().find_map(|(j, joint)| {
-                    joint.harmonics.iter().find_map(|h| {
-                        let (s, c) = (f64::from(h.order) * q_deg[j]).to_radians().sin_cos();
-                        if h.sin_param == i {
-                            Some((joint.elem, s))
-                        } else if h.cos_param == i {
-                            Some((joint.elem, c))
-                        } else {
-                            None
-                        }
-                    })
-                })
-            }
+            },
         }
     }
 
-    /// Twist of element `e` moved at `rate` in `fr`: `(w rad, v mm)` with point velocity
-    /// `w x x + v`.
-    fn elem_twist(&self, fr: &Frames, e: usize, rate: f64) -> (Vector3<f64>, Vector3<f64>) {
-        let (r, p) = fr.before(e);
-        let axis = r.column(self.elems[e].axis.index()).into_owned();
-        match self.elems[e].motion {
-            Motion::Rot => {
-                let w = axis * (rate * DEG);
-                (w, -w.cross(&p))
-            }
-            Motion::Trans => (Vector3::zeros(), axis * rate),
-        }
-    }
-
-    /// Derivative of the moment of joint `i` (kgf.m, joint frame) for element `e` moved at
-    /// `rate`.
-    fn moment_derivative(&self, md: &MomentData, i: usize, e: usize, rate: f64) -> Vector3<f64> {
+    /// Derivative of the static moment of joint `i` (kgf.m, joint frame) for element `e` moved
+    /// at `rate` (untilted frames of `d`).
+    fn moment_derivative(&self, d: &Data, i: usize, e: usize, rate: f64) -> Vector3<f64> {
         let ei = self.joints[i].elem;
-        let ri = md.frames.rot[ei];
-        let oi = md.frames.pos_mm[ei];
-        let (w, v) = self.elem_twist(&md.frames, e, rate);
-        let mut d = Vector3::zeros();
+        let ri = d.rot0[ei];
+        let oi = d.pos0_mm[ei];
+        let (w, v) = elem_twist(self, &d.rot0, &d.pos0_mm, e, rate);
+        let mut out = Vector3::zeros();
         if e <= ei {
             if w == Vector3::zeros() {
-                return d;
+                return out;
             }
-            d -= w.cross(&md.sums[i]);
-            for (k, m, c) in &md.points {
+            out -= w.cross(&d.sums[i]);
+            for (k, m, c) in &d.points {
                 if *k >= ei {
-                    d += w
+                    out += w
                         .cross(&((c - oi) * 1e-3))
                         .cross(&(GRAVITY_KGF_PER_KG * *m));
                 }
             }
         } else {
-            for (k, m, c) in &md.points {
+            for (k, m, c) in &d.points {
                 if *k >= e {
-                    d += ((w.cross(c) + v) * 1e-3).cross(&(GRAVITY_KGF_PER_KG * *m));
+                    out += ((w.cross(c) + v) * 1e-3).cross(&(GRAVITY_KGF_PER_KG * *m));
                 }
             }
         }
-        ri.transpose() * d
+        ri.transpose() * out
     }
 
-    /// Tool position (and the full FK) at `q_deg` with its Jacobian wrt `wrt` (one column per
-    /// entry, mm per unit of the coordinate). See the module doc for what is differentiated.
-    pub fn position_jacobian(
-        &self,
-        q_deg: &[f64],
-        tilt: Tilt<'_>,
-        wrt: &[Wrt],
-    ) -> Result<(Fk, Matrix3xX<f64>), ModelError> {
+    fn check_wrt(&self, wrt: &[Wrt]) -> Result<(), ModelError> {
         for w in wrt {
             match *w {
                 Wrt::Joint(j) if j >= self.joints.len() => {
@@ -129,105 +119,115 @@ impl Model {
                 _ => {}
             }
         }
-        let TiltState {
-            moments_kgfm: moments,
-            tilts_deg: tilts,
-            untilted,
-        } = self.tilt_state(q_deg, tilt)?;
-        let tilted = !tilts.is_empty();
-        let fr = self.frames(q_deg, tilted.then_some(&tilts[..]))?;
-        let p = fr.tool_mm();
-        let sf = self.scale_factor();
-        let fk = Fk {
-            position_mm: p * sf,
-            rotation: fr.tool_rot(),
-            moments_kgfm: moments,
-            tilts_deg: tilts,
-        };
+        Ok(())
+    }
 
-        // Per joint: d tool / d (da, db, dt) (mm/deg) and the tilt law's partials.
-        let mut tilt_data: Vec<(Matrix3<f64>, TiltPartials)> = Vec::new();
-        if tilted {
-            let tv = self.require_tilt()?;
-            for (i, joint) in self.joints.iter().enumerate() {
-                let t = &fk.tilts_deg[i];
-                let r0 = fr.joint_rot_untilted[i];
-                let rx = r0 * axis_rotation(0, t.x.to_radians());
-                let rxy = rx * axis_rotation(1, t.y.to_radians());
-                let arm = p - fr.pos_mm[joint.elem];
-                let g = Matrix3::from_columns(&[
-                    r0.column(0).cross(&arm) * DEG,
-                    rx.column(1).cross(&arm) * DEG,
-                    rxy.column(2).cross(&arm) * DEG,
-                ]);
-                tilt_data.push((
-                    g,
-                    tilt_partials(&fk.moments_kgfm[i], &tv[i], self.gamma_law),
-                ));
-            }
+    /// Per joint: `d tool / d (da, db, dt)` (mm/deg) and the tilt law's partials, into `d`.
+    fn tilt_sensitivities(&self, d: &mut Data) {
+        let p = d.tool_unscaled();
+        d.tilt_partials.clear();
+        for (i, joint) in self.joints.iter().enumerate() {
+            let arm = p - d.pos_mm[joint.elem];
+            let [a0, a1, a2] = d.tilt_axes[i];
+            d.tilt_g[i] = Matrix3::from_columns(&[
+                a0.cross(&arm) * DEG,
+                a1.cross(&arm) * DEG,
+                a2.cross(&arm) * DEG,
+            ]);
+            let tp = tilt_partials(&d.moments_kgfm[i], &d.tilt_values[i], self.gamma_law);
+            d.tilt_partials.push(tp);
         }
-        let moment_data = untilted.map(|frames| {
-            let points = self.mass_points(&frames);
-            let sums = self
-                .joints
-                .iter()
-                .map(|j| {
-                    let o = frames.pos_mm[j.elem];
-                    points
-                        .iter()
-                        .filter(|(k, _, _)| *k >= j.elem)
-                        .map(|(_, m, c)| ((c - o) * 1e-3).cross(&(GRAVITY_KGF_PER_KG * *m)))
-                        .sum()
-                })
-                .collect();
-            MomentData {
-                frames,
-                points,
-                sums,
-            }
-        });
+    }
 
-        let mut jac = Matrix3xX::zeros(wrt.len());
-        for (col, &w) in wrt.iter().enumerate() {
+    /// Column of the Jacobian wrt one coordinate (unscaled), from an evaluated workspace.
+    fn jacobian_column(&self, d: &Data, w: Wrt, q_deg: &[f64]) -> Vector3<f64> {
+        let p = d.tool_unscaled();
+        let direct = self.direct_effect(d, w, q_deg);
+        let mut col = Vector3::zeros();
+        if let Some((e, rate)) = direct {
+            let (tw, tv) = elem_twist(self, &d.rot, &d.pos_mm, e, rate);
+            col += tw.cross(&p) + tv;
+        }
+        if !d.tilted {
+            return col;
+        }
+        for (i, tp) in d.tilt_partials.iter().enumerate() {
+            let mut dtilt = Vector3::zeros();
+            if d.has_untilted {
+                let deta = if w == Wrt::Param(self.payload_param) {
+                    let ei = self.joints[i].elem;
+                    let tool0 = d.pos0_mm.last().copied().unwrap_or_else(Vector3::zeros);
+                    let arm = (tool0 - d.pos0_mm[ei]) * 1e-3;
+                    d.rot0[ei].transpose() * arm.cross(&GRAVITY_KGF_PER_KG)
+                } else if let Some((e, rate)) = direct {
+                    self.moment_derivative(d, i, e, rate)
+                } else {
+                    Vector3::zeros()
+                };
+                dtilt += tp.wrt_eta * deta;
+            }
+            if let (Wrt::Param(pi), Some(tps)) = (w, &self.tilt) {
+                let t = &tps[i];
+                if pi == t.clearance {
+                    dtilt += tp.wrt_clearance;
+                } else if pi == t.backlash {
+                    dtilt += tp.wrt_backlash;
+                } else if pi == t.stiffness {
+                    dtilt += tp.wrt_stiffness;
+                }
+            }
+            col += d.tilt_g[i] * dtilt;
+        }
+        col
+    }
+
+    /// FK and the Jacobian of the tool position wrt `wrt` (one column per entry, mm per unit of
+    /// the coordinate, read with [`Data::jacobian`]) in the workspace `d`: no heap allocation
+    /// once `d` is warm. Same values as [`Model::position_jacobian`].
+    pub fn jacobian_with(
+        &self,
+        d: &mut Data,
+        q_deg: &[f64],
+        tilt: Tilt<'_>,
+        wrt: &[Wrt],
+    ) -> Result<(), ModelError> {
+        self.check_wrt(wrt)?;
+        self.fk_with(d, q_deg, tilt)?;
+        if d.tilted {
+            self.tilt_sensitivities(d);
+        }
+        let p = d.tool_unscaled();
+        let sf = d.scale;
+        let mut jac = std::mem::take(&mut d.jac);
+        jac.clear();
+        for &w in wrt {
             if w == Wrt::Param(self.scale_param) {
-                jac.set_column(col, &(p * 1e-6));
-                continue;
+                jac.push(p * 1e-6);
+            } else {
+                jac.push(self.jacobian_column(d, w, q_deg) * sf);
             }
-            let direct = self.direct_effect(w, q_deg);
-            let mut d = Vector3::zeros();
-            if let Some((e, rate)) = direct {
-                let (tw, tv) = self.elem_twist(&fr, e, rate);
-                d += tw.cross(&p) + tv;
-            }
-            for (i, (g, tp)) in tilt_data.iter().enumerate() {
-                let mut dtilt = Vector3::zeros();
-                if let Some(md) = &moment_data {
-                    let deta = if w == Wrt::Param(self.payload_param) {
-                        let ei = self.joints[i].elem;
-                        let arm = (md.frames.tool_mm() - md.frames.pos_mm[ei]) * 1e-3;
-                        md.frames.rot[ei].transpose() * arm.cross(&GRAVITY_KGF_PER_KG)
-                    } else if let Some((e, rate)) = direct {
-                        self.moment_derivative(md, i, e, rate)
-                    } else {
-                        Vector3::zeros()
-                    };
-                    dtilt += tp.wrt_eta * deta;
-                }
-                if let (Wrt::Param(pi), Some(tps)) = (w, &self.tilt) {
-                    let t = &tps[i];
-                    if pi == t.clearance {
-                        dtilt += tp.wrt_clearance;
-                    } else if pi == t.backlash {
-                        dtilt += tp.wrt_backlash;
-                    } else if pi == t.stiffness {
-                        dtilt += tp.wrt_stiffness;
-                    }
-                }
-                d += g * dtilt;
-            }
-            jac.set_column(col, &(d * sf));
         }
-        Ok((fk, jac))
+        d.jac = jac;
+        Ok(())
+    }
+
+    /// Tool position (and the full FK) at `q_deg` with its Jacobian wrt `wrt` (one column per
+    /// entry, mm per unit of the coordinate). See the module doc for what is differentiated.
+    pub fn position_jacobian(
+        &self,
+        q_deg: &[f64],
+        tilt: Tilt<'_>,
+        wrt: &[Wrt],
+    ) -> Result<(Fk, Matrix3xX<f64>), ModelError> {
+        with_workspace(self, |d| {
+            self.jacobian_with(d, q_deg, tilt, wrt)?;
+            let jac = if wrt.is_empty() {
+                Matrix3xX::zeros(0)
+            } else {
+                Matrix3xX::from_columns(d.jacobian())
+            };
+            Ok((Fk::from_data(d), jac))
+        })
     }
 
     /// Jacobian of the tool position wrt all joints (mm/deg), with the FK.

@@ -4,6 +4,7 @@
 use nalgebra::{Matrix3, Vector3};
 
 use super::chain::{Model, Motion, TiltValues};
+use super::data::Data;
 use super::error::ModelError;
 use super::tilt::tilt_from_moment;
 
@@ -62,6 +63,23 @@ impl Frames {
     }
 }
 
+thread_local! {
+    /// The workspace the allocating wrappers ([`Model::fk`], [`Model::position_jacobian`], ...)
+    /// reuse on this thread (refreshed when the model or its parameter values change).
+    static WORKSPACE: std::cell::RefCell<Option<Data>> = const { std::cell::RefCell::new(None) };
+}
+
+/// Runs `f` with this thread's reusable workspace for `model` (a fresh one if it is in use).
+pub(crate) fn with_workspace<T>(model: &Model, f: impl FnOnce(&mut Data) -> T) -> T {
+    WORKSPACE.with(|cell| match cell.try_borrow_mut() {
+        Ok(mut slot) => {
+            let d = slot.get_or_insert_with(|| Data::new(model));
+            f(d)
+        }
+        Err(_) => f(&mut Data::new(model)),
+    })
+}
+
 /// Result of forward kinematics for one pose.
 #[derive(Debug, Clone)]
 pub struct Fk {
@@ -76,6 +94,16 @@ pub struct Fk {
 }
 
 impl Fk {
+    /// The FK result held by an evaluated workspace.
+    pub fn from_data(d: &Data) -> Self {
+        Fk {
+            position_mm: d.position_mm(),
+            rotation: d.rotation(),
+            moments_kgfm: d.moments_kgfm().to_vec(),
+            tilts_deg: d.tilts_deg().to_vec(),
+        }
+    }
+
     /// ZXZ Euler angles `(phi, theta, psi)` of the tool rotation, degrees (thesis eq. 2.3).
     pub fn zxz_deg(&self) -> [f64; 3] {
         zxz_deg(&self.rotation)
@@ -106,13 +134,6 @@ pub(crate) fn tilt_rotation(t_deg: &Vector3<f64>) -> Matrix3<f64> {
     axis_rotation(0, t_deg.x.to_radians())
         * axis_rotation(1, t_deg.y.to_radians())
         * axis_rotation(2, t_deg.z.to_radians())
-}
-
-/// Moments and tilts of one evaluation, with the untilted frames when they were computed.
-pub(crate) struct TiltState {
-    pub moments_kgfm: Vec<Vector3<f64>>,
-    pub tilts_deg: Vec<Vector3<f64>>,
-    pub untilted: Option<Frames>,
 }
 
 impl Model {
@@ -199,47 +220,13 @@ impl Model {
         1.0 + self.params[self.scale_param].value * 1e-6
     }
 
-    /// World positions (mm) and masses (kg) of the link masses and the payload, with the index
-    /// of the frame each is attached to.
-    pub(crate) fn mass_points(&self, fr: &Frames) -> Vec<(usize, f64, Vector3<f64>)> {
-        let mut out: Vec<_> = self
-            .masses
-            .iter()
-            .map(|m| {
-                let k = self.mass_frame(m);
-                (k, m.mass_kg, fr.rot[k] * m.com_mm + fr.pos_mm[k])
-            })
-            .collect();
-        let payload = self.params[self.payload_param].value;
-        if payload != 0.0 {
-            out.push((self.elems.len() - 1, payload, fr.tool_mm()));
-        }
-        out
-    }
-
-    /// Static gravity moments (kgf.m) of every joint in its joint frame, from untilted frames
-    /// `fr`: sum over masses carried at or after joint i of `(c - o_i) x (m g)`.
-    pub(crate) fn moments_from_frames(&self, fr: &Frames) -> Vec<Vector3<f64>> {
-        let points = self.mass_points(fr);
-        self.joints
-            .iter()
-            .map(|j| {
-                let o = fr.pos_mm[j.elem];
-                let s: Vector3<f64> = points
-                    .iter()
-                    .filter(|(k, _, _)| *k >= j.elem)
-                    .map(|(_, m, c)| ((c - o) * 1e-3).cross(&(GRAVITY_KGF_PER_KG * *m)))
-                    .sum();
-                fr.rot[j.elem].transpose() * s
-            })
-            .collect()
-    }
-
     /// Static joint moments (kgf.m, joint frame i) at `q_deg`, computed on the untilted chain
     /// (link masses + payload, gravity -z of R).
     pub fn moments_kgfm(&self, q_deg: &[f64]) -> Result<Vec<Vector3<f64>>, ModelError> {
-        let fr = self.frames(q_deg, None)?;
-        Ok(self.moments_from_frames(&fr))
+        with_workspace(self, |d| {
+            self.static_moments_with(d, q_deg)?;
+            Ok(d.moments_kgfm.clone())
+        })
     }
 
     /// Tilts `(da, db, dt)` (deg) of every joint for moments `moments_kgfm` (one per joint).
@@ -267,80 +254,20 @@ impl Model {
         })
     }
 
-    /// Moments and tilts for a tilt mode (empty for `Tilt::Off`), plus the untilted frames
-    /// when they were needed.
-    pub(crate) fn tilt_state(
-        &self,
-        q_deg: &[f64],
-        tilt: Tilt<'_>,
-    ) -> Result<TiltState, ModelError> {
-        match tilt {
-            Tilt::Off => Ok(TiltState {
-                moments_kgfm: Vec::new(),
-                tilts_deg: Vec::new(),
-                untilted: None,
-            }),
-            Tilt::Static => {
-                let fr = self.frames(q_deg, None)?;
-                let moments_kgfm = self.moments_from_frames(&fr);
-                let tilts_deg = self.tilts_deg(&moments_kgfm)?;
-                Ok(TiltState {
-                    moments_kgfm,
-                    tilts_deg,
-                    untilted: Some(fr),
-                })
-            }
-            Tilt::StaticPlus(extra) => {
-                if extra.len() != self.n_joints() {
-                    return Err(ModelError::JointCount {
-                        expected: self.n_joints(),
-                        found: extra.len(),
-                    });
-                }
-                let fr = self.frames(q_deg, None)?;
-                let moments_kgfm: Vec<Vector3<f64>> = self
-                    .moments_from_frames(&fr)
-                    .iter()
-                    .zip(extra)
-                    .map(|(a, b)| a + b)
-                    .collect();
-                let tilts_deg = self.tilts_deg(&moments_kgfm)?;
-                Ok(TiltState {
-                    moments_kgfm,
-                    tilts_deg,
-                    untilted: Some(fr),
-                })
-            }
-            Tilt::Moments(m) => {
-                let tilts_deg = self.tilts_deg(m)?;
-                Ok(TiltState {
-                    moments_kgfm: m.to_vec(),
-                    tilts_deg,
-                    untilted: None,
-                })
-            }
-        }
-    }
-
     /// Forward kinematics of one pose: tool point (mm, R, scale included), rotation, and the
-    /// moments and tilts used.
+    /// moments and tilts used. Allocates a workspace per call; [`Model::fk_with`] reuses one.
     pub fn fk(&self, q_deg: &[f64], tilt: Tilt<'_>) -> Result<Fk, ModelError> {
-        let TiltState {
-            moments_kgfm,
-            tilts_deg,
-            ..
-        } = self.tilt_state(q_deg, tilt)?;
-        let fr = self.frames(q_deg, (!tilts_deg.is_empty()).then_some(&tilts_deg[..]))?;
-        Ok(Fk {
-            position_mm: fr.tool_mm() * self.scale_factor(),
-            rotation: fr.tool_rot(),
-            moments_kgfm,
-            tilts_deg,
+        with_workspace(self, |d| {
+            self.fk_with(d, q_deg, tilt)?;
+            Ok(Fk::from_data(d))
         })
     }
 
     /// Tool point only (mm, R).
     pub fn position_mm(&self, q_deg: &[f64], tilt: Tilt<'_>) -> Result<Vector3<f64>, ModelError> {
-        Ok(self.fk(q_deg, tilt)?.position_mm)
+        with_workspace(self, |d| {
+            self.fk_with(d, q_deg, tilt)?;
+            Ok(d.position_mm())
+        })
     }
 }

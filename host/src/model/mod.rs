@@ -62,6 +62,7 @@
 //! [`Model::write_file`]; the format is documented in [`toml_file`].
 
 mod chain;
+mod data;
 pub mod dynamics;
 mod error;
 pub mod gravity;
@@ -77,6 +78,7 @@ pub mod toml_file;
 pub mod transmission;
 
 pub use chain::*;
+pub use data::Data;
 pub use error::ModelError;
 pub use jacobian::Wrt;
 pub use kinematics::*;

@@ -65,6 +65,7 @@ pub fn tilt_from_moment(eta: &Vector3<f64>, tv: &TiltValues, law: GammaLaw) -> V
 
 /// Partials of [`tilt_from_moment`]: `d tilt / d eta` (deg per kgf.m; the sign steps count as
 /// flat) and `d tilt / d C`, `d tilt / d b`, `d tilt / d k`.
+#[derive(Debug, Clone, Copy)]
 pub(crate) struct TiltPartials {
     pub wrt_eta: Matrix3<f64>,
     pub wrt_clearance: Vector3<f64>,

@@ -1,0 +1,321 @@
+//! Levenberg-Marquardt on the normal equations, for problems with many residuals: the problem
+//! accumulates `J^T J` (n x n), `J^T r` and `r^T r` per measurement instead of building the tall
+//! `m x n` Jacobian, so memory stays bounded whatever the number of poses.
+//!
+//! The iteration is the one of [`super::lm::solve`] (same column scaling, damping, stopping
+//! rules); only the linear algebra differs: the SVD of the column-scaled Jacobian `Js = J D^-1`
+//! is obtained from the symmetric eigen-decomposition of `Js^T Js = D^-1 J^T J D^-1`
+//! (`s_i = sqrt(eig_i)`, `U^T r = S^-1 V^T Js^T r`). Squaring the Jacobian squares its condition
+//! number, so singular values below [`NORMAL_EIG_FLOOR`]`^(1/2)` of the largest are round-off
+//! and are dropped like the ones below `rank_rtol`; [`super::fit::fit_parameters`] uses this path
+//! only when the identifiability threshold keeps the condition number far from that floor and
+//! falls back to the tall QR path otherwise (never silently: see [`use_normal_equations`]).
+
+use nalgebra::{DMatrix, DVector};
+
+use super::identifiability::ZERO_COLUMN_RTOL;
+use super::lm::{negligible, Damping, LmConfig, LmError, ScaledSvd, Termination};
+
+/// Eigenvalues of the scaled normal matrix below this fraction of the largest are round-off
+/// (about 100 machine epsilons); their directions are not stepped along.
+pub const NORMAL_EIG_FLOOR: f64 = 1e-14;
+
+/// Largest identifiability threshold (`rtol`, relative singular value) below which the normal
+/// equations are not accurate enough: with `rtol >= 1e-6` every kept direction has a scaled
+/// eigenvalue above 1e-12 of the largest, 100 times the round-off floor.
+pub const NORMAL_MIN_RTOL: f64 = 1e-6;
+
+/// Whether an identification with threshold `rtol` may use the normal equations.
+pub fn use_normal_equations(rtol: f64) -> bool {
+    rtol >= NORMAL_MIN_RTOL
+}
+
+/// Normal equations of a linearisation: `J^T J`, `J^T r`, `r^T r` and the number of residuals.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Normal {
+    /// `J^T J` (n x n, symmetric, both triangles filled by [`Normal::symmetrise`]).
+    pub jtj: DMatrix<f64>,
+    /// `J^T r`.
+    pub jtr: DVector<f64>,
+    /// `r^T r`.
+    pub rtr: f64,
+    /// Number of residuals accumulated.
+    pub m: usize,
+}
+
+impl Normal {
+    /// Zero equations for `n` unknowns.
+    pub fn zeros(n: usize) -> Self {
+        Self {
+            jtj: DMatrix::zeros(n, n),
+            jtr: DVector::zeros(n),
+            rtr: 0.0,
+            m: 0,
+        }
+    }
+
+    /// Resets to zero (no allocation).
+    pub fn clear(&mut self) {
+        self.jtj.fill(0.0);
+        self.jtr.fill(0.0);
+        self.rtr = 0.0;
+        self.m = 0;
+    }
+
+    /// Adds `other` (same size).
+    pub fn add(&mut self, other: &Normal) {
+        self.jtj += &other.jtj;
+        self.jtr += &other.jtr;
+        self.rtr += other.rtr;
+        self.m += other.m;
+    }
+
+    /// Copies the upper triangle into the lower one (accumulators fill the upper one only).
+    pub fn symmetrise(&mut self) {
+        let n = self.jtj.nrows();
+        for a in 0..n {
+            for b in 0..a {
+                self.jtj[(a, b)] = self.jtj[(b, a)];
+            }
+        }
+    }
+
+    /// A square matrix `M` with `M^T M = J^T J`, whose column norms, singular values and right
+    /// singular vectors are those of `J` (to round-off): what the identifiability analysis and the
+    /// sigmas need, without the tall Jacobian. Built as `sqrt(D^-1 J^T J D^-1) D` with `D` the
+    /// exact column norms `sqrt((J^T J)_jj)`, so a column that is round-off in `J` (below
+    /// [`ZERO_COLUMN_RTOL`] of the largest) stays one here instead of taking the size of the
+    /// eigen-solver's round-off.
+    pub fn jacobian_root(&self) -> DMatrix<f64> {
+        let n = self.jtj.nrows();
+        if n == 0 {
+            return DMatrix::zeros(0, 0);
+        }
+        let norms: Vec<f64> = (0..n).map(|j| self.jtj[(j, j)].max(0.0).sqrt()).collect();
+        let top = norms.iter().copied().fold(0.0, f64::max);
+        let live: Vec<bool> = norms
+            .iter()
+            .map(|&c| c > ZERO_COLUMN_RTOL * top && c > 0.0)
+            .collect();
+        let ns = DMatrix::from_fn(n, n, |a, b| {
+            if live[a] && live[b] {
+                self.jtj[(a, b)] / (norms[a] * norms[b])
+            } else {
+                0.0
+            }
+        });
+        let eig = ns.symmetric_eigen();
+        let mut root = DMatrix::zeros(n, n);
+        for k in 0..n {
+            let s = eig.eigenvalues[k].max(0.0).sqrt();
+            let v = eig.eigenvectors.column(k);
+            root.ger(s, &v, &v, 1.0);
+        }
+        for (j, &c) in norms.iter().enumerate() {
+            let scale = if live[j] { c } else { 0.0 };
+            root.column_mut(j).scale_mut(scale);
+        }
+        root
+    }
+}
+
+/// A least-squares problem that gives its normal equations (see the module doc).
+pub trait NormalProblem {
+    /// The problem's own error type.
+    type Error;
+    /// Number of unknowns.
+    fn n_params(&self) -> usize;
+    /// Number of residuals.
+    fn n_residuals(&self) -> usize;
+    /// `r(x)^T r(x)`.
+    fn sum_sq(&mut self, x: &DVector<f64>) -> Result<f64, Self::Error>;
+    /// The normal equations at `x` into `eq` (upper triangle of `jtj` at least).
+    fn normal(&mut self, x: &DVector<f64>, eq: &mut Normal) -> Result<(), Self::Error>;
+}
+
+/// Result of [`solve_normal`].
+#[derive(Debug, Clone)]
+pub struct NormalReport {
+    /// The solution.
+    pub x: DVector<f64>,
+    /// Normal equations at `x` (evaluated after the last accepted step; symmetric).
+    pub normal: Normal,
+    /// `0.5 |r|^2` at `x`.
+    pub cost: f64,
+    /// `0.5 |r|^2` at the start.
+    pub initial_cost: f64,
+    /// Number of linearisations (iterations).
+    pub iterations: usize,
+    /// Number of evaluations (linearisations and residual sums).
+    pub evaluations: usize,
+    /// Why it stopped.
+    pub termination: Termination,
+}
+
+impl ScaledSvd {
+    /// The SVD of `Js = J D^-1` from the normal equations (see the module doc).
+    fn from_normal(eq: &Normal, diag: &DVector<f64>) -> Option<Self> {
+        let n = diag.len();
+        let ns = DMatrix::from_fn(n, n, |a, b| eq.jtj[(a, b)] / (diag[a] * diag[b]));
+        let gs = eq.jtr.component_div(diag);
+        let eig = ns.try_symmetric_eigen(f64::EPSILON, 0)?;
+        let top = eig.eigenvalues.iter().copied().fold(0.0, f64::max);
+        let s = eig.eigenvalues.map(|e| {
+            if e > NORMAL_EIG_FLOOR * top {
+                e.sqrt()
+            } else {
+                0.0
+            }
+        });
+        let vtg = eig.eigenvectors.transpose() * gs;
+        let ut_r = DVector::from_fn(n, |i, _| if s[i] > 0.0 { vtg[i] / s[i] } else { 0.0 });
+        Some(ScaledSvd::from_parts(eig.eigenvectors, s, ut_r))
+    }
+}
+
+/// Updates the column scaling `diag` (running max of the column norms `sqrt((J^T J)_jj)`, 1 for a
+/// zero column).
+fn update_scaling(eq: &Normal, diag: &mut DVector<f64>) {
+    for (j, d) in diag.iter_mut().enumerate() {
+        *d = d.max(eq.jtj[(j, j)].max(0.0).sqrt());
+        if *d == 0.0 {
+            *d = 1.0;
+        }
+    }
+}
+
+/// A trial step that decreased the cost.
+struct Accepted {
+    x: DVector<f64>,
+    cost: f64,
+    step_norm: f64,
+}
+
+/// Inner loop: steps from `x` until one decreases the cost (as in [`super::lm`]).
+#[allow(clippy::too_many_arguments)]
+fn find_decrease<P: NormalProblem>(
+    problem: &mut P,
+    evaluations: &mut usize,
+    svd: &ScaledSvd,
+    damping: &mut Damping,
+    x: &DVector<f64>,
+    diag: &DVector<f64>,
+    cost: f64,
+    cfg: &LmConfig,
+) -> Result<Option<Accepted>, LmError<P::Error>> {
+    let xs_norm = x.component_mul(diag).norm();
+    let mut gn_scale = 1.0;
+    for _ in 0..40 {
+        let y = svd.step(damping.lambda, cfg.rank_rtol) * gn_scale;
+        if negligible(y.norm(), xs_norm, cfg.xtol) {
+            return Ok(None);
+        }
+        let x_try = x + y.component_div(diag);
+        *evaluations += 1;
+        let cost_try = 0.5 * problem.sum_sq(&x_try).map_err(LmError::Problem)?;
+        if cost_try.is_finite() && cost_try < cost {
+            damping.accepted(svd.gain_ratio(&y, cost - cost_try));
+            return Ok(Some(Accepted {
+                x: x_try,
+                cost: cost_try,
+                step_norm: y.norm(),
+            }));
+        }
+        damping.rejected(&mut gn_scale);
+    }
+    Ok(None)
+}
+
+/// Solves `problem` from `x0` with Levenberg-Marquardt on its normal equations (the iteration
+/// of [`super::lm::solve`]).
+pub fn solve_normal<P: NormalProblem>(
+    problem: &mut P,
+    x0: DVector<f64>,
+    cfg: &LmConfig,
+) -> Result<NormalReport, LmError<P::Error>> {
+    let (n, m) = (problem.n_params(), problem.n_residuals());
+    if x0.len() != n {
+        return Err(LmError::Dimensions(format!(
+            "start vector has {} entries, problem has {n} unknowns",
+            x0.len()
+        )));
+    }
+    if m < n {
+        return Err(LmError::Underdetermined {
+            residuals: m,
+            params: n,
+        });
+    }
+    let mut x = x0;
+    let mut eq = Normal::zeros(n);
+    problem.normal(&x, &mut eq).map_err(LmError::Problem)?;
+    eq.symmetrise();
+    let mut evaluations = 1;
+    if !eq.rtr.is_finite() || !eq.jtj.iter().all(|v| v.is_finite()) {
+        return Err(LmError::NonFiniteStart);
+    }
+    let mut cost = 0.5 * eq.rtr;
+    let initial_cost = cost;
+    let mut diag: DVector<f64> = DVector::from_element(n, 0.0);
+    let mut damping: Option<Damping> = None;
+    let mut iterations = 1;
+    let termination = loop {
+        if cost == 0.0 {
+            break Termination::GradientConverged;
+        }
+        update_scaling(&eq, &mut diag);
+        let grad_inf = eq.jtr.component_div(&diag).amax() / eq.rtr.sqrt();
+        if grad_inf < cfg.gtol {
+            break Termination::GradientConverged;
+        }
+        let Some(svd) = ScaledSvd::from_normal(&eq, &diag) else {
+            break Termination::NoFurtherDecrease;
+        };
+        let damping = damping.get_or_insert_with(|| Damping {
+            lambda: cfg.initial_damping * svd.max_sv().powi(2),
+            nu: 2.0,
+        });
+        let found = find_decrease(
+            problem,
+            &mut evaluations,
+            &svd,
+            damping,
+            &x,
+            &diag,
+            cost,
+            cfg,
+        )?;
+        let Some(step) = found else {
+            break if iterations == 1 && cost == initial_cost {
+                Termination::NoFurtherDecrease
+            } else {
+                Termination::StepConverged
+            };
+        };
+        let rel_decrease = (cost - step.cost) / cost;
+        x = step.x;
+        evaluations += 1;
+        problem.normal(&x, &mut eq).map_err(LmError::Problem)?;
+        eq.symmetrise();
+        cost = step.cost;
+        if rel_decrease < cfg.ftol {
+            break Termination::CostConverged;
+        }
+        if negligible(step.step_norm, x.component_mul(&diag).norm(), cfg.xtol) {
+            break Termination::StepConverged;
+        }
+        if iterations >= cfg.max_iterations {
+            break Termination::MaxIterations;
+        }
+        iterations += 1;
+    };
+    Ok(NormalReport {
+        x,
+        normal: eq,
+        cost,
+        initial_cost,
+        iterations,
+        evaluations,
+        termination,
+    })
+}

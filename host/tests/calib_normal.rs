@@ -1,0 +1,147 @@
+//! The identification on normal equations accumulated per pose (`calib::normal`,
+//! `calib::accumulate`) against the tall-Jacobian QR solver it replaces in `fit_parameters`:
+//! same parameters to 1e-9 on the simulated Katana (with and without tilting) and the UR5
+//! laser-tracker data; the chunked two-thread accumulation is bitwise independent of the thread
+//! count.
+
+mod common;
+
+use nalgebra::Vector3;
+use rand::{Rng, SeedableRng};
+use rand_chacha::ChaCha8Rng;
+use rigctl::calib::accumulate::Accumulator;
+use rigctl::calib::fit::{fit_parameters_normal, fit_problem, Fit};
+use rigctl::calib::identifiability::DEFAULT_RTOL;
+use rigctl::calib::lm::LmConfig;
+use rigctl::calib::normal::Normal;
+use rigctl::calib::problem::{stacked_jacobian, PositionProblem};
+use rigctl::calib::{default_selection, Poses};
+use rigctl::model::{katana450, ur5, Model, Tilt, UR5_SMR_TOOL_MM};
+
+/// The tall-Jacobian path (QR of the stacked Jacobian), as `fit_parameters` did before.
+fn tall_fit(start: &Model, poses: &Poses, sel: &[usize], tilt: bool) -> Fit {
+    let jac0 = stacked_jacobian(start, poses, sel, tilt).unwrap();
+    let lm = LmConfig::default();
+    let make = |cols| PositionProblem::new(start, poses, cols, tilt);
+    fit_problem(start, sel, &jac0, make, &lm, DEFAULT_RTOL).unwrap()
+}
+
+fn assert_same(a: &Fit, b: &Fit, what: &str) {
+    assert_eq!(a.fitted, b.fitted, "{what}: fitted");
+    assert_eq!(a.fixed, b.fixed, "{what}: fixed");
+    assert_eq!(a.unidentifiable, b.unidentifiable, "{what}");
+    assert_eq!(a.rank, b.rank, "{what}: rank");
+    let mut worst: f64 = 0.0;
+    for &c in &a.fitted {
+        let (x, y) = (a.model.params()[c].value, b.model.params()[c].value);
+        worst = worst.max((x - y).abs());
+        assert!(
+            (x - y).abs() <= 1e-9,
+            "{what}: {} {x} vs {y}",
+            a.model.params()[c].name
+        );
+    }
+    for (s, t) in a.sigma.iter().zip(&b.sigma) {
+        assert!((s - t).abs() <= 1e-6 * s.abs(), "{what}: sigma {s} vs {t}");
+    }
+    let rel = (a.condition_number / b.condition_number - 1.0).abs();
+    assert!(rel < 1e-6, "{what}: condition {rel}");
+    eprintln!(
+        "{what}: {} parameters, largest difference {worst:.2e}, iterations {} / {}",
+        a.fitted.len(),
+        a.iterations,
+        b.iterations
+    );
+}
+
+fn katana_poses(n: usize, seed: u64) -> (Model, Poses) {
+    let nominal = katana450(200.0).unwrap();
+    let mut truth = nominal.clone();
+    for (p, v) in [
+        ("dth2", 0.03),
+        ("al3", 0.02),
+        ("dth4", -0.05),
+        ("be3", 0.01),
+    ] {
+        truth.set_param(p, v).unwrap();
+    }
+    let mut rng = ChaCha8Rng::seed_from_u64(seed);
+    let mut poses = Poses::default();
+    for _ in 0..n {
+        let q: Vec<f64> = truth
+            .joint_limits()
+            .iter()
+            .map(|l| rng.gen_range(l[0]..l[1]))
+            .collect();
+        let x = truth.position_mm(&q, Tilt::Static).unwrap();
+        let noise = Vector3::from_fn(|_, _| rng.gen_range(-0.01..0.01));
+        poses.xyz_mm.push(x + noise);
+        poses.q_deg.push(q);
+    }
+    (nominal, poses)
+}
+
+#[test]
+fn katana_normal_equations_match_the_tall_solver() {
+    let (nominal, poses) = katana_poses(118, 118);
+    let sel = default_selection(&nominal, false);
+    let lm = LmConfig::default();
+    for tilt in [false, true] {
+        let tall = tall_fit(&nominal, &poses, &sel, tilt);
+        let normal =
+            fit_parameters_normal(&nominal, &poses, &sel, tilt, &lm, DEFAULT_RTOL).unwrap();
+        assert_same(&tall, &normal, &format!("katana tilt={tilt}"));
+        assert!(normal.converged);
+    }
+}
+
+#[test]
+fn ur5_normal_equations_match_the_tall_solver() {
+    let Some(dir) = common::shared_file(
+        "ur5_normal_equations_match_the_tall_solver",
+        "data/real/ur5_laser_tracker",
+    ) else {
+        return;
+    };
+    let mut model = ur5().unwrap();
+    for (name, v) in ["tool_dx", "tool_dy", "tool_dz"]
+        .iter()
+        .zip(UR5_SMR_TOOL_MM)
+    {
+        model.set_param(name, v).unwrap();
+    }
+    let grid = Poses::read(&dir.join("grid.csv"), &model).unwrap();
+    let sel = default_selection(&model, true);
+    let tall = tall_fit(&model, &grid, &sel, false);
+    let lm = LmConfig::default();
+    let normal = fit_parameters_normal(&model, &grid, &sel, false, &lm, DEFAULT_RTOL).unwrap();
+    assert_same(&tall, &normal, "ur5 grid");
+}
+
+/// More than one chunk: one thread and two threads give bitwise the same sums, and the sums
+/// match the tall Jacobian's `J^T J`, `J^T r` to round-off.
+#[test]
+fn chunked_accumulation_is_deterministic() {
+    let (nominal, poses) = katana_poses(5000, 7);
+    let sel = default_selection(&nominal, false);
+    let mut sums = Vec::new();
+    for threads in [1, 2] {
+        let mut acc = Accumulator::with_threads(&nominal, poses.len(), &sel, threads);
+        let mut eq = Normal::zeros(sel.len());
+        acc.normal(&nominal, &poses, true, &mut eq).unwrap();
+        let ss = acc.sum_sq(&nominal, &poses, true).unwrap();
+        sums.push((eq, ss));
+    }
+    assert_eq!(sums[0], sums[1]);
+    let (eq, ss) = &sums[0];
+    assert_eq!(eq.m, 15000);
+    assert_eq!(eq.rtr.to_bits(), ss.to_bits());
+    let jac = stacked_jacobian(&nominal, &poses, &sel, true).unwrap();
+    let jtj = jac.transpose() * &jac;
+    for a in 0..sel.len() {
+        for b in a..sel.len() {
+            let tol = 1e-12 * (jtj[(a, a)] * jtj[(b, b)]).sqrt().max(1.0);
+            assert!((eq.jtj[(a, b)] - jtj[(a, b)]).abs() <= tol, "({a},{b})");
+        }
+    }
+}
