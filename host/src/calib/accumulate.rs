@@ -96,8 +96,9 @@ fn chunk_normal(
     eq: &mut Normal,
 ) -> Result<(), ModelError> {
     eq.clear();
+    d.sync(model);
     for i in range {
-        model.jacobian_with(d, &poses.q_deg[i], tilt, wrt)?;
+        model.jacobian_synced(d, &poses.q_deg[i], tilt, wrt)?;
         let r = d.position_mm() - poses.xyz_mm[i];
         add_pose(eq, d.jacobian(), &r);
     }
@@ -113,8 +114,9 @@ fn chunk_sum_sq(
     d: &mut Data,
 ) -> Result<f64, ModelError> {
     let mut s = 0.0;
+    d.sync(model);
     for i in range {
-        model.fk_with(d, &poses.q_deg[i], tilt)?;
+        model.fk_synced(d, &poses.q_deg[i], tilt)?;
         s += (d.position_mm() - poses.xyz_mm[i]).norm_squared();
     }
     Ok(s)
@@ -176,6 +178,31 @@ impl Accumulator {
         })?;
         Ok(self.sums.iter().sum())
     }
+}
+
+/// Position errors `measured - model` of every pose (mm), chunked on [`THREADS`] threads when
+/// there are several chunks (same values as one pose after the other).
+pub fn position_errors(
+    model: &Model,
+    poses: &Poses,
+    tilt: bool,
+) -> Result<Vec<Vector3<f64>>, ModelError> {
+    let (len, t) = (poses.len(), tilt_mode(tilt));
+    let chunks = n_chunks(len);
+    let threads = if chunks > 1 { THREADS } else { 1 };
+    let mut workers: Vec<Data> = (0..threads).map(|_| Data::new(model)).collect();
+    let mut out: Vec<Vec<Vector3<f64>>> = vec![Vec::new(); chunks];
+    run_chunks(&mut workers, &mut out, |c, d, errs| {
+        let range = chunk(c, len);
+        errs.reserve_exact(range.len());
+        d.sync(model);
+        for i in range {
+            model.fk_synced(d, &poses.q_deg[i], t)?;
+            errs.push(poses.xyz_mm[i] - d.position_mm());
+        }
+        Ok(())
+    })?;
+    Ok(out.concat())
 }
 
 /// The normal equations (symmetric) of `model - measured` over `poses` wrt the parameters `cols`.

@@ -127,7 +127,7 @@ pub trait NormalProblem {
     fn n_params(&self) -> usize;
     /// Number of residuals.
     fn n_residuals(&self) -> usize;
-    /// `r(x)^T r(x)`.
+    /// `r(x)^T r(x)` (the residuals alone, cheaper than [`NormalProblem::normal`]).
     fn sum_sq(&mut self, x: &DVector<f64>) -> Result<f64, Self::Error>;
     /// The normal equations at `x` into `eq` (upper triangle of `jtj` at least).
     fn normal(&mut self, x: &DVector<f64>, eq: &mut Normal) -> Result<(), Self::Error>;
@@ -184,14 +184,16 @@ fn update_scaling(eq: &Normal, diag: &mut DVector<f64>) {
     }
 }
 
-/// A trial step that decreased the cost.
+/// A trial step that decreased the cost (its normal equations are in the caller's `eq_try`).
 struct Accepted {
     x: DVector<f64>,
     cost: f64,
     step_norm: f64,
 }
 
-/// Inner loop: steps from `x` until one decreases the cost (as in [`super::lm`]).
+/// Inner loop: steps from `x` until one decreases the cost (as in [`super::lm`]). Each trial
+/// evaluates the normal equations at once (into `eq_try`): near a solution nearly every trial is
+/// accepted, and its linearisation is then the next iteration's, with the same cost `r^T r / 2`.
 #[allow(clippy::too_many_arguments)]
 fn find_decrease<P: NormalProblem>(
     problem: &mut P,
@@ -201,6 +203,7 @@ fn find_decrease<P: NormalProblem>(
     x: &DVector<f64>,
     diag: &DVector<f64>,
     cost: f64,
+    eq_try: &mut Normal,
     cfg: &LmConfig,
 ) -> Result<Option<Accepted>, LmError<P::Error>> {
     let xs_norm = x.component_mul(diag).norm();
@@ -212,7 +215,8 @@ fn find_decrease<P: NormalProblem>(
         }
         let x_try = x + y.component_div(diag);
         *evaluations += 1;
-        let cost_try = 0.5 * problem.sum_sq(&x_try).map_err(LmError::Problem)?;
+        problem.normal(&x_try, eq_try).map_err(LmError::Problem)?;
+        let cost_try = 0.5 * eq_try.rtr;
         if cost_try.is_finite() && cost_try < cost {
             damping.accepted(svd.gain_ratio(&y, cost - cost_try));
             return Ok(Some(Accepted {
@@ -248,6 +252,7 @@ pub fn solve_normal<P: NormalProblem>(
     }
     let mut x = x0;
     let mut eq = Normal::zeros(n);
+    let mut eq_try = Normal::zeros(n);
     problem.normal(&x, &mut eq).map_err(LmError::Problem)?;
     eq.symmetrise();
     let mut evaluations = 1;
@@ -283,6 +288,7 @@ pub fn solve_normal<P: NormalProblem>(
             &x,
             &diag,
             cost,
+            &mut eq_try,
             cfg,
         )?;
         let Some(step) = found else {
@@ -294,8 +300,7 @@ pub fn solve_normal<P: NormalProblem>(
         };
         let rel_decrease = (cost - step.cost) / cost;
         x = step.x;
-        evaluations += 1;
-        problem.normal(&x, &mut eq).map_err(LmError::Problem)?;
+        std::mem::swap(&mut eq, &mut eq_try);
         eq.symmetrise();
         cost = step.cost;
         if rel_decrease < cfg.ftol {

@@ -78,16 +78,7 @@ pub fn position_errors(
     poses: &Poses,
     tilt: bool,
 ) -> Result<Vec<Vector3<f64>>, ModelError> {
-    let mut d = Data::new(model);
-    poses
-        .q_deg
-        .iter()
-        .zip(&poses.xyz_mm)
-        .map(|(q, m)| {
-            model.fk_with(&mut d, q, tilt_mode(tilt))?;
-            Ok(m - d.position_mm())
-        })
-        .collect()
+    super::accumulate::position_errors(model, poses, tilt)
 }
 
 /// The values of the parameters `cols` of `model`, as a vector (NaN for an index that is not a

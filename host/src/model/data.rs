@@ -74,6 +74,9 @@ pub struct Data {
     pub(crate) tilt_axes: Vec<[Vector3<f64>; 3]>,
     /// Mass points of the untilted chain: (frame, kg, world point mm).
     pub(crate) points: Vec<(usize, f64, Vector3<f64>)>,
+    /// Per frame k: sum of `m c` (kg mm) and of `m` (kg) over the points on frames `>= k`.
+    pub(crate) suffix_mc: Vec<Vector3<f64>>,
+    pub(crate) suffix_m: Vec<f64>,
     pub(crate) moments_kgfm: Vec<Vector3<f64>>,
     pub(crate) tilts_deg: Vec<Vector3<f64>>,
     pub(crate) tilted: bool,
@@ -140,6 +143,8 @@ impl Data {
         d.rot0 = vec![Matrix3::identity(); ne];
         d.pos0_mm = vec![Vector3::zeros(); ne];
         d.tilt_axes = vec![[Vector3::zeros(); 3]; nj];
+        d.suffix_mc = vec![Vector3::zeros(); ne];
+        d.suffix_m = vec![0.0; ne];
         d.moments_kgfm = vec![Vector3::zeros(); nj];
         d.tilts_deg = vec![Vector3::zeros(); nj];
         d.sums = vec![Vector3::zeros(); nj];
@@ -172,6 +177,8 @@ impl Data {
             has_untilted: false,
             tilt_axes: Vec::new(),
             points: Vec::new(),
+            suffix_mc: Vec::new(),
+            suffix_m: Vec::new(),
             moments_kgfm: Vec::new(),
             tilts_deg: Vec::new(),
             tilted: false,
@@ -183,8 +190,9 @@ impl Data {
         }
     }
 
-    /// Refreshes the cache if `model`'s parameter values (or shape) changed since the last call.
-    pub(crate) fn sync(&mut self, model: &Model) {
+    /// Refreshes the cache if `model`'s parameter values (or shape) changed since the last call
+    /// (the `*_with` evaluations call it themselves).
+    pub fn sync(&mut self, model: &Model) {
         let same = self.elems == model.elems
             && self.tilt_values.len() == model.tilt.as_ref().map_or(0, Vec::len)
             && self.param_bits.len() == model.params.len()
@@ -336,6 +344,17 @@ impl Model {
             let last = self.elems.len() - 1;
             d.points.push((last, d.payload_kg, d.pos0_mm[last]));
         }
+        d.suffix_mc.fill(Vector3::zeros());
+        d.suffix_m.fill(0.0);
+        for (k, m, c) in &d.points {
+            d.suffix_mc[*k] += c * *m;
+            d.suffix_m[*k] += *m;
+        }
+        for k in (0..d.suffix_m.len().saturating_sub(1)).rev() {
+            let (mc, m) = (d.suffix_mc[k + 1], d.suffix_m[k + 1]);
+            d.suffix_mc[k] += mc;
+            d.suffix_m[k] += m;
+        }
         for (i, j) in self.joints.iter().enumerate() {
             let o = d.pos0_mm[j.elem];
             let mut s = Vector3::zeros();
@@ -397,8 +416,18 @@ impl Model {
     /// warm): tool point ([`Data::position_mm`]), rotation, moments and tilts. Same results as
     /// [`Model::fk`].
     pub fn fk_with(&self, d: &mut Data, q_deg: &[f64], tilt: Tilt<'_>) -> Result<(), ModelError> {
-        self.check_joints(q_deg)?;
         d.sync(self);
+        self.fk_synced(d, q_deg, tilt)
+    }
+
+    /// [`Model::fk_with`] on a workspace already synchronised with this model ([`Data::sync`]).
+    pub(crate) fn fk_synced(
+        &self,
+        d: &mut Data,
+        q_deg: &[f64],
+        tilt: Tilt<'_>,
+    ) -> Result<(), ModelError> {
+        self.check_joints(q_deg)?;
         self.tilt_checks(d, tilt)?;
         self.load_joints(d, q_deg);
         d.has_untilted = false;

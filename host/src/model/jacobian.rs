@@ -72,33 +72,21 @@ impl Model {
     }
 
     /// Derivative of the static moment of joint `i` (kgf.m, joint frame) for element `e` moved
-    /// at `rate` (untilted frames of `d`).
+    /// at `rate` (untilted frames of `d`). The sums over the carried masses are linear in the
+    /// mass points, so they come from the per-frame suffix sums of `m c` and `m`.
     fn moment_derivative(&self, d: &Data, i: usize, e: usize, rate: f64) -> Vector3<f64> {
         let ei = self.joints[i].elem;
-        let ri = d.rot0[ei];
-        let oi = d.pos0_mm[ei];
         let (w, v) = elem_twist(self, &d.rot0, &d.pos0_mm, e, rate);
-        let mut out = Vector3::zeros();
-        if e <= ei {
+        let out = if e <= ei {
             if w == Vector3::zeros() {
-                return out;
+                return Vector3::zeros();
             }
-            out -= w.cross(&d.sums[i]);
-            for (k, m, c) in &d.points {
-                if *k >= ei {
-                    out += w
-                        .cross(&((c - oi) * 1e-3))
-                        .cross(&(GRAVITY_KGF_PER_KG * *m));
-                }
-            }
+            let lever = (d.suffix_mc[ei] - d.pos0_mm[ei] * d.suffix_m[ei]) * 1e-3;
+            w.cross(&lever).cross(&GRAVITY_KGF_PER_KG) - w.cross(&d.sums[i])
         } else {
-            for (k, m, c) in &d.points {
-                if *k >= e {
-                    out += ((w.cross(c) + v) * 1e-3).cross(&(GRAVITY_KGF_PER_KG * *m));
-                }
-            }
-        }
-        ri.transpose() * out
+            ((w.cross(&d.suffix_mc[e]) + v * d.suffix_m[e]) * 1e-3).cross(&GRAVITY_KGF_PER_KG)
+        };
+        d.rot0[ei].transpose() * out
     }
 
     fn check_wrt(&self, wrt: &[Wrt]) -> Result<(), ModelError> {
@@ -191,8 +179,20 @@ impl Model {
         tilt: Tilt<'_>,
         wrt: &[Wrt],
     ) -> Result<(), ModelError> {
+        d.sync(self);
+        self.jacobian_synced(d, q_deg, tilt, wrt)
+    }
+
+    /// [`Model::jacobian_with`] on a workspace already synchronised with this model.
+    pub(crate) fn jacobian_synced(
+        &self,
+        d: &mut Data,
+        q_deg: &[f64],
+        tilt: Tilt<'_>,
+        wrt: &[Wrt],
+    ) -> Result<(), ModelError> {
         self.check_wrt(wrt)?;
-        self.fk_with(d, q_deg, tilt)?;
+        self.fk_synced(d, q_deg, tilt)?;
         if d.tilted {
             self.tilt_sensitivities(d);
         }
