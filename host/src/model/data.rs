@@ -86,6 +86,15 @@ pub struct Data {
     pub(crate) sums: Vec<Vector3<f64>>,
     pub(crate) tilt_g: Vec<Matrix3<f64>>,
     pub(crate) tilt_partials: Vec<super::tilt::TiltPartials>,
+    /// Per joint: `K_i = G_i (d tilt_i / d eta_i) R_i^T`, tool motion per moment change in R.
+    pub(crate) k_mat: Vec<Matrix3<f64>>,
+    /// `sum_{i < j} K_i` (j = 0..=joints).
+    pub(crate) k_pre: Vec<Matrix3<f64>>,
+    /// `sum_{i >= j} K_i A_i` with `A_i w` the change of joint i's moment (R) for a rotation `w`
+    /// before it (j = 0..=joints).
+    pub(crate) ka_post: Vec<Matrix3<f64>>,
+    /// Per element: the number of joints whose element comes before it (structure).
+    pub(crate) joints_before: Vec<usize>,
 }
 
 impl Data {
@@ -107,6 +116,9 @@ impl Data {
         self.param_bits
             .extend(model.params.iter().map(|p| p.value.to_bits()));
         self.elems.clone_from(&model.elems);
+        for (e, slot) in self.joints_before.iter_mut().enumerate() {
+            *slot = model.joints.iter().filter(|j| j.elem < e).count();
+        }
         for (k, e) in model.elems.iter().enumerate() {
             let v = model.params[e.param].value;
             self.elem_value[k] = v;
@@ -149,6 +161,10 @@ impl Data {
         d.tilts_deg = vec![Vector3::zeros(); nj];
         d.sums = vec![Vector3::zeros(); nj];
         d.tilt_g = vec![Matrix3::zeros(); nj];
+        d.k_mat = vec![Matrix3::zeros(); nj];
+        d.k_pre = vec![Matrix3::zeros(); nj + 1];
+        d.ka_post = vec![Matrix3::zeros(); nj + 1];
+        d.joints_before = vec![0; ne];
         d.tilt_values = Vec::with_capacity(nj);
         d.tilt_partials = Vec::with_capacity(nj);
         d.points = Vec::with_capacity(model.masses.len() + 1);
@@ -187,6 +203,10 @@ impl Data {
             sums: Vec::new(),
             tilt_g: Vec::new(),
             tilt_partials: Vec::new(),
+            k_mat: Vec::new(),
+            k_pre: Vec::new(),
+            ka_post: Vec::new(),
+            joints_before: Vec::new(),
         }
     }
 

@@ -71,24 +71,6 @@ impl Model {
         }
     }
 
-    /// Derivative of the static moment of joint `i` (kgf.m, joint frame) for element `e` moved
-    /// at `rate` (untilted frames of `d`). The sums over the carried masses are linear in the
-    /// mass points, so they come from the per-frame suffix sums of `m c` and `m`.
-    fn moment_derivative(&self, d: &Data, i: usize, e: usize, rate: f64) -> Vector3<f64> {
-        let ei = self.joints[i].elem;
-        let (w, v) = elem_twist(self, &d.rot0, &d.pos0_mm, e, rate);
-        let out = if e <= ei {
-            if w == Vector3::zeros() {
-                return Vector3::zeros();
-            }
-            let lever = (d.suffix_mc[ei] - d.pos0_mm[ei] * d.suffix_m[ei]) * 1e-3;
-            w.cross(&lever).cross(&GRAVITY_KGF_PER_KG) - w.cross(&d.sums[i])
-        } else {
-            ((w.cross(&d.suffix_mc[e]) + v * d.suffix_m[e]) * 1e-3).cross(&GRAVITY_KGF_PER_KG)
-        };
-        d.rot0[ei].transpose() * out
-    }
-
     fn check_wrt(&self, wrt: &[Wrt]) -> Result<(), ModelError> {
         for w in wrt {
             match *w {
@@ -125,6 +107,34 @@ impl Model {
             let tp = tilt_partials(&d.moments_kgfm[i], &d.tilt_values[i], self.gamma_law);
             d.tilt_partials.push(tp);
         }
+        if d.has_untilted {
+            self.moment_sensitivities(d);
+        }
+    }
+
+    /// The moment part of the tilt's derivative, summed over the joints once per pose (see
+    /// `Data::k_pre`, `Data::ka_post`): moving element `e` at `(w, v)` (untilted frames) changes
+    /// the static moment of a joint at or after `e` by `A_i w` (in R;
+    /// `A_i = [g]x [L_i]x + [S_i]x`, `L_i` the mass-weighted lever of the carried masses in m,
+    /// `S_i` their moment), and of a joint before `e` by `((w x sum m c + v sum m) 1e-3) x g`,
+    /// the same for all of them; the tool moves by `K_i` times the change.
+    fn moment_sensitivities(&self, d: &mut Data) {
+        let nj = self.joints.len();
+        let g = GRAVITY_KGF_PER_KG.cross_matrix();
+        d.k_pre[0] = Matrix3::zeros();
+        for (i, joint) in self.joints.iter().enumerate() {
+            let ei = joint.elem;
+            let k = d.tilt_g[i] * d.tilt_partials[i].wrt_eta * d.rot0[ei].transpose();
+            d.k_mat[i] = k;
+            d.k_pre[i + 1] = d.k_pre[i] + k;
+        }
+        d.ka_post[nj] = Matrix3::zeros();
+        for (i, joint) in self.joints.iter().enumerate().rev() {
+            let ei = joint.elem;
+            let lever = (d.suffix_mc[ei] - d.pos0_mm[ei] * d.suffix_m[ei]) * 1e-3;
+            let a = g * lever.cross_matrix() + d.sums[i].cross_matrix();
+            d.ka_post[i] = d.ka_post[i + 1] + d.k_mat[i] * a;
+        }
     }
 
     /// Column of the Jacobian wrt one coordinate (unscaled), from an evaluated workspace.
@@ -139,32 +149,34 @@ impl Model {
         if !d.tilted {
             return col;
         }
-        for (i, tp) in d.tilt_partials.iter().enumerate() {
-            let mut dtilt = Vector3::zeros();
-            if d.has_untilted {
-                let deta = if w == Wrt::Param(self.payload_param) {
-                    let ei = self.joints[i].elem;
-                    let tool0 = d.pos0_mm.last().copied().unwrap_or_else(Vector3::zeros);
-                    let arm = (tool0 - d.pos0_mm[ei]) * 1e-3;
-                    d.rot0[ei].transpose() * arm.cross(&GRAVITY_KGF_PER_KG)
-                } else if let Some((e, rate)) = direct {
-                    self.moment_derivative(d, i, e, rate)
-                } else {
-                    Vector3::zeros()
-                };
-                dtilt += tp.wrt_eta * deta;
-            }
-            if let (Wrt::Param(pi), Some(tps)) = (w, &self.tilt) {
-                let t = &tps[i];
-                if pi == t.clearance {
-                    dtilt += tp.wrt_clearance;
-                } else if pi == t.backlash {
-                    dtilt += tp.wrt_backlash;
-                } else if pi == t.stiffness {
-                    dtilt += tp.wrt_stiffness;
+        if d.has_untilted {
+            if w == Wrt::Param(self.payload_param) {
+                let tool0 = d.pos0_mm.last().copied().unwrap_or_else(Vector3::zeros);
+                for (i, joint) in self.joints.iter().enumerate() {
+                    let arm = (tool0 - d.pos0_mm[joint.elem]) * 1e-3;
+                    col += d.k_mat[i] * arm.cross(&GRAVITY_KGF_PER_KG);
                 }
+            } else if let Some((e, rate)) = direct {
+                let (w, v) = elem_twist(self, &d.rot0, &d.pos0_mm, e, rate);
+                let j = d.joints_before[e];
+                let after = ((w.cross(&d.suffix_mc[e]) + v * d.suffix_m[e]) * 1e-3)
+                    .cross(&GRAVITY_KGF_PER_KG);
+                col += d.ka_post[j] * w + d.k_pre[j] * after;
             }
-            col += d.tilt_g[i] * dtilt;
+        }
+        if let (Wrt::Param(pi), Some(tps)) = (w, &self.tilt) {
+            for (i, (t, tp)) in tps.iter().zip(&d.tilt_partials).enumerate() {
+                let dtilt = if pi == t.clearance {
+                    tp.wrt_clearance
+                } else if pi == t.backlash {
+                    tp.wrt_backlash
+                } else if pi == t.stiffness {
+                    tp.wrt_stiffness
+                } else {
+                    continue;
+                };
+                col += d.tilt_g[i] * dtilt;
+            }
         }
         col
     }
