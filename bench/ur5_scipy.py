@@ -8,11 +8,21 @@ offset (0, 0.07, 31.0) mm is the nominal tool point. Fitted: the parameter set r
 identifiable at its default threshold (the others stay nominal):
 dth1..dth6, tool_dy, tool_dz, base_x, base_y, base_z, base_rx, base_ry, d2, d5, a1..a4, al1..al4.
 
-Usage: python3 bench/ur5_scipy.py [DATA_DIR]   (default ../shared/data/real/ur5_laser_tracker)
-Needs numpy and scipy (pip install numpy scipy in a venv).
+Usage: python3 bench/ur5_scipy.py [DATA_DIR] [--rigctl PATH] [--runs N] [--jac 2-point|3-point]
+(DATA_DIR defaults to ../shared/data/real/ur5_laser_tracker). Needs numpy and scipy (pip install
+numpy scipy in a venv).
+
+With --rigctl PATH (e.g. target/release/rigctl) the same run also times `rigctl calibrate --robot
+ur5 --base` as a whole process (N runs, median wall time from spawn to exit, CSV reading and JSON
+writing included), prints both parameter vectors (deg / mm), their largest difference and the
+ratio rigctl whole process / scipy in-process.
 """
+import argparse
 import io
+import json
+import subprocess
 import sys
+import tempfile
 import time
 from pathlib import Path
 
@@ -76,8 +86,33 @@ def params_from(x):
     return p
 
 
+ANGLES = {n for n in FITTED if n.startswith(("dth", "al")) or n in ("base_rx", "base_ry")}
+
+
+def run_rigctl(rigctl, data, runs):
+    """Median wall time (s) of `rigctl calibrate` as a process, and its parameters."""
+    times = []
+    with tempfile.TemporaryDirectory() as tmp:
+        out = Path(tmp) / "cal.json"
+        cmd = [rigctl, "calibrate", "--robot", "ur5", "--base", "--set", "tool_dy=0.07",
+               "--set", "tool_dz=31.0", "--poses", str(data / "grid.csv"), "--json", str(out)]
+        for _ in range(runs):
+            t0 = time.perf_counter()
+            subprocess.run(cmd, check=True, stdout=subprocess.DEVNULL)
+            times.append(time.perf_counter() - t0)
+        params = json.load(open(out))["parameters"]
+    return float(np.median(times)), params
+
+
 def main():
-    data = Path(sys.argv[1]) if len(sys.argv) > 1 else Path(__file__).resolve().parents[2] / "shared/data/real/ur5_laser_tracker"
+    ap = argparse.ArgumentParser()
+    ap.add_argument("data", nargs="?", default=str(Path(__file__).resolve().parents[2] / "shared/data/real/ur5_laser_tracker"))
+    ap.add_argument("--rigctl")
+    ap.add_argument("--runs", type=int, default=5)
+    ap.add_argument("--jac", default="2-point")
+    ap.add_argument("--tol", type=float, default=1e-8, help="scipy ftol = xtol = gtol")
+    args = ap.parse_args()
+    data = Path(args.data)
     qc, pc = load(data / "grid.csv")
     qv, pv = load(data / "random.csv")
     x0 = np.array([nominal()[n] for n in FITTED])
@@ -86,15 +121,30 @@ def main():
         return (fk(params_from(x), q) - meas).ravel()
 
     runs = []
-    for _ in range(5):
+    for _ in range(args.runs):
         t0 = time.perf_counter()
-        sol = least_squares(res, x0, args=(qc, pc), method="lm", x_scale="jac")
+        sol = least_squares(res, x0, args=(qc, pc), method="lm", x_scale="jac", jac=args.jac,
+                            ftol=args.tol, xtol=args.tol, gtol=args.tol)
         runs.append(time.perf_counter() - t0)
+    scipy_s = float(np.median(runs))
     mean = lambda e: np.linalg.norm(e.reshape(-1, 3), axis=1).mean()
-    print("scipy least_squares (lm, 2-point Jacobian): median %.1f ms over %d runs, %d evaluations"
-          % (1e3 * np.median(runs), len(runs), sol.nfev))
+    print("scipy least_squares (lm, %s Jacobian, tol %g): median %.1f ms over %d runs, %d evaluations"
+          % (args.jac, args.tol, 1e3 * scipy_s, len(runs), sol.nfev))
     print("held-out mean: before %.4f mm, after %.4f mm" % (mean(res(x0, qv, pv)), mean(res(sol.x, qv, pv))))
     print("calibration mean after %.4f mm" % mean(sol.fun))
+    if not args.rigctl:
+        return
+    rig_s, params = run_rigctl(args.rigctl, data, args.runs)
+    print("%-8s %22s %22s %10s" % ("param", "scipy", "rigctl", "diff"))
+    worst = 0.0
+    for name, v in zip(FITTED, sol.x):
+        v = np.degrees(v) if name in ANGLES else v
+        r = params.get(name, float("nan"))
+        worst = max(worst, abs(r - v))
+        print("%-8s %22.12f %22.12f %10.2e" % (name, v, r, r - v))
+    print("largest parameter difference %.2e (deg / mm)" % worst)
+    print("rigctl calibrate, whole process: median %.1f ms over %d runs; scipy in-process %.1f ms; "
+          "ratio 1/%.1f" % (1e3 * rig_s, args.runs, 1e3 * scipy_s, scipy_s / rig_s))
 
 
 if __name__ == "__main__":
