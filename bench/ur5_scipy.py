@@ -8,7 +8,8 @@ offset (0, 0.07, 31.0) mm is the nominal tool point. Fitted: the parameter set r
 identifiable at its default threshold (the others stay nominal):
 dth1..dth6, tool_dy, tool_dz, base_x, base_y, base_z, base_rx, base_ry, d2, d5, a1..a4, al1..al4.
 
-Usage: python3 bench/ur5_scipy.py [DATA_DIR] [--rigctl PATH] [--runs N] [--jac 2-point|3-point]
+Usage: python3 bench/ur5_scipy.py [DATA_DIR] [--rigctl PATH] [--runs N] [--jac 2-point|3-point|cs]
+[--tol T]
 (DATA_DIR defaults to ../shared/data/real/ur5_laser_tracker). Needs numpy and scipy (pip install
 numpy scipy in a venv).
 
@@ -57,7 +58,7 @@ def nominal():
 def rot(axis, t):
     c, s = np.cos(t), np.sin(t)
     n = np.size(t)
-    r = np.zeros((n, 3, 3))
+    r = np.zeros((n, 3, 3), dtype=np.result_type(t, float))
     i, j = [(1, 2), (2, 0), (0, 1)][axis]
     r[:, axis, axis] = 1
     r[:, i, i] = c
@@ -70,7 +71,8 @@ def rot(axis, t):
 def fk(p, q):
     n = len(q)
     R = rot(0, np.full(n, p["base_rx"])) @ rot(1, np.full(n, p["base_ry"]))
-    P = np.tile([p["base_x"], p["base_y"], p["base_z"]], (n, 1)).astype(float)
+    dt = np.result_type(*[np.asarray(v) for v in p.values()], float)
+    P = np.tile(np.array([p["base_x"], p["base_y"], p["base_z"]], dtype=dt), (n, 1))
     for i in range(6):
         k = str(i + 1)
         R = R @ rot(2, q[:, i] + p["dth" + k])
@@ -109,7 +111,7 @@ def main():
     ap.add_argument("data", nargs="?", default=str(Path(__file__).resolve().parents[2] / "shared/data/real/ur5_laser_tracker"))
     ap.add_argument("--rigctl")
     ap.add_argument("--runs", type=int, default=5)
-    ap.add_argument("--jac", default="2-point")
+    ap.add_argument("--jac", default="2-point", help="2-point, 3-point or cs (complex step)")
     ap.add_argument("--tol", type=float, default=1e-8, help="scipy ftol = xtol = gtol")
     args = ap.parse_args()
     data = Path(args.data)
@@ -120,10 +122,22 @@ def main():
     def res(x, q, meas):
         return (fk(params_from(x), q) - meas).ravel()
 
+    jac = args.jac
+    if jac == "cs":
+        # Complex-step Jacobian: exact to round-off, so the fit converges like rigctl's analytic one.
+        def jac(x, q, meas):
+            h = 1e-30
+            cols = []
+            for k in range(len(x)):
+                xc = x.astype(complex)
+                xc[k] += 1j * h
+                cols.append(res(xc, q, meas).imag / h)
+            return np.stack(cols, 1)
+
     runs = []
     for _ in range(args.runs):
         t0 = time.perf_counter()
-        sol = least_squares(res, x0, args=(qc, pc), method="lm", x_scale="jac", jac=args.jac,
+        sol = least_squares(res, x0, args=(qc, pc), method="lm", x_scale="jac", jac=jac,
                             ftol=args.tol, xtol=args.tol, gtol=args.tol)
         runs.append(time.perf_counter() - t0)
     scipy_s = float(np.median(runs))
@@ -137,8 +151,15 @@ def main():
     rig_s, params = run_rigctl(args.rigctl, data, args.runs)
     print("%-8s %22s %22s %10s" % ("param", "scipy", "rigctl", "diff"))
     worst = 0.0
-    for name, v in zip(FITTED, sol.x):
-        v = np.degrees(v) if name in ANGLES else v
+    ours = {n: (np.degrees(v) if n in ANGLES else v) for n, v in zip(FITTED, sol.x)}
+    # The fit is unique only up to a half turn of the tool about joint 6's axis (dth6 + 180 deg
+    # with tool_dx, tool_dy negated moves no point): compare on rigctl's branch.
+    if abs((ours["dth6"] - params.get("dth6", ours["dth6"]) + 180.0) % 360.0 - 180.0) > 90.0:
+        ours["dth6"] -= 180.0 if ours["dth6"] > params["dth6"] else -180.0
+        ours["tool_dy"] = -ours["tool_dy"]
+        print("(scipy's solution taken to rigctl's branch: dth6 - 180 deg, tool_dy negated)")
+    for name in FITTED:
+        v = ours[name]
         r = params.get(name, float("nan"))
         worst = max(worst, abs(r - v))
         print("%-8s %22.12f %22.12f %10.2e" % (name, v, r, r - v))

@@ -5,9 +5,11 @@ use criterion::{criterion_group, criterion_main, Criterion};
 use nalgebra::Vector3;
 use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
+use rigctl::calib::accumulate::PositionNormalProblem;
 use rigctl::calib::fit::fit_parameters;
 use rigctl::calib::identifiability::DEFAULT_RTOL;
 use rigctl::calib::lm::LmConfig;
+use rigctl::calib::normal::{Normal, NormalProblem};
 use rigctl::calib::{default_selection, Poses};
 use rigctl::model::{katana450, ur5, Tilt, UR5_SMR_TOOL_MM};
 
@@ -47,6 +49,14 @@ fn bench(c: &mut Criterion) {
     });
     c.bench_function("katana_118_standard", |b| {
         b.iter(|| fit_parameters(&nominal, &cal, &sel, false, &lm, DEFAULT_RTOL).unwrap())
+    });
+    // One LM linearisation (normal equations of 118 poses with tilting, 12 parameters).
+    let x =
+        nalgebra::DVector::from_iterator(sel.len(), sel.iter().map(|&c| nominal.params()[c].value));
+    let mut problem = PositionNormalProblem::new(&nominal, &cal, sel.clone(), true);
+    let mut eq = Normal::zeros(sel.len());
+    c.bench_function("katana_118_lm_iteration_normal_equations", |b| {
+        b.iter(|| problem.normal(&x, &mut eq).unwrap())
     });
     let Some(dir) = rigctl::shared_dir()
         .map(|d| d.join("data/real/ur5_laser_tracker"))

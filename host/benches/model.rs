@@ -4,7 +4,7 @@
 use criterion::{black_box, criterion_group, criterion_main, Criterion};
 use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
-use rigctl::model::{katana450, Model, Tilt, KATANA_GEOMETRIC_PARAMS};
+use rigctl::model::{katana450, Data, Model, Tilt, Wrt, KATANA_GEOMETRIC_PARAMS};
 
 fn poses(model: &Model, n: usize) -> Vec<Vec<f64>> {
     let mut rng = ChaCha8Rng::seed_from_u64(1);
@@ -45,6 +45,22 @@ fn bench_model(c: &mut Criterion) {
             for q in &batch {
                 black_box(model.param_jacobian(q, Tilt::Static, &geometric).unwrap());
             }
+        })
+    });
+    // The reusable workspace (no allocation per pose).
+    let wrt: Vec<Wrt> = geometric.iter().map(|&i| Wrt::Param(i)).collect();
+    let mut d = Data::new(&model);
+    c.bench_function("workspace_fk_tilt_one_pose", |b| {
+        b.iter(|| model.fk_with(&mut d, black_box(&q), Tilt::Static).unwrap())
+    });
+    c.bench_function("workspace_fk_no_tilt_one_pose", |b| {
+        b.iter(|| model.fk_with(&mut d, black_box(&q), Tilt::Off).unwrap())
+    });
+    c.bench_function("workspace_fk_tilt_param_jacobian_12_one_pose", |b| {
+        b.iter(|| {
+            model
+                .jacobian_with(&mut d, black_box(&q), Tilt::Static, &wrt)
+                .unwrap()
         })
     });
     c.bench_function("fk_no_tilt_batch_118", |b| {
