@@ -14,7 +14,6 @@
 //! | [`sheet`] | the printable trace sheet's geometry and SVG |
 //! | [`trace`] | scanned pencil traces -> centreline in sheet mm; simulated scans |
 //! | [`urdf`] | URDF import: a serial chain of a URDF file as a [`model::Model`] (`rigctl urdf2model`) |
-//! | [`tiago`] | the TIAGo motion-capture data set (FIGAROH) as poses, and its calibration levels |
 //! | [`fusion`] | the low-cost measurement: pot calibration, clock alignment, joints + pot + trace -> partial error samples |
 //! | [`error`] | how errors are classified (bad input vs failure of the run) |
 #![forbid(unsafe_code)]
@@ -33,7 +32,6 @@ pub mod plot;
 pub mod report;
 pub mod sheet;
 pub mod sim;
-pub mod tiago;
 pub mod trace;
 pub mod urdf;
 

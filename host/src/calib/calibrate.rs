@@ -118,16 +118,49 @@ pub fn default_selection(model: &Model, base: bool) -> Vec<usize> {
     sel
 }
 
-/// Resolves a selection by names (or the default one).
+/// The parameters of a group named in `--params` as `@group` (README "Parameter groups"):
+/// `@base` (base frame: `base_*`, with `base_rz` when the model has it), `@tool` (`tool_d*`),
+/// `@offsets` (joint offsets), `@chain` (the chain's constant lengths and twists, `base_rz`
+/// excepted), in model order.
+pub fn param_group(model: &Model, group: &str) -> Result<Vec<usize>, CalibError> {
+    let rz = model.param_index("base_rz");
+    Ok(match group {
+        "base" => {
+            let mut v = model.params_of_kind(ParamKind::Base);
+            v.extend(rz);
+            v
+        }
+        "tool" => model.params_of_kind(ParamKind::Tool),
+        "offsets" => model.params_of_kind(ParamKind::JointOffset),
+        "chain" => (0..model.params().len())
+            .filter(|&i| {
+                Some(i) != rz
+                    && matches!(model.params()[i].kind, ParamKind::Twist | ParamKind::Length)
+            })
+            .collect(),
+        _ => {
+            return Err(CalibError::Unsupported(format!(
+                "--params: unknown group `@{group}` (@base, @tool, @offsets, @chain)"
+            )))
+        }
+    })
+}
+
+/// Resolves a selection by names and `@group`s ([`param_group`]), or the default one.
 pub fn resolve_selection(model: &Model, opts: &CalibrateOptions) -> Result<Vec<usize>, CalibError> {
     match &opts.params {
         None => Ok(default_selection(model, opts.base)),
         Some(names) => {
             let mut sel = Vec::new();
             for n in names.iter().map(|n| n.trim()).filter(|n| !n.is_empty()) {
-                let i = model.require_param(n)?;
-                if !sel.contains(&i) {
-                    sel.push(i);
+                let group = match n.strip_prefix('@') {
+                    Some(g) => param_group(model, g)?,
+                    None => vec![model.require_param(n)?],
+                };
+                for i in group {
+                    if !sel.contains(&i) {
+                        sel.push(i);
+                    }
                 }
             }
             if sel.is_empty() {
@@ -193,6 +226,7 @@ pub(super) fn fit_report(
         iterations: fit.iterations,
         converged: fit.converged,
         tilting_applied,
+        terms: NamedValues::default(),
     }
 }
 

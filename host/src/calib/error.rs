@@ -25,6 +25,12 @@ pub enum CalibError {
     /// A parameter selection that names no parameter.
     #[error("--params: empty parameter list")]
     EmptySelection,
+    /// Joint compliance asked of a model without link masses.
+    #[error("--compliance needs link masses in the model (e.g. `urdf2model` from a URDF with <inertial>)")]
+    NoMasses,
+    /// A combination of options that the identification does not support.
+    #[error("{0}")]
+    Unsupported(String),
 }
 
 impl CalibError {
@@ -48,7 +54,9 @@ impl Classify for CalibError {
             CalibError::NoPoses
             | CalibError::NothingToFit
             | CalibError::TooFewPoses { .. }
-            | CalibError::EmptySelection => ErrorKind::BadInput,
+            | CalibError::EmptySelection
+            | CalibError::NoMasses
+            | CalibError::Unsupported(_) => ErrorKind::BadInput,
         }
     }
 }

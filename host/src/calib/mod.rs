@@ -13,15 +13,23 @@
 //! | [`fit`] | identifiability + LM + covariance on a parameter subset |
 //! | [`influence`] | influence-based identification (thesis eq. 3.7-3.8) |
 //! | [`calibrate`] | the whole `calibrate` command: selection, methods, report |
+//! | [`measurements`] | poses with several measured points each (pose, point slot, xyz) |
+//! | [`general`] | identification with point offsets and joint compliance |
+//! | [`press`] | block-PRESS (leave-one-pose-out) forward selection |
+//! | [`calibrate_general`] | `calibrate` with several points, `--compliance`, `--select press` |
 
 pub mod accumulate;
 pub mod calibrate;
+pub mod calibrate_general;
 pub mod error;
 pub mod fit;
+pub mod general;
 pub mod identifiability;
 pub mod influence;
 pub mod lm;
+pub mod measurements;
 pub mod normal;
+pub mod press;
 pub mod problem;
 pub mod projected;
 pub mod report;

@@ -6,7 +6,7 @@
 //! `condition_number`. Added keys (FORMATS.md allows additions): `standard` (the conventional
 //! result used for the table-4.5 comparison), `sigma` (one standard deviation of each fitted
 //! parameter), `fixed` (parameters kept at their nominal value), `rank`, `iterations`,
-//! `converged`, `tilting_applied`.
+//! `converged`, `tilting_applied`, `terms` (non-parameter values: point offsets, compliance).
 
 use serde::ser::SerializeMap;
 use serde::{Serialize, Serializer};
@@ -37,6 +37,11 @@ impl Serialize for NamedValues {
 }
 
 impl NamedValues {
+    /// Whether there is no value.
+    pub fn is_empty(&self) -> bool {
+        self.0.is_empty()
+    }
+
     /// The value called `name`.
     pub fn get(&self, name: &str) -> Option<f64> {
         self.0.iter().find(|(k, _)| k == name).map(|(_, v)| *v)
@@ -84,6 +89,11 @@ pub struct CalibrateReport {
     /// Whether the calibrated model includes the declared joint tilting (method `tilting` on a
     /// model with tilting data).
     pub tilting_applied: bool,
+    /// Identified values that are not model parameters (README "calibrate: several points,
+    /// compliance, PRESS selection"): `marker<k>_x_mm` (point offsets in the tool frame) and
+    /// `compliance_j<i>_deg_per_kgfm`; their sigmas are in `sigma`. Absent when empty.
+    #[serde(skip_serializing_if = "NamedValues::is_empty")]
+    pub terms: NamedValues,
 }
 
 #[cfg(test)]
@@ -114,6 +124,7 @@ mod tests {
             iterations: 4,
             converged: true,
             tilting_applied: true,
+            terms: NamedValues::default(),
         };
         let text = serde_json::to_string(&r).unwrap();
         let v: serde_json::Value = serde_json::from_str(&text).unwrap();

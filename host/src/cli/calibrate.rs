@@ -1,7 +1,9 @@
 //! `rigctl calibrate --poses CAL.csv [--validate VAL.csv] [--method standard|influence|tilting]
 //! [--json OUT.json] [--out MODEL.toml] [--robot NAME | --model FILE] [--tool-mm L]
-//! [--set NAME=VALUE ...] [--params a,b,c] [--base]`: identifies the model's parameters and
-//! prints a thesis-table-4.5 style summary.
+//! [--set NAME=VALUE ...] [--params a,b,@group] [--base] [--units m,rad] [--markers 1,2]
+//! [--select press] [--compliance]`: identifies the model's parameters (and, with several
+//! measured points per pose or `--compliance`, the points' offsets and the joint compliances:
+//! `rigctl::calib::calibrate_general`) and prints a thesis-table-4.5 style summary.
 //!
 //! `rigctl calibrate --samples FUSED.csv [--method standard|tilting] [--errors-csv FILE]
 //! [--plot FILE.svg] ...`:
@@ -13,13 +15,17 @@ use std::fmt::Write as _;
 use std::path::PathBuf;
 
 use nalgebra::Vector3;
+use rigctl::calib::calibrate_general::{calibrate_general, GeneralOptions, Select};
+use rigctl::calib::measurements::Measurements;
 use rigctl::calib::stats::AxisExtremes;
-use rigctl::calib::{calibrate, CalibrateOptions, Method, Poses};
+use rigctl::calib::{calibrate, CalibrateOptions, Method};
 use rigctl::io::atomic::write_bytes_atomic;
+use rigctl::io::pose_csv::read_poses;
 use rigctl::model::KATANA_PENCIL_TOOL_MM;
 
 use super::model_args::ModelArgs;
 use super::out::out;
+use super::pose_args::PoseArgs;
 use super::CliError;
 
 #[derive(clap::Args, Debug)]
@@ -55,7 +61,8 @@ pub struct Args {
     #[command(flatten)]
     pub model: ModelArgs,
     /// Parameters to identify, comma separated (default: the Katana's 12 geometric ones, or for
-    /// other robots all joint offsets, twists, lengths and the tool point).
+    /// other robots all joint offsets, twists, lengths and the tool point). Groups: @base (base
+    /// frame, base_rz included), @tool, @offsets (joint offsets), @chain (lengths and twists).
     #[arg(long, value_name = "a,b,c", value_delimiter = ',')]
     pub params: Option<Vec<String>>,
     /// Also identify the base frame (base_x, base_y, base_z, base_rx, base_ry).
@@ -65,6 +72,32 @@ pub struct Args {
     /// largest are reported unidentifiable and kept nominal.
     #[arg(long, value_name = "RTOL", default_value_t = rigctl::calib::identifiability::DEFAULT_RTOL, value_parser = parse_rtol)]
     pub rtol: f64,
+    // --units LENGTH,ANGLE of the pose files.
+    #[command(flatten)]
+    pub pose: PoseArgs,
+    /// With several measured points per pose (x1,y1,z1,..): the points to use, 1-based, comma
+    /// separated (default: all). The first is the tool point; each further one gets its own
+    /// offset in the tool frame (marker<k>_x_mm ..).
+    #[arg(
+        long,
+        value_name = "1,2,..",
+        value_delimiter = ',',
+        conflicts_with = "samples"
+    )]
+    pub markers: Option<Vec<usize>>,
+    /// all (fit every selected parameter) or press: fit the selection without the chain
+    /// constants, then add the chain constants (and with --compliance the joint compliances)
+    /// that lower the leave-one-pose-out prediction error (block PRESS) on the calibration poses.
+    #[arg(long, default_value = "all", value_parser = parse_select, conflicts_with = "samples")]
+    pub select: Select,
+    /// Identify a compliance of every revolute joint (deg per kgf.m of gravity torque about its
+    /// axis, from the model's link masses; with --select press, only those chosen).
+    #[arg(long, conflicts_with = "samples")]
+    pub compliance: bool,
+}
+
+fn parse_select(s: &str) -> Result<Select, String> {
+    s.parse()
 }
 
 /// A relative threshold strictly between 0 and 1 (NaN and infinities refused).
@@ -94,12 +127,21 @@ pub fn run(args: Args) -> Result<(), CliError> {
         .as_deref()
         .ok_or_else(|| CliError::bad_input("--poses or --samples is required"))?;
     let model = args.model.choose()?;
-    let cal = Poses::read(poses, &model)?;
-    let val = args
-        .validate
-        .as_deref()
-        .map(|p| Poses::read(p, &model))
-        .transpose()?;
+    let markers: Option<Vec<usize>> = match &args.markers {
+        Some(m) if m.is_empty() || m.contains(&0) => {
+            return Err(CliError::bad_input(
+                "--markers: 1-based point numbers, e.g. 1,2,3",
+            ))
+        }
+        Some(m) => Some(m.iter().map(|k| k - 1).collect()),
+        None => None,
+    };
+    let read = |p: &std::path::Path| -> Result<Measurements, CliError> {
+        let file = read_poses(p, &args.pose.spec(&model, true, 0))?;
+        Ok(Measurements::from_pose_file(&file, markers.as_deref())?)
+    };
+    let cal = read(poses)?;
+    let val = args.validate.as_deref().map(read).transpose()?;
     let opts = CalibrateOptions {
         method: args.method,
         params: args.params.clone(),
@@ -107,7 +149,23 @@ pub fn run(args: Args) -> Result<(), CliError> {
         rtol: args.rtol,
         ..Default::default()
     };
-    let outcome = calibrate(&model, &cal, val.as_ref(), &opts)?;
+    let gen = GeneralOptions {
+        select: args.select,
+        compliance: args.compliance,
+    };
+    let mut notes = String::new();
+    let outcome = if cal.n_slots() == 1 && gen == GeneralOptions::default() {
+        calibrate(
+            &model,
+            &cal.as_poses(),
+            val.as_ref().map(|v| v.as_poses()).as_ref(),
+            &opts,
+        )?
+    } else {
+        let g = calibrate_general(&model, &cal, val.as_ref(), &opts, &gen)?;
+        notes = general_notes(&g, &cal);
+        g.outcome
+    };
     if let Some(path) = &args.json {
         let text = serde_json::to_string_pretty(&outcome.report)
             .map_err(|e| CliError::failure(format!("encoding JSON: {e}")))?;
@@ -116,8 +174,28 @@ pub fn run(args: Args) -> Result<(), CliError> {
     if let Some(path) = &args.out {
         outcome.model.write_file(path)?;
     }
-    out!("{}", summary(&outcome, val.is_some()))?;
+    out!("{}{notes}", summary(&outcome, val.is_some()))?;
     Ok(())
+}
+
+/// What `calibrate_general` adds to the summary: the PRESS choice and the validation error of
+/// every point.
+fn general_notes(
+    g: &rigctl::calib::calibrate_general::GeneralOutcome,
+    cal: &Measurements,
+) -> String {
+    let mut s = String::new();
+    if !g.added.is_empty() {
+        let _ = writeln!(s, "added by PRESS selection: {}", g.added.join(", "));
+    }
+    for (slot, rms) in g.validation_rms_by_point_mm.iter().enumerate() {
+        let _ = writeln!(
+            s,
+            "validation RMS of point {}: {rms:.4} mm",
+            cal.markers.get(slot).map_or(slot, |m| *m) + 1
+        );
+    }
+    s
 }
 
 /// Table 4.5 style: min / max / average of |dX|, |dY|, |dZ|, |dP| before, after the standard
@@ -257,7 +335,7 @@ fn report_tail(r: &rigctl::calib::report::CalibrateReport) -> String {
         );
     }
     let _ = writeln!(s, "{:<12} {:>14} {:>12}", "parameter", "value", "sigma");
-    for (name, v) in &r.parameters.0 {
+    for (name, v) in r.parameters.0.iter().chain(&r.terms.0) {
         let sig = r
             .sigma
             .get(name)

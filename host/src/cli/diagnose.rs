@@ -1,6 +1,6 @@
 //! `rigctl diagnose --poses CAL.csv --validate VAL.csv [--json OUT.json] [--out MODEL.toml]
 //! [--plots DIR] [--residual-model] [--robot NAME | --model FILE.toml] [--tool-mm L]
-//! [--set NAME=VALUE ...]`:
+//! [--set NAME=VALUE ...] [--units m,rad] [--marker K]`:
 //! fits the declared model, adds the missing effects the data establish (see
 //! `rigctl::diagnose`), prints a table, and writes the JSON report, the extended model and plots.
 //!
@@ -21,6 +21,7 @@ use rigctl::model::KATANA_PENCIL_TOOL_MM;
 
 use super::model_args::ModelArgs;
 use super::out::out;
+use super::pose_args::PoseArgs;
 use super::CliError;
 
 #[derive(clap::Args, Debug)]
@@ -62,6 +63,13 @@ pub struct Args {
     /// Seed of the cross-validation folds.
     #[arg(long, default_value_t = 1)]
     pub seed: u64,
+    // --units LENGTH,ANGLE of the pose files.
+    #[command(flatten)]
+    pub pose: PoseArgs,
+    /// In pose files with several measured points per pose (x1,y1,z1,..): the point diagnosed
+    /// (1-based; the others are ignored).
+    #[arg(long, value_name = "K", default_value_t = 1, value_parser = clap::value_parser!(u64).range(1..))]
+    pub marker: u64,
 }
 
 pub fn run(args: Args) -> Result<(), CliError> {
@@ -69,10 +77,12 @@ pub fn run(args: Args) -> Result<(), CliError> {
     // the pencil holder is on the arm when the rig's samples are measured
     let default_tool_mm = (!args.samples.is_empty()).then_some(KATANA_PENCIL_TOOL_MM);
     let model = args.model.choose_with_default_tool(default_tool_mm)?;
+    let marker = usize::try_from(args.marker - 1).unwrap_or(usize::MAX);
+    let spec = args.pose.spec(&model, true, marker);
     let mut cal: Option<Dataset> = args
         .poses
         .as_deref()
-        .map(|p| Dataset::read(p, &model))
+        .map(|p| Dataset::read_with(p, &spec))
         .transpose()?;
     for path in &args.samples {
         let d = read_samples(path, &model)?;
@@ -87,7 +97,7 @@ pub fn run(args: Args) -> Result<(), CliError> {
         let d = if is_fused(path) {
             read_samples(path, &model)?
         } else {
-            Dataset::read(path, &model)?
+            Dataset::read_with(path, &spec)?
         };
         val = Some(match val {
             Some(v) => v.concat(d),

@@ -1,19 +1,22 @@
 //! `rigctl fk --joints FILE.csv [--tilt] [--tool-mm L] [--set NAME=VALUE ...]
-//! [--robot NAME | --model FILE.toml]`: forward kinematics of every row, CSV
-//! `x,y,z,phi,theta,psi` (mm in frame R, ZXZ Euler angles in deg) on stdout.
+//! [--robot NAME | --model FILE.toml] [--units m,rad]`: forward kinematics of every row, CSV
+//! `x,y,z,phi,theta,psi` (mm in frame R, ZXZ Euler angles in deg, whatever `--units` says of
+//! the input) on stdout.
 
 use std::fmt::Write as _;
 use std::path::PathBuf;
 
-use rigctl::io::pose_csv::{read_poses, PoseSpec};
+use rigctl::io::pose_csv::read_poses;
 use rigctl::model::{ModelError, Tilt};
 
 use super::model_args::ModelArgs;
+use super::pose_args::PoseArgs;
 use super::CliError;
 
 #[derive(clap::Args, Debug)]
 pub struct Args {
-    /// Pose file with columns q1..qN (deg); other columns are ignored.
+    /// Pose file with columns q1..qN (deg), or the model's joint names; other columns are
+    /// ignored.
     #[arg(long, value_name = "FILE.csv")]
     pub joints: PathBuf,
     /// Add joint tilting with the declared values (MODEL.md).
@@ -22,6 +25,9 @@ pub struct Args {
     // The model choice: --robot NAME | --model FILE.toml, --tool-mm L, --set NAME=VALUE.
     #[command(flatten)]
     pub model: ModelArgs,
+    // --units LENGTH,ANGLE of the joint readings.
+    #[command(flatten)]
+    pub pose: PoseArgs,
 }
 
 pub fn run(args: Args) -> Result<(), CliError> {
@@ -32,7 +38,7 @@ pub fn run(args: Args) -> Result<(), CliError> {
         }
         .into());
     }
-    let poses = read_poses(&args.joints, &PoseSpec::for_model(&model, false))?;
+    let poses = read_poses(&args.joints, &args.pose.spec(&model, false, 0))?;
     let tilt = if args.tilt { Tilt::Static } else { Tilt::Off };
     let mut out = String::from("x,y,z,phi,theta,psi\n");
     for pose in &poses.poses {

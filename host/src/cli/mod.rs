@@ -14,6 +14,7 @@ mod model_args;
 pub mod out;
 mod plan;
 mod ports;
+mod pose_args;
 mod potcal;
 mod record;
 mod report;

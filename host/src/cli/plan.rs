@@ -8,19 +8,23 @@ use std::path::PathBuf;
 
 use nalgebra::Vector3;
 use rigctl::io::atomic::write_bytes_atomic;
-use rigctl::io::pose_csv::{read_poses, PoseSpec};
+use rigctl::io::pose_csv::read_poses;
 use rigctl::plan::output::{plan_csv, plan_json, summary_table};
 use rigctl::plan::{plan, Criterion, FromDiagnose, PlanConfig};
 use rigctl::plot::plan::poses_svg;
 
 use super::model_args::ModelArgs;
 use super::out::out;
+use super::pose_args::PoseArgs;
 use super::CliError;
 
 #[derive(clap::Args, Debug)]
 pub struct Args {
     #[command(flatten)]
     pub model: ModelArgs,
+    // --units LENGTH,ANGLE of --poses.
+    #[command(flatten)]
+    pub pose: PoseArgs,
     /// Number of poses to choose.
     #[arg(long, value_name = "N")]
     pub n: usize,
@@ -124,7 +128,7 @@ pub fn run(args: Args) -> Result<(), CliError> {
         cfg.workspace.min_z_mm = Some(z);
     }
     if let Some(p) = &args.poses {
-        let file = read_poses(p, &PoseSpec::for_model(&model, false))?;
+        let file = read_poses(p, &args.pose.spec(&model, false, 0))?;
         cfg.existing_q = file.joints();
     }
     let from = match &args.from_diagnose {

@@ -77,7 +77,13 @@ impl Dataset {
     /// Reads a pose file with measured positions for `model` (joint count and limits checked).
     /// `t` is used only if every row has it.
     pub fn read(path: &Path, model: &Model) -> Result<Self, PoseCsvError> {
-        let file = read_poses(path, &PoseSpec::for_model(model, true))?;
+        Self::read_with(path, &PoseSpec::for_model(model, true))
+    }
+
+    /// As [`Dataset::read`] with the file's expectations `spec` (units, joint names, which
+    /// measured point of a file with several is the pose's point).
+    pub fn read_with(path: &Path, spec: &PoseSpec) -> Result<Self, PoseCsvError> {
+        let file = read_poses(path, spec)?;
         let poses = Poses::from_pose_file(&file).unwrap_or_default();
         let t: Option<Vec<f64>> = file.poses.iter().map(|p| p.t_s).collect();
         let ids: Option<Vec<String>> = file.poses.iter().map(|p| p.id.clone()).collect();

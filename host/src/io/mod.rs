@@ -1,4 +1,5 @@
-//! File formats at the edges: the shared CSV table reader, pose CSV files, output files (atomic
+//! File formats at the edges: the shared CSV table reader, pose CSV files (several measured
+//! points per pose, joint columns by name, units converted at the edge: [`units`]), output files (atomic
 //! for regular files, direct for devices and FIFOs) and the process's interruption handling.
 
 pub mod atomic;
@@ -6,3 +7,4 @@ pub mod interrupt;
 pub mod pose_csv;
 pub mod ranges;
 pub mod table;
+pub mod units;

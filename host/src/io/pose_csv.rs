@@ -1,6 +1,10 @@
 //! Pose CSV files (FORMATS.md "Pose files"): a header naming the columns, one pose per row,
 //! `#` comment lines. Columns `q1..qN` (deg, mm for a prismatic joint) are required; `x,y,z`
 //! (mm) are required when the caller needs measured positions and checked whenever present;
+//! extensions (README "Pose files: extensions"): several measured points per pose as
+//! `x1,y1,z1,...,xk,yk,zk` instead of `x,y,z` (all k complete, no empty cell); the joint
+//! columns named by the model's joint names ([`PoseSpec::joint_names`]) instead of `q1..qN`;
+//! lengths and angles in other units ([`PoseSpec::units`], converted to mm / deg here);
 //! `t` (s) is optional and numeric; `id` is optional text; any other column is kept as text and
 //! ignored. A missing, non-numeric, NaN or infinite value in a used column, a wrong field
 //! count, or a joint outside its limits is [`PoseCsvError`] (bad input) naming the file, the
@@ -9,6 +13,7 @@
 use std::path::Path;
 
 use super::table::{Table, TableError};
+use super::units::Units;
 use crate::error::{Classify, ErrorKind};
 
 /// What a reader expects of a pose file (`PoseSpec::for_model` builds it from a model, in
@@ -19,8 +24,17 @@ pub struct PoseSpec {
     pub n_joints: usize,
     /// Joint limits `[min, max]` per joint; empty = no limit check.
     pub limits: Vec<[f64; 2]>,
-    /// Whether `x, y, z` must be present.
+    /// Whether `x, y, z` (or `x1, y1, z1, ...`) must be present.
     pub require_xyz: bool,
+    /// Names of the joints (e.g. URDF joint names), used for the joint columns when the file
+    /// has no `q1`; empty = `q1..qN` only.
+    pub joint_names: Vec<String>,
+    /// Which joints are prismatic (their readings are lengths); empty = all revolute.
+    pub prismatic: Vec<bool>,
+    /// Units of the file's lengths and angles.
+    pub units: Units,
+    /// The measured point reported as [`Pose::xyz_mm`] in a file with several (0-based).
+    pub marker: usize,
 }
 
 /// One row of a pose file.
@@ -30,8 +44,12 @@ pub struct Pose {
     pub line: usize,
     /// Joint readings `q1..qN` (deg; mm for a prismatic joint).
     pub q: Vec<f64>,
-    /// Measured tool point (mm, frame R), when the file has `x,y,z`.
+    /// Measured tool point (mm, frame R), when the file has `x,y,z` (in a file with several
+    /// points, point [`PoseSpec::marker`]).
     pub xyz_mm: Option<[f64; 3]>,
+    /// Every measured point of the row (mm, frame R): one for `x,y,z`, k for `x1..zk`, none
+    /// without measured positions.
+    pub markers_mm: Vec<[f64; 3]>,
     /// Time since the start of the session (s), when the file has `t`.
     pub t_s: Option<f64>,
     /// Pose name, when the file has `id`.
@@ -64,6 +82,11 @@ impl PoseFile {
         self.poses.iter().map(|p| p.xyz_mm).collect()
     }
 
+    /// Number of measured points per pose (0 without measured positions).
+    pub fn n_markers(&self) -> usize {
+        self.poses.first().map_or(0, |p| p.markers_mm.len())
+    }
+
     /// Text of extra column `name` of pose `i`.
     pub fn extra(&self, i: usize, name: &str) -> Option<&str> {
         let c = self.extra_columns.iter().position(|n| n == name)?;
@@ -86,6 +109,15 @@ pub enum PoseCsvError {
     Table(TableError),
     #[error("{file}: no pose rows")]
     NoPoses { file: String },
+    /// A header that mixes `x,y,z` with numbered points `x1..`, or names a point beyond those
+    /// the caller can use.
+    #[error("{file}:{line}: column `{column}`: {problem}")]
+    Columns {
+        file: String,
+        line: usize,
+        column: String,
+        problem: String,
+    },
     #[error(
         "{file}:{line}: column `{column}`: joint value {value} outside the limits [{min}, {max}]"
     )]
@@ -128,27 +160,97 @@ pub fn read_poses(path: &Path, spec: &PoseSpec) -> Result<PoseFile, PoseCsvError
 /// Where each used column sits in a row.
 struct Layout {
     q: Vec<usize>,
-    xyz: Option<[usize; 3]>,
+    /// `[x, y, z]` columns of every measured point.
+    markers: Vec<[usize; 3]>,
     t: Option<usize>,
     id: Option<usize>,
     extra: Vec<usize>,
 }
 
+/// The joint columns: `q1..qN`, or the joint names when the file has no `q1` and the spec
+/// names the joints.
+fn joint_columns(table: &Table, spec: &PoseSpec) -> Result<Vec<usize>, TableError> {
+    let by_name = table.find("q1").is_none()
+        && spec.joint_names.len() == spec.n_joints
+        && spec.joint_names.iter().any(|n| table.find(n).is_some());
+    (0..spec.n_joints)
+        .map(|i| match by_name {
+            true => table.need(&spec.joint_names[i]),
+            false => table.need(&format!("q{}", i + 1)),
+        })
+        .collect()
+}
+
+/// The measured points' columns: `x,y,z`, or `x1,y1,z1 .. xk,yk,zk` (every point complete).
+fn marker_columns(table: &Table, spec: &PoseSpec) -> Result<Vec<[usize; 3]>, PoseCsvError> {
+    let numbered = |name: &str| -> Option<usize> {
+        let rest = name.strip_prefix(['x', 'y', 'z'])?;
+        let k: usize = rest
+            .parse()
+            .ok()
+            .filter(|_| rest.bytes().all(|b| b.is_ascii_digit()))?;
+        Some(k)
+    };
+    let k_max = table.header.iter().filter_map(|h| numbered(h)).max();
+    let plain = ["x", "y", "z"].map(|a| table.find(a));
+    let cols = match k_max {
+        Some(k_max) => {
+            if let Some(c) = plain.iter().flatten().next() {
+                return Err(PoseCsvError::Columns {
+                    file: table.file.clone(),
+                    line: table.header_line,
+                    column: table.header[*c].clone(),
+                    problem: "a file with numbered points x1,y1,z1.. has no plain x,y,z".into(),
+                });
+            }
+            if k_max == 0 {
+                return Err(TableError::MissingColumn {
+                    file: table.file.clone(),
+                    line: table.header_line,
+                    column: "x1".into(),
+                }
+                .into());
+            }
+            (1..=k_max)
+                .map(|k| {
+                    Ok([
+                        table.need(&format!("x{k}"))?,
+                        table.need(&format!("y{k}"))?,
+                        table.need(&format!("z{k}"))?,
+                    ])
+                })
+                .collect::<Result<Vec<_>, TableError>>()?
+        }
+        None => match plain {
+            [Some(x), Some(y), Some(z)] => vec![[x, y, z]],
+            [None, None, None] if !spec.require_xyz => Vec::new(),
+            _ => vec![[table.need("x")?, table.need("y")?, table.need("z")?]],
+        },
+    };
+    if !cols.is_empty() && spec.marker >= cols.len() {
+        return Err(PoseCsvError::Columns {
+            file: table.file.clone(),
+            line: table.header_line,
+            column: format!("x{}", spec.marker + 1),
+            problem: format!(
+                "point {} asked for, the file has {}",
+                spec.marker + 1,
+                cols.len()
+            ),
+        });
+    }
+    Ok(cols)
+}
+
 impl Layout {
-    fn new(table: &Table, spec: &PoseSpec) -> Result<Self, TableError> {
-        let q = (1..=spec.n_joints)
-            .map(|i| table.need(&format!("q{i}")))
-            .collect::<Result<Vec<_>, _>>()?;
-        let xyz = match (table.find("x"), table.find("y"), table.find("z")) {
-            (Some(x), Some(y), Some(z)) => Some([x, y, z]),
-            (None, None, None) if !spec.require_xyz => None,
-            _ => Some([table.need("x")?, table.need("y")?, table.need("z")?]),
-        };
+    fn new(table: &Table, spec: &PoseSpec) -> Result<Self, PoseCsvError> {
+        let q = joint_columns(table, spec)?;
+        let markers = marker_columns(table, spec)?;
         let (t, id) = (table.find("t"), table.find("id"));
         let used: Vec<usize> = q
             .iter()
             .copied()
-            .chain(xyz.into_iter().flatten())
+            .chain(markers.iter().flatten().copied())
             .chain(t)
             .chain(id)
             .collect();
@@ -157,7 +259,7 @@ impl Layout {
             .collect();
         Ok(Self {
             q,
-            xyz,
+            markers,
             t,
             id,
             extra,
@@ -174,7 +276,8 @@ pub fn parse_poses(text: &str, file: &str, spec: &PoseSpec) -> Result<PoseFile, 
     for row in &table.rows {
         let mut q = Vec::with_capacity(lay.q.len());
         for (j, &col) in lay.q.iter().enumerate() {
-            let v = table.number(row, col)?;
+            let prismatic = spec.prismatic.get(j).copied().unwrap_or(false);
+            let v = spec.units.joint(table.number(row, col)?, prismatic);
             if let Some(&[min, max]) = spec.limits.get(j) {
                 if v < min || v > max {
                     return Err(PoseCsvError::JointLimit {
@@ -189,12 +292,18 @@ pub fn parse_poses(text: &str, file: &str, spec: &PoseSpec) -> Result<PoseFile, 
             }
             q.push(v);
         }
-        let xyz_mm = lay.xyz.map(|cols| table.numbers(row, cols)).transpose()?;
+        let markers_mm = lay
+            .markers
+            .iter()
+            .map(|&cols| Ok(table.numbers(row, cols)?.map(|v| spec.units.length_mm(v))))
+            .collect::<Result<Vec<_>, TableError>>()?;
+        let xyz_mm = markers_mm.get(spec.marker).copied();
         let t_s = lay.t.map(|c| table.number(row, c)).transpose()?;
         poses.push(Pose {
             line: row.line,
             q,
             xyz_mm,
+            markers_mm,
             t_s,
             id: lay.id.map(|c| row.fields[c].clone()),
             extra: lay.extra.iter().map(|&c| row.fields[c].clone()).collect(),

@@ -131,9 +131,32 @@ pub struct Model {
     pub(crate) gamma_law: GammaLaw,
     pub(crate) payload_param: usize,
     pub(crate) scale_param: usize,
+    /// Names of the joints (e.g. URDF joint names), or empty.
+    pub(crate) joint_names: Vec<String>,
 }
 
 impl Model {
+    /// Names of the joints in order (e.g. the URDF's, for pose-file columns), or empty.
+    pub fn joint_names(&self) -> &[String] {
+        &self.joint_names
+    }
+
+    /// Names the joints (one name per joint, all different; an empty list removes the names).
+    pub fn set_joint_names(&mut self, names: Vec<String>) -> Result<(), ModelError> {
+        let distinct = names
+            .iter()
+            .enumerate()
+            .all(|(i, n)| !names[..i].contains(n));
+        if !names.is_empty() && (names.len() != self.joints.len() || !distinct) {
+            return Err(ModelError::Invalid(format!(
+                "{} joint names (all different) needed, got {names:?}",
+                self.joints.len()
+            )));
+        }
+        self.joint_names = names;
+        Ok(())
+    }
+
     /// The model's name (e.g. `"katana450"`).
     pub fn name(&self) -> &str {
         &self.name
@@ -604,6 +627,7 @@ impl ModelBuilder {
             gamma_law: self.gamma_law,
             payload_param,
             scale_param,
+            joint_names: Vec::new(),
         })
     }
 }

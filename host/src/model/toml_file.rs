@@ -36,6 +36,7 @@
 //! d = 0.0
 //!
 //! [[joint]]                       # one per joint, in order (limits in deg, mm if prismatic)
+//! name = "shoulder"               # optional, for all joints or none: pose-file joint columns
 //! min = -169.5
 //! max = 169.5
 //! clearance_deg = 0.022           # tilting values: optional, but for all joints or none
@@ -99,6 +100,8 @@ struct ChainEntry {
 #[derive(Debug, Deserialize)]
 #[serde(deny_unknown_fields)]
 struct JointEntry {
+    #[serde(default)]
+    name: Option<String>,
     min: f64,
     max: f64,
     clearance_deg: Option<f64>,
@@ -264,6 +267,11 @@ fn build(file: ModelFile) -> Result<Model, String> {
             .map_err(|e| format!("mass entry {}: {e}", n + 1))?;
     }
     let mut model = b.build().map_err(|e| e.to_string())?;
+    let names: Vec<String> = file.joint.iter().filter_map(|j| j.name.clone()).collect();
+    if !names.is_empty() && names.len() != file.joint.len() {
+        return Err("[[joint]] name: give a name for every joint or for none".into());
+    }
+    model.set_joint_names(names).map_err(|e| e.to_string())?;
     for (name, &value) in &file.params {
         model
             .set_param(name, value)
@@ -320,9 +328,15 @@ impl Model {
         }
         let tilt = self.tilt_values();
         for (j, joint) in self.joints.iter().enumerate() {
+            if let Some(n) = self.joint_names.get(j) {
+                let n = n.replace('\\', "\\\\").replace('"', "\\\"");
+                let _ = writeln!(s, "\n[[joint]]\nname = \"{n}\"");
+            } else {
+                let _ = writeln!(s, "\n[[joint]]");
+            }
             let _ = writeln!(
                 s,
-                "\n[[joint]]\nmin = {}\nmax = {}",
+                "min = {}\nmax = {}",
                 fmt_f64(joint.limits[0]),
                 fmt_f64(joint.limits[1])
             );

@@ -45,13 +45,27 @@ pub struct ImportOptions<'a> {
     pub tool_mm: [f64; 3],
 }
 
-/// An imported chain: the model and the URDF names of its joints, in model joint order.
+/// An imported chain: the model (carrying the joint names, [`Model::joint_names`]) and the URDF
+/// names of its joints, in model joint order.
 #[derive(Debug, Clone)]
 pub struct Imported {
     /// The model (joints in deg, mm for prismatic joints).
     pub model: Model,
     /// URDF joint names, one per model joint.
     pub joint_names: Vec<String>,
+}
+
+/// Widens every joint's limits by `fraction` of its range at both ends (readings of a real
+/// robot may pass its URDF limits slightly: TIAGo's torso reads 350.18 mm against 350).
+/// Negative or non-finite fractions change nothing.
+pub fn widen_limits(model: &mut Model, fraction: f64) {
+    if !(fraction.is_finite() && fraction > 0.0) {
+        return;
+    }
+    for j in &mut model.joints {
+        let margin = fraction * (j.limits[1] - j.limits[0]).abs();
+        j.limits = [j.limits[0] - margin, j.limits[1] + margin];
+    }
 }
 
 /// The parameter-name stem of a URDF joint: non `[A-Za-z0-9_]` characters become `_`.
@@ -370,6 +384,12 @@ fn import(urdf: &Urdf, opts: &ImportOptions, masses: bool) -> Result<Imported, U
             source: e,
         })?;
     }
+    model
+        .set_joint_names(joint_names.clone())
+        .map_err(|e| UrdfError::Model {
+            source_name: urdf.source_name.clone(),
+            source: e,
+        })?;
     Ok(Imported { model, joint_names })
 }
 

@@ -13,6 +13,7 @@ pub mod parse;
 
 pub use error::UrdfError;
 pub use import::{
-    import_chain, import_chain_with_masses, param_stem, rpy_matrix, rpy_of, ImportOptions, Imported,
+    import_chain, import_chain_with_masses, param_stem, rpy_matrix, rpy_of, widen_limits,
+    ImportOptions, Imported,
 };
 pub use parse::{JointType, LinkInertial, Urdf, UrdfJoint};

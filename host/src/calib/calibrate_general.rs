@@ -1,0 +1,303 @@
+//! `rigctl calibrate` beyond one point and the chain parameters, as a library call: several
+//! measured points per pose, joint compliance (`--compliance`) and parameter selection by
+//! leave-one-pose-out PRESS on the calibration poses (`--select press`, [`super::press`]).
+//!
+//! The unknowns:
+//! * always: the selected model parameters ([`super::calibrate::resolve_selection`]; with
+//!   `--select press` and no `--params`, the default selection without the chain constants),
+//!   and the offsets of every point slot after the first;
+//! * with `--select press`, candidates added by forward selection at the fit of the always-set:
+//!   the chain constants (`@chain`: lengths, twists) not already selected and, with `--compliance`, the
+//!   compliance of every revolute joint; without it, all compliances are fitted.
+
+use std::str::FromStr;
+
+use nalgebra::Vector3;
+
+use super::calibrate::{fit_report, resolve_selection, CalibrateOptions, Method, Outcome};
+use super::error::CalibError;
+use super::fit::Fit;
+use super::general::{fit_general, stacked, GeneralFit, GeneralModel, PoseTorques, Unknown};
+use super::measurements::Measurements;
+use super::press::forward_select;
+use super::report::{BeforeAfter, StandardSummary};
+use super::stats::Stats;
+use crate::model::{Model, ParamKind};
+
+/// How the identified set is chosen (`--select`).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+pub enum Select {
+    /// Every selected unknown.
+    #[default]
+    All,
+    /// Forward selection by block PRESS on the calibration poses.
+    Press,
+}
+
+impl FromStr for Select {
+    type Err = String;
+    fn from_str(s: &str) -> Result<Self, String> {
+        match s {
+            "all" => Ok(Select::All),
+            "press" => Ok(Select::Press),
+            _ => Err(format!("unknown selection `{s}` (all, press)")),
+        }
+    }
+}
+
+/// Settings beyond [`CalibrateOptions`].
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+pub struct GeneralOptions {
+    pub select: Select,
+    /// Identify joint compliances (needs link masses).
+    pub compliance: bool,
+}
+
+/// Result of [`calibrate_general`].
+#[derive(Debug, Clone)]
+pub struct GeneralOutcome {
+    /// The calibrated model, report (with `terms`) and error vectors (one per measurement).
+    pub outcome: Outcome,
+    /// The chosen identification (offsets and compliances included).
+    pub fit: GeneralFit,
+    /// Names of the unknowns added by `--select press`, in order.
+    pub added: Vec<String>,
+    /// Validation RMS (mm) of every point slot (empty without validation data).
+    pub validation_rms_by_point_mm: Vec<f64>,
+}
+
+fn chain_constant(model: &Model, i: usize) -> bool {
+    matches!(
+        model.params().get(i).map(|p| p.kind),
+        Some(ParamKind::Length | ParamKind::Twist)
+    ) && model.param_index("base_rz") != Some(i)
+}
+
+/// The always-fitted unknowns and the PRESS candidates (empty with [`Select::All`]).
+fn unknown_sets(
+    nominal: &Model,
+    data: &Measurements,
+    opts: &CalibrateOptions,
+    gen: &GeneralOptions,
+) -> Result<(Vec<Unknown>, Vec<Unknown>), CalibError> {
+    let selection = resolve_selection(nominal, opts)?;
+    let press = gen.select == Select::Press;
+    let mut always: Vec<Unknown> = selection
+        .iter()
+        .filter(|&&i| !(press && opts.params.is_none() && chain_constant(nominal, i)))
+        .map(|&i| Unknown::Param(i))
+        .collect();
+    for slot in 1..data.n_slots() {
+        always.extend((0..3).map(|axis| Unknown::Offset { slot, axis }));
+    }
+    let compliance: Vec<Unknown> = match gen.compliance {
+        true => (0..nominal.n_joints())
+            .filter(|&j| !nominal.joints()[j].prismatic)
+            .map(Unknown::Compliance)
+            .collect(),
+        false => Vec::new(),
+    };
+    if !press {
+        always.extend(compliance);
+        return Ok((always, Vec::new()));
+    }
+    let chain = super::calibrate::param_group(nominal, "chain")?;
+    let mut candidates: Vec<Unknown> = chain
+        .into_iter()
+        .map(Unknown::Param)
+        .filter(|u| !always.contains(u))
+        .collect();
+    candidates.extend(compliance);
+    Ok((always, candidates))
+}
+
+/// Fits `always`, then (with candidates) adds the ones chosen by block PRESS at that fit and
+/// fits them all.
+fn identify(
+    start: &GeneralModel,
+    data: &Measurements,
+    tau: &PoseTorques,
+    sets: &(Vec<Unknown>, Vec<Unknown>),
+    opts: &CalibrateOptions,
+) -> Result<(GeneralFit, Vec<Unknown>), CalibError> {
+    let (always, candidates) = sets;
+    let first = fit_general(start, data, tau, always, &opts.lm, opts.rtol)?;
+    if candidates.is_empty() {
+        return Ok((first, Vec::new()));
+    }
+    let mut cols = first.fitted.clone();
+    cols.extend(candidates.iter().filter(|c| !first.fitted.contains(c)));
+    let (jac, r) = stacked(&first.state, data, tau, &cols)?;
+    let fixed: Vec<usize> = (0..first.fitted.len()).collect();
+    let cand: Vec<usize> = (first.fitted.len()..cols.len()).collect();
+    let added: Vec<Unknown> = forward_select(&jac, &r, &data.row_blocks(), &fixed, &cand)
+        .into_iter()
+        .map(|k| cols[k])
+        .collect();
+    if added.is_empty() {
+        return Ok((first, added));
+    }
+    let mut sel = first.fitted.clone();
+    sel.extend(&added);
+    let fit = fit_general(&first.state, data, tau, &sel, &opts.lm, opts.rtol)?;
+    Ok((fit, added))
+}
+
+fn torques(nominal: &Model, data: &Measurements, needed: bool) -> Result<PoseTorques, CalibError> {
+    if !needed {
+        return Ok(PoseTorques::default());
+    }
+    PoseTorques::of(nominal, data)?.ok_or(CalibError::NoMasses)
+}
+
+/// The model-parameter part of a general fit, for the report.
+fn model_fit(f: &GeneralFit) -> Fit {
+    let params = |v: &[Unknown]| -> Vec<usize> {
+        v.iter()
+            .filter_map(|u| match u {
+                Unknown::Param(i) => Some(*i),
+                _ => None,
+            })
+            .collect()
+    };
+    Fit {
+        model: f.state.model.clone(),
+        fitted: params(&f.fitted),
+        fixed: params(&f.fixed),
+        unidentifiable: f.unidentifiable.clone(),
+        sigma: f
+            .fitted
+            .iter()
+            .zip(&f.sigma)
+            .filter(|(u, _)| matches!(u, Unknown::Param(_)))
+            .map(|(_, s)| *s)
+            .collect(),
+        condition_number: f.condition_number,
+        rank: f.rank,
+        iterations: f.iterations,
+        converged: f.converged,
+    }
+}
+
+/// Calibrates `nominal` on `cal` (several points per pose, compliance, PRESS selection) and
+/// evaluates on `val`. "before" is the nominal model without tilting, its further points at
+/// their identified offsets (they have no nominal value).
+pub fn calibrate_general(
+    nominal: &Model,
+    cal: &Measurements,
+    val: Option<&Measurements>,
+    opts: &CalibrateOptions,
+    gen: &GeneralOptions,
+) -> Result<GeneralOutcome, CalibError> {
+    if opts.method == Method::Influence {
+        return Err(CalibError::Unsupported(
+            "--method influence works on one point per pose without --select/--compliance".into(),
+        ));
+    }
+    if let Some(v) = val.filter(|v| v.n_slots() != cal.n_slots()) {
+        return Err(CalibError::Unsupported(format!(
+            "the validation poses have {} measured point(s) per pose, the calibration poses {}",
+            v.n_slots(),
+            cal.n_slots()
+        )));
+    }
+    let sets = unknown_sets(nominal, cal, opts, gen)?;
+    let tau_cal = torques(nominal, cal, gen.compliance)?;
+    let tau_val = match val {
+        Some(v) => torques(nominal, v, gen.compliance)?,
+        None => PoseTorques::default(),
+    };
+    let tilt = opts.method == Method::Tilting && nominal.has_tilt();
+    let run = |tilt: bool| {
+        let start = GeneralModel::new(nominal.clone(), cal.n_slots(), tilt)?;
+        identify(&start, cal, &tau_cal, &sets, opts)
+    };
+    let (chosen, added) = run(tilt)?;
+    let standard = if tilt { run(false)?.0 } else { chosen.clone() };
+    let mut before = GeneralModel::new(nominal.clone(), cal.n_slots(), false)?;
+    for (b, c) in before
+        .offsets_mm
+        .iter_mut()
+        .zip(&chosen.state.offsets_mm)
+        .skip(1)
+    {
+        *b = *c;
+    }
+    let errs = |m: &GeneralModel, d: &Measurements, t: &PoseTorques| m.errors(d, t);
+    let cal_errors = [
+        errs(&before, cal, &tau_cal)?,
+        errs(&standard.state, cal, &tau_cal)?,
+        errs(&chosen.state, cal, &tau_cal)?,
+    ];
+    let val_errors = match val {
+        Some(v) => [
+            errs(&before, v, &tau_val)?,
+            errs(&standard.state, v, &tau_val)?,
+            errs(&chosen.state, v, &tau_val)?,
+        ],
+        None => [Vec::new(), Vec::new(), Vec::new()],
+    };
+    let validation_rms_by_point_mm = match val {
+        Some(v) => rms_by_slot(v, &val_errors[2]),
+        None => Vec::new(),
+    };
+    let mut selection: Vec<usize> = resolve_selection(nominal, opts)?;
+    for u in &added {
+        if let Unknown::Param(i) = u {
+            selection.push(*i);
+        }
+    }
+    let mut report = fit_report(
+        &model_fit(&chosen),
+        &selection,
+        opts.method.as_str(),
+        BeforeAfter {
+            before: Stats::from_errors(&cal_errors[0]),
+            after: Stats::from_errors(&cal_errors[2]),
+        },
+        val.map(|_| BeforeAfter {
+            before: Stats::from_errors(&val_errors[0]),
+            after: Stats::from_errors(&val_errors[2]),
+        }),
+        StandardSummary {
+            calibration: Stats::from_errors(&cal_errors[1]),
+            validation: val.map(|_| Stats::from_errors(&val_errors[1])),
+        },
+        tilt,
+    );
+    for (u, s) in chosen.fitted.iter().zip(&chosen.sigma) {
+        if !matches!(u, Unknown::Param(_)) {
+            let name = chosen.state.name(*u, cal);
+            report.terms.0.push((name.clone(), chosen.state.value(*u)));
+            report.sigma.0.push((name, *s));
+        }
+    }
+    Ok(GeneralOutcome {
+        added: added.iter().map(|&u| chosen.state.name(u, cal)).collect(),
+        outcome: Outcome {
+            model: chosen.state.model.clone(),
+            tilt,
+            report,
+            calibration_errors: cal_errors,
+            validation_errors: val_errors,
+        },
+        fit: chosen,
+        validation_rms_by_point_mm,
+    })
+}
+
+/// RMS of the error lengths of every slot (mm).
+fn rms_by_slot(data: &Measurements, errors: &[Vector3<f64>]) -> Vec<f64> {
+    (0..data.n_slots())
+        .map(|slot| {
+            let e: Vec<f64> = data
+                .points
+                .iter()
+                .zip(errors)
+                .filter(|(m, _)| m.slot == slot)
+                .map(|(_, e)| e.norm_squared())
+                .collect();
+            (e.iter().sum::<f64>() / e.len().max(1) as f64).sqrt()
+        })
+        .collect()
+}

@@ -1,0 +1,447 @@
+//! The identification beyond one tool point and the chain parameters: several measured points
+//! per pose ([`Measurements`], each point with its own offset in the tool frame) and joint
+//! compliance (a joint deflection proportional to the gravity torque about its axis, the
+//! `compliance:j<i>` law of [`crate::model::gravity::compliance_deflected`]).
+//!
+//! Prediction of measurement (pose i, slot k):
+//!
+//! ```text
+//! q_eff = q_i + c . tau(q_i)                c deg per kgf.m, tau from the nominal link masses
+//! p     = fk(q_eff) with the tool point = slot k's offset (slot 0: tool_dx..dz)
+//! ```
+//!
+//! The torques are those of the nominal chain at the readings (fixed regressors: the
+//! compliance is a small correction of a stiff joint).
+
+use nalgebra::{DMatrix, DVector, Vector3};
+
+use super::error::CalibError;
+use super::fit::parameter_sigmas;
+use super::identifiability::analyse;
+use super::lm::{solve, LmConfig, Problem};
+use super::measurements::Measurements;
+use super::problem::tilt_mode;
+use crate::model::gravity::{compliance_deflected, GravityModel};
+use crate::model::{Model, ModelError, Wrt};
+
+/// One unknown of the general identification.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+pub enum Unknown {
+    /// A model parameter (index into [`Model::params`]).
+    Param(usize),
+    /// Coordinate `axis` (0..3) of point slot `slot` (>= 1) in the tool frame, mm.
+    Offset { slot: usize, axis: usize },
+    /// Compliance of joint j (0-based), deg per kgf.m.
+    Compliance(usize),
+}
+
+/// Gravity torques about the joint axes (kgf.m) at every pose, from the link masses of a
+/// nominal model (empty vectors when not needed).
+#[derive(Debug, Clone, Default)]
+pub struct PoseTorques(pub Vec<Vec<f64>>);
+
+impl PoseTorques {
+    /// Torques of `nominal` (its masses, [`GravityModel::for_model`]) at the poses of `data`;
+    /// `None` if the model has no link masses.
+    pub fn of(nominal: &Model, data: &Measurements) -> Result<Option<Self>, ModelError> {
+        let Some(g) = GravityModel::for_model(nominal) else {
+            return Ok(None);
+        };
+        let tau = data
+            .q_deg
+            .iter()
+            .map(|q| g.axis_torques_kgfm(nominal, q))
+            .collect::<Result<Vec<_>, _>>()?;
+        Ok(Some(Self(tau)))
+    }
+
+    fn at(&self, pose: usize) -> &[f64] {
+        self.0.get(pose).map_or(&[], Vec::as_slice)
+    }
+}
+
+/// A model with point offsets and joint compliances.
+#[derive(Debug, Clone)]
+pub struct GeneralModel {
+    /// The robot model (slot 0's point is its tool point).
+    pub model: Model,
+    /// Offset of every point slot in the tool frame (mm); slot 0 mirrors the tool point.
+    pub offsets_mm: Vec<Vector3<f64>>,
+    /// Compliance per joint, deg per kgf.m.
+    pub compliance_deg_per_kgfm: Vec<f64>,
+    /// Whether the declared static tilting is applied.
+    pub tilt: bool,
+}
+
+fn tool_of(model: &Model) -> Result<[usize; 3], ModelError> {
+    Ok([
+        model.require_param("tool_dx")?,
+        model.require_param("tool_dy")?,
+        model.require_param("tool_dz")?,
+    ])
+}
+
+impl GeneralModel {
+    /// `model` with `slots` point slots, all starting at its tool point, and no compliance.
+    pub fn new(model: Model, slots: usize, tilt: bool) -> Result<Self, ModelError> {
+        let t = tool_of(&model)?;
+        let v = model.param_values();
+        let tool = Vector3::new(v[t[0]], v[t[1]], v[t[2]]);
+        Ok(Self {
+            compliance_deg_per_kgfm: vec![0.0; model.n_joints()],
+            offsets_mm: vec![tool; slots.max(1)],
+            model,
+            tilt,
+        })
+    }
+
+    /// Current value of an unknown.
+    pub fn value(&self, u: Unknown) -> f64 {
+        match u {
+            Unknown::Param(i) => self.model.params().get(i).map_or(f64::NAN, |p| p.value),
+            Unknown::Offset { slot, axis } => self
+                .offsets_mm
+                .get(slot)
+                .map_or(f64::NAN, |o| o[axis.min(2)]),
+            Unknown::Compliance(j) => self
+                .compliance_deg_per_kgfm
+                .get(j)
+                .copied()
+                .unwrap_or(f64::NAN),
+        }
+    }
+
+    /// Sets an unknown.
+    pub fn set_value(&mut self, u: Unknown, v: f64) -> Result<(), ModelError> {
+        match u {
+            Unknown::Param(i) => self.model.set_param_at(i, v)?,
+            Unknown::Offset { slot, axis } => {
+                if let Some(o) = self.offsets_mm.get_mut(slot) {
+                    o[axis.min(2)] = v;
+                }
+            }
+            Unknown::Compliance(j) => {
+                if let Some(c) = self.compliance_deg_per_kgfm.get_mut(j) {
+                    *c = v;
+                }
+            }
+        }
+        Ok(())
+    }
+
+    /// The name of an unknown: the parameter's, `marker<k>_x_mm`, `compliance_j<i>_deg_per_kgfm`.
+    pub fn name(&self, u: Unknown, data: &Measurements) -> String {
+        match u {
+            Unknown::Param(i) => self
+                .model
+                .params()
+                .get(i)
+                .map_or_else(|| format!("param{i}"), |p| p.name.clone()),
+            Unknown::Offset { slot, axis } => data.offset_name(slot, axis),
+            Unknown::Compliance(j) => format!("compliance_j{}_deg_per_kgfm", j + 1),
+        }
+    }
+
+    /// The model of every slot: the tool point moved to the slot's offset (slot 0: as is).
+    fn slot_models(&self) -> Result<Vec<Model>, ModelError> {
+        let t = tool_of(&self.model)?;
+        let mut out = vec![self.model.clone()];
+        for o in self.offsets_mm.iter().skip(1) {
+            let mut m = self.model.clone();
+            for (&i, &v) in t.iter().zip(o.iter()) {
+                m.set_param_at(i, v)?;
+            }
+            out.push(m);
+        }
+        Ok(out)
+    }
+
+    /// Errors `measured - predicted` of every measurement (mm).
+    pub fn errors(
+        &self,
+        data: &Measurements,
+        tau: &PoseTorques,
+    ) -> Result<Vec<Vector3<f64>>, ModelError> {
+        let models = self.slot_models()?;
+        let tilt = tilt_mode(self.tilt);
+        data.points
+            .iter()
+            .map(|m| {
+                let q = compliance_deflected(
+                    &data.q_deg[m.pose],
+                    &self.compliance_deg_per_kgfm,
+                    tau.at(m.pose),
+                );
+                let model = models.get(m.slot).unwrap_or(&self.model);
+                Ok(m.xyz_mm - model.position_mm(&q, tilt)?)
+            })
+            .collect()
+    }
+
+    /// Residuals `predicted - measured` (3 rows per measurement) and their Jacobian wrt
+    /// `unknowns`.
+    pub fn rows(
+        &self,
+        data: &Measurements,
+        tau: &PoseTorques,
+        unknowns: &[Unknown],
+        r: &mut DVector<f64>,
+        jac: Option<&mut DMatrix<f64>>,
+    ) -> Result<(), ModelError> {
+        let models = self.slot_models()?;
+        let tilt = tilt_mode(self.tilt);
+        let t = tool_of(&self.model)?;
+        let wrt: Vec<Wrt> = unknowns
+            .iter()
+            .map(|u| match *u {
+                Unknown::Param(i) => Wrt::Param(i),
+                Unknown::Offset { axis, .. } => Wrt::Param(t[axis.min(2)]),
+                Unknown::Compliance(j) => Wrt::Joint(j),
+            })
+            .collect();
+        let Some(jac) = jac else {
+            for (i, m) in data.points.iter().enumerate() {
+                let q = compliance_deflected(
+                    &data.q_deg[m.pose],
+                    &self.compliance_deg_per_kgfm,
+                    tau.at(m.pose),
+                );
+                let model = models.get(m.slot).unwrap_or(&self.model);
+                let p = model.position_mm(&q, tilt)?;
+                r.fixed_rows_mut::<3>(3 * i).copy_from(&(p - m.xyz_mm));
+            }
+            return Ok(());
+        };
+        for (i, m) in data.points.iter().enumerate() {
+            let tau_i = tau.at(m.pose);
+            let q = compliance_deflected(&data.q_deg[m.pose], &self.compliance_deg_per_kgfm, tau_i);
+            let model = models.get(m.slot).unwrap_or(&self.model);
+            let (fk, j) = model.position_jacobian(&q, tilt, &wrt)?;
+            r.fixed_rows_mut::<3>(3 * i)
+                .copy_from(&(fk.position_mm - m.xyz_mm));
+            for (c, u) in unknowns.iter().enumerate() {
+                let scale = match *u {
+                    // The tool point of slot 0 is not the point of the other slots.
+                    Unknown::Param(p) if m.slot != 0 && t.contains(&p) => 0.0,
+                    Unknown::Offset { slot, .. } if slot != m.slot || slot == 0 => 0.0,
+                    Unknown::Compliance(jt) => tau_i.get(jt).copied().unwrap_or(0.0),
+                    _ => 1.0,
+                };
+                jac.view_mut((3 * i, c), (3, 1))
+                    .copy_from(&(j.column(c) * scale));
+            }
+        }
+        Ok(())
+    }
+}
+
+/// The general identification as a least-squares problem.
+struct GeneralProblem<'a> {
+    state: GeneralModel,
+    data: &'a Measurements,
+    tau: &'a PoseTorques,
+    unknowns: Vec<Unknown>,
+}
+
+impl GeneralProblem<'_> {
+    fn set(&mut self, x: &DVector<f64>) -> Result<(), ModelError> {
+        for (&u, &v) in self.unknowns.iter().zip(x.iter()) {
+            self.state.set_value(u, v)?;
+        }
+        Ok(())
+    }
+}
+
+impl Problem for GeneralProblem<'_> {
+    type Error = ModelError;
+
+    fn n_params(&self) -> usize {
+        self.unknowns.len()
+    }
+
+    fn n_residuals(&self) -> usize {
+        3 * self.data.len()
+    }
+
+    fn evaluate(
+        &mut self,
+        x: &DVector<f64>,
+        r: &mut DVector<f64>,
+        jac: Option<&mut DMatrix<f64>>,
+    ) -> Result<(), ModelError> {
+        self.set(x)?;
+        self.state.rows(self.data, self.tau, &self.unknowns, r, jac)
+    }
+}
+
+/// Result of [`fit_general`].
+#[derive(Debug, Clone)]
+pub struct GeneralFit {
+    /// The fitted model, offsets and compliances.
+    pub state: GeneralModel,
+    /// Fitted unknowns.
+    pub fitted: Vec<Unknown>,
+    /// Selected unknowns kept at their start value (not identifiable).
+    pub fixed: Vec<Unknown>,
+    /// Names of the unidentifiable unknowns or combinations.
+    pub unidentifiable: Vec<String>,
+    /// One sigma of every fitted unknown (same order).
+    pub sigma: Vec<f64>,
+    /// Condition number of the column-scaled Jacobian of the fitted unknowns at the solution.
+    pub condition_number: f64,
+    /// Rank of the start Jacobian over all selected unknowns.
+    pub rank: usize,
+    pub iterations: usize,
+    pub converged: bool,
+}
+
+/// Stacked Jacobian (rows `predicted - measured`) and residuals of `state` wrt `unknowns`.
+pub fn stacked(
+    state: &GeneralModel,
+    data: &Measurements,
+    tau: &PoseTorques,
+    unknowns: &[Unknown],
+) -> Result<(DMatrix<f64>, DVector<f64>), ModelError> {
+    let mut r = DVector::zeros(3 * data.len());
+    let mut jac = DMatrix::zeros(3 * data.len(), unknowns.len());
+    state.rows(data, tau, unknowns, &mut r, Some(&mut jac))?;
+    Ok((jac, r))
+}
+
+/// Identifies `selection` (in preference order: later ones are fixed first when a combination
+/// is unidentifiable, threshold `rtol`) from `start` on `data`.
+pub fn fit_general(
+    start: &GeneralModel,
+    data: &Measurements,
+    tau: &PoseTorques,
+    selection: &[Unknown],
+    lm: &LmConfig,
+    rtol: f64,
+) -> Result<GeneralFit, CalibError> {
+    if data.is_empty() {
+        return Err(CalibError::NoPoses);
+    }
+    let (jac0, _) = stacked(start, data, tau, selection)?;
+    let id = analyse(&jac0, rtol);
+    let names: Vec<String> = selection.iter().map(|&u| start.name(u, data)).collect();
+    let name_refs: Vec<&str> = names.iter().map(String::as_str).collect();
+    let unidentifiable = id.combinations.iter().map(|c| c.name(&name_refs)).collect();
+    let fitted: Vec<Unknown> = id.kept.iter().map(|&k| selection[k]).collect();
+    let fixed: Vec<Unknown> = id.fixed.iter().map(|&k| selection[k]).collect();
+    if fitted.is_empty() {
+        return Err(CalibError::NothingToFit);
+    }
+    let x0 = DVector::from_iterator(fitted.len(), fitted.iter().map(|&u| start.value(u)));
+    let mut problem = GeneralProblem {
+        state: start.clone(),
+        data,
+        tau,
+        unknowns: fitted.clone(),
+    };
+    let rep = solve(&mut problem, x0, lm).map_err(CalibError::from_lm)?;
+    problem.set(&rep.x)?;
+    let mut state = problem.state;
+    // Slot 0's offset mirrors the tool point.
+    let v = state.model.param_values();
+    let t = tool_of(&state.model)?;
+    if let Some(o) = state.offsets_mm.first_mut() {
+        *o = Vector3::new(v[t[0]], v[t[1]], v[t[2]]);
+    }
+    Ok(GeneralFit {
+        state,
+        sigma: parameter_sigmas(&rep.jacobian, rep.residuals.norm_squared(), rtol),
+        condition_number: analyse(&rep.jacobian, rtol).condition_number,
+        fitted,
+        fixed,
+        unidentifiable,
+        rank: id.rank,
+        iterations: rep.iterations,
+        converged: rep.termination.converged(),
+    })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::calib::problem::Poses;
+    use crate::model::Tilt;
+    use crate::urdf::{import_chain_with_masses, ImportOptions, Urdf};
+
+    /// Two joints about horizontal axes (y), a 2 kg link 0.4 m long and a 1 kg link: the
+    /// gravity torques vary with the posture.
+    const XML: &str = r#"<robot name="m">
+      <link name="base"/>
+      <link name="l1"><inertial><mass value="2"/><origin xyz="0.4 0 0"/></inertial></link>
+      <link name="l2"><inertial><mass value="1"/><origin xyz="0.3 0 0"/></inertial></link>
+      <link name="tip"/>
+      <joint name="j1" type="revolute"><parent link="base"/><child link="l1"/>
+        <origin xyz="0 0 0.5"/><axis xyz="0 1 0"/><limit lower="-3" upper="3"/></joint>
+      <joint name="j2" type="revolute"><parent link="l1"/><child link="l2"/>
+        <origin xyz="0.8 0 0"/><axis xyz="0 1 0"/><limit lower="-3" upper="3"/></joint>
+      <joint name="t" type="fixed"><parent link="l2"/><child link="tip"/>
+        <origin xyz="0.6 0 0"/></joint>
+    </robot>"#;
+
+    /// Exact data of a compliant arm: the torques are the URDF's (|tau_1| = 2*0.4 + 1*1.1 kgf.m
+    /// at q = 0), the compliances are recovered, the residual vanishes, and the Jacobian
+    /// matches finite differences.
+    #[test]
+    fn compliance_is_recovered_with_the_gravity_torques() {
+        let urdf = Urdf::parse(XML, "m.urdf").unwrap();
+        let opts = ImportOptions {
+            base_link: None,
+            tip_link: "tip",
+            tool_mm: [0.0; 3],
+        };
+        let model = import_chain_with_masses(&urdf, &opts).unwrap().model;
+        let g = GravityModel::for_model(&model).unwrap();
+        let t0 = g.axis_torques_kgfm(&model, &[0.0, 0.0]).unwrap();
+        assert!((t0[0].abs() - 1.9).abs() < 1e-12, "{t0:?}");
+        let coef = [0.05, -0.2];
+        let mut poses = Poses::default();
+        for a in [-60.0, -25.0, 0.0, 30.0, 70.0] {
+            for b in [-80.0, -20.0, 15.0, 50.0, 100.0] {
+                let q = vec![a, b];
+                let tau = g.axis_torques_kgfm(&model, &q).unwrap();
+                let qc = compliance_deflected(&q, &coef, &tau);
+                poses
+                    .xyz_mm
+                    .push(model.position_mm(&qc, Tilt::Off).unwrap());
+                poses.q_deg.push(q);
+            }
+        }
+        let data = Measurements::from_poses(&poses);
+        let tau = PoseTorques::of(&model, &data).unwrap().unwrap();
+        let start = GeneralModel::new(model.clone(), 1, false).unwrap();
+        let sel = [Unknown::Compliance(0), Unknown::Compliance(1)];
+        // Jacobian against central differences at a point off the solution.
+        let mut at = start.clone();
+        at.compliance_deg_per_kgfm = vec![0.02, 0.1];
+        let (jac, r0) = stacked(&at, &data, &tau, &sel).unwrap();
+        for (c, &u) in sel.iter().enumerate() {
+            let h = 1e-6;
+            let (mut p, mut m) = (at.clone(), at.clone());
+            p.set_value(u, at.value(u) + h).unwrap();
+            m.set_value(u, at.value(u) - h).unwrap();
+            let (_, rp) = stacked(&p, &data, &tau, &sel).unwrap();
+            let (_, rm) = stacked(&m, &data, &tau, &sel).unwrap();
+            let fd = (rp - rm) / (2.0 * h);
+            assert!(
+                (fd - jac.column(c)).amax() < 1e-5 * (1.0 + r0.amax()),
+                "column {c}"
+            );
+        }
+        let fit = fit_general(&start, &data, &tau, &sel, &LmConfig::default(), 1e-6).unwrap();
+        for (f, c) in fit.state.compliance_deg_per_kgfm.iter().zip(coef) {
+            assert!((f - c).abs() < 1e-6, "{f} vs {c}");
+        }
+        let worst = fit
+            .state
+            .errors(&data, &tau)
+            .unwrap()
+            .iter()
+            .map(|e| e.norm())
+            .fold(0.0, f64::max);
+        assert!(worst < 1e-6, "{worst}");
+    }
+}
