@@ -112,11 +112,21 @@ impl PaperMap {
 
     /// Red paper level of the block holding pixel coordinates `(x, y)` (no interpolation: for
     /// thresholds).
-    #[inline]
+    #[cfg(test)]
     pub fn red_near(&self, x: f64, y: f64) -> f32 {
-        let bx = ((x.max(0.0) as usize) / self.block).min(self.w - 1);
-        let by = ((y.max(0.0) as usize) / self.block).min(self.h - 1);
-        self.level[by * self.w + bx][0]
+        self.level[self.row_of(y) * self.w + self.col_of(x)][0]
+    }
+
+    /// Block column holding pixel x coordinate `x`.
+    #[inline]
+    pub fn col_of(&self, x: f64) -> usize {
+        ((x.max(0.0) as usize) / self.block).min(self.w - 1)
+    }
+
+    /// Block row holding pixel y coordinate `y`.
+    #[inline]
+    pub fn row_of(&self, y: f64) -> usize {
+        ((y.max(0.0) as usize) / self.block).min(self.h - 1)
     }
 
     /// Paper level at pixel coordinates `(x, y)` (pixel centres at `i + 0.5`).

@@ -2,6 +2,7 @@
 //! and connected components on a coarse mask. These are the only passes that touch every pixel;
 //! everything after them works in small windows.
 
+use super::paper::PaperMap;
 #[cfg(test)]
 use image::RgbImage;
 
@@ -107,6 +108,27 @@ impl CoarseMap {
         min_red
     }
 
+    /// For every block, `keep(darkest red value, red paper level at the block's centre)`
+    /// ([`PaperMap::red_near`], looked up once per row and column).
+    pub fn classify(&self, paper: &PaperMap, keep: impl Fn(u8, f32) -> bool) -> Vec<bool> {
+        let cols: Vec<usize> = (0..self.w)
+            .map(|bx| paper.col_of(self.block_centre_px(bx, 0)[0]))
+            .collect();
+        let mut out = vec![false; self.min_red.len()];
+        for (by, (row, o)) in self
+            .min_red
+            .chunks_exact(self.w.max(1))
+            .zip(out.chunks_exact_mut(self.w.max(1)))
+            .enumerate()
+        {
+            let levels = &paper.level[paper.row_of(self.block_centre_px(0, by)[1]) * paper.w..];
+            for ((v, o), &c) in row.iter().zip(o.iter_mut()).zip(&cols) {
+                *o = keep(*v, levels[c][0]);
+            }
+        }
+        out
+    }
+
     /// Centre of block `(bx, by)` in pixel coordinates (pixel `(c, r)` covers
     /// `[c, c+1) x [r, r+1)`).
     pub fn block_centre_px(&self, bx: usize, by: usize) -> [f64; 2] {
@@ -205,5 +227,22 @@ mod tests {
         assert_eq!(map.min_red[0], 250);
         assert_eq!(map.min_red[5], 40);
         assert_eq!(paper_level(&img), [250.0, 250.0, 250.0]);
+    }
+
+    #[test]
+    fn classify_looks_up_the_paper_level_of_each_block_centre() {
+        let img = RgbImage::from_fn(203, 151, |x, y| {
+            let v = ((x * 31 + y * 17) % 256) as u8;
+            image::Rgb([v, 200, 200])
+        });
+        let paper = PaperMap::build(&img, 16);
+        let map = CoarseMap::build(&img, 3);
+        let got = map.classify(&paper, |v, level| (v as f32) < 0.5 * level);
+        for (i, &g) in got.iter().enumerate() {
+            let c = map.block_centre_px(i % map.w, i / map.w);
+            let want = (map.min_red[i] as f32) < 0.5 * paper.red_near(c[0], c[1]);
+            assert_eq!(g, want, "block {i}");
+        }
+        assert!(got.iter().any(|&g| g) && got.iter().any(|&g| !g));
     }
 }
