@@ -1,6 +1,7 @@
 //! `trace` on an A4 scan at 600 dpi (4961 x 7016 px, a 100 mm-radius pencil circle, rotated
 //! 2 degrees) and on a 12 MP phone photo (JPEG, 30 degrees tilt, k1 = -0.08, shading): decoding
-//! and tracing measured separately.
+//! and tracing measured separately, and the whole read-and-trace as the CLI does it
+//! (`load_prepared` + `trace_prepared`: a PNG's maps are built while it is decoded).
 //!
 //! The bench also leaves the scan and its truth in `target/tmp/trace_bench/` (`scan600.png`,
 //! `truth.csv` = the pencil centreline, closed, x,y mm in sheet coordinates) for the OpenCV
@@ -10,9 +11,11 @@ use criterion::{criterion_group, criterion_main, Criterion};
 use indicatif::ProgressBar;
 use rigctl::trace::render_photo::jpeg_bytes;
 use rigctl::trace::{
-    load_scan, render_photo, render_scan, trace_image, PhotoSpec, RenderSpec, TraceOptions,
+    load_prepared, load_scan, render_photo, render_scan, trace_image, trace_prepared, PhotoSpec,
+    RenderSpec, TraceOptions,
 };
 use std::io::Write;
+use std::path::Path;
 use std::path::PathBuf;
 use std::time::Duration;
 
@@ -29,6 +32,14 @@ fn truth() -> Vec<[f64; 2]> {
             [r * a.cos(), r * a.sin()]
         })
         .collect()
+}
+
+/// Reads and traces a file as `rigctl trace` does.
+fn read_and_trace(path: &Path, opts: &TraceOptions) -> Option<usize> {
+    let (img, prepared) = load_prepared(path).ok()?;
+    trace_prepared(&img, &prepared, opts, &ProgressBar::hidden())
+        .ok()
+        .map(|t| t.strokes.len())
 }
 
 fn trace_a4_600dpi(c: &mut Criterion) {
@@ -65,6 +76,9 @@ fn trace_a4_600dpi(c: &mut Criterion) {
     let opts = TraceOptions::default();
     g.bench_function("trace_a4_600dpi", |b| {
         b.iter(|| trace_image(&img, &opts, &ProgressBar::hidden()).map(|t| t.strokes.len()))
+    });
+    g.bench_function("read_and_trace_png_a4_600dpi", |b| {
+        b.iter(|| read_and_trace(&png, &opts))
     });
     g.finish();
 }
@@ -104,6 +118,9 @@ fn trace_photo_12mp(c: &mut Criterion) {
     let opts = TraceOptions::default();
     g.bench_function("trace_photo_12mp", |b| {
         b.iter(|| trace_image(&decoded, &opts, &ProgressBar::hidden()).map(|t| t.strokes.len()))
+    });
+    g.bench_function("read_and_trace_jpeg_12mp", |b| {
+        b.iter(|| read_and_trace(&jpg, &opts))
     });
     g.finish();
 }

@@ -7,7 +7,9 @@ use super::CliError;
 use indicatif::{ProgressBar, ProgressDrawTarget, ProgressStyle};
 use rigctl::sheet::ReferencePath;
 use rigctl::trace::overlay::{render_overlay, write_overlay};
-use rigctl::trace::{load_scan, trace_image, write_csv, Mapping, PathChoice, Trace, TraceOptions};
+use rigctl::trace::{
+    load_prepared, trace_prepared, write_csv, Mapping, PathChoice, Trace, TraceOptions,
+};
 use std::path::PathBuf;
 
 #[derive(clap::Args, Debug)]
@@ -72,7 +74,8 @@ pub fn run(args: Args) -> Result<(), CliError> {
         },
         ..TraceOptions::default()
     };
-    let img = load_scan(&args.scan)?;
+    // A PNG's whole-image maps are built while it is decoded.
+    let (img, prepared) = load_prepared(&args.scan)?;
     let progress = if u64::from(img.width()) * u64::from(img.height()) > 4_000_000 {
         let bar = ProgressBar::with_draw_target(None, ProgressDrawTarget::stderr());
         bar.set_style(
@@ -83,7 +86,8 @@ pub fn run(args: Args) -> Result<(), CliError> {
     } else {
         ProgressBar::hidden()
     };
-    let trace = trace_image(&img, &opts, &progress);
+    let trace = trace_prepared(&img, &prepared, &opts, &progress);
+    drop(prepared);
     progress.finish_and_clear();
     let trace = trace.map_err(|e| CliError::from(e).in_file(&args.scan))?;
     if let Some(path) = &args.overlay {

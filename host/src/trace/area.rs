@@ -93,15 +93,16 @@ pub(crate) fn seed_mask(
     roi: &dyn Fn([f64; 2]) -> bool,
     px_per_mm: f64,
 ) -> Vec<bool> {
-    let mut mask = vec![false; map.min_red.len()];
-    for (i, &v) in map.min_red.iter().enumerate() {
-        let c = map.block_centre_px(i % map.w, i / map.w);
-        let level = paper.red_near(c[0], c[1]);
+    let dark = map.classify(paper, |v, level| {
         let dark_max = (level * (1.0 - opts.min_darkness)).max(0.0);
         let black = if exclude_black { level * 0.22 } else { -1.0 };
         let v = v as f32;
-        if v <= dark_max && v >= black {
-            mask[i] = roi(c);
+        v <= dark_max && v >= black
+    });
+    let mut mask = dark;
+    for (i, m) in mask.iter_mut().enumerate() {
+        if *m {
+            *m = roi(map.block_centre_px(i % map.w, i / map.w));
         }
     }
     let (labels, comps) = raster::components(&mask, map.w, map.h);

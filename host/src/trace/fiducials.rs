@@ -63,15 +63,7 @@ pub(crate) fn find(
 
 /// Every disc-like dark blob, refined to sub-pixel centroids, largest first.
 pub(crate) fn candidate_discs(img: &RgbImage, map: &CoarseMap, paper: &PaperMap) -> Vec<Disc> {
-    let mask: Vec<bool> = map
-        .min_red
-        .iter()
-        .enumerate()
-        .map(|(i, &v)| {
-            let c = map.block_centre_px(i % map.w, i / map.w);
-            (v as f32) < paper.red_near(c[0], c[1]) * BLACK_FRACTION
-        })
-        .collect();
+    let mask = map.classify(paper, |v, level| (v as f32) < level * BLACK_FRACTION);
     let (_, comps) = components(&mask, map.w, map.h);
     let mut discs: Vec<Disc> = comps
         .iter()

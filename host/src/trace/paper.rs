@@ -7,6 +7,7 @@
 //! neighbours' paper) and smoothed; a pixel's level is interpolated bilinearly between block
 //! centres.
 
+#[cfg(test)]
 use image::RgbImage;
 
 /// Block-wise paper level with bilinear interpolation.
@@ -24,36 +25,62 @@ pub(crate) struct PaperMap {
 const PAPER_PERCENTILE: f64 = 0.8;
 
 impl PaperMap {
-    /// Builds the map with blocks of `block` pixels (sampling every second pixel).
+    /// Builds the map with blocks of `block` pixels in one pass (the reference for the banded
+    /// build of [`super::prepare`]).
+    #[cfg(test)]
     pub fn build(img: &RgbImage, block: usize) -> Self {
         let block = block.max(4);
         let (iw, ih) = (img.width() as usize, img.height() as usize);
         let (w, h) = (iw.div_ceil(block), ih.div_ceil(block));
-        let raw = img.as_raw();
-        let mut level = vec![[255.0f32; 3]; w * h];
-        let mut hist = vec![[0u32; 256]; 3];
-        for by in 0..h {
+        let level = Self::band(img.as_raw(), iw, ih, 0, ih, block);
+        Self::from_block_levels(block, w, h, &level)
+    }
+
+    /// The raw paper level (a high percentile per channel, sampling every second pixel of
+    /// every second row) of the block rows of a band of `n_rows` image rows starting at `y0`
+    /// (a multiple of `block`); `rows` holds those RGB rows.
+    pub(crate) fn band(
+        rows: &[u8],
+        iw: usize,
+        ih: usize,
+        y0: usize,
+        n_rows: usize,
+        block: usize,
+    ) -> Vec<[f32; 3]> {
+        let w = iw.div_ceil(block);
+        let (by0, by1) = (y0 / block, (y0 + n_rows).min(ih).div_ceil(block));
+        let mut level = vec![[255.0f32; 3]; w * by1.saturating_sub(by0)];
+        let mut hist = [[0u32; 256]; 3];
+        for by in by0..by1 {
             for bx in 0..w {
                 for hc in hist.iter_mut() {
                     hc.fill(0);
                 }
                 let mut n = 0u32;
-                for y in (by * block..((by + 1) * block).min(ih)).step_by(2) {
-                    let row = &raw[3 * iw * y..3 * iw * (y + 1)];
-                    for x in (bx * block..((bx + 1) * block).min(iw)).step_by(2) {
+                let (x0, x1) = (bx * block, ((bx + 1) * block).min(iw));
+                for y in (by * block..((by + 1) * block).min(ih).min(y0 + n_rows)).step_by(2) {
+                    let row = &rows[3 * iw * (y - y0)..3 * iw * (y - y0 + 1)];
+                    for px in row[3 * x0..3 * x1].chunks_exact(6) {
+                        hist[0][px[0] as usize] += 1;
+                        hist[1][px[1] as usize] += 1;
+                        hist[2][px[2] as usize] += 1;
+                        n += 1;
+                    }
+                    if (x1 - x0) % 2 == 1 {
+                        let px = &row[3 * (x1 - 1)..3 * x1];
                         for c in 0..3 {
-                            hist[c][row[3 * x + c] as usize] += 1;
+                            hist[c][px[c] as usize] += 1;
                         }
                         n += 1;
                     }
                 }
-                let target = (n as f64 * PAPER_PERCENTILE).ceil() as u32;
-                let out = &mut level[by * w + bx];
+                let target = ((n as f64 * PAPER_PERCENTILE).ceil() as u32).max(1);
+                let out = &mut level[(by - by0) * w + bx];
                 for c in 0..3 {
                     let mut acc = 0u32;
                     for (v, &k) in hist[c].iter().enumerate() {
                         acc += k;
-                        if acc >= target.max(1) {
+                        if acc >= target {
                             out[c] = (v as f32).max(1.0);
                             break;
                         }
@@ -61,23 +88,45 @@ impl PaperMap {
                 }
             }
         }
-        let level = smooth(&max_filter(&level, w, h), w, h);
+        level
+    }
+
+    /// The map from the raw block levels (`w x h` blocks of `block` pixels): max-filtered over
+    /// 3 x 3 blocks and smoothed.
+    pub(crate) fn from_block_levels(block: usize, w: usize, h: usize, raw: &[[f32; 3]]) -> Self {
+        let level = smooth(&max_filter(raw, w, h), w, h);
         Self { block, w, h, level }
     }
 
     /// Block size for an image: about 1/150 of its short side (1.4 mm on an A4 scan), at least
     /// 8 pixels.
+    #[cfg(test)]
     pub fn block_size_for(img: &RgbImage) -> usize {
-        (img.width().min(img.height()) as usize / 150).max(8)
+        Self::block_size_for_dims(img.width() as usize, img.height() as usize)
+    }
+
+    /// [`Self::block_size_for`] from the image's width and height.
+    pub fn block_size_for_dims(w: usize, h: usize) -> usize {
+        (w.min(h) / 150).max(8)
     }
 
     /// Red paper level of the block holding pixel coordinates `(x, y)` (no interpolation: for
     /// thresholds).
-    #[inline]
+    #[cfg(test)]
     pub fn red_near(&self, x: f64, y: f64) -> f32 {
-        let bx = ((x.max(0.0) as usize) / self.block).min(self.w - 1);
-        let by = ((y.max(0.0) as usize) / self.block).min(self.h - 1);
-        self.level[by * self.w + bx][0]
+        self.level[self.row_of(y) * self.w + self.col_of(x)][0]
+    }
+
+    /// Block column holding pixel x coordinate `x`.
+    #[inline]
+    pub fn col_of(&self, x: f64) -> usize {
+        ((x.max(0.0) as usize) / self.block).min(self.w - 1)
+    }
+
+    /// Block row holding pixel y coordinate `y`.
+    #[inline]
+    pub fn row_of(&self, y: f64) -> usize {
+        ((y.max(0.0) as usize) / self.block).min(self.h - 1)
     }
 
     /// Paper level at pixel coordinates `(x, y)` (pixel centres at `i + 0.5`).

@@ -2,6 +2,8 @@
 //! and connected components on a coarse mask. These are the only passes that touch every pixel;
 //! everything after them works in small windows.
 
+use super::paper::PaperMap;
+#[cfg(test)]
 use image::RgbImage;
 
 /// Per-channel paper level (median of a regular sample of pixels), 0..255.
@@ -37,6 +39,7 @@ pub(crate) fn paper_level(img: &RgbImage) -> [f32; 3] {
 
 /// The scan reduced to `k x k` blocks, each holding the darkest red value inside it. Red ink is
 /// nearly invisible in the red channel, so this map shows graphite and black print only.
+#[derive(Debug, Clone)]
 pub(crate) struct CoarseMap {
     /// Block side, pixels.
     pub k: usize,
@@ -47,10 +50,18 @@ pub(crate) struct CoarseMap {
 
 impl CoarseMap {
     /// Block size giving a map about 1240 blocks wide (0.17 mm blocks on an A4 scan).
+    #[cfg(test)]
     pub fn block_size_for(img: &RgbImage) -> usize {
-        (img.width().min(img.height()) as usize / 1240).max(1)
+        Self::block_size_for_dims(img.width() as usize, img.height() as usize)
     }
 
+    /// [`Self::block_size_for`] from the image's width and height.
+    pub fn block_size_for_dims(w: usize, h: usize) -> usize {
+        (w.min(h) / 1240).max(1)
+    }
+
+    /// The map in one pass (the reference for the banded build of [`super::prepare`]).
+    #[cfg(test)]
     pub fn build(img: &RgbImage, k: usize) -> Self {
         let (iw, ih) = (img.width() as usize, img.height() as usize);
         let (w, h) = (iw.div_ceil(k), ih.div_ceil(k));
@@ -67,6 +78,55 @@ impl CoarseMap {
             }
         }
         Self { k, w, h, min_red }
+    }
+
+    /// The map's rows for a band of `n_rows` whole RGB image rows (`rows`, width `iw`) that
+    /// starts at a multiple of `k`.
+    pub(crate) fn band(rows: &[u8], iw: usize, n_rows: usize, k: usize) -> Vec<u8> {
+        let k = k.max(1);
+        let w = iw.div_ceil(k);
+        let mut min_red = vec![255u8; w * n_rows.div_ceil(k)];
+        for y in 0..n_rows {
+            let row = &rows[3 * iw * y..3 * iw * (y + 1)];
+            let out = &mut min_red[(y / k) * w..(y / k + 1) * w];
+            if k == 4 {
+                // The common case (A4 at 600 dpi): fixed-size blocks the compiler unrolls.
+                let mut blocks = row.chunks_exact(12);
+                for (b, o) in (&mut blocks).zip(out.iter_mut()) {
+                    *o = (*o).min(b[0].min(b[3]).min(b[6].min(b[9])));
+                }
+                let rest = blocks.remainder();
+                if let Some(o) = out.last_mut().filter(|_| !rest.is_empty()) {
+                    *o = rest.iter().step_by(3).fold(*o, |m, &v| m.min(v));
+                }
+            } else {
+                for (b, o) in row.chunks(3 * k).zip(out.iter_mut()) {
+                    *o = b.iter().step_by(3).fold(*o, |m, &v| m.min(v));
+                }
+            }
+        }
+        min_red
+    }
+
+    /// For every block, `keep(darkest red value, red paper level at the block's centre)`
+    /// ([`PaperMap::red_near`], looked up once per row and column).
+    pub fn classify(&self, paper: &PaperMap, keep: impl Fn(u8, f32) -> bool) -> Vec<bool> {
+        let cols: Vec<usize> = (0..self.w)
+            .map(|bx| paper.col_of(self.block_centre_px(bx, 0)[0]))
+            .collect();
+        let mut out = vec![false; self.min_red.len()];
+        for (by, (row, o)) in self
+            .min_red
+            .chunks_exact(self.w.max(1))
+            .zip(out.chunks_exact_mut(self.w.max(1)))
+            .enumerate()
+        {
+            let levels = &paper.level[paper.row_of(self.block_centre_px(0, by)[1]) * paper.w..];
+            for ((v, o), &c) in row.iter().zip(o.iter_mut()).zip(&cols) {
+                *o = keep(*v, levels[c][0]);
+            }
+        }
+        out
     }
 
     /// Centre of block `(bx, by)` in pixel coordinates (pixel `(c, r)` covers
@@ -167,5 +227,22 @@ mod tests {
         assert_eq!(map.min_red[0], 250);
         assert_eq!(map.min_red[5], 40);
         assert_eq!(paper_level(&img), [250.0, 250.0, 250.0]);
+    }
+
+    #[test]
+    fn classify_looks_up_the_paper_level_of_each_block_centre() {
+        let img = RgbImage::from_fn(203, 151, |x, y| {
+            let v = ((x * 31 + y * 17) % 256) as u8;
+            image::Rgb([v, 200, 200])
+        });
+        let paper = PaperMap::build(&img, 16);
+        let map = CoarseMap::build(&img, 3);
+        let got = map.classify(&paper, |v, level| (v as f32) < 0.5 * level);
+        for (i, &g) in got.iter().enumerate() {
+            let c = map.block_centre_px(i % map.w, i / map.w);
+            let want = (map.min_red[i] as f32) < 0.5 * paper.red_near(c[0], c[1]);
+            assert_eq!(g, want, "block {i}");
+        }
+        assert!(got.iter().any(|&g| g) && got.iter().any(|&g| !g));
     }
 }

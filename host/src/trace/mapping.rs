@@ -1,0 +1,119 @@
+//! How pixels become sheet mm: the camera fitted on the printed marks (fiducial mapping) or a
+//! plain scale about the image centre.
+
+use super::centreline::Occluders;
+use super::paper::PaperMap;
+use super::raster::CoarseMap;
+use super::{
+    fiducials, CameraModel, Fiducials, FitQuality, Homography, Mapping, TraceError, TraceOptions,
+};
+use crate::sheet::{fiducial_centres_mm, orientation_dot_mm, FIDUCIAL_SPACING_MM};
+use image::RgbImage;
+
+/// The camera of a fiducial mapping: fitted on all marks with the ring, else the corners'
+/// homography. Returns the model, the fit (ring) and the orientation dot's residual, mm.
+pub(crate) fn fit_camera(
+    img: &RgbImage,
+    fid: &Fiducials,
+    spacing_mm: f64,
+    opts: &TraceOptions,
+) -> Result<(CameraModel, Option<FitQuality>, f64), TraceError> {
+    let size = [img.width() as f64, img.height() as f64];
+    let expected = orientation_dot_mm(spacing_mm);
+    if fid.ring.len() >= 8 {
+        let mut mm: Vec<[f64; 2]> = fiducial_centres_mm(spacing_mm).to_vec();
+        let mut px: Vec<[f64; 2]> = fid.corners.iter().map(|d| d.centre_px).collect();
+        mm.push(expected);
+        px.push(fid.dot.centre_px);
+        for (d, m) in &fid.ring {
+            mm.push(*m);
+            px.push(d.centre_px);
+        }
+        let (cam, q) = CameraModel::fit(&mm, &px, size).ok_or(TraceError::DegenerateFiducials)?;
+        let limit_mm = opts.max_camera_rms_mm * spacing_mm / FIDUCIAL_SPACING_MM;
+        if !(q.rms_mm <= limit_mm && q.max_mm <= 4.0 * limit_mm) {
+            return Err(TraceError::CameraCheck {
+                rms_mm: q.rms_mm,
+                max_mm: q.max_mm,
+                used: q.used,
+                found: q.found,
+                limit_mm,
+            });
+        }
+        let dot = cam.to_mm(fid.dot.centre_px);
+        let residual = (dot[0] - expected[0]).hypot(dot[1] - expected[1]);
+        return Ok((cam, Some(q), residual));
+    }
+    let px: Vec<[f64; 2]> = fid.corners.iter().map(|d| d.centre_px).collect();
+    let to_px = Homography::fit(&fiducial_centres_mm(spacing_mm), &px)
+        .ok_or(TraceError::DegenerateFiducials)?;
+    let cam = CameraModel::from_homography(&to_px, size).ok_or(TraceError::DegenerateFiducials)?;
+    let dot = cam.to_mm(fid.dot.centre_px);
+    let residual_mm = (dot[0] - expected[0]).hypot(dot[1] - expected[1]);
+    if residual_mm.is_nan() || residual_mm > 1.0 {
+        return Err(TraceError::FiducialResidual { residual_mm });
+    }
+    Ok((cam, None, residual_mm))
+}
+
+/// A pixel -> sheet mm map.
+pub(crate) type ToMm = Box<dyn Fn([f64; 2]) -> [f64; 2]>;
+
+/// The mapping of one image and what was measured to find it.
+pub(crate) struct Mapped {
+    pub to_mm: ToMm,
+    pub fiducials: Option<Fiducials>,
+    pub camera: Option<CameraModel>,
+    pub camera_fit: Option<FitQuality>,
+    pub dot_residual_mm: Option<f64>,
+    /// Image scale, pixels per mm.
+    pub px_per_mm: f64,
+    /// The ring dots, which the pencil may cross.
+    pub occluders: Occluders,
+}
+
+/// Finds the marks and fits the camera (fiducial mapping), or sets up the plain scale.
+pub(crate) fn map_pixels(
+    img: &RgbImage,
+    map: &CoarseMap,
+    paper: &PaperMap,
+    opts: &TraceOptions,
+) -> Result<Mapped, TraceError> {
+    let (w_px, h_px) = (img.width() as f64, img.height() as f64);
+    let mut occluders = Occluders::default();
+    match opts.mapping {
+        Mapping::Fiducials { spacing_mm } => {
+            let fid = fiducials::find(img, map, paper, spacing_mm)?;
+            let (cam, fit, residual) = fit_camera(img, &fid, spacing_mm, opts)?;
+            let ppmm = fid.side_px() / spacing_mm;
+            for (d, _) in &fid.ring {
+                occluders
+                    .discs
+                    .push((d.centre_px, 0.5 * d.diameter_px + 0.3 * ppmm));
+            }
+            Ok(Mapped {
+                to_mm: Box::new(move |p| cam.to_mm(p)),
+                fiducials: Some(fid),
+                camera: Some(cam),
+                camera_fit: fit,
+                dot_residual_mm: Some(residual),
+                px_per_mm: ppmm,
+                occluders,
+            })
+        }
+        Mapping::Scale { mm_per_px } => Ok(Mapped {
+            to_mm: Box::new(move |p: [f64; 2]| {
+                [
+                    (p[0] - w_px / 2.0) * mm_per_px,
+                    (h_px / 2.0 - p[1]) * mm_per_px,
+                ]
+            }),
+            fiducials: None,
+            camera: None,
+            camera_fit: None,
+            dot_residual_mm: None,
+            px_per_mm: 1.0 / mm_per_px,
+            occluders,
+        }),
+    }
+}
