@@ -1,5 +1,7 @@
-//! Arbitrary bytes as a scanned sheet (PNG or JPEG, small images only: at most 256 x 256 and
-//! 4 MiB decoded): decoding and tracing, with fiducials and with a fixed scale, never panic.
+//! Arbitrary bytes as a scanned sheet (PNG or JPEG): decoding and tracing never panic. Small
+//! images only: the decoder refuses anything over 64 x 64 pixels from the header, before
+//! allocating, and at most 1 MiB in all. An input is traced with fiducials or with a fixed
+//! scale (chosen by its length's parity, so both paths are fuzzed without tracing twice).
 #![no_main]
 
 use image::{ImageReader, Limits};
@@ -8,24 +10,29 @@ use libfuzzer_sys::fuzz_target;
 use rigctl::trace::{trace_image, Mapping, TraceOptions};
 use std::io::Cursor;
 
+/// Largest width and height decoded, px.
+const MAX_SIDE_PX: u32 = 64;
+
 fuzz_target!(|data: &[u8]| {
-    let Ok(reader) = ImageReader::new(Cursor::new(data)).with_guessed_format() else {
+    let Ok(mut reader) = ImageReader::new(Cursor::new(data)).with_guessed_format() else {
         return;
     };
-    let mut reader = reader;
     let mut limits = Limits::default();
-    limits.max_image_width = Some(256);
-    limits.max_image_height = Some(256);
-    limits.max_alloc = Some(4 << 20);
+    limits.max_image_width = Some(MAX_SIDE_PX);
+    limits.max_image_height = Some(MAX_SIDE_PX);
+    limits.max_alloc = Some(1 << 20);
     reader.limits(limits);
     let Ok(img) = reader.decode() else {
         return;
     };
     let img = img.into_rgb8();
-    let _ = trace_image(&img, &TraceOptions::default(), &ProgressBar::hidden());
-    let scale = TraceOptions {
-        mapping: Mapping::Scale { mm_per_px: 0.1 },
-        ..TraceOptions::default()
+    let options = if data.len() % 2 == 0 {
+        TraceOptions::default()
+    } else {
+        TraceOptions {
+            mapping: Mapping::Scale { mm_per_px: 0.1 },
+            ..TraceOptions::default()
+        }
     };
-    let _ = trace_image(&img, &scale, &ProgressBar::hidden());
+    let _ = trace_image(&img, &options, &ProgressBar::hidden());
 });

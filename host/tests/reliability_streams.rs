@@ -1,0 +1,472 @@
+//! Issue 15, defect 2 for every subcommand: no command can be made to exit 101 (a panic) by
+//! its standard streams. Each subcommand of `rigctl --help` (and `--help`, `--version`) runs
+//! once normally, then with
+//!
+//! - stdout a pipe whose reader has gone (`| true`): exit 0 or 141, quietly;
+//! - stdout `/dev/full` (`> /dev/full`): exit 1 with "No space left" when the command prints
+//!   on stdout, else its normal exit;
+//! - stderr a closed pipe (`2>&-` of a pipeline) and stderr `/dev/full` (`2> /dev/full`): its
+//!   normal exit code (stderr errors are ignored, never a panic).
+//!
+//! `record` and `board-sim` run against each other, one of them with the hostile stream.
+
+use std::ffi::OsString;
+use std::fs::OpenOptions;
+use std::path::Path;
+use std::process::{Child, Command, Output, Stdio};
+use std::time::{Duration, Instant};
+
+use rigctl::joints::{header, predicted_tilt_deg, row, TiltReading};
+use rigctl::model::katana450;
+use rigctl::sim::session::{simulate_session, write_session, SessionConfig};
+
+fn rigctl() -> Command {
+    Command::new(env!("CARGO_BIN_EXE_rigctl"))
+}
+
+fn text(b: &[u8]) -> String {
+    String::from_utf8_lossy(b).into_owned()
+}
+
+/// The hostile streams tried on every command.
+#[derive(Debug, Clone, Copy, PartialEq)]
+enum Hostile {
+    ClosedStdout,
+    FullStdout,
+    ClosedStderr,
+    FullStderr,
+}
+
+const HOSTILE: [Hostile; 4] = [
+    Hostile::ClosedStdout,
+    Hostile::FullStdout,
+    Hostile::ClosedStderr,
+    Hostile::FullStderr,
+];
+
+fn dev_full() -> Option<std::fs::File> {
+    OpenOptions::new().write(true).open("/dev/full").ok()
+}
+
+/// Spawns `cmd` with `how` applied (the other stream piped), returns the child.
+fn spawn_hostile(mut cmd: Command, how: Hostile) -> Option<Child> {
+    cmd.stdin(Stdio::null());
+    match how {
+        Hostile::ClosedStdout | Hostile::ClosedStderr => {
+            cmd.stdout(Stdio::piped()).stderr(Stdio::piped());
+        }
+        Hostile::FullStdout => {
+            cmd.stdout(dev_full()?).stderr(Stdio::piped());
+        }
+        Hostile::FullStderr => {
+            cmd.stdout(Stdio::piped()).stderr(dev_full()?);
+        }
+    }
+    let mut child = cmd.spawn().expect("spawn rigctl");
+    match how {
+        Hostile::ClosedStdout => drop(child.stdout.take()),
+        Hostile::ClosedStderr => drop(child.stderr.take()),
+        _ => {}
+    }
+    Some(child)
+}
+
+/// Checks one hostile run of `name` against its normal run.
+fn judge(name: &str, how: Hostile, normal: &Output, got: &Output) {
+    let code = got.status.code();
+    let err = text(&got.stderr);
+    let what = format!("{name} with {how:?}: {code:?}, stderr {err:?}");
+    assert_ne!(code, Some(101), "{what}");
+    assert!(!err.contains("panicked"), "{what}");
+    let normal_code = normal.status.code();
+    match how {
+        Hostile::ClosedStdout => {
+            assert!(matches!(code, Some(0) | Some(141)), "{what}");
+            assert!(
+                !err.contains("stdout") && !err.contains("Broken pipe"),
+                "a closed pipe ends quietly: {what}"
+            );
+        }
+        Hostile::FullStdout if !normal.stdout.is_empty() => {
+            assert_eq!(code, Some(1), "{what}");
+            assert!(err.contains("No space left"), "{what}");
+        }
+        Hostile::FullStdout | Hostile::ClosedStderr | Hostile::FullStderr => {
+            assert_eq!(code, normal_code, "{what}");
+        }
+    }
+}
+
+fn run_normal(name: &str, args: &[OsString]) -> Output {
+    let o = rigctl()
+        .args(args)
+        .stdin(Stdio::null())
+        .output()
+        .expect("run rigctl");
+    assert_eq!(o.status.code(), Some(0), "{name}: {}", text(&o.stderr));
+    o
+}
+
+/// The inputs every command needs, made once in `dir`; returns (name, args) per command.
+fn commands(dir: &Path) -> Vec<(&'static str, Vec<OsString>)> {
+    let d = |s: &str| dir.join(s).into_os_string();
+    let o = |s: &str| OsString::from(s);
+
+    // Poses (the CLI) and a short pose set for the slow diagnose.
+    let sim = dir.join("sim");
+    let out = rigctl()
+        .args(["simulate", "--seed", "3", "--val", "20", "--out"])
+        .arg(&sim)
+        .output()
+        .unwrap();
+    assert!(out.status.success(), "{}", text(&out.stderr));
+    let cal = std::fs::read_to_string(sim.join("cal.csv")).unwrap();
+    let short: Vec<&str> = cal.lines().take(41).collect();
+    std::fs::write(dir.join("cal40.csv"), short.join("\n") + "\n").unwrap();
+
+    // A pencil session (library, at the smallest scan resolution it allows, 300 dpi) and its ideal trace.
+    let declared = katana450(330.0).unwrap();
+    let cfg = SessionConfig {
+        dpi: 300.0,
+        ..SessionConfig::default()
+    };
+    let session = simulate_session(&declared, &cfg).unwrap();
+    let sess = dir.join("sess");
+    write_session(&sess, &session, &cfg).unwrap();
+    let mut trace = String::from("x,y\n");
+    for p in &session.pencil_mm {
+        trace.push_str(&format!("{:.4},{:.4}\n", p[0], p[1]));
+    }
+    std::fs::write(dir.join("trace.csv"), trace).unwrap();
+    let out = rigctl()
+        .args(["potcal", "--points"])
+        .arg(sess.join("potjig.csv"))
+        .arg("--out")
+        .arg(dir.join("pot.toml"))
+        .output()
+        .unwrap();
+    assert!(out.status.success(), "{}", text(&out.stderr));
+
+    std::fs::write(dir.join("path.csv"), "x,y,z\n300,0,200\n310,0,200\n").unwrap();
+    std::fs::write(dir.join("tilt.csv"), tilt_readings()).unwrap();
+    std::fs::write(dir.join("arm.urdf"), URDF).unwrap();
+
+    let s = |f: &str| sess.join(f).into_os_string();
+    let p = |f: &str| sim.join(f).into_os_string();
+    vec![
+        ("--help", vec![o("--help")]),
+        ("--version", vec![o("--version")]),
+        ("calibrate --help", vec![o("calibrate"), o("--help")]),
+        ("fk", vec![o("fk"), o("--joints"), p("val.csv")]),
+        ("simulate", vec![o("simulate"), o("--out"), d("sim2")]),
+        (
+            "calibrate",
+            vec![o("calibrate"), o("--poses"), p("cal.csv")],
+        ),
+        (
+            "diagnose",
+            vec![
+                o("diagnose"),
+                o("--poses"),
+                d("cal40.csv"),
+                o("--validate"),
+                p("val.csv"),
+            ],
+        ),
+        (
+            "report",
+            vec![
+                o("report"),
+                sim.clone().into_os_string(),
+                o("--html"),
+                d("r.html"),
+            ],
+        ),
+        ("ports", vec![o("ports")]),
+        (
+            "export",
+            vec![o("export"), s("pot.rec"), o("--csv"), d("export")],
+        ),
+        ("sheet", vec![o("sheet"), o("--out"), d("sheet.svg")]),
+        (
+            "trace",
+            vec![
+                o("trace"),
+                s("scan.png"),
+                o("--out"),
+                d("traced.csv"),
+                o("--overlay"),
+                d("overlay.png"),
+            ],
+        ),
+        (
+            "potcal",
+            vec![
+                o("potcal"),
+                o("--points"),
+                s("potjig.csv"),
+                o("--out"),
+                d("pot2.toml"),
+            ],
+        ),
+        (
+            "fuse",
+            vec![
+                o("fuse"),
+                o("--joints"),
+                s("joints.csv"),
+                o("--recording"),
+                s("pot.rec"),
+                o("--trace"),
+                d("trace.csv"),
+                o("--placement"),
+                s("placement.toml"),
+                o("--pot"),
+                d("pot.toml"),
+                o("--out"),
+                d("fused.csv"),
+            ],
+        ),
+        (
+            "urdf2model",
+            vec![
+                o("urdf2model"),
+                o("--urdf"),
+                d("arm.urdf"),
+                o("--tip"),
+                o("tip"),
+                o("--out"),
+                d("arm.toml"),
+            ],
+        ),
+        (
+            "joints",
+            vec![
+                o("joints"),
+                o("--readings"),
+                d("tilt.csv"),
+                o("--out"),
+                d("tilt.toml"),
+            ],
+        ),
+        (
+            "compensate",
+            vec![
+                o("compensate"),
+                o("--path"),
+                d("path.csv"),
+                o("--out"),
+                d("comp.csv"),
+            ],
+        ),
+        (
+            "plan",
+            vec![
+                o("plan"),
+                o("--robot"),
+                o("katana450"),
+                o("--n"),
+                o("8"),
+                o("--candidates"),
+                o("200"),
+                o("--out"),
+                d("plan.csv"),
+            ],
+        ),
+    ]
+}
+
+/// Paired inclinometer readings (a configuration and its mirror, 0 and 3 kg) of the declared
+/// Katana, exact: enough for `joints` to fit every joint.
+fn tilt_readings() -> String {
+    let model = katana450(200.0).unwrap();
+    let limits = model.joint_limits();
+    let mut text = format!("{}\n", header(5));
+    for joint in 0..5 {
+        for pair in 0..6 {
+            let q: Vec<f64> = (0..5)
+                .map(|k| {
+                    let [lo, hi] = limits[k];
+                    let f = ((pair * 7 + k * 3 + joint) % 10) as f64 / 10.0;
+                    lo.max(-100.0) + f * (hi.min(100.0) - lo.max(-100.0))
+                })
+                .collect();
+            let mut mirror = q.clone();
+            for k in 1..5 {
+                mirror[k] = (-q[k]).clamp(limits[k][0], limits[k][1]);
+            }
+            let payload_kg = if pair % 2 == 0 { 0.0 } else { 3.0 };
+            for (tag, qq) in [("a", q), ("b", mirror)] {
+                let tilt = predicted_tilt_deg(&model, &qq, payload_kg, joint).unwrap();
+                let r = TiltReading {
+                    line: 0,
+                    joint,
+                    config: format!("j{}_{pair}{tag}", joint + 1),
+                    q_deg: qq,
+                    payload_kg,
+                    incl_deg: [Some(tilt[0]), Some(tilt[1]), Some(tilt[2])],
+                };
+                text.push_str(&row(&r));
+                text.push('\n');
+            }
+        }
+    }
+    text
+}
+
+const URDF: &str = r#"<robot name="arm">
+  <link name="base"/><link name="l1"/><link name="tip"/>
+  <joint name="j1" type="revolute">
+    <parent link="base"/><child link="l1"/>
+    <origin xyz="0 0 0.2" rpy="0 0 0"/><axis xyz="0 0 1"/>
+    <limit lower="-3" upper="3" effort="1" velocity="1"/>
+  </joint>
+  <joint name="j2" type="revolute">
+    <parent link="l1"/><child link="tip"/>
+    <origin xyz="0.3 0 0" rpy="0 0 0"/><axis xyz="0 1 0"/>
+    <limit lower="-2" upper="2" effort="1" velocity="1"/>
+  </joint>
+</robot>
+"#;
+
+#[test]
+fn defect2_no_subcommand_exits_101_on_closed_or_full_streams() {
+    let dir = tempfile::tempdir().unwrap();
+    let cases = commands(dir.path());
+    let help = run_normal("--help", &[OsString::from("--help")]);
+    // Every subcommand listed by --help is in the table (or is `help`, or record/board-sim,
+    // tried below against each other).
+    let listed = text(&help.stdout);
+    let names: Vec<&str> = listed
+        .split("Commands:")
+        .nth(1)
+        .and_then(|s| s.split("Options:").next())
+        .unwrap_or_default()
+        .lines()
+        .filter_map(|l| l.split_whitespace().next())
+        .collect();
+    assert!(names.len() > 10, "{listed}");
+    for n in &names {
+        assert!(
+            matches!(*n, "help" | "record" | "board-sim") || cases.iter().any(|(c, _)| c == n),
+            "subcommand {n} is not tried"
+        );
+    }
+    for (name, args) in &cases {
+        let normal = run_normal(name, args);
+        for how in HOSTILE {
+            let mut cmd = rigctl();
+            cmd.args(args);
+            let Some(child) = spawn_hostile(cmd, how) else {
+                continue;
+            };
+            let got = child.wait_with_output().unwrap();
+            judge(name, how, &normal, &got);
+        }
+        assert_no_temp_files(dir.path());
+    }
+}
+
+fn assert_no_temp_files(dir: &Path) {
+    let mut stack = vec![dir.to_path_buf()];
+    while let Some(d) = stack.pop() {
+        for e in std::fs::read_dir(&d).unwrap().flatten() {
+            let name = e.file_name().to_string_lossy().into_owned();
+            assert!(!name.contains(".tmp-"), "{name} left in {}", d.display());
+            if e.file_type().map(|t| t.is_dir()).unwrap_or(false) {
+                stack.push(e.path());
+            }
+        }
+    }
+}
+
+/// `rigctl board-sim --link DIR/board` at ten times real time for `duration_s` of board time.
+fn board_sim_cmd(link: &Path) -> Command {
+    let mut cmd = rigctl();
+    cmd.arg("board-sim")
+        .arg("--link")
+        .arg(link)
+        .args(["--speed", "10", "--duration-s", "3"]);
+    cmd
+}
+
+fn record_cmd(link: &Path, rec: &Path) -> Command {
+    let mut cmd = rigctl();
+    cmd.args(["record", "--overwrite", "--duration", "0.3", "--port"])
+        .arg(link)
+        .arg("--out")
+        .arg(rec);
+    cmd
+}
+
+fn wait_for_link(link: &Path) {
+    let deadline = Instant::now() + Duration::from_secs(30);
+    while std::fs::symlink_metadata(link).is_err() {
+        assert!(Instant::now() < deadline, "board-sim made no link");
+        std::thread::sleep(Duration::from_millis(20));
+    }
+}
+
+/// Waits at most 60 s for `child`.
+fn finish(mut child: Child) -> Output {
+    let deadline = Instant::now() + Duration::from_secs(60);
+    while child.try_wait().unwrap().is_none() {
+        if Instant::now() > deadline {
+            let _ = child.kill();
+            panic!("process did not end");
+        }
+        std::thread::sleep(Duration::from_millis(20));
+    }
+    child.wait_with_output().unwrap()
+}
+
+fn quiet(mut cmd: Command) -> Child {
+    cmd.stdin(Stdio::null())
+        .stdout(Stdio::piped())
+        .stderr(Stdio::piped())
+        .spawn()
+        .unwrap()
+}
+
+/// One record run against one board-sim; `hostile` applies to `which` of the two.
+fn acquisition(dir: &Path, which: &str, how: Option<Hostile>) -> Option<Output> {
+    let link = dir.join(format!("board-{which}"));
+    let rec = dir.join("run.rec");
+    let sim = match (which, how) {
+        ("board-sim", Some(h)) => spawn_hostile(board_sim_cmd(&link), h)?,
+        _ => quiet(board_sim_cmd(&link)),
+    };
+    wait_for_link(&link);
+    let record = match (which, how) {
+        ("record", Some(h)) => spawn_hostile(record_cmd(&link, &rec), h)?,
+        _ => quiet(record_cmd(&link, &rec)),
+    };
+    let record = finish(record);
+    let sim = finish(sim);
+    assert!(
+        std::fs::symlink_metadata(&link).is_err(),
+        "board-sim left its link"
+    );
+    Some(if which == "record" { record } else { sim })
+}
+
+#[test]
+fn defect2_record_and_board_sim_never_exit_101_on_closed_or_full_streams() {
+    let dir = tempfile::tempdir().unwrap();
+    for which in ["record", "board-sim"] {
+        let normal = acquisition(dir.path(), which, None).unwrap();
+        assert_eq!(
+            normal.status.code(),
+            Some(0),
+            "{which}: {}",
+            text(&normal.stderr)
+        );
+        assert!(!normal.stdout.is_empty(), "{which} prints a summary");
+        for how in HOSTILE {
+            if let Some(got) = acquisition(dir.path(), which, Some(how)) {
+                judge(which, how, &normal, &got);
+            }
+        }
+    }
+    assert_no_temp_files(dir.path());
+}
