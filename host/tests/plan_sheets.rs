@@ -108,6 +108,22 @@ fn cli_writes_the_sheets_ranking() {
         assert!(first.get(key).is_some(), "sheets.ranked[0] lacks {key}");
     }
     assert!(sheets["pairs"][0]["sheets"].as_array().unwrap().len() == 2);
+    // the report shows the ranking
+    let html = p("r.html");
+    let out = Command::new(env!("CARGO_BIN_EXE_rigctl"))
+        .args(["report", &dir.path().to_string_lossy(), "--html", &html])
+        .output()
+        .unwrap();
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let page = std::fs::read_to_string(&html).unwrap();
+    assert!(
+        page.contains("pencil sheets reachable"),
+        "report lacks the sheets"
+    );
     // the UR5 has no pencil rig IK: a clear refusal, exit 2
     let out = Command::new(env!("CARGO_BIN_EXE_rigctl"))
         .args([
