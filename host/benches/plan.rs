@@ -1,5 +1,6 @@
 //! `rigctl plan` on the Katana: 10 000 candidates, N = 30 (candidates, Jacobians, A-optimal
-//! greedy + exchange with 1 random restart (the default), random baseline), and with the greedy start only.
+//! greedy + exchange with 1 random restart (the default), random baseline and its spread), and with
+//! the greedy start only.
 
 use criterion::{criterion_group, criterion_main, Criterion};
 use rigctl::model::{katana450, KATANA_TOOL_MM};

@@ -1,7 +1,7 @@
 //! `rigctl plan --robot NAME | --model FILE --n N --out PLAN.csv [--seed S] [--json PLAN.json]
 //! [--plot PLAN.svg] [--noise-mm 0.01] [--candidates 5000] [--box X0,Y0,Z0,X1,Y1,Z1]
 //! [--visible-from X,Y,Z [--cone-deg 60]] [--min-z-mm Z] [--poses CAL.csv]
-//! [--from-diagnose D.json]`: chooses the N calibration poses that identify the model best
+//! [--from-diagnose D.json] [--criterion a|g|i|d] [--sheets [--sheet-rows fused|trace|plane]]`: chooses the N calibration poses that identify the model best
 //! (`rigctl::plan`) and prints their expected parameter sigmas against random poses.
 
 use std::path::PathBuf;
@@ -10,6 +10,8 @@ use nalgebra::Vector3;
 use rigctl::io::atomic::write_bytes_atomic;
 use rigctl::io::pose_csv::read_poses;
 use rigctl::plan::output::{plan_csv, plan_json, summary_table};
+use rigctl::plan::sheets::{candidate_specs, rank_sheets, SheetRows};
+use rigctl::plan::sheets_output::{sheets_json, sheets_table};
 use rigctl::plan::{plan, Criterion, FromDiagnose, PlanConfig};
 use rigctl::plot::plan::poses_svg;
 
@@ -46,9 +48,10 @@ pub struct Args {
     /// Number of random candidate configurations.
     #[arg(long, value_name = "COUNT", default_value_t = 5000)]
     pub candidates: usize,
-    /// Optimality criterion: a (sum of squared scaled sigmas, the default) or d (determinant);
-    /// with --from-diagnose restricted to the effects to separate (As / Ds).
-    #[arg(long, value_name = "a|d", default_value = "a", value_parser = parse_criterion)]
+    /// Optimality criterion: a (sum of the squared sigmas relative to random designs, the
+    /// default), g (geometric mean of the sigmas), i (mean prediction variance over the
+    /// candidates) or d (determinant); with --from-diagnose restricted to the effects to separate.
+    #[arg(long, value_name = "a|g|i|d", default_value = "a", value_parser = parse_criterion)]
     pub criterion: Criterion,
     /// Exchange runs from random starts besides the greedy one (more: slower, slightly better).
     #[arg(long, value_name = "COUNT", default_value_t = 1)]
@@ -82,18 +85,28 @@ pub struct Args {
     /// Poses already measured (pose CSV; only the joints are used): the plan adds to them.
     #[arg(long, value_name = "CAL.csv")]
     pub poses: Option<PathBuf>,
+    /// Also rank candidate pencil sheets and paths (plane placements and orientations, circle or
+    /// line) by what each sheet and each pair identifies, naming the parameters a sheet leaves
+    /// blind (table on stdout, `sheets` in --json).
+    #[arg(long)]
+    pub sheets: bool,
+    /// What a sheet sample measures for --sheets: fused (across the path + out of the sheet,
+    /// what `rigctl fuse` gives), trace (across the path only) or plane (both in-plane
+    /// directions).
+    #[arg(long, value_name = "fused|trace|plane", default_value = "fused", value_parser = parse_sheet_rows, requires = "sheets")]
+    pub sheet_rows: SheetRows,
     /// A diagnose JSON: choose poses that separate its `aliased` pairs (and pin down its
     /// effects with large sigmas), given --poses.
     #[arg(long, value_name = "D.json")]
     pub from_diagnose: Option<PathBuf>,
 }
 
+fn parse_sheet_rows(s: &str) -> Result<SheetRows, String> {
+    SheetRows::parse(s).ok_or_else(|| format!("unknown --sheet-rows `{s}` (fused, trace, plane)"))
+}
+
 fn parse_criterion(s: &str) -> Result<Criterion, String> {
-    match s.to_ascii_lowercase().as_str() {
-        "a" => Ok(Criterion::A),
-        "d" => Ok(Criterion::D),
-        _ => Err(format!("unknown criterion `{s}` (a, d)")),
-    }
+    Criterion::parse(s).ok_or_else(|| format!("unknown criterion `{s}` (g, a, i, d)"))
 }
 
 pub fn run(args: Args) -> Result<(), CliError> {
@@ -136,6 +149,23 @@ pub fn run(args: Args) -> Result<(), CliError> {
         None => None,
     };
     let result = plan(&model, &cfg, from.as_ref())?;
+    let sheets = if args.sheets {
+        let ws = rigctl::plan::Workspace {
+            visible_from_mm: None,
+            ..cfg.workspace.clone()
+        };
+        Some(rank_sheets(
+            &model,
+            &candidate_specs(),
+            &ws,
+            &result.parameters,
+            &result.scale,
+            cfg.noise_mm,
+            args.sheet_rows,
+        )?)
+    } else {
+        None
+    };
     if let Some(path) = &args.plot {
         let planned: Vec<[f64; 3]> = result.poses.iter().map(|p| p.nominal_mm.into()).collect();
         // the candidates are not kept in the plan: redraw a light background of the same seed
@@ -163,12 +193,16 @@ pub fn run(args: Args) -> Result<(), CliError> {
         write_bytes_atomic(path, &bytes)?;
     }
     if let Some(path) = &args.json {
-        let doc = plan_json(&result, cfg.noise_mm, cfg.seed, None);
+        let sheets_doc = sheets.as_ref().map(|r| sheets_json(r, cfg.noise_mm));
+        let doc = plan_json(&result, cfg.noise_mm, cfg.seed, sheets_doc);
         let text = serde_json::to_string_pretty(&doc)
             .map_err(|e| CliError::failure(format!("JSON: {e}")))?;
         write_bytes_atomic(path, format!("{text}\n").as_bytes())?;
     }
     write_bytes_atomic(&args.out, plan_csv(&result).as_bytes())?;
     out!("{}", summary_table(&result, cfg.noise_mm))?;
+    if let Some(r) = &sheets {
+        out!("{}", sheets_table(r))?;
+    }
     Ok(())
 }

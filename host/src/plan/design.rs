@@ -3,174 +3,35 @@
 //!
 //! `b` stacks the (column-scaled) Jacobian blocks of every candidate, three rows each. The
 //! information of a design `S` is `M = M0 + sum_{c in S} B_c^T B_c` (`M0`: poses already
-//! measured). The criterion is
+//! measured); the criteria (D/Ds, A, G, I) and their per-candidate gains are in
+//! [`super::criteria`].
 //!
-//! * **D-optimal** (no columns of interest given): maximise `log det M`;
-//! * **Ds-optimal** (columns of interest `I`, nuisance `O` the others): maximise
-//!   `log det M - log det M_OO`, the log-determinant of the Schur complement
-//!   `M_II - M_IO M_OO^-1 M_OI` = the information about `I` left once `O` is estimated. This
-//!   is what separates two aliased effects: it grows only with what tells them apart from the
-//!   rest and from each other.
-//!
-//! Adding candidate `c` changes `log det M` by `log det(I_3 + B_c M^-1 B_c^T)` (matrix
-//! determinant lemma), and `M^-1` is updated by the Woodbury identity; a small ridge
+//! `M^-1` is updated by the Woodbury identity; a small ridge
 //! ([`RIDGE`], relative to the unit column scale) keeps `M` invertible while fewer poses than
 //! parameters are chosen. Each exchange pass removes every chosen pose in turn and puts back the
 //! best candidate (possibly the same one); passes stop when none improves the criterion by
 //! more than [`MIN_GAIN`], and `M^-1` is rebuilt from scratch after every pass.
 
-use nalgebra::{DMatrix, Matrix3};
+use nalgebra::DMatrix;
 
+pub use super::criteria::{information, Criterion, RIDGE};
+use super::criteria::{value, Scorer};
 use super::PlanError;
 
-/// Ridge added to the information matrix (columns are scaled to unit RMS per pose).
-pub const RIDGE: f64 = 1e-6;
-/// Smallest log-determinant gain of an exchange.
+/// Smallest criterion gain of an exchange.
 pub const MIN_GAIN: f64 = 1e-9;
 /// Most exchange passes.
 pub const MAX_PASSES: usize = 10;
-
-/// What a design maximises.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
-pub enum Criterion {
-    /// `log det M` (or of the Schur complement of the columns of interest: Ds).
-    D,
-    /// `-trace(M^-1)` over the columns of interest (all by default): the sum of the squared
-    /// scaled parameter sigmas (A-optimality).
-    #[default]
-    A,
-}
-
-impl Criterion {
-    /// Name in `plan.json` (`"D-optimal"`, `"Ds-optimal"`, `"A-optimal"`, `"As-optimal"`).
-    pub fn name(self, subset: bool) -> &'static str {
-        match (self, subset) {
-            (Criterion::D, false) => "D-optimal",
-            (Criterion::D, true) => "Ds-optimal",
-            (Criterion::A, false) => "A-optimal",
-            (Criterion::A, true) => "As-optimal",
-        }
-    }
-}
 
 /// A chosen design.
 #[derive(Debug, Clone, PartialEq)]
 pub struct Design {
     /// Indices of the chosen candidates, in the order chosen.
     pub chosen: Vec<usize>,
-    /// Criterion value (log det of the ridged information, or of its Schur complement).
+    /// Criterion value (larger is better; see [`super::criteria`]).
     pub criterion: f64,
     /// Exchanges made after the greedy start.
     pub exchanges: usize,
-}
-
-/// `M^-1` of the ridged information restricted to some columns.
-struct InfoState {
-    cols: Vec<usize>,
-    minv: DMatrix<f64>,
-}
-
-fn sub_block(b: &DMatrix<f64>, c: usize, cols: &[usize]) -> DMatrix<f64> {
-    DMatrix::from_fn(3, cols.len(), |r, k| b[(3 * c + r, cols[k])])
-}
-
-fn log_det3(s: &Matrix3<f64>) -> f64 {
-    let d = s.determinant();
-    if d > 0.0 {
-        d.ln()
-    } else {
-        f64::NEG_INFINITY
-    }
-}
-
-impl InfoState {
-    fn new(m: &DMatrix<f64>, cols: Vec<usize>) -> Result<Self, PlanError> {
-        let q = cols.len();
-        let sub =
-            DMatrix::from_fn(q, q, |r, c| m[(cols[r], cols[c])]) + DMatrix::identity(q, q) * RIDGE;
-        let minv = sub
-            .cholesky()
-            .map(|c| c.inverse())
-            .ok_or(PlanError::Numerical(
-                "information matrix not positive definite",
-            ))?;
-        Ok(Self { cols, minv })
-    }
-
-    /// `log det(I + B_c M^-1 B_c^T)` of every candidate (`b_sub`: the stack restricted to
-    /// `cols`).
-    fn gains(&self, b_sub: &DMatrix<f64>) -> Vec<f64> {
-        if self.cols.is_empty() {
-            return vec![0.0; b_sub.nrows() / 3];
-        }
-        let w = b_sub * &self.minv;
-        (0..b_sub.nrows() / 3)
-            .map(|c| {
-                let mut s = Matrix3::identity();
-                for r in 0..3 {
-                    for t in 0..3 {
-                        s[(r, t)] += w.row(3 * c + r).dot(&b_sub.row(3 * c + t));
-                    }
-                }
-                log_det3(&s)
-            })
-            .collect()
-    }
-
-    /// Decrease of `trace((M^-1)_II)` over the columns `interest` (all when empty) that adding
-    /// each candidate would give (A-optimality).
-    fn trace_gains(&self, b: &DMatrix<f64>, interest: &[usize]) -> Vec<f64> {
-        let w = b * &self.minv;
-        let all: Vec<usize> = (0..b.ncols()).collect();
-        let cols = if interest.is_empty() {
-            &all[..]
-        } else {
-            interest
-        };
-        (0..b.nrows() / 3)
-            .map(|c| {
-                let s = Matrix3::identity()
-                    + Matrix3::from_fn(|r, t| w.row(3 * c + r).dot(&b.row(3 * c + t)));
-                let Some(si) = s.try_inverse() else {
-                    return f64::NEG_INFINITY;
-                };
-                cols.iter()
-                    .map(|&i| {
-                        let v = nalgebra::Vector3::new(
-                            w[(3 * c, i)],
-                            w[(3 * c + 1, i)],
-                            w[(3 * c + 2, i)],
-                        );
-                        v.dot(&(si * v))
-                    })
-                    .sum()
-            })
-            .collect()
-    }
-
-    /// Adds (`sign` = 1) or removes (-1) candidate `c`: Woodbury update of `M^-1`.
-    fn update(&mut self, b: &DMatrix<f64>, c: usize, sign: f64) {
-        if self.cols.is_empty() {
-            return;
-        }
-        let bc = sub_block(b, c, &self.cols);
-        let mb = &self.minv * bc.transpose(); // q x 3
-        let s = Matrix3::identity() * sign
-            + Matrix3::from_fn(|r, t| bc.row(r).transpose().dot(&mb.column(t)));
-        if let Some(si) = s.try_inverse() {
-            let si = DMatrix::from_fn(3, 3, |r, t| si[(r, t)]);
-            self.minv -= &mb * si * mb.transpose();
-        }
-    }
-}
-
-fn information(b: &DMatrix<f64>, prior: &DMatrix<f64>, chosen: &[usize]) -> DMatrix<f64> {
-    let mut m = prior.clone();
-    for &c in chosen {
-        let bc = b.rows(3 * c, 3);
-        m += bc.transpose() * bc;
-    }
-    m
 }
 
 /// `-trace` of the ridged `M^-1` over `interest` (all when empty) of the design `chosen`.
@@ -181,21 +42,11 @@ pub fn a_criterion(
     interest: &[usize],
 ) -> f64 {
     let m = information(b, prior, chosen);
-    let p = m.nrows();
-    match (m + DMatrix::identity(p, p) * RIDGE).cholesky() {
-        Some(ch) => {
-            let inv = ch.inverse();
-            if interest.is_empty() {
-                -inv.trace()
-            } else {
-                -interest.iter().map(|&i| inv[(i, i)]).sum::<f64>()
-            }
-        }
-        None => f64::NEG_INFINITY,
-    }
+    value(Criterion::A, &m, interest, &DMatrix::zeros(0, 0))
 }
 
-/// D criterion of the design `chosen` (see the module docs).
+/// D criterion of the design `chosen`: `log det M - log det M_OO` (`nuisance` = O; plain
+/// `log det M` when empty).
 pub fn criterion(
     b: &DMatrix<f64>,
     prior: &DMatrix<f64>,
@@ -204,20 +55,13 @@ pub fn criterion(
 ) -> f64 {
     let m = information(b, prior, chosen);
     let p = m.nrows();
-    let ld = |cols: &[usize]| -> f64 {
-        if cols.is_empty() {
-            return 0.0;
-        }
-        let q = cols.len();
-        let sub =
-            DMatrix::from_fn(q, q, |r, c| m[(cols[r], cols[c])]) + DMatrix::identity(q, q) * RIDGE;
-        match sub.cholesky() {
-            Some(ch) => 2.0 * ch.l().diagonal().iter().map(|d| d.ln()).sum::<f64>(),
-            None => f64::NEG_INFINITY,
-        }
+    let interest: Vec<usize> = (0..p).filter(|c| !nuisance.contains(c)).collect();
+    let interest = if nuisance.is_empty() {
+        Vec::new()
+    } else {
+        interest
     };
-    let all: Vec<usize> = (0..p).collect();
-    ld(&all) - ld(nuisance)
+    value(Criterion::D, &m, &interest, &DMatrix::zeros(0, 0))
 }
 
 /// Chooses `n` distinct candidates (rows `3c..3c+3` of `b`) maximising the criterion `kind`
@@ -243,61 +87,52 @@ pub fn exchange_from(
     kind: Criterion,
     start: &[usize],
 ) -> Result<Design, PlanError> {
+    exchange_weighted(b, prior, n, interest, kind, start, &[])
+}
+
+/// As [`exchange_from`], with the A criterion's column weights `weights` (empty: all 1; see
+/// [`Scorer::with_weights`]).
+pub fn exchange_weighted(
+    b: &DMatrix<f64>,
+    prior: &DMatrix<f64>,
+    n: usize,
+    interest: &[usize],
+    kind: Criterion,
+    start: &[usize],
+    weights: &[f64],
+) -> Result<Design, PlanError> {
     let n_cand = b.nrows() / 3;
-    let p = b.ncols();
     if n > n_cand {
         return Err(PlanError::TooFewCandidates {
             n,
             candidates: n_cand,
         });
     }
-    let all: Vec<usize> = (0..p).collect();
-    let nuisance: Vec<usize> = if interest.is_empty() {
-        Vec::new()
-    } else {
-        all.iter()
-            .copied()
-            .filter(|c| !interest.contains(c))
-            .collect()
-    };
-    let b_nui = DMatrix::from_fn(b.nrows(), nuisance.len(), |r, k| b[(r, nuisance[k])]);
-    let mut full = InfoState::new(prior, all.clone())?;
-    let mut nui = InfoState::new(prior, nuisance.clone())?;
-    let score = |full: &InfoState, nui: &InfoState| -> Vec<f64> {
-        if kind == Criterion::A {
-            return full.trace_gains(b, interest);
-        }
-        let g = full.gains(b);
-        let h = nui.gains(&b_nui);
-        g.iter().zip(&h).map(|(a, c)| a - c).collect()
-    };
+    let mut sc = Scorer::new(kind, b, prior, interest)?.with_weights(weights);
     let mut taken = vec![false; n_cand];
     let mut chosen = Vec::with_capacity(n);
     for &c in start.iter().take(n) {
         if c < n_cand && !taken[c] {
             taken[c] = true;
             chosen.push(c);
-            full.update(b, c, 1.0);
-            nui.update(b, c, 1.0);
+            sc.update(c, 1.0);
         }
     }
     while chosen.len() < n {
-        let s = score(&full, &nui);
+        let s = sc.gains();
         let best = best_free(&s, &taken).ok_or(PlanError::Numerical("no finite gain"))?;
         taken[best] = true;
         chosen.push(best);
-        full.update(b, best, 1.0);
-        nui.update(b, best, 1.0);
+        sc.update(best, 1.0);
     }
     let mut exchanges = 0;
     for _ in 0..MAX_PASSES {
         let mut improved = false;
         for slot in chosen.iter_mut() {
             let old = *slot;
-            full.update(b, old, -1.0);
-            nui.update(b, old, -1.0);
+            sc.update(old, -1.0);
             taken[old] = false;
-            let s = score(&full, &nui);
+            let s = sc.gains();
             let best = match best_free(&s, &taken) {
                 Some(c) if c != old && s[c] > s[old] + MIN_GAIN => {
                     exchanges += 1;
@@ -308,21 +143,15 @@ pub fn exchange_from(
             };
             taken[best] = true;
             *slot = best;
-            full.update(b, best, 1.0);
-            nui.update(b, best, 1.0);
+            sc.update(best, 1.0);
         }
-        let m = information(b, prior, &chosen);
-        full = InfoState::new(&m, all.clone())?;
-        nui = InfoState::new(&m, nuisance.clone())?;
+        sc.rebuild(&chosen)?;
         if !improved {
             break;
         }
     }
     Ok(Design {
-        criterion: match kind {
-            Criterion::D => criterion(b, prior, &chosen, &nuisance),
-            Criterion::A => a_criterion(b, prior, &chosen, interest),
-        },
+        criterion: sc.value(&chosen),
         chosen,
         exchanges,
     })

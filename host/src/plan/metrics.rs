@@ -125,6 +125,43 @@ pub fn random_baseline(
     }
 }
 
+/// The spread of the baseline: for each of `draws` random designs of `n` candidates (plus the
+/// prior rows), the median over parameters of `planned[i] / sigma_i(draw)`.
+#[allow(clippy::too_many_arguments)]
+pub fn ratio_per_draw(
+    b: &DMatrix<f64>,
+    scale: &[f64],
+    prior_rows: &DMatrix<f64>,
+    planned: &[f64],
+    n: usize,
+    draws: usize,
+    noise_mm: f64,
+    rng: &mut impl Rng,
+) -> Vec<f64> {
+    let n_cand = b.nrows() / 3;
+    let prior_poses = prior_rows.nrows() / 3;
+    (0..draws)
+        .map(|_| {
+            let pick = sample(rng, n_cand, n.min(n_cand)).into_vec();
+            let jac = stack_rows(b, scale, prior_rows, &pick);
+            let st = design_stats(&jac, prior_poses + pick.len(), noise_mm);
+            median_ratio(planned, &st.sigma)
+        })
+        .collect()
+}
+
+/// The `q`-quantile (0..1, linear between order statistics) of the finite values; NaN for none.
+pub fn quantile(values: &[f64], q: f64) -> f64 {
+    let mut v: Vec<f64> = values.iter().copied().filter(|x| x.is_finite()).collect();
+    if v.is_empty() {
+        return f64::NAN;
+    }
+    v.sort_by(f64::total_cmp);
+    let pos = q.clamp(0.0, 1.0) * (v.len() - 1) as f64;
+    let (lo, hi) = (pos.floor() as usize, pos.ceil() as usize);
+    v[lo] + (v[hi] - v[lo]) * (pos - lo as f64)
+}
+
 /// Median over parameters of `planned / random` sigma (parameters with an infinite random
 /// sigma count as ratio 0, those never identified are left out).
 pub fn median_ratio(planned: &[f64], random: &[f64]) -> f64 {

@@ -4,10 +4,13 @@
 //! |---|---|
 //! | [`candidates`] | random reachable configurations within the limits and workspace constraints |
 //! | [`setup`] | the identification Jacobian of every candidate (declared tilting on), identifiability, column scaling |
-//! | [`design`] | D- / Ds-optimal designs: greedy start + exchange with rank-3 updates |
+//! | [`criteria`] | D/Ds, A, G (geometric-mean sigma) and I (prediction variance) criteria and their rank-3 gains |
+//! | [`design`] | greedy start + exchange with rank-3 updates |
 //! | [`metrics`] | expected sigmas, condition number, O1; the random baseline |
 //! | [`aliased`] | `--from-diagnose`: the aliased pairs of a diagnose JSON as unknowns to separate |
 //! | [`output`] | `plan.csv` and `plan.json` |
+//! | [`sheets`] | `--sheets`: candidate pencil sheets and paths, what each sheet and pair identifies, the blind parameters |
+//! | [`sheets_output`] | the `sheets` object of `plan.json` and the sheet table |
 //! | [`evaluate`] | a plan checked on a simulated truth: held-out error against the noise floor |
 //!
 //! The parameters are those the calibration identifies ([`crate::calib::default_selection`],
@@ -20,11 +23,14 @@
 
 pub mod aliased;
 pub mod candidates;
+pub mod criteria;
 pub mod design;
 pub mod evaluate;
 pub mod metrics;
 pub mod output;
 pub mod setup;
+pub mod sheets;
+pub mod sheets_output;
 
 use rand::SeedableRng;
 use rand_chacha::ChaCha8Rng;
@@ -33,8 +39,8 @@ use crate::error::{Classify, ErrorKind};
 use crate::model::{Model, ModelError};
 pub use aliased::{FromDiagnose, FromDiagnoseReport};
 pub use candidates::{draw_candidates, CandidatePose, Workspace};
-pub use design::{exchange_from, optimal_design, Criterion, Design};
-pub use metrics::{design_stats, median_ratio, random_baseline, DesignStats};
+pub use design::{exchange_from, exchange_weighted, optimal_design, Criterion, Design};
+pub use metrics::{design_stats, median_ratio, quantile, random_baseline, DesignStats};
 pub use setup::Setup;
 
 /// Everything that can stop a plan.
@@ -135,6 +141,9 @@ pub struct Plan {
     pub poses: Vec<CandidatePose>,
     /// Identifiable parameters (unknown names), in the order of the sigmas.
     pub parameters: Vec<String>,
+    /// Their column scale: RMS tool-point change per unit of each over the candidates (mm per
+    /// parameter unit).
+    pub scale: Vec<f64>,
     /// Unidentifiable parameters or combinations on the whole candidate set.
     pub unidentifiable: Vec<String>,
     /// Expected quality of the plan (with the poses already measured, if any).
@@ -147,6 +156,9 @@ pub struct Plan {
     pub from_diagnose: Option<FromDiagnoseReport>,
     /// Exchanges made after the greedy start.
     pub exchanges: usize,
+    /// The spread of the baseline: per random design (another `random_draws` draws), the median
+    /// over parameters of planned / that design's sigma.
+    pub ratio_per_draw: Vec<f64>,
 }
 
 /// Plans `cfg.n` poses for `model` (see the module docs); with `from`, the extra poses that
@@ -183,25 +195,7 @@ pub fn plan(
         });
     }
     let prior = setup.prior_rows.transpose() * &setup.prior_rows;
-    // greedy start, then exchanges from a few random starts too; the best design is kept
-    let mut design = optimal_design(&setup.b, &prior, cfg.n, &setup.interest, cfg.criterion)?;
-    let n_cand = setup.b.nrows() / 3;
-    for _ in 0..cfg.restarts {
-        let start = rand::seq::index::sample(&mut rng, n_cand, cfg.n.min(n_cand)).into_vec();
-        let d = exchange_from(
-            &setup.b,
-            &prior,
-            cfg.n,
-            &setup.interest,
-            cfg.criterion,
-            &start,
-        )?;
-        if d.criterion > design.criterion {
-            design = d;
-        }
-    }
-    let jac = metrics::stack_rows(&setup.b, &setup.scale, &setup.prior_rows, &design.chosen);
-    let planned = design_stats(&jac, prior_poses + cfg.n, cfg.noise_mm);
+    // the baseline first: A weighs each parameter's variance by 1 / its random-design variance
     let random = random_baseline(
         &setup.b,
         &setup.scale,
@@ -211,7 +205,51 @@ pub fn plan(
         cfg.noise_mm,
         &mut rng,
     );
+    let weights: Vec<f64> = random
+        .sigma
+        .iter()
+        .zip(&setup.scale)
+        .map(|(s, k)| 1.0 / (s * k / cfg.noise_mm).powi(2))
+        .collect();
+    let n_cand = setup.b.nrows() / 3;
+    let mut design: Option<Design> = None;
+    // greedy start, then exchanges from a few random starts too; the best design is kept
+    for r in 0..=cfg.restarts {
+        let start = if r == 0 {
+            Vec::new()
+        } else {
+            rand::seq::index::sample(&mut rng, n_cand, cfg.n.min(n_cand)).into_vec()
+        };
+        let d = exchange_weighted(
+            &setup.b,
+            &prior,
+            cfg.n,
+            &setup.interest,
+            cfg.criterion,
+            &start,
+            &weights,
+        )?;
+        if design
+            .as_ref()
+            .is_none_or(|best| d.criterion > best.criterion)
+        {
+            design = Some(d);
+        }
+    }
+    let design = design.ok_or(PlanError::Numerical("no design"))?;
+    let jac = metrics::stack_rows(&setup.b, &setup.scale, &setup.prior_rows, &design.chosen);
+    let planned = design_stats(&jac, prior_poses + cfg.n, cfg.noise_mm);
     let median_sigma_ratio = median_ratio(&planned.sigma, &random.sigma);
+    let ratio_per_draw = metrics::ratio_per_draw(
+        &setup.b,
+        &setup.scale,
+        &setup.prior_rows,
+        &planned.sigma,
+        cfg.n,
+        cfg.random_draws,
+        cfg.noise_mm,
+        &mut rng,
+    );
     let from_diagnose = match from {
         Some(f) => Some(f.report(&setup, &design.chosen)),
         None => None,
@@ -222,11 +260,13 @@ pub fn plan(
         candidates: cands.len(),
         poses: design.chosen.iter().map(|&c| cands[c].clone()).collect(),
         parameters: setup.names.clone(),
+        scale: setup.scale.clone(),
         unidentifiable: setup.unidentifiable.clone(),
         planned,
         random,
         median_sigma_ratio,
         from_diagnose,
         exchanges: design.exchanges,
+        ratio_per_draw,
     })
 }

@@ -6,6 +6,7 @@ use std::fmt::Write as _;
 use serde_json::{json, Map, Value};
 
 use super::aliased::FromDiagnoseReport;
+use super::metrics::quantile;
 use super::Plan;
 
 /// The plan as CSV: joints with 9 decimals (deg), nominal tool point with 6 (mm).
@@ -79,6 +80,12 @@ pub fn plan_json(plan: &Plan, noise_mm: f64, seed: u64, sheets: Option<Value>) -
         "min_singular_value": num(plan.planned.min_singular_value),
         "random_min_singular_value": num(plan.random.min_singular_value),
         "exchanges": plan.exchanges,
+        "median_sigma_ratio_per_draw": {
+            "draws": plan.ratio_per_draw.len(),
+            "p10": num(quantile(&plan.ratio_per_draw, 0.1)),
+            "p50": num(quantile(&plan.ratio_per_draw, 0.5)),
+            "p90": num(quantile(&plan.ratio_per_draw, 0.9)),
+        },
     })
 }
 
@@ -111,6 +118,14 @@ pub fn summary_table(plan: &Plan, noise_mm: f64) -> String {
         plan.planned.o1,
         plan.random.o1,
         plan.median_sigma_ratio
+    );
+    let _ = writeln!(
+        out,
+        "median sigma ratio against each of {} other random designs: p10 {:.3}, p50 {:.3}, p90 {:.3}",
+        plan.ratio_per_draw.len(),
+        quantile(&plan.ratio_per_draw, 0.1),
+        quantile(&plan.ratio_per_draw, 0.5),
+        quantile(&plan.ratio_per_draw, 0.9)
     );
     if !plan.unidentifiable.is_empty() {
         let _ = writeln!(

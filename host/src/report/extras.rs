@@ -120,6 +120,61 @@ pub(crate) fn plan_section(run: &RunDir, notes: &mut Vec<String>) -> Option<Plan
     Some(sec)
 }
 
+/// The `--sheets` ranking of plan.json as facts: reachable count, the best sheets and pairs
+/// with what they leave blind.
+fn sheet_facts(sh: &Value, out: &mut Vec<(String, String)>) {
+    let u = |v: &Value, k: &str| v.get(k).and_then(Value::as_u64).unwrap_or(0);
+    out.push((
+        "pencil sheets reachable".into(),
+        format!("{} of {} candidates", u(sh, "reachable"), u(sh, "tried")),
+    ));
+    let describe = |e: &Value| -> String {
+        let blind: Vec<String> = e
+            .get("blind")
+            .and_then(Value::as_array)
+            .map(|b| b.iter().map(super::docs::compact).collect())
+            .unwrap_or_default();
+        let med = e.get("median_scaled_sigma").and_then(Value::as_f64);
+        format!(
+            "{} identifiable, blind: {}; median sigma {} mm",
+            e.get("identifiable")
+                .and_then(Value::as_array)
+                .map_or(0, Vec::len),
+            if blind.is_empty() {
+                "none".into()
+            } else {
+                blind.join(", ")
+            },
+            med.map_or("-".into(), |m| format!("{m:.4}"))
+        )
+    };
+    let label = |e: &Value| e.get("label").map(super::docs::compact).unwrap_or_default();
+    let ranked = sh.get("ranked").and_then(Value::as_array);
+    for e in ranked.into_iter().flatten().take(3) {
+        out.push((format!("sheet #{} {}", u(e, "rank"), label(e)), describe(e)));
+    }
+    if let Some(worst) = ranked.and_then(|r| r.last()) {
+        out.push((format!("worst sheet {}", label(worst)), describe(worst)));
+    }
+    for e in sh
+        .get("pairs")
+        .and_then(Value::as_array)
+        .into_iter()
+        .flatten()
+        .take(2)
+    {
+        let labels: Vec<String> = e
+            .get("labels")
+            .and_then(Value::as_array)
+            .map(|l| l.iter().map(super::docs::compact).collect())
+            .unwrap_or_default();
+        out.push((
+            format!("pair #{} {}", u(e, "rank"), labels.join(" + ")),
+            describe(e),
+        ));
+    }
+}
+
 fn plan_facts(doc: &Value) -> Vec<(String, String)> {
     let mut out = Vec::new();
     let text = |k: &str| doc.get(k).map(super::docs::compact);
@@ -153,6 +208,9 @@ fn plan_facts(doc: &Value) -> Vec<(String, String)> {
                 names.join(", ")
             },
         ));
+    }
+    if let Some(sh) = doc.get("sheets").filter(|v| v.is_object()) {
+        sheet_facts(sh, &mut out);
     }
     if doc.get("from_diagnose").is_some_and(|v| !v.is_null()) {
         out.push((
