@@ -94,11 +94,11 @@ pub fn run(args: Args) -> Result<(), CliError> {
         .as_deref()
         .ok_or_else(|| CliError::bad_input("--poses or --samples is required"))?;
     let model = args.model.choose()?;
-    let cal = Poses::read(poses, &model)?;
+    let cal = read_poses_effective(poses, &model)?;
     let val = args
         .validate
         .as_deref()
-        .map(|p| Poses::read(p, &model))
+        .map(|p| read_poses_effective(p, &model))
         .transpose()?;
     let opts = CalibrateOptions {
         method: args.method,
@@ -118,6 +118,23 @@ pub fn run(args: Args) -> Result<(), CliError> {
     }
     out!("{}", summary(&outcome, val.is_some()))?;
     Ok(())
+}
+
+/// A pose file's poses with the joint readings mapped through the model's transmission terms
+/// (model file `[[joint]]` keys; hysteresis in the file's pose order): the terms are kept fixed
+/// by the calibration and written back with `--out`.
+fn read_poses_effective(
+    path: &std::path::Path,
+    model: &rigctl::model::Model,
+) -> Result<Poses, CliError> {
+    let file = rigctl::io::pose_csv::read_poses(
+        path,
+        &rigctl::io::pose_csv::PoseSpec::for_model(model, true),
+    )?;
+    let mut poses = Poses::from_pose_file(&file).unwrap_or_default();
+    poses.q_deg =
+        model.effective_pose_joints(&poses.q_deg, super::fk::pose_times(&file).as_deref())?;
+    Ok(poses)
 }
 
 /// Table 4.5 style: min / max / average of |dX|, |dY|, |dZ|, |dP| before, after the standard
@@ -178,6 +195,11 @@ fn run_samples(args: &Args, samples: &std::path::Path) -> Result<(), CliError> {
     let model = args
         .model
         .choose_with_default_tool(Some(KATANA_PENCIL_TOOL_MM))?;
+    if model.transmission().is_active() {
+        return Err(CliError::bad_input(
+            "the model file has transmission terms (joint_scale, joint_coupling, hysteresis_deg, compliance_deg_per_kgfm); --samples does not apply them yet: use --poses",
+        ));
+    }
     let fused = rigctl::fusion::read_fused(samples, model.n_joints())?;
     let data = ProjectedData::from_fused(&fused);
     let (data, tilt) = match args.method {

@@ -131,6 +131,8 @@ pub struct Model {
     pub(crate) gamma_law: GammaLaw,
     pub(crate) payload_param: usize,
     pub(crate) scale_param: usize,
+    /// Transmission terms on the joint angles (model files; [`super::transmission`]).
+    pub(crate) transmission: super::transmission::JointTerms,
 }
 
 impl Model {
@@ -604,6 +606,7 @@ impl ModelBuilder {
             gamma_law: self.gamma_law,
             payload_param,
             scale_param,
+            transmission: Default::default(),
         })
     }
 }
