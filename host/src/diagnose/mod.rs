@@ -7,7 +7,9 @@
 //! | [`extended`] | the model plus non-parameter effects (time drift, compliance); the extended fit |
 //! | [`candidates`] | the effect library (FORMATS.md effect ids) and effect-unit parameters |
 //! | [`residual`] | regressors, linearised screening, structure tests |
-//! | [`decide`] | greedy forward selection: F-test + BIC + k-fold cross-validation |
+//! | [`decide`] | the decision rule: F-test + BIC + k-fold cross-validation, its settings and tests |
+//! | [`select`] | the greedy forward selection in named steps (shortlist, refit, near ties, tests) |
+//! | [`parallel`] | deterministic use of both cores for independent fits |
 //! | [`polish`] | derivative-free polish of a refit across the sign steps of the tilting law |
 //! | [`stat`] | F distribution, BIC, noise statistics |
 //! | [`floor`] | the independent floor (`--instrument-mm`, repeatability) and its tests |
@@ -34,11 +36,13 @@ pub mod data;
 pub mod decide;
 pub mod extended;
 pub mod floor;
+pub mod parallel;
 pub mod plots;
 pub mod polish;
 pub mod probe;
 pub mod report;
 pub mod residual;
+pub mod select;
 pub mod stat;
 
 use nalgebra::Vector3;
