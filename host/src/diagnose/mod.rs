@@ -289,13 +289,9 @@ pub fn diagnose(
             min: 1,
         });
     }
-    let repeat = floor::repeatability_mm(cal);
-    let known_floor = match (opts.instrument_mm.filter(|s| *s > 0.0), repeat) {
-        (Some(i), Some((r, _))) => Some(i.max(r)),
-        (Some(i), None) => Some(i),
-        (None, Some((r, _))) => Some(r),
-        (None, None) => None,
-    };
+    // repeats anywhere (calibration and held-out files) are pooled
+    let repeat = floor::repeatability_of_files(&[cal, val]);
+    let known_floor = floor::choose_floor(opts.instrument_mm, repeat).1;
     let cfg_owned = DecideConfig {
         floor_mm: known_floor,
         ..cfg.clone()
@@ -447,11 +443,23 @@ pub fn diagnose(
         .map(|s| s.trial.candidate.clone())
         .collect();
     let others = candidates::library(&last.ext, &selection.requested, cal);
-    let aliased = alias::aliased(last, &requested, &accepted, &others, cal)?;
+    let mut aliased = alias::aliased(last, &requested, &accepted, &others, cal)?;
+    let tested: Vec<String> = selection
+        .last_trials
+        .iter()
+        .map(|t| t.candidate.id.clone())
+        .chain(
+            selection
+                .steps
+                .iter()
+                .flat_map(|s| s.equivalent.iter().cloned()),
+        )
+        .collect();
+    alias::rank_pairs(&mut aliased, &tested);
     for e in effects.iter_mut() {
         let stand_in: Vec<&str> = aliased
             .iter()
-            .filter(|a| a.a == e.id)
+            .filter(|a| a.a == e.id && a.kind != "declared")
             .map(|a| a.b.as_str())
             .collect();
         if !stand_in.is_empty() {
