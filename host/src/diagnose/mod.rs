@@ -262,50 +262,15 @@ fn running_median_spikes(series: &[(usize, f64)]) -> Vec<(usize, bool)> {
         .collect()
 }
 
-fn mean_norm(e: &[Vector3<f64>]) -> f64 {
-    Stats::from_errors(e).mean_mm
-}
-
-/// Diagnoses `model` on the calibration poses `cal`, reporting held-out numbers on `val`.
-pub fn diagnose(
-    model: &Model,
+/// One report (and plot trace) per accepted effect: its final values and sigmas, its values at
+/// entry, the before/after statistics and the evidence in words.
+fn effect_reports(
+    selection: &Selection,
+    regs: &[residual::Regressor],
     cal: &Dataset,
     val: &Dataset,
-    opts: &DiagnoseOptions,
-) -> Result<Diagnosis, DiagnoseError> {
-    let cfg = &opts.decide;
-    let min = 2 * cfg.folds.max(2);
-    if cal.len() < min {
-        return Err(DiagnoseError::TooFewPoses {
-            what: "calibration set",
-            n: cal.len(),
-            min,
-        });
-    }
-    if val.is_empty() {
-        return Err(DiagnoseError::TooFewPoses {
-            what: "validation set",
-            n: 0,
-            min: 1,
-        });
-    }
-    // repeats anywhere (calibration and held-out files) are pooled
-    let repeat = floor::repeatability_of_files(&[cal, val]);
-    let known_floor = floor::choose_floor(opts.instrument_mm, repeat).1;
-    let cfg_owned = DecideConfig {
-        floor_mm: known_floor,
-        ..cfg.clone()
-    };
-    let cfg = &cfg_owned;
-    let cal = cal.clone().with_approach();
-    let val = &val.clone().with_approach();
-    let (cal, outliers, declared, requested) = trim_outliers(model, &cal, cfg)?;
-    let cal = &cal;
-    let declared_cal = declared.ext.errors(cal)?;
-    let declared_val = declared.ext.errors(val)?;
-    let selection = forward_selection(declared.clone(), &requested, cal, cfg)?;
-    let regs = regressors(&selection.last.ext, cal)?;
-
+    cfg: &DecideConfig,
+) -> Result<(Vec<EffectReport>, Vec<EffectTrace>), DiagnoseError> {
     let mut effects = Vec::new();
     let mut traces = Vec::new();
     for step in &selection.steps {
@@ -402,6 +367,55 @@ pub fn diagnose(
             contribution: contrib,
         });
     }
+
+    Ok((effects, traces))
+}
+
+fn mean_norm(e: &[Vector3<f64>]) -> f64 {
+    Stats::from_errors(e).mean_mm
+}
+
+/// Diagnoses `model` on the calibration poses `cal`, reporting held-out numbers on `val`.
+pub fn diagnose(
+    model: &Model,
+    cal: &Dataset,
+    val: &Dataset,
+    opts: &DiagnoseOptions,
+) -> Result<Diagnosis, DiagnoseError> {
+    let cfg = &opts.decide;
+    let min = 2 * cfg.folds.max(2);
+    if cal.len() < min {
+        return Err(DiagnoseError::TooFewPoses {
+            what: "calibration set",
+            n: cal.len(),
+            min,
+        });
+    }
+    if val.is_empty() {
+        return Err(DiagnoseError::TooFewPoses {
+            what: "validation set",
+            n: 0,
+            min: 1,
+        });
+    }
+    // repeats anywhere (calibration and held-out files) are pooled
+    let repeat = floor::repeatability_of_files(&[cal, val]);
+    let known_floor = floor::choose_floor(opts.instrument_mm, repeat).1;
+    let cfg_owned = DecideConfig {
+        floor_mm: known_floor,
+        ..cfg.clone()
+    };
+    let cfg = &cfg_owned;
+    let cal = cal.clone().with_approach();
+    let val = &val.clone().with_approach();
+    let (cal, outliers, declared, requested) = trim_outliers(model, &cal, cfg)?;
+    let cal = &cal;
+    let declared_cal = declared.ext.errors(cal)?;
+    let declared_val = declared.ext.errors(val)?;
+    let selection = forward_selection(declared.clone(), &requested, cal, cfg)?;
+    let regs = regressors(&selection.last.ext, cal)?;
+
+    let (mut effects, traces) = effect_reports(&selection, &regs, cal, val, cfg)?;
 
     let last = &selection.last;
     let final_cal = last.ext.errors(cal)?;
