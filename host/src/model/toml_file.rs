@@ -295,7 +295,10 @@ fn build(file: ModelFile) -> Result<Model, String> {
                 .into(),
         );
     }
-    model.set_transmission(terms);
+    // no term: the same (empty) terms as a built-in model, so reading back is exact
+    if terms.is_active() {
+        model.set_transmission(terms);
+    }
     Ok(model)
 }
 
