@@ -280,7 +280,7 @@ fn effect_reports(
         let cb = step.before.ext.errors(cal)?;
         let ca = step.after.ext.errors(cal)?;
         let contrib = contribution(&step.before, &step.after, cal)?;
-        let (ri, ex) = best_regressor(&contrib, &regs).unwrap_or((0, explain(&contrib, &regs[0])));
+        let (ri, ex) = best_regressor(&contrib, regs).unwrap_or((0, explain(&contrib, &regs[0])));
         let values = effect_values(&t.candidate, &step.before.ext, &step.after);
         let final_values = effect_values(&t.candidate, &step.before.ext, &selection.last);
         let share = if t.rss_before_mm2 > 0.0 {
