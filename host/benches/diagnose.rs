@@ -1,7 +1,8 @@
 //! Runtime of `diagnose` on a simulated session of 118 calibration + 60 validation poses (the
 //! ISO 9283 sequence), clean and with one undeclared encoder harmonic; and on the partial
 //! measurements of the low-cost rig (ideal fused samples of the circle sheet, held out on the
-//! line sheet, about 600 samples each) with the same harmonic.
+//! line sheet, about 600 samples each) with the same harmonic. The UR5 with the whole library:
+//! the laser-tracker data (1000 poses) and simulated sessions of 1000 and 20 000 poses.
 
 use criterion::{criterion_group, criterion_main, Criterion};
 use rigctl::calib::Poses;
@@ -97,5 +98,94 @@ fn bench_probe(c: &mut Criterion) {
     g.finish();
 }
 
-criterion_group!(benches, bench, bench_probe);
+/// A simulated UR5 session of `n` random poses within +-170 deg (joint 2 in -170..-10) plus 20
+/// held out: the truth has a base tilt, a joint-2 first harmonic and a joint-3 gear-ratio error,
+/// the tracker noise is 0.015 mm per coordinate.
+fn ur5_session(n: usize, seed: u64) -> (rigctl::model::Model, Dataset, Dataset) {
+    use nalgebra::Vector3;
+    use rand::{Rng, SeedableRng};
+    use rand_distr::{Distribution, Normal};
+    use rigctl::model::{transmission::JointTerms, ur5, Tilt};
+    let declared = ur5().expect("preset");
+    let mut truth = declared.clone();
+    for (name, v) in [
+        ("base_rx", 0.02),
+        ("base_ry", -0.015),
+        ("enc_j2_h1_sin", 0.03),
+        ("enc_j2_h1_cos", -0.01),
+    ] {
+        truth.set_param(name, v).expect("param");
+    }
+    let mut t = JointTerms::zeros(6);
+    t.scale[2] = 2e-4;
+    truth.set_transmission(t);
+    let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(seed);
+    let noise = Normal::new(0.0, 0.015).expect("sigma");
+    let mut set = |m: usize| {
+        let q: Vec<Vec<f64>> = (0..m)
+            .map(|_| {
+                (0..6)
+                    .map(|j| {
+                        if j == 1 {
+                            rng.gen_range(-170.0..-10.0)
+                        } else {
+                            rng.gen_range(-170.0..170.0)
+                        }
+                    })
+                    .collect()
+            })
+            .collect();
+        let q_eff = truth.effective_pose_joints(&q, None).expect("joints");
+        let xyz: Vec<Vector3<f64>> = q_eff
+            .iter()
+            .map(|q| {
+                truth.fk(q, Tilt::Off).expect("fk").position_mm
+                    + Vector3::from_fn(|_, _| noise.sample(&mut rng))
+            })
+            .collect();
+        Dataset::from_poses(Poses {
+            q_deg: q,
+            xyz_mm: xyz,
+        })
+    };
+    let cal = set(n);
+    let val = set(20);
+    (declared, cal, val)
+}
+
+/// The whole library on the UR5: the laser-tracker data (1000 grid poses, 20 held out; skipped
+/// without the shared data) and simulated sessions of 1000 and 20 000 poses.
+fn bench_ur5(c: &mut Criterion) {
+    let mut g = c.benchmark_group("diagnose_ur5");
+    g.sample_size(10);
+    let opts = DiagnoseOptions {
+        instrument_mm: Some(0.015),
+        ..DiagnoseOptions::default()
+    };
+    if let Some(dir) = rigctl::shared_dir().map(|d| d.join("data/real/ur5_laser_tracker")) {
+        if dir.is_dir() {
+            let mut model = rigctl::model::ur5().expect("preset");
+            for (name, v) in ["tool_dx", "tool_dy", "tool_dz"]
+                .iter()
+                .zip(rigctl::model::UR5_SMR_TOOL_MM)
+            {
+                model.set_param(name, v).expect("tool");
+            }
+            let cal = Dataset::read(&dir.join("grid.csv"), &model).expect("grid.csv");
+            let val = Dataset::read(&dir.join("random.csv"), &model).expect("random.csv");
+            g.bench_function("tracker_1000", |b| {
+                b.iter(|| diagnose(&model, &cal, &val, &opts).expect("diagnose"))
+            });
+        }
+    }
+    for n in [1000usize, 20_000] {
+        let (model, cal, val) = ur5_session(n, 3);
+        g.bench_function(format!("sim_{n}"), |b| {
+            b.iter(|| diagnose(&model, &cal, &val, &opts).expect("diagnose"))
+        });
+    }
+    g.finish();
+}
+
+criterion_group!(benches, bench, bench_probe, bench_ur5);
 criterion_main!(benches);

@@ -236,3 +236,71 @@ fn a_stand_in_is_reported_as_aliased_or_both_are_right() {
         "{table}"
     );
 }
+
+#[test]
+fn the_iso_sequence_repeatability_is_too_thin_to_be_a_floor_and_says_so() {
+    // the ISO 9283 sequence measures one pose twice: 3 degrees of freedom
+    let r = run_with(&[], 3, &DiagnoseOptions::default());
+    let f = &r.diag.report.floor;
+    assert_eq!(f.repeatability_dof, Some(3), "{f:?}");
+    assert_eq!(f.used, "residual", "{f:?}");
+    assert!(f.note.contains("too uncertain"), "{}", f.note);
+    assert!(r.diag.report.table().contains("3 degrees of freedom"));
+}
+
+#[test]
+fn repeats_of_many_poses_are_pooled_into_the_floor() {
+    use rand::SeedableRng;
+    use rand_distr::{Distribution, Normal};
+    let declared = katana450(200.0).unwrap();
+    let cfg = SimConfig {
+        seed: 4,
+        noise_mm: NOISE_MM,
+        ..SimConfig::default()
+    };
+    let out = simulate(&declared, &cfg).unwrap();
+    // every fourth calibration pose measured once more at the end, and two held-out poses
+    let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(9);
+    let noise = Normal::new(0.0, NOISE_MM).unwrap();
+    let mut remeasure = |p: &rigctl::sim::simulate::SimPose| {
+        let mut q = p.clone();
+        q.measured_mm = p.truth_mm + nalgebra::Vector3::from_fn(|_, _| noise.sample(&mut rng));
+        q
+    };
+    let mut cal = out.cal.clone();
+    cal.extend(
+        out.cal
+            .iter()
+            .step_by(4)
+            .map(&mut remeasure)
+            .collect::<Vec<_>>(),
+    );
+    let mut val = out.val.clone();
+    val.extend(
+        out.val
+            .iter()
+            .take(2)
+            .map(&mut remeasure)
+            .collect::<Vec<_>>(),
+    );
+    let diag = diagnose(
+        &declared,
+        &Dataset::from_sim_poses(&cal),
+        &Dataset::from_sim_poses(&val),
+        &DiagnoseOptions::default(),
+    )
+    .unwrap();
+    let f = &diag.report.floor;
+    let dof = f.repeatability_dof.unwrap_or(0);
+    assert!(dof >= 3 * 30, "{f:?}");
+    assert_eq!(f.used, "repeatability", "{f:?}");
+    let rep = f.repeatability_mm.unwrap();
+    // pairs (measure, remeasure): the pooled SD estimates the noise (about 8 % relative SE)
+    assert!((rep / NOISE_MM - 1.0).abs() < 0.3, "{f:?}");
+    assert!(
+        f.final_over_floor <= 1.3 && !f.above,
+        "{f:?}\n{}",
+        diag.report.table()
+    );
+    assert!(f.note.contains("degrees of freedom"), "{}", f.note);
+}

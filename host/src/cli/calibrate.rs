@@ -136,9 +136,14 @@ pub fn run(args: Args) -> Result<(), CliError> {
         Some(m) => Some(m.iter().map(|k| k - 1).collect()),
         None => None,
     };
+    // The model's transmission terms (model file `[[joint]]` keys) map the readings to the
+    // joints' angles, hysteresis in the file's pose order; the calibration keeps them fixed and
+    // writes them back with `--out`.
     let read = |p: &std::path::Path| -> Result<Measurements, CliError> {
         let file = read_poses(p, &args.pose.spec(&model, true, 0))?;
-        Ok(Measurements::from_pose_file(&file, markers.as_deref())?)
+        let mut m = Measurements::from_pose_file(&file, markers.as_deref())?;
+        m.q_deg = model.effective_pose_joints(&m.q_deg, super::fk::pose_times(&file).as_deref())?;
+        Ok(m)
     };
     let cal = read(poses)?;
     let val = args.validate.as_deref().map(read).transpose()?;
@@ -256,6 +261,11 @@ fn run_samples(args: &Args, samples: &std::path::Path) -> Result<(), CliError> {
     let model = args
         .model
         .choose_with_default_tool(Some(KATANA_PENCIL_TOOL_MM))?;
+    if model.transmission().is_active() {
+        return Err(CliError::bad_input(
+            "the model file has transmission terms (joint_scale, joint_coupling, hysteresis_deg, compliance_deg_per_kgfm); --samples does not apply them yet: use --poses",
+        ));
+    }
     let fused = rigctl::fusion::read_fused(samples, model.n_joints())?;
     let data = ProjectedData::from_fused(&fused);
     let (data, tilt) = match args.method {

@@ -159,40 +159,6 @@ pub fn run(args: Args) -> Result<(), CliError> {
             .enumerate()
             .filter(|(_, v)| **v != 0.0)
             .map(|(j, v)| format!("joint {} offset drift {v:.6} deg/h", j + 1))
-            .chain(
-                ext.compliance_deg_per_kgfm
-                    .iter()
-                    .enumerate()
-                    .filter(|(_, v)| **v != 0.0)
-                    .map(|(j, v)| format!("joint {} compliance {v:.6} deg per kgf.m", j + 1)),
-            )
-            .chain(
-                ext.joint_scale
-                    .iter()
-                    .enumerate()
-                    .filter(|(_, v)| **v != 0.0)
-                    .map(|(j, v)| format!("joint {} transmission-ratio error s = {v:.9}", j + 1)),
-            )
-            .chain(ext.coupling.iter().enumerate().flat_map(|(i, row)| {
-                row.iter()
-                    .enumerate()
-                    .filter(|(_, v)| **v != 0.0)
-                    .map(move |(k, v)| {
-                        format!("joint {} += {v:.9} x joint {} (deg/deg)", i + 1, k + 1)
-                    })
-            }))
-            .chain(
-                ext.hysteresis_deg
-                    .iter()
-                    .enumerate()
-                    .filter(|(_, v)| **v != 0.0)
-                    .map(|(j, v)| {
-                        format!(
-                            "joint {} hysteresis {v:.6} deg by direction of approach",
-                            j + 1
-                        )
-                    }),
-            )
             .chain((ext.drift_mm_per_h.norm() > 0.0).then(|| {
                 let d = ext.drift_mm_per_h;
                 format!(
@@ -212,7 +178,8 @@ pub fn run(args: Args) -> Result<(), CliError> {
                 "# Not expressible in a model file (applied by diagnose only): {e}"
             );
         }
-        text.push_str(&ext.model.to_toml_string());
+        // Transmission terms (scale, coupling, hysteresis, compliance) are model-file keys.
+        text.push_str(&ext.to_model().to_toml_string());
         write_bytes_atomic(path, text.as_bytes())?;
     }
     if let Some(dir) = &args.plots {

@@ -1,7 +1,8 @@
 //! `rigctl fk --joints FILE.csv [--tilt] [--tool-mm L] [--set NAME=VALUE ...]
 //! [--robot NAME | --model FILE.toml] [--units m,rad]`: forward kinematics of every row, CSV
 //! `x,y,z,phi,theta,psi` (mm in frame R, ZXZ Euler angles in deg, whatever `--units` says of
-//! the input) on stdout.
+//! the input) on stdout. A model file's transmission terms are applied to the readings first,
+//! hysteresis in the pose order of the file (by `t` when every row has one).
 
 use std::fmt::Write as _;
 use std::path::PathBuf;
@@ -40,9 +41,12 @@ pub fn run(args: Args) -> Result<(), CliError> {
     }
     let poses = read_poses(&args.joints, &args.pose.spec(&model, false, 0))?;
     let tilt = if args.tilt { Tilt::Static } else { Tilt::Off };
+    // The model's transmission terms map the readings to the joints' angles, with the
+    // directions of approach from the file's pose order (FORMATS.md "Pose order").
+    let q_eff = model.effective_pose_joints(&poses.joints(), pose_times(&poses).as_deref())?;
     let mut out = String::from("x,y,z,phi,theta,psi\n");
-    for pose in &poses.poses {
-        let fk = model.fk(&pose.q, tilt)?;
+    for q in &q_eff {
+        let fk = model.fk(q, tilt)?;
         let p = fk.position_mm;
         let [phi, theta, psi] = fk.zxz_deg();
         let _ = writeln!(
@@ -52,4 +56,9 @@ pub fn run(args: Args) -> Result<(), CliError> {
         );
     }
     super::out::stdout_bytes(out.as_bytes())
+}
+
+/// The pose times when every pose has one (the pose order is then by `t`), else `None`.
+pub(crate) fn pose_times(file: &rigctl::io::pose_csv::PoseFile) -> Option<Vec<f64>> {
+    file.poses.iter().map(|p| p.t_s).collect()
 }

@@ -37,6 +37,38 @@ pub struct AliasReport {
     pub correlation: f64,
     /// What it means.
     pub note: String,
+    /// The kind of pair (extra key): `stand_in` (an accepted effect and a candidate it may stand
+    /// in for), `reproduced` (a candidate the accepted effects reproduce together),
+    /// `both_effects` (two accepted effects) or `declared` (an accepted effect and a fitted
+    /// declared parameter: both fitted, their values trade off).
+    pub kind: String,
+    /// Whether `b` is a candidate that was refitted and rejected (extra key).
+    pub tested: bool,
+}
+
+/// Most pairs listed in the text report; the JSON keeps them all, in the same order.
+pub const ALIAS_TEXT_MAX: usize = 8;
+
+/// Orders the pairs by what matters to a user: a candidate that was tested and rejected while an
+/// accepted effect may stand in for it first, then other candidates the accepted effects stand
+/// in for or reproduce, then pairs of accepted effects, then accepted effects against declared
+/// parameters (both fitted; their sigmas already carry the trade-off); by |correlation| within
+/// each. `tested` are the ids of the candidates refitted and rejected.
+pub fn rank_pairs(pairs: &mut [AliasReport], tested: &[String]) {
+    for p in pairs.iter_mut() {
+        p.tested = tested.contains(&p.b);
+    }
+    let class = |p: &AliasReport| match (p.kind.as_str(), p.tested) {
+        ("stand_in" | "reproduced", true) => 0,
+        ("stand_in" | "reproduced", false) => 1,
+        ("both_effects", _) => 2,
+        _ => 3,
+    };
+    pairs.sort_by(|x, y| {
+        class(x)
+            .cmp(&class(y))
+            .then(y.correlation.total_cmp(&x.correlation))
+    });
 }
 
 /// A group of columns: a name and the unknowns it covers.
@@ -117,16 +149,26 @@ pub fn aliased(
                 }
             }
             if best >= ALIAS_MIN {
-                let what = if bi < n_fitted_groups {
-                    "both fitted; their values trade off and each is uncertain"
+                let (what, kind) = if bi >= n_fitted_groups {
+                    ("the poses cannot tell them apart: the accepted effect may stand in for the other", "stand_in")
+                } else if b.accepted {
+                    (
+                        "both fitted; their values trade off and each is uncertain",
+                        "both_effects",
+                    )
                 } else {
-                    "the poses cannot tell them apart: the accepted effect may stand in for the other"
+                    (
+                        "both fitted; their values trade off and each is uncertain",
+                        "declared",
+                    )
                 };
                 out.push(AliasReport {
                     a: a.name.clone(),
                     b: b.name.clone(),
                     correlation: best,
                     note: format!("|correlation| {best:.3} of their columns: {what}"),
+                    kind: kind.to_string(),
+                    tested: false,
                 });
             }
         }
@@ -199,6 +241,8 @@ pub fn aliased(
                 "what the declared parameters cannot reproduce of {} the accepted effects do (cosine {cos_min:.3}): {a} may be a stand-in for it",
                 b.name
             ),
+            kind: "reproduced".to_string(),
+            tested: false,
         });
     }
     Ok(out)

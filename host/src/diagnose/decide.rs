@@ -37,12 +37,10 @@ use rand::seq::SliceRandom;
 use rand::SeedableRng;
 use rand_chacha::ChaCha8Rng;
 
-use super::candidates::{library, Candidate};
+use super::candidates::Candidate;
 use super::data::Dataset;
 use super::extended::{fit, ExtFit, ExtModel, Unknown};
-use super::polish::{needs_polish, polish};
-use super::residual::screen;
-use super::stat::{delta_bic, nested_f_test};
+use super::parallel::map_ordered;
 use crate::calib::lm::LmConfig;
 use crate::calib::stats::autocorrelation_time;
 use crate::calib::CalibError;
@@ -217,18 +215,27 @@ pub fn cv_errors(f: &ExtFit, data: &Dataset, cfg: &DecideConfig) -> Result<Vec<f
     } else {
         fold_assignment(n, k, cfg.seed)
     };
-    let mut out = vec![0.0; n];
-    for g in 0..k {
+    // the folds are independent: refitted on both cores, each by the same code
+    let groups: Vec<usize> = (0..k).collect();
+    let per_fold = map_ordered(&groups, |&g| -> Result<Vec<(usize, f64)>, CalibError> {
         let train: Vec<usize> = (0..n).filter(|&i| fold[i] != g).collect();
         let test: Vec<usize> = (0..n).filter(|&i| fold[i] == g).collect();
         if test.is_empty() || 3 * train.len() < f.fitted.len() {
-            continue;
+            return Ok(Vec::new());
         }
         let sub = data.subset(&train);
         let refit = fit(&f.ext, &sub, &f.fitted, &cfg.lm_cv, cfg.rtol, true)?;
-        for &i in &test {
-            let p = refit.ext.predict_pose(data, i)?;
-            out[i] = data.measured_part(i, &(data.poses.xyz_mm[i] - p)).norm();
+        test.iter()
+            .map(|&i| {
+                let p = refit.ext.predict_pose(data, i)?;
+                Ok((i, data.measured_part(i, &(data.poses.xyz_mm[i] - p)).norm()))
+            })
+            .collect()
+    });
+    let mut out = vec![0.0; n];
+    for part in per_fold {
+        for (i, e) in part? {
+            out[i] = e;
         }
     }
     Ok(out)
@@ -237,7 +244,7 @@ pub fn cv_errors(f: &ExtFit, data: &Dataset, cfg: &DecideConfig) -> Result<Vec<f
 /// Mean of `e0 - e1`, relative to mean `e0`, and the paired t statistic; with `serial` the
 /// differences are a series along a path and the t statistic is divided by the square root of
 /// its autocorrelation time.
-fn paired_gain(e0: &[f64], e1: &[f64], serial: bool) -> (f64, f64, f64, f64) {
+pub(super) fn paired_gain(e0: &[f64], e1: &[f64], serial: bool) -> (f64, f64, f64, f64) {
     let n = e0.len().min(e1.len());
     if n < 2 {
         return (f64::NAN, f64::NAN, 0.0, 0.0);
@@ -269,7 +276,7 @@ fn paired_gain(e0: &[f64], e1: &[f64], serial: bool) -> (f64, f64, f64, f64) {
 /// [`DecideConfig::cv_t_min`]) are statistically equivalent, and among them the simplest comes
 /// first ([`simplicity`]: fewer unknowns, then a lower harmonic order); the others follow by
 /// cross-validated mean.
-fn rank_contenders<'a>(
+pub(super) fn rank_contenders<'a>(
     ids: &[usize],
     errs: &[Vec<f64>],
     candidate: impl Fn(usize) -> &'a Candidate,
@@ -317,231 +324,7 @@ fn simplicity(c: &Candidate) -> (usize, u32) {
     (c.unknowns.len(), order)
 }
 
-/// Greedy forward selection from the declared fit `declared` (its requested unknowns
-/// `declared_unknowns`) on `data`. See the module documentation.
-pub fn forward_selection(
-    declared: ExtFit,
-    declared_unknowns: &[Unknown],
-    data: &Dataset,
-    cfg: &DecideConfig,
-) -> Result<Selection, CalibError> {
-    let serial = data.is_serial();
-    let mut cur = declared;
-    let mut requested: Vec<Unknown> = declared_unknowns.to_vec();
-    let mut steps: Vec<Accepted> = Vec::new();
-    let mut last_trials = Vec::new();
-    while steps.len() < cfg.max_effects {
-        let cands = library(&cur.ext, &requested, data);
-        if cands.is_empty() {
-            break;
-        }
-        let screens = screen(&cur.ext, data, &cur.fitted, &cands, cfg.rtol)?;
-        let rss0 = cur.rss_mm2;
-        // independent residuals: all of them for full positions, fewer along a traced path
-        let m_eff = |tau: f64| ((data.n_residuals() as f64 / tau).round() as usize).max(1);
-        let m = m_eff(serial_tau(&cur.ext, data)?);
-        let mut ranked: Vec<(usize, usize, f64)> = screens
-            .iter()
-            .filter(|s| s.added > 0)
-            .map(|s| {
-                (
-                    s.candidate,
-                    s.added,
-                    delta_bic(m, rss0, (rss0 - s.delta_rss_mm2).max(rss0 * 1e-12), s.added),
-                )
-            })
-            .filter(|(_, _, b)| *b < 0.0)
-            .collect();
-        ranked.sort_by(|a, b| a.2.total_cmp(&b.2));
-        ranked.truncate(cfg.refit_top);
-        for ci in onset_candidates(&cur, &cands, data, cfg)? {
-            if !ranked.iter().any(|r| r.0 == ci) {
-                let added = screens
-                    .iter()
-                    .find(|s| s.candidate == ci)
-                    .map_or(0, |s| s.added);
-                ranked.push((ci, added, 0.0));
-            }
-        }
-        let mut refits: Vec<(Trial, ExtFit)> = Vec::new();
-        for (ci, _, _) in &ranked {
-            let cand = &cands[*ci];
-            let mut req = requested.clone();
-            req.extend(cand.unknowns.iter().copied());
-            // Two starts: the current values, and the linearised least-squares step of all fitted
-            // unknowns plus the candidate's (reaches effects whose influence is switched on only
-            // away from zero, e.g. a base tilt that gives joint 1 a gravity torque and so its
-            // backlash); the lower RSS wins.
-            // The linearised restart is repeated from the best fit while it lowers the RSS by more
-            // than 1 % (the sign steps of the tilt law stop the solver at a step edge).
-            let mut best: Option<ExtFit> = fit(&cur.ext, data, &req, &cfg.lm, cfg.rtol, false).ok();
-            let mut from = cur.clone();
-            for _ in 0..4 {
-                let Some(start) = linear_start(&from, data, cand) else {
-                    break;
-                };
-                let Ok(f2) = fit(&start, data, &req, &cfg.lm, cfg.rtol, false) else {
-                    break;
-                };
-                let better = best.as_ref().is_none_or(|b| f2.rss_mm2 < 0.99 * b.rss_mm2);
-                if !better {
-                    break;
-                }
-                from = f2.clone();
-                best = Some(f2);
-            }
-            let Some(mut after) = best else { continue };
-            if needs_polish(&cur.ext, &after, data, cfg.rtol)? {
-                after = polish(after, &cur.ext, &cand.unknowns, data, cfg)?;
-            }
-            let added = after.fitted.len().saturating_sub(cur.fitted.len());
-            // the tests count the independent residuals of the refit: under the null hypothesis
-            // its residual is the noise, whose serial correlation sets the count
-            let m = m_eff(serial_tau(&after.ext, data)?);
-            let dof = m.saturating_sub(after.fitted.len());
-            let (f, p) = nested_f_test(rss0, after.rss_mm2, added, dof);
-            let dbic = if added > 0 {
-                delta_bic(m, rss0, after.rss_mm2, added)
-            } else {
-                0.0
-            };
-            let trial = Trial {
-                candidate: cand.clone(),
-                added,
-                rss_before_mm2: rss0,
-                rss_after_mm2: after.rss_mm2,
-                f,
-                p_value: p,
-                delta_bic: dbic,
-                cv_mean_mm: [f64::NAN; 2],
-                cv_t: f64::NAN,
-                accepted: false,
-                reason: String::new(),
-            };
-            refits.push((trial, after));
-        }
-        refits.sort_by(|a, b| a.0.delta_bic.total_cmp(&b.0.delta_bic));
-        let mut equivalent_ids: Vec<String> = Vec::new();
-        // The known floor (if any) does not relax the rule: on the UR5 tracker data, accepting
-        // every significant cross-validated gain above the floor added effects that made the
-        // held-out error worse (0.0886 -> 0.0951 mm). The floor judges the final residual.
-        let min_gain = cfg.cv_min_gain;
-        let t_min = cfg.cv_t_min;
-        let mut cv_before: Option<Vec<f64>> = None;
-        let mut cv_cache: Vec<Option<Vec<f64>>> = vec![None; refits.len()];
-        let passes = |t: &Trial| t.added > 0 && t.p_value < cfg.alpha && t.delta_bic < 0.0;
-        let contenders: Vec<usize> = match refits.iter().map(|r| &r.0).find(|t| passes(t)) {
-            Some(best) => (0..refits.len())
-                .filter(|&i| {
-                    passes(&refits[i].0) && refits[i].0.delta_bic <= best.delta_bic + cfg.bic_tie
-                })
-                .collect(),
-            None => Vec::new(),
-        };
-        if contenders.len() > 1 {
-            let mut errs = Vec::with_capacity(contenders.len());
-            for &i in &contenders {
-                let e1 = cv_errors(&refits[i].1, data, cfg)?;
-                errs.push(e1.clone());
-                cv_cache[i] = Some(e1);
-            }
-            let (ranked, eq) =
-                rank_contenders(&contenders, &errs, |i| &refits[i].0.candidate, cfg, serial);
-            if eq.len() > 1 {
-                equivalent_ids = eq
-                    .iter()
-                    .map(|&i| refits[i].0.candidate.id.clone())
-                    .collect();
-            }
-            // Contenders first (see `rank_contenders`); then the rest in BIC order.
-            let order: Vec<usize> = ranked
-                .into_iter()
-                .chain((0..refits.len()).filter(|i| !contenders.contains(i)))
-                .collect();
-            let mut slots: Vec<Option<(Trial, ExtFit)>> = refits.into_iter().map(Some).collect();
-            let mut caches: Vec<Option<Vec<f64>>> = std::mem::take(&mut cv_cache);
-            refits = Vec::with_capacity(order.len());
-            for i in order {
-                if let Some(r) = slots[i].take() {
-                    refits.push(r);
-                    cv_cache.push(caches[i].take());
-                }
-            }
-        }
-        let mut chosen: Option<(Trial, ExtFit)> = None;
-        let mut trials = Vec::new();
-        for ((mut trial, after), cached) in refits.into_iter().zip(cv_cache) {
-            if chosen.is_some() {
-                trial.reason = "not tested: an earlier candidate was accepted".into();
-                trials.push(trial);
-                continue;
-            }
-            if trial.added == 0 {
-                trial.reason = "adds no identifiable direction (aliases fitted parameters)".into();
-            } else if !(trial.p_value < cfg.alpha && trial.delta_bic < 0.0) {
-                trial.reason = format!(
-                    "F-test p = {:.2e} (needs < {:.0e}) or BIC change {:+.1} (needs < 0)",
-                    trial.p_value, cfg.alpha, trial.delta_bic
-                );
-            } else {
-                if cv_before.is_none() {
-                    cv_before = Some(cv_errors(&cur, data, cfg)?);
-                }
-                let e0 = cv_before.as_deref().unwrap_or(&[]);
-                let e1 = match cached {
-                    Some(e1) => e1,
-                    None => cv_errors(&after, data, cfg)?,
-                };
-                let (m0, m1, rel, t) = paired_gain(e0, &e1, serial);
-                trial.cv_mean_mm = [m0, m1];
-                trial.cv_t = t;
-                if rel >= min_gain && rel > 0.0 && t >= t_min {
-                    trial.accepted = true;
-                    chosen = Some((trial.clone(), after));
-                    continue;
-                }
-                trial.reason = format!(
-                    "cross-validation: mean {m0:.4} -> {m1:.4} mm ({:+.1} %, t = {t:.2}; needs >= {:.0} % and t >= {:.2})",
-                    -100.0 * rel,
-                    100.0 * min_gain,
-                    t_min
-                );
-            }
-            trials.push(trial);
-        }
-        match chosen {
-            Some((trial, after)) => {
-                requested.extend(trial.candidate.unknowns.iter().copied());
-                let before = std::mem::replace(&mut cur, after.clone());
-                let equivalent = if equivalent_ids.contains(&trial.candidate.id) {
-                    equivalent_ids
-                        .iter()
-                        .filter(|i| **i != trial.candidate.id)
-                        .cloned()
-                        .collect()
-                } else {
-                    Vec::new()
-                };
-                steps.push(Accepted {
-                    trial,
-                    before,
-                    after,
-                    equivalent,
-                });
-            }
-            None => {
-                last_trials = trials;
-                break;
-            }
-        }
-    }
-    Ok(Selection {
-        steps,
-        last_trials,
-        last: cur,
-        requested,
-    })
-}
+pub use super::select::forward_selection;
 
 /// Indices of the candidates whose small move ([`DecideConfig::onset_probe`] on each of their
 /// unknowns) flips a sign of the joint moments at some pose: where the tilting law's sign steps
@@ -585,7 +368,7 @@ pub fn onset_candidates(
 
 /// The current model moved by the Gauss-Newton step of its fitted unknowns plus `cand`'s
 /// (minimum-norm least squares on column-scaled Jacobians), or `None` if it cannot be computed.
-fn linear_start(cur: &ExtFit, data: &Dataset, cand: &Candidate) -> Option<ExtModel> {
+pub(super) fn linear_start(cur: &ExtFit, data: &Dataset, cand: &Candidate) -> Option<ExtModel> {
     let mut unknowns = cur.fitted.clone();
     unknowns.extend(
         cand.unknowns

@@ -20,7 +20,7 @@ use crate::calib::identifiability::analyse;
 use crate::calib::lm::{solve, LmConfig, Problem};
 use crate::calib::CalibError;
 use crate::model::gravity::GravityModel;
-use crate::model::transmission::transmission_increments;
+use crate::model::transmission::{transmission_increments, JointTerms};
 use crate::model::{sign_1e9, Model, ModelError, Tilt, Wrt};
 
 /// Seconds per hour (drift rates are per hour).
@@ -109,17 +109,43 @@ impl ExtModel {
         let n = model.n_joints();
         let tilt = model.has_tilt();
         let gravity = GravityModel::for_model(&model);
+        // The model's own transmission terms (model file) are the starting values.
+        let t = model.transmission().clone();
+        let sized = |v: Vec<f64>| if v.len() == n { v } else { vec![0.0; n] };
+        let coupling = if t.coupling.len() == n && t.coupling.iter().all(|r| r.len() == n) {
+            t.coupling
+        } else {
+            vec![vec![0.0; n]; n]
+        };
         Self {
             model,
             tilt,
             drift_mm_per_h: Vector3::zeros(),
             joint_drift_deg_per_h: vec![0.0; n],
-            compliance_deg_per_kgfm: vec![0.0; n],
+            compliance_deg_per_kgfm: sized(t.compliance_deg_per_kgfm),
             gravity,
-            joint_scale: vec![0.0; n],
-            coupling: vec![vec![0.0; n]; n],
-            hysteresis_deg: vec![0.0; n],
+            joint_scale: sized(t.scale),
+            coupling,
+            hysteresis_deg: sized(t.hysteresis_deg),
         }
+    }
+
+    /// The model with this fit's transmission terms (`joint_scale`, `joint_coupling`,
+    /// `hysteresis`, `compliance`) as model-file parameters, for `diagnose --out`; the drifts
+    /// are not model parameters.
+    pub fn to_model(&self) -> Model {
+        let mut m = self.model.clone();
+        m.set_transmission(JointTerms {
+            scale: self.joint_scale.clone(),
+            coupling: self.coupling.clone(),
+            hysteresis_deg: self.hysteresis_deg.clone(),
+            compliance_deg_per_kgfm: if self.gravity.is_some() {
+                self.compliance_deg_per_kgfm.clone()
+            } else {
+                Vec::new()
+            },
+        });
+        m
     }
 
     /// The tilting applied at pose `k` of `data`: none, or the static moments plus the dataset's

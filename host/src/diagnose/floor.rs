@@ -10,7 +10,11 @@
 //! * **residual**: `sqrt(RSS / (m - p))` of the final fit, when neither is known; then the test
 //!   cannot tell a missing effect from noise, and the output says so.
 //!
-//! The floor used is the larger known one. The final calibration residual is tested against it:
+//! The repeatability pools every pose measured more than once, in the calibration and the
+//! held-out files together, and serves as a floor only with at least [`MIN_REPEAT_DOF`] degrees
+//! of freedom ([`choose_floor`]; the ISO 9283 sequence repeats one pose: 3). The floor used is
+//! the larger known one; the fallback is instrument > repeatability > residual, and
+//! `floor.note` says which floors were known and why one was used. The final calibration residual is tested against it:
 //! `RSS / sigma_floor^2` is chi-square with `(m - p) / tau` degrees of freedom (`tau` the
 //! serial-correlation time along a traced path, 1 for independent poses) when the instrument
 //! sets the floor, an F ratio with the repeatability's own degrees of freedom when the
@@ -27,6 +31,10 @@ use super::stat::f_test_p_value;
 pub const SAME_JOINTS_TOL: f64 = 1e-6;
 /// Significance level of the floor tests.
 pub const FLOOR_ALPHA: f64 = 1e-3;
+/// Fewest degrees of freedom of the pooled repeatability for it to serve as the floor: below
+/// this its sigma is uncertain by more than about 20 % (relative standard error
+/// `1 / sqrt(2 dof)`), e.g. the ISO 9283 sequence's single repeated pose gives 3.
+pub const MIN_REPEAT_DOF: usize = 12;
 
 /// The `floor` object of the diagnose JSON (FORMATS.md).
 #[derive(Debug, Clone, PartialEq, Serialize)]
@@ -53,6 +61,67 @@ pub struct FloorReport {
     pub validation_p_value: Option<f64>,
     /// Whether the residual is significantly above a known floor (extra key).
     pub above: bool,
+    /// Degrees of freedom of the pooled repeatability (extra key; null without repeats).
+    pub repeatability_dof: Option<usize>,
+    /// Why this floor was used (extra key): which floors were known, the repeatability's degrees
+    /// of freedom, and the fallback taken (instrument > repeatability > residual).
+    pub note: String,
+}
+
+/// The floor to use and why: the instrument's and the repeatability's (when it has at least
+/// [`MIN_REPEAT_DOF`] degrees of freedom), the larger when both are known; the residual only
+/// without either. Returns `(used, sigma_mm, dof of an estimated floor, note)`;
+/// `sigma_mm` is `None` for the residual.
+pub fn choose_floor(
+    instrument_mm: Option<f64>,
+    repeat: Option<(f64, usize)>,
+) -> (&'static str, Option<f64>, Option<usize>, String) {
+    let instrument = instrument_mm.filter(|s| *s > 0.0 && s.is_finite());
+    let rep = repeat.filter(|(s, _)| *s > 0.0 && s.is_finite());
+    let rep_text = |(r, d): (f64, usize)| {
+        format!("repeatability {r:.4} mm per coordinate from {d} degrees of freedom (poses measured more than once, pooled)")
+    };
+    let usable = rep.filter(|(_, d)| *d >= MIN_REPEAT_DOF);
+    let too_few = rep.filter(|(_, d)| *d < MIN_REPEAT_DOF).map(|x| {
+        format!(
+            "{} is too uncertain to be a floor (needs >= {MIN_REPEAT_DOF} degrees of freedom: measure more poses more than once)",
+            rep_text(x)
+        )
+    });
+    match (instrument, usable) {
+        (Some(i), Some((r, d))) if r > i => (
+            "repeatability",
+            Some(r),
+            Some(d),
+            format!(
+                "{} is above the instrument's {i:.4} mm: the robot's own repeatability is the floor",
+                rep_text((r, d))
+            ),
+        ),
+        (Some(i), _) => {
+            let other = match (usable, &too_few) {
+                (Some(x), _) => format!("; {} is below it", rep_text(x)),
+                (None, Some(t)) => format!("; {t}"),
+                (None, None) => "; no pose measured more than once".to_string(),
+            };
+            ("instrument", Some(i), None, format!("the instrument's {i:.4} mm (--instrument-mm){other}"))
+        }
+        (None, Some((r, d))) => (
+            "repeatability",
+            Some(r),
+            Some(d),
+            format!("{} (no --instrument-mm)", rep_text((r, d))),
+        ),
+        (None, None) => (
+            "residual",
+            None,
+            None,
+            match too_few {
+                Some(t) => format!("no --instrument-mm, and the {t}: the floor falls back to the residual itself"),
+                None => "no --instrument-mm and no pose measured more than once: the floor falls back to the residual itself".to_string(),
+            },
+        ),
+    }
 }
 
 /// Pooled repeatability (mm per coordinate) and its degrees of freedom, from the poses of
@@ -94,6 +163,30 @@ pub fn repeatability_mm(data: &Dataset) -> Option<(f64, usize)> {
         dof += dims * (idx.len() - 1);
     }
     (dof > 0).then(|| ((ss / dof as f64).sqrt(), dof))
+}
+
+/// [`repeatability_mm`] pooled over several files (calibration and held out): a pose id names
+/// the same pose only within its own file; across files, the same joint readings do.
+pub fn repeatability_of_files(sets: &[&Dataset]) -> Option<(f64, usize)> {
+    let mut merged: Option<Dataset> = None;
+    for (f, d) in sets.iter().enumerate() {
+        let mut d = (*d).clone();
+        let ids: Vec<String> = (0..d.len())
+            .map(|k| {
+                d.ids
+                    .as_ref()
+                    .and_then(|ids| ids.get(k))
+                    .filter(|id| !id.is_empty())
+                    .map_or_else(String::new, |id| format!("{f}:{id}"))
+            })
+            .collect();
+        d.ids = Some(ids);
+        merged = Some(match merged {
+            Some(m) => m.concat(d),
+            None => d,
+        });
+    }
+    repeatability_mm(&merged?)
 }
 
 fn same_pose(data: &Dataset, a: usize, b: usize) -> bool {
@@ -181,12 +274,9 @@ pub fn judge(
     let validation_rms_mm = (r.val_ss_mm2 / val_dof).sqrt();
     let instrument = instrument_mm.filter(|s| *s > 0.0 && s.is_finite());
     let rep = repeat.filter(|(s, _)| *s > 0.0);
-    let (used, floor, floor_dof) = match (instrument, rep) {
-        (Some(i), Some((r, d))) if r > i => ("repeatability", r, Some(d as f64)),
-        (Some(i), _) => ("instrument", i, None),
-        (None, Some((r, d))) => ("repeatability", r, Some(d as f64)),
-        (None, None) => ("residual", residual_mm, None),
-    };
+    let (used, floor, floor_dof, note) = choose_floor(instrument, rep);
+    let floor = floor.unwrap_or(residual_mm);
+    let floor_dof = floor_dof.map(|d| d as f64);
     let test = |ss: f64, d: f64| -> f64 {
         let stat = ss / (floor * floor);
         match floor_dof {
@@ -215,6 +305,8 @@ pub fn judge(
         validation_over_floor: validation_rms_mm / floor,
         validation_p_value: vp,
         above,
+        repeatability_dof: rep.map(|r| r.1),
+        note,
     }
 }
 
@@ -223,8 +315,8 @@ pub fn verdict(f: &FloorReport) -> String {
     let fmt_p = |p: Option<f64>| p.map_or("-".to_string(), |p| format!("{p:.1e}"));
     match f.used.as_str() {
         "residual" => format!(
-            "no independent floor (no --instrument-mm, no pose measured twice): the noise is estimated from the final residual itself ({:.4} mm per coordinate), so the diagnosis cannot tell a missing effect from noise; held-out residual {:.4} mm per coordinate",
-            f.residual_mm, f.validation_rms_mm
+            "no independent floor ({}): the noise is estimated from the final residual itself ({:.4} mm per coordinate), so the diagnosis cannot tell a missing effect from noise; held-out residual {:.4} mm per coordinate",
+            f.note, f.residual_mm, f.validation_rms_mm
         ),
         used => {
             let floor = if used == "instrument" {
@@ -239,13 +331,14 @@ pub fn verdict(f: &FloorReport) -> String {
                 "at the floor"
             };
             format!(
-                "{head}: final calibration residual {:.4} mm per coordinate = {:.2} x the {used} floor {floor:.4} mm (p = {}), held out {:.4} mm = {:.2} x (p = {})",
+                "{head}: final calibration residual {:.4} mm per coordinate = {:.2} x the {used} floor {floor:.4} mm (p = {}), held out {:.4} mm = {:.2} x (p = {}); floor: {}",
                 f.residual_mm,
                 f.final_over_floor,
                 fmt_p(f.p_value),
                 f.validation_rms_mm,
                 f.validation_over_floor,
-                fmt_p(f.validation_p_value)
+                fmt_p(f.validation_p_value),
+                f.note
             )
         }
     }
@@ -307,8 +400,42 @@ mod tests {
         let g = judge(&r, Some(0.02), Some((0.01, 20)));
         assert_eq!(g.used, "instrument");
         assert!(!g.above, "{g:?}");
+        assert!(g.note.contains("is below it"), "{}", g.note);
         let h = judge(&r, None, None);
         assert_eq!(h.used, "residual");
         assert!(!h.above && (h.final_over_floor - 1.0).abs() < 1e-12);
+    }
+
+    #[test]
+    fn too_few_repeats_fall_back_in_order_and_say_why() {
+        let r = FinalResidual {
+            rss_mm2: 300.0 * 0.02f64.powi(2),
+            n_residuals: 300,
+            n_params: 0,
+            tau: 1.0,
+            n_poses: 100,
+            val_ss_mm2: 90.0 * 0.02f64.powi(2),
+            val_residuals: 90,
+        };
+        // one pose measured twice: 3 degrees of freedom
+        let few = Some((0.03, 3));
+        let a = judge(&r, Some(0.01), few);
+        assert_eq!(a.used, "instrument", "{a:?}");
+        assert!(
+            a.note.contains("too uncertain") && a.note.contains("3 degrees"),
+            "{}",
+            a.note
+        );
+        assert_eq!(a.repeatability_dof, Some(3));
+        let b = judge(&r, None, few);
+        assert_eq!(b.used, "residual", "{b:?}");
+        assert!(verdict(&b).contains("too uncertain"), "{}", verdict(&b));
+        // enough repeats: the repeatability is the floor, with its degrees of freedom
+        let c = judge(&r, None, Some((0.02, 30)));
+        assert_eq!(c.used, "repeatability");
+        assert!(c.note.contains("30 degrees of freedom"), "{}", c.note);
+        // larger than the instrument: the robot's repeatability sets the floor
+        let d = judge(&r, Some(0.01), Some((0.02, 30)));
+        assert_eq!(d.used, "repeatability");
     }
 }

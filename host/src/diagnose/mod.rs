@@ -7,7 +7,9 @@
 //! | [`extended`] | the model plus non-parameter effects (time drift, compliance); the extended fit |
 //! | [`candidates`] | the effect library (FORMATS.md effect ids) and effect-unit parameters |
 //! | [`residual`] | regressors, linearised screening, structure tests |
-//! | [`decide`] | greedy forward selection: F-test + BIC + k-fold cross-validation |
+//! | [`decide`] | the decision rule: F-test + BIC + k-fold cross-validation, its settings and tests |
+//! | [`select`] | the greedy forward selection in named steps (shortlist, refit, near ties, tests) |
+//! | [`parallel`] | deterministic use of both cores for independent fits |
 //! | [`polish`] | derivative-free polish of a refit across the sign steps of the tilting law |
 //! | [`stat`] | F distribution, BIC, noise statistics |
 //! | [`floor`] | the independent floor (`--instrument-mm`, repeatability) and its tests |
@@ -34,11 +36,13 @@ pub mod data;
 pub mod decide;
 pub mod extended;
 pub mod floor;
+pub mod parallel;
 pub mod plots;
 pub mod polish;
 pub mod probe;
 pub mod report;
 pub mod residual;
+pub mod select;
 pub mod stat;
 
 use nalgebra::Vector3;
@@ -258,54 +262,15 @@ fn running_median_spikes(series: &[(usize, f64)]) -> Vec<(usize, bool)> {
         .collect()
 }
 
-fn mean_norm(e: &[Vector3<f64>]) -> f64 {
-    Stats::from_errors(e).mean_mm
-}
-
-/// Diagnoses `model` on the calibration poses `cal`, reporting held-out numbers on `val`.
-pub fn diagnose(
-    model: &Model,
+/// One report (and plot trace) per accepted effect: its final values and sigmas, its values at
+/// entry, the before/after statistics and the evidence in words.
+fn effect_reports(
+    selection: &Selection,
+    regs: &[residual::Regressor],
     cal: &Dataset,
     val: &Dataset,
-    opts: &DiagnoseOptions,
-) -> Result<Diagnosis, DiagnoseError> {
-    let cfg = &opts.decide;
-    let min = 2 * cfg.folds.max(2);
-    if cal.len() < min {
-        return Err(DiagnoseError::TooFewPoses {
-            what: "calibration set",
-            n: cal.len(),
-            min,
-        });
-    }
-    if val.is_empty() {
-        return Err(DiagnoseError::TooFewPoses {
-            what: "validation set",
-            n: 0,
-            min: 1,
-        });
-    }
-    let repeat = floor::repeatability_mm(cal);
-    let known_floor = match (opts.instrument_mm.filter(|s| *s > 0.0), repeat) {
-        (Some(i), Some((r, _))) => Some(i.max(r)),
-        (Some(i), None) => Some(i),
-        (None, Some((r, _))) => Some(r),
-        (None, None) => None,
-    };
-    let cfg_owned = DecideConfig {
-        floor_mm: known_floor,
-        ..cfg.clone()
-    };
-    let cfg = &cfg_owned;
-    let cal = cal.clone().with_approach();
-    let val = &val.clone().with_approach();
-    let (cal, outliers, declared, requested) = trim_outliers(model, &cal, cfg)?;
-    let cal = &cal;
-    let declared_cal = declared.ext.errors(cal)?;
-    let declared_val = declared.ext.errors(val)?;
-    let selection = forward_selection(declared.clone(), &requested, cal, cfg)?;
-    let regs = regressors(&selection.last.ext, cal)?;
-
+    cfg: &DecideConfig,
+) -> Result<(Vec<EffectReport>, Vec<EffectTrace>), DiagnoseError> {
     let mut effects = Vec::new();
     let mut traces = Vec::new();
     for step in &selection.steps {
@@ -315,7 +280,7 @@ pub fn diagnose(
         let cb = step.before.ext.errors(cal)?;
         let ca = step.after.ext.errors(cal)?;
         let contrib = contribution(&step.before, &step.after, cal)?;
-        let (ri, ex) = best_regressor(&contrib, &regs).unwrap_or((0, explain(&contrib, &regs[0])));
+        let (ri, ex) = best_regressor(&contrib, regs).unwrap_or((0, explain(&contrib, &regs[0])));
         let values = effect_values(&t.candidate, &step.before.ext, &step.after);
         let final_values = effect_values(&t.candidate, &step.before.ext, &selection.last);
         let share = if t.rss_before_mm2 > 0.0 {
@@ -403,6 +368,55 @@ pub fn diagnose(
         });
     }
 
+    Ok((effects, traces))
+}
+
+fn mean_norm(e: &[Vector3<f64>]) -> f64 {
+    Stats::from_errors(e).mean_mm
+}
+
+/// Diagnoses `model` on the calibration poses `cal`, reporting held-out numbers on `val`.
+pub fn diagnose(
+    model: &Model,
+    cal: &Dataset,
+    val: &Dataset,
+    opts: &DiagnoseOptions,
+) -> Result<Diagnosis, DiagnoseError> {
+    let cfg = &opts.decide;
+    let min = 2 * cfg.folds.max(2);
+    if cal.len() < min {
+        return Err(DiagnoseError::TooFewPoses {
+            what: "calibration set",
+            n: cal.len(),
+            min,
+        });
+    }
+    if val.is_empty() {
+        return Err(DiagnoseError::TooFewPoses {
+            what: "validation set",
+            n: 0,
+            min: 1,
+        });
+    }
+    // repeats anywhere (calibration and held-out files) are pooled
+    let repeat = floor::repeatability_of_files(&[cal, val]);
+    let known_floor = floor::choose_floor(opts.instrument_mm, repeat).1;
+    let cfg_owned = DecideConfig {
+        floor_mm: known_floor,
+        ..cfg.clone()
+    };
+    let cfg = &cfg_owned;
+    let cal = cal.clone().with_approach();
+    let val = &val.clone().with_approach();
+    let (cal, outliers, declared, requested) = trim_outliers(model, &cal, cfg)?;
+    let cal = &cal;
+    let declared_cal = declared.ext.errors(cal)?;
+    let declared_val = declared.ext.errors(val)?;
+    let selection = forward_selection(declared.clone(), &requested, cal, cfg)?;
+    let regs = regressors(&selection.last.ext, cal)?;
+
+    let (mut effects, traces) = effect_reports(&selection, &regs, cal, val, cfg)?;
+
     let last = &selection.last;
     let final_cal = last.ext.errors(cal)?;
     let final_val = last.ext.errors(val)?;
@@ -443,11 +457,23 @@ pub fn diagnose(
         .map(|s| s.trial.candidate.clone())
         .collect();
     let others = candidates::library(&last.ext, &selection.requested, cal);
-    let aliased = alias::aliased(last, &requested, &accepted, &others, cal)?;
+    let mut aliased = alias::aliased(last, &requested, &accepted, &others, cal)?;
+    let tested: Vec<String> = selection
+        .last_trials
+        .iter()
+        .map(|t| t.candidate.id.clone())
+        .chain(
+            selection
+                .steps
+                .iter()
+                .flat_map(|s| s.equivalent.iter().cloned()),
+        )
+        .collect();
+    alias::rank_pairs(&mut aliased, &tested);
     for e in effects.iter_mut() {
         let stand_in: Vec<&str> = aliased
             .iter()
-            .filter(|a| a.a == e.id)
+            .filter(|a| a.a == e.id && a.kind != "declared")
             .map(|a| a.b.as_str())
             .collect();
         if !stand_in.is_empty() {

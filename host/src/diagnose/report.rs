@@ -279,8 +279,17 @@ impl DiagnoseReport {
                 s,
                 "not separable on these poses (more poses are needed: rigctl plan --from-diagnose):"
             );
-            for a in &self.aliased {
-                let _ = writeln!(s, "  {} ~ {}: {}", a.a, a.b, a.note);
+            let max = super::alias::ALIAS_TEXT_MAX;
+            for a in self.aliased.iter().take(max) {
+                let tested = if a.tested { " (tested, rejected)" } else { "" };
+                let _ = writeln!(s, "  {} ~ {}{tested}: {}", a.a, a.b, a.note);
+            }
+            if self.aliased.len() > max {
+                let _ = writeln!(
+                    s,
+                    "  ... and {} more pairs, weaker or with declared parameters (all in the JSON `aliased`)",
+                    self.aliased.len() - max
+                );
             }
         }
         if let Some(h) = &self.residual_model {

@@ -133,6 +133,8 @@ pub struct Model {
     pub(crate) scale_param: usize,
     /// Names of the joints (e.g. URDF joint names), or empty.
     pub(crate) joint_names: Vec<String>,
+    /// Transmission terms on the joint angles (model files; [`super::transmission`]).
+    pub(crate) transmission: super::transmission::JointTerms,
 }
 
 impl Model {
@@ -628,6 +630,7 @@ impl ModelBuilder {
             payload_param,
             scale_param,
             joint_names: Vec::new(),
+            transmission: Default::default(),
         })
     }
 }

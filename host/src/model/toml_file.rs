@@ -42,6 +42,10 @@
 //! clearance_deg = 0.022           # tilting values: optional, but for all joints or none
 //! backlash_deg = 0.063
 //! stiffness_kgfm_per_deg = 122.0
+//! joint_scale = 1.0e-4            # transmission terms (optional, see below): q *= 1 + s
+//! joint_coupling = { j2 = 0.002 } # this joint's angle += c x joint 2's reading (deg/deg)
+//! hysteresis_deg = 0.03           # += b x direction of approach (pose order)
+//! compliance_deg_per_kgfm = 0.01  # += g x gravity torque about the axis (needs [[mass]])
 //!
 //! [[mass]]                        # a link mass carried by `joint`, in the frame `after`
 //! joint = 2                       # elements past the joint's element (0 = joint frame;
@@ -58,6 +62,14 @@
 //! parameters listed in the [`super`] module doc; set them in `[params]`.
 //! [`Model::to_toml_string`] writes the chain as elementary transforms with all current values,
 //! so writing and reading back gives the identical model.
+//!
+//! The transmission keys of a `[[joint]]` entry (all optional, default 0; FORMATS.md effects
+//! `joint_scale:j<i>`, `joint_coupling:j<i>:j<k>`, `hysteresis:j<i>`, `compliance:j<i>`) map the
+//! joint readings to the angles the joints take, once per pose before the chain
+//! ([`super::transmission::JointTerms`]): `q_eff_i = q_i + s_i q_i + sum_k c_ik q_k + b_i d_i +
+//! g_i tau_i(q)`, `d_i` the direction in which joint i last moved (file order, or `t`), `tau_i`
+//! the gravity torque of the link masses (kgf.m). `compliance_deg_per_kgfm` needs masses
+//! (`[[mass]]` rows, or the `ur5` name with 6 DH joints, whose published masses are used).
 
 use serde::Deserialize;
 use std::collections::BTreeMap;
@@ -66,7 +78,9 @@ use std::path::Path;
 
 use super::chain::{Axis, GammaLaw, Model, ModelBuilder, Motion, TiltValues};
 use super::error::ModelError;
+use super::gravity::GravityModel;
 use super::param::ParamKind;
+use super::transmission::JointTerms;
 
 #[derive(Debug, Deserialize)]
 #[serde(deny_unknown_fields)]
@@ -107,6 +121,11 @@ struct JointEntry {
     clearance_deg: Option<f64>,
     backlash_deg: Option<f64>,
     stiffness_kgfm_per_deg: Option<f64>,
+    joint_scale: Option<f64>,
+    #[serde(default)]
+    joint_coupling: BTreeMap<String, f64>,
+    hysteresis_deg: Option<f64>,
+    compliance_deg_per_kgfm: Option<f64>,
 }
 
 #[derive(Debug, Deserialize)]
@@ -277,7 +296,77 @@ fn build(file: ModelFile) -> Result<Model, String> {
             .set_param(name, value)
             .map_err(|e| format!("[params] {e}"))?;
     }
+    let terms = joint_terms(&file.joint)?;
+    if terms.has_compliance() && GravityModel::for_model(&model).is_none() {
+        return Err(
+            "compliance_deg_per_kgfm needs link masses ([[mass]] rows) for the gravity torques"
+                .into(),
+        );
+    }
+    // no term: the same (empty) terms as a built-in model, so reading back is exact
+    if terms.is_active() {
+        model.set_transmission(terms);
+    }
     Ok(model)
+}
+
+/// The transmission terms of the `[[joint]]` entries (all zero when none is given).
+fn joint_terms(joints: &[JointEntry]) -> Result<JointTerms, String> {
+    let n = joints.len();
+    let mut t = JointTerms::zeros(n);
+    for (i, e) in joints.iter().enumerate() {
+        let at = |msg: String| format!("[[joint]] entry {}: {msg}", i + 1);
+        let finite = |v: Option<f64>, key: &str| -> Result<f64, String> {
+            match v {
+                Some(x) if !x.is_finite() => Err(at(format!("`{key}` = {x} is not finite"))),
+                Some(x) => Ok(x),
+                None => Ok(0.0),
+            }
+        };
+        t.scale[i] = finite(e.joint_scale, "joint_scale")?;
+        t.hysteresis_deg[i] = finite(e.hysteresis_deg, "hysteresis_deg")?;
+        t.compliance_deg_per_kgfm[i] =
+            finite(e.compliance_deg_per_kgfm, "compliance_deg_per_kgfm")?;
+        for (key, &c) in &e.joint_coupling {
+            let k = key
+                .strip_prefix('j')
+                .and_then(|d| d.parse::<usize>().ok())
+                .filter(|k| (1..=n).contains(k) && *k != i + 1)
+                .ok_or_else(|| {
+                    at(format!(
+                        "joint_coupling key `{key}`: use j<k> with k another joint in 1..={n}"
+                    ))
+                })?;
+            t.coupling[i][k - 1] = finite(Some(c), "joint_coupling")?;
+        }
+    }
+    Ok(t)
+}
+
+/// The `[[joint]]` transmission lines of joint `i` (only the non-zero terms).
+fn write_joint_terms(s: &mut String, t: &JointTerms, i: usize) {
+    let (scale, hyst, comp) = t.joint_values(i);
+    for (key, v) in [
+        ("joint_scale", scale),
+        ("hysteresis_deg", hyst),
+        ("compliance_deg_per_kgfm", comp),
+    ] {
+        if v != 0.0 {
+            let _ = writeln!(s, "{key} = {}", fmt_f64(v));
+        }
+    }
+    let row: Vec<String> = t
+        .coupling
+        .get(i)
+        .into_iter()
+        .flatten()
+        .enumerate()
+        .filter(|(_, c)| **c != 0.0)
+        .map(|(k, c)| format!("j{} = {}", k + 1, fmt_f64(*c)))
+        .collect();
+    if !row.is_empty() {
+        let _ = writeln!(s, "joint_coupling = {{ {} }}", row.join(", "));
+    }
 }
 
 impl Model {
@@ -349,6 +438,7 @@ impl Model {
                     fmt_f64(t.stiffness_kgfm_per_deg)
                 );
             }
+            write_joint_terms(&mut s, &self.transmission, j);
         }
         for m in &self.masses {
             let c = m.com_mm;

@@ -1,7 +1,11 @@
 //! Transmission effects on the joint angles (FORMATS.md `joint_scale`, `joint_coupling`,
 //! `hysteresis`): what the joint really turns by, given the commanded angles and the direction
 //! from which each joint approached the pose (pose order). Used by `simulate` (the truth) and
-//! `diagnose` (the candidates).
+//! `diagnose` (the candidates), and carried by a [`Model`] ([`JointTerms`], model files) so
+//! that `fk` and `calibrate` apply them.
+
+use super::gravity::GravityModel;
+use super::{Model, ModelError};
 
 /// Joint-motion threshold (deg, or mm for a prismatic joint) below which a joint did not move
 /// between two poses.
@@ -60,4 +64,197 @@ pub fn transmission_increments(
             s + c + h
         })
         .collect()
+}
+
+/// The transmission terms a model carries (model file `[[joint]]` keys `joint_scale`,
+/// `joint_coupling`, `hysteresis_deg`, `compliance_deg_per_kgfm`; FORMATS.md effects
+/// `joint_scale:j<i>`, `joint_coupling:j<i>:j<k>`, `hysteresis:j<i>`, `compliance:j<i>`):
+/// the map from the joint readings to the angles the joints really take,
+///
+/// ```text
+/// q_eff_i = q_i + s_i q_i + sum_k c_ik q_k + b_i d_i + g_i tau_i(q)
+/// ```
+///
+/// with `d_i` the direction of approach (pose order, [`approach_directions`]) and `tau_i` the
+/// static gravity torque about joint axis i at the readings (kgf.m, the model's link masses,
+/// [`super::gravity::GravityModel`]). Applied once per pose before the model's evaluation
+/// ([`Model::effective_joints`]); [`Model::fk`] itself evaluates the angles it is given.
+/// Empty vectors mean no term.
+#[derive(Debug, Clone, Default, PartialEq)]
+pub struct JointTerms {
+    /// Transmission-ratio error per joint (dimensionless).
+    pub scale: Vec<f64>,
+    /// Coupling, row i (the joint moved) column k (the command it follows), deg/deg.
+    pub coupling: Vec<Vec<f64>>,
+    /// Hysteresis per joint, deg (times the direction of approach).
+    pub hysteresis_deg: Vec<f64>,
+    /// Compliance per joint, deg per kgf.m of gravity torque about the joint axis.
+    pub compliance_deg_per_kgfm: Vec<f64>,
+}
+
+impl JointTerms {
+    /// No term, sized for `n_joints` joints.
+    pub fn zeros(n_joints: usize) -> Self {
+        Self {
+            scale: vec![0.0; n_joints],
+            coupling: vec![vec![0.0; n_joints]; n_joints],
+            hysteresis_deg: vec![0.0; n_joints],
+            compliance_deg_per_kgfm: vec![0.0; n_joints],
+        }
+    }
+
+    /// Whether any term is non-zero.
+    pub fn is_active(&self) -> bool {
+        self.scale
+            .iter()
+            .chain(self.coupling.iter().flatten())
+            .chain(&self.hysteresis_deg)
+            .chain(&self.compliance_deg_per_kgfm)
+            .any(|v| *v != 0.0)
+    }
+
+    /// Whether some hysteresis term is non-zero (the pose order matters).
+    pub fn uses_pose_order(&self) -> bool {
+        self.hysteresis_deg.iter().any(|v| *v != 0.0)
+    }
+
+    /// Whether some compliance term is non-zero (gravity torques needed).
+    pub fn has_compliance(&self) -> bool {
+        self.compliance_deg_per_kgfm.iter().any(|v| *v != 0.0)
+    }
+
+    /// Joint i's coupling to joint k's command (deg/deg), 0 when absent.
+    pub fn coupling_at(&self, i: usize, k: usize) -> f64 {
+        self.coupling
+            .get(i)
+            .and_then(|r| r.get(k))
+            .copied()
+            .unwrap_or(0.0)
+    }
+
+    /// The terms of joint `i` in model-file form, 0 when absent: (scale, hysteresis_deg,
+    /// compliance_deg_per_kgfm).
+    pub fn joint_values(&self, i: usize) -> (f64, f64, f64) {
+        let at = |v: &[f64]| v.get(i).copied().unwrap_or(0.0);
+        (
+            at(&self.scale),
+            at(&self.hysteresis_deg),
+            at(&self.compliance_deg_per_kgfm),
+        )
+    }
+
+    /// `d q_eff / d q` at the readings `q_deg` for the linear terms (identity + scale +
+    /// coupling; hysteresis is piecewise constant). The compliance term's derivative is taken
+    /// by central differences of the gravity torques (step 1e-4 deg) when compliance is
+    /// present. Row i, column k.
+    pub fn joint_map_jacobian(
+        &self,
+        model: &Model,
+        q_deg: &[f64],
+    ) -> Result<nalgebra::DMatrix<f64>, ModelError> {
+        let n = q_deg.len();
+        let mut jac = nalgebra::DMatrix::<f64>::identity(n, n);
+        for i in 0..n {
+            jac[(i, i)] += self.scale.get(i).copied().unwrap_or(0.0);
+            for k in 0..n {
+                jac[(i, k)] += self.coupling_at(i, k);
+            }
+        }
+        if self.has_compliance() {
+            if let Some(g) = GravityModel::for_model(model) {
+                const STEP_DEG: f64 = 1e-4;
+                let mut q = q_deg.to_vec();
+                for k in 0..n {
+                    q[k] = q_deg[k] + STEP_DEG;
+                    let up = g.axis_torques_kgfm(model, &q)?;
+                    q[k] = q_deg[k] - STEP_DEG;
+                    let down = g.axis_torques_kgfm(model, &q)?;
+                    q[k] = q_deg[k];
+                    for i in 0..n {
+                        let c = self.compliance_deg_per_kgfm.get(i).copied().unwrap_or(0.0);
+                        let (u, d) = (
+                            up.get(i).copied().unwrap_or(0.0),
+                            down.get(i).copied().unwrap_or(0.0),
+                        );
+                        jac[(i, k)] += c * (u - d) / (2.0 * STEP_DEG);
+                    }
+                }
+            }
+        }
+        Ok(jac)
+    }
+
+    /// The angles the joints really take for the readings `q_deg`, with the directions of
+    /// approach `approach` (+1, -1, 0 per joint; empty = none known). Compliance torques come
+    /// from `model`'s masses (none: no compliance).
+    pub fn effective_joints(
+        &self,
+        model: &Model,
+        q_deg: &[f64],
+        approach: &[f64],
+    ) -> Result<Vec<f64>, ModelError> {
+        let trans = transmission_increments(
+            q_deg,
+            approach,
+            &self.scale,
+            &self.coupling,
+            &self.hysteresis_deg,
+        );
+        let tau = match self
+            .has_compliance()
+            .then(|| GravityModel::for_model(model))
+            .flatten()
+        {
+            Some(g) => g.axis_torques_kgfm(model, q_deg)?,
+            None => Vec::new(),
+        };
+        Ok(q_deg
+            .iter()
+            .enumerate()
+            .map(|(j, q)| {
+                q + trans[j]
+                    + self.compliance_deg_per_kgfm.get(j).copied().unwrap_or(0.0)
+                        * tau.get(j).copied().unwrap_or(0.0)
+            })
+            .collect())
+    }
+}
+
+impl Model {
+    /// The transmission terms this model carries (model file `[[joint]]` keys).
+    pub fn transmission(&self) -> &JointTerms {
+        &self.transmission
+    }
+
+    /// Replaces the transmission terms.
+    pub fn set_transmission(&mut self, terms: JointTerms) {
+        self.transmission = terms;
+    }
+
+    /// The angles fed to the chain for a sequence of joint readings (one vector per pose, in
+    /// file order; `t_s` the pose times when the file has them): the readings mapped through
+    /// [`Model::transmission`], the direction of approach taken from the pose order (FORMATS.md
+    /// "Pose order"; the first pose has no history). Without terms, the readings themselves.
+    pub fn effective_pose_joints(
+        &self,
+        q_deg: &[Vec<f64>],
+        t_s: Option<&[f64]>,
+    ) -> Result<Vec<Vec<f64>>, ModelError> {
+        if !self.transmission.is_active() {
+            return Ok(q_deg.to_vec());
+        }
+        let approach = if self.transmission.uses_pose_order() {
+            approach_directions(q_deg, t_s)
+        } else {
+            Vec::new()
+        };
+        q_deg
+            .iter()
+            .enumerate()
+            .map(|(k, q)| {
+                let a = approach.get(k).map_or(&[][..], Vec::as_slice);
+                self.transmission.effective_joints(self, q, a)
+            })
+            .collect()
+    }
 }

@@ -396,6 +396,16 @@ impl JointEffects {
             .any(|v| *v != 0.0)
     }
 
+    /// The terms as a model carries them ([`crate::model::transmission::JointTerms`]).
+    pub fn terms(&self) -> crate::model::transmission::JointTerms {
+        crate::model::transmission::JointTerms {
+            scale: self.scale.clone(),
+            coupling: self.coupling.clone(),
+            hysteresis_deg: self.hysteresis_deg.clone(),
+            compliance_deg_per_kgfm: self.compliance_deg_per_kgfm.clone(),
+        }
+    }
+
     /// The angles the joints really take for the readings `q_deg` with directions of approach
     /// `approach` (compliance torques from the masses of `model`).
     pub fn true_joints(
@@ -404,29 +414,6 @@ impl JointEffects {
         q_deg: &[f64],
         approach: &[f64],
     ) -> Result<Vec<f64>, ModelError> {
-        let trans = crate::model::transmission::transmission_increments(
-            q_deg,
-            approach,
-            &self.scale,
-            &self.coupling,
-            &self.hysteresis_deg,
-        );
-        let tau = if self.compliance_deg_per_kgfm.iter().any(|c| *c != 0.0) {
-            match crate::model::gravity::GravityModel::for_model(model) {
-                Some(g) => g.axis_torques_kgfm(model, q_deg)?,
-                None => vec![0.0; q_deg.len()],
-            }
-        } else {
-            vec![0.0; q_deg.len()]
-        };
-        Ok(q_deg
-            .iter()
-            .enumerate()
-            .map(|(j, q)| {
-                q + trans[j]
-                    + self.compliance_deg_per_kgfm.get(j).copied().unwrap_or(0.0)
-                        * tau.get(j).copied().unwrap_or(0.0)
-            })
-            .collect())
+        self.terms().effective_joints(model, q_deg, approach)
     }
 }
