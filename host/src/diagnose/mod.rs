@@ -383,21 +383,7 @@ pub fn diagnose(
     opts: &DiagnoseOptions,
 ) -> Result<Diagnosis, DiagnoseError> {
     let cfg = &opts.decide;
-    let min = 2 * cfg.folds.max(2);
-    if cal.len() < min {
-        return Err(DiagnoseError::TooFewPoses {
-            what: "calibration set",
-            n: cal.len(),
-            min,
-        });
-    }
-    if val.is_empty() {
-        return Err(DiagnoseError::TooFewPoses {
-            what: "validation set",
-            n: 0,
-            min: 1,
-        });
-    }
+    check_sizes(cal, val, cfg)?;
     // repeats anywhere (calibration and held-out files) are pooled
     let repeat = floor::repeatability_of_files(&[cal, val]);
     let known_floor = floor::choose_floor(opts.instrument_mm, repeat).1;
@@ -420,27 +406,7 @@ pub fn diagnose(
     let last = &selection.last;
     let final_cal = last.ext.errors(cal)?;
     let final_val = last.ext.errors(val)?;
-    let dof = last.n_residuals.saturating_sub(last.fitted.len()).max(1);
-    let sigma = (last.rss_mm2 / dof as f64).sqrt();
-    let noise = NoiseReport {
-        sigma_mm: sigma,
-        expected_mean_mm: stat::expected_mean_norm_dims(sigma, cal.measured_dims()),
-    };
-    let tau = decide::serial_tau(&last.ext, cal)?;
-    let val_dims: usize = (0..val.len()).map(|k| val.rows(k)).sum();
-    let floor = floor::judge(
-        &floor::FinalResidual {
-            rss_mm2: last.rss_mm2,
-            n_residuals: last.n_residuals,
-            n_params: last.fitted.len(),
-            tau,
-            n_poses: cal.len(),
-            val_ss_mm2: final_val.iter().map(|e| e.norm_squared()).sum(),
-            val_residuals: val_dims,
-        },
-        opts.instrument_mm,
-        repeat,
-    );
+    let (noise, tau, floor) = judge_floor(last, cal, val, &final_val, opts.instrument_mm, repeat)?;
     let mut unexplained = unexplained(
         &final_cal,
         &final_val,
@@ -451,52 +417,8 @@ pub fn diagnose(
     );
     unexplained.note = format!("{}; {}", floor::verdict(&floor), unexplained.note);
     unexplained.structured |= floor.above;
-    let accepted: Vec<candidates::Candidate> = selection
-        .steps
-        .iter()
-        .map(|s| s.trial.candidate.clone())
-        .collect();
-    let others = candidates::library(&last.ext, &selection.requested, cal);
-    let mut aliased = alias::aliased(last, &requested, &accepted, &others, cal)?;
-    let tested: Vec<String> = selection
-        .last_trials
-        .iter()
-        .map(|t| t.candidate.id.clone())
-        .chain(
-            selection
-                .steps
-                .iter()
-                .flat_map(|s| s.equivalent.iter().cloned()),
-        )
-        .collect();
-    alias::rank_pairs(&mut aliased, &tested);
-    for e in effects.iter_mut() {
-        let stand_in: Vec<&str> = aliased
-            .iter()
-            .filter(|a| a.a == e.id && a.kind != "declared")
-            .map(|a| a.b.as_str())
-            .collect();
-        if !stand_in.is_empty() {
-            e.evidence.push_str(&format!(
-                "; not separable on these poses from {}: its value may be a stand-in",
-                stand_in.join(", ")
-            ));
-        }
-    }
-    // an independent floor (instrument, repeatability) also sets the smallest term worth naming
-    let known_floor_mm = match floor.used.as_str() {
-        "instrument" => floor.instrument_mm,
-        "repeatability" => floor.repeatability_mm,
-        _ => None,
-    };
-    let probe_cfg = probe::ProbeConfig {
-        folds: cfg.folds,
-        seed: cfg.seed,
-        floor_mm: opts.probe.floor_mm.or(known_floor_mm),
-        ..opts.probe.clone()
-    };
-    let jac = probe::jacobians(&last.ext, cal, &last.fitted)?;
-    let probe = probe::probe_dataset(cal, &final_cal, &jac, &probe_cfg);
+    let aliased = aliased_pairs(&selection, &requested, cal, &mut effects)?;
+    let (probe, probe_cfg) = probe_residual(last, cal, &final_cal, &floor, opts)?;
     unexplained.add_probe(&probe);
     let report = DiagnoseReport {
         declared: SetStats {
@@ -539,6 +461,129 @@ pub fn diagnose(
         traces,
         probe,
     })
+}
+
+/// The calibration set needs two poses per fold, the held-out set at least one.
+fn check_sizes(cal: &Dataset, val: &Dataset, cfg: &DecideConfig) -> Result<(), DiagnoseError> {
+    let min = 2 * cfg.folds.max(2);
+    if cal.len() < min {
+        return Err(DiagnoseError::TooFewPoses {
+            what: "calibration set",
+            n: cal.len(),
+            min,
+        });
+    }
+    if val.is_empty() {
+        return Err(DiagnoseError::TooFewPoses {
+            what: "validation set",
+            n: 0,
+            min: 1,
+        });
+    }
+    Ok(())
+}
+
+/// The residual's noise level, its serial correlation and the verdict against the floor.
+fn judge_floor(
+    last: &ExtFit,
+    cal: &Dataset,
+    val: &Dataset,
+    final_val: &[Vector3<f64>],
+    instrument_mm: Option<f64>,
+    repeat: Option<(f64, usize)>,
+) -> Result<(NoiseReport, f64, floor::FloorReport), DiagnoseError> {
+    let dof = last.n_residuals.saturating_sub(last.fitted.len()).max(1);
+    let sigma = (last.rss_mm2 / dof as f64).sqrt();
+    let noise = NoiseReport {
+        sigma_mm: sigma,
+        expected_mean_mm: stat::expected_mean_norm_dims(sigma, cal.measured_dims()),
+    };
+    let tau = decide::serial_tau(&last.ext, cal)?;
+    let val_dims: usize = (0..val.len()).map(|k| val.rows(k)).sum();
+    let floor = floor::judge(
+        &floor::FinalResidual {
+            rss_mm2: last.rss_mm2,
+            n_residuals: last.n_residuals,
+            n_params: last.fitted.len(),
+            tau,
+            n_poses: cal.len(),
+            val_ss_mm2: final_val.iter().map(|e| e.norm_squared()).sum(),
+            val_residuals: val_dims,
+        },
+        instrument_mm,
+        repeat,
+    );
+    Ok((noise, tau, floor))
+}
+
+/// The pairs the poses cannot separate, ranked, with the accepted effects' evidence told which
+/// candidates they may stand in for.
+fn aliased_pairs(
+    selection: &decide::Selection,
+    requested: &[Unknown],
+    cal: &Dataset,
+    effects: &mut [EffectReport],
+) -> Result<Vec<alias::AliasReport>, DiagnoseError> {
+    let last = &selection.last;
+    let accepted: Vec<candidates::Candidate> = selection
+        .steps
+        .iter()
+        .map(|s| s.trial.candidate.clone())
+        .collect();
+    let others = candidates::library(&last.ext, &selection.requested, cal);
+    let mut aliased = alias::aliased(last, requested, &accepted, &others, cal)?;
+    let tested: Vec<String> = selection
+        .last_trials
+        .iter()
+        .map(|t| t.candidate.id.clone())
+        .chain(
+            selection
+                .steps
+                .iter()
+                .flat_map(|s| s.equivalent.iter().cloned()),
+        )
+        .collect();
+    alias::rank_pairs(&mut aliased, &tested);
+    for e in effects.iter_mut() {
+        let stand_in: Vec<&str> = aliased
+            .iter()
+            .filter(|a| a.a == e.id && a.kind != "declared")
+            .map(|a| a.b.as_str())
+            .collect();
+        if !stand_in.is_empty() {
+            e.evidence.push_str(&format!(
+                "; not separable on these poses from {}: its value may be a stand-in",
+                stand_in.join(", ")
+            ));
+        }
+    }
+    Ok(aliased)
+}
+
+/// The probe of the final residual for what no candidate describes.
+fn probe_residual(
+    last: &ExtFit,
+    cal: &Dataset,
+    final_cal: &[Vector3<f64>],
+    floor: &floor::FloorReport,
+    opts: &DiagnoseOptions,
+) -> Result<(probe::ProbeResult, probe::ProbeConfig), DiagnoseError> {
+    let cfg = &opts.decide;
+    // an independent floor (instrument, repeatability) also sets the smallest term worth naming
+    let known_floor_mm = match floor.used.as_str() {
+        "instrument" => floor.instrument_mm,
+        "repeatability" => floor.repeatability_mm,
+        _ => None,
+    };
+    let probe_cfg = probe::ProbeConfig {
+        folds: cfg.folds,
+        seed: cfg.seed,
+        floor_mm: opts.probe.floor_mm.or(known_floor_mm),
+        ..opts.probe.clone()
+    };
+    let jac = probe::jacobians(&last.ext, cal, &last.fitted)?;
+    let probe = probe::probe_dataset(cal, final_cal, &jac, &probe_cfg);
+    Ok((probe, probe_cfg))
 }
 
 fn unexplained(
