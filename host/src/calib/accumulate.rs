@@ -13,7 +13,7 @@ use super::problem::{tilt_mode, Poses, Unknowns};
 use crate::model::{Data, Model, ModelError, Tilt, Wrt};
 
 /// Poses per chunk of the accumulation (the unit of work and of summation order).
-pub const CHUNK_POSES: usize = 2048;
+pub const CHUNK_POSES: usize = 256;
 
 /// Threads used when there is more than one chunk.
 pub const THREADS: usize = 2;
