@@ -212,10 +212,12 @@ fn lm_iteration_allocations_do_not_grow_with_the_poses() {
         }));
     }
     // 200 poses are one chunk (no thread); 1000 and 4000 poses several chunks on two threads
-    assert!(
-        200 <= rigctl::calib::accumulate::CHUNK_POSES
-            && 1000 > rigctl::calib::accumulate::CHUNK_POSES
-    );
+    const {
+        assert!(
+            200 <= rigctl::calib::accumulate::CHUNK_POSES
+                && 1000 > rigctl::calib::accumulate::CHUNK_POSES
+        )
+    };
     assert_eq!(per_iteration[0], 0, "one chunk: {per_iteration:?}");
     assert_eq!(per_iteration[1], per_iteration[2], "{per_iteration:?}");
     assert!(per_iteration[1] < 50, "{per_iteration:?}");
