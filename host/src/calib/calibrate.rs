@@ -230,6 +230,26 @@ pub(super) fn fit_report(
     }
 }
 
+/// The error statistics of `calibrate --json` from the error vectors `[before, standard,
+/// chosen]` of the calibration poses and, with validation poses, of those.
+pub(super) fn error_summary(
+    cal: &[Vec<Vector3<f64>>; 3],
+    val: Option<&[Vec<Vector3<f64>>; 3]>,
+) -> (BeforeAfter, Option<BeforeAfter>, StandardSummary) {
+    let before_after = |e: &[Vec<Vector3<f64>>; 3]| BeforeAfter {
+        before: Stats::from_errors(&e[0]),
+        after: Stats::from_errors(&e[2]),
+    };
+    (
+        before_after(cal),
+        val.map(before_after),
+        StandardSummary {
+            calibration: Stats::from_errors(&cal[1]),
+            validation: val.map(|e| Stats::from_errors(&e[1])),
+        },
+    )
+}
+
 /// Calibrates `nominal` on `cal` (and evaluates on `val`): the standard identification always
 /// (for the comparison), then the chosen method. "before" is the nominal model without tilting.
 pub fn calibrate(
@@ -270,22 +290,14 @@ pub fn calibrate(
         ],
         None => [Vec::new(), Vec::new(), Vec::new()],
     };
+    let (calibration, validation, standard) = error_summary(&cal_errors, val.map(|_| &val_errors));
     let report = fit_report(
         &chosen,
         &selection,
         opts.method.as_str(),
-        BeforeAfter {
-            before: Stats::from_errors(&cal_errors[0]),
-            after: Stats::from_errors(&cal_errors[2]),
-        },
-        val.map(|_| BeforeAfter {
-            before: Stats::from_errors(&val_errors[0]),
-            after: Stats::from_errors(&val_errors[2]),
-        }),
-        StandardSummary {
-            calibration: Stats::from_errors(&cal_errors[1]),
-            validation: val.map(|_| Stats::from_errors(&val_errors[1])),
-        },
+        calibration,
+        validation,
+        standard,
         tilt,
     );
     Ok(Outcome {

@@ -14,14 +14,14 @@ use std::str::FromStr;
 
 use nalgebra::Vector3;
 
-use super::calibrate::{fit_report, resolve_selection, CalibrateOptions, Method, Outcome};
+use super::calibrate::{
+    error_summary, fit_report, resolve_selection, CalibrateOptions, Method, Outcome,
+};
 use super::error::CalibError;
 use super::fit::Fit;
 use super::general::{fit_general, stacked, GeneralFit, GeneralModel, PoseTorques, Unknown};
 use super::measurements::Measurements;
 use super::press::forward_select;
-use super::report::{BeforeAfter, StandardSummary};
-use super::stats::Stats;
 use crate::model::{Model, ParamKind};
 
 /// How the identified set is chosen (`--select`).
@@ -247,22 +247,14 @@ pub fn calibrate_general(
             selection.push(*i);
         }
     }
+    let (calibration, validation, standard) = error_summary(&cal_errors, val.map(|_| &val_errors));
     let mut report = fit_report(
         &model_fit(&chosen),
         &selection,
         opts.method.as_str(),
-        BeforeAfter {
-            before: Stats::from_errors(&cal_errors[0]),
-            after: Stats::from_errors(&cal_errors[2]),
-        },
-        val.map(|_| BeforeAfter {
-            before: Stats::from_errors(&val_errors[0]),
-            after: Stats::from_errors(&val_errors[2]),
-        }),
-        StandardSummary {
-            calibration: Stats::from_errors(&cal_errors[1]),
-            validation: val.map(|_| Stats::from_errors(&val_errors[1])),
-        },
+        calibration,
+        validation,
+        standard,
         tilt,
     );
     for (u, s) in chosen.fitted.iter().zip(&chosen.sigma) {
