@@ -180,9 +180,10 @@ fn measured(model: &Model, n: usize) -> Poses {
 }
 
 /// One LM iteration's per-pose work (normal equations + a trial residual sum) allocates nothing
-/// on one chunk (one thread); over several chunks only the second thread's fixed cost, the same
-/// for 1000 and 4000 poses; and a whole solve allocates the same (small, n x n algebra and the
-/// helper thread) whatever the pose count.
+/// per pose: on one chunk (one thread) only the matrix product's packing buffer; over several
+/// chunks at most one more per chunk of `CHUNK_POSES` poses and the second thread's fixed cost;
+/// and a whole solve allocates about the same (small, n x n algebra and the helper thread)
+/// whatever the pose count.
 #[test]
 fn lm_iteration_allocations_do_not_grow_with_the_poses() {
     let model = busy_katana();
@@ -218,9 +219,16 @@ fn lm_iteration_allocations_do_not_grow_with_the_poses() {
                 && 1000 > rigctl::calib::accumulate::CHUNK_POSES
         )
     };
-    assert_eq!(per_iteration[0], 0, "one chunk: {per_iteration:?}");
-    assert_eq!(per_iteration[1], per_iteration[2], "{per_iteration:?}");
+    let chunks = |n: usize| n.div_ceil(rigctl::calib::accumulate::CHUNK_POSES);
+    assert!(per_iteration[0] <= 1, "one chunk: {per_iteration:?}");
+    assert!(
+        per_iteration[2] <= per_iteration[1] + chunks(4000) - chunks(1000),
+        "{per_iteration:?}"
+    );
     assert!(per_iteration[1] < 50, "{per_iteration:?}");
-    assert_eq!(per_solve[1], per_solve[2], "{per_solve:?}");
+    assert!(
+        per_solve[2] <= per_solve[1] + 4 * (chunks(4000) - chunks(1000)),
+        "{per_solve:?}"
+    );
     assert!(per_solve[0] < 200 && per_solve[1] < 400, "{per_solve:?}");
 }

@@ -5,9 +5,11 @@
 //! number of threads (deterministic).
 
 use std::ops::Range;
+use std::sync::Arc;
 
-use nalgebra::{DVector, Vector3};
+use nalgebra::{DMatrix, DMatrixView, DVector, Vector3};
 
+use super::helper::{Helper, Work};
 use super::normal::{Normal, NormalProblem};
 use super::problem::{tilt_mode, Poses, Unknowns};
 use crate::model::{Data, Model, ModelError, Tilt, Wrt};
@@ -18,7 +20,7 @@ pub const CHUNK_POSES: usize = 256;
 /// Threads used when there is more than one chunk.
 pub const THREADS: usize = 2;
 
-fn n_chunks(poses: usize) -> usize {
+pub(super) fn n_chunks(poses: usize) -> usize {
     poses.div_ceil(CHUNK_POSES).max(1)
 }
 
@@ -29,10 +31,11 @@ fn chunk(c: usize, poses: usize) -> Range<usize> {
 /// Runs `f(chunk index, workspace, output)` on every chunk, on two threads when there are
 /// several chunks and two workspaces (first half of the chunks here, second half on a scoped
 /// thread); the first error in chunk order is returned.
-fn run_chunks<T, F>(workers: &mut [Data], out: &mut [T], f: F) -> Result<(), ModelError>
+fn run_chunks<W, T, F>(workers: &mut [W], out: &mut [T], f: F) -> Result<(), ModelError>
 where
+    W: Send,
     T: Send,
-    F: Fn(usize, &mut Data, &mut T) -> Result<(), ModelError> + Sync,
+    F: Fn(usize, &mut W, &mut T) -> Result<(), ModelError> + Sync,
 {
     let n = out.len();
     let (w0, rest) = workers
@@ -69,39 +72,110 @@ where
     })
 }
 
-/// Adds one pose's residual `r` (3 rows) and Jacobian columns `cols` to `eq` (upper triangle).
-#[inline]
-fn add_pose(eq: &mut Normal, cols: &[Vector3<f64>], r: &Vector3<f64>) {
-    let n = cols.len();
-    let jtj = eq.jtj.as_mut_slice();
-    for (b, cb) in cols.iter().enumerate() {
-        let col = &mut jtj[b * n..b * n + b + 1];
-        for (slot, ca) in col.iter_mut().zip(cols) {
-            *slot += ca.dot(cb);
-        }
-        eq.jtr[b] += cb.dot(r);
-    }
-    eq.rtr += r.norm_squared();
-    eq.m += 3;
+/// `(sin, cos)` of every joint reading of a pose set (radians of the degrees read), computed
+/// once for the many evaluations of an identification ([`Data::give_joint_sin_cos`]).
+#[derive(Debug, Clone, Default)]
+pub struct JointTrig {
+    joints: usize,
+    sin_cos: Vec<(f64, f64)>,
 }
 
-/// Normal equations of the poses `range` into `eq` (cleared first).
+impl JointTrig {
+    /// The table of `poses` (empty, i.e. unused, when the poses differ in their joint count).
+    pub fn new(poses: &Poses) -> Self {
+        let joints = poses.q_deg.first().map_or(0, Vec::len);
+        if poses.q_deg.iter().any(|q| q.len() != joints) {
+            return Self::default();
+        }
+        Self {
+            joints,
+            sin_cos: poses
+                .q_deg
+                .iter()
+                .flatten()
+                .map(|q| q.to_radians().sin_cos())
+                .collect(),
+        }
+    }
+
+    /// The pairs of pose `i` (`None` outside the table).
+    fn pose(&self, i: usize) -> Option<&[(f64, f64)]> {
+        self.sin_cos
+            .get(i * self.joints..(i + 1) * self.joints)
+            .filter(|_| self.joints > 0)
+    }
+
+    /// Gives pose `i`'s pairs to `d` for its next evaluation (nothing without a table).
+    fn give(trig: Option<&Self>, i: usize, d: &mut Data) {
+        if let Some(sc) = trig.and_then(|t| t.pose(i)) {
+            d.give_joint_sin_cos(sc);
+        }
+    }
+}
+
+/// One thread's workspace for the normal equations: the model workspace, the residual rows
+/// `[J_k, r_k]` of a chunk (`n + 1` values per row, one column per row) and their product
+/// `[J r]^T [J r]` (`J^T J` and `J^T r` in one matrix product, SIMD through `matrixmultiply`;
+/// its packing buffer is the one allocation per chunk, none per pose).
+#[derive(Debug, Clone)]
+struct Worker {
+    data: Data,
+    rows: Vec<f64>,
+    aug: DMatrix<f64>,
+}
+
+impl Worker {
+    fn new(model: &Model, n: usize) -> Self {
+        Self {
+            data: Data::new(model),
+            rows: vec![0.0; (n + 1) * 3 * CHUNK_POSES],
+            aug: DMatrix::zeros(n + 1, n + 1),
+        }
+    }
+}
+
+/// Normal equations of the poses `range` (at most [`CHUNK_POSES`]) into `eq`.
+#[allow(clippy::too_many_arguments)]
 fn chunk_normal(
     model: &Model,
     poses: &Poses,
+    trig: Option<&JointTrig>,
     range: Range<usize>,
     tilt: Tilt<'_>,
     wrt: &[Wrt],
-    d: &mut Data,
+    w: &mut Worker,
     eq: &mut Normal,
 ) -> Result<(), ModelError> {
-    eq.clear();
-    d.sync(model);
-    for i in range {
-        model.jacobian_synced(d, &poses.q_deg[i], tilt, wrt)?;
-        let r = d.position_mm() - poses.xyz_mm[i];
-        add_pose(eq, d.jacobian(), &r);
+    let (n, k) = (wrt.len(), 3 * range.len());
+    let width = n + 1;
+    let rows = w
+        .rows
+        .get_mut(..width * k)
+        .ok_or_else(|| ModelError::Invalid("accumulation chunk larger than its buffer".into()))?;
+    w.data.sync(model);
+    // `r^T r` summed pose by pose as in `chunk_sum_sq` (bitwise the same cost both ways).
+    let mut rtr = 0.0;
+    for (p, i) in range.enumerate() {
+        JointTrig::give(trig, i, &mut w.data);
+        model.jacobian_synced(&mut w.data, &poses.q_deg[i], tilt, wrt)?;
+        let r = w.data.position_mm() - poses.xyz_mm[i];
+        rtr += r.norm_squared();
+        for (row, &res) in r.iter().enumerate() {
+            let dst = &mut rows[(3 * p + row) * width..(3 * p + row + 1) * width];
+            for (slot, c) in dst.iter_mut().zip(w.data.jacobian()) {
+                *slot = c[row];
+            }
+            dst[n] = res;
+        }
     }
+    let rows: &[f64] = rows;
+    let r = DMatrixView::from_slice(rows, width, k);
+    let rt = DMatrixView::from_slice_with_strides(rows, k, width, width, 1);
+    w.aug.gemm(1.0, &r, &rt, 0.0);
+    eq.jtj.copy_from(&w.aug.view((0, 0), (n, n)));
+    eq.jtr.copy_from(&w.aug.view((0, n), (n, 1)));
+    eq.rtr = rtr;
+    eq.m = k;
     Ok(())
 }
 
@@ -109,6 +183,7 @@ fn chunk_normal(
 fn chunk_sum_sq(
     model: &Model,
     poses: &Poses,
+    trig: Option<&JointTrig>,
     range: Range<usize>,
     tilt: Tilt<'_>,
     d: &mut Data,
@@ -116,6 +191,7 @@ fn chunk_sum_sq(
     let mut s = 0.0;
     d.sync(model);
     for i in range {
+        JointTrig::give(trig, i, d);
         model.fk_synced(d, &poses.q_deg[i], tilt)?;
         s += (d.position_mm() - poses.xyz_mm[i]).norm_squared();
     }
@@ -125,7 +201,7 @@ fn chunk_sum_sq(
 /// Workspaces and per-chunk partial sums for one model and pose set, allocated once.
 #[derive(Debug, Clone)]
 pub struct Accumulator {
-    workers: Vec<Data>,
+    workers: Vec<Worker>,
     partial: Vec<Normal>,
     sums: Vec<f64>,
     wrt: Vec<Wrt>,
@@ -142,7 +218,9 @@ impl Accumulator {
         let chunks = n_chunks(poses);
         let threads = if chunks > 1 { threads.clamp(1, 2) } else { 1 };
         Self {
-            workers: (0..threads).map(|_| Data::new(model)).collect(),
+            workers: (0..threads)
+                .map(|_| Worker::new(model, cols.len()))
+                .collect(),
             partial: vec![Normal::zeros(cols.len()); chunks],
             sums: vec![0.0; chunks],
             wrt: cols.iter().map(|&c| Wrt::Param(c)).collect(),
@@ -158,22 +236,117 @@ impl Accumulator {
         tilt: bool,
         eq: &mut Normal,
     ) -> Result<(), ModelError> {
+        self.normal_with(model, poses, None, tilt, eq)
+    }
+
+    /// [`Accumulator::normal`] with the poses' joint sines and cosines computed once
+    /// ([`JointTrig`]; the same sums to round-off).
+    pub fn normal_with(
+        &mut self,
+        model: &Model,
+        poses: &Poses,
+        trig: Option<&JointTrig>,
+        tilt: bool,
+        eq: &mut Normal,
+    ) -> Result<(), ModelError> {
+        self.normal_chunks_threaded(model, poses, trig, tilt)?;
+        self.total(eq);
+        Ok(())
+    }
+
+    /// The per-chunk normal equations of every chunk, on this accumulator's threads.
+    pub(super) fn normal_chunks_threaded(
+        &mut self,
+        model: &Model,
+        poses: &Poses,
+        trig: Option<&JointTrig>,
+        tilt: bool,
+    ) -> Result<(), ModelError> {
         let (len, wrt, t) = (poses.len(), &self.wrt[..], tilt_mode(tilt));
         run_chunks(&mut self.workers, &mut self.partial, |c, d, out| {
-            chunk_normal(model, poses, chunk(c, len), t, wrt, d, out)
-        })?;
-        eq.clear();
-        for p in &self.partial {
-            eq.add(p);
+            chunk_normal(model, poses, trig, chunk(c, len), t, wrt, d, out)
+        })
+    }
+
+    /// Normal equations of the chunks `chunks` on this thread (first workspace) into the
+    /// per-chunk sums ([`Accumulator::partial_mut`]).
+    pub(super) fn normal_chunks(
+        &mut self,
+        model: &Model,
+        poses: &Poses,
+        trig: Option<&JointTrig>,
+        tilt: bool,
+        chunks: Range<usize>,
+    ) -> Result<(), ModelError> {
+        let (len, wrt, t) = (poses.len(), &self.wrt[..], tilt_mode(tilt));
+        let w = self
+            .workers
+            .first_mut()
+            .ok_or_else(|| ModelError::Invalid("no workspace".into()))?;
+        for c in chunks {
+            let out = self
+                .partial
+                .get_mut(c)
+                .ok_or_else(|| ModelError::Invalid(format!("no chunk {c}")))?;
+            chunk_normal(model, poses, trig, chunk(c, len), t, wrt, w, out)?;
         }
         Ok(())
     }
 
+    /// `r^T r` of the chunks `chunks` on this thread into the per-chunk sums.
+    pub(super) fn sum_sq_chunks(
+        &mut self,
+        model: &Model,
+        poses: &Poses,
+        trig: Option<&JointTrig>,
+        tilt: bool,
+        chunks: Range<usize>,
+    ) -> Result<(), ModelError> {
+        let (len, t) = (poses.len(), tilt_mode(tilt));
+        let w = self
+            .workers
+            .first_mut()
+            .ok_or_else(|| ModelError::Invalid("no workspace".into()))?;
+        for c in chunks {
+            let out = self
+                .sums
+                .get_mut(c)
+                .ok_or_else(|| ModelError::Invalid(format!("no chunk {c}")))?;
+            *out = chunk_sum_sq(model, poses, trig, chunk(c, len), t, &mut w.data)?;
+        }
+        Ok(())
+    }
+
+    /// The per-chunk normal equations and residual sums (chunk order).
+    pub(super) fn partial_mut(&mut self) -> (&mut [Normal], &mut [f64]) {
+        (&mut self.partial, &mut self.sums)
+    }
+
+    /// `eq` = the sum of the per-chunk equations, in chunk order.
+    pub(super) fn total(&self, eq: &mut Normal) {
+        eq.clear();
+        for p in &self.partial {
+            eq.add(p);
+        }
+    }
+
     /// `r^T r` of `model - measured`.
     pub fn sum_sq(&mut self, model: &Model, poses: &Poses, tilt: bool) -> Result<f64, ModelError> {
+        self.sum_sq_with(model, poses, None, tilt)
+    }
+
+    /// [`Accumulator::sum_sq`] with the poses' [`JointTrig`] (bitwise the `r^T r` of
+    /// [`Accumulator::normal_with`] with the same table).
+    pub fn sum_sq_with(
+        &mut self,
+        model: &Model,
+        poses: &Poses,
+        trig: Option<&JointTrig>,
+        tilt: bool,
+    ) -> Result<f64, ModelError> {
         let (len, t) = (poses.len(), tilt_mode(tilt));
         run_chunks(&mut self.workers, &mut self.sums, |c, d, out| {
-            *out = chunk_sum_sq(model, poses, chunk(c, len), t, d)?;
+            *out = chunk_sum_sq(model, poses, trig, chunk(c, len), t, &mut d.data)?;
             Ok(())
         })?;
         Ok(self.sums.iter().sum())
@@ -212,36 +385,97 @@ pub fn normal_equations(
     cols: &[usize],
     tilt: bool,
 ) -> Result<Normal, ModelError> {
+    normal_equations_with(model, poses, None, cols, tilt)
+}
+
+/// [`normal_equations`] with the poses' [`JointTrig`].
+pub fn normal_equations_with(
+    model: &Model,
+    poses: &Poses,
+    trig: Option<&JointTrig>,
+    cols: &[usize],
+    tilt: bool,
+) -> Result<Normal, ModelError> {
     let mut acc = Accumulator::new(model, poses.len(), cols);
     let mut eq = Normal::zeros(cols.len());
-    acc.normal(model, poses, tilt, &mut eq)?;
+    acc.normal_with(model, poses, trig, tilt, &mut eq)?;
     eq.symmetrise();
     Ok(eq)
 }
 
-/// The geometric identification ([`super::problem::PositionProblem`]) as a [`NormalProblem`].
+/// The geometric identification ([`super::problem::PositionProblem`]) as a [`NormalProblem`],
+/// on two cores when there are several chunks (a [`Helper`] thread for the problem's lifetime).
 pub struct PositionNormalProblem<'a> {
     unknowns: Unknowns,
     poses: &'a Poses,
+    trig: Arc<JointTrig>,
     tilt: bool,
     acc: Accumulator,
+    helper: Option<Helper>,
 }
 
 impl<'a> PositionNormalProblem<'a> {
     /// A problem on a copy of `model` with the parameters `cols` as unknowns.
     pub fn new(model: &Model, poses: &'a Poses, cols: Vec<usize>, tilt: bool) -> Self {
-        let acc = Accumulator::new(model, poses.len(), &cols);
+        Self::with_trig(model, poses, JointTrig::new(poses), cols, tilt)
+    }
+
+    /// [`PositionNormalProblem::new`] with the poses' [`JointTrig`] already computed.
+    pub fn with_trig(
+        model: &Model,
+        poses: &'a Poses,
+        trig: JointTrig,
+        cols: Vec<usize>,
+        tilt: bool,
+    ) -> Self {
+        let chunks = n_chunks(poses.len());
+        let unknowns = Unknowns::new(model, cols);
+        let trig = Arc::new(trig);
+        let helper = (chunks > 1 && THREADS > 1)
+            .then(|| Helper::spawn(&unknowns, poses, Arc::clone(&trig), tilt, chunks))
+            .flatten();
+        let threads = if helper.is_some() { 1 } else { THREADS };
+        let acc = Accumulator::with_threads(model, poses.len(), unknowns.cols(), threads);
         Self {
-            unknowns: Unknowns::new(model, cols),
+            unknowns,
             poses,
+            trig,
             tilt,
             acc,
+            helper,
         }
     }
 
     /// The model and its unknowns.
     pub fn into_unknowns(self) -> Unknowns {
         self.unknowns
+    }
+
+    /// `work` at `x`: the first half of the chunks here, the second on the helper.
+    fn evaluate(&mut self, x: &DVector<f64>, work: Work) -> Result<(), ModelError> {
+        self.unknowns.set(x)?;
+        let chunks = n_chunks(self.poses.len());
+        let (model, poses, trig, tilt) = (
+            self.unknowns.model(),
+            self.poses,
+            Some(&*self.trig),
+            self.tilt,
+        );
+        let Some(helper) = self.helper.as_mut() else {
+            return match work {
+                Work::Normal => self.acc.normal_chunks_threaded(model, poses, trig, tilt),
+                Work::SumSq => self.acc.sum_sq_with(model, poses, trig, tilt).map(|_| ()),
+            };
+        };
+        let half = chunks.div_ceil(2);
+        helper.start(x, work, half..chunks)?;
+        let here = match work {
+            Work::Normal => self.acc.normal_chunks(model, poses, trig, tilt, 0..half),
+            Work::SumSq => self.acc.sum_sq_chunks(model, poses, trig, tilt, 0..half),
+        };
+        let (normals, sums) = self.acc.partial_mut();
+        let there = helper.finish(work, normals, sums);
+        here.and(there)
     }
 }
 
@@ -257,14 +491,13 @@ impl NormalProblem for PositionNormalProblem<'_> {
     }
 
     fn sum_sq(&mut self, x: &DVector<f64>) -> Result<f64, ModelError> {
-        self.unknowns.set(x)?;
-        self.acc
-            .sum_sq(self.unknowns.model(), self.poses, self.tilt)
+        self.evaluate(x, Work::SumSq)?;
+        Ok(self.acc.partial_mut().1.iter().sum())
     }
 
     fn normal(&mut self, x: &DVector<f64>, eq: &mut Normal) -> Result<(), ModelError> {
-        self.unknowns.set(x)?;
-        self.acc
-            .normal(self.unknowns.model(), self.poses, self.tilt, eq)
+        self.evaluate(x, Work::Normal)?;
+        self.acc.total(eq);
+        Ok(())
     }
 }

@@ -276,18 +276,21 @@ pub fn calibrate(
             }
         }
     };
-    let errs = |m: &Model, p: &Poses, t: bool| position_errors(m, p, t);
-    let cal_errors = [
-        errs(nominal, cal, false)?,
-        errs(&standard.model, cal, false)?,
-        errs(&chosen.model, cal, tilt)?,
-    ];
+    // "standard" and "chosen" are often the same fit: its errors are computed once.
+    let same = matches!(opts.method, Method::Standard) || !tilt && opts.method == Method::Tilting;
+    let errs = |p: &Poses| -> Result<[Vec<Vector3<f64>>; 3], CalibError> {
+        let before = position_errors(nominal, p, false)?;
+        let standard_errs = position_errors(&standard.model, p, false)?;
+        let chosen_errs = if same {
+            standard_errs.clone()
+        } else {
+            position_errors(&chosen.model, p, tilt)?
+        };
+        Ok([before, standard_errs, chosen_errs])
+    };
+    let cal_errors = errs(cal)?;
     let val_errors = match val {
-        Some(v) => [
-            errs(nominal, v, false)?,
-            errs(&standard.model, v, false)?,
-            errs(&chosen.model, v, tilt)?,
-        ],
+        Some(v) => errs(v)?,
         None => [Vec::new(), Vec::new(), Vec::new()],
     };
     let (calibration, validation, standard) = error_summary(&cal_errors, val.map(|_| &val_errors));

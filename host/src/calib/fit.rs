@@ -3,11 +3,11 @@
 
 use nalgebra::DMatrix;
 
-use super::accumulate::{normal_equations, PositionNormalProblem};
+use super::accumulate::{normal_equations_with, JointTrig, PositionNormalProblem};
 use super::error::CalibError;
 use super::identifiability::{analyse, scaled_svd};
 use super::lm::{solve, LmConfig};
-use super::normal::{solve_normal, use_normal_equations};
+use super::normal::{solve_normal, solve_normal_from, use_normal_equations};
 use super::problem::{param_vector, stacked_jacobian, ModelProblem, Poses, PositionProblem};
 use crate::model::Model;
 
@@ -115,11 +115,24 @@ pub fn fit_parameters_normal(
     if poses.is_empty() {
         return Err(CalibError::NoPoses);
     }
-    let root0 = normal_equations(start, poses, selection, tilt)?.jacobian_root();
-    let split = split_selection(start, selection, &root0, rtol)?;
+    let trig = JointTrig::new(poses);
+    let full = normal_equations_with(start, poses, Some(&trig), selection, tilt)?;
+    let split = split_selection(start, selection, &full.jacobian_root(), rtol)?;
     let x0 = param_vector(start, &split.fitted);
-    let mut problem = PositionNormalProblem::new(start, poses, split.fitted.clone(), tilt);
-    let rep = solve_normal(&mut problem, x0, lm).map_err(CalibError::from_lm)?;
+    // The fitted unknowns' equations at the start are part of the ones just analysed.
+    let kept: Vec<usize> = split
+        .fitted
+        .iter()
+        .filter_map(|c| selection.iter().position(|s| s == c))
+        .collect();
+    let mut problem =
+        PositionNormalProblem::with_trig(start, poses, trig, split.fitted.clone(), tilt);
+    let rep = if kept.len() == split.fitted.len() {
+        solve_normal_from(&mut problem, x0, full.select(&kept), lm)
+    } else {
+        solve_normal(&mut problem, x0, lm)
+    }
+    .map_err(CalibError::from_lm)?;
     let mut unknowns = problem.into_unknowns();
     unknowns.set(&rep.x)?;
     let root = rep.normal.jacobian_root();

@@ -8,6 +8,7 @@
 //! | [`stats`] | the error statistics object of FORMATS.md |
 //! | [`report`] | the `calibrate --json` document |
 //! | [`accumulate`] | the geometric identification on normal equations: per-pose accumulation in reusable model workspaces, chunked on two threads |
+//! | `helper` | the second core of an identification: a thread for the problem's lifetime that accumulates half of the chunks |
 //! | [`problem`] | measured poses, position errors, the identification as a least-squares problem |
 //! | [`projected`] | identification from partial measurements (projections on known directions, `calibrate --samples`) |
 //! | [`fit`] | identifiability + LM + covariance on a parameter subset |
@@ -24,6 +25,7 @@ pub mod calibrate_general;
 pub mod error;
 pub mod fit;
 pub mod general;
+mod helper;
 pub mod identifiability;
 pub mod influence;
 pub mod lm;

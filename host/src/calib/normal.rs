@@ -62,12 +62,35 @@ impl Normal {
         self.m = 0;
     }
 
+    /// Becomes a copy of `other` (without allocating when the sizes agree).
+    pub fn assign(&mut self, other: &Normal) {
+        if self.jtj.shape() == other.jtj.shape() && self.jtr.len() == other.jtr.len() {
+            self.jtj.copy_from(&other.jtj);
+            self.jtr.copy_from(&other.jtr);
+        } else {
+            self.jtj = other.jtj.clone();
+            self.jtr = other.jtr.clone();
+        }
+        self.rtr = other.rtr;
+        self.m = other.m;
+    }
+
     /// Adds `other` (same size).
     pub fn add(&mut self, other: &Normal) {
         self.jtj += &other.jtj;
         self.jtr += &other.jtr;
         self.rtr += other.rtr;
         self.m += other.m;
+    }
+
+    /// The equations of the unknowns `idx` only (indices into these unknowns, in that order).
+    pub fn select(&self, idx: &[usize]) -> Normal {
+        Normal {
+            jtj: self.jtj.select_rows(idx).select_columns(idx),
+            jtr: self.jtr.select_rows(idx),
+            rtr: self.rtr,
+            m: self.m,
+        }
     }
 
     /// Copies the upper triangle into the lower one (accumulators fill the upper one only).
@@ -237,6 +260,15 @@ pub fn solve_normal<P: NormalProblem>(
     x0: DVector<f64>,
     cfg: &LmConfig,
 ) -> Result<NormalReport, LmError<P::Error>> {
+    let n = problem.n_params();
+    check_sizes(problem, &x0)?;
+    let mut eq = Normal::zeros(n);
+    problem.normal(&x0, &mut eq).map_err(LmError::Problem)?;
+    eq.symmetrise();
+    solve_normal_from(problem, x0, eq, cfg)
+}
+
+fn check_sizes<P: NormalProblem>(problem: &P, x0: &DVector<f64>) -> Result<(), LmError<P::Error>> {
     let (n, m) = (problem.n_params(), problem.n_residuals());
     if x0.len() != n {
         return Err(LmError::Dimensions(format!(
@@ -250,11 +282,28 @@ pub fn solve_normal<P: NormalProblem>(
             params: n,
         });
     }
+    Ok(())
+}
+
+/// [`solve_normal`] given the problem's normal equations at `x0` (symmetric, e.g. selected from
+/// an identifiability analysis done at the same point): saves their evaluation.
+pub fn solve_normal_from<P: NormalProblem>(
+    problem: &mut P,
+    x0: DVector<f64>,
+    eq0: Normal,
+    cfg: &LmConfig,
+) -> Result<NormalReport, LmError<P::Error>> {
+    let n = problem.n_params();
+    check_sizes(problem, &x0)?;
+    if eq0.jtr.len() != n || eq0.jtj.nrows() != n || eq0.jtj.ncols() != n {
+        return Err(LmError::Dimensions(format!(
+            "start normal equations are for {} unknowns, problem has {n}",
+            eq0.jtr.len()
+        )));
+    }
     let mut x = x0;
-    let mut eq = Normal::zeros(n);
+    let mut eq = eq0;
     let mut eq_try = Normal::zeros(n);
-    problem.normal(&x, &mut eq).map_err(LmError::Problem)?;
-    eq.symmetrise();
     let mut evaluations = 1;
     if !eq.rtr.is_finite() || !eq.jtj.iter().all(|v| v.is_finite()) {
         return Err(LmError::NonFiniteStart);
@@ -314,6 +363,28 @@ pub fn solve_normal<P: NormalProblem>(
         }
         iterations += 1;
     };
+    if termination.converged() && cost > 0.0 {
+        // The final Gauss-Newton correction ([`ScaledSvd::final_correction`]) from the last
+        // linearisation, evaluated so that `eq` and `cost` are those of the returned point; kept
+        // unless the cost grew beyond round-off (its predicted change is below `ftol` of it).
+        update_scaling(&eq, &mut diag);
+        if let Some(y) =
+            ScaledSvd::from_normal(&eq, &diag).and_then(|svd| svd.final_correction(cost, cfg))
+        {
+            let x_try = &x + y.component_div(&diag);
+            evaluations += 1;
+            problem
+                .normal(&x_try, &mut eq_try)
+                .map_err(LmError::Problem)?;
+            let cost_try = 0.5 * eq_try.rtr;
+            if cost_try.is_finite() && cost_try <= cost * (1.0 + 1e-12) {
+                x = x_try;
+                std::mem::swap(&mut eq, &mut eq_try);
+                eq.symmetrise();
+                cost = cost_try;
+            }
+        }
+    }
     Ok(NormalReport {
         x,
         normal: eq,

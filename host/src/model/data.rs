@@ -21,16 +21,6 @@ use super::error::ModelError;
 use super::kinematics::{Tilt, GRAVITY_KGF_PER_KG};
 use super::tilt::tilt_from_moment;
 
-/// `r <- r . R_axis(angle)` given `(sin, cos)` of the angle: only two columns change.
-#[inline]
-pub(crate) fn rotate_cols(r: &mut Matrix3<f64>, axis: usize, s: f64, c: f64) {
-    let (i, j) = ((axis + 1) % 3, (axis + 2) % 3);
-    let ci: Vector3<f64> = r.column(i).into_owned();
-    let cj: Vector3<f64> = r.column(j).into_owned();
-    r.set_column(i, &(ci * c + cj * s));
-    r.set_column(j, &(cj * c - ci * s));
-}
-
 /// What a parameter moves directly (the Jacobian's direct effect).
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub(crate) enum ParamEffect {
@@ -60,7 +50,13 @@ pub struct Data {
     pub(crate) scale: f64,
     pub(crate) payload_kg: f64,
     pub(crate) effects: Vec<ParamEffect>,
+    /// Per joint: `(sin, cos)` of its offset parameter (for [`Data::give_joint_sin_cos`]).
+    pub(crate) offset_sc: Vec<(f64, f64)>,
     // --- per evaluation ---
+    /// Per joint: `(sin, cos)` of the reading, given by the caller for the next evaluation
+    /// (`q_sc_given`), e.g. cached once per pose over the iterations of an identification.
+    pub(crate) q_sc: Vec<(f64, f64)>,
+    pub(crate) q_sc_given: bool,
     /// Per joint: `(q_eff, d q_eff / d q)`.
     pub(crate) joint_dv: Vec<f64>,
     /// Frames of the evaluated (tilted when tilting is on) chain.
@@ -127,6 +123,12 @@ impl Data {
                 Motion::Trans => (v, 0.0),
             };
         }
+        for (slot, joint) in self.offset_sc.iter_mut().zip(&model.joints) {
+            *slot = model.params[model.elems[joint.elem].param]
+                .value
+                .to_radians()
+                .sin_cos();
+        }
         self.tilt_values.clear();
         if let Some(tps) = &model.tilt {
             self.tilt_values.extend(tps.iter().map(|tp| TiltValues {
@@ -150,6 +152,8 @@ impl Data {
         d.elem_sc = vec![(0.0, 1.0); ne];
         d.elem_value = vec![0.0; ne];
         d.joint_dv = vec![1.0; nj];
+        d.offset_sc = vec![(0.0, 1.0); nj];
+        d.q_sc = vec![(0.0, 1.0); nj];
         d.rot = vec![Matrix3::identity(); ne];
         d.pos_mm = vec![Vector3::zeros(); ne];
         d.rot0 = vec![Matrix3::identity(); ne];
@@ -185,6 +189,9 @@ impl Data {
             scale: 1.0,
             payload_kg: 0.0,
             effects: Vec::new(),
+            offset_sc: Vec::new(),
+            q_sc: Vec::new(),
+            q_sc_given: false,
             joint_dv: Vec::new(),
             rot: Vec::new(),
             pos_mm: Vec::new(),
@@ -223,6 +230,18 @@ impl Data {
                 .all(|(b, p)| *b == p.value.to_bits());
         if !same {
             self.refresh(model);
+        }
+    }
+
+    /// Gives `(sin, cos)` of every joint reading (radians of the degrees read) for the next
+    /// evaluation only: a caller that evaluates the same poses many times (an identification)
+    /// computes them once per pose; the evaluation then takes `sin`/`cos` of `q + offset` by
+    /// the angle sum instead of calling `sin_cos` (not for a joint with encoder harmonics).
+    /// Ignored unless there is one pair per joint.
+    pub fn give_joint_sin_cos(&mut self, sin_cos: &[(f64, f64)]) {
+        if sin_cos.len() == self.q_sc.len() {
+            self.q_sc.copy_from_slice(sin_cos);
+            self.q_sc_given = true;
         }
     }
 
@@ -287,12 +306,14 @@ fn param_effect(model: &Model, i: usize) -> ParamEffect {
 impl Model {
     /// Joint values (deg / mm, offset and encoder harmonics included) and their sines and
     /// cosines into `d`; harmonics with both coefficients 0 cost nothing.
-    fn load_joints(&self, d: &mut Data, q_deg: &[f64]) {
+    /// The joint values (and their `sin`/`cos`: from [`Data::give_joint_sin_cos`] when `given`).
+    fn load_joints(&self, d: &mut Data, q_deg: &[f64], given: bool) {
         for (j, joint) in self.joints.iter().enumerate() {
             let q = q_deg[j];
             let e = joint.elem;
             let mut v = q + self.params[self.elems[e].param].value;
             let mut dv = 1.0;
+            let mut harmonics = false;
             for h in &joint.harmonics {
                 let (a_s, a_c) = (
                     self.params[h.sin_param].value,
@@ -301,6 +322,7 @@ impl Model {
                 if a_s == 0.0 && a_c == 0.0 {
                     continue;
                 }
+                harmonics = true;
                 let n = f64::from(h.order);
                 let (s, c) = (n * q).to_radians().sin_cos();
                 v += a_s * s + a_c * c;
@@ -309,6 +331,11 @@ impl Model {
             d.elem_value[e] = v;
             d.joint_dv[j] = dv;
             d.elem_sc[e] = match self.elems[e].motion {
+                Motion::Rot if given && !harmonics => {
+                    // sin / cos of `q + offset` by the angle sum (same values to round-off).
+                    let ((sq, cq), (so, co)) = (d.q_sc[j], d.offset_sc[j]);
+                    (sq * co + cq * so, cq * co - sq * so)
+                }
                 Motion::Rot => v.to_radians().sin_cos(),
                 Motion::Trans => (v, 0.0),
             };
@@ -318,36 +345,40 @@ impl Model {
     /// One sweep of the chain with the values in `d`; with `tilts` the tilt of joint i is
     /// inserted after its element (and the tilt axes recorded). Writes `rot` / `pos`.
     fn sweep(&self, d: &mut Data, tilts: bool, untilted: bool) {
-        let mut r = Matrix3::identity();
-        let mut p = Vector3::zeros();
+        // The running frame as three column values and a position (kept in registers; a
+        // `Matrix3` updated through indices went through the stack with stalled reloads).
+        let mut f = Frame::identity();
         for (k, e) in self.elems.iter().enumerate() {
-            apply_elem(e, d.elem_sc[k], d.elem_value[k], &mut r, &mut p);
+            if d.elem_value[k] != 0.0 {
+                let (s, c) = d.elem_sc[k];
+                f.apply(e.motion, e.axis.index(), s, c, d.elem_value[k]);
+            }
             if let (Some(j), true) = (e.joint, tilts) {
                 let t = d.tilts_deg[j];
-                let x0 = r.column(0).into_owned();
+                let x0 = f.cols[0];
                 if t.x != 0.0 {
                     let (s, c) = t.x.to_radians().sin_cos();
-                    rotate_cols(&mut r, 0, s, c);
+                    f.rotate(0, s, c);
                 }
-                let x1 = r.column(1).into_owned();
+                let x1 = f.cols[1];
                 if t.y != 0.0 {
                     let (s, c) = t.y.to_radians().sin_cos();
-                    rotate_cols(&mut r, 1, s, c);
+                    f.rotate(1, s, c);
                 }
-                let x2 = r.column(2).into_owned();
+                let x2 = f.cols[2];
                 if t.z != 0.0 {
                     let (s, c) = t.z.to_radians().sin_cos();
-                    rotate_cols(&mut r, 2, s, c);
+                    f.rotate(2, s, c);
                 }
                 d.tilt_axes[j] = [x0, x1, x2];
             }
-            if untilted {
-                d.rot0[k] = r;
-                d.pos0_mm[k] = p;
+            let (rot, pos) = if untilted {
+                (&mut d.rot0[k], &mut d.pos0_mm[k])
             } else {
-                d.rot[k] = r;
-                d.pos_mm[k] = p;
-            }
+                (&mut d.rot[k], &mut d.pos_mm[k])
+            };
+            *rot = Matrix3::from_columns(&f.cols);
+            *pos = f.pos;
         }
     }
 
@@ -395,9 +426,10 @@ impl Model {
         d: &mut Data,
         q_deg: &[f64],
     ) -> Result<(), ModelError> {
+        d.q_sc_given = false;
         self.check_joints(q_deg)?;
         d.sync(self);
-        self.load_joints(d, q_deg);
+        self.load_joints(d, q_deg, false);
         self.sweep(d, false, true);
         self.static_moments(d);
         d.has_untilted = true;
@@ -447,9 +479,11 @@ impl Model {
         q_deg: &[f64],
         tilt: Tilt<'_>,
     ) -> Result<(), ModelError> {
+        // Given sines and cosines are for this evaluation only, even one that fails.
+        let given = std::mem::replace(&mut d.q_sc_given, false);
         self.check_joints(q_deg)?;
         self.tilt_checks(d, tilt)?;
-        self.load_joints(d, q_deg);
+        self.load_joints(d, q_deg, given);
         d.has_untilted = false;
         d.tilted = !matches!(tilt, Tilt::Off);
         match tilt {
@@ -478,18 +512,44 @@ impl Model {
     }
 }
 
-/// Applies one element with cached `(sin, cos)` / value to the running frame.
-#[inline]
-fn apply_elem(e: &Elem, sc: (f64, f64), v: f64, r: &mut Matrix3<f64>, p: &mut Vector3<f64>) {
-    match e.motion {
-        Motion::Rot => {
-            if v != 0.0 {
-                rotate_cols(r, e.axis.index(), sc.0, sc.1);
-            }
+/// The running frame of a sweep: rotation columns and position (mm).
+#[derive(Debug, Clone, Copy)]
+struct Frame {
+    cols: [Vector3<f64>; 3],
+    pos: Vector3<f64>,
+}
+
+impl Frame {
+    fn identity() -> Self {
+        Self {
+            cols: [Vector3::x(), Vector3::y(), Vector3::z()],
+            pos: Vector3::zeros(),
         }
-        Motion::Trans => {
-            if v != 0.0 {
-                *p += r.column(e.axis.index()) * v;
+    }
+
+    /// `R <- R . R_axis(angle)` given `(sin, cos)`: the two other columns turn.
+    #[inline(always)]
+    fn rotate(&mut self, axis: usize, s: f64, c: f64) {
+        let [x, y, z] = self.cols;
+        self.cols = match axis {
+            0 => [x, y * c + z * s, z * c - y * s],
+            1 => [x * c - z * s, y, z * c + x * s],
+            _ => [x * c + y * s, y * c - x * s, z],
+        };
+    }
+
+    /// One element with its cached `(sin, cos)` (rotation) or value `v` (translation).
+    #[inline(always)]
+    fn apply(&mut self, motion: Motion, axis: usize, s: f64, c: f64, v: f64) {
+        match motion {
+            Motion::Rot => self.rotate(axis, s, c),
+            Motion::Trans => {
+                let [x, y, z] = self.cols;
+                self.pos += match axis {
+                    0 => x,
+                    1 => y,
+                    _ => z,
+                } * v;
             }
         }
     }

@@ -32,7 +32,8 @@ pub enum Wrt {
 }
 
 /// Twist of element `e` moved at `rate` in the frames `rot` / `pos`: `(w rad, v mm)` with point
-/// velocity `w x x + v`.
+/// velocity `w x x + v`. Inlined: returning the pair through memory stalled the per-pose loop.
+#[inline(always)]
 fn elem_twist(
     model: &Model,
     rot: &[Matrix3<f64>],
@@ -55,8 +56,32 @@ fn elem_twist(
     }
 }
 
+/// Velocity of the point `p` when element `e` moves at `rate` in the frames `rot` / `pos`
+/// (`w x (p - o)` for a rotation about an axis through `o`, the axis for a translation).
+#[inline(always)]
+fn elem_point_velocity(
+    model: &Model,
+    rot: &[Matrix3<f64>],
+    pos: &[Vector3<f64>],
+    e: usize,
+    rate: f64,
+    p: &Vector3<f64>,
+) -> Vector3<f64> {
+    let ax = model.elems[e].axis.index();
+    let (axis, o) = if e == 0 {
+        (Vector3::ith(ax, 1.0), Vector3::zeros())
+    } else {
+        (rot[e - 1].column(ax).into_owned(), pos[e - 1])
+    };
+    match model.elems[e].motion {
+        Motion::Rot => (axis * (rate * DEG)).cross(&(p - o)),
+        Motion::Trans => axis * rate,
+    }
+}
+
 impl Model {
     /// The element a coordinate moves directly, and its rate (deg or mm per unit).
+    #[inline(always)]
     fn direct_effect(&self, d: &Data, wrt: Wrt, q_deg: &[f64]) -> Option<(usize, f64)> {
         match wrt {
             Wrt::Joint(j) => Some((self.joints[j].elem, d.joint_dv[j])),
@@ -138,14 +163,14 @@ impl Model {
     }
 
     /// Column of the Jacobian wrt one coordinate (unscaled), from an evaluated workspace.
+    #[inline]
     fn jacobian_column(&self, d: &Data, w: Wrt, q_deg: &[f64]) -> Vector3<f64> {
         let p = d.tool_unscaled();
         let direct = self.direct_effect(d, w, q_deg);
-        let mut col = Vector3::zeros();
-        if let Some((e, rate)) = direct {
-            let (tw, tv) = elem_twist(self, &d.rot, &d.pos_mm, e, rate);
-            col += tw.cross(&p) + tv;
-        }
+        let mut col = match direct {
+            Some((e, rate)) => elem_point_velocity(self, &d.rot, &d.pos_mm, e, rate, &p),
+            None => Vector3::zeros(),
+        };
         if !d.tilted {
             return col;
         }
@@ -203,7 +228,10 @@ impl Model {
         tilt: Tilt<'_>,
         wrt: &[Wrt],
     ) -> Result<(), ModelError> {
-        self.check_wrt(wrt)?;
+        if let Err(e) = self.check_wrt(wrt) {
+            d.q_sc_given = false;
+            return Err(e);
+        }
         self.fk_synced(d, q_deg, tilt)?;
         if d.tilted {
             self.tilt_sensitivities(d);
@@ -215,8 +243,15 @@ impl Model {
         for &w in wrt {
             if w == Wrt::Param(self.scale_param) {
                 jac.push(p * 1e-6);
-            } else {
+            } else if d.tilted {
                 jac.push(self.jacobian_column(d, w, q_deg) * sf);
+            } else {
+                // Untilted: the direct effect only (inlined; the common identification case).
+                let col = match self.direct_effect(d, w, q_deg) {
+                    Some((e, rate)) => elem_point_velocity(self, &d.rot, &d.pos_mm, e, rate, &p),
+                    None => Vector3::zeros(),
+                };
+                jac.push(col * sf);
             }
         }
         d.jac = jac;

@@ -1,0 +1,224 @@
+//! The second core of an identification on normal equations: a thread that lives as long as
+//! the problem ([`super::accumulate::PositionNormalProblem`]) and accumulates the second half
+//! of the chunks of every evaluation, while the calling thread does the first half.
+//!
+//! Starting a thread per evaluation cost 50-100 us each (a fresh stack, the scheduler), about
+//! a tenth of a 1000-pose evaluation; this one blocks on a channel between evaluations (it does
+//! not spin). It owns copies of what it needs (the unknowns' model, the poses, the joint sines
+//! and cosines), receives the unknowns' values, and sends back its per-chunk sums; the buffers
+//! travel back and forth, so an evaluation allocates nothing. The chunks and their order of
+//! summation are those of [`super::accumulate::Accumulator`], so the results are bitwise the
+//! same as on one thread.
+
+use std::ops::Range;
+use std::sync::mpsc::{sync_channel, Receiver, SyncSender};
+use std::sync::Arc;
+use std::thread::JoinHandle;
+
+use nalgebra::DVector;
+
+use super::accumulate::{Accumulator, JointTrig};
+use super::normal::Normal;
+use super::problem::{Poses, Unknowns};
+use crate::model::ModelError;
+
+/// What an evaluation computes.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub(super) enum Work {
+    /// Normal equations per chunk.
+    Normal,
+    /// `r^T r` per chunk.
+    SumSq,
+}
+
+/// The buffers that travel between the threads.
+struct Buffers {
+    x: DVector<f64>,
+    normals: Vec<Normal>,
+    sums: Vec<f64>,
+}
+
+struct Request {
+    work: Work,
+    chunks: Range<usize>,
+    buffers: Buffers,
+}
+
+struct Reply {
+    result: Result<(), ModelError>,
+    buffers: Buffers,
+}
+
+/// The helper thread and its channels (see the module doc); joined when dropped.
+pub(super) struct Helper {
+    tx: Option<SyncSender<Request>>,
+    rx: Receiver<Reply>,
+    handle: Option<JoinHandle<()>>,
+    /// The buffers while they are on this side; `None` while the helper works.
+    buffers: Option<Buffers>,
+    /// The chunks of the evaluation under way.
+    chunks: Range<usize>,
+}
+
+impl Helper {
+    /// A helper for the unknowns `unknowns` of an identification on `poses` (copied), for
+    /// evaluations of up to `chunks` chunks; `None` when the thread cannot be started (the
+    /// caller then works alone).
+    pub(super) fn spawn(
+        unknowns: &Unknowns,
+        poses: &Poses,
+        trig: Arc<JointTrig>,
+        tilt: bool,
+        chunks: usize,
+    ) -> Option<Self> {
+        let n = unknowns.cols().len();
+        let (tx, requests) = sync_channel::<Request>(1);
+        let (replies, rx) = sync_channel::<Reply>(1);
+        let mut unknowns = unknowns.clone();
+        let poses = poses.clone();
+        let mut acc = Accumulator::with_threads(unknowns.model(), poses.len(), unknowns.cols(), 1);
+        let handle = std::thread::Builder::new()
+            .name("rigctl-accumulate".into())
+            .spawn(move || {
+                while let Ok(Request {
+                    work,
+                    chunks,
+                    mut buffers,
+                }) = requests.recv()
+                {
+                    let result = serve(
+                        &mut unknowns,
+                        &mut acc,
+                        &poses,
+                        &trig,
+                        tilt,
+                        work,
+                        &chunks,
+                        &mut buffers,
+                    );
+                    if replies.send(Reply { result, buffers }).is_err() {
+                        break;
+                    }
+                }
+            })
+            .ok()?;
+        let back = chunks.saturating_sub(chunks.div_ceil(2));
+        Some(Self {
+            tx: Some(tx),
+            rx,
+            handle: Some(handle),
+            buffers: Some(Buffers {
+                x: DVector::zeros(n),
+                normals: vec![Normal::zeros(n); back],
+                sums: vec![0.0; back],
+            }),
+            chunks: 0..0,
+        })
+    }
+
+    /// Starts `work` at the unknowns' values `x` on the chunks `chunks` (at most the second half
+    /// given at [`Helper::spawn`]); [`Helper::finish`] waits for it.
+    pub(super) fn start(
+        &mut self,
+        x: &DVector<f64>,
+        work: Work,
+        chunks: Range<usize>,
+    ) -> Result<(), ModelError> {
+        let stopped = || ModelError::Invalid("the accumulation thread stopped".into());
+        let mut buffers = self.buffers.take().ok_or_else(stopped)?;
+        if buffers.normals.len() < chunks.len() || buffers.x.len() != x.len() {
+            self.buffers = Some(buffers);
+            return Err(ModelError::Invalid(
+                "accumulation thread buffers do not match the evaluation".into(),
+            ));
+        }
+        buffers.x.copy_from(x);
+        self.chunks = chunks.clone();
+        let tx = self.tx.as_ref().ok_or_else(stopped)?;
+        tx.send(Request {
+            work,
+            chunks,
+            buffers,
+        })
+        .map_err(|_| stopped())
+    }
+
+    /// Waits for the evaluation started last and copies its per-chunk results into
+    /// `normals` / `sums` (indexed by chunk, as in the caller's accumulator).
+    pub(super) fn finish(
+        &mut self,
+        work: Work,
+        normals: &mut [Normal],
+        sums: &mut [f64],
+    ) -> Result<(), ModelError> {
+        let Reply { result, buffers } = self
+            .rx
+            .recv()
+            .map_err(|_| ModelError::Invalid("the accumulation thread stopped".into()))?;
+        let chunks = self.chunks.clone();
+        for (k, c) in chunks.enumerate() {
+            match work {
+                Work::Normal => {
+                    if let (Some(dst), Some(src)) = (normals.get_mut(c), buffers.normals.get(k)) {
+                        dst.assign(src);
+                    }
+                }
+                Work::SumSq => {
+                    if let (Some(dst), Some(src)) = (sums.get_mut(c), buffers.sums.get(k)) {
+                        *dst = *src;
+                    }
+                }
+            }
+        }
+        self.buffers = Some(buffers);
+        result
+    }
+}
+
+/// One request on the helper's side: its unknowns set to `x`, the chunks accumulated with its
+/// own accumulator, the per-chunk results copied into the buffers.
+#[allow(clippy::too_many_arguments)]
+fn serve(
+    unknowns: &mut Unknowns,
+    acc: &mut Accumulator,
+    poses: &Poses,
+    trig: &JointTrig,
+    tilt: bool,
+    work: Work,
+    chunks: &Range<usize>,
+    buffers: &mut Buffers,
+) -> Result<(), ModelError> {
+    unknowns.set(&buffers.x)?;
+    let model = unknowns.model();
+    match work {
+        Work::Normal => acc.normal_chunks(model, poses, Some(trig), tilt, chunks.clone())?,
+        Work::SumSq => acc.sum_sq_chunks(model, poses, Some(trig), tilt, chunks.clone())?,
+    }
+    let (normals, sums) = acc.partial_mut();
+    for (k, c) in chunks.clone().enumerate() {
+        match work {
+            Work::Normal => {
+                if let (Some(dst), Some(src)) = (buffers.normals.get_mut(k), normals.get(c)) {
+                    dst.assign(src);
+                }
+            }
+            Work::SumSq => {
+                if let (Some(dst), Some(src)) = (buffers.sums.get_mut(k), sums.get(c)) {
+                    *dst = *src;
+                }
+            }
+        }
+    }
+    Ok(())
+}
+
+impl Drop for Helper {
+    fn drop(&mut self) {
+        // Closing the request channel ends the thread's loop.
+        self.tx.take();
+        if let Some(h) = self.handle.take() {
+            // A panic on the helper was already reported as a stopped thread.
+            let _ = h.join();
+        }
+    }
+}
