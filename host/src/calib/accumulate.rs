@@ -5,7 +5,6 @@
 //! number of threads (deterministic).
 
 use std::ops::Range;
-use std::sync::Arc;
 
 use nalgebra::{DMatrix, DMatrixView, DVector, Vector3};
 
@@ -408,7 +407,7 @@ pub fn normal_equations_with(
 pub struct PositionNormalProblem<'a> {
     unknowns: Unknowns,
     poses: &'a Poses,
-    trig: Arc<JointTrig>,
+    trig: JointTrig,
     tilt: bool,
     acc: Accumulator,
     helper: Option<Helper>,
@@ -430,9 +429,8 @@ impl<'a> PositionNormalProblem<'a> {
     ) -> Self {
         let chunks = n_chunks(poses.len());
         let unknowns = Unknowns::new(model, cols);
-        let trig = Arc::new(trig);
         let helper = (chunks > 1 && THREADS > 1)
-            .then(|| Helper::spawn(&unknowns, poses, Arc::clone(&trig), tilt, chunks))
+            .then(|| Helper::spawn(&unknowns, poses, tilt, chunks.div_ceil(2), chunks))
             .flatten();
         let threads = if helper.is_some() { 1 } else { THREADS };
         let acc = Accumulator::with_threads(model, poses.len(), unknowns.cols(), threads);
@@ -458,7 +456,7 @@ impl<'a> PositionNormalProblem<'a> {
         let (model, poses, trig, tilt) = (
             self.unknowns.model(),
             self.poses,
-            Some(&*self.trig),
+            Some(&self.trig),
             self.tilt,
         );
         let Some(helper) = self.helper.as_mut() else {

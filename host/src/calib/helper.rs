@@ -4,20 +4,19 @@
 //!
 //! Starting a thread per evaluation cost 50-100 us each (a fresh stack, the scheduler), about
 //! a tenth of a 1000-pose evaluation; this one blocks on a channel between evaluations (it does
-//! not spin). It owns copies of what it needs (the unknowns' model, the poses, the joint sines
-//! and cosines), receives the unknowns' values, and sends back its per-chunk sums; the buffers
-//! travel back and forth, so an evaluation allocates nothing. The chunks and their order of
-//! summation are those of [`super::accumulate::Accumulator`], so the results are bitwise the
-//! same as on one thread.
+//! not spin). It owns copies of what it needs (the unknowns' model, the poses of its half of the
+//! chunks and their joint sines and cosines), receives the unknowns' values, and sends back its
+//! per-chunk sums; the buffers travel back and forth, so an evaluation allocates nothing. The
+//! chunks and their order of summation are those of [`super::accumulate::Accumulator`], so the
+//! results are bitwise the same as on one thread.
 
 use std::ops::Range;
 use std::sync::mpsc::{sync_channel, Receiver, SyncSender};
-use std::sync::Arc;
 use std::thread::JoinHandle;
 
 use nalgebra::DVector;
 
-use super::accumulate::{Accumulator, JointTrig};
+use super::accumulate::{Accumulator, JointTrig, CHUNK_POSES};
 use super::normal::Normal;
 use super::problem::{Poses, Unknowns};
 use crate::model::ModelError;
@@ -61,39 +60,46 @@ pub(super) struct Helper {
 }
 
 impl Helper {
-    /// A helper for the unknowns `unknowns` of an identification on `poses` (copied), for
-    /// evaluations of up to `chunks` chunks; `None` when the thread cannot be started (the
-    /// caller then works alone).
+    /// A helper for the unknowns `unknowns` of an identification on `poses` in `chunks` chunks:
+    /// it takes the chunks `first..chunks` (a copy of their poses); `None` when the thread
+    /// cannot be started (the caller then works alone).
     pub(super) fn spawn(
         unknowns: &Unknowns,
         poses: &Poses,
-        trig: Arc<JointTrig>,
         tilt: bool,
+        first: usize,
         chunks: usize,
     ) -> Option<Self> {
         let n = unknowns.cols().len();
+        let start = (first * CHUNK_POSES).min(poses.len());
+        let tail = Poses {
+            q_deg: poses.q_deg[start..].to_vec(),
+            xyz_mm: poses.xyz_mm[start..].to_vec(),
+        };
         let (tx, requests) = sync_channel::<Request>(1);
         let (replies, rx) = sync_channel::<Reply>(1);
         let mut unknowns = unknowns.clone();
-        let poses = poses.clone();
-        let mut acc = Accumulator::with_threads(unknowns.model(), poses.len(), unknowns.cols(), 1);
         let handle = std::thread::Builder::new()
             .name("rigctl-accumulate".into())
             .spawn(move || {
+                let trig = JointTrig::new(&tail);
+                let mut acc =
+                    Accumulator::with_threads(unknowns.model(), tail.len(), unknowns.cols(), 1);
                 while let Ok(Request {
                     work,
                     chunks,
                     mut buffers,
                 }) = requests.recv()
                 {
+                    let here = chunks.start.saturating_sub(first)..chunks.end.saturating_sub(first);
                     let result = serve(
                         &mut unknowns,
                         &mut acc,
-                        &poses,
+                        &tail,
                         &trig,
                         tilt,
                         work,
-                        &chunks,
+                        &here,
                         &mut buffers,
                     );
                     if replies.send(Reply { result, buffers }).is_err() {
@@ -102,7 +108,7 @@ impl Helper {
                 }
             })
             .ok()?;
-        let back = chunks.saturating_sub(chunks.div_ceil(2));
+        let back = chunks.saturating_sub(first);
         Some(Self {
             tx: Some(tx),
             rx,
@@ -116,8 +122,8 @@ impl Helper {
         })
     }
 
-    /// Starts `work` at the unknowns' values `x` on the chunks `chunks` (at most the second half
-    /// given at [`Helper::spawn`]); [`Helper::finish`] waits for it.
+    /// Starts `work` at the unknowns' values `x` on the chunks `chunks` (within the ones given
+    /// at [`Helper::spawn`]); [`Helper::finish`] waits for it.
     pub(super) fn start(
         &mut self,
         x: &DVector<f64>,
@@ -175,8 +181,9 @@ impl Helper {
     }
 }
 
-/// One request on the helper's side: its unknowns set to `x`, the chunks accumulated with its
-/// own accumulator, the per-chunk results copied into the buffers.
+/// One request on the helper's side: its unknowns set to `x`, the chunks `chunks` of its poses
+/// (numbered from its first) accumulated with its own accumulator, the per-chunk results copied
+/// into the buffers.
 #[allow(clippy::too_many_arguments)]
 fn serve(
     unknowns: &mut Unknowns,
