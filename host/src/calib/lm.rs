@@ -46,6 +46,10 @@ pub struct LmConfig {
     pub initial_damping: f64,
     /// Singular values of the scaled Jacobian below `rank_rtol * s_max` are treated as zero.
     pub rank_rtol: f64,
+    /// End a converged solve with one Gauss-Newton correction ([`ScaledSvd::final_correction`]:
+    /// one more evaluation; the fit is then the optimum to round-off along weakly seen
+    /// directions too). Off for approximate refits (cross-validation folds).
+    pub final_correction: bool,
 }
 
 impl Default for LmConfig {
@@ -57,6 +61,7 @@ impl Default for LmConfig {
             gtol: 1e-10,
             initial_damping: 1e-4,
             rank_rtol: 1e-12,
+            final_correction: true,
         }
     }
 }
@@ -416,7 +421,7 @@ pub fn solve<P: Problem>(
         }
         iterations += 1;
     };
-    if termination.converged() && cost > 0.0 {
+    if cfg.final_correction && termination.converged() && cost > 0.0 {
         let js = scale_columns(&jac, &mut diag);
         if let Some(y) = ScaledSvd::new(js, &r).and_then(|svd| svd.final_correction(cost, cfg)) {
             let x_try = &x + y.component_div(&diag);

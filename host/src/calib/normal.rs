@@ -363,7 +363,7 @@ pub fn solve_normal_from<P: NormalProblem>(
         }
         iterations += 1;
     };
-    if termination.converged() && cost > 0.0 {
+    if cfg.final_correction && termination.converged() && cost > 0.0 {
         // The final Gauss-Newton correction ([`ScaledSvd::final_correction`]) from the last
         // linearisation, evaluated so that `eq` and `cost` are those of the returned point; kept
         // unless the cost grew beyond round-off (its predicted change is below `ftol` of it).

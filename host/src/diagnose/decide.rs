@@ -98,6 +98,7 @@ impl Default for DecideConfig {
             lm_cv: LmConfig {
                 max_iterations: 30,
                 ftol: 1e-10,
+                final_correction: false,
                 ..LmConfig::default()
             },
             rtol: crate::calib::identifiability::DEFAULT_RTOL,
