@@ -108,7 +108,7 @@ impl Classify for CompensateError {
             },
             CompensateError::Model(e) => e.kind(),
             CompensateError::Transmission { source, .. } => match source {
-                transmission::InvertError::Model(e) => e.kind(),
+                transmission::InvertError::Model { source, .. } => source.kind(),
                 transmission::InvertError::NotInvertible { .. } => ErrorKind::Failure,
             },
             CompensateError::Write(_) => ErrorKind::Failure,
@@ -242,12 +242,11 @@ fn apply_transmission(
     let q_eff: Vec<Vec<f64>> = out.iter().map(|p| p.q_deg.clone()).collect();
     let t_s: Option<Vec<f64>> = points.iter().map(|p| p.t_s).collect();
     let commands = transmission::commands_for(model, &q_eff, t_s.as_deref()).map_err(|source| {
-        let line = match &source {
-            transmission::InvertError::NotInvertible { index, .. } => {
-                points.get(*index).map_or(0, |p| p.line)
-            }
-            transmission::InvertError::Model(_) => 0,
+        let index = match &source {
+            transmission::InvertError::NotInvertible { index, .. }
+            | transmission::InvertError::Model { index, .. } => *index,
         };
+        let line = points.get(index).map_or(0, |p| p.line);
         CompensateError::Transmission {
             file: file.to_string(),
             line,

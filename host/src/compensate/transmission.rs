@@ -27,10 +27,18 @@ const MAX_ITERATIONS: usize = 50;
 /// Why no command gives an angle.
 #[derive(Debug, thiserror::Error)]
 pub enum InvertError {
-    #[error(transparent)]
-    Model(#[from] ModelError),
+    /// The model failed at a path point (pose index).
+    #[error("path point {} (1-based): {source}", .index + 1)]
+    Model {
+        index: usize,
+        #[source]
+        source: ModelError,
+    },
     /// The transmission map is singular or the iteration did not converge (pose index).
-    #[error("path point {index}: the transmission terms cannot be inverted: {problem}")]
+    #[error(
+        "path point {} (1-based): the transmission terms cannot be inverted: {problem}",
+        .index + 1
+    )]
     NotInvertible { index: usize, problem: String },
 }
 
@@ -174,13 +182,14 @@ fn solve(
         .filter(|j| !held.iter().any(|(h, _)| h == j))
         .collect();
     let fail = |problem: String| InvertError::NotInvertible { index, problem };
+    let model_err = |source| InvertError::Model { index, source };
     for _ in 0..MAX_ITERATIONS {
-        let eff = terms.effective_joints(model, &q, d)?;
+        let eff = terms.effective_joints(model, &q, d).map_err(model_err)?;
         let r = DVector::from_iterator(free.len(), free.iter().map(|&j| eff[j] - target[j]));
         if r.amax() < TOLERANCE_DEG {
             return Ok(q);
         }
-        let jac = terms.joint_map_jacobian(model, &q)?;
+        let jac = terms.joint_map_jacobian(model, &q).map_err(model_err)?;
         let sub = DMatrix::from_fn(free.len(), free.len(), |a, b| jac[(free[a], free[b])]);
         let dx = sub
             .lu()
