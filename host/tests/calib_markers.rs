@@ -161,11 +161,7 @@ fn an_incomplete_point_or_a_missing_cell_is_bad_input_naming_the_place() {
             ":1:",
             "z1",
         ),
-        (
-            "q1,q2,q3,q4,x,y,z,x2,y2,z2\n1,2,3,4,5,6,7,8,9,10\n",
-            ":1:",
-            "x",
-        ),
+        ("q1,q2,q3,q4,x,y,x2,y2,z2\n1,2,3,4,5,6,8,9,10\n", ":1:", "x"),
         (
             "q1,q2,q3,q4,x1,y1,z1,x2,y2,z2\n1,2,3,4,5,6,7,8,,10\n",
             ":2:",
@@ -253,5 +249,93 @@ fn fk_reads_metres_and_radians() {
     assert!(
         (row[0] - p.x).abs() < 1e-6 && (row[1] - p.y).abs() < 1e-6 && (row[2] - p.z).abs() < 1e-6
     );
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
+/// Copies a pose file with two more columns whose names look like numbered points (`z2` with a
+/// number, `x1` with text or nothing): FORMATS.md keeps them and ignores them.
+fn with_point_like_columns(from: &Path, to: &Path) {
+    let text = std::fs::read_to_string(from).unwrap();
+    let mut out = String::new();
+    for (i, line) in text.lines().enumerate() {
+        let more = match i {
+            0 => ",z2,x1",
+            _ if i % 2 == 0 => ",7.5,",
+            _ => ",-3,note",
+        };
+        out.push_str(line);
+        out.push_str(more);
+        out.push('\n');
+    }
+    std::fs::write(to, out).unwrap();
+}
+
+/// Runs rigctl with `args`, asserts exit 0, returns stdout.
+fn run_ok(args: &[&std::ffi::OsStr]) -> String {
+    let out = rigctl().args(args).output().unwrap();
+    assert!(
+        out.status.success(),
+        "{args:?}: {}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    String::from_utf8_lossy(&out.stdout).into_owned()
+}
+
+#[test]
+fn plain_xyz_with_point_like_columns_is_read_by_calibrate_fk_and_diagnose() {
+    let dir = scratch("plain");
+    let os = |s: &str| std::ffi::OsString::from(s);
+    let p = |name: &str| dir.join(name).into_os_string();
+    run_ok(&[
+        &os("simulate"),
+        &os("--out"),
+        &p("sim"),
+        &os("--seed"),
+        &os("5"),
+    ]);
+    for f in ["cal", "val"] {
+        with_point_like_columns(
+            &dir.join(format!("sim/{f}.csv")),
+            &dir.join(format!("{f}2.csv")),
+        );
+    }
+    let (cal, val) = (p("sim/cal.csv"), p("sim/val.csv"));
+    let (cal2, val2) = (p("cal2.csv"), p("val2.csv"));
+    // calibrate: the same identification as without the extra columns.
+    let cal_json = |c: &std::ffi::OsStr, v: &std::ffi::OsStr, out: &str| {
+        run_ok(&[
+            &os("calibrate"),
+            &os("--poses"),
+            c,
+            &os("--validate"),
+            v,
+            &os("--json"),
+            &p(out),
+        ]);
+        let doc: serde_json::Value =
+            serde_json::from_str(&std::fs::read_to_string(dir.join(out)).unwrap()).unwrap();
+        doc
+    };
+    let a = cal_json(&cal, &val, "a.json");
+    let b = cal_json(&cal2, &val2, "b.json");
+    assert_eq!(a["parameters"], b["parameters"]);
+    assert_eq!(a["validation"], b["validation"]);
+    // fk: the same positions.
+    let fk = |c: &std::ffi::OsStr| run_ok(&[&os("fk"), &os("--joints"), c]);
+    assert_eq!(fk(&cal), fk(&cal2));
+    // diagnose reads it too (every pose, both files).
+    run_ok(&[
+        &os("diagnose"),
+        &os("--poses"),
+        &cal2,
+        &os("--validate"),
+        &val2,
+        &os("--json"),
+        &p("d.json"),
+    ]);
+    let d: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(dir.join("d.json")).unwrap()).unwrap();
+    assert_eq!(d["declared"]["validation"]["n"], 60);
+    assert_eq!(d["final"]["calibration"]["n"], 118);
     let _ = std::fs::remove_dir_all(&dir);
 }

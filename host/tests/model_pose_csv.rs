@@ -37,6 +37,57 @@ fn reads_columns_comments_and_extras() {
     assert_eq!(f.positions_mm(), None);
 }
 
+/// FORMATS.md: other columns are kept and ignored, also when their names look like numbered
+/// points (`x1`, `z2`); with plain `x,y,z` those are the measurement. Without plain `x,y,z`
+/// the numbered points are the measurement (README "Pose files: extensions").
+#[test]
+fn plain_xyz_wins_over_columns_named_like_numbered_points() {
+    let text = "q1,q2,q3,q4,q5,z2,x,y,z,x1
+1,2,3,4,5,junk,10,20,30,
+";
+    let f = parse_poses(text, "mem.csv", &spec(true)).unwrap();
+    assert_eq!(f.poses[0].xyz_mm, Some([10.0, 20.0, 30.0]));
+    assert_eq!(f.poses[0].markers_mm, [[10.0, 20.0, 30.0]]);
+    assert_eq!(f.n_markers(), 1);
+    assert_eq!(f.extra_columns, ["z2", "x1"]);
+    assert_eq!(f.extra(0, "z2"), Some("junk"));
+    // The same without the plain point: two numbered points.
+    let text = "q1,q2,q3,q4,q5,x1,y1,z1,x2,y2,z2
+1,2,3,4,5,1,2,3,4,5,6
+";
+    let f = parse_poses(text, "mem.csv", &spec(true)).unwrap();
+    assert_eq!(f.poses[0].markers_mm, [[1.0, 2.0, 3.0], [4.0, 5.0, 6.0]]);
+    assert_eq!(f.poses[0].xyz_mm, Some([1.0, 2.0, 3.0]));
+    assert!(f.extra_columns.is_empty());
+    // Incomplete groups without a complete plain x,y,z stay bad input naming the column.
+    for (text, column) in [
+        (
+            "q1,q2,q3,q4,q5,x1,y1,x2,y2,z2
+0,0,0,0,0,1,2,3,4,5
+",
+            "`z1`",
+        ),
+        (
+            "q1,q2,q3,q4,q5,x,y,x1,y1,z1
+0,0,0,0,0,1,2,3,4,5
+",
+            "`x`",
+        ),
+        (
+            "q1,q2,q3,q4,q5,x0,y0,z0
+0,0,0,0,0,1,2,3
+",
+            "`x1`",
+        ),
+    ] {
+        let msg = parse_poses(text, "p.csv", &spec(false))
+            .unwrap_err()
+            .to_string();
+        assert!(msg.starts_with("p.csv:1: "), "{msg}");
+        assert!(msg.contains(column), "`{msg}` should name {column}");
+    }
+}
+
 /// Each rule: text, expected line, a fragment the message must contain.
 #[test]
 fn every_bad_input_rule_names_file_line_and_column() {

@@ -1,7 +1,7 @@
 //! The identification beyond one tool point and the chain parameters: several measured points
 //! per pose ([`Measurements`], each point with its own offset in the tool frame) and joint
 //! compliance (a joint deflection proportional to the gravity torque about its axis, the
-//! `compliance:j<i>` law of [`crate::model::gravity::compliance_deflected`]).
+//! `compliance:j<i>` law of [`crate::model::transmission::compliance_deflection_deg`]).
 //!
 //! Prediction of measurement (pose i, slot k):
 //!
@@ -21,7 +21,8 @@ use super::identifiability::analyse;
 use super::lm::{solve, LmConfig, Problem};
 use super::measurements::Measurements;
 use super::problem::tilt_mode;
-use crate::model::gravity::{compliance_deflected, GravityModel};
+use crate::model::gravity::GravityModel;
+use crate::model::transmission::{compliance_deflected, compliance_regressor};
 use crate::model::{Model, ModelError, Wrt};
 
 /// One unknown of the general identification.
@@ -224,7 +225,7 @@ impl GeneralModel {
                     // The tool point of slot 0 is not the point of the other slots.
                     Unknown::Param(p) if m.slot != 0 && t.contains(&p) => 0.0,
                     Unknown::Offset { slot, .. } if slot != m.slot || slot == 0 => 0.0,
-                    Unknown::Compliance(jt) => tau_i.get(jt).copied().unwrap_or(0.0),
+                    Unknown::Compliance(jt) => compliance_regressor(tau_i, jt),
                     _ => 1.0,
                 };
                 jac.view_mut((3 * i, c), (3, 1))

@@ -1,6 +1,7 @@
 //! `rigctl compensate --path PATH.csv [--robot NAME | --model CALIBRATED.toml] [--set ...]
 //! [--no-tilt] [--no-nominal] --out JOINTS.csv`: joints that put the calibrated, tilting arm on a
-//! Cartesian path (thesis eq. 5.22; see `rigctl::compensate`).
+//! Cartesian path (thesis eq. 5.22; see `rigctl::compensate`), through the model file's
+//! transmission terms when it has some.
 
 use std::path::PathBuf;
 
@@ -56,6 +57,26 @@ pub fn run(args: Args) -> Result<(), CliError> {
     let file = args.path.display().to_string();
     let out = compensate(&model, nominal.as_ref(), &points, tilt, &file)?;
     write_joints_csv(&args.out, model.n_joints(), &out)?;
+    let held: Vec<String> = out
+        .iter()
+        .zip(&points)
+        .filter(|(o, _)| !o.held_joints.is_empty())
+        .map(|(o, p)| {
+            let joints: Vec<String> = o
+                .held_joints
+                .iter()
+                .map(|j| format!("q{}", j + 1))
+                .collect();
+            format!("line {} ({})", p.line, joints.join(", "))
+        })
+        .collect();
+    if !held.is_empty() {
+        errln!(
+            "rigctl compensate: warning: {} path point(s) ask a joint with hysteresis to reverse by less than its dead band (2 x hysteresis_deg); the joint is held at its previous command there and misses by less than the dead band: {}",
+            held.len(),
+            held.join("; ")
+        );
+    }
     errln!("{} path points -> {}", out.len(), args.out.display());
     Ok(())
 }

@@ -8,6 +8,9 @@
 //! ([`crate::model::ik::solve`], Gauss-Newton to convergence, i.e. eq. 5.22 iterated), with static
 //! tilting on by default, seeded with the previous point's solution. The nominal model's rigid IK
 //! joints (what an uncalibrated controller would command) are given alongside for comparison.
+//! When the model carries transmission terms (model file `joint_scale`, `joint_coupling`,
+//! `hysteresis_deg`, `compliance_deg_per_kgfm`), the IK gives the angles the joints must take
+//! and the commands are the readings the terms map to them ([`transmission::commands_for`]).
 //!
 //! # Input: `PATH.csv`
 //! | column | unit | meaning |
@@ -33,6 +36,8 @@ use crate::model::ik::{solve, IkError, IkTilt};
 use crate::model::{Model, ModelError};
 use crate::sim::plan::KATANA_SEED_DEG;
 
+pub mod transmission;
+
 /// Tool axis used when the path file has no `ax, ay, az` columns: straight down (-z of R).
 pub const DEFAULT_TOOL_AXIS: [f64; 3] = [0.0, 0.0, -1.0];
 
@@ -52,10 +57,14 @@ pub struct PathPoint {
 pub struct CompensatedPoint {
     /// Time (s), copied from the path point.
     pub t_s: Option<f64>,
-    /// Joints to command (deg): the calibrated model reaches the target with them.
+    /// Joints to command (deg): the calibrated model, through its transmission terms when it
+    /// has some, reaches the target with them.
     pub q_deg: Vec<f64>,
     /// The nominal model's rigid IK joints (deg), when a nominal model was given.
     pub q_nominal_deg: Option<Vec<f64>>,
+    /// Joints (0-based) held at the previous command in a hysteresis dead band: they miss
+    /// the angle by less than twice their hysteresis ([`transmission`]).
+    pub held_joints: Vec<usize>,
 }
 
 /// Why compensation failed.
@@ -76,6 +85,14 @@ pub enum CompensateError {
     /// The model failed (e.g. tilting asked of a model without tilting data).
     #[error(transparent)]
     Model(#[from] ModelError),
+    /// The model's transmission terms cannot be inverted at a path point.
+    #[error("{file}:{line}: {source}")]
+    Transmission {
+        file: String,
+        line: usize,
+        #[source]
+        source: transmission::InvertError,
+    },
     /// The output could not be written.
     #[error(transparent)]
     Write(#[from] crate::io::atomic::AtomicWriteError),
@@ -90,6 +107,10 @@ impl Classify for CompensateError {
                 IkError::Unreachable { .. } => ErrorKind::BadInput,
             },
             CompensateError::Model(e) => e.kind(),
+            CompensateError::Transmission { source, .. } => match source {
+                transmission::InvertError::Model { source, .. } => source.kind(),
+                transmission::InvertError::NotInvertible { .. } => ErrorKind::Failure,
+            },
             CompensateError::Write(_) => ErrorKind::Failure,
         }
     }
@@ -200,9 +221,47 @@ pub fn compensate(
             t_s: p.t_s,
             q_deg: q,
             q_nominal_deg: q_nominal,
+            held_joints: Vec::new(),
         });
     }
+    apply_transmission(model, points, &mut out, file)?;
     Ok(out)
+}
+
+/// Replaces the joint angles of `out` by the commands that give them through `model`'s
+/// transmission terms (pose order: by `t` when every point has one).
+fn apply_transmission(
+    model: &Model,
+    points: &[PathPoint],
+    out: &mut [CompensatedPoint],
+    file: &str,
+) -> Result<(), CompensateError> {
+    if !model.transmission().is_active() {
+        return Ok(());
+    }
+    let q_eff: Vec<Vec<f64>> = out.iter().map(|p| p.q_deg.clone()).collect();
+    let t_s: Option<Vec<f64>> = points.iter().map(|p| p.t_s).collect();
+    let commands = transmission::commands_for(model, &q_eff, t_s.as_deref()).map_err(|source| {
+        let index = match &source {
+            transmission::InvertError::NotInvertible { index, .. }
+            | transmission::InvertError::Model { index, .. } => *index,
+        };
+        let line = points.get(index).map_or(0, |p| p.line);
+        CompensateError::Transmission {
+            file: file.to_string(),
+            line,
+            source,
+        }
+    })?;
+    for (p, q) in out.iter_mut().zip(commands.q_deg) {
+        p.q_deg = q;
+    }
+    for (k, j) in commands.held {
+        if let Some(p) = out.get_mut(k) {
+            p.held_joints.push(j);
+        }
+    }
+    Ok(())
 }
 
 /// The output CSV text (see the module doc).

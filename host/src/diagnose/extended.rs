@@ -1,6 +1,7 @@
 //! The declared model extended with the effects that are not parameters of a [`Model`]: a
 //! measurement-side position drift linear in the pose time `t`, joint-offset drifts, and joint
-//! compliance (a joint deflection proportional to the gravity torque about the joint axis).
+//! compliance (a joint deflection proportional to the gravity torque about the joint axis, the
+//! law of [`crate::model::transmission::compliance_deflection_deg`]).
 //!
 //! Prediction of pose k (joint readings `q`, time `t` s):
 //!
@@ -20,7 +21,9 @@ use crate::calib::identifiability::analyse;
 use crate::calib::lm::{solve, LmConfig, Problem};
 use crate::calib::CalibError;
 use crate::model::gravity::GravityModel;
-use crate::model::transmission::{transmission_increments, JointTerms};
+use crate::model::transmission::{
+    compliance_deflection_deg, compliance_regressor, transmission_increments, JointTerms,
+};
 use crate::model::{sign_1e9, Model, ModelError, Tilt, Wrt};
 
 /// Seconds per hour (drift rates are per hour).
@@ -255,8 +258,7 @@ impl ExtModel {
             .map(|(j, q)| {
                 let drift =
                     self.joint_drift_deg_per_h.get(j).copied().unwrap_or(0.0) * t_s / S_PER_H;
-                let comp = self.compliance_deg_per_kgfm.get(j).copied().unwrap_or(0.0)
-                    * tau.get(j).copied().unwrap_or(0.0);
+                let comp = compliance_deflection_deg(&self.compliance_deg_per_kgfm, &tau, j);
                 q + drift + comp + trans[j]
             })
             .collect();
@@ -335,9 +337,7 @@ impl ExtModel {
                     v
                 }
                 (Unknown::JointDrift(_), Some(s)) => jm.column(s) * (t_s / S_PER_H),
-                (Unknown::Compliance(j), Some(s)) => {
-                    jm.column(s) * tau.get(j).copied().unwrap_or(0.0)
-                }
+                (Unknown::Compliance(j), Some(s)) => jm.column(s) * compliance_regressor(&tau, j),
                 (Unknown::JointScale(j), Some(s)) => {
                     jm.column(s) * q.get(j).copied().unwrap_or(0.0)
                 }

@@ -2,7 +2,8 @@
 //! `#` comment lines. Columns `q1..qN` (deg, mm for a prismatic joint) are required; `x,y,z`
 //! (mm) are required when the caller needs measured positions and checked whenever present;
 //! extensions (README "Pose files: extensions"): several measured points per pose as
-//! `x1,y1,z1,...,xk,yk,zk` instead of `x,y,z` (all k complete, no empty cell); the joint
+//! `x1,y1,z1,...,xk,yk,zk` instead of `x,y,z` (all k complete, no empty cell; when `x,y,z`
+//! are all present they are the measurement and numbered columns are other columns); the joint
 //! columns named by the model's joint names ([`PoseSpec::joint_names`]) instead of `q1..qN`;
 //! lengths and angles in other units ([`PoseSpec::units`], converted to mm / deg here);
 //! `t` (s) is optional and numeric; `id` is optional text; any other column is kept as text and
@@ -109,7 +110,7 @@ pub enum PoseCsvError {
     Table(TableError),
     #[error("{file}: no pose rows")]
     NoPoses { file: String },
-    /// A header that mixes `x,y,z` with numbered points `x1..`, or names a point beyond those
+    /// A header that mixes part of `x,y,z` with numbered points `x1..`, or names a point beyond those
     /// the caller can use.
     #[error("{file}:{line}: column `{column}`: {problem}")]
     Columns {
@@ -181,7 +182,9 @@ fn joint_columns(table: &Table, spec: &PoseSpec) -> Result<Vec<usize>, TableErro
         .collect()
 }
 
-/// The measured points' columns: `x,y,z`, or `x1,y1,z1 .. xk,yk,zk` (every point complete).
+/// The measured points' columns: `x,y,z` when all three are present (FORMATS.md; any numbered
+/// column `x1`, `z2`, .. is then an other column, kept and ignored), else `x1,y1,z1 .. xk,yk,zk`
+/// (every point complete).
 fn marker_columns(table: &Table, spec: &PoseSpec) -> Result<Vec<[usize; 3]>, PoseCsvError> {
     let numbered = |name: &str| -> Option<usize> {
         let rest = name.strip_prefix(['x', 'y', 'z'])?;
@@ -191,8 +194,11 @@ fn marker_columns(table: &Table, spec: &PoseSpec) -> Result<Vec<[usize; 3]>, Pos
             .filter(|_| rest.bytes().all(|b| b.is_ascii_digit()))?;
         Some(k)
     };
-    let k_max = table.header.iter().filter_map(|h| numbered(h)).max();
     let plain = ["x", "y", "z"].map(|a| table.find(a));
+    if let [Some(x), Some(y), Some(z)] = plain {
+        return Ok(vec![[x, y, z]]);
+    }
+    let k_max = table.header.iter().filter_map(|h| numbered(h)).max();
     let cols = match k_max {
         Some(k_max) => {
             if let Some(c) = plain.iter().flatten().next() {
@@ -200,7 +206,9 @@ fn marker_columns(table: &Table, spec: &PoseSpec) -> Result<Vec<[usize; 3]>, Pos
                     file: table.file.clone(),
                     line: table.header_line,
                     column: table.header[*c].clone(),
-                    problem: "a file with numbered points x1,y1,z1.. has no plain x,y,z".into(),
+                    problem: "an incomplete plain x,y,z in a file with numbered points \
+                              x1,y1,z1.. (give all of x,y,z or none)"
+                        .into(),
                 });
             }
             if k_max == 0 {
@@ -222,7 +230,6 @@ fn marker_columns(table: &Table, spec: &PoseSpec) -> Result<Vec<[usize; 3]>, Pos
                 .collect::<Result<Vec<_>, TableError>>()?
         }
         None => match plain {
-            [Some(x), Some(y), Some(z)] => vec![[x, y, z]],
             [None, None, None] if !spec.require_xyz => Vec::new(),
             _ => vec![[table.need("x")?, table.need("y")?, table.need("z")?]],
         },

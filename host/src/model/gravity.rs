@@ -113,16 +113,7 @@ impl GravityModel {
     }
 }
 
-/// The joint readings deflected by compliance (effect `compliance:j<i>`, FORMATS.md): joint j
-/// reads `q_j + c_j tau_j`, `c_j` deg per kgf.m (mm per kgf.m for a prismatic joint) and
-/// `tau_j` the gravity torque about its axis ([`GravityModel::axis_torques_kgfm`]). Missing
-/// coefficients or torques count as 0.
-pub fn compliance_deflected(q_deg: &[f64], compliance: &[f64], tau_kgfm: &[f64]) -> Vec<f64> {
-    q_deg
-        .iter()
-        .enumerate()
-        .map(|(j, q)| {
-            q + compliance.get(j).copied().unwrap_or(0.0) * tau_kgfm.get(j).copied().unwrap_or(0.0)
-        })
-        .collect()
-}
+/// The joint readings deflected by compliance; the law lives in
+/// [`super::transmission::compliance_deflection_deg`] (re-exported here for the callers that
+/// found it in this module).
+pub use super::transmission::compliance_deflected;

@@ -66,6 +66,35 @@ pub fn transmission_increments(
         .collect()
 }
 
+/// The compliance law (FORMATS.md effect `compliance:j<i>`): joint j deflects by `c_j tau_j`,
+/// `c_j` deg per kgf.m (mm per kgf.m for a prismatic joint) and `tau_j` the static gravity
+/// torque about its axis (kgf.m, [`GravityModel::axis_torques_kgfm`]). Missing coefficients or
+/// torques count as 0. The one home of the law: the model files ([`JointTerms`]), the general
+/// identification (`calib::general`) and `diagnose` (`diagnose::extended`) call it.
+pub fn compliance_deflection_deg(
+    compliance_deg_per_kgfm: &[f64],
+    tau_kgfm: &[f64],
+    j: usize,
+) -> f64 {
+    compliance_deg_per_kgfm.get(j).copied().unwrap_or(0.0) * compliance_regressor(tau_kgfm, j)
+}
+
+/// The derivative of [`compliance_deflection_deg`] of joint j with respect to its coefficient
+/// `c_j`: the torque `tau_j` (kgf.m), 0 when missing.
+pub fn compliance_regressor(tau_kgfm: &[f64], j: usize) -> f64 {
+    tau_kgfm.get(j).copied().unwrap_or(0.0)
+}
+
+/// The joint readings deflected by compliance: joint j reads
+/// `q_j + `[`compliance_deflection_deg`]`(c, tau, j)`.
+pub fn compliance_deflected(q_deg: &[f64], compliance: &[f64], tau_kgfm: &[f64]) -> Vec<f64> {
+    q_deg
+        .iter()
+        .enumerate()
+        .map(|(j, q)| q + compliance_deflection_deg(compliance, tau_kgfm, j))
+        .collect()
+}
+
 /// The transmission terms a model carries (model file `[[joint]]` keys `joint_scale`,
 /// `joint_coupling`, `hysteresis_deg`, `compliance_deg_per_kgfm`; FORMATS.md effects
 /// `joint_scale:j<i>`, `joint_coupling:j<i>:j<k>`, `hysteresis:j<i>`, `compliance:j<i>`):
@@ -212,9 +241,7 @@ impl JointTerms {
             .iter()
             .enumerate()
             .map(|(j, q)| {
-                q + trans[j]
-                    + self.compliance_deg_per_kgfm.get(j).copied().unwrap_or(0.0)
-                        * tau.get(j).copied().unwrap_or(0.0)
+                q + trans[j] + compliance_deflection_deg(&self.compliance_deg_per_kgfm, &tau, j)
             })
             .collect())
     }

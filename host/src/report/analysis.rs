@@ -56,6 +56,26 @@ pub fn evaluate(
     })
 }
 
+/// [`evaluate`] with `model`'s transmission terms (model file `[[joint]]` keys) applied to the
+/// readings first, as `fk` and `calibrate` do: the directions of approach of the hysteresis
+/// terms from the pose order (`t_s` when every pose has a time, else file order).
+pub fn evaluate_in_order(
+    label: &str,
+    model: &Model,
+    poses: &Poses,
+    t_s: Option<&[f64]>,
+    tilt: Option<bool>,
+) -> Result<Evaluated, ModelError> {
+    if !model.transmission().is_active() {
+        return evaluate(label, model, poses, tilt);
+    }
+    let mapped = Poses {
+        q_deg: model.effective_pose_joints(&poses.q_deg, t_s)?,
+        xyz_mm: poses.xyz_mm.clone(),
+    };
+    evaluate(label, model, &mapped, tilt)
+}
+
 /// How much one parameter's small step moves the tool point at each pose.
 #[derive(Debug, Clone, PartialEq)]
 pub struct Influence {

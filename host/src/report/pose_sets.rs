@@ -1,16 +1,19 @@
 //! The pose files of a run directory (`cal.csv`, `val.csv`) evaluated with the nominal model and
-//! every model file: a table per set, and the before / after figures with the best model.
+//! every model file (with its transmission terms, in the file's pose order, as `fk` and
+//! `calibrate` apply them): a table per set, and the before / after figures with the best model.
 
 use serde_json::Value;
 
 use super::analysis::{
-    evaluate, influence_names, most_correlated_joint, parameter_influence, Evaluated,
+    evaluate, evaluate_in_order, influence_names, most_correlated_joint, parameter_influence,
+    Evaluated,
 };
 use super::build::figure;
 use super::run_dir::RunDir;
 use super::table::{Column, ErrorTable};
 use super::Figure;
 use crate::calib::Poses;
+use crate::io::pose_csv::{read_poses, PoseCsvError, PoseSpec};
 use crate::model::{Model, KATANA_GEOMETRIC_PARAMS};
 use crate::plot::{ErrorHistogram, LineChart, PoseErrorBars, Scatter, Series};
 
@@ -35,6 +38,17 @@ fn mean(v: &[f64]) -> f64 {
     v.iter().sum::<f64>() / v.len().max(1) as f64
 }
 
+/// The poses of a pose file read for `model`, and their times when every pose has one (the
+/// pose order of the hysteresis terms, FORMATS.md "Pose order").
+fn read_with_times(
+    path: &std::path::Path,
+    model: &Model,
+) -> Result<(Poses, Option<Vec<f64>>), PoseCsvError> {
+    let file = read_poses(path, &PoseSpec::for_model(model, true))?;
+    let times = file.poses.iter().map(|p| p.t_s).collect();
+    Ok((Poses::from_pose_file(&file).unwrap_or_default(), times))
+}
+
 /// Evaluates `cal.csv` and `val.csv` with `decl` (nominal, no tilting) and every model.
 pub(crate) fn pose_sets(
     run: &RunDir,
@@ -49,8 +63,8 @@ pub(crate) fn pose_sets(
         (&run.val_csv, "Held-out poses", true),
     ] {
         let Some(path) = path else { continue };
-        let poses = match Poses::read(path, decl) {
-            Ok(p) if !p.is_empty() => p,
+        let (poses, times) = match read_with_times(path, decl) {
+            Ok((p, t)) if !p.is_empty() => (p, t),
             Ok(_) => {
                 notes.push(format!("{}: no poses", path.display()));
                 continue;
@@ -70,7 +84,7 @@ pub(crate) fn pose_sets(
             }
         }
         for (name, m) in models {
-            match evaluate(name, m, &poses, None) {
+            match evaluate_in_order(name, m, &poses, times.as_deref(), None) {
                 Ok(mut e) => {
                     e.label = format!("{name}.toml{}", if e.tilt { " (tilting)" } else { "" });
                     cols.push(e);

@@ -24,6 +24,7 @@
 
 use nalgebra::Vector3;
 
+use crate::model::transmission::JointTerms;
 use crate::model::{Model, ModelError};
 
 /// A bad `--effect` argument.
@@ -347,73 +348,28 @@ impl TimeEffects {
     }
 }
 
-/// The joint-angle terms of the truth, applied pose by pose.
-#[derive(Debug, Clone, Default, PartialEq)]
-pub struct JointEffects {
-    /// Transmission-ratio error per joint.
-    pub scale: Vec<f64>,
-    /// Coupling, row i column k (deg/deg).
-    pub coupling: Vec<Vec<f64>>,
-    /// Hysteresis per joint (deg).
-    pub hysteresis_deg: Vec<f64>,
-    /// Compliance per joint (deg per kgf.m).
-    pub compliance_deg_per_kgfm: Vec<f64>,
-}
+/// The joint-angle terms of the truth, applied pose by pose: the model's own
+/// [`JointTerms`] (one struct and one law for the simulator, the model files and `diagnose`;
+/// [`JointTerms::effective_joints`] gives the angles the joints really take).
+pub type JointEffects = JointTerms;
 
-impl JointEffects {
-    /// Collects the joint terms of `effects` for `n_joints` joints.
-    pub fn from_effects(effects: &[Effect], n_joints: usize) -> Self {
-        let mut out = Self {
-            scale: vec![0.0; n_joints],
-            coupling: vec![vec![0.0; n_joints]; n_joints],
-            hysteresis_deg: vec![0.0; n_joints],
-            compliance_deg_per_kgfm: vec![0.0; n_joints],
+/// Collects the joint terms of `effects` for `n_joints` joints (terms on joints the model does
+/// not have are left out; [`Effect::apply`] refuses them first).
+pub fn joint_terms(effects: &[Effect], n_joints: usize) -> JointTerms {
+    let mut out = JointTerms::zeros(n_joints);
+    for e in effects {
+        let EffectKind::Joint(term) = e.kind else {
+            continue;
         };
-        for e in effects {
-            let EffectKind::Joint(term) = e.kind else {
-                continue;
-            };
-            if term.joints().iter().any(|&j| j >= n_joints) {
-                continue;
-            }
-            match term {
-                JointTerm::Scale(j, v) => out.scale[j] += v,
-                JointTerm::Coupling(i, k, v) => out.coupling[i][k] += v,
-                JointTerm::Hysteresis(j, v) => out.hysteresis_deg[j] += v,
-                JointTerm::Compliance(j, v) => out.compliance_deg_per_kgfm[j] += v,
-            }
+        if term.joints().iter().any(|&j| j >= n_joints) {
+            continue;
         }
-        out
-    }
-
-    /// Whether any term is non-zero.
-    pub fn is_active(&self) -> bool {
-        self.scale
-            .iter()
-            .chain(self.coupling.iter().flatten())
-            .chain(&self.hysteresis_deg)
-            .chain(&self.compliance_deg_per_kgfm)
-            .any(|v| *v != 0.0)
-    }
-
-    /// The terms as a model carries them ([`crate::model::transmission::JointTerms`]).
-    pub fn terms(&self) -> crate::model::transmission::JointTerms {
-        crate::model::transmission::JointTerms {
-            scale: self.scale.clone(),
-            coupling: self.coupling.clone(),
-            hysteresis_deg: self.hysteresis_deg.clone(),
-            compliance_deg_per_kgfm: self.compliance_deg_per_kgfm.clone(),
+        match term {
+            JointTerm::Scale(j, v) => out.scale[j] += v,
+            JointTerm::Coupling(i, k, v) => out.coupling[i][k] += v,
+            JointTerm::Hysteresis(j, v) => out.hysteresis_deg[j] += v,
+            JointTerm::Compliance(j, v) => out.compliance_deg_per_kgfm[j] += v,
         }
     }
-
-    /// The angles the joints really take for the readings `q_deg` with directions of approach
-    /// `approach` (compliance torques from the masses of `model`).
-    pub fn true_joints(
-        &self,
-        model: &Model,
-        q_deg: &[f64],
-        approach: &[f64],
-    ) -> Result<Vec<f64>, ModelError> {
-        self.terms().effective_joints(model, q_deg, approach)
-    }
+    out
 }

@@ -25,7 +25,7 @@ use rand::SeedableRng;
 use rand_chacha::ChaCha8Rng;
 use rand_distr::{Distribution, Normal};
 
-use super::effects::{Effect, EffectError, JointEffects, TimeEffects};
+use super::effects::{joint_terms, Effect, EffectError, TimeEffects};
 use super::iso9283::{Cube, ISO_POSE_COUNT};
 use super::plan::{iso_calibration_sequence, random_poses, PlanError, PlannedPose};
 use crate::model::ik::ArmGeometry;
@@ -206,7 +206,7 @@ pub fn simulate(declared: &Model, cfg: &SimConfig) -> Result<SimOutput, SimError
     }
     let (truth, geometric_errors) = truth_model(declared, cfg)?;
     let time_effects = TimeEffects::from_effects(&cfg.effects, declared.n_joints());
-    let joint_effects = JointEffects::from_effects(&cfg.effects, declared.n_joints());
+    let joint_effects = joint_terms(&cfg.effects, declared.n_joints());
     let tilt = truth.has_tilt();
     let cal_plan: Vec<PlannedPose> = if ArmGeometry::of(declared).is_ok() {
         iso_calibration_sequence(declared, &Cube::thesis_frontal())?
@@ -243,7 +243,7 @@ pub fn simulate(declared: &Model, cfg: &SimConfig) -> Result<SimOutput, SimError
                         &truth
                     };
                     let q_true = if joint_effects.is_active() {
-                        joint_effects.true_joints(m, &q, &approach[k])?
+                        joint_effects.effective_joints(m, &q, &approach[k])?
                     } else {
                         q.clone()
                     };

@@ -1,0 +1,188 @@
+//! `rigctl compensate` with a model file's transmission terms (joint scale, coupling,
+//! hysteresis, compliance): the commanded joints, read back through `rigctl fk` with the same
+//! model file (which applies the terms in the file's pose order), put the tool point on the
+//! path; the same joints without the terms miss it. A reversal smaller than a joint's
+//! hysteresis dead band is held and reported (a warning naming the path line and joint), never
+//! failed.
+
+use std::path::Path;
+use std::process::{Command, Output};
+
+use nalgebra::Vector3;
+use rigctl::compensate::transmission::commands_for;
+use rigctl::model::ik::{tool_target, IkTilt};
+use rigctl::model::transmission::JointTerms;
+use rigctl::model::{katana450, Model};
+
+fn rigctl(args: &[&std::ffi::OsStr]) -> Output {
+    Command::new(env!("CARGO_BIN_EXE_rigctl"))
+        .args(args)
+        .output()
+        .expect("run rigctl")
+}
+
+/// The Katana with a payload (tilting), geometric errors and transmission terms.
+fn model_with_terms() -> Model {
+    let mut m = katana450(200.0).unwrap();
+    for (name, delta) in [("dth2", 0.3), ("dth3", -0.2), ("al3", 0.1)] {
+        let v = m.param(name).unwrap();
+        m.set_param(name, v + delta).unwrap();
+    }
+    m.set_param("payload_kg", 0.5).unwrap();
+    let mut t = JointTerms::zeros(m.n_joints());
+    t.scale[1] = 0.004;
+    t.coupling[2][1] = 0.003;
+    t.hysteresis_deg[1] = 0.05;
+    t.hysteresis_deg[3] = 0.04;
+    t.compliance_deg_per_kgfm[2] = 0.02;
+    m.set_transmission(t);
+    m
+}
+
+/// A line out and back (41 points, t every 0.1 s): every joint reverses at the far end.
+fn path_csv() -> String {
+    let nominal = katana450(200.0).unwrap();
+    let start = tool_target(&nominal, &[-90.0, 60.0, -70.0, -20.0, 80.0], IkTilt::Off).unwrap();
+    let span = Vector3::new(80.0, 40.0, -80.0);
+    let mut s = String::from("t,x,y,z,ax,ay,az\n");
+    for i in 0..41 {
+        let u = if i <= 20 { i } else { 40 - i } as f64 / 20.0;
+        let (x, a) = (start.position_mm + span * u, start.axis);
+        s.push_str(&format!(
+            "{:.3},{:.12},{:.12},{:.12},{:.15},{:.15},{:.15}\n",
+            i as f64 * 0.1,
+            x.x,
+            x.y,
+            x.z,
+            a.x,
+            a.y,
+            a.z
+        ));
+    }
+    s
+}
+
+fn rows(csv: &str) -> Vec<Vec<f64>> {
+    csv.lines()
+        .skip(1)
+        .map(|l| l.split(',').map(|f| f.parse().unwrap()).collect())
+        .collect()
+}
+
+fn fk(model: &Path, joints: &Path) -> Vec<Vec<f64>> {
+    let o = rigctl(&[
+        "fk".as_ref(),
+        "--tilt".as_ref(),
+        "--model".as_ref(),
+        model.as_os_str(),
+        "--joints".as_ref(),
+        joints.as_os_str(),
+    ]);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    rows(&String::from_utf8_lossy(&o.stdout))
+}
+
+#[test]
+fn compensated_joints_through_fk_recover_the_path() {
+    let dir = tempfile::tempdir().unwrap();
+    let (model_file, plain_file) = (dir.path().join("m.toml"), dir.path().join("plain.toml"));
+    let model = model_with_terms();
+    model.write_file(&model_file).unwrap();
+    let mut plain = model.clone();
+    plain.set_transmission(JointTerms::default());
+    plain.write_file(&plain_file).unwrap();
+    let text = path_csv();
+    let (path, out) = (dir.path().join("path.csv"), dir.path().join("joints.csv"));
+    std::fs::write(&path, &text).unwrap();
+    let o = rigctl(&[
+        "compensate".as_ref(),
+        "--path".as_ref(),
+        path.as_os_str(),
+        "--model".as_ref(),
+        model_file.as_os_str(),
+        "--no-nominal".as_ref(),
+        "--out".as_ref(),
+        out.as_os_str(),
+    ]);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let stderr = String::from_utf8_lossy(&o.stderr);
+    let want = rows(&text);
+    let got = fk(&model_file, &out);
+    let without = fk(&plain_file, &out);
+    assert_eq!(got.len(), want.len());
+    // The path lines the warning lists (q2 turns round mid-line in small steps).
+    let held: Vec<usize> = stderr
+        .split("line ")
+        .skip(1)
+        .filter_map(|s| s.split_whitespace().next()?.parse().ok())
+        .collect();
+    let (mut worst, mut worst_held, mut least_without) = (0.0f64, 0.0f64, f64::INFINITY);
+    for (i, ((w, g), n)) in want.iter().zip(&got).zip(&without).enumerate() {
+        let d = |p: &[f64]| {
+            (0..3)
+                .map(|c| (p[c] - w[1 + c]).powi(2))
+                .sum::<f64>()
+                .sqrt()
+        };
+        match held.contains(&(i + 2)) {
+            true => worst_held = worst_held.max(d(g)),
+            false => worst = worst.max(d(g)),
+        }
+        least_without = least_without.min(d(n));
+    }
+    println!(
+        "through the terms: worst {worst:.2e} mm, {} held point(s) worst {worst_held:.3} mm; \
+         without the terms at least {least_without:.3} mm",
+        held.len()
+    );
+    assert!(worst < 1e-6, "compensated path missed by {worst} mm");
+    assert!(
+        least_without > 0.05,
+        "the terms change only {least_without} mm"
+    );
+    // Held: q2 within 2 x 0.05 deg of its angle, < 1.1 mm at the Katana's reach.
+    assert!(
+        (1..=6).contains(&held.len()) && stderr.contains("(q2)"),
+        "{stderr}"
+    );
+    assert!(worst_held < 1.1, "held points off by {worst_held} mm");
+}
+
+/// One joint with hysteresis b: a reversal by less than 2b is held (the joint stays where
+/// it was, the point listed), a larger one is reached exactly; fk's pose order is used.
+#[test]
+fn a_reversal_inside_the_dead_band_is_held() {
+    let mut m = katana450(200.0).unwrap();
+    let mut t = JointTerms::zeros(m.n_joints());
+    t.hysteresis_deg[0] = 0.03;
+    t.scale[0] = 0.01;
+    m.set_transmission(t);
+    let base = [-90.0, 60.0, -70.0, -20.0, 80.0];
+    let with_q1 = |q1: f64| {
+        let mut q = base.to_vec();
+        q[0] = q1;
+        q
+    };
+    // up, up, back by 0.02 (< 0.06: held), back by 0.2 (reached), then still.
+    let q_eff: Vec<Vec<f64>> = [-90.0, -80.0, -80.02, -80.2, -80.2]
+        .into_iter()
+        .map(with_q1)
+        .collect();
+    let c = commands_for(&m, &q_eff, None).unwrap();
+    assert_eq!(c.held, [(2, 0)]);
+    assert_eq!(c.q_deg[2][0], c.q_deg[1][0]);
+    let back = m.effective_pose_joints(&c.q_deg, None).unwrap();
+    for (k, (b, w)) in back.iter().zip(&q_eff).enumerate() {
+        let err = (b[0] - w[0]).abs();
+        match k {
+            2 => assert!(err > 0.0 && err < 0.06, "held point off by {err}"),
+            _ => assert!(err < 1e-9, "point {k} off by {err}"),
+        }
+        assert!((1..5).all(|j| (b[j] - w[j]).abs() < 1e-12));
+    }
+    // The same angles in another time order are another visit order.
+    let times = [0.0, 1.0, 2.0, 4.0, 3.0];
+    let c = commands_for(&m, &q_eff, Some(&times)).unwrap();
+    let back = m.effective_pose_joints(&c.q_deg, Some(&times)).unwrap();
+    assert!((back[3][0] - q_eff[3][0]).abs() < 1e-9);
+}
