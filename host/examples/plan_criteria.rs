@@ -44,7 +44,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
             cfg.criterion = kind;
             cfg.candidates = candidates;
             cfg.restarts = restarts;
-            cfg.refine_sweeps = sweeps;
+            cfg.refine_sweeps = Some(sweeps);
             cfg.structured = structured;
             let p = plan(&declared, &cfg, None)?;
             ratios.push(p.median_sigma_ratio);

@@ -1,7 +1,7 @@
 //! `rigctl plan --robot NAME | --model FILE --n N --out PLAN.csv [--seed S] [--json PLAN.json]
 //! [--plot PLAN.svg] [--noise-mm 0.01] [--candidates 5000] [--box X0,Y0,Z0,X1,Y1,Z1]
 //! [--visible-from X,Y,Z [--cone-deg 60]] [--min-z-mm Z] [--poses CAL.csv]
-//! [--from-diagnose D.json] [--criterion a|g|i|d] [--restarts 1] [--refine-sweeps 3] [--no-structured]
+//! [--from-diagnose D.json] [--criterion a|g|i|d] [--restarts 1] [--refine-sweeps 3|0] [--no-structured]
 //! [--sheets [--sheet-rows fused|trace|plane]]`: chooses the N calibration poses that identify the model best
 //! (`rigctl::plan`) and prints their expected parameter sigmas against random poses.
 
@@ -58,9 +58,9 @@ pub struct Args {
     #[arg(long, value_name = "COUNT", default_value_t = 1)]
     pub restarts: usize,
     /// Sweeps of the continuous refinement of the chosen poses' joint values (0: keep the
-    /// candidates as chosen).
-    #[arg(long, value_name = "COUNT", default_value_t = 3)]
-    pub refine_sweeps: usize,
+    /// candidates as chosen); default 3, 0 with --from-diagnose.
+    #[arg(long, value_name = "COUNT")]
+    pub refine_sweeps: Option<usize>,
     /// Leave the structured candidates (joint limits and mid-range combinations) out of the pool.
     #[arg(long)]
     pub no_structured: bool,
