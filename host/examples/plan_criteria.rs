@@ -45,7 +45,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
             cfg.candidates = candidates;
             cfg.restarts = restarts;
             cfg.refine_sweeps = Some(sweeps);
-            cfg.structured = structured;
+            cfg.structured = Some(structured);
             let p = plan(&declared, &cfg, None)?;
             ratios.push(p.median_sigma_ratio);
             draws.extend(p.ratio_per_draw.iter().copied());

@@ -61,7 +61,8 @@ pub struct Args {
     /// candidates as chosen); default 3, 0 with --from-diagnose.
     #[arg(long, value_name = "COUNT")]
     pub refine_sweeps: Option<usize>,
-    /// Leave the structured candidates (joint limits and mid-range combinations) out of the pool.
+    /// Leave the structured candidates (joint limits and mid-range combinations) out of the pool
+    /// (always out with --from-diagnose).
     #[arg(long)]
     pub no_structured: bool,
     /// Random designs of N poses drawn for the baseline.
@@ -132,7 +133,9 @@ pub fn run(args: Args) -> Result<(), CliError> {
     cfg.criterion = args.criterion;
     cfg.restarts = args.restarts;
     cfg.refine_sweeps = args.refine_sweeps;
-    cfg.structured = !args.no_structured;
+    if args.no_structured {
+        cfg.structured = Some(false);
+    }
     if let Some(b) = &args.box_mm {
         let b: [f64; 6] = b
             .as_slice()
