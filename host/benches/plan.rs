@@ -1,6 +1,7 @@
-//! `rigctl plan` on the Katana: 10 000 candidates, N = 30 (candidates, Jacobians, A-optimal
-//! greedy + exchange with 1 random restart (the default), random baseline and its spread), and with
-//! the greedy start only.
+//! `rigctl plan` on the Katana: 10 000 uniform candidates (plus the 210 structured ones), N = 30:
+//! candidates, Jacobians, weighted-A greedy + exchange with 1 random restart, the continuous
+//! refinement (3 sweeps), the random baseline and its spread (the defaults); and with the
+//! greedy start only.
 
 use criterion::{criterion_group, criterion_main, Criterion};
 use rigctl::model::{katana450, KATANA_TOOL_MM};

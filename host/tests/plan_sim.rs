@@ -9,15 +9,18 @@ use rigctl::plan::metrics::median;
 use rigctl::plan::{plan, FromDiagnose, PlanConfig};
 use rigctl::sim::simulate::{truth_model, SimConfig};
 
-/// N = 12: the planned poses' expected sigmas are well below those of 12 random poses (median
-/// ratio measured 0.636-0.687 on seeds 1-5 with the default criterion; the 0.6 is not
-/// reached, see the README) and the held-out error after calibration is closer to the noise
-/// floor (median over 5 truths: 0.0026 mm above it planned, 0.0044 random).
+/// N = 12: the planned poses' expected sigmas are well below those of 12 random poses and the
+/// held-out error after calibration is closer to the noise floor. Default plan (weighted A,
+/// structured candidates, continuous refinement): median planned / random sigma ratio measured
+/// 0.588-0.644 on seeds 1-5 (median 0.635; the 0.6 is not reached, see the README); the
+/// direct reading (median planned sigma over the mean of the random designs' median sigmas)
+/// about 0.65.
 #[test]
 fn twelve_planned_poses_beat_twelve_random_ones() {
     let declared = katana450(KATANA_TOOL_MM).unwrap();
     let cfg = PlanConfig::new(&declared, 12);
     let (mut ratios, mut planned, mut random, mut floor) = (vec![], vec![], vec![], vec![]);
+    let mut direct = vec![];
     for seed in 1..=5u64 {
         let mut c = cfg.clone();
         c.seed = seed;
@@ -28,7 +31,10 @@ fn twelve_planned_poses_beat_twelve_random_ones() {
             "table clearance"
         );
         assert_eq!(p.unidentifiable, ["dth5+be4", "be5"]);
+        assert!(p.structured_candidates > 0 && p.refinement.moves > 0);
+        assert!(p.refinement.criterion_after > p.refinement.criterion_before);
         ratios.push(p.median_sigma_ratio);
+        direct.push(p.direct.ratio_to_mean());
         let sim = SimConfig {
             seed,
             ..SimConfig::default()
@@ -39,9 +45,10 @@ fn twelve_planned_poses_beat_twelve_random_ones() {
         random.push(hr.mean_mm - hr.floor_mm);
         floor.push(hp.floor_mm);
     }
-    let r = median(&ratios);
-    eprintln!("median sigma ratios {ratios:?}, held-out above floor planned {planned:?} random {random:?}");
-    assert!(r < 0.7, "median planned/random sigma ratio {r}");
+    let (r, d) = (median(&ratios), median(&direct));
+    eprintln!("median sigma ratios {ratios:?}, direct {direct:?}, held-out above floor planned {planned:?} random {random:?}");
+    assert!(r <= 0.645, "median planned/random sigma ratio {r}");
+    assert!(d <= 0.67, "direct reading {d}");
     assert!(
         median(&planned) < median(&random),
         "planned {planned:?} random {random:?}"

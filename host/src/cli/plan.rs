@@ -1,7 +1,8 @@
 //! `rigctl plan --robot NAME | --model FILE --n N --out PLAN.csv [--seed S] [--json PLAN.json]
 //! [--plot PLAN.svg] [--noise-mm 0.01] [--candidates 5000] [--box X0,Y0,Z0,X1,Y1,Z1]
 //! [--visible-from X,Y,Z [--cone-deg 60]] [--min-z-mm Z] [--poses CAL.csv]
-//! [--from-diagnose D.json] [--criterion a|g|i|d] [--sheets [--sheet-rows fused|trace|plane]]`: chooses the N calibration poses that identify the model best
+//! [--from-diagnose D.json] [--criterion a|g|i|d] [--restarts 1] [--refine-sweeps 3|0] [--no-structured]
+//! [--sheets [--sheet-rows fused|trace|plane]]`: chooses the N calibration poses that identify the model best
 //! (`rigctl::plan`) and prints their expected parameter sigmas against random poses.
 
 use std::path::PathBuf;
@@ -56,6 +57,14 @@ pub struct Args {
     /// Exchange runs from random starts besides the greedy one (more: slower, slightly better).
     #[arg(long, value_name = "COUNT", default_value_t = 1)]
     pub restarts: usize,
+    /// Sweeps of the continuous refinement of the chosen poses' joint values (0: keep the
+    /// candidates as chosen); default 3, 0 with --from-diagnose.
+    #[arg(long, value_name = "COUNT")]
+    pub refine_sweeps: Option<usize>,
+    /// Leave the structured candidates (joint limits and mid-range combinations) out of the pool
+    /// (always out with --from-diagnose).
+    #[arg(long)]
+    pub no_structured: bool,
     /// Random designs of N poses drawn for the baseline.
     #[arg(long, value_name = "COUNT", default_value_t = 25)]
     pub random_draws: usize,
@@ -123,6 +132,10 @@ pub fn run(args: Args) -> Result<(), CliError> {
     cfg.random_draws = args.random_draws;
     cfg.criterion = args.criterion;
     cfg.restarts = args.restarts;
+    cfg.refine_sweeps = args.refine_sweeps;
+    if args.no_structured {
+        cfg.structured = Some(false);
+    }
     if let Some(b) = &args.box_mm {
         let b: [f64; 6] = b
             .as_slice()

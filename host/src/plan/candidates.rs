@@ -104,12 +104,65 @@ pub fn draw_candidates(
         let q: Vec<f64> = limits
             .iter()
             .map(|l| {
-                let (lo, hi) = (l[0] + LIMIT_MARGIN_DEG, l[1] - LIMIT_MARGIN_DEG);
+                let (lo, hi) = usable_range(l);
                 if hi > lo {
                     rng.gen_range(lo..hi)
                 } else {
-                    0.5 * (l[0] + l[1])
+                    lo
                 }
+            })
+            .collect();
+        let fk = model.fk(&q, Tilt::Off)?;
+        let axis = fk.rotation.column(2).into_owned();
+        if ws.admits(&fk.position_mm, &axis) {
+            out.push(CandidatePose {
+                q_deg: q,
+                nominal_mm: fk.position_mm,
+            });
+        }
+    }
+    Ok(out)
+}
+
+/// Most structured candidates: `3^joints` up to 7 joints; none beyond.
+pub const MAX_STRUCTURED: usize = 2187;
+
+/// The joint range a pose may use: the limits less [`LIMIT_MARGIN_DEG`] (the midpoint when the
+/// range is narrower than twice the margin).
+pub fn usable_range(limit: &[f64; 2]) -> (f64, f64) {
+    let (lo, hi) = (limit[0] + LIMIT_MARGIN_DEG, limit[1] - LIMIT_MARGIN_DEG);
+    if hi > lo {
+        (lo, hi)
+    } else {
+        let mid = 0.5 * (limit[0] + limit[1]);
+        (mid, mid)
+    }
+}
+
+/// The structured candidates: every combination of each joint at its lower usable limit, its
+/// mid-range and its upper usable limit ([`usable_range`]), kept when `ws` admits the tool point
+/// (optimal designs sit at such extremes, which uniform draws rarely reach in every joint at
+/// once). Empty when there would be more than [`MAX_STRUCTURED`].
+pub fn structured_candidates(
+    model: &Model,
+    ws: &Workspace,
+) -> Result<Vec<CandidatePose>, PlanError> {
+    let ranges: Vec<(f64, f64)> = model.joint_limits().iter().map(usable_range).collect();
+    let total = 3usize
+        .checked_pow(ranges.len() as u32)
+        .unwrap_or(usize::MAX);
+    if ranges.is_empty() || total > MAX_STRUCTURED {
+        return Ok(Vec::new());
+    }
+    let mut out = Vec::new();
+    for code in 0..total {
+        let mut rest = code;
+        let q: Vec<f64> = ranges
+            .iter()
+            .map(|&(lo, hi)| {
+                let level = rest % 3;
+                rest /= 3;
+                lo + (hi - lo) * 0.5 * level as f64
             })
             .collect();
         let fk = model.fk(&q, Tilt::Off)?;

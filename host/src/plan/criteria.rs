@@ -151,6 +151,25 @@ pub fn value(kind: Criterion, m: &DMatrix<f64>, interest: &[usize], q: &DMatrix<
     }
 }
 
+/// As [`value`], with A's column weights `weights` (one per column of `m`; empty: all 1).
+pub fn value_weighted(
+    kind: Criterion,
+    m: &DMatrix<f64>,
+    interest: &[usize],
+    q: &DMatrix<f64>,
+    weights: &[f64],
+) -> f64 {
+    if kind != Criterion::A || weights.len() != m.nrows() {
+        return value(kind, m, interest, q);
+    }
+    let all: Vec<usize> = (0..m.nrows()).collect();
+    let cols = if interest.is_empty() { &all } else { interest };
+    match ridged_inverse(m, &all) {
+        Some(inv) => -cols.iter().map(|&i| weights[i] * inv[(i, i)]).sum::<f64>(),
+        None => f64::NEG_INFINITY,
+    }
+}
+
 /// `M^-1` of the ridged information restricted to some columns, recomputed from `M` (kept
 /// by rank-3 additions) after every change: a Woodbury update from the ridge-only start loses
 /// digits (entries of 1/RIDGE cancelling to O(1)), a p x p Cholesky costs nothing next to the
@@ -224,6 +243,15 @@ impl<'a> Scorer<'a> {
         self
     }
 
+    /// The prediction weight of criterion I: `q` (p x p, e.g. [`prediction_weight`] of the
+    /// uniformly drawn candidates only) instead of the mean over all rows of `b`.
+    pub fn with_prediction_weight(mut self, q: &DMatrix<f64>) -> Self {
+        if self.kind == Criterion::I && q.nrows() == self.b.ncols() && q.ncols() == q.nrows() {
+            self.q = q.clone();
+        }
+        self
+    }
+
     /// The state of the empty design (information `prior`).
     pub fn new(
         kind: Criterion,
@@ -284,17 +312,7 @@ impl<'a> Scorer<'a> {
     pub fn value(&self, chosen: &[usize]) -> f64 {
         let m = information(self.b, self.prior, chosen);
         let interest = if self.subset { &self.cols[..] } else { &[] };
-        if self.kind == Criterion::A {
-            return match ridged_inverse(&m, &(0..m.nrows()).collect::<Vec<_>>()) {
-                Some(inv) => -self
-                    .cols
-                    .iter()
-                    .map(|&i| self.weights[i] * inv[(i, i)])
-                    .sum::<f64>(),
-                None => f64::NEG_INFINITY,
-            };
-        }
-        value(self.kind, &m, interest, &self.q)
+        value_weighted(self.kind, &m, interest, &self.q, &self.weights)
     }
 
     /// Whether the ridge still stands in for information the design lacks (some scaled

@@ -101,6 +101,44 @@ pub fn exchange_weighted(
     start: &[usize],
     weights: &[f64],
 ) -> Result<Design, PlanError> {
+    let problem = Problem {
+        b,
+        prior,
+        interest,
+        kind,
+        weights,
+        prediction: None,
+    };
+    exchange(&problem, n, start)
+}
+
+/// A design problem on a candidate set.
+#[derive(Debug, Clone, Copy)]
+pub struct Problem<'a> {
+    /// Scaled Jacobian blocks of the candidates, 3 rows each.
+    pub b: &'a DMatrix<f64>,
+    /// Information of the poses already measured (p x p).
+    pub prior: &'a DMatrix<f64>,
+    /// Columns of interest (all when empty).
+    pub interest: &'a [usize],
+    /// The criterion.
+    pub kind: Criterion,
+    /// A's column weights (empty: all 1).
+    pub weights: &'a [f64],
+    /// I's prediction weight (`None`: the mean over all rows of `b`).
+    pub prediction: Option<&'a DMatrix<f64>>,
+}
+
+/// Greedy completion of `start` to `n` candidates, then exchange passes (module docs).
+pub fn exchange(problem: &Problem<'_>, n: usize, start: &[usize]) -> Result<Design, PlanError> {
+    let Problem {
+        b,
+        prior,
+        interest,
+        kind,
+        weights,
+        prediction,
+    } = *problem;
     let n_cand = b.nrows() / 3;
     if n > n_cand {
         return Err(PlanError::TooFewCandidates {
@@ -109,6 +147,9 @@ pub fn exchange_weighted(
         });
     }
     let mut sc = Scorer::new(kind, b, prior, interest)?.with_weights(weights);
+    if let Some(q) = prediction {
+        sc = sc.with_prediction_weight(q);
+    }
     let mut taken = vec![false; n_cand];
     let mut chosen = Vec::with_capacity(n);
     for &c in start.iter().take(n) {

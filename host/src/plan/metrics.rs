@@ -101,10 +101,24 @@ pub fn random_baseline(
     noise_mm: f64,
     rng: &mut impl Rng,
 ) -> DesignStats {
+    random_baseline_draws(b, scale, prior_rows, n, draws, noise_mm, rng).0
+}
+
+/// As [`random_baseline`], with every draw's sigmas (one vector per draw).
+pub fn random_baseline_draws(
+    b: &DMatrix<f64>,
+    scale: &[f64],
+    prior_rows: &DMatrix<f64>,
+    n: usize,
+    draws: usize,
+    noise_mm: f64,
+    rng: &mut impl Rng,
+) -> (DesignStats, Vec<Vec<f64>>) {
     let n_cand = b.nrows() / 3;
     let p = b.ncols();
     let prior_poses = prior_rows.nrows() / 3;
     let mut sig: Vec<Vec<f64>> = vec![Vec::with_capacity(draws); p];
+    let mut per_draw = Vec::with_capacity(draws.max(1));
     let (mut conds, mut mins, mut o1s) = (Vec::new(), Vec::new(), Vec::new());
     for _ in 0..draws.max(1) {
         let pick = sample(rng, n_cand, n.min(n_cand)).into_vec();
@@ -116,12 +130,63 @@ pub fn random_baseline(
         conds.push(st.condition_number);
         mins.push(st.min_singular_value);
         o1s.push(st.o1);
+        per_draw.push(st.sigma);
     }
-    DesignStats {
+    let stats = DesignStats {
         sigma: sig.iter().map(|v| median(v)).collect(),
         condition_number: median(&conds),
         min_singular_value: median(&mins),
         o1: median(&o1s),
+    };
+    (stats, per_draw)
+}
+
+/// The direct reading of "median parameter sigma": the median over parameters of the
+/// planned sigmas against the same median of each random design (mixed units: degrees and
+/// millimetres are compared as numbers, so it depends on the unit choice).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct DirectRatio {
+    /// Median over parameters of the planned sigmas.
+    pub planned: f64,
+    /// Mean over the random draws of each draw's median sigma.
+    pub random_mean: f64,
+    /// Median over the random draws of each draw's median sigma.
+    pub random_median: f64,
+}
+
+impl DirectRatio {
+    /// From the planned sigmas and every random draw's sigmas (non-finite sigmas count as
+    /// infinite in each median).
+    pub fn new(planned: &[f64], draws: &[Vec<f64>]) -> Self {
+        let med = |v: &[f64]| {
+            let w: Vec<f64> = v
+                .iter()
+                .map(|x| if x.is_finite() { *x } else { f64::INFINITY })
+                .collect();
+            median(&w)
+        };
+        let per: Vec<f64> = draws.iter().map(|d| med(d)).collect();
+        let finite: Vec<f64> = per.iter().copied().filter(|x| x.is_finite()).collect();
+        let random_mean = if finite.len() == per.len() && !per.is_empty() {
+            finite.iter().sum::<f64>() / finite.len() as f64
+        } else {
+            f64::INFINITY
+        };
+        Self {
+            planned: med(planned),
+            random_mean,
+            random_median: median(&per),
+        }
+    }
+
+    /// `planned / random_mean`.
+    pub fn ratio_to_mean(&self) -> f64 {
+        self.planned / self.random_mean
+    }
+
+    /// `planned / random_median`.
+    pub fn ratio_to_median(&self) -> f64 {
+        self.planned / self.random_median
     }
 }
 

@@ -80,6 +80,20 @@ pub fn plan_json(plan: &Plan, noise_mm: f64, seed: u64, sheets: Option<Value>) -
         "min_singular_value": num(plan.planned.min_singular_value),
         "random_min_singular_value": num(plan.random.min_singular_value),
         "exchanges": plan.exchanges,
+        "structured_candidates": plan.structured_candidates,
+        "refinement": {
+            "sweeps": plan.refinement.sweeps,
+            "moves": plan.refinement.moves,
+            "criterion_before": num(plan.refinement.criterion_before),
+            "criterion_after": num(plan.refinement.criterion_after),
+        },
+        "median_sigma_direct": {
+            "planned": num(plan.direct.planned),
+            "random_mean": num(plan.direct.random_mean),
+            "random_median": num(plan.direct.random_median),
+            "ratio_to_mean": num(plan.direct.ratio_to_mean()),
+            "ratio_to_median": num(plan.direct.ratio_to_median()),
+        },
         "median_sigma_ratio_per_draw": {
             "draws": plan.ratio_per_draw.len(),
             "p10": num(quantile(&plan.ratio_per_draw, 0.1)),
@@ -94,10 +108,12 @@ pub fn summary_table(plan: &Plan, noise_mm: f64) -> String {
     let mut out = String::new();
     let _ = writeln!(
         out,
-        "{} {} poses of {} candidates on {} ({} parameters), noise {noise_mm} mm",
+        "{} {} poses of {} candidates ({} structured; refined: {} joint moves) on {} ({} parameters), noise {noise_mm} mm",
         plan.criterion,
         plan.poses.len(),
         plan.candidates,
+        plan.structured_candidates,
+        plan.refinement.moves,
         plan.robot,
         plan.parameters.len()
     );
@@ -126,6 +142,15 @@ pub fn summary_table(plan: &Plan, noise_mm: f64) -> String {
         quantile(&plan.ratio_per_draw, 0.1),
         quantile(&plan.ratio_per_draw, 0.5),
         quantile(&plan.ratio_per_draw, 0.9)
+    );
+    let _ = writeln!(
+        out,
+        "median sigma over parameters (mixed units): planned {:.6}, random mean {:.6} / median {:.6} over draws (ratio {:.3} / {:.3})",
+        plan.direct.planned,
+        plan.direct.random_mean,
+        plan.direct.random_median,
+        plan.direct.ratio_to_mean(),
+        plan.direct.ratio_to_median()
     );
     if !plan.unidentifiable.is_empty() {
         let _ = writeln!(

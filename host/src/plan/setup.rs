@@ -44,6 +44,17 @@ pub fn joints_dataset(q: &[Vec<f64>]) -> Dataset {
 }
 
 impl Setup {
+    /// The scaled Jacobian block (3 x p, same columns and scale as [`Setup::b`]) of one
+    /// configuration `q_deg` (deg), e.g. a pose moved off the candidate set.
+    pub fn block_at(&self, q_deg: &[f64]) -> Result<DMatrix<f64>, PlanError> {
+        let (jac, _) = self
+            .ext
+            .stacked(&joints_dataset(&[q_deg.to_vec()]), &self.unknowns)?;
+        Ok(DMatrix::from_fn(jac.nrows(), jac.ncols(), |r, c| {
+            jac[(r, c)] / self.scale[c]
+        }))
+    }
+
     /// The declared identification: [`default_selection`] with the declared tilting.
     pub fn declared(
         model: &Model,
