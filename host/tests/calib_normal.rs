@@ -16,7 +16,7 @@ use rigctl::calib::lm::LmConfig;
 use rigctl::calib::normal::Normal;
 use rigctl::calib::problem::{stacked_jacobian, PositionProblem};
 use rigctl::calib::{default_selection, Poses};
-use rigctl::model::{katana450, ur5, Model, Tilt, UR5_SMR_TOOL_MM};
+use rigctl::model::{katana450, Model, Tilt};
 
 /// The tall-Jacobian path (QR of the stacked Jacobian), as `fit_parameters` did before.
 fn tall_fit(start: &Model, poses: &Poses, sel: &[usize], tilt: bool) -> Fit {
@@ -103,13 +103,7 @@ fn ur5_normal_equations_match_the_tall_solver() {
     ) else {
         return;
     };
-    let mut model = ur5().unwrap();
-    for (name, v) in ["tool_dx", "tool_dy", "tool_dz"]
-        .iter()
-        .zip(UR5_SMR_TOOL_MM)
-    {
-        model.set_param(name, v).unwrap();
-    }
+    let model = common::ur5_with_smr_tool();
     let grid = Poses::read(&dir.join("grid.csv"), &model).unwrap();
     let sel = default_selection(&model, true);
     let tall = tall_fit(&model, &grid, &sel, false);
@@ -160,13 +154,7 @@ fn ur5_fit_is_a_gauss_newton_fixed_point() {
     ) else {
         return;
     };
-    let mut model = ur5().unwrap();
-    for (name, v) in ["tool_dx", "tool_dy", "tool_dz"]
-        .iter()
-        .zip(UR5_SMR_TOOL_MM)
-    {
-        model.set_param(name, v).unwrap();
-    }
+    let model = common::ur5_with_smr_tool();
     let grid = Poses::read(&dir.join("grid.csv"), &model).unwrap();
     let sel = default_selection(&model, true);
     let lm = LmConfig::default();

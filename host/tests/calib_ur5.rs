@@ -5,7 +5,6 @@
 mod common;
 
 use rigctl::calib::{calibrate, CalibrateOptions, Method, Poses};
-use rigctl::model::{ur5, UR5_SMR_TOOL_MM};
 
 #[test]
 fn ur5_held_out_mean_beats_the_published_value() {
@@ -15,13 +14,7 @@ fn ur5_held_out_mean_beats_the_published_value() {
     ) else {
         return;
     };
-    let mut model = ur5().unwrap();
-    for (name, v) in ["tool_dx", "tool_dy", "tool_dz"]
-        .iter()
-        .zip(UR5_SMR_TOOL_MM)
-    {
-        model.set_param(name, v).unwrap();
-    }
+    let model = common::ur5_with_smr_tool();
     let cal = Poses::read(&dir.join("grid.csv"), &model).unwrap();
     let val = Poses::read(&dir.join("random.csv"), &model).unwrap();
     assert_eq!((cal.len(), val.len()), (1000, 20));

@@ -7,7 +7,6 @@ mod common;
 
 use rigctl::diagnose::data::Dataset;
 use rigctl::diagnose::{diagnose, DiagnoseOptions};
-use rigctl::model::{ur5, UR5_SMR_TOOL_MM};
 
 #[test]
 fn ur5_laser_tracker_effects_lower_the_held_out_error() {
@@ -17,13 +16,7 @@ fn ur5_laser_tracker_effects_lower_the_held_out_error() {
     ) else {
         return;
     };
-    let mut model = ur5().unwrap();
-    for (name, v) in ["tool_dx", "tool_dy", "tool_dz"]
-        .iter()
-        .zip(UR5_SMR_TOOL_MM)
-    {
-        model.set_param(name, v).unwrap();
-    }
+    let model = common::ur5_with_smr_tool();
     let cal = Dataset::read(&dir.join("grid.csv"), &model).unwrap();
     let val = Dataset::read(&dir.join("random.csv"), &model).unwrap();
     assert_eq!((cal.len(), val.len()), (1000, 20));

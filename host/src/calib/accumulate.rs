@@ -267,14 +267,15 @@ impl Accumulator {
         })
     }
 
-    /// Normal equations of the chunks `chunks` on this thread (first workspace) into the
-    /// per-chunk sums ([`Accumulator::partial_mut`]).
-    pub(super) fn normal_chunks(
+    /// `work` (normal equations or `r^T r`) on the chunks `chunks`, on this thread (first
+    /// workspace), into the per-chunk sums ([`Accumulator::partial_mut`]).
+    pub(super) fn run_here(
         &mut self,
         model: &Model,
         poses: &Poses,
         trig: Option<&JointTrig>,
         tilt: bool,
+        work: Work,
         chunks: Range<usize>,
     ) -> Result<(), ModelError> {
         let (len, wrt, t) = (poses.len(), &self.wrt[..], tilt_mode(tilt));
@@ -283,35 +284,15 @@ impl Accumulator {
             .first_mut()
             .ok_or_else(|| ModelError::Invalid("no workspace".into()))?;
         for c in chunks {
-            let out = self
-                .partial
-                .get_mut(c)
-                .ok_or_else(|| ModelError::Invalid(format!("no chunk {c}")))?;
-            chunk_normal(model, poses, trig, chunk(c, len), t, wrt, w, out)?;
-        }
-        Ok(())
-    }
-
-    /// `r^T r` of the chunks `chunks` on this thread into the per-chunk sums.
-    pub(super) fn sum_sq_chunks(
-        &mut self,
-        model: &Model,
-        poses: &Poses,
-        trig: Option<&JointTrig>,
-        tilt: bool,
-        chunks: Range<usize>,
-    ) -> Result<(), ModelError> {
-        let (len, t) = (poses.len(), tilt_mode(tilt));
-        let w = self
-            .workers
-            .first_mut()
-            .ok_or_else(|| ModelError::Invalid("no workspace".into()))?;
-        for c in chunks {
-            let out = self
-                .sums
-                .get_mut(c)
-                .ok_or_else(|| ModelError::Invalid(format!("no chunk {c}")))?;
-            *out = chunk_sum_sq(model, poses, trig, chunk(c, len), t, &mut w.data)?;
+            let (Some(normal), Some(sum)) = (self.partial.get_mut(c), self.sums.get_mut(c)) else {
+                return Err(ModelError::Invalid(format!("no chunk {c}")));
+            };
+            match work {
+                Work::Normal => chunk_normal(model, poses, trig, chunk(c, len), t, wrt, w, normal)?,
+                Work::SumSq => {
+                    *sum = chunk_sum_sq(model, poses, trig, chunk(c, len), t, &mut w.data)?;
+                }
+            }
         }
         Ok(())
     }
@@ -467,10 +448,7 @@ impl<'a> PositionNormalProblem<'a> {
         };
         let half = chunks.div_ceil(2);
         helper.start(x, work, half..chunks)?;
-        let here = match work {
-            Work::Normal => self.acc.normal_chunks(model, poses, trig, tilt, 0..half),
-            Work::SumSq => self.acc.sum_sq_chunks(model, poses, trig, tilt, 0..half),
-        };
+        let here = self.acc.run_here(model, poses, trig, tilt, work, 0..half);
         let (normals, sums) = self.acc.partial_mut();
         let there = helper.finish(work, normals, sums);
         here.and(there)

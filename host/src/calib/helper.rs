@@ -197,10 +197,7 @@ fn serve(
 ) -> Result<(), ModelError> {
     unknowns.set(&buffers.x)?;
     let model = unknowns.model();
-    match work {
-        Work::Normal => acc.normal_chunks(model, poses, Some(trig), tilt, chunks.clone())?,
-        Work::SumSq => acc.sum_sq_chunks(model, poses, Some(trig), tilt, chunks.clone())?,
-    }
+    acc.run_here(model, poses, Some(trig), tilt, work, chunks.clone())?;
     let (normals, sums) = acc.partial_mut();
     for (k, c) in chunks.clone().enumerate() {
         match work {

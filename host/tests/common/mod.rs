@@ -19,3 +19,18 @@ pub fn shared_file(test: &str, rel: &str) -> Option<PathBuf> {
     eprintln!("SKIPPED {msg}");
     None
 }
+
+/// The `ur5` preset with the laser tracker's SMR as its tool point (`UR5_SMR_TOOL_MM`), the
+/// model the UR5 data sets of `../shared` are calibrated with.
+pub fn ur5_with_smr_tool() -> rigctl::model::Model {
+    let mut model = rigctl::model::ur5().expect("the ur5 preset builds");
+    for (name, v) in ["tool_dx", "tool_dy", "tool_dz"]
+        .iter()
+        .zip(rigctl::model::UR5_SMR_TOOL_MM)
+    {
+        model
+            .set_param(name, v)
+            .expect("the ur5 preset has a tool point");
+    }
+    model
+}
