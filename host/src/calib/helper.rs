@@ -161,21 +161,15 @@ impl Helper {
             .rx
             .recv()
             .map_err(|_| ModelError::Invalid("the accumulation thread stopped".into()))?;
-        let chunks = self.chunks.clone();
-        for (k, c) in chunks.enumerate() {
-            match work {
-                Work::Normal => {
-                    if let (Some(dst), Some(src)) = (normals.get_mut(c), buffers.normals.get(k)) {
-                        dst.assign(src);
-                    }
-                }
-                Work::SumSq => {
-                    if let (Some(dst), Some(src)) = (sums.get_mut(c), buffers.sums.get(k)) {
-                        *dst = *src;
-                    }
-                }
-            }
-        }
+        let first = self.chunks.start;
+        copy_results(
+            work,
+            (&buffers.normals, &buffers.sums),
+            0,
+            (normals, sums),
+            first,
+            self.chunks.len(),
+        );
         self.buffers = Some(buffers);
         result
     }
@@ -199,21 +193,41 @@ fn serve(
     let model = unknowns.model();
     acc.run_here(model, poses, Some(trig), tilt, work, chunks.clone())?;
     let (normals, sums) = acc.partial_mut();
-    for (k, c) in chunks.clone().enumerate() {
+    copy_results(
+        work,
+        (normals, sums),
+        chunks.start,
+        (&mut buffers.normals, &mut buffers.sums),
+        0,
+        chunks.len(),
+    );
+    Ok(())
+}
+
+/// Copies the `count` per-chunk results of `work` from `src` (from index `src_at`) to `dst`
+/// (from `dst_at`): between the accumulator's per-chunk sums and the buffers that travel.
+fn copy_results(
+    work: Work,
+    src: (&[Normal], &[f64]),
+    src_at: usize,
+    dst: (&mut [Normal], &mut [f64]),
+    dst_at: usize,
+    count: usize,
+) {
+    for k in 0..count {
         match work {
             Work::Normal => {
-                if let (Some(dst), Some(src)) = (buffers.normals.get_mut(k), normals.get(c)) {
-                    dst.assign(src);
+                if let (Some(d), Some(s)) = (dst.0.get_mut(dst_at + k), src.0.get(src_at + k)) {
+                    d.assign(s);
                 }
             }
             Work::SumSq => {
-                if let (Some(dst), Some(src)) = (buffers.sums.get_mut(k), sums.get(c)) {
-                    *dst = *src;
+                if let (Some(d), Some(s)) = (dst.1.get_mut(dst_at + k), src.1.get(src_at + k)) {
+                    *d = *s;
                 }
             }
         }
     }
-    Ok(())
 }
 
 impl Drop for Helper {

@@ -212,6 +212,21 @@ impl ScaledSvd {
             .then_some(y)
     }
 
+    /// Whether a solve that stopped with `termination` at `cost` takes the final correction.
+    pub(super) fn wants_final_correction(
+        cfg: &LmConfig,
+        termination: Termination,
+        cost: f64,
+    ) -> bool {
+        cfg.final_correction && termination.converged() && cost > 0.0
+    }
+
+    /// Whether the evaluated final correction (cost `cost_try`) is kept: unless the cost grew
+    /// beyond round-off (the decrease it predicts is below `ftol` of the cost, i.e. round-off).
+    pub(super) fn keeps_correction(cost: f64, cost_try: f64) -> bool {
+        cost_try.is_finite() && cost_try <= cost * (1.0 + 1e-12)
+    }
+
     /// Gain ratio: the actual decrease of the cost over the decrease `-(Js y).r - |Js y|^2 / 2`
     /// the linear model predicts for the scaled step `y` (1 when it predicts none).
     pub(super) fn gain_ratio(&self, y: &DVector<f64>, actual_decrease: f64) -> f64 {
@@ -421,7 +436,7 @@ pub fn solve<P: Problem>(
         }
         iterations += 1;
     };
-    if cfg.final_correction && termination.converged() && cost > 0.0 {
+    if ScaledSvd::wants_final_correction(cfg, termination, cost) {
         let js = scale_columns(&jac, &mut diag);
         if let Some(y) = ScaledSvd::new(js, &r).and_then(|svd| svd.final_correction(cost, cfg)) {
             let x_try = &x + y.component_div(&diag);
@@ -429,8 +444,7 @@ pub fn solve<P: Problem>(
             let mut jac_try = DMatrix::zeros(m, n);
             problem.evaluate(&x_try, &mut r_try, Some(&mut jac_try))?;
             let cost_try = 0.5 * r_try.norm_squared();
-            // Accepted unless the cost grew beyond round-off (the predicted change is below it).
-            if cost_try.is_finite() && cost_try <= cost * (1.0 + 1e-12) {
+            if ScaledSvd::keeps_correction(cost, cost_try) {
                 (x, r, jac, cost) = (x_try, r_try, jac_try, cost_try);
             }
         }

@@ -363,10 +363,9 @@ pub fn solve_normal_from<P: NormalProblem>(
         }
         iterations += 1;
     };
-    if cfg.final_correction && termination.converged() && cost > 0.0 {
+    if ScaledSvd::wants_final_correction(cfg, termination, cost) {
         // The final Gauss-Newton correction ([`ScaledSvd::final_correction`]) from the last
-        // linearisation, evaluated so that `eq` and `cost` are those of the returned point; kept
-        // unless the cost grew beyond round-off (its predicted change is below `ftol` of it).
+        // linearisation, evaluated so that `eq` and `cost` are those of the returned point.
         update_scaling(&eq, &mut diag);
         if let Some(y) =
             ScaledSvd::from_normal(&eq, &diag).and_then(|svd| svd.final_correction(cost, cfg))
@@ -377,7 +376,7 @@ pub fn solve_normal_from<P: NormalProblem>(
                 .normal(&x_try, &mut eq_try)
                 .map_err(LmError::Problem)?;
             let cost_try = 0.5 * eq_try.rtr;
-            if cost_try.is_finite() && cost_try <= cost * (1.0 + 1e-12) {
+            if ScaledSvd::keeps_correction(cost, cost_try) {
                 x = x_try;
                 std::mem::swap(&mut eq, &mut eq_try);
                 eq.symmetrise();

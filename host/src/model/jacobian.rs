@@ -31,6 +31,22 @@ pub enum Wrt {
     Param(usize),
 }
 
+/// The axis (unit, R) of element `e` and a point on it (mm): the frame before the element.
+#[inline(always)]
+fn elem_axis(
+    model: &Model,
+    rot: &[Matrix3<f64>],
+    pos: &[Vector3<f64>],
+    e: usize,
+) -> (Vector3<f64>, Vector3<f64>) {
+    let ax = model.elems[e].axis.index();
+    if e == 0 {
+        (Vector3::ith(ax, 1.0), Vector3::zeros())
+    } else {
+        (rot[e - 1].column(ax).into_owned(), pos[e - 1])
+    }
+}
+
 /// Twist of element `e` moved at `rate` in the frames `rot` / `pos`: `(w rad, v mm)` with point
 /// velocity `w x x + v`. Inlined: returning the pair through memory stalled the per-pose loop.
 #[inline(always)]
@@ -41,16 +57,11 @@ fn elem_twist(
     e: usize,
     rate: f64,
 ) -> (Vector3<f64>, Vector3<f64>) {
-    let ax = model.elems[e].axis.index();
-    let (axis, p) = if e == 0 {
-        (Vector3::ith(ax, 1.0), Vector3::zeros())
-    } else {
-        (rot[e - 1].column(ax).into_owned(), pos[e - 1])
-    };
+    let (axis, o) = elem_axis(model, rot, pos, e);
     match model.elems[e].motion {
         Motion::Rot => {
             let w = axis * (rate * DEG);
-            (w, -w.cross(&p))
+            (w, -w.cross(&o))
         }
         Motion::Trans => (Vector3::zeros(), axis * rate),
     }
@@ -67,12 +78,7 @@ fn elem_point_velocity(
     rate: f64,
     p: &Vector3<f64>,
 ) -> Vector3<f64> {
-    let ax = model.elems[e].axis.index();
-    let (axis, o) = if e == 0 {
-        (Vector3::ith(ax, 1.0), Vector3::zeros())
-    } else {
-        (rot[e - 1].column(ax).into_owned(), pos[e - 1])
-    };
+    let (axis, o) = elem_axis(model, rot, pos, e);
     match model.elems[e].motion {
         Motion::Rot => (axis * (rate * DEG)).cross(&(p - o)),
         Motion::Trans => axis * rate,
