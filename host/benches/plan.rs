@@ -1,7 +1,8 @@
 //! `rigctl plan` on the Katana: 10 000 uniform candidates (plus the 210 structured ones), N = 30:
-//! candidates, Jacobians, weighted-A greedy + exchange with 1 random restart, the continuous
-//! refinement (3 sweeps), the random baseline and its spread (the defaults); and with the
-//! greedy start only.
+//! candidates, Jacobians, the random baseline (400 draws) and its spread, the approximate
+//! optimum with its certificate and the sensitivity climbs that extend the pool, weighted-A
+//! greedy + exchange (from the rounded optimum, the greedy start and 1 random restart), the
+//! continuous refinement (3 sweeps) (the defaults); and with the greedy start only.
 
 use criterion::{criterion_group, criterion_main, Criterion};
 use rigctl::model::{katana450, KATANA_TOOL_MM};

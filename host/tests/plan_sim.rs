@@ -9,12 +9,14 @@ use rigctl::plan::metrics::median;
 use rigctl::plan::{plan, FromDiagnose, PlanConfig};
 use rigctl::sim::simulate::{truth_model, SimConfig};
 
-/// N = 12: the planned poses' expected sigmas are well below those of 12 random poses and the
-/// held-out error after calibration is closer to the noise floor. Default plan (weighted A,
-/// structured candidates, continuous refinement): median planned / random sigma ratio measured
-/// 0.588-0.644 on seeds 1-5 (median 0.635; the 0.6 is not reached, see the README); the
-/// direct reading (median planned sigma over the mean of the random designs' median sigmas)
-/// about 0.65.
+/// N = 12: the planned poses' expected sigmas are well below those of 12 random poses, the plan
+/// is within 2 % of the best design possible on its (extended) candidates, and the held-out error
+/// after calibration is closer to the noise floor. Default plan (weighted A, structured
+/// candidates, continuous refinement, Jacobian with the tilt's contact direction held, 400
+/// random draws): median planned / random sigma ratio measured 0.610-0.622 on seeds 1-5
+/// (median 0.614; the 0.6 is not reached, and the approximate optimum on the same
+/// candidates reaches 0.603-0.623: see the README); the direct reading (median planned sigma
+/// over the mean of the random designs' median sigmas) 0.630-0.647.
 #[test]
 fn twelve_planned_poses_beat_twelve_random_ones() {
     let declared = katana450(KATANA_TOOL_MM).unwrap();
@@ -33,6 +35,22 @@ fn twelve_planned_poses_beat_twelve_random_ones() {
         assert_eq!(p.unidentifiable, ["dth5+be4", "be5"]);
         assert!(p.structured_candidates > 0 && p.refinement.moves > 0);
         assert!(p.refinement.criterion_after > p.refinement.criterion_before);
+        let best = p
+            .optimum
+            .as_ref()
+            .expect("the A criterion has a certified optimum");
+        assert!(
+            best.efficiency > 0.98 && best.efficiency_bound > 0.97,
+            "seed {seed}: efficiency {} (bound {})",
+            best.efficiency,
+            best.efficiency_bound
+        );
+        assert!(
+            p.median_sigma_ratio < best.median_sigma_ratio + 0.02,
+            "seed {seed}: plan {} optimum {}",
+            p.median_sigma_ratio,
+            best.median_sigma_ratio
+        );
         ratios.push(p.median_sigma_ratio);
         direct.push(p.direct.ratio_to_mean());
         let sim = SimConfig {
@@ -47,8 +65,8 @@ fn twelve_planned_poses_beat_twelve_random_ones() {
     }
     let (r, d) = (median(&ratios), median(&direct));
     eprintln!("median sigma ratios {ratios:?}, direct {direct:?}, held-out above floor planned {planned:?} random {random:?}");
-    assert!(r <= 0.645, "median planned/random sigma ratio {r}");
-    assert!(d <= 0.67, "direct reading {d}");
+    assert!(r <= 0.62, "median planned/random sigma ratio {r}");
+    assert!(d <= 0.65, "direct reading {d}");
     assert!(
         median(&planned) < median(&random),
         "planned {planned:?} random {random:?}"

@@ -66,7 +66,7 @@ pub struct Args {
     #[arg(long)]
     pub no_structured: bool,
     /// Random designs of N poses drawn for the baseline.
-    #[arg(long, value_name = "COUNT", default_value_t = 25)]
+    #[arg(long, value_name = "COUNT", default_value_t = rigctl::plan::DEFAULT_RANDOM_DRAWS)]
     pub random_draws: usize,
     /// Workspace box the tool point must lie in (mm, frame R).
     #[arg(

@@ -129,6 +129,9 @@ pub struct Model {
     pub(crate) masses: Vec<PointMass>,
     pub(crate) tilt: Option<Vec<TiltParams>>,
     pub(crate) gamma_law: GammaLaw,
+    /// The Jacobian holds the clearance tilt's direction fixed (see
+    /// [`Model::set_tilt_direction_frozen`]).
+    pub(crate) tilt_direction_frozen: bool,
     pub(crate) payload_param: usize,
     pub(crate) scale_param: usize,
     /// Names of the joints (e.g. URDF joint names), or empty.
@@ -207,6 +210,23 @@ impl Model {
     /// Chooses the gamma law (the declared model is [`GammaLaw::Linear`]).
     pub fn set_gamma_law(&mut self, law: GammaLaw) {
         self.gamma_law = law;
+    }
+
+    /// Whether the Jacobian holds the clearance tilt's direction fixed.
+    pub fn tilt_direction_frozen(&self) -> bool {
+        self.tilt_direction_frozen
+    }
+
+    /// Makes the Jacobian (not the position) hold the direction of the clearance tilt fixed:
+    /// the contact angle gamma of MODEL.md eq. 5.16, like the `sign()` steps, counts as flat
+    /// in the moments, while the compliance term `eta_z / k` keeps its slope. Gamma's slope
+    /// grows as `1 / (|eta_x| + |eta_y|)` where a joint's moment vanishes: there the linearised
+    /// information holds only within a hair of the nominal parameters and the contact direction
+    /// is physically undetermined, so `rigctl plan` designs on this Jacobian (elsewhere the term
+    /// is a small share of a column). Off by default (calibration differentiates the declared
+    /// law exactly).
+    pub fn set_tilt_direction_frozen(&mut self, frozen: bool) {
+        self.tilt_direction_frozen = frozen;
     }
 
     /// All parameters, in a fixed order (the order of Jacobian columns by index).
@@ -627,6 +647,7 @@ impl ModelBuilder {
             masses: self.masses,
             tilt,
             gamma_law: self.gamma_law,
+            tilt_direction_frozen: false,
             payload_param,
             scale_param,
             joint_names: Vec::new(),

@@ -135,7 +135,10 @@ impl Model {
                 a1.cross(&arm) * DEG,
                 a2.cross(&arm) * DEG,
             ]);
-            let tp = tilt_partials(&d.moments_kgfm[i], &d.tilt_values[i], self.gamma_law);
+            let mut tp = tilt_partials(&d.moments_kgfm[i], &d.tilt_values[i], self.gamma_law);
+            if self.tilt_direction_frozen {
+                tp.freeze_direction();
+            }
             d.tilt_partials.push(tp);
         }
         if d.has_untilted {

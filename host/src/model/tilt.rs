@@ -73,6 +73,18 @@ pub(crate) struct TiltPartials {
     pub wrt_stiffness: Vector3<f64>,
 }
 
+impl TiltPartials {
+    /// Drops the slope of the contact direction gamma (the `da`, `db` rows wrt `eta_x`,
+    /// `eta_y`), keeping the compliance slope `1 / k` ([`crate::model::Model::set_tilt_direction_frozen`]).
+    pub(crate) fn freeze_direction(&mut self) {
+        for r in 0..2 {
+            for c in 0..2 {
+                self.wrt_eta[(r, c)] = 0.0;
+            }
+        }
+    }
+}
+
 pub(crate) fn tilt_partials(eta: &Vector3<f64>, tv: &TiltValues, law: GammaLaw) -> TiltPartials {
     let (g, dgx, dgy) = gamma(eta.x, eta.y, law);
     let (sx, sy, sz) = (sign_1e9(eta.x), sign_1e9(eta.y), sign_1e9(eta.z));

@@ -94,6 +94,19 @@ pub fn plan_json(plan: &Plan, noise_mm: f64, seed: u64, sheets: Option<Value>) -
             "ratio_to_mean": num(plan.direct.ratio_to_mean()),
             "ratio_to_median": num(plan.direct.ratio_to_median()),
         },
+        "optimum": plan.optimum.as_ref().map(|o| json!({
+            "iterations": o.optimum.iterations,
+            "added_configurations": o.extension.added,
+            "rounds": o.extension.rounds,
+            "last_sensitivity_ratio": num(o.extension.last_excess),
+            "support": o.optimum.support,
+            "value": num(o.optimum.value),
+            "bound": num(o.optimum.bound),
+            "efficiency": num(o.efficiency),
+            "efficiency_bound": num(o.efficiency_bound),
+            "expected_sigma": named(&plan.parameters, &o.sigma),
+            "median_sigma_ratio": num(o.median_sigma_ratio),
+        })),
         "median_sigma_ratio_per_draw": {
             "draws": plan.ratio_per_draw.len(),
             "p10": num(quantile(&plan.ratio_per_draw, 0.1)),
@@ -152,6 +165,18 @@ pub fn summary_table(plan: &Plan, noise_mm: f64) -> String {
         plan.direct.ratio_to_mean(),
         plan.direct.ratio_to_median()
     );
+    if let Some(o) = &plan.optimum {
+        let _ = writeln!(
+            out,
+            "best possible (approximate optimum on the candidates + {} configurations found by {} rounds of sensitivity climbs, {} support poses): median sigma ratio {:.3}; this plan's efficiency {:.3} of it, {:.3} of the bound no design on that pool can pass",
+            o.extension.added,
+            o.extension.rounds,
+            o.optimum.support,
+            o.median_sigma_ratio,
+            o.efficiency,
+            o.efficiency_bound
+        );
+    }
     if !plan.unidentifiable.is_empty() {
         let _ = writeln!(
             out,

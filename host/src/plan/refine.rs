@@ -156,8 +156,23 @@ impl Refiner<'_> {
         b0: DMatrix<f64>,
         ranges: &[(f64, f64)],
     ) -> Result<(Vec<f64>, DMatrix<f64>, usize), PlanError> {
+        self.climb(q0, b0, ranges, |bt| {
+            self.value(&(rest + bt.transpose() * bt))
+        })
+    }
+
+    /// The coordinate search of one configuration `q0` (block `b0`) on `objective` of the
+    /// scaled block (larger is better), within the joint `ranges` and the workspace: the new
+    /// joints, block and the number of accepted moves.
+    pub fn climb(
+        &self,
+        q0: &[f64],
+        b0: DMatrix<f64>,
+        ranges: &[(f64, f64)],
+        objective: impl Fn(&DMatrix<f64>) -> f64,
+    ) -> Result<(Vec<f64>, DMatrix<f64>, usize), PlanError> {
         let (mut q, mut blk) = (q0.to_vec(), b0);
-        let mut best = self.value(&(rest + blk.transpose() * &blk));
+        let mut best = objective(&blk);
         let mut accepted = 0;
         for frac in STEP_FRACTIONS {
             for _ in 0..MAX_MOVES_PER_STEP {
@@ -177,7 +192,7 @@ impl Refiner<'_> {
                         let Some(bt) = self.feasible_block(&trial)? else {
                             continue;
                         };
-                        let val = self.value(&(rest + bt.transpose() * &bt));
+                        let val = objective(&bt);
                         if val > best + MIN_REL_GAIN * best.abs().max(1e-300) {
                             (best, q, blk, improved) = (val, trial, bt, true);
                             accepted += 1;

@@ -55,7 +55,8 @@ impl Setup {
         }))
     }
 
-    /// The declared identification: [`default_selection`] with the declared tilting.
+    /// The declared identification: [`default_selection`] with the declared tilting, its
+    /// contact direction held fixed in the Jacobian ([`Model::set_tilt_direction_frozen`]).
     pub fn declared(
         model: &Model,
         cands: &[CandidatePose],
@@ -65,13 +66,11 @@ impl Setup {
             .into_iter()
             .map(Unknown::Param)
             .collect();
-        Self::build(
-            ExtModel::new(model.clone()),
-            cands,
-            &requested,
-            &[],
-            prior_q,
-        )
+        // design on the Jacobian with the clearance tilt's direction held fixed: its slope is
+        // unbounded where a joint's moment vanishes (see `Model::set_tilt_direction_frozen`)
+        let mut ext = ExtModel::new(model.clone());
+        ext.model.set_tilt_direction_frozen(true);
+        Self::build(ext, cands, &requested, &[], prior_q)
     }
 
     /// The problem for the unknowns `requested` (earlier ones are kept when a combination is

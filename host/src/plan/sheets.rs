@@ -390,7 +390,8 @@ pub fn rank_sheets(
             "--sheets needs a Katana-type arm (the pencil rig's IK): {e}"
         ))
     })?;
-    let ext = ExtModel::new(model.clone());
+    let mut ext = ExtModel::new(model.clone());
+    ext.model.set_tilt_direction_frozen(true);
     let unknowns: Vec<Unknown> = default_selection(model, false)
         .into_iter()
         .map(Unknown::Param)

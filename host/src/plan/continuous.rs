@@ -1,0 +1,205 @@
+//! The best design over the reachable configurations, not only the candidate pool: the
+//! approximate optimum on the pool is extended by the configurations that maximise its
+//! sensitivity function (the classical route for a continuous design region: Fedorov's and
+//! Wynn's algorithms, the equivalence theorem of Kiefer and Wolfowitz).
+//!
+//! At the optimum on a pool, every configuration's sensitivity `d(q)` (the directional
+//! derivative of the criterion towards it, [`Optimum::sensitivity`]) is at most the threshold
+//! ([`Optimum::threshold`]). A reachable configuration above it improves the design: each round
+//! climbs `d(q)` from the pool's most sensitive candidates (the coordinate search of the
+//! refinement, within every constraint), adds the configurations found above the threshold to
+//! the pool, and solves the pool again from the previous weights. It stops when no climb
+//! finds one, i.e. when the equivalence condition holds at the local maxima of `d` reached from
+//! those starts, or after [`MAX_ROUNDS`].
+
+use nalgebra::DMatrix;
+
+use super::candidates::{usable_range, CandidatePose};
+use super::optimum::{approximate_optimum_from, Optimum};
+use super::refine::Refiner;
+use super::PlanError;
+use crate::model::Tilt;
+
+/// Rounds of climbing and re-solving at most.
+pub const MAX_ROUNDS: usize = 4;
+/// Climbs per round: from this many of the most sensitive candidates.
+pub const STARTS_PER_ROUND: usize = 12;
+/// A configuration is added when its sensitivity exceeds the threshold by this fraction.
+const MIN_EXCESS: f64 = 1e-3;
+/// Configurations closer than this in every joint (deg) to one added before are not added.
+const SAME_POSE_DEG: f64 = 0.5;
+/// Share of the weight given to the configurations added in a round, at the re-solve's start.
+const NEW_SHARE: f64 = 0.1;
+
+/// The pool extended towards the continuous optimum.
+#[derive(Debug, Clone)]
+pub struct Extended {
+    /// The configurations added, with their scaled blocks (3 rows each).
+    pub poses: Vec<CandidatePose>,
+    /// Scaled blocks of the added configurations.
+    pub blocks: DMatrix<f64>,
+    /// The optimum on the pool plus the added configurations.
+    pub optimum: Optimum,
+    /// Rounds run.
+    pub rounds: usize,
+    /// Largest sensitivity over the threshold found by the last round's climbs (1 or below: the
+    /// equivalence condition holds there).
+    pub last_excess: f64,
+}
+
+/// Extends the pool `b` (scaled blocks of `cands`) from its optimum `first` (criterion weight
+/// `weight`, as given to [`super::optimum::approximate_optimum`]).
+pub fn extend(
+    refiner: &Refiner<'_>,
+    cands: &[CandidatePose],
+    b: &DMatrix<f64>,
+    weight: &DMatrix<f64>,
+    first: Optimum,
+) -> Result<Extended, PlanError> {
+    let p = b.ncols();
+    let ranges: Vec<(f64, f64)> = refiner
+        .model
+        .joint_limits()
+        .iter()
+        .map(usable_range)
+        .collect();
+    let mut pool_q: Vec<Vec<f64>> = cands.iter().map(|c| c.q_deg.clone()).collect();
+    let mut pool_b = b.clone();
+    let mut added: Vec<CandidatePose> = Vec::new();
+    let mut optimum = first;
+    let (mut rounds, mut last_excess) = (0, 0.0);
+    for _ in 0..MAX_ROUNDS {
+        rounds += 1;
+        let threshold = optimum.threshold();
+        let n_pool = pool_b.nrows() / 3;
+        let mut order: Vec<(usize, f64)> = (0..n_pool)
+            .map(|c| (c, optimum.sensitivity(&pool_b.rows(3 * c, 3).into_owned())))
+            .collect();
+        order.sort_by(|a, b| b.1.total_cmp(&a.1).then(a.0.cmp(&b.0)));
+        let mut found: Vec<(Vec<f64>, DMatrix<f64>)> = Vec::new();
+        last_excess = 0.0;
+        for &(c, _) in order.iter().take(STARTS_PER_ROUND) {
+            let b0 = pool_b.rows(3 * c, 3).into_owned();
+            let (q, blk, _) =
+                refiner.climb(&pool_q[c], b0, &ranges, |bt| optimum.sensitivity(bt))?;
+            let s = optimum.sensitivity(&blk) / threshold;
+            last_excess = f64::max(last_excess, s);
+            let near = |other: &Vec<f64>| {
+                other
+                    .iter()
+                    .zip(&q)
+                    .all(|(a, b)| (a - b).abs() < SAME_POSE_DEG)
+            };
+            let seen = found.iter().any(|(o, _)| near(o)) || added.iter().any(|a| near(&a.q_deg));
+            if s > 1.0 + MIN_EXCESS && !seen {
+                found.push((q, blk));
+            }
+        }
+        if found.is_empty() {
+            break;
+        }
+        let mut start: Vec<f64> = optimum
+            .design
+            .iter()
+            .map(|x| x * (1.0 - NEW_SHARE))
+            .collect();
+        let mut grown = DMatrix::zeros(pool_b.nrows() + 3 * found.len(), p);
+        grown.rows_mut(0, pool_b.nrows()).copy_from(&pool_b);
+        for (k, (q, blk)) in found.into_iter().enumerate() {
+            grown.rows_mut(pool_b.nrows() + 3 * k, 3).copy_from(&blk);
+            let fk = refiner.model.fk(&q, Tilt::Off)?;
+            added.push(CandidatePose {
+                q_deg: q.clone(),
+                nominal_mm: fk.position_mm,
+            });
+            pool_q.push(q);
+            start.push(0.0);
+        }
+        let k_new = (grown.nrows() - pool_b.nrows()) / 3;
+        for x in start.iter_mut().skip(n_pool) {
+            *x = NEW_SHARE / k_new as f64;
+        }
+        pool_b = grown;
+        match approximate_optimum_from(&pool_b, optimum.n, optimum.kind, weight, &start) {
+            Some(o) => optimum = o,
+            None => return Err(PlanError::Numerical("approximate optimum lost rank")),
+        }
+    }
+    let n0 = b.nrows();
+    Ok(Extended {
+        blocks: pool_b.rows(n0, pool_b.nrows() - n0).into_owned(),
+        poses: added,
+        optimum,
+        rounds,
+        last_excess,
+    })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::model::{katana450, KATANA_TOOL_MM};
+    use crate::plan::candidates::{draw_candidates, Workspace};
+    use crate::plan::criteria::{prediction_weight, Criterion};
+    use crate::plan::optimum::approximate_optimum;
+    use crate::plan::setup::Setup;
+    use rand::SeedableRng;
+    use rand_chacha::ChaCha8Rng;
+
+    /// On a small Katana pool: the configurations added lie within the constraints and each
+    /// improved the design it was found for; the extended optimum is at least as good as the
+    /// pool's, and the certificate still brackets it.
+    #[test]
+    fn climbs_add_reachable_configurations_that_improve_the_optimum() {
+        let model = katana450(KATANA_TOOL_MM).unwrap();
+        let ws = Workspace::for_model(&model);
+        let mut rng = ChaCha8Rng::seed_from_u64(2);
+        let cands = draw_candidates(&model, 300, &ws, &mut rng).unwrap();
+        let setup = Setup::declared(&model, &cands, &[]).unwrap();
+        let p = setup.b.ncols();
+        let q = prediction_weight(&setup.b);
+        let w = DMatrix::identity(p, p);
+        for kind in [Criterion::A, Criterion::D] {
+            let first = approximate_optimum(&setup.b, 12, kind, &w).unwrap();
+            let refiner = Refiner {
+                model: &model,
+                setup: &setup,
+                workspace: &ws,
+                kind,
+                weights: &[],
+                prediction: &q,
+            };
+            let ext = extend(&refiner, &cands, &setup.b, &w, first.clone()).unwrap();
+            assert!(
+                !ext.poses.is_empty(),
+                "{kind:?}: 300 random candidates are not the optimum"
+            );
+            assert_eq!(ext.blocks.nrows(), 3 * ext.poses.len());
+            let sensitive = (0..ext.poses.len())
+                .filter(|&k| {
+                    first.sensitivity(&ext.blocks.rows(3 * k, 3).into_owned()) > first.threshold()
+                })
+                .count();
+            assert!(
+                sensitive > 0,
+                "{kind:?}: the first round's additions improve the first optimum"
+            );
+            for pose in &ext.poses {
+                assert!(pose.nominal_mm.z >= 40.0 - 1e-9, "table");
+                for (v, l) in pose.q_deg.iter().zip(model.joint_limits()) {
+                    let (lo, hi) = usable_range(&l);
+                    assert!(*v >= lo - 1e-9 && *v <= hi + 1e-9);
+                }
+            }
+            let o = &ext.optimum;
+            match kind {
+                Criterion::D => {
+                    assert!(o.value >= first.value - 1e-9 && o.bound >= o.value);
+                }
+                _ => {
+                    assert!(o.value <= first.value + 1e-9 && o.bound <= o.value);
+                }
+            }
+        }
+    }
+}
