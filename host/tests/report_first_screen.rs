@@ -150,7 +150,7 @@ fn plan_and_overlay_get_their_sections() {
             "random_sigma": {"dth2": 0.0040, "a2": 0.030},
             "condition_number": 12.5, "random_condition_number": 40.2,
             "median_sigma_ratio": 0.48, "unidentifiable": [], "from_diagnose": null,
-            "sheets": null})
+            "sheets": null, "optimum": {"median_sigma_ratio": 0.47, "efficiency": 0.985}})
         .to_string(),
     )
     .unwrap();
@@ -182,6 +182,7 @@ fn plan_and_overlay_get_their_sections() {
     assert!(html.contains("<a href=\"#overlay\">Trace overlay</a>"));
     assert!(html.contains("src=\"data:image/png;base64,iVBORw0KGgo"));
     assert!(html.contains("condition number, planned / random poses</th><td>12.5 / 40.2"));
+    assert!(html.contains("median sigma / random; plan&#39;s efficiency</th><td>0.470; 0.985"));
     // a broken plan file is a note naming file, line and column
     std::fs::write(p.join("plan.csv"), "q1,nom_x,nom_y,nom_z\n0,1,x,3\n").unwrap();
     let r = build_report(p, &ReportOptions::default()).unwrap();

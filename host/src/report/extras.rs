@@ -198,6 +198,15 @@ fn plan_facts(doc: &Value) -> Vec<(String, String)> {
     if let Some(r) = f("median_sigma_ratio") {
         out.push(("median sigma, planned / random".into(), format!("{r:.3}")));
     }
+    if let Some(o) = doc.get("optimum").filter(|v| v.is_object()) {
+        let g = |k: &str| o.get(k).and_then(Value::as_f64);
+        if let (Some(r), Some(e)) = (g("median_sigma_ratio"), g("efficiency")) {
+            out.push((
+                "best possible on the candidates: median sigma / random; plan's efficiency".into(),
+                format!("{r:.3}; {e:.3}"),
+            ));
+        }
+    }
     if let Some(u) = doc.get("unidentifiable").and_then(Value::as_array) {
         let names: Vec<String> = u.iter().map(super::docs::compact).collect();
         out.push((
