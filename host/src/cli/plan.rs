@@ -1,6 +1,6 @@
 //! `rigctl plan --robot NAME | --model FILE --n N --out PLAN.csv [--seed S] [--json PLAN.json]
 //! [--plot PLAN.svg] [--noise-mm 0.01] [--candidates 5000] [--box X0,Y0,Z0,X1,Y1,Z1]
-//! [--visible-from X,Y,Z [--cone-deg 60]] [--min-z-mm Z] [--poses CAL.csv]
+//! [--visible-from X,Y,Z [--cone-deg 60]] [--min-z-mm Z] [--poses CAL.csv] [--candidates-from POSES.csv] [--base]
 //! [--from-diagnose D.json] [--criterion a|g|i|d] [--restarts 1] [--refine-sweeps 3|0] [--no-structured]
 //! [--sheets [--sheet-rows fused|trace|plane]]`: chooses the N calibration poses that identify the model best
 //! (`rigctl::plan`) and prints their expected parameter sigmas against random poses.
@@ -49,6 +49,15 @@ pub struct Args {
     /// Number of random candidate configurations.
     #[arg(long, value_name = "COUNT", default_value_t = 5000)]
     pub candidates: usize,
+    /// Choose among these configurations only (a pose file: q1..qN, measured x,y,z optional;
+    /// e.g. the poses the robot reaches safely, or a measured set to subsample): no random or
+    /// structured candidates, no refinement.
+    #[arg(long, value_name = "POSES.csv", conflicts_with_all = ["candidates", "no_structured", "refine_sweeps"])]
+    pub candidates_from: Option<PathBuf>,
+    /// Plan for the base frame too (base_x, base_y, base_z, base_rx, base_ry), as `calibrate
+    /// --base` identifies it.
+    #[arg(long)]
+    pub base: bool,
     /// Optimality criterion: a (sum of the squared sigmas relative to random designs, the
     /// default), g (geometric mean of the sigmas), i (mean prediction variance over the
     /// candidates) or d (determinant); with --from-diagnose restricted to the effects to separate.
@@ -132,6 +141,7 @@ pub fn run(args: Args) -> Result<(), CliError> {
     cfg.random_draws = args.random_draws;
     cfg.criterion = args.criterion;
     cfg.restarts = args.restarts;
+    cfg.base = args.base;
     cfg.refine_sweeps = args.refine_sweeps;
     if args.no_structured {
         cfg.structured = Some(false);
@@ -152,6 +162,10 @@ pub fn run(args: Args) -> Result<(), CliError> {
     }
     if let Some(z) = args.min_z_mm {
         cfg.workspace.min_z_mm = Some(z);
+    }
+    if let Some(p) = &args.candidates_from {
+        let file = read_poses(p, &args.pose.spec(&model, false, 0))?;
+        cfg.pool_q = Some(file.joints());
     }
     if let Some(p) = &args.poses {
         let file = read_poses(p, &args.pose.spec(&model, false, 0))?;

@@ -124,6 +124,29 @@ pub fn draw_candidates(
     Ok(out)
 }
 
+/// The configurations `pool` (joint readings, deg; e.g. the poses a robot can reach safely, or
+/// poses already measured) as candidates, in order, kept when the declared model's tool point
+/// satisfies `ws`; with the index of each kept configuration in `pool`.
+pub fn pool_candidates(
+    model: &Model,
+    pool: &[Vec<f64>],
+    ws: &Workspace,
+) -> Result<(Vec<CandidatePose>, Vec<usize>), PlanError> {
+    let (mut out, mut index) = (Vec::new(), Vec::new());
+    for (k, q) in pool.iter().enumerate() {
+        let fk = model.fk(q, Tilt::Off)?;
+        let axis = fk.rotation.column(2).into_owned();
+        if ws.admits(&fk.position_mm, &axis) {
+            out.push(CandidatePose {
+                q_deg: q.clone(),
+                nominal_mm: fk.position_mm,
+            });
+            index.push(k);
+        }
+    }
+    Ok((out, index))
+}
+
 /// Most structured candidates: `3^joints` up to 7 joints; none beyond.
 pub const MAX_STRUCTURED: usize = 2187;
 

@@ -152,6 +152,12 @@ pub struct PlanConfig {
     /// Sweeps of the continuous refinement of the chosen poses (0: off); `None`: 3 for the
     /// declared identification, 0 with `--from-diagnose` (see [`DEFAULT_REFINE_SWEEPS`]).
     pub refine_sweeps: Option<usize>,
+    /// The candidates given (`--candidates-from`: configurations the robot can reach, or poses
+    /// measured already): the plan is a subset of them; no random or structured candidates, no
+    /// refinement, no climbs (the best possible is on these alone).
+    pub pool_q: Option<Vec<Vec<f64>>>,
+    /// Plan for the base frame too (`--base`, as `calibrate --base` identifies it).
+    pub base: bool,
 }
 
 impl PlanConfig {
@@ -170,6 +176,8 @@ impl PlanConfig {
             existing_q: Vec::new(),
             structured: None,
             refine_sweeps: None,
+            pool_q: None,
+            base: false,
         }
     }
 }
@@ -212,6 +220,8 @@ pub struct Plan {
     pub direct: DirectRatio,
     /// The continuous refinement: criterion before and after, accepted moves, sweeps run.
     pub refinement: RefineSummary,
+    /// With [`PlanConfig::pool_q`]: the index in the pool of each planned pose.
+    pub pool_index: Option<Vec<usize>>,
     /// The best possible on the candidates (approximate optimum and its bound) and the plan's
     /// efficiency against it; `None` for G, with poses already measured or `--from-diagnose`.
     pub optimum: Option<optimum::OptimumReport>,
@@ -247,13 +257,28 @@ pub fn plan(
         return Err(PlanError::Config("--n must be at least 1".into()));
     }
     let mut rng = ChaCha8Rng::seed_from_u64(cfg.seed);
-    let mut cands = draw_candidates(model, cfg.candidates.max(cfg.n), &cfg.workspace, &mut rng)?;
+    let (mut cands, pool_index) = match &cfg.pool_q {
+        Some(pool) => {
+            let (c, index) = candidates::pool_candidates(model, pool, &cfg.workspace)?;
+            if c.len() < cfg.n {
+                return Err(PlanError::TooFewCandidates {
+                    n: cfg.n,
+                    candidates: c.len(),
+                });
+            }
+            (c, Some(index))
+        }
+        None => (
+            draw_candidates(model, cfg.candidates.max(cfg.n), &cfg.workspace, &mut rng)?,
+            None,
+        ),
+    };
     let n_uniform = cands.len();
-    if cfg.structured.unwrap_or(from.is_none()) {
+    if pool_index.is_none() && cfg.structured.unwrap_or(from.is_none()) {
         cands.extend(structured_candidates(model, &cfg.workspace)?);
     }
     let setup = match from {
-        None => Setup::declared(model, &cands, &cfg.existing_q)?,
+        None => Setup::declared_with_base(model, &cands, &cfg.existing_q, cfg.base)?,
         Some(f) => f.setup(model, &cands, &cfg.existing_q)?,
     };
     let p = setup.names.len();
@@ -316,9 +341,12 @@ pub fn plan(
         prediction: &prediction,
     };
     let start: Vec<CandidatePose> = design.chosen.iter().map(|&c| cands[c].clone()).collect();
-    let sweeps = cfg
-        .refine_sweeps
-        .unwrap_or_else(|| default_refine_sweeps(from.is_some()));
+    let sweeps = match pool_index {
+        Some(_) => 0,
+        None => cfg
+            .refine_sweeps
+            .unwrap_or_else(|| default_refine_sweeps(from.is_some())),
+    };
     let refined = refiner.refine(&prior, &start, sweeps)?;
     let chosen: Vec<usize> = (0..refined.poses.len()).collect();
     let jac = metrics::stack_rows(&refined.blocks, &setup.scale, &setup.prior_rows, &chosen);
@@ -372,6 +400,7 @@ pub fn plan(
         ratio_per_draw,
         direct,
         refinement,
+        pool_index: pool_index.map(|index| design.chosen.iter().map(|&c| index[c]).collect()),
         optimum,
     })
 }
@@ -415,6 +444,13 @@ fn best_possible(
         weights,
         prediction,
     };
+    if cfg.pool_q.is_some() {
+        return Ok(Some(BestPossible {
+            optimum: first,
+            weight: w,
+            extension: optimum::Extension::default(),
+        }));
+    }
     let ext = continuous::extend(&refiner, cands, &setup.b, &w, first)?;
     let rows = setup.b.nrows();
     let mut grown = DMatrix::zeros(rows + ext.blocks.nrows(), setup.b.ncols());

@@ -166,15 +166,21 @@ pub fn summary_table(plan: &Plan, noise_mm: f64) -> String {
         plan.direct.ratio_to_median()
     );
     if let Some(o) = &plan.optimum {
+        let pool = if o.extension.rounds == 0 {
+            format!(
+                "approximate optimum on the candidates, {} support poses",
+                o.optimum.support
+            )
+        } else {
+            format!(
+                "approximate optimum on the candidates + {} configurations found by {} rounds of sensitivity climbs, {} support poses",
+                o.extension.added, o.extension.rounds, o.optimum.support
+            )
+        };
         let _ = writeln!(
             out,
-            "best possible (approximate optimum on the candidates + {} configurations found by {} rounds of sensitivity climbs, {} support poses): median sigma ratio {:.3}; this plan's efficiency {:.3} of it, {:.3} of the bound no design on that pool can pass",
-            o.extension.added,
-            o.extension.rounds,
-            o.optimum.support,
-            o.median_sigma_ratio,
-            o.efficiency,
-            o.efficiency_bound
+            "best possible ({pool}): median sigma ratio {:.3}; this plan's efficiency {:.3} of it, {:.3} of the bound no design on that pool can pass",
+            o.median_sigma_ratio, o.efficiency, o.efficiency_bound
         );
     }
     if !plan.unidentifiable.is_empty() {

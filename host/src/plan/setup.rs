@@ -62,7 +62,18 @@ impl Setup {
         cands: &[CandidatePose],
         prior_q: &[Vec<f64>],
     ) -> Result<Self, PlanError> {
-        let requested: Vec<Unknown> = default_selection(model, false)
+        Self::declared_with_base(model, cands, prior_q, false)
+    }
+
+    /// As [`Setup::declared`], with the base frame among the parameters when `base` (as
+    /// `calibrate --base` identifies it).
+    pub fn declared_with_base(
+        model: &Model,
+        cands: &[CandidatePose],
+        prior_q: &[Vec<f64>],
+        base: bool,
+    ) -> Result<Self, PlanError> {
+        let requested: Vec<Unknown> = default_selection(model, base)
             .into_iter()
             .map(Unknown::Param)
             .collect();
