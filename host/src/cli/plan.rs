@@ -195,14 +195,25 @@ pub fn run(args: Args) -> Result<(), CliError> {
     };
     if let Some(path) = &args.plot {
         let planned: Vec<[f64; 3]> = result.poses.iter().map(|p| p.nominal_mm.into()).collect();
-        // the candidates are not kept in the plan: redraw a light background of the same seed
-        let mut rng = <rand_chacha::ChaCha8Rng as rand::SeedableRng>::seed_from_u64(cfg.seed);
-        let cands = rigctl::plan::draw_candidates(
-            &model,
-            1500.min(cfg.candidates),
-            &cfg.workspace,
-            &mut rng,
-        )?;
+        // the candidates are not kept in the plan: the file's configurations, or a light
+        // background redrawn with the same seed
+        let cands = match &cfg.pool_q {
+            Some(pool) => {
+                let every = pool.len().div_ceil(1500).max(1);
+                let light: Vec<Vec<f64>> = pool.iter().step_by(every).cloned().collect();
+                rigctl::plan::candidates::pool_candidates(&model, &light, &cfg.workspace)?.0
+            }
+            None => {
+                let mut rng =
+                    <rand_chacha::ChaCha8Rng as rand::SeedableRng>::seed_from_u64(cfg.seed);
+                rigctl::plan::draw_candidates(
+                    &model,
+                    1500.min(cfg.candidates),
+                    &cfg.workspace,
+                    &mut rng,
+                )?
+            }
+        };
         let background: Vec<[f64; 3]> = cands.iter().map(|c| c.nominal_mm.into()).collect();
         let title = format!("{} planned poses, {}", result.poses.len(), result.robot);
         let bytes = if path
