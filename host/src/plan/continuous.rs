@@ -12,13 +12,15 @@
 //! finds one, i.e. when the equivalence condition holds at the local maxima of `d` reached from
 //! those starts, or after [`MAX_ROUNDS`].
 
-use nalgebra::DMatrix;
+use nalgebra::{DMatrix, DVector};
 
 use super::candidates::{usable_range, CandidatePose};
-use super::optimum::{approximate_optimum_from, Optimum};
+use super::criteria::Criterion;
+use super::optimum::{approximate_optimum, approximate_optimum_from, Extension, Optimum};
 use super::refine::Refiner;
-use super::PlanError;
-use crate::model::Tilt;
+use super::setup::Setup;
+use super::{PlanConfig, PlanError};
+use crate::model::{Model, Tilt};
 
 /// Rounds of climbing and re-solving at most.
 pub const MAX_ROUNDS: usize = 4;
@@ -133,6 +135,73 @@ pub fn extend(
         rounds,
         last_excess,
     })
+}
+
+/// The best possible of [`best_possible`].
+pub(crate) struct BestPossible {
+    pub optimum: Optimum,
+    /// The criterion weight it was computed with.
+    pub weight: DMatrix<f64>,
+    /// What the climbs added.
+    pub extension: Extension,
+}
+
+/// The best possible for the declared identification (no poses measured before, no columns
+/// of interest): the approximate optimum on the candidates, then extended over the
+/// reachable configurations ([`extend`]; not with [`PlanConfig::pool_q`]), whose
+/// configurations join the pool (`cands` and `setup.b`).
+pub(crate) fn best_possible(
+    model: &Model,
+    cfg: &PlanConfig,
+    setup: &mut Setup,
+    cands: &mut Vec<CandidatePose>,
+    weights: &[f64],
+    prediction: &DMatrix<f64>,
+) -> Result<Option<BestPossible>, PlanError> {
+    if setup.prior_rows.nrows() != 0 || !setup.interest.is_empty() {
+        return Ok(None);
+    }
+    let w = match cfg.criterion {
+        Criterion::I => prediction.clone(),
+        _ => DMatrix::from_diagonal(&DVector::from_column_slice(weights)),
+    };
+    let Some(first) = approximate_optimum(&setup.b, cfg.n, cfg.criterion, &w) else {
+        return Ok(None);
+    };
+    if cfg.pool_q.is_some() {
+        return Ok(Some(BestPossible {
+            optimum: first,
+            weight: w,
+            extension: Extension::default(),
+        }));
+    }
+    let refiner = Refiner {
+        model,
+        setup,
+        workspace: &cfg.workspace,
+        kind: cfg.criterion,
+        weights,
+        prediction,
+    };
+    let ext = extend(&refiner, cands, &setup.b, &w, first)?;
+    let rows = setup.b.nrows();
+    let mut grown = DMatrix::zeros(rows + ext.blocks.nrows(), setup.b.ncols());
+    grown.rows_mut(0, rows).copy_from(&setup.b);
+    grown
+        .rows_mut(rows, ext.blocks.nrows())
+        .copy_from(&ext.blocks);
+    setup.b = grown;
+    cands.extend(ext.poses.iter().cloned());
+    let extension = Extension {
+        added: ext.poses.len(),
+        rounds: ext.rounds,
+        last_excess: ext.last_excess,
+    };
+    Ok(Some(BestPossible {
+        optimum: ext.optimum,
+        weight: w,
+        extension,
+    }))
 }
 
 #[cfg(test)]

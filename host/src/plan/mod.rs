@@ -40,7 +40,7 @@ pub mod setup;
 pub mod sheets;
 pub mod sheets_output;
 
-use nalgebra::{DMatrix, DVector};
+use nalgebra::DMatrix;
 use rand::SeedableRng;
 use rand_chacha::ChaCha8Rng;
 
@@ -223,7 +223,7 @@ pub struct Plan {
     /// With [`PlanConfig::pool_q`]: the index in the pool of each planned pose.
     pub pool_index: Option<Vec<usize>>,
     /// The best possible on the candidates (approximate optimum and its bound) and the plan's
-    /// efficiency against it; `None` for G, with poses already measured or `--from-diagnose`.
+    /// efficiency against it; `None` with poses already measured or `--from-diagnose`.
     pub optimum: Option<optimum::OptimumReport>,
 }
 
@@ -321,7 +321,8 @@ pub fn plan(
     let prediction = criteria::prediction_weight(&b_uniform);
     let n_pool = cands.len();
     let mut setup = setup;
-    let best = best_possible(model, cfg, &mut setup, &mut cands, &weights, &prediction)?;
+    let best =
+        continuous::best_possible(model, cfg, &mut setup, &mut cands, &weights, &prediction)?;
     let problem = design::Problem {
         b: &setup.b,
         prior: &prior,
@@ -403,73 +404,6 @@ pub fn plan(
         pool_index: pool_index.map(|index| design.chosen.iter().map(|&c| index[c]).collect()),
         optimum,
     })
-}
-
-/// The best possible for the declared identification (no poses measured before, no columns
-/// of interest): the approximate optimum on the candidates, then extended over the
-/// reachable configurations ([`continuous::extend`]), whose configurations join the pool
-/// (`cands` and `setup.b`).
-/// The best possible of [`best_possible`].
-struct BestPossible {
-    optimum: optimum::Optimum,
-    /// The criterion weight it was computed with.
-    weight: DMatrix<f64>,
-    /// What the climbs added.
-    extension: optimum::Extension,
-}
-
-fn best_possible(
-    model: &Model,
-    cfg: &PlanConfig,
-    setup: &mut Setup,
-    cands: &mut Vec<CandidatePose>,
-    weights: &[f64],
-    prediction: &DMatrix<f64>,
-) -> Result<Option<BestPossible>, PlanError> {
-    if setup.prior_rows.nrows() != 0 || !setup.interest.is_empty() {
-        return Ok(None);
-    }
-    let w = match cfg.criterion {
-        Criterion::I => prediction.clone(),
-        _ => DMatrix::from_diagonal(&DVector::from_column_slice(weights)),
-    };
-    let Some(first) = optimum::approximate_optimum(&setup.b, cfg.n, cfg.criterion, &w) else {
-        return Ok(None);
-    };
-    let refiner = refine::Refiner {
-        model,
-        setup,
-        workspace: &cfg.workspace,
-        kind: cfg.criterion,
-        weights,
-        prediction,
-    };
-    if cfg.pool_q.is_some() {
-        return Ok(Some(BestPossible {
-            optimum: first,
-            weight: w,
-            extension: optimum::Extension::default(),
-        }));
-    }
-    let ext = continuous::extend(&refiner, cands, &setup.b, &w, first)?;
-    let rows = setup.b.nrows();
-    let mut grown = DMatrix::zeros(rows + ext.blocks.nrows(), setup.b.ncols());
-    grown.rows_mut(0, rows).copy_from(&setup.b);
-    grown
-        .rows_mut(rows, ext.blocks.nrows())
-        .copy_from(&ext.blocks);
-    setup.b = grown;
-    cands.extend(ext.poses.iter().cloned());
-    let extension = optimum::Extension {
-        added: ext.poses.len(),
-        rounds: ext.rounds,
-        last_excess: ext.last_excess,
-    };
-    Ok(Some(BestPossible {
-        optimum: ext.optimum,
-        weight: w,
-        extension,
-    }))
 }
 
 /// The greedy start's exchange, the exchange from `rounded` (the approximate optimum's
