@@ -83,7 +83,7 @@ pub struct FromDiagnoseReport {
     /// The plausible magnitude of each unknown of interest the linearity test used
     /// ([`super::robust`]), by name.
     pub magnitudes: Vec<(String, f64)>,
-    /// Candidates that passed the linearity test, of all candidates.
+    /// Candidates that passed the linearity test.
     pub admissible_candidates: usize,
     /// The largest nonlinearity admitted ([`robust::LINEARITY_RTOL`] unless raised).
     pub nonlinearity_threshold: f64,
@@ -339,11 +339,7 @@ impl FromDiagnose {
                         .collect()
                 })
                 .unwrap_or_default(),
-            admissible_candidates: if setup.admissible.is_empty() {
-                setup.b.nrows() / 3
-            } else {
-                setup.admissible.iter().filter(|a| **a).count()
-            },
+            admissible_candidates: setup.admissible.iter().filter(|a| **a).count(),
             nonlinearity_threshold: setup
                 .linearity
                 .as_ref()
@@ -375,4 +371,26 @@ pub fn max_correlation(jac: &DMatrix<f64>, a: &[usize], b: &[usize]) -> f64 {
         }
     }
     worst
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// The sizes the linearity test needs come from the diagnose JSON when it has them.
+    #[test]
+    fn parse_reads_the_declared_residual_and_the_fitted_values() {
+        let json = r#"{"declared": {"calibration": {"rms_mm": 0.25}},
+            "effects": [{"id": "link_length:a3", "parameters": {"delta_mm": 0.29},
+                         "sigma": {"delta_mm": 0.016}, "model_parameters": {"a3": 139.29}}],
+            "aliased": [{"a": "link_length:a3", "b": "payload", "correlation": 0.9}]}"#;
+        let f = FromDiagnose::parse("d.json", json).unwrap();
+        assert_eq!(f.declared_rms_mm, Some(0.25));
+        assert_eq!(f.fitted, vec![("a3".to_string(), 139.29)]);
+        assert!(f.loose.is_empty());
+        let bare = r#"{"aliased": [{"a": "payload", "b": "link_length:a3"}]}"#;
+        let f = FromDiagnose::parse("d.json", bare).unwrap();
+        assert_eq!(f.declared_rms_mm, None);
+        assert!(f.fitted.is_empty());
+    }
 }

@@ -5,10 +5,10 @@
 //! The Katana's payload is the case in point: it acts through the joint moments on the
 //! clearance tilt of MODEL.md eq. 5.16-5.18, whose contact direction
 //! `gamma = (pi/2) |eta_x| / (|eta_x| + |eta_y|)` has a derivative of order `1 / (|eta_x| +
-//! |eta_y|)`: where a joint's own moment nearly vanishes (the arm's weight above the joint) the
-//! payload column at zero payload is 40-200 mm/kg, but a payload of a few grams already turns the
-//! contact fully and the tilt saturates at the clearance C; at 0.5 kg the same poses move by
-//! 0.03-0.06 mm/kg. A design linearised at zero collects exactly those poses (expected payload
+//! |eta_y|)`: where a joint's own moment nearly vanishes (the centre of mass beyond it on its
+//! vertical) the payload column at zero payload is 40-200 mm/kg, but a payload of a few grams
+//! already turns the contact fully and the tilt saturates at the clearance C; at 0.5 kg the same
+//! poses move by 0.03-0.06 mm/kg. A design linearised at zero collects exactly those poses (expected payload
 //! sigma 8e-5 kg, while the sigma at the true 0.5 kg on the same poses is 0.039 kg and a
 //! Monte-Carlo over the noise gives 0.024 kg), and `diagnose`, which screens every candidate
 //! linearly at zero as well, then does not even refit the payload.
