@@ -67,11 +67,12 @@ pub struct Args {
     #[arg(long, value_name = "COUNT", default_value_t = 1)]
     pub restarts: usize,
     /// Sweeps of the continuous refinement of the chosen poses' joint values (0: keep the
-    /// candidates as chosen); default 3, 0 with --from-diagnose.
+    /// candidates as chosen); default 3 (with --from-diagnose, moves that fail the linearity
+    /// test of the effects to separate are not taken).
     #[arg(long, value_name = "COUNT")]
     pub refine_sweeps: Option<usize>,
     /// Leave the structured candidates (joint limits and mid-range combinations) out of the pool
-    /// (always out with --from-diagnose).
+    /// (with --from-diagnose they are kept only where the effects to separate are linear).
     #[arg(long)]
     pub no_structured: bool,
     /// Random designs of N poses drawn for the baseline.

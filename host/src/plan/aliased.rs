@@ -15,6 +15,7 @@ use nalgebra::DMatrix;
 use serde_json::Value;
 
 use super::candidates::CandidatePose;
+use super::robust::{self, DEFAULT_EFFECT_RMS_MM};
 use super::setup::Setup;
 use super::PlanError;
 use crate::calib::default_selection;
@@ -49,6 +50,11 @@ pub struct FromDiagnose {
     pub effects: Vec<String>,
     /// Accepted effects with a large sigma.
     pub loose: Vec<String>,
+    /// The declared fit's calibration RMS error (`declared.calibration.rms_mm`), the size of
+    /// an effect the declared model lacks ([`super::robust`]); `None` when absent.
+    pub declared_rms_mm: Option<f64>,
+    /// Fitted model values of the accepted effects' unknowns (`effects[].model_parameters`).
+    pub fitted: Vec<(String, f64)>,
 }
 
 /// A pair after planning.
@@ -74,6 +80,13 @@ pub struct FromDiagnoseReport {
     /// Names of the unknowns the design separates.
     pub interest: Vec<String>,
     pub existing_poses: usize,
+    /// The plausible magnitude of each unknown of interest the linearity test used
+    /// ([`super::robust`]), by name.
+    pub magnitudes: Vec<(String, f64)>,
+    /// Candidates that passed the linearity test.
+    pub admissible_candidates: usize,
+    /// The largest nonlinearity admitted ([`robust::LINEARITY_RTOL`] unless raised).
+    pub nonlinearity_threshold: f64,
 }
 
 fn field_err(path: &str, message: String) -> PlanError {
@@ -138,8 +151,15 @@ impl FromDiagnose {
         }
         let mut effects = Vec::new();
         let mut loose = Vec::new();
+        let mut fitted = Vec::new();
         if let Some(list) = doc.get("effects").and_then(Value::as_array) {
             for (k, e) in list.iter().enumerate() {
+                if let Some(mp) = e.get("model_parameters").and_then(Value::as_object) {
+                    fitted.extend(
+                        mp.iter()
+                            .filter_map(|(n, v)| v.as_f64().map(|v| (n.clone(), v))),
+                    );
+                }
                 let id = e.get("id").and_then(Value::as_str).ok_or_else(|| {
                     field_err(
                         path,
@@ -158,11 +178,17 @@ impl FromDiagnose {
                 "no `aliased` pair and no effect with a large sigma: nothing to separate (plan without --from-diagnose)".into(),
             ));
         }
+        let declared_rms_mm = doc
+            .pointer("/declared/calibration/rms_mm")
+            .and_then(Value::as_f64)
+            .filter(|v| v.is_finite() && *v > 0.0);
         Ok(Self {
             path: path.to_string(),
             pairs,
             effects,
             loose,
+            declared_rms_mm,
+            fitted,
         })
     }
 
@@ -230,7 +256,32 @@ impl FromDiagnose {
                 push(us, &mut requested);
             }
         }
-        Setup::build(ext, cands, &requested, &interest, existing_q)
+        let mut setup = Setup::build(ext, cands, &requested, &interest, existing_q)?;
+        let target_mm = self.declared_rms_mm.unwrap_or(DEFAULT_EFFECT_RMS_MM);
+        let sizing = robust::sizing_poses(cands);
+        let (mut unknowns, mut magnitudes) = (Vec::new(), Vec::new());
+        for &c in &setup.interest {
+            let u = setup.unknowns[c];
+            let name = u.name(&setup.ext.model);
+            let change = self
+                .fitted
+                .iter()
+                .find(|(n, _)| *n == name)
+                .map(|(_, v)| (v - setup.ext.value(u)).abs())
+                .filter(|d| *d > 0.0 && d.is_finite());
+            // the linear guess: the column's RMS over the candidates is `scale` (mm per unit)
+            let linear = target_mm / setup.scale[c];
+            if let Some(m) = change
+                .or_else(|| robust::effect_magnitude(&setup.ext, u, &sizing, target_mm, linear))
+            {
+                unknowns.push(u);
+                magnitudes.push(m);
+            }
+        }
+        let mut linearity = robust::Linearity::new(&setup.ext, unknowns, magnitudes);
+        setup.admissible = linearity.admissible(cands)?;
+        setup.linearity = Some(linearity);
+        Ok(setup)
     }
 
     /// The report after planning `chosen` (candidate indices of `setup`).
@@ -277,6 +328,22 @@ impl FromDiagnose {
                 .map(|&c| setup.names[c].clone())
                 .collect(),
             existing_poses: setup.prior_rows.nrows() / 3,
+            magnitudes: setup
+                .linearity
+                .as_ref()
+                .map(|l| {
+                    l.unknowns
+                        .iter()
+                        .zip(&l.magnitudes)
+                        .map(|(u, m)| (u.name(&ext.model), *m))
+                        .collect()
+                })
+                .unwrap_or_default(),
+            admissible_candidates: setup.admissible.iter().filter(|a| **a).count(),
+            nonlinearity_threshold: setup
+                .linearity
+                .as_ref()
+                .map_or(f64::INFINITY, |l| l.threshold),
         }
     }
 }
@@ -304,4 +371,26 @@ pub fn max_correlation(jac: &DMatrix<f64>, a: &[usize], b: &[usize]) -> f64 {
         }
     }
     worst
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// The sizes the linearity test needs come from the diagnose JSON when it has them.
+    #[test]
+    fn parse_reads_the_declared_residual_and_the_fitted_values() {
+        let json = r#"{"declared": {"calibration": {"rms_mm": 0.25}},
+            "effects": [{"id": "link_length:a3", "parameters": {"delta_mm": 0.29},
+                         "sigma": {"delta_mm": 0.016}, "model_parameters": {"a3": 139.29}}],
+            "aliased": [{"a": "link_length:a3", "b": "payload", "correlation": 0.9}]}"#;
+        let f = FromDiagnose::parse("d.json", json).unwrap();
+        assert_eq!(f.declared_rms_mm, Some(0.25));
+        assert_eq!(f.fitted, vec![("a3".to_string(), 139.29)]);
+        assert!(f.loose.is_empty());
+        let bare = r#"{"aliased": [{"a": "payload", "b": "link_length:a3"}]}"#;
+        let f = FromDiagnose::parse("d.json", bare).unwrap();
+        assert_eq!(f.declared_rms_mm, None);
+        assert!(f.fitted.is_empty());
+    }
 }

@@ -108,6 +108,7 @@ pub fn exchange_weighted(
         kind,
         weights,
         prediction: None,
+        admissible: &[],
     };
     exchange(&problem, n, start)
 }
@@ -127,6 +128,9 @@ pub struct Problem<'a> {
     pub weights: &'a [f64],
     /// I's prediction weight (`None`: the mean over all rows of `b`).
     pub prediction: Option<&'a DMatrix<f64>>,
+    /// Per candidate, whether it may be chosen (empty: all; `--from-diagnose` leaves out the
+    /// poses where the effects to separate are not linear in their values, [`super::robust`]).
+    pub admissible: &'a [bool],
 }
 
 /// Greedy completion of `start` to `n` candidates, then exchange passes (module docs).
@@ -138,19 +142,24 @@ pub fn exchange(problem: &Problem<'_>, n: usize, start: &[usize]) -> Result<Desi
         kind,
         weights,
         prediction,
+        admissible,
     } = *problem;
     let n_cand = b.nrows() / 3;
-    if n > n_cand {
+    // a candidate that may not be chosen counts as taken from the start
+    let mut taken: Vec<bool> = (0..n_cand)
+        .map(|c| admissible.get(c).is_some_and(|a| !a))
+        .collect();
+    let available = taken.iter().filter(|t| !**t).count();
+    if n > available {
         return Err(PlanError::TooFewCandidates {
             n,
-            candidates: n_cand,
+            candidates: available,
         });
     }
     let mut sc = Scorer::new(kind, b, prior, interest)?.with_weights(weights);
     if let Some(q) = prediction {
         sc = sc.with_prediction_weight(q);
     }
-    let mut taken = vec![false; n_cand];
     let mut chosen = Vec::with_capacity(n);
     for &c in start.iter().take(n) {
         if c < n_cand && !taken[c] {
@@ -274,6 +283,42 @@ mod tests {
             }
             assert!(a_criterion(&b, &prior, &pick, &[]) < d.criterion);
         }
+    }
+
+    /// Candidates that are not admissible are never chosen, even the best ones; too few
+    /// admissible candidates is an error.
+    #[test]
+    fn inadmissible_candidates_are_never_chosen() {
+        let p = 6;
+        let b = random_stack(100, p, 6);
+        let prior = DMatrix::zeros(p, p);
+        let free = optimal_design(&b, &prior, 8, &[], Criterion::A).unwrap();
+        let mut admissible = vec![true; 100];
+        for &c in &free.chosen {
+            admissible[c] = false;
+        }
+        let problem = Problem {
+            b: &b,
+            prior: &prior,
+            interest: &[],
+            kind: Criterion::A,
+            weights: &[],
+            prediction: None,
+            admissible: &admissible,
+        };
+        let d = exchange(&problem, 8, &free.chosen).unwrap();
+        assert_eq!(d.chosen.len(), 8);
+        assert!(d.chosen.iter().all(|&c| admissible[c]), "{:?}", d.chosen);
+        assert!(d.criterion < free.criterion);
+        let few = vec![false; 100];
+        let problem = Problem {
+            admissible: &few,
+            ..problem
+        };
+        assert!(matches!(
+            exchange(&problem, 8, &[]),
+            Err(PlanError::TooFewCandidates { candidates: 0, .. })
+        ));
     }
 
     /// Ds on two nearly aliased columns picks the candidates that tell them apart.

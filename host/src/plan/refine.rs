@@ -83,11 +83,13 @@ impl Refiner<'_> {
         )
     }
 
-    /// The block of `q` when the pose satisfies the workspace constraints (`None` otherwise).
+    /// The block of `q` when the pose satisfies the workspace constraints and, with
+    /// `--from-diagnose`, the linearity test of the effects to separate ([`Setup::admits`];
+    /// `None` otherwise).
     fn feasible_block(&self, q: &[f64]) -> Result<Option<DMatrix<f64>>, PlanError> {
         let fk = self.model.fk(q, Tilt::Off)?;
         let axis = fk.rotation.column(2).into_owned();
-        if !self.workspace.admits(&fk.position_mm, &axis) {
+        if !self.workspace.admits(&fk.position_mm, &axis) || !self.setup.admits(q)? {
             return Ok(None);
         }
         Ok(Some(self.setup.block_at(q)?))

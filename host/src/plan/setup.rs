@@ -4,6 +4,7 @@
 use nalgebra::{DMatrix, Vector3};
 
 use super::candidates::CandidatePose;
+use super::robust::Linearity;
 use super::PlanError;
 use crate::calib::default_selection;
 use crate::calib::identifiability::{analyse, DEFAULT_RTOL};
@@ -33,6 +34,11 @@ pub struct Setup {
     pub prior_rows: DMatrix<f64>,
     /// Columns whose separation is wanted (Ds-optimality); empty: all (D-optimality).
     pub interest: Vec<usize>,
+    /// The linearity test of the unknowns of interest over their plausible values
+    /// ([`super::robust`]; `--from-diagnose`), `None`: every pose is admissible.
+    pub linearity: Option<Linearity>,
+    /// Per candidate, whether it passes that test (empty: all do).
+    pub admissible: Vec<bool>,
 }
 
 /// The poses `q` as a dataset (positions unused).
@@ -47,12 +53,28 @@ impl Setup {
     /// The scaled Jacobian block (3 x p, same columns and scale as [`Setup::b`]) of one
     /// configuration `q_deg` (deg), e.g. a pose moved off the candidate set.
     pub fn block_at(&self, q_deg: &[f64]) -> Result<DMatrix<f64>, PlanError> {
-        let (jac, _) = self
-            .ext
-            .stacked(&joints_dataset(&[q_deg.to_vec()]), &self.unknowns)?;
+        self.scaled_jacobian(&self.ext, &[q_deg.to_vec()])
+    }
+
+    /// The scaled Jacobian (3 rows per configuration of `q`, the columns and scale of
+    /// [`Setup::b`]) of the model `ext` (e.g. a moved one).
+    pub fn scaled_jacobian(
+        &self,
+        ext: &ExtModel,
+        q: &[Vec<f64>],
+    ) -> Result<DMatrix<f64>, PlanError> {
+        let (jac, _) = ext.stacked(&joints_dataset(q), &self.unknowns)?;
         Ok(DMatrix::from_fn(jac.nrows(), jac.ncols(), |r, c| {
             jac[(r, c)] / self.scale[c]
         }))
+    }
+
+    /// Whether the configuration `q_deg` passes the linearity test ([`Setup::linearity`]).
+    pub fn admits(&self, q_deg: &[f64]) -> Result<bool, PlanError> {
+        match &self.linearity {
+            Some(l) => l.admits(q_deg),
+            None => Ok(true),
+        }
     }
 
     /// The declared identification: [`default_selection`] with the declared tilting, its
@@ -137,6 +159,8 @@ impl Setup {
             prior_rows,
             interest: interest_cols,
             ext,
+            linearity: None,
+            admissible: Vec::new(),
         })
     }
 }
