@@ -19,6 +19,28 @@ fn rigctl(args: &[&str]) -> std::process::Output {
         .expect("rigctl runs")
 }
 
+/// `rigctl plan --robot katana450 --n 12 --candidates-from POOL --out OUT` and `extra`.
+fn plan_from(
+    pool: &std::path::Path,
+    out: &std::path::Path,
+    extra: &[&str],
+) -> std::process::Output {
+    let (pool, out) = (pool.to_str().unwrap(), out.to_str().unwrap());
+    let mut args = vec![
+        "plan",
+        "--robot",
+        "katana450",
+        "--n",
+        "12",
+        "--candidates-from",
+        pool,
+        "--out",
+        out,
+    ];
+    args.extend_from_slice(extra);
+    rigctl(&args)
+}
+
 fn joints(csv: &str) -> Vec<Vec<f64>> {
     csv.lines()
         .skip(1)
@@ -45,19 +67,7 @@ fn the_plan_is_a_subset_of_the_file() {
     }
     std::fs::write(&pool, &text).unwrap();
     let (out, json) = (dir.path().join("p.csv"), dir.path().join("p.json"));
-    let o = rigctl(&[
-        "plan",
-        "--robot",
-        "katana450",
-        "--n",
-        "12",
-        "--candidates-from",
-        pool.to_str().unwrap(),
-        "--out",
-        out.to_str().unwrap(),
-        "--json",
-        json.to_str().unwrap(),
-    ]);
+    let o = plan_from(&pool, &out, &["--json", json.to_str().unwrap()]);
     assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
     let given = joints(&text);
     let planned = joints(&std::fs::read_to_string(&out).unwrap());
@@ -88,34 +98,14 @@ fn bad_pool_input_is_exit_2() {
     let pool = dir.path().join("pool.csv");
     std::fs::write(&pool, "q1,q2,q3,q4,q5\n0,10,20,30,40\n0,10,x,30,40\n").unwrap();
     let out = dir.path().join("p.csv");
-    let o = rigctl(&[
-        "plan",
-        "--robot",
-        "katana450",
-        "--n",
-        "12",
-        "--candidates-from",
-        pool.to_str().unwrap(),
-        "--out",
-        out.to_str().unwrap(),
-    ]);
+    let o = plan_from(&pool, &out, &[]);
     assert_eq!(o.status.code(), Some(2));
     let err = String::from_utf8_lossy(&o.stderr);
     assert!(err.contains("pool.csv:3") && err.contains("q3"), "{err}");
     assert!(!out.exists(), "nothing half-written");
     // fewer usable configurations than poses asked
     std::fs::write(&pool, "q1,q2,q3,q4,q5\n0,10,20,30,40\n").unwrap();
-    let o = rigctl(&[
-        "plan",
-        "--robot",
-        "katana450",
-        "--n",
-        "12",
-        "--candidates-from",
-        pool.to_str().unwrap(),
-        "--out",
-        out.to_str().unwrap(),
-    ]);
+    let o = plan_from(&pool, &out, &[]);
     assert_eq!(
         o.status.code(),
         Some(2),
@@ -124,19 +114,7 @@ fn bad_pool_input_is_exit_2() {
     );
     assert!(!out.exists());
     // refinement would leave the file's configurations
-    let o = rigctl(&[
-        "plan",
-        "--robot",
-        "katana450",
-        "--n",
-        "12",
-        "--candidates-from",
-        pool.to_str().unwrap(),
-        "--refine-sweeps",
-        "2",
-        "--out",
-        out.to_str().unwrap(),
-    ]);
+    let o = plan_from(&pool, &out, &["--refine-sweeps", "2"]);
     assert_eq!(o.status.code(), Some(2));
 }
 

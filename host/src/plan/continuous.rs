@@ -207,24 +207,20 @@ pub(crate) fn best_possible(
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::model::{katana450, KATANA_TOOL_MM};
-    use crate::plan::candidates::{draw_candidates, Workspace};
-    use crate::plan::criteria::{prediction_weight, Criterion};
-    use crate::plan::optimum::approximate_optimum;
-    use crate::plan::setup::Setup;
-    use rand::SeedableRng;
-    use rand_chacha::ChaCha8Rng;
+    use crate::plan::criteria::prediction_weight;
+    use crate::plan::test_support::{katana_pool, KatanaPool};
 
     /// On a small Katana pool: the configurations added lie within the constraints and each
     /// improved the design it was found for; the extended optimum is at least as good as the
     /// pool's, and the certificate still brackets it.
     #[test]
     fn climbs_add_reachable_configurations_that_improve_the_optimum() {
-        let model = katana450(KATANA_TOOL_MM).unwrap();
-        let ws = Workspace::for_model(&model);
-        let mut rng = ChaCha8Rng::seed_from_u64(2);
-        let cands = draw_candidates(&model, 300, &ws, &mut rng).unwrap();
-        let setup = Setup::declared(&model, &cands, &[]).unwrap();
+        let KatanaPool {
+            model,
+            ws,
+            cands,
+            setup,
+        } = katana_pool(300, 2);
         let p = setup.b.ncols();
         let q = prediction_weight(&setup.b);
         let w = DMatrix::identity(p, p);

@@ -394,13 +394,7 @@ impl<'a> Scorer<'a> {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use rand::{Rng, SeedableRng};
-    use rand_chacha::ChaCha8Rng;
-
-    fn random_stack(n_cand: usize, p: usize, seed: u64) -> DMatrix<f64> {
-        let mut rng = ChaCha8Rng::seed_from_u64(seed);
-        DMatrix::from_fn(3 * n_cand, p, |_, _| rng.gen_range(-1.0..1.0))
-    }
+    use crate::plan::test_support::random_stack;
 
     /// Every criterion's rank-3 gain equals the change of its directly evaluated value, from an
     /// empty (ridge only) design, rank-deficient ones and full ones, after a removal too, with

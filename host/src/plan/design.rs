@@ -223,13 +223,9 @@ fn best_free(score: &[f64], taken: &[bool]) -> Option<usize> {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::plan::test_support::random_stack;
     use rand::{Rng, SeedableRng};
     use rand_chacha::ChaCha8Rng;
-
-    fn random_stack(n_cand: usize, p: usize, seed: u64) -> DMatrix<f64> {
-        let mut rng = ChaCha8Rng::seed_from_u64(seed);
-        DMatrix::from_fn(3 * n_cand, p, |_, _| rng.gen_range(-1.0..1.0))
-    }
 
     /// The rank-3 updates give the same criterion as a direct evaluation, and the design beats
     /// every random design of the same size drawn here.

@@ -41,6 +41,8 @@ pub mod robust;
 pub mod setup;
 pub mod sheets;
 pub mod sheets_output;
+#[cfg(test)]
+mod test_support;
 
 use nalgebra::DMatrix;
 use rand::SeedableRng;

@@ -375,13 +375,9 @@ pub fn approximate_optimum_from(
 mod tests {
     use super::*;
     use crate::plan::criteria::information;
-    use rand::{Rng, SeedableRng};
+    use crate::plan::test_support::random_stack;
+    use rand::SeedableRng;
     use rand_chacha::ChaCha8Rng;
-
-    fn random_stack(n_cand: usize, p: usize, seed: u64) -> DMatrix<f64> {
-        let mut rng = ChaCha8Rng::seed_from_u64(seed);
-        DMatrix::from_fn(3 * n_cand, p, |_, _| rng.gen_range(-1.0..1.0))
-    }
 
     /// The certificate brackets the optimum: every exact design of N candidates is worse than
     /// the bound, and the approximate optimum is within the target gap of it.

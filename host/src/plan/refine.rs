@@ -214,21 +214,19 @@ impl Refiner<'_> {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::model::{katana450, KATANA_TOOL_MM};
-    use crate::plan::candidates::draw_candidates;
     use crate::plan::criteria::prediction_weight;
-    use rand::SeedableRng;
-    use rand_chacha::ChaCha8Rng;
+    use crate::plan::test_support::{katana_pool, KatanaPool};
 
     /// The analytic block of a configuration equals the candidate set's rows; the refinement
     /// raises the criterion, keeps every constraint and is deterministic.
     #[test]
     fn refinement_improves_within_the_constraints() {
-        let model = katana450(KATANA_TOOL_MM).unwrap();
-        let ws = Workspace::for_model(&model);
-        let mut rng = ChaCha8Rng::seed_from_u64(4);
-        let cands = draw_candidates(&model, 300, &ws, &mut rng).unwrap();
-        let setup = Setup::declared(&model, &cands, &[]).unwrap();
+        let KatanaPool {
+            model,
+            ws,
+            cands,
+            setup,
+        } = katana_pool(300, 4);
         for k in [0usize, 17, 299] {
             let blk = setup.block_at(&cands[k].q_deg).unwrap();
             let diff = (blk - setup.b.rows(3 * k, 3)).abs().max();
