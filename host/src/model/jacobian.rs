@@ -5,7 +5,9 @@
 //! moments (the moments are recomputed from the untilted chain at the current values, so their
 //! derivative is included). The `sign()` steps of the tilt law (MODEL.md eq. 5.17-5.19) are
 //! piecewise constant and count as flat. With `Tilt::Moments` the supplied moments are held
-//! fixed (derivative 0); only the tilting values act through them.
+//! fixed (derivative 0); only the tilting values act through them. With
+//! [`Model::set_tilt_direction_frozen`] the contact direction (gamma) counts as flat too (the
+//! design Jacobian of `rigctl plan`); the position is unchanged.
 //!
 //! [`Model::jacobian_with`] works in a reusable [`Data`] workspace (no heap allocation per
 //! pose); [`Model::position_jacobian`], [`Model::joint_jacobian`] and [`Model::param_jacobian`]

@@ -1,7 +1,8 @@
 //! The best any design on the candidate set can do: the approximate optimum of the criterion
 //! (Kiefer's continuous designs: a weight on every candidate, `N` poses in all), found by the
-//! multiplicative algorithm (Silvey, Titterington and Torsney; monotone for these criteria,
-//! Yu 2010), with the equivalence-theorem certificate that bounds the optimum.
+//! multiplicative algorithm (Silvey, Titterington and Torsney; with the power 1, twice the one
+//! Yu (2010) proves monotone for A, so the best design met and the tightest bound are kept),
+//! with the equivalence-theorem certificate that bounds the optimum.
 //!
 //! An exact design of `N` poses from the candidates is a special approximate design, so the
 //! approximate optimum is a bound on every plan drawn from the pool: it says how far the plan
@@ -16,8 +17,7 @@
 //!   by convexity and `phi(tM) = phi(M)/t`, every design `xi` certifies
 //!   `phi* >= phi(xi)^2 / max_c d_c`;
 //! * D (`log det M`): `d_c = N trace(M^-1 B_c^T B_c)`, update `xi_c *= d_c / p`; certificate
-//!   `log det M* <= log det M(xi) + p log(max_c d_c / p)`.
-//!
+//!   `log det M* <= log det M(xi) + p log(max_c d_c / p)`;
 //! * G (`-sum_i log (M^-1)_ii`, the geometric mean of the sigmas): concave in `M`, since
 //!   `1 / (M^-1)_ii` is a Schur complement of `M` (concave) and the log of a positive concave
 //!   function is concave; `d_c = N trace(M^-1 V^-1 M^-1 B_c^T B_c)` with `V = diag(M^-1)`,
@@ -31,7 +31,7 @@ use super::criteria::Criterion;
 /// Iterations at most.
 pub const MAX_ITERATIONS: usize = 2000;
 /// Stop when the certificate puts the current design within this relative gap of the optimum
-/// (A/I: `1 - bound / phi`; D: `1 - exp(-(bound gap) / p)`, an efficiency).
+/// (A/I: `1 - bound / phi`; D/G: `1 - exp(-(bound - value) / p)`, an efficiency).
 pub const TARGET_GAP: f64 = 0.005;
 /// Candidates with less weight than this fraction of one pose count as outside the support.
 const SUPPORT_WEIGHT: f64 = 0.01;
@@ -39,7 +39,7 @@ const SUPPORT_WEIGHT: f64 = 0.01;
 /// The approximate optimum on the candidates and its certificate.
 #[derive(Debug, Clone, PartialEq)]
 pub struct Optimum {
-    /// The criterion (A, I or D).
+    /// The criterion (A, I, D or G).
     pub kind: Criterion,
     /// Value at the approximate optimum found: `trace(W M^-1)` (A, I; smaller is better),
     /// `log det M` (D) or `-sum log (M^-1)_ii` (G; larger is better).
