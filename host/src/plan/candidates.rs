@@ -80,6 +80,36 @@ pub struct CandidatePose {
     pub nominal_mm: Vector3<f64>,
 }
 
+impl CandidatePose {
+    /// The configuration `q_deg` with its nominal tool point, and the tool's z axis.
+    fn with_axis(model: &Model, q_deg: Vec<f64>) -> Result<(Self, Vector3<f64>), PlanError> {
+        let fk = model.fk(&q_deg, Tilt::Off)?;
+        let axis = fk.rotation.column(2).into_owned();
+        Ok((
+            Self {
+                q_deg,
+                nominal_mm: fk.position_mm,
+            },
+            axis,
+        ))
+    }
+
+    /// The configuration `q_deg` with its nominal tool point (declared model, no tilt).
+    pub fn at(model: &Model, q_deg: Vec<f64>) -> Result<Self, PlanError> {
+        Ok(Self::with_axis(model, q_deg)?.0)
+    }
+
+    /// As [`CandidatePose::at`], when the tool point and axis satisfy `ws` (`None` otherwise).
+    pub fn admitted(
+        model: &Model,
+        q_deg: Vec<f64>,
+        ws: &Workspace,
+    ) -> Result<Option<Self>, PlanError> {
+        let (pose, axis) = Self::with_axis(model, q_deg)?;
+        Ok(ws.admits(&pose.nominal_mm, &axis).then_some(pose))
+    }
+}
+
 /// `count` random configurations, joints uniform within the limits (less
 /// [`LIMIT_MARGIN_DEG`]), kept when the declared model's tool point satisfies `ws`.
 pub fn draw_candidates(
@@ -112,14 +142,7 @@ pub fn draw_candidates(
                 }
             })
             .collect();
-        let fk = model.fk(&q, Tilt::Off)?;
-        let axis = fk.rotation.column(2).into_owned();
-        if ws.admits(&fk.position_mm, &axis) {
-            out.push(CandidatePose {
-                q_deg: q,
-                nominal_mm: fk.position_mm,
-            });
-        }
+        out.extend(CandidatePose::admitted(model, q, ws)?);
     }
     Ok(out)
 }
@@ -134,13 +157,8 @@ pub fn pool_candidates(
 ) -> Result<(Vec<CandidatePose>, Vec<usize>), PlanError> {
     let (mut out, mut index) = (Vec::new(), Vec::new());
     for (k, q) in pool.iter().enumerate() {
-        let fk = model.fk(q, Tilt::Off)?;
-        let axis = fk.rotation.column(2).into_owned();
-        if ws.admits(&fk.position_mm, &axis) {
-            out.push(CandidatePose {
-                q_deg: q.clone(),
-                nominal_mm: fk.position_mm,
-            });
+        if let Some(c) = CandidatePose::admitted(model, q.clone(), ws)? {
+            out.push(c);
             index.push(k);
         }
     }
@@ -188,14 +206,7 @@ pub fn structured_candidates(
                 lo + (hi - lo) * 0.5 * level as f64
             })
             .collect();
-        let fk = model.fk(&q, Tilt::Off)?;
-        let axis = fk.rotation.column(2).into_owned();
-        if ws.admits(&fk.position_mm, &axis) {
-            out.push(CandidatePose {
-                q_deg: q,
-                nominal_mm: fk.position_mm,
-            });
-        }
+        out.extend(CandidatePose::admitted(model, q, ws)?);
     }
     Ok(out)
 }

@@ -20,7 +20,7 @@ use super::optimum::{approximate_optimum, approximate_optimum_from, Extension, O
 use super::refine::Refiner;
 use super::setup::Setup;
 use super::{PlanConfig, PlanError};
-use crate::model::{Model, Tilt};
+use crate::model::Model;
 
 /// Rounds of climbing and re-solving at most.
 pub const MAX_ROUNDS: usize = 4;
@@ -36,17 +36,14 @@ const NEW_SHARE: f64 = 0.1;
 /// The pool extended towards the continuous optimum.
 #[derive(Debug, Clone)]
 pub struct Extended {
-    /// The configurations added, with their scaled blocks (3 rows each).
+    /// The configurations added.
     pub poses: Vec<CandidatePose>,
-    /// Scaled blocks of the added configurations.
-    pub blocks: DMatrix<f64>,
+    /// Scaled blocks of the pool given, then of the added configurations (3 rows each).
+    pub pool: DMatrix<f64>,
     /// The optimum on the pool plus the added configurations.
     pub optimum: Optimum,
-    /// Rounds run.
-    pub rounds: usize,
-    /// Largest sensitivity over the threshold found by the last round's climbs (1 or below: the
-    /// equivalence condition holds there).
-    pub last_excess: f64,
+    /// How many were added in how many rounds, and the last round's largest sensitivity.
+    pub extension: Extension,
 }
 
 /// Extends the pool `b` (scaled blocks of `cands`) from its optimum `first` (criterion weight
@@ -109,11 +106,7 @@ pub fn extend(
         grown.rows_mut(0, pool_b.nrows()).copy_from(&pool_b);
         for (k, (q, blk)) in found.into_iter().enumerate() {
             grown.rows_mut(pool_b.nrows() + 3 * k, 3).copy_from(&blk);
-            let fk = refiner.model.fk(&q, Tilt::Off)?;
-            added.push(CandidatePose {
-                q_deg: q.clone(),
-                nominal_mm: fk.position_mm,
-            });
+            added.push(CandidatePose::at(refiner.model, q.clone())?);
             pool_q.push(q);
             start.push(0.0);
         }
@@ -127,13 +120,15 @@ pub fn extend(
             None => return Err(PlanError::Numerical("approximate optimum lost rank")),
         }
     }
-    let n0 = b.nrows();
     Ok(Extended {
-        blocks: pool_b.rows(n0, pool_b.nrows() - n0).into_owned(),
+        extension: Extension {
+            added: added.len(),
+            rounds,
+            last_excess,
+        },
+        pool: pool_b,
         poses: added,
         optimum,
-        rounds,
-        last_excess,
     })
 }
 
@@ -184,23 +179,12 @@ pub(crate) fn best_possible(
         prediction,
     };
     let ext = extend(&refiner, cands, &setup.b, &w, first)?;
-    let rows = setup.b.nrows();
-    let mut grown = DMatrix::zeros(rows + ext.blocks.nrows(), setup.b.ncols());
-    grown.rows_mut(0, rows).copy_from(&setup.b);
-    grown
-        .rows_mut(rows, ext.blocks.nrows())
-        .copy_from(&ext.blocks);
-    setup.b = grown;
-    cands.extend(ext.poses.iter().cloned());
-    let extension = Extension {
-        added: ext.poses.len(),
-        rounds: ext.rounds,
-        last_excess: ext.last_excess,
-    };
+    setup.b = ext.pool;
+    cands.extend(ext.poses);
     Ok(Some(BestPossible {
         optimum: ext.optimum,
         weight: w,
-        extension,
+        extension: ext.extension,
     }))
 }
 
@@ -239,10 +223,13 @@ mod tests {
                 !ext.poses.is_empty(),
                 "{kind:?}: 300 random candidates are not the optimum"
             );
-            assert_eq!(ext.blocks.nrows(), 3 * ext.poses.len());
+            let n0 = setup.b.nrows();
+            assert_eq!(ext.pool.nrows(), n0 + 3 * ext.poses.len());
+            assert_eq!(ext.extension.added, ext.poses.len());
             let sensitive = (0..ext.poses.len())
                 .filter(|&k| {
-                    first.sensitivity(&ext.blocks.rows(3 * k, 3).into_owned()) > first.threshold()
+                    first.sensitivity(&ext.pool.rows(n0 + 3 * k, 3).into_owned())
+                        > first.threshold()
                 })
                 .count();
             assert!(

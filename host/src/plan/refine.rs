@@ -17,7 +17,7 @@ use super::candidates::{usable_range, CandidatePose, Workspace};
 use super::criteria::{value_weighted, Criterion};
 use super::setup::Setup;
 use super::PlanError;
-use crate::model::{Model, Tilt};
+use crate::model::Model;
 
 /// Trial steps as fractions of each joint's usable range, coarse to fine (about 20 deg down to
 /// 0.6 deg on a 300-deg joint).
@@ -87,9 +87,8 @@ impl Refiner<'_> {
     /// `--from-diagnose`, the linearity test of the effects to separate ([`Setup::admits`];
     /// `None` otherwise).
     fn feasible_block(&self, q: &[f64]) -> Result<Option<DMatrix<f64>>, PlanError> {
-        let fk = self.model.fk(q, Tilt::Off)?;
-        let axis = fk.rotation.column(2).into_owned();
-        if !self.workspace.admits(&fk.position_mm, &axis) || !self.setup.admits(q)? {
+        let admitted = CandidatePose::admitted(self.model, q.to_vec(), self.workspace)?;
+        if admitted.is_none() || !self.setup.admits(q)? {
             return Ok(None);
         }
         Ok(Some(self.setup.block_at(q)?))
@@ -129,11 +128,7 @@ impl Refiner<'_> {
                 moved = true;
                 m = &rest + blk.transpose() * &blk;
                 blocks.view_mut((3 * k, 0), (3, p)).copy_from(&blk);
-                let fk = self.model.fk(&q, Tilt::Off)?;
-                *pose = CandidatePose {
-                    q_deg: q,
-                    nominal_mm: fk.position_mm,
-                };
+                *pose = CandidatePose::at(self.model, q)?;
             }
             if !moved {
                 break;
