@@ -83,12 +83,17 @@ pub struct Args {
         long = "box",
         value_name = "X0,Y0,Z0,X1,Y1,Z1",
         value_delimiter = ',',
-        num_args = 6
+        allow_hyphen_values = true
     )]
     pub box_mm: Option<Vec<f64>>,
     /// A tracker at this point (mm, R) must see the tool: the direction to it lies within
     /// --cone-deg of the tool's z axis.
-    #[arg(long, value_name = "X,Y,Z", value_delimiter = ',', num_args = 3)]
+    #[arg(
+        long,
+        value_name = "X,Y,Z",
+        value_delimiter = ',',
+        allow_hyphen_values = true
+    )]
     pub visible_from: Option<Vec<f64>>,
     /// Acceptance half-angle of the tracker target, deg.
     #[arg(
