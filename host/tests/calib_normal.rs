@@ -97,14 +97,10 @@ fn katana_normal_equations_match_the_tall_solver() {
 
 #[test]
 fn ur5_normal_equations_match_the_tall_solver() {
-    let Some(dir) = common::shared_file(
-        "ur5_normal_equations_match_the_tall_solver",
-        "data/real/ur5_laser_tracker",
-    ) else {
+    let Some((model, grid, _)) = common::ur5_tracker("ur5_normal_equations_match_the_tall_solver")
+    else {
         return;
     };
-    let model = common::ur5_with_smr_tool();
-    let grid = Poses::read(&dir.join("grid.csv"), &model).unwrap();
     let sel = default_selection(&model, true);
     let tall = tall_fit(&model, &grid, &sel, false);
     let lm = LmConfig::default();
@@ -148,14 +144,10 @@ fn chunked_accumulation_is_deterministic() {
 /// showed, `bench/ur5_scipy.py --jac cs --tol 1e-15`).
 #[test]
 fn ur5_fit_is_a_gauss_newton_fixed_point() {
-    let Some(dir) = common::shared_file(
-        "ur5_fit_is_a_gauss_newton_fixed_point",
-        "data/real/ur5_laser_tracker",
-    ) else {
+    let Some((model, grid, _)) = common::ur5_tracker("ur5_fit_is_a_gauss_newton_fixed_point")
+    else {
         return;
     };
-    let model = common::ur5_with_smr_tool();
-    let grid = Poses::read(&dir.join("grid.csv"), &model).unwrap();
     let sel = default_selection(&model, true);
     let lm = LmConfig::default();
     let fit = fit_parameters_normal(&model, &grid, &sel, false, &lm, DEFAULT_RTOL).unwrap();

@@ -4,19 +4,15 @@
 
 mod common;
 
-use rigctl::calib::{calibrate, CalibrateOptions, Method, Poses};
+use rigctl::calib::{calibrate, CalibrateOptions, Method};
 
 #[test]
 fn ur5_held_out_mean_beats_the_published_value() {
-    let Some(dir) = common::shared_file(
-        "ur5_held_out_mean_beats_the_published_value",
-        "data/real/ur5_laser_tracker",
-    ) else {
+    let Some((model, cal, val)) =
+        common::ur5_tracker("ur5_held_out_mean_beats_the_published_value")
+    else {
         return;
     };
-    let model = common::ur5_with_smr_tool();
-    let cal = Poses::read(&dir.join("grid.csv"), &model).unwrap();
-    let val = Poses::read(&dir.join("random.csv"), &model).unwrap();
     assert_eq!((cal.len(), val.len()), (1000, 20));
     let opts = CalibrateOptions {
         method: Method::Standard,

@@ -8,7 +8,6 @@ use std::process::Command;
 
 use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
-use rigctl::calib::Poses;
 use rigctl::model::katana450;
 use rigctl::plan::{plan, PlanConfig};
 
@@ -123,12 +122,9 @@ fn bad_pool_input_is_exit_2() {
 /// of 20 random grid poses.
 #[test]
 fn ur5_grid_as_the_pool() {
-    let Some(dir) = common::shared_file("ur5_grid_as_the_pool", "data/real/ur5_laser_tracker")
-    else {
+    let Some((model, cal, _)) = common::ur5_tracker("ur5_grid_as_the_pool") else {
         return;
     };
-    let model = common::ur5_with_smr_tool();
-    let cal = Poses::read(&dir.join("grid.csv"), &model).unwrap();
     let mut cfg = PlanConfig::new(&model, 20);
     cfg.pool_q = Some(cal.q_deg.clone());
     cfg.base = true;

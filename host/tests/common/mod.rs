@@ -34,3 +34,23 @@ pub fn ur5_with_smr_tool() -> rigctl::model::Model {
     }
     model
 }
+
+/// The real UR5 laser-tracker set (`../shared/data/real/ur5_laser_tracker`): the model of
+/// [`ur5_with_smr_tool`], the 1000 grid poses and the 20 random test poses; `None` after the
+/// [`shared_file`] message when it is absent.
+pub fn ur5_tracker(
+    test: &str,
+) -> Option<(
+    rigctl::model::Model,
+    rigctl::calib::Poses,
+    rigctl::calib::Poses,
+)> {
+    let dir = shared_file(test, "data/real/ur5_laser_tracker")?;
+    let model = ur5_with_smr_tool();
+    let read = |name: &str| {
+        rigctl::calib::Poses::read(&dir.join(name), &model)
+            .unwrap_or_else(|e| panic!("{name}: {e}"))
+    };
+    let (grid, random) = (read("grid.csv"), read("random.csv"));
+    Some((model, grid, random))
+}
