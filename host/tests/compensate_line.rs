@@ -2,6 +2,8 @@
 //! compensated joints lies on the path (1e-6 mm), while the nominal IK joints miss it by the
 //! calibration error; CSV output format; bad input (exit 2 naming line and column).
 
+mod common;
+
 use std::process::{Command, Output};
 
 use nalgebra::Vector3;
@@ -117,16 +119,7 @@ fn path_csv(path: &Line) -> String {
     let mut s = String::from("t,x,y,z,ax,ay,az\n");
     for p in points(path) {
         let (x, a) = (p.target.position_mm, p.target.axis);
-        s.push_str(&format!(
-            "{:.3},{:.12},{:.12},{:.12},{:.15},{:.15},{:.15}\n",
-            p.t_s.unwrap(),
-            x.x,
-            x.y,
-            x.z,
-            a.x,
-            a.y,
-            a.z
-        ));
+        s.push_str(&common::path_row(p.t_s.unwrap(), &x, &a));
     }
     s
 }

@@ -5,6 +5,8 @@
 //! hysteresis dead band is held and reported (a warning naming the path line and joint), never
 //! failed.
 
+mod common;
+
 use std::path::Path;
 use std::process::{Command, Output};
 
@@ -48,16 +50,7 @@ fn path_csv() -> String {
     for i in 0..41 {
         let u = if i <= 20 { i } else { 40 - i } as f64 / 20.0;
         let (x, a) = (start.position_mm + span * u, start.axis);
-        s.push_str(&format!(
-            "{:.3},{:.12},{:.12},{:.12},{:.15},{:.15},{:.15}\n",
-            i as f64 * 0.1,
-            x.x,
-            x.y,
-            x.z,
-            a.x,
-            a.y,
-            a.z
-        ));
+        s.push_str(&common::path_row(i as f64 * 0.1, &x, &a));
     }
     s
 }

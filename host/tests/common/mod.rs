@@ -54,3 +54,11 @@ pub fn ur5_tracker(
     let (grid, random) = (read("grid.csv"), read("random.csv"));
     Some((model, grid, random))
 }
+
+/// One row `t,x,y,z,ax,ay,az` of a `compensate --path` file (s, mm, unit tool axis).
+pub fn path_row(t_s: f64, x: &nalgebra::Vector3<f64>, a: &nalgebra::Vector3<f64>) -> String {
+    format!(
+        "{t_s:.3},{:.12},{:.12},{:.12},{:.15},{:.15},{:.15}\n",
+        x.x, x.y, x.z, a.x, a.y, a.z
+    )
+}
