@@ -275,7 +275,7 @@ pub fn plan(
     if pool_index.is_none() && cfg.structured.unwrap_or(true) {
         cands.extend(structured_candidates(model, &cfg.workspace)?);
     }
-    let setup = match from {
+    let mut setup = match from {
         None => Setup::declared_with_base(model, &cands, &cfg.existing_q, cfg.base)?,
         Some(f) => f.setup(model, &cands, &cfg.existing_q)?,
     };
@@ -318,7 +318,6 @@ pub fn plan(
         .collect();
     let prediction = criteria::prediction_weight(&b_uniform);
     let n_pool = cands.len();
-    let mut setup = setup;
     let best =
         continuous::best_possible(model, cfg, &mut setup, &mut cands, &weights, &prediction)?;
     let problem = design::Problem {

@@ -54,7 +54,7 @@ fn from_diagnose_json(f: &FromDiagnoseReport) -> Value {
             "correlation_before": num(p.correlation_before),
             "correlation_after": num(p.correlation_after),
         })).collect::<Vec<_>>(),
-        "magnitudes": f.magnitudes.iter().map(|(k, v)| (k.clone(), num(*v))).collect::<serde_json::Map<_, _>>(),
+        "magnitudes": f.magnitudes.iter().map(|(k, v)| (k.clone(), num(*v))).collect::<Map<_, _>>(),
         "admissible_candidates": f.admissible_candidates,
         "nonlinearity_threshold": num(f.nonlinearity_threshold),
     })
