@@ -7,7 +7,7 @@
 //! and variant name and every field type, recursively. [`SCHEMA_HASH`] folds the keys of the two
 //! top-level messages ([`DeviceMsg`], [`HostMsg`]) and [`POT_BATCH_MAX`] (a capacity, which the
 //! derived schema does not see) into 32 bits with FNV-1a. Nothing is written by hand, so the
-//! hash cannot drift from the types; the frozen byte vectors in `tests/frozen_vectors.rs` and the
+//! hash cannot drift from the types; the frozen byte vectors in `tests/wire/frozen_vectors.rs` and the
 //! frozen hash in `tests/schema.rs` break on purpose when a message changes.
 
 use postcard_schema::key::hash::fnv1a64::hash_ty_path;

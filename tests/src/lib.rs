@@ -1,4 +1,4 @@
-//! Helpers for the end-to-end tests in `tests/tests/`.
+//! Helpers for the end-to-end tests in `tests/tests/e2e/`.
 
 use std::path::PathBuf;
 use std::process::Command;

@@ -74,9 +74,48 @@ pub fn parameter_sigmas_m(
         .collect()
 }
 
+/// Most refits of [`fit_parameters`] when the rank grows at the solution.
+const MAX_RANK_REFITS: usize = 3;
+
 /// Identifies the parameters `selection` (model indices; put the ones you would rather fit
 /// first) of `start` from `poses`, with or without the declared tilting.
+///
+/// The identifiability analysis is that of the Jacobian at the start; a nominal model with
+/// exact right angles can hide directions that the fitted model shows (the rank at the solution
+/// is larger). The analysis is then repeated at the solution and the fit goes on from there with
+/// the larger set (at most [`MAX_RANK_REFITS`] times), so that a second run from the result
+/// cannot improve on it; the iterations add up.
 pub fn fit_parameters(
+    start: &Model,
+    poses: &Poses,
+    selection: &[usize],
+    tilt: bool,
+    lm: &LmConfig,
+    rtol: f64,
+) -> Result<Fit, CalibError> {
+    let mut fit = fit_parameters_once(start, poses, selection, tilt, lm, rtol)?;
+    for _ in 0..MAX_RANK_REFITS {
+        let rank = if use_normal_equations(rtol) {
+            let eq = normal_equations_with(&fit.model, poses, None, selection, tilt)?;
+            analyse(&eq.jacobian_root(), rtol).rank
+        } else {
+            analyse(&stacked_jacobian(&fit.model, poses, selection, tilt)?, rtol).rank
+        };
+        if rank <= fit.rank {
+            break;
+        }
+        let next = fit_parameters_once(&fit.model, poses, selection, tilt, lm, rtol)?;
+        fit = Fit {
+            iterations: fit.iterations + next.iterations,
+            converged: fit.converged && next.converged,
+            ..next
+        };
+    }
+    Ok(fit)
+}
+
+/// One identification of [`fit_parameters`]: the analysis at `start`, then the solve.
+fn fit_parameters_once(
     start: &Model,
     poses: &Poses,
     selection: &[usize],

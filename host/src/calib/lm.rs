@@ -12,6 +12,8 @@
 
 use nalgebra::{DMatrix, DVector};
 
+use super::iterate::{iterate, Linearisation};
+
 /// A least-squares problem: residuals `r(x)` (length [`Self::n_residuals`]) and their Jacobian
 /// `dr/dx` (`n_residuals x n_params`).
 pub trait Problem {
@@ -33,8 +35,15 @@ pub trait Problem {
 /// Settings of the solver.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct LmConfig {
-    /// Iteration cap (Jacobian evaluations).
+    /// Iteration budget (Jacobian evaluations). A solve that still makes progress at the budget
+    /// goes on ([`Budget`]): while the last `max_iterations / 10` iterations (at least 5) lowered
+    /// the cost by more than `progress_rtol` of itself, up to `max_iterations_hard`.
     pub max_iterations: usize,
+    /// Hard cap on the iterations, whatever the progress.
+    pub max_iterations_hard: usize,
+    /// Relative decrease of the cost over the last window that counts as progress past the
+    /// budget.
+    pub progress_rtol: f64,
     /// Stop when the relative decrease of the cost in a successful step is below this.
     pub ftol: f64,
     /// Stop when the scaled step is below `xtol * (|D x| + xtol)`.
@@ -56,6 +65,8 @@ impl Default for LmConfig {
     fn default() -> Self {
         Self {
             max_iterations: 100,
+            max_iterations_hard: 2000,
+            progress_rtol: 1e-9,
             ftol: 1e-12,
             xtol: 1e-10,
             gtol: 1e-10,
@@ -88,7 +99,8 @@ pub enum Termination {
     GradientConverged,
     /// No damping value produced a decrease: the current point is a minimum to working precision.
     NoFurtherDecrease,
-    /// The iteration cap was reached; the best point found is returned.
+    /// The iteration budget was spent while the solve still made progress (or the hard cap was
+    /// reached); the best point found is returned.
     MaxIterations,
 }
 
@@ -270,33 +282,6 @@ impl Damping {
     }
 }
 
-/// The problem with a count of its evaluations.
-struct Counted<'p, P> {
-    problem: &'p mut P,
-    evaluations: usize,
-}
-
-impl<P: Problem> Counted<'_, P> {
-    fn evaluate(
-        &mut self,
-        x: &DVector<f64>,
-        r: &mut DVector<f64>,
-        jac: Option<&mut DMatrix<f64>>,
-    ) -> Result<(), LmError<P::Error>> {
-        self.evaluations += 1;
-        self.problem.evaluate(x, r, jac).map_err(LmError::Problem)
-    }
-}
-
-/// A trial step that decreased the cost.
-struct Accepted {
-    x: DVector<f64>,
-    residuals: DVector<f64>,
-    cost: f64,
-    /// Norm of the scaled step.
-    step_norm: f64,
-}
-
 fn all_finite<'a>(it: impl IntoIterator<Item = &'a f64>) -> bool {
     it.into_iter().all(|v| v.is_finite())
 }
@@ -323,41 +308,57 @@ fn scale_columns(jac: &DMatrix<f64>, diag: &mut DVector<f64>) -> DMatrix<f64> {
     js
 }
 
-/// Inner loop of an iteration: tries steps from `x` (cost `cost`), adapting the damping, until
-/// one decreases the cost. `None` when the step became negligible or 40 trials gave no
-/// decrease.
-fn find_decrease<P: Problem>(
-    problem: &mut Counted<'_, P>,
-    svd: &ScaledSvd,
-    damping: &mut Damping,
-    x: &DVector<f64>,
-    diag: &DVector<f64>,
-    cost: f64,
-    cfg: &LmConfig,
-) -> Result<Option<Accepted>, LmError<P::Error>> {
-    let mut r_try = DVector::zeros(problem.problem.n_residuals());
-    let xs_norm = x.component_mul(diag).norm();
-    let mut gn_scale = 1.0;
-    for _ in 0..40 {
-        let y = svd.step(damping.lambda, cfg.rank_rtol) * gn_scale;
-        if negligible(y.norm(), xs_norm, cfg.xtol) {
-            return Ok(None);
-        }
-        let x_try = x + y.component_div(diag);
-        problem.evaluate(&x_try, &mut r_try, None)?;
-        let cost_try = 0.5 * r_try.norm_squared();
-        if cost_try.is_finite() && cost_try < cost {
-            damping.accepted(svd.gain_ratio(&y, cost - cost_try));
-            return Ok(Some(Accepted {
-                x: x_try,
-                residuals: r_try,
-                cost: cost_try,
-                step_norm: y.norm(),
-            }));
-        }
-        damping.rejected(&mut gn_scale);
+/// The tall linearisation: residuals and Jacobian at the current point, the trial's residuals
+/// (and Jacobian, for the final correction) beside them.
+struct Tall<'p, P> {
+    problem: &'p mut P,
+    r: DVector<f64>,
+    jac: DMatrix<f64>,
+    r_try: DVector<f64>,
+    jac_try: Option<DMatrix<f64>>,
+    /// The scaled Jacobian of the last [`Linearisation::rescale`].
+    js: Option<DMatrix<f64>>,
+}
+
+impl<P: Problem> Linearisation for Tall<'_, P> {
+    type Error = P::Error;
+
+    fn cost(&self) -> f64 {
+        0.5 * self.r.norm_squared()
     }
-    Ok(None)
+
+    fn rescale(&mut self, diag: &mut DVector<f64>) -> f64 {
+        let js = scale_columns(&self.jac, diag);
+        let grad_inf = (js.transpose() * &self.r).amax() / self.r.norm();
+        self.js = Some(js);
+        grad_inf
+    }
+
+    fn scaled_svd(&mut self, _diag: &DVector<f64>) -> Option<ScaledSvd> {
+        ScaledSvd::new(self.js.take()?, &self.r)
+    }
+
+    fn trial(&mut self, x: &DVector<f64>, jacobian: bool) -> Result<f64, P::Error> {
+        if jacobian {
+            let mut jac = DMatrix::zeros(self.jac.nrows(), self.jac.ncols());
+            self.problem.evaluate(x, &mut self.r_try, Some(&mut jac))?;
+            self.jac_try = Some(jac);
+        } else {
+            self.jac_try = None;
+            self.problem.evaluate(x, &mut self.r_try, None)?;
+        }
+        Ok(0.5 * self.r_try.norm_squared())
+    }
+
+    fn accept(&mut self, x: &DVector<f64>) -> Result<bool, P::Error> {
+        std::mem::swap(&mut self.r, &mut self.r_try);
+        if let Some(jac) = self.jac_try.take() {
+            self.jac = jac;
+            return Ok(false);
+        }
+        self.problem.evaluate(x, &mut self.r, Some(&mut self.jac))?;
+        Ok(true)
+    }
 }
 
 /// Solves `problem` from `x0` with Levenberg-Marquardt (or Gauss-Newton, see
@@ -380,84 +381,32 @@ pub fn solve<P: Problem>(
             params: n,
         });
     }
-    let mut problem = Counted {
-        problem,
-        evaluations: 0,
-    };
-    let mut x = x0;
     let mut r = DVector::zeros(m);
     let mut jac = DMatrix::zeros(m, n);
-    problem.evaluate(&x, &mut r, Some(&mut jac))?;
+    problem
+        .evaluate(&x0, &mut r, Some(&mut jac))
+        .map_err(LmError::Problem)?;
     if !all_finite(r.iter()) || !all_finite(jac.iter()) {
         return Err(LmError::NonFiniteStart);
     }
-    let mut cost = 0.5 * r.norm_squared();
-    let initial_cost = cost;
-    let mut diag: DVector<f64> = DVector::from_element(n, 0.0);
-    let mut damping: Option<Damping> = None;
-    let mut iterations = 1;
-    let termination = loop {
-        if cost == 0.0 {
-            break Termination::GradientConverged;
-        }
-        let js = scale_columns(&jac, &mut diag);
-        let grad_inf = (js.transpose() * &r).amax() / r.norm();
-        if grad_inf < cfg.gtol {
-            break Termination::GradientConverged;
-        }
-        let Some(svd) = ScaledSvd::new(js, &r) else {
-            break Termination::NoFurtherDecrease;
-        };
-        let damping = damping.get_or_insert_with(|| Damping {
-            lambda: cfg.initial_damping * svd.max_sv().powi(2),
-            nu: 2.0,
-        });
-        let found = find_decrease(&mut problem, &svd, damping, &x, &diag, cost, cfg)?;
-        let Some(step) = found else {
-            break if iterations == 1 && cost == initial_cost {
-                Termination::NoFurtherDecrease
-            } else {
-                Termination::StepConverged
-            };
-        };
-        let rel_decrease = (cost - step.cost) / cost;
-        x = step.x;
-        r = step.residuals;
-        cost = step.cost;
-        problem.evaluate(&x, &mut r, Some(&mut jac))?;
-        if rel_decrease < cfg.ftol {
-            break Termination::CostConverged;
-        }
-        if negligible(step.step_norm, x.component_mul(&diag).norm(), cfg.xtol) {
-            break Termination::StepConverged;
-        }
-        if iterations >= cfg.max_iterations {
-            break Termination::MaxIterations;
-        }
-        iterations += 1;
+    let mut lin = Tall {
+        problem,
+        r,
+        jac,
+        r_try: DVector::zeros(m),
+        jac_try: None,
+        js: None,
     };
-    if ScaledSvd::wants_final_correction(cfg, termination, cost) {
-        let js = scale_columns(&jac, &mut diag);
-        if let Some(y) = ScaledSvd::new(js, &r).and_then(|svd| svd.final_correction(cost, cfg)) {
-            let x_try = &x + y.component_div(&diag);
-            let mut r_try = DVector::zeros(m);
-            let mut jac_try = DMatrix::zeros(m, n);
-            problem.evaluate(&x_try, &mut r_try, Some(&mut jac_try))?;
-            let cost_try = 0.5 * r_try.norm_squared();
-            if ScaledSvd::keeps_correction(cost, cost_try) {
-                (x, r, jac, cost) = (x_try, r_try, jac_try, cost_try);
-            }
-        }
-    }
+    let it = iterate(&mut lin, x0, cfg, 1, false)?;
     Ok(LmReport {
-        x,
-        residuals: r,
-        jacobian: jac,
-        cost,
-        initial_cost,
-        iterations,
-        evaluations: problem.evaluations,
-        termination,
+        x: it.x,
+        residuals: lin.r,
+        jacobian: lin.jac,
+        cost: it.cost,
+        initial_cost: it.initial_cost,
+        iterations: it.iterations,
+        evaluations: it.evaluations,
+        termination: it.termination,
     })
 }
 

@@ -3,6 +3,7 @@
 //! | module | holds |
 //! |---|---|
 //! | [`lm`] | Levenberg-Marquardt / Gauss-Newton on a generic least-squares problem |
+//! | `iterate` | the Levenberg-Marquardt iteration itself (scaling, damping, stopping rules, budget by progress), generic over the linearisation |
 //! | [`normal`] | the same iteration on normal equations accumulated per measurement (bounded memory, many poses) |
 //! | [`identifiability`] | rank, condition number, unidentifiable parameters and their names |
 //! | [`stats`] | the error statistics object of FORMATS.md |
@@ -18,6 +19,7 @@
 //! | [`general`] | identification with point offsets and joint compliance |
 //! | [`press`] | block-PRESS (leave-one-pose-out) forward selection |
 //! | [`calibrate_general`] | `calibrate` with several points, `--compliance`, `--select press` |
+//! | [`samples`] | the pencil rig's partial measurement: a fused sample (`FUSED.csv` row) |
 
 pub mod accumulate;
 pub mod calibrate;
@@ -28,6 +30,7 @@ pub mod general;
 mod helper;
 pub mod identifiability;
 pub mod influence;
+mod iterate;
 pub mod lm;
 pub mod measurements;
 pub mod normal;
@@ -35,6 +38,7 @@ pub mod press;
 pub mod problem;
 pub mod projected;
 pub mod report;
+pub mod samples;
 pub mod stats;
 
 pub use calibrate::{calibrate, default_selection, CalibrateOptions, Method, Outcome};

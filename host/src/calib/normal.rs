@@ -14,7 +14,8 @@
 use nalgebra::{DMatrix, DVector};
 
 use super::identifiability::ZERO_COLUMN_RTOL;
-use super::lm::{negligible, Damping, LmConfig, LmError, ScaledSvd, Termination};
+use super::iterate::{iterate, Linearisation};
+use super::lm::{LmConfig, LmError, ScaledSvd, Termination};
 
 /// Eigenvalues of the scaled normal matrix below this fraction of the largest are round-off
 /// (about 100 machine epsilons); their directions are not stepped along.
@@ -207,50 +208,41 @@ fn update_scaling(eq: &Normal, diag: &mut DVector<f64>) {
     }
 }
 
-/// A trial step that decreased the cost (its normal equations are in the caller's `eq_try`).
-struct Accepted {
-    x: DVector<f64>,
-    cost: f64,
-    step_norm: f64,
+/// The linearisation by normal equations: those at the current point and at the last trial
+/// (each trial evaluates them at once: near a solution nearly every trial is accepted, and its
+/// linearisation is then the next iteration's).
+struct Equations<'p, P> {
+    problem: &'p mut P,
+    eq: Normal,
+    eq_try: Normal,
 }
 
-/// Inner loop: steps from `x` until one decreases the cost (as in [`super::lm`]). Each trial
-/// evaluates the normal equations at once (into `eq_try`): near a solution nearly every trial is
-/// accepted, and its linearisation is then the next iteration's, with the same cost `r^T r / 2`.
-#[allow(clippy::too_many_arguments)]
-fn find_decrease<P: NormalProblem>(
-    problem: &mut P,
-    evaluations: &mut usize,
-    svd: &ScaledSvd,
-    damping: &mut Damping,
-    x: &DVector<f64>,
-    diag: &DVector<f64>,
-    cost: f64,
-    eq_try: &mut Normal,
-    cfg: &LmConfig,
-) -> Result<Option<Accepted>, LmError<P::Error>> {
-    let xs_norm = x.component_mul(diag).norm();
-    let mut gn_scale = 1.0;
-    for _ in 0..40 {
-        let y = svd.step(damping.lambda, cfg.rank_rtol) * gn_scale;
-        if negligible(y.norm(), xs_norm, cfg.xtol) {
-            return Ok(None);
-        }
-        let x_try = x + y.component_div(diag);
-        *evaluations += 1;
-        problem.normal(&x_try, eq_try).map_err(LmError::Problem)?;
-        let cost_try = 0.5 * eq_try.rtr;
-        if cost_try.is_finite() && cost_try < cost {
-            damping.accepted(svd.gain_ratio(&y, cost - cost_try));
-            return Ok(Some(Accepted {
-                x: x_try,
-                cost: cost_try,
-                step_norm: y.norm(),
-            }));
-        }
-        damping.rejected(&mut gn_scale);
+impl<P: NormalProblem> Linearisation for Equations<'_, P> {
+    type Error = P::Error;
+
+    fn cost(&self) -> f64 {
+        0.5 * self.eq.rtr
     }
-    Ok(None)
+
+    fn rescale(&mut self, diag: &mut DVector<f64>) -> f64 {
+        update_scaling(&self.eq, diag);
+        self.eq.jtr.component_div(diag).amax() / self.eq.rtr.sqrt()
+    }
+
+    fn scaled_svd(&mut self, diag: &DVector<f64>) -> Option<ScaledSvd> {
+        ScaledSvd::from_normal(&self.eq, diag)
+    }
+
+    fn trial(&mut self, x: &DVector<f64>, _jacobian: bool) -> Result<f64, P::Error> {
+        self.problem.normal(x, &mut self.eq_try)?;
+        Ok(0.5 * self.eq_try.rtr)
+    }
+
+    fn accept(&mut self, _x: &DVector<f64>) -> Result<bool, P::Error> {
+        std::mem::swap(&mut self.eq, &mut self.eq_try);
+        self.eq.symmetrise();
+        Ok(false)
+    }
 }
 
 /// Solves `problem` from `x0` with Levenberg-Marquardt on its normal equations (the iteration
@@ -301,96 +293,22 @@ pub fn solve_normal_from<P: NormalProblem>(
             eq0.jtr.len()
         )));
     }
-    let mut x = x0;
-    let mut eq = eq0;
-    let mut eq_try = Normal::zeros(n);
-    let mut evaluations = 1;
-    if !eq.rtr.is_finite() || !eq.jtj.iter().all(|v| v.is_finite()) {
+    if !eq0.rtr.is_finite() || !eq0.jtj.iter().all(|v| v.is_finite()) {
         return Err(LmError::NonFiniteStart);
     }
-    let mut cost = 0.5 * eq.rtr;
-    let initial_cost = cost;
-    let mut diag: DVector<f64> = DVector::from_element(n, 0.0);
-    let mut damping: Option<Damping> = None;
-    let mut iterations = 1;
-    let termination = loop {
-        if cost == 0.0 {
-            break Termination::GradientConverged;
-        }
-        update_scaling(&eq, &mut diag);
-        let grad_inf = eq.jtr.component_div(&diag).amax() / eq.rtr.sqrt();
-        if grad_inf < cfg.gtol {
-            break Termination::GradientConverged;
-        }
-        let Some(svd) = ScaledSvd::from_normal(&eq, &diag) else {
-            break Termination::NoFurtherDecrease;
-        };
-        let damping = damping.get_or_insert_with(|| Damping {
-            lambda: cfg.initial_damping * svd.max_sv().powi(2),
-            nu: 2.0,
-        });
-        let found = find_decrease(
-            problem,
-            &mut evaluations,
-            &svd,
-            damping,
-            &x,
-            &diag,
-            cost,
-            &mut eq_try,
-            cfg,
-        )?;
-        let Some(step) = found else {
-            break if iterations == 1 && cost == initial_cost {
-                Termination::NoFurtherDecrease
-            } else {
-                Termination::StepConverged
-            };
-        };
-        let rel_decrease = (cost - step.cost) / cost;
-        x = step.x;
-        std::mem::swap(&mut eq, &mut eq_try);
-        eq.symmetrise();
-        cost = step.cost;
-        if rel_decrease < cfg.ftol {
-            break Termination::CostConverged;
-        }
-        if negligible(step.step_norm, x.component_mul(&diag).norm(), cfg.xtol) {
-            break Termination::StepConverged;
-        }
-        if iterations >= cfg.max_iterations {
-            break Termination::MaxIterations;
-        }
-        iterations += 1;
+    let mut lin = Equations {
+        problem,
+        eq: eq0,
+        eq_try: Normal::zeros(n),
     };
-    if ScaledSvd::wants_final_correction(cfg, termination, cost) {
-        // The final Gauss-Newton correction ([`ScaledSvd::final_correction`]) from the last
-        // linearisation, evaluated so that `eq` and `cost` are those of the returned point.
-        update_scaling(&eq, &mut diag);
-        if let Some(y) =
-            ScaledSvd::from_normal(&eq, &diag).and_then(|svd| svd.final_correction(cost, cfg))
-        {
-            let x_try = &x + y.component_div(&diag);
-            evaluations += 1;
-            problem
-                .normal(&x_try, &mut eq_try)
-                .map_err(LmError::Problem)?;
-            let cost_try = 0.5 * eq_try.rtr;
-            if ScaledSvd::keeps_correction(cost, cost_try) {
-                x = x_try;
-                std::mem::swap(&mut eq, &mut eq_try);
-                eq.symmetrise();
-                cost = cost_try;
-            }
-        }
-    }
+    let it = iterate(&mut lin, x0, cfg, 1, true)?;
     Ok(NormalReport {
-        x,
-        normal: eq,
-        cost,
-        initial_cost,
-        iterations,
-        evaluations,
-        termination,
+        x: it.x,
+        normal: lin.eq,
+        cost: it.cost,
+        initial_cost: it.initial_cost,
+        iterations: it.iterations,
+        evaluations: it.evaluations,
+        termination: it.termination,
     })
 }

@@ -25,9 +25,9 @@ use super::fit::{fit_problem, Fit};
 use super::lm::{LmConfig, Problem};
 use super::problem::{ModelProblem, Unknowns};
 use super::report::{BeforeAfter, CalibrateReport, StandardSummary};
+use super::samples::FusedSample;
 use super::stats::{self, Stats};
-use crate::fusion::motion::moments_in_motion;
-use crate::fusion::FusedSample;
+use crate::model::motion::moments_in_motion;
 use crate::model::{Model, ModelError, Tilt};
 
 /// One measured projection.
@@ -96,7 +96,7 @@ impl ProjectedData {
     }
 
     /// Computes the joint moments in motion of `model` at every sample
-    /// ([`crate::fusion::motion::moments_in_motion`]: finite differences over the samples, RNEA).
+    /// ([`crate::model::motion::moments_in_motion`]: finite differences over the samples, RNEA).
     pub fn with_dynamic_moments(mut self, model: &Model) -> Result<Self, ModelError> {
         self.moments_kgfm = moments_in_motion(model, &self.t_s, &self.q_deg)?;
         Ok(self)

@@ -180,7 +180,20 @@ pub fn run(args: Args) -> Result<(), CliError> {
         outcome.model.write_file(path)?;
     }
     out!("{}{notes}", summary(&outcome, val.is_some()))?;
-    Ok(())
+    not_converged(&outcome.report)
+}
+
+/// Exit 1 when the fit stopped on its iteration budget: the outputs are written (with
+/// `"converged": false`), but they are not the optimum.
+fn not_converged(r: &rigctl::calib::report::CalibrateReport) -> Result<(), CliError> {
+    if r.converged {
+        return Ok(());
+    }
+    Err(CliError::failure(format!(
+        "the fit did not converge: {} iterations spent while it still improved, so the parameters are \
+         not at the optimum; outputs written with \"converged\": false (re-run from --out to go on)",
+        r.iterations
+    )))
 }
 
 /// What `calibrate_general` adds to the summary: the PRESS choice and the validation error of
@@ -205,14 +218,21 @@ fn general_notes(
 
 /// Table 4.5 style: min / max / average of |dX|, |dY|, |dZ|, |dP| before, after the standard
 /// calibration and after the chosen method.
-fn table(title: &str, errs: &[Vec<Vector3<f64>>; 3], method: &str) -> String {
+fn table(title: &str, noun: &str, errs: &[Vec<Vector3<f64>>; 3], method: &str) -> String {
     let mut s = String::new();
-    let _ = writeln!(s, "{title} ({} poses), mm", errs[0].len());
-    let _ = writeln!(
-        s,
-        "{:<8} {:<5} {:>10} {:>10} {:>10}",
-        "", "", "before", "standard", method
-    );
+    let _ = writeln!(s, "{title} ({} {noun}), mm", errs[0].len());
+    // nominal, standard and the chosen method (once when the method is the standard one)
+    let cols: Vec<usize> = if method == "standard" {
+        vec![0, 1]
+    } else {
+        vec![0, 1, 2]
+    };
+    let names = ["nominal", "standard", method];
+    let _ = write!(s, "{:<8} {:<5}", "", "");
+    for &c in &cols {
+        let _ = write!(s, " {:>10}", names[c]);
+    }
+    s.push('\n');
     let stats: Vec<_> = errs
         .iter()
         .map(|e| rigctl::calib::Stats::from_errors(e))
@@ -221,8 +241,10 @@ fn table(title: &str, errs: &[Vec<Vector3<f64>>; 3], method: &str) -> String {
     let labels = ["|dX|", "|dY|", "|dZ|", "|dP|"];
     for (row, pick) in [("Minimum", 0), ("Maximum", 1), ("Average", 2)] {
         for (k, label) in labels.iter().enumerate() {
-            let v: Vec<f64> = (0..3)
-                .map(|c| match (pick, k) {
+            let first = if k == 0 { row } else { "" };
+            let _ = write!(s, "{first:<8} {label:<5}");
+            for &c in &cols {
+                let v = match (pick, k) {
                     (0, 3) => stats[c].min_mm,
                     (1, 3) => stats[c].max_mm,
                     (2, 3) => stats[c].mean_mm,
@@ -231,14 +253,10 @@ fn table(title: &str, errs: &[Vec<Vector3<f64>>; 3], method: &str) -> String {
                     (_, 0) => stats[c].mean_abs_x_mm,
                     (_, 1) => stats[c].mean_abs_y_mm,
                     _ => stats[c].mean_abs_z_mm,
-                })
-                .collect();
-            let first = if k == 0 { row } else { "" };
-            let _ = writeln!(
-                s,
-                "{first:<8} {label:<5} {:>10.4} {:>10.4} {:>10.4}",
-                v[0], v[1], v[2]
-            );
+                };
+                let _ = write!(s, " {v:>10.4}");
+            }
+            s.push('\n');
         }
     }
     s
@@ -246,10 +264,20 @@ fn table(title: &str, errs: &[Vec<Vector3<f64>>; 3], method: &str) -> String {
 
 fn summary(o: &rigctl::calib::Outcome, with_val: bool) -> String {
     let r = &o.report;
-    let mut s = table("Calibration poses", &o.calibration_errors, &r.method);
+    let mut s = table(
+        "Calibration poses",
+        "poses",
+        &o.calibration_errors,
+        &r.method,
+    );
     if with_val {
         s.push('\n');
-        s.push_str(&table("Validation poses", &o.validation_errors, &r.method));
+        s.push_str(&table(
+            "Validation poses",
+            "poses",
+            &o.validation_errors,
+            &r.method,
+        ));
     }
     s.push_str(&report_tail(r));
     s
@@ -303,7 +331,8 @@ fn run_samples(args: &Args, samples: &std::path::Path) -> Result<(), CliError> {
         write_bytes_atomic(path, svg.as_bytes())?;
     }
     let mut s = table(
-        "Fused samples, measured components only (|dP| = sqrt(dev_u^2 + dev_n^2); along the path not measured)",
+        "Fused samples, measured components only in frame R (|dP| = sqrt(dev_u^2 + dev_n^2); along the path not measured)",
+        "samples",
         &outcome.errors,
         &outcome.report.method,
     );
@@ -316,7 +345,7 @@ fn run_samples(args: &Args, samples: &std::path::Path) -> Result<(), CliError> {
         rigctl::calib::projected::OUTLIER_SIGMAS
     );
     out!("{s}")?;
-    Ok(())
+    not_converged(&outcome.report)
 }
 
 /// Method, rank, condition, unidentifiable parameters and the parameter table.

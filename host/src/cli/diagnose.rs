@@ -187,6 +187,12 @@ pub fn run(args: Args) -> Result<(), CliError> {
         write_probe_plots(dir, &diag.probe)?;
     }
     out!("{}", diag.report.table())?;
+    if !diag.report.converged {
+        return Err(CliError::failure(format!(
+            "{}; outputs written with \"converged\": false",
+            rigctl::diagnose::NOT_CONVERGED_NOTE
+        )));
+    }
     Ok(())
 }
 

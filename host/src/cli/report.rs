@@ -35,7 +35,7 @@ pub fn run(args: Args) -> Result<(), CliError> {
     outln!(
         "report: {} tables, {} figures, {} notes written to {}",
         report.tables.len(),
-        report.figures.len(),
+        report.figure_count(),
         report.notes.len(),
         args.html.display()
     )?;

@@ -32,9 +32,9 @@ use nalgebra::Vector3;
 use crate::error::{Classify, ErrorKind};
 use crate::joints::table::{Table, TableError};
 use crate::model::ik::ToolTarget;
+use crate::model::ik::KATANA_SEED_DEG;
 use crate::model::ik::{solve, IkError, IkTilt};
 use crate::model::{Model, ModelError};
-use crate::sim::plan::KATANA_SEED_DEG;
 
 pub mod transmission;
 

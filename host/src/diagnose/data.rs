@@ -18,12 +18,11 @@ use std::path::Path;
 use nalgebra::{DMatrix, Vector3};
 
 use crate::calib::Poses;
-use crate::fusion::motion::moments_in_motion;
 use crate::fusion::FusedSample;
 use crate::io::pose_csv::{read_poses, PoseCsvError, PoseSpec};
+use crate::model::motion::moments_in_motion;
 use crate::model::transmission::approach_directions;
 use crate::model::{Model, ModelError};
-use crate::sim::simulate::SimPose;
 
 /// Measured poses and, when known, the time of each measurement (s since the start of the
 /// session).
@@ -53,19 +52,6 @@ pub struct Dataset {
 }
 
 impl Dataset {
-    /// The measured poses of a simulation (`rigctl simulate`), with their times, in the order
-    /// the robot visited them.
-    pub fn from_sim_poses(poses: &[SimPose]) -> Self {
-        Self {
-            poses: Poses {
-                q_deg: poses.iter().map(|p| p.q_deg.clone()).collect(),
-                xyz_mm: poses.iter().map(|p| p.measured_mm).collect(),
-            },
-            t_s: Some(poses.iter().map(|p| p.t_s).collect()),
-            ..Self::default()
-        }
-    }
-
     /// Poses without times.
     pub fn from_poses(poses: Poses) -> Self {
         Self {

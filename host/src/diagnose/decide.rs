@@ -97,6 +97,7 @@ impl Default for DecideConfig {
             lm: LmConfig::default(),
             lm_cv: LmConfig {
                 max_iterations: 30,
+                max_iterations_hard: 30,
                 ftol: 1e-10,
                 final_correction: false,
                 ..LmConfig::default()

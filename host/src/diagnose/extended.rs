@@ -494,6 +494,9 @@ pub struct ExtFit {
     pub rss_mm2: f64,
     /// Number of residuals (measured components: 3 per full position).
     pub n_residuals: usize,
+    /// Whether the solver converged (false: its iteration budget was spent while it still made
+    /// progress, so the values are not at the optimum).
+    pub converged: bool,
 }
 
 impl ExtFit {
@@ -548,6 +551,7 @@ pub fn fit(
             sigma: Vec::new(),
             rss_mm2: rss,
             n_residuals: n_res,
+            converged: true,
         });
     }
     let mut problem = ExtProblem {
@@ -568,6 +572,7 @@ pub fn fit(
         sigma,
         rss_mm2: rss,
         n_residuals: n_res,
+        converged: rep.termination.converged(),
     })
 }
 

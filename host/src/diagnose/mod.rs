@@ -170,9 +170,14 @@ pub fn declared_fit(
         sigma: f.sigma.clone(),
         rss_mm2: rss,
         n_residuals: cal.n_residuals(),
+        converged: f.converged,
     };
     Ok((fit, requested))
 }
+
+/// Said first in `unexplained.note` when the final fit stopped on its iteration budget.
+pub const NOT_CONVERGED_NOTE: &str =
+    "the final fit did not converge (iteration budget spent while still improving): its values and the verdict are not those of the optimum";
 
 /// Outlier threshold of [`trim_outliers`], in robust standard deviations.
 pub const OUTLIER_SIGMAS: f64 = 5.0;
@@ -416,6 +421,9 @@ pub fn diagnose(
         (cal.measured_dims(), tau),
     );
     unexplained.note = format!("{}; {}", floor::verdict(&floor), unexplained.note);
+    if !last.converged {
+        unexplained.note = format!("{NOT_CONVERGED_NOTE}; {}", unexplained.note);
+    }
     unexplained.structured |= floor.above;
     let aliased = aliased_pairs(&selection, &requested, cal, &mut effects)?;
     let (probe, probe_cfg) = probe_residual(last, cal, &final_cal, &floor, opts)?;
@@ -450,6 +458,7 @@ pub fn diagnose(
         }
         .to_string(),
         outliers_left_out: outliers,
+        converged: last.converged && declared.converged,
         probe: probe.report(&probe_cfg),
         residual_model: None,
     };

@@ -123,6 +123,7 @@ impl Profile<'_> {
                     sigma: Vec::new(),
                     rss_mm2: rss,
                     n_residuals: self.data.n_residuals(),
+                    converged: true,
                 }
             })
         } else {

@@ -168,6 +168,9 @@ pub struct DiagnoseReport {
     /// Calibration samples left out as outliers of the declared tilting law
     /// ([`super::trim_outliers`]; always 0 for full positions).
     pub outliers_left_out: usize,
+    /// Whether the declared and the final fits converged (false: an iteration budget was spent
+    /// while the solver still made progress; `diagnose` then exits 1).
+    pub converged: bool,
     /// The probe of the final residual: its terms and cross-validated RMS.
     pub probe: super::probe::ProbeReport,
     /// With `--residual-model`: the probe's function as a correction (a hybrid model, never in

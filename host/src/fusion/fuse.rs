@@ -9,7 +9,7 @@
 //! sample with the pencil predicted on the paper counts, dwells included):
 //! 1. the nominal tool point `p = p(q)` and tool axis `a` of the fusing model (with its declared
 //!    tilting driven by the moments in motion along the logged joints,
-//!    [`super::motion::moments_in_motion`], when the model has tilting data; rigid otherwise)
+//!    [`crate::model::motion::moments_in_motion`], when the model has tilting data; rigid otherwise)
 //!    and its height `h = n . (p - origin)` above the sheet;
 //! 2. the board time of `t` from the clock alignment ([`super::align`], on the travel the
 //!    pencil would show for the model, `-h / (n . a)`), and the pencil travel
@@ -64,12 +64,12 @@ use nalgebra::Vector3;
 use super::align::{align, AlignOptions, ClockAlignment};
 use super::curve::TracedCurve;
 use super::error::FusionError;
-use super::motion::moments_in_motion;
 use super::placement::SheetPlacement;
 use super::pot::TravelSeries;
 use crate::io::atomic::write_bytes_atomic;
 use crate::io::pose_csv::{read_poses, PoseSpec};
 use crate::io::table::{Table, TableError};
+use crate::model::motion::moments_in_motion;
 use crate::model::{Model, Tilt};
 
 /// Format tag in the first comment line of `FUSED.csv`.
@@ -159,31 +159,7 @@ impl Default for FuseOptions {
     }
 }
 
-/// One fused sample (see the module documentation for the meaning of the fields).
-#[derive(Debug, Clone, PartialEq)]
-pub struct FusedSample {
-    /// Robot-clock time, s.
-    pub t_s: f64,
-    /// Joint readings, deg.
-    pub q_deg: Vec<f64>,
-    /// Nominal tool point of the fusing model, mm in R.
-    pub nominal_mm: Vector3<f64>,
-    /// Measured minus nominal along `u`, mm.
-    pub dev_u_mm: f64,
-    /// In-plane normal of the path (unit, R).
-    pub u: Vector3<f64>,
-    /// Measured minus nominal along `n`, mm.
-    pub dev_n_mm: f64,
-    /// Sheet normal (unit, R).
-    pub n: Vector3<f64>,
-}
-
-impl FusedSample {
-    /// The measured part of the error as a vector in R: `dev_u u + dev_n n` (mm).
-    pub fn measured_error_mm(&self) -> Vector3<f64> {
-        self.u * self.dev_u_mm + self.n * self.dev_n_mm
-    }
-}
+pub use crate::calib::samples::FusedSample;
 
 /// Counts of skipped joint samples.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]

@@ -11,7 +11,6 @@
 //! | [`pot`] | the potentiometer samples of a board recording |
 //! | [`align`] | clock alignment of the board (pot) and the robot (joints) by the dip markers |
 //! | [`curve`] | the traced curve: closest point and local in-plane normal |
-//! | [`motion`] | joint moments along a logged joint trajectory (declared tilting in motion) |
 //! | [`fuse`] | the fusion itself and the fused-samples file `FUSED.csv` |
 //! | [`error`] | [`FusionError`] |
 //!
@@ -29,7 +28,6 @@ pub mod align;
 pub mod curve;
 pub mod error;
 pub mod fuse;
-pub mod motion;
 pub mod placement;
 pub mod pot;
 pub mod potcal;

@@ -29,6 +29,9 @@ use nalgebra::{DMatrix, DVector, Vector3};
 
 use super::{Model, ModelError, Tilt};
 
+/// Joints the Katana's IK starts its search from (arm forward over the ISO cube, tool down-ish).
+pub const KATANA_SEED_DEG: [f64; 5] = [-90.0, 60.0, -60.0, 0.0, 90.0];
+
 /// A Cartesian target: a tool-point position (mm, frame R) and the tool-axis direction (unit).
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct ToolTarget {

@@ -51,7 +51,8 @@
 //! [`Model::param_values`], [`Model::set_param_values`], [`Model::params_of_kind`] ([`ParamKind`]).
 //!
 //! # Physics beyond the chain
-//! [`dynamics`] (joint moments in motion by recursive Newton-Euler, [`rnea`], with the model's
+//! [`dynamics`] (joint moments in motion by recursive Newton-Euler, [`rnea`]; along a logged
+//! joint trajectory: [`motion`], with the model's
 //! link masses), [`gravity`] (gravity torque about each joint axis, for compliance; the UR5's
 //! published masses), [`transmission`] (gear-ratio, coupling and hysteresis terms on the joint
 //! angles, and the direction of approach from the pose order), [`ik`] (inverse kinematics of
@@ -69,6 +70,7 @@ pub mod gravity;
 pub mod ik;
 pub mod jacobian;
 mod kinematics;
+pub mod motion;
 mod param;
 mod pose_spec;
 mod presets;

@@ -32,10 +32,10 @@ use crate::calib::Poses;
 use crate::diagnose::data::Dataset;
 use crate::diagnose::extended::{ExtModel, Unknown};
 use crate::fusion::SheetPlacement;
+use crate::model::ik::KATANA_SEED_DEG;
 use crate::model::ik::{solve, ArmGeometry, IkTilt, ToolTarget};
 use crate::model::Model;
-use crate::sim::plan::KATANA_SEED_DEG;
-use crate::sim::session::{default_pencil_axis, SessionPath, SESSION_SHEET_ORIGIN_MM};
+use crate::sheet::drawn::{default_pencil_axis, SessionPath, SESSION_SHEET_ORIGIN_MM};
 
 /// Samples along every path (the circle every 5 deg; the line every 5 mm).
 pub const SHEET_SAMPLES: usize = 37;

@@ -186,7 +186,7 @@ fn next_steps(
         .collect();
     if !unident.is_empty() {
         out.push(format!(
-            "Not identifiable from these poses: {}; `rigctl plan --robot {robot} --n 60 --out plan.csv` chooses poses that identify them.",
+            "Not identifiable from these poses: {}. `rigctl plan --robot {robot} --n 60 --out plan.csv` says which of them no pose can identify (structural combinations: keep one parameter of each fixed) and chooses poses that identify the others.",
             unident.join(", ")
         ));
     }
@@ -217,8 +217,13 @@ pub(crate) fn build_summary(
     let fig = heads.first().and_then(|h| {
         figure(
             format!(
-                "Error on {} at each stage: the bars should shrink from top to bottom.",
-                h.set
+                "Error on {} at each stage, from the top (mean and RMS){}",
+                h.set,
+                if h.stages.windows(2).all(|w| w[1].mean_mm <= w[0].mean_mm) {
+                    ": each stage lowers it."
+                } else {
+                    ": not every stage lowers it on these poses (a bar longer than the one above it is a stage that made the error worse here)."
+                }
             ),
             &StageBars {
                 title: format!("Error on {}", h.set),

@@ -188,6 +188,24 @@ pub struct Report {
     pub notes: Vec<String>,
 }
 
+impl Report {
+    /// Every figure on the page: the first screen's chart, the figures, the trace overlays, the
+    /// path-error chart and the plan's.
+    pub fn figure_count(&self) -> usize {
+        usize::from(self.summary.figure.is_some())
+            + self.figures.len()
+            + self.overlays.len()
+            + self
+                .path_errors
+                .as_ref()
+                .map_or(0, |p| usize::from(p.figure.is_some()))
+            + self
+                .plan
+                .as_ref()
+                .map_or(0, |p| usize::from(p.figure.is_some()))
+    }
+}
+
 /// Builds the report of `dir` and writes it to `out` atomically; returns the report.
 pub fn write_report(dir: &Path, out: &Path, opts: &ReportOptions) -> Result<Report, ReportError> {
     let report = build_report(dir, opts)?;

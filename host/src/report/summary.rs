@@ -174,7 +174,8 @@ pub fn headlines(
                 }
             }
             if let Some(st) = stats(ba.get("after")) {
-                push_stage(h, &format!("calibrated model ({method})"), st, name);
+                let label = format!("calibrated model ({method}{})", not_converged_words(doc));
+                push_stage(h, &label, st, name);
             }
         }
         for (name, doc) in diagnose {
@@ -203,8 +204,9 @@ pub fn headlines(
             if let Some(fin) = stats(doc.get("final").and_then(|d| d.get(set))) {
                 if n_eff > 0 {
                     let label = format!(
-                        "with the {n_eff} effect{} found",
-                        if n_eff == 1 { "" } else { "s" }
+                        "with the {n_eff} effect{} found{}",
+                        if n_eff == 1 { "" } else { "s" },
+                        not_converged_words(doc)
                     );
                     push_stage(h, &label, fin, name);
                 }
@@ -253,6 +255,15 @@ pub fn headline_sentence(h: &Headline) -> String {
             format!(" (in between: {})", mid.join("; "))
         }
     )
+}
+
+/// `", not converged"` for a document whose fit stopped on its iteration budget.
+fn not_converged_words(doc: &Value) -> &'static str {
+    if doc.get("converged").and_then(Value::as_bool) == Some(false) {
+        ", not converged"
+    } else {
+        ""
+    }
 }
 
 fn pct(before: f64, after: f64) -> Option<f64> {
@@ -378,6 +389,12 @@ pub fn verdict(doc: &Value) -> Option<String> {
             .unwrap_or_default(),
     };
     let structured = structured?;
+    if doc.get("converged").and_then(Value::as_bool) == Some(false) {
+        return Some(format!(
+            "The final fit did not converge (its iteration budget was spent while it still \
+             improved): no verdict{floor_words}."
+        ));
+    }
     if !structured {
         return Some(format!(
             "At the {used} floor: the residual left has no structure{floor_words}."

@@ -1,11 +1,13 @@
 //! The printable trace sheet: its geometry, shared by the SVG renderer ([`svg`]), the simulated
-//! scan renderer (`trace::render`) and the tracer (`trace`).
+//! scan renderer (`trace::render`) and the tracer (`trace`); the paths drawn on it in the
+//! simulated sessions and where their sheet lies ([`drawn`]).
 //!
 //! Sheet coordinates (FORMATS.md "Scanned sheets"): origin at the centre of the fiducial square,
 //! x to the right, y up, mm. The square's centre sits at the centre of an A4 portrait page.
 //! Page coordinates (SVG, renderer) have their origin at the page's top-left corner, x to the
 //! right, y down, mm.
 
+pub mod drawn;
 pub mod svg;
 
 /// A4 page width, mm.

@@ -34,8 +34,7 @@ pub struct PlannedPose {
     pub target: ToolTarget,
 }
 
-/// Joints the Katana starts the search from (arm forward over the cube, tool down-ish).
-pub const KATANA_SEED_DEG: [f64; 5] = [-90.0, 60.0, -60.0, 0.0, 90.0];
+pub use crate::model::ik::KATANA_SEED_DEG;
 
 /// Why a plan could not be made.
 #[derive(Debug, thiserror::Error)]

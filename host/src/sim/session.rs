@@ -44,7 +44,6 @@
 //! joint reading, a pose file), `session.json` (clock offset, pot scale, geometric errors).
 
 use std::path::Path;
-use std::str::FromStr;
 
 use image::RgbImage;
 use nalgebra::Vector3;
@@ -55,15 +54,17 @@ use rig_protocol::{encode_device, DeviceMsg, PotBatch, DEVICE_FRAME_MAX};
 
 use super::effects::{Effect, EffectKind};
 use super::paths::quintic_profile;
-use super::plan::KATANA_SEED_DEG;
 use super::simulate::{truth_model, SimConfig, SimError};
 use crate::daq::recording::{RecordingError, RecordingMeta, RecordingWriter};
 use crate::fusion::{FusionError, JigPoint, SheetPlacement};
 use crate::io::atomic::{write_bytes_atomic, AtomicWriteError};
 use crate::model::dynamics::{moments_kgfm, Inertia};
+use crate::model::ik::KATANA_SEED_DEG;
 use crate::model::ik::{solve, IkError, IkTilt, ToolTarget};
 use crate::model::{Model, ModelError, Tilt};
-use crate::sheet::{ReferencePath, CIRCLE_RADIUS_MM};
+pub use crate::sheet::drawn::{
+    default_pencil_axis, SessionPath, LINE_HALF_LENGTH_DRAWN_MM, SESSION_SHEET_ORIGIN_MM,
+};
 use crate::trace::{render_scan, RenderSpec};
 
 /// Format tag of `session.json`.
@@ -72,53 +73,7 @@ pub const SESSION_FORMAT: &str = "rigctl-session-truth/1";
 const DIFF_STEPS: usize = 10;
 /// Potentiometer samples per frame.
 const BATCH: usize = 50;
-/// Default sheet origin of the simulated session, mm in R. With the pencil holder (d5 = 330 mm)
-/// the thesis's circle about [0 -300 139.2893] is only partly reachable within the joint limits
-/// of table 3.1 with a fixed pencil axis (see `tests/sim_plan.rs`); on this parallel 45-degree
-/// plane the whole circle and line are, with the pencil inclined 22.5 deg from the sheet normal
-/// towards -z ([`default_pencil_axis`]).
-pub const SESSION_SHEET_ORIGIN_MM: [f64; 3] = [55.0, -200.0, 200.0];
-
-/// The default pencil (tool) axis while drawing on a sheet with normal `n`: halfway between
-/// `-n` and straight down (22.5 deg from `-n` on the 45-degree plane).
-pub fn default_pencil_axis(n: &Vector3<f64>) -> Vector3<f64> {
-    (-n - Vector3::z()).normalize()
-}
-
-/// Half length of the drawn line, mm (the printed reference line is +-100 mm).
-pub const LINE_HALF_LENGTH_DRAWN_MM: f64 = 90.0;
-
-/// The drawn path.
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
-pub enum SessionPath {
-    /// The thesis circle, radius 100 mm about the sheet origin, counter-clockwise on the sheet
-    /// from (-100, 0).
-    Circle,
-    /// A straight line along sheet x from -90 to +90 mm, on a sheet whose origin is 30 mm up
-    /// the slope from the circle's centre.
-    Line,
-}
-
-impl FromStr for SessionPath {
-    type Err = String;
-    fn from_str(s: &str) -> Result<Self, String> {
-        match s {
-            "circle" => Ok(Self::Circle),
-            "line" => Ok(Self::Line),
-            _ => Err(format!("unknown session path `{s}` (circle, line)")),
-        }
-    }
-}
-
 impl SessionPath {
-    /// The name used on the command line.
-    pub fn as_str(self) -> &'static str {
-        match self {
-            Self::Circle => "circle",
-            Self::Line => "line",
-        }
-    }
-
     /// The default sheet placement of this path: the 45-degree plane of
     /// [`SheetPlacement::thesis_plane`] through [`SESSION_SHEET_ORIGIN_MM`] (the circle), or 30 mm
     /// up the slope from it (the line).
@@ -128,24 +83,6 @@ impl SessionPath {
         match self {
             Self::Circle => base,
             Self::Line => SheetPlacement::thesis_plane(c + base.y_axis * 30.0),
-        }
-    }
-
-    /// Sheet point at path parameter `s` in 0..1.
-    pub fn sheet_point(self, s: f64) -> [f64; 2] {
-        match self {
-            Self::Circle => {
-                let a = std::f64::consts::PI + std::f64::consts::TAU * s;
-                [CIRCLE_RADIUS_MM * a.cos(), CIRCLE_RADIUS_MM * a.sin()]
-            }
-            Self::Line => [LINE_HALF_LENGTH_DRAWN_MM * (2.0 * s - 1.0), 0.0],
-        }
-    }
-
-    fn reference(self) -> ReferencePath {
-        match self {
-            Self::Circle => ReferencePath::Circle,
-            Self::Line => ReferencePath::Line,
         }
     }
 }

@@ -277,3 +277,19 @@ pub fn simulate(declared: &Model, cfg: &SimConfig) -> Result<SimOutput, SimError
         val,
     })
 }
+
+/// A simulation's poses as the diagnosis reads them.
+impl crate::diagnose::data::Dataset {
+    /// The measured poses of a simulation (`rigctl simulate`), with their times, in the order
+    /// the robot visited them.
+    pub fn from_sim_poses(poses: &[SimPose]) -> Self {
+        Self {
+            poses: crate::calib::Poses {
+                q_deg: poses.iter().map(|p| p.q_deg.clone()).collect(),
+                xyz_mm: poses.iter().map(|p| p.measured_mm).collect(),
+            },
+            t_s: Some(poses.iter().map(|p| p.t_s).collect()),
+            ..Self::default()
+        }
+    }
+}

@@ -12,8 +12,8 @@ use rigctl::calib::default_selection;
 use rigctl::calib::identifiability::DEFAULT_RTOL;
 use rigctl::calib::lm::LmConfig;
 use rigctl::calib::projected::{fit_projected, ProjectedData, SampleTilt};
-use rigctl::fusion::motion::moments_in_motion;
 use rigctl::fusion::read_fused;
+use rigctl::model::motion::moments_in_motion;
 use rigctl::model::{katana450, Model, Tilt, KATANA_PENCIL_TOOL_MM};
 use rigctl::sim::session::{simulate_session, SessionConfig, SessionPath};
 

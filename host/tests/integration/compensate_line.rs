@@ -2,7 +2,7 @@
 //! compensated joints lies on the path (1e-6 mm), while the nominal IK joints miss it by the
 //! calibration error; CSV output format; bad input (exit 2 naming line and column).
 
-mod common;
+use crate::common;
 
 use std::process::{Command, Output};
 

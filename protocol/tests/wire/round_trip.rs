@@ -1,6 +1,6 @@
 //! Encode -> decode round trips, buffer sizing, and the encoder's errors.
 
-mod common;
+use crate::common;
 
 use common::{frame_device, frame_host, max_pot_batch};
 use rig_protocol::*;

@@ -3,7 +3,7 @@
 //! Reference bar: the published hybrid MDH + neural-network result on the same 20 poses,
 //! 0.1549 mm mean (README of the data set).
 
-mod common;
+use crate::common;
 
 use rigctl::diagnose::data::Dataset;
 use rigctl::diagnose::{diagnose, DiagnoseOptions};

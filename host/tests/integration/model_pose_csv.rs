@@ -1,7 +1,7 @@
 //! Pose CSV reading (FORMATS.md): what is accepted, and every bad-input rule with the file,
 //! line and column it must name.
 
-mod common;
+use crate::common;
 
 use rigctl::error::{Classify, ErrorKind};
 use rigctl::io::pose_csv::{parse_poses, read_poses, PoseCsvError, PoseSpec};

@@ -4,7 +4,7 @@
 //! laser-tracker data; the chunked two-thread accumulation is bitwise independent of the thread
 //! count, with or without the problem's helper thread; the fit is a Gauss-Newton fixed point.
 
-mod common;
+use crate::common;
 
 use nalgebra::Vector3;
 use rand::{Rng, SeedableRng};

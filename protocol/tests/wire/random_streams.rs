@@ -1,7 +1,7 @@
 //! Property-style tests over many seeded random byte streams: the decoder never panics, its
 //! counters stay consistent, and it never yields a message that was not sent.
 
-mod common;
+use crate::common;
 
 use common::{frame_device, XorShift};
 use rig_protocol::*;

@@ -9,7 +9,7 @@
 //! rounding, `5e-7 * sum_j |dy/dq_j|`; (3) the tilting increment `y(tilt) - y(no tilt)` of each
 //! row pair, where that rounding cancels, must match within 1e-6.
 
-mod common;
+use crate::common;
 
 use rigctl::model::{katana450, Model, Tilt};
 

@@ -2,7 +2,7 @@
 //! random or structured candidates, no refinement, no climbs), with `--base`; on the real UR5
 //! laser-tracker grid too; and bad input.
 
-mod common;
+use crate::common;
 
 use std::process::Command;
 

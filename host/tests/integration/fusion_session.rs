@@ -1,6 +1,6 @@
 //! The fusion and the projected calibration on simulated sessions, without the scanner: the
 //! pencil tip's true path on the paper stands in for the traced curve, so the fused components
-//! can be checked against the truth. (The scanner is in `tests/tests/session_e2e.rs`.)
+//! can be checked against the truth. (The scanner is in `tests/tests/e2e/session_e2e.rs`.)
 
 use nalgebra::Vector3;
 use rigctl::calib::identifiability::DEFAULT_RTOL;

@@ -2,7 +2,7 @@
 //! tilt flag and tool length), the output format, and bad input (exit code 2, message naming
 //! the line or listing the valid names).
 
-mod common;
+use crate::common;
 
 use std::collections::BTreeMap;
 use std::process::{Command, Output};

@@ -9,7 +9,7 @@
 //! (tests/schema.rs, derived from the types), then replace these vectors on purpose, in the
 //! same commit.
 
-mod common;
+use crate::common;
 
 use common::{frame_device, frame_host, hex};
 use rig_protocol::{Decoded, DeviceDecoder, HostDecoder};

@@ -1,7 +1,7 @@
 //! Real photographs of plotter drawings (BrachioGraph docs, shared/data/real): they carry no
 //! fiducials, so `trace` must say so; with a plain scale the strokes are still extracted.
 
-mod common;
+use crate::common;
 
 use indicatif::ProgressBar;
 use rigctl::trace::{load_scan, trace_image, Mapping, TraceError, TraceOptions};

@@ -1,7 +1,7 @@
 //! Inverse kinematics round trips: FK(IK(target)) = target over the workspace, for the nominal
 //! Katana, a calibrated (perturbed) one and the tilted chain.
 
-mod common;
+use crate::common;
 
 use nalgebra::Vector3;
 use rand::{Rng, SeedableRng};

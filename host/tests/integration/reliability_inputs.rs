@@ -161,7 +161,7 @@ fn defect8_messages_name_the_file_urdf_loops_and_rtol_nan() {
 /// a debug build) instead of being refused.
 #[test]
 fn fuzz_finding_model_file_with_joint_0_is_refused() {
-    let text = include_str!("../fuzz/seeds/model_toml/regression-joint-0.toml");
+    let text = include_str!("../../fuzz/seeds/model_toml/regression-joint-0.toml");
     let e = rigctl::model::Model::from_toml_str(text, "joint0.toml").unwrap_err();
     assert!(e.to_string().contains("joint 0"), "{e}");
 }

@@ -5,7 +5,7 @@
 //! hysteresis dead band is held and reported (a warning naming the path line and joint), never
 //! failed.
 
-mod common;
+use crate::common;
 
 use std::path::Path;
 use std::process::{Command, Output};

@@ -205,6 +205,7 @@ fn lm_iteration_allocations_do_not_grow_with_the_poses() {
         let mut p = PositionNormalProblem::new(&model, &poses, sel.clone(), true);
         let lm = LmConfig {
             max_iterations: 1,
+            max_iterations_hard: 1,
             ..LmConfig::default()
         };
         p.normal(&x, &mut eq).unwrap();

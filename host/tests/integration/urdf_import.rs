@@ -1,7 +1,7 @@
 //! URDF import: the imported model's forward kinematics against an independent 4x4-matrix FK
 //! computed here straight from the URDF XML, and a DH-form UR5 URDF against the `ur5` preset.
 
-mod common;
+use crate::common;
 
 use nalgebra::{Matrix3, Matrix4, Rotation3, Unit, Vector3};
 use rand::{Rng, SeedableRng};

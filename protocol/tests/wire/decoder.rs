@@ -1,6 +1,6 @@
 //! Streaming decoder: resynchronisation, split feeds, corruption of every kind, counters.
 
-mod common;
+use crate::common;
 
 use common::{frame_device, frame_host, max_pot_batch};
 use rig_protocol::*;

@@ -2,8 +2,8 @@
 
 use nalgebra::Vector3;
 
-use crate::model::dynamics::{moments_kgfm, Inertia};
-use crate::model::{Model, ModelError};
+use super::dynamics::{moments_kgfm, Inertia};
+use super::{Model, ModelError};
 
 /// Joint moments in motion (kgf.m, joint frames) of `model` at every logged sample: joint rates
 /// and accelerations by central differences over the neighbouring samples when both lie within

@@ -3,7 +3,7 @@
 //! that the published work reports before calibration (mean 2.5664 mm on random.csv), which
 //! checks the DH convention, the joint order and the units.
 
-mod common;
+use crate::common;
 
 use rigctl::io::pose_csv::{read_poses, PoseSpec};
 use rigctl::model::{ur5, Tilt, UR5_SMR_TOOL_MM};

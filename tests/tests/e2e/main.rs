@@ -1,0 +1,8 @@
+//! End-to-end tests across the crates: one test binary, a module per area (`cargo test -p rig-tests --test e2e <area>`).
+
+mod diagnose_cli;
+mod record_pty;
+mod reliability_signals;
+mod report_browser;
+mod session_e2e;
+mod simulate_cli;
