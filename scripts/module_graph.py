@@ -1,6 +1,7 @@
 #!/usr/bin/env python3
 """Lists the imports between the top-level modules of host/src (crate `rigctl`) and fails on a
-cycle, and checks that the README's host module table names exactly the modules of the tree.
+cycle, and checks that the host module table of docs/ARCHITECTURE.md ("Host library modules")
+names exactly the modules of the tree.
 
     python3 scripts/module_graph.py            # print the graph, exit 1 on a cycle or mismatch
     python3 scripts/module_graph.py --dot      # the graph in Graphviz dot
@@ -85,8 +86,11 @@ def cycles(edges):
     return out
 
 
-def readme_modules():
-    text = (ROOT / "README.md").read_text(encoding="utf-8")
+TABLE_DOC = ROOT / "docs" / "ARCHITECTURE.md"
+
+
+def table_modules():
+    text = TABLE_DOC.read_text(encoding="utf-8")
     start = text.find("Host library modules")
     if start < 0:
         return None
@@ -121,19 +125,19 @@ def main():
             for t in comp:
                 if t in checked[m]:
                     print(f"  {m} -> {t}: {', '.join(sorted(checked[m][t]))}")
-    listed = readme_modules()
+    listed = table_modules()
     tree = set(mods) - IGNORED
     if listed is None:
-        print("\nREADME.md has no 'Host library modules' table")
+        print("\ndocs/ARCHITECTURE.md has no 'Host library modules' table")
         bad = 1
     elif listed != tree:
         bad = 1
         if tree - listed:
-            print(f"\nREADME module table lacks: {', '.join(sorted(tree - listed))}")
+            print(f"\nthe module table (docs/ARCHITECTURE.md) lacks: {', '.join(sorted(tree - listed))}")
         if listed - tree:
-            print(f"\nREADME module table names modules not in host/src: {', '.join(sorted(listed - tree))}")
+            print(f"\nthe module table (docs/ARCHITECTURE.md) names modules not in host/src: {', '.join(sorted(listed - tree))}")
     if not bad:
-        print("\nno import cycle between host/src modules; the README module table matches the tree")
+        print("\nno import cycle between host/src modules; the module table of docs/ARCHITECTURE.md matches the tree")
     return bad
 
 

@@ -2,19 +2,21 @@
 //!
 //! | module | holds |
 //! |---|---|
-//! | [`model`] | the kinematic + tilting model (chain, FK, Jacobians, moments, tilting, IK, model files) |
-//! | [`io`] | pose CSV files, atomic output files |
+//! | [`model`] | the robot physics: chain, FK, Jacobians, moments, tilting, transmission terms, IK, model files |
+//! | [`io`] | CSV readers (pose, joints, trace, jig, fused files), atomic output files, interrupt handling |
 //! | [`joints`] | joint-tilting values (clearance, backlash, stiffness) from inclinometer readings (`rigctl joints`) |
 //! | [`sim`] | the virtual rig with known truth (`rigctl simulate`) |
 //! | [`calib`] | identification (`rigctl calibrate`): solvers, identifiability, statistics |
 //! | [`compensate`] | trajectory correction (`rigctl compensate`, eq. 5.22): joints that put the calibrated, tilting arm on a path |
 //! | [`diagnose`] | `rigctl diagnose`: residual analysis, candidate effects, forward selection |
-//! | [`plan`] | `rigctl plan`: optimal calibration poses (D- / Ds-optimal designs), expected sigmas vs random poses |
+//! | [`plan`] | `rigctl plan`: optimal calibration poses (A-optimal by default; G, I, D and their subset forms), expected sigmas vs random poses |
 //! | [`daq`] | the acquisition path: recordings, `record`, `export`, the virtual board |
 //! | [`sheet`] | the printable trace sheet's geometry and SVG |
 //! | [`trace`] | scanned pencil traces -> centreline in sheet mm; simulated scans |
 //! | [`urdf`] | URDF import: a serial chain of a URDF file as a [`model::Model`] (`rigctl urdf2model`) |
 //! | [`fusion`] | the low-cost measurement: pot calibration, clock alignment, joints + pot + trace -> partial error samples |
+//! | [`plot`] | plots (PNG/SVG): the path-error chart, the report's stage bars and workspace views, plan views |
+//! | [`report`] | `rigctl report`: the self-contained HTML page of a run directory |
 //! | [`error`] | how errors are classified (bad input vs failure of the run) |
 #![forbid(unsafe_code)]
 

@@ -68,8 +68,8 @@ pub enum Command {
     Joints(joints::Args),
     /// Joints that put the calibrated, tilting arm on a Cartesian path (eq. 5.22).
     Compensate(compensate::Args),
-    /// Choose the calibration poses that identify the model best (D-optimal), or that separate
-    /// the effects a diagnosis found aliased.
+    /// Choose the calibration poses that identify the model best (A-optimal by default; G, I or
+    /// D with --criterion), or that separate the effects a diagnosis found aliased.
     Plan(plan::Args),
 }
 
