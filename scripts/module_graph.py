@@ -17,6 +17,10 @@ import sys
 ROOT = pathlib.Path(__file__).resolve().parent.parent
 SRC = ROOT / "host" / "src"
 IGNORED = {"cli"}
+# Edges the layering forbids (docs/ARCHITECTURE.md "Layering"): the identification does not
+# depend on the fusion, and nothing that diagnoses, compensates or plans depends on the
+# simulator.
+FORBIDDEN = {("calib", "fusion"), ("diagnose", "sim"), ("compensate", "sim"), ("plan", "sim"), ("model", "sim"), ("calib", "sim")}
 
 
 def modules():
@@ -104,6 +108,13 @@ def table_modules():
     return names
 
 
+def documented_graph():
+    """The graph block after "The current graph:" in docs/ARCHITECTURE.md (lines `m -> a, b`)."""
+    text = TABLE_DOC.read_text(encoding="utf-8")
+    m = re.search(r"The current graph:\s*```\n(.*?)```", text, flags=re.S)
+    return None if m is None else [l.rstrip() for l in m.group(1).splitlines() if l.strip()]
+
+
 def main():
     mods = modules()
     edges = graph(mods)
@@ -115,9 +126,19 @@ def main():
                 print(f'  "{m}" -> "{t}";')
         print("}")
         return 0
-    for m, e in sorted(checked.items()):
-        print(f"{m:10} -> {', '.join(sorted(e)) or '(nothing)'}")
+    lines = [f"{m:10} -> {', '.join(sorted(e)) or '(nothing)'}" for m, e in sorted(checked.items())]
+    print("\n".join(lines))
     bad = 0
+    for a, b in sorted(FORBIDDEN):
+        if b in checked.get(a, {}):
+            bad = 1
+            print(f"\nforbidden edge {a} -> {b}: {', '.join(sorted(checked[a][b]))}")
+    doc = documented_graph()
+    wanted = [l for l in lines if not l.endswith("(nothing)")]
+    if doc != wanted:
+        bad = 1
+        print("\nthe graph in docs/ARCHITECTURE.md (after 'The current graph:') differs; it should read:")
+        print("\n".join(wanted))
     for comp in cycles(checked):
         bad = 1
         print(f"\nCYCLE between {', '.join(comp)}:")
@@ -137,7 +158,7 @@ def main():
         if listed - tree:
             print(f"\nthe module table (docs/ARCHITECTURE.md) names modules not in host/src: {', '.join(sorted(listed - tree))}")
     if not bad:
-        print("\nno import cycle between host/src modules; the module table of docs/ARCHITECTURE.md matches the tree")
+        print("\nno import cycle between host/src modules; the module table and the graph of docs/ARCHITECTURE.md match the tree")
     return bad
 
 
