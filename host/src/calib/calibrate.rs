@@ -10,6 +10,7 @@ use super::fit::{fit_parameters, Fit};
 use super::identifiability::DEFAULT_RTOL;
 use super::influence::{fit_influence, InfluenceConfig};
 use super::lm::LmConfig;
+use super::outliers;
 use super::problem::{position_errors, Poses};
 use super::report::{BeforeAfter, CalibrateReport, NamedValues, StandardSummary};
 use super::stats::Stats;
@@ -68,6 +69,8 @@ pub struct CalibrateOptions {
     pub rtol: f64,
     /// Settings of the influence-based method.
     pub influence: InfluenceConfig,
+    /// Keep every pose (no gross-error rule, [`super::outliers`]).
+    pub keep_outliers: bool,
 }
 
 impl Default for CalibrateOptions {
@@ -79,6 +82,7 @@ impl Default for CalibrateOptions {
             lm: LmConfig::default(),
             rtol: DEFAULT_RTOL,
             influence: InfluenceConfig::default(),
+            keep_outliers: false,
         }
     }
 }
@@ -227,6 +231,8 @@ pub(super) fn fit_report(
         converged: fit.converged,
         tilting_applied,
         terms: NamedValues::default(),
+        outliers: Vec::new(),
+        outlier_note: None,
     }
 }
 
@@ -250,8 +256,13 @@ pub(super) fn error_summary(
     )
 }
 
+/// Fewest calibration poses on which the gross-error rule is applied.
+pub const MIN_POSES_FOR_OUTLIERS: usize = 10;
+
 /// Calibrates `nominal` on `cal` (and evaluates on `val`): the standard identification always
 /// (for the comparison), then the chosen method. "before" is the nominal model without tilting.
+/// Poses with gross errors ([`super::outliers`]) are left out of the fits and of the statistics
+/// and listed in the report (`outliers`), unless [`CalibrateOptions::keep_outliers`].
 pub fn calibrate(
     nominal: &Model,
     cal: &Poses,
@@ -259,12 +270,51 @@ pub fn calibrate(
     opts: &CalibrateOptions,
 ) -> Result<Outcome, CalibError> {
     let selection = resolve_selection(nominal, opts)?;
-    let standard = fit_parameters(nominal, cal, &selection, false, &opts.lm, opts.rtol)?;
     let tilt = opts.method == Method::Tilting && nominal.has_tilt();
+    // Gross errors: fit-and-flag with the chosen method's fit (the influence method's poses are
+    // judged by the standard fit); the last fit on the kept poses is reused.
+    let mut last: Option<(Vec<usize>, Fit)> = None;
+    let trimmed = if opts.keep_outliers || cal.len() < MIN_POSES_FOR_OUTLIERS {
+        None
+    } else {
+        Some(outliers::trim(cal.len(), 3, None, |keep| {
+            let f = fit_parameters(
+                nominal,
+                &cal.subset(keep),
+                &selection,
+                tilt,
+                &opts.lm,
+                opts.rtol,
+            )?;
+            let errors = position_errors(&f.model, cal, tilt)?;
+            last = Some((keep.to_vec(), f));
+            Ok::<_, CalibError>(errors.iter().map(|e| e.norm()).collect())
+        })?)
+    };
+    let flagged: Vec<usize> = trimmed
+        .as_ref()
+        .map_or_else(Vec::new, |t| t.flagged.clone());
+    let keep = outliers::kept(cal.len(), &flagged);
+    let cal_all = cal;
+    let cal_kept;
+    let cal: &Poses = if flagged.is_empty() {
+        cal_all
+    } else {
+        cal_kept = cal_all.subset(&keep);
+        &cal_kept
+    };
+    let reused = last.filter(|(k, _)| *k == keep).map(|(_, f)| f);
+    let standard = match (&reused, tilt) {
+        (Some(f), false) => f.clone(),
+        _ => fit_parameters(nominal, cal, &selection, false, &opts.lm, opts.rtol)?,
+    };
     let chosen: Fit = match opts.method {
         Method::Standard => standard.clone(),
         Method::Tilting if !tilt => standard.clone(),
-        Method::Tilting => fit_parameters(nominal, cal, &selection, true, &opts.lm, opts.rtol)?,
+        Method::Tilting => match reused {
+            Some(f) => f,
+            None => fit_parameters(nominal, cal, &selection, true, &opts.lm, opts.rtol)?,
+        },
         Method::Influence => {
             // Same identifiable set as the standard fit; the influence iteration on it.
             let inf = fit_influence(nominal, cal, &standard.fitted, &opts.influence)?;
@@ -289,12 +339,40 @@ pub fn calibrate(
         Ok([before, standard_errs, chosen_errs])
     };
     let cal_errors = errs(cal)?;
+    // The flagged poses' errors under the final model, and the held-out poses judged by the
+    // calibration's threshold.
+    let chosen_errors = |p: &Poses| -> Result<Vec<f64>, CalibError> {
+        Ok(position_errors(&chosen.model, p, tilt)?
+            .iter()
+            .map(|e| e.norm())
+            .collect())
+    };
+    let mut outlier_reports = Vec::new();
+    let mut val_kept_store = None;
+    if let Some(t) = &trimmed {
+        let kept_norms: Vec<f64> = cal_errors[2].iter().map(|e| e.norm()).collect();
+        let threshold = outliers::threshold_mm(outliers::robust_sigma_mm(&kept_norms, 3), None);
+        if !flagged.is_empty() {
+            let all = chosen_errors(cal_all)?;
+            outlier_reports.extend(outliers::reports("cal", &flagged, &all, threshold));
+        }
+        if let Some(v) = val {
+            let norms = chosen_errors(v)?;
+            let (vflag, vthr) = outliers::flag_held_out(&norms, threshold);
+            if !vflag.is_empty() {
+                outlier_reports.extend(outliers::reports("val", &vflag, &norms, vthr));
+                val_kept_store = Some(v.subset(&outliers::kept(v.len(), &vflag)));
+            }
+        }
+        let _ = t;
+    }
+    let val = val_kept_store.as_ref().or(val);
     let val_errors = match val {
         Some(v) => errs(v)?,
         None => [Vec::new(), Vec::new(), Vec::new()],
     };
     let (calibration, validation, standard) = error_summary(&cal_errors, val.map(|_| &val_errors));
-    let report = fit_report(
+    let mut report = fit_report(
         &chosen,
         &selection,
         opts.method.as_str(),
@@ -303,6 +381,8 @@ pub fn calibrate(
         standard,
         tilt,
     );
+    report.outliers = outlier_reports;
+    report.outlier_note = trimmed.and_then(|t| t.note);
     Ok(Outcome {
         model: chosen.model,
         tilt,

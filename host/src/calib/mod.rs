@@ -17,6 +17,7 @@
 //! | [`calibrate`] | the whole `calibrate` command: selection, methods, report |
 //! | [`measurements`] | poses with several measured points each (pose, point slot, xyz) |
 //! | [`general`] | identification with point offsets and joint compliance |
+//! | [`outliers`] | gross errors in measured poses: the robust fit-and-flag rule shared by `calibrate` and `diagnose` |
 //! | [`press`] | block-PRESS (leave-one-pose-out) forward selection |
 //! | [`calibrate_general`] | `calibrate` with several points, `--compliance`, `--select press` |
 //! | [`samples`] | the pencil rig's partial measurement: a fused sample (`FUSED.csv` row) |
@@ -34,6 +35,7 @@ mod iterate;
 pub mod lm;
 pub mod measurements;
 pub mod normal;
+pub mod outliers;
 pub mod press;
 pub mod problem;
 pub mod projected;

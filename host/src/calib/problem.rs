@@ -48,6 +48,14 @@ impl Poses {
     }
 
     /// The first `n` poses and the rest (for hold-out splits).
+    /// The poses `keep` (indices, in that order).
+    pub fn subset(&self, keep: &[usize]) -> Poses {
+        Poses {
+            q_deg: keep.iter().map(|&k| self.q_deg[k].clone()).collect(),
+            xyz_mm: keep.iter().map(|&k| self.xyz_mm[k]).collect(),
+        }
+    }
+
     pub fn split_at(&self, n: usize) -> (Poses, Poses) {
         let n = n.min(self.len());
         (

@@ -94,6 +94,12 @@ pub struct CalibrateReport {
     /// `compliance_j<i>_deg_per_kgfm`; their sigmas are in `sigma`. Absent when empty.
     #[serde(skip_serializing_if = "NamedValues::is_empty")]
     pub terms: NamedValues,
+    /// Poses left out as gross errors (FORMATS.md "Gross errors in measured poses"); the
+    /// statistics above are over the other poses.
+    pub outliers: Vec<super::outliers::OutlierReport>,
+    /// Set when the gross-error rule was not applied as such (heavy tails) or did not settle.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub outlier_note: Option<String>,
 }
 
 #[cfg(test)]
@@ -125,6 +131,8 @@ mod tests {
             converged: true,
             tilting_applied: true,
             terms: NamedValues::default(),
+            outliers: Vec::new(),
+            outlier_note: None,
         };
         let text = serde_json::to_string(&r).unwrap();
         let v: serde_json::Value = serde_json::from_str(&text).unwrap();

@@ -94,6 +94,10 @@ pub struct Args {
     /// axis, from the model's link masses; with --select press, only those chosen).
     #[arg(long, conflicts_with = "samples")]
     pub compliance: bool,
+    /// Keep every pose: no gross-error rule (poses whose error is inconsistent with the others
+    /// are otherwise left out of the fit and listed as `outliers`).
+    #[arg(long, conflicts_with = "samples")]
+    pub keep_outliers: bool,
 }
 
 fn parse_select(s: &str) -> Result<Select, String> {
@@ -139,19 +143,23 @@ pub fn run(args: Args) -> Result<(), CliError> {
     // The model's transmission terms (model file `[[joint]]` keys) map the readings to the
     // joints' angles, hysteresis in the file's pose order; the calibration keeps them fixed and
     // writes them back with `--out`.
-    let read = |p: &std::path::Path| -> Result<Measurements, CliError> {
+    let read = |p: &std::path::Path| -> Result<(Measurements, PoseLabels), CliError> {
         let file = read_poses(p, &args.pose.spec(&model, true, 0))?;
         let mut m = Measurements::from_pose_file(&file, markers.as_deref())?;
         m.q_deg = model.effective_pose_joints(&m.q_deg, super::fk::pose_times(&file).as_deref())?;
-        Ok(m)
+        Ok((m, PoseLabels::of(&file)))
     };
-    let cal = read(poses)?;
-    let val = args.validate.as_deref().map(read).transpose()?;
+    let (cal, cal_labels) = read(poses)?;
+    let (val, val_labels) = match args.validate.as_deref().map(read).transpose()? {
+        Some((v, l)) => (Some(v), Some(l)),
+        None => (None, None),
+    };
     let opts = CalibrateOptions {
         method: args.method,
         params: args.params.clone(),
         base: args.base,
         rtol: args.rtol,
+        keep_outliers: args.keep_outliers,
         ..Default::default()
     };
     let gen = GeneralOptions {
@@ -171,6 +179,22 @@ pub fn run(args: Args) -> Result<(), CliError> {
         notes = general_notes(&g, &cal);
         g.outcome
     };
+    let mut outcome = outcome;
+    for o in &mut outcome.report.outliers {
+        let labels = if o.file == "val" {
+            val_labels.as_ref()
+        } else {
+            Some(&cal_labels)
+        };
+        if let Some(l) = labels {
+            l.fill(o);
+        }
+    }
+    notes.push_str(&outlier_lines(
+        &outcome.report,
+        poses,
+        args.validate.as_deref(),
+    ));
     if let Some(path) = &args.json {
         let text = serde_json::to_string_pretty(&outcome.report)
             .map_err(|e| CliError::failure(format!("encoding JSON: {e}")))?;
@@ -194,6 +218,62 @@ fn not_converged(r: &rigctl::calib::report::CalibrateReport) -> Result<(), CliEr
          not at the optimum; outputs written with \"converged\": false (re-run from --out to go on)",
         r.iterations
     )))
+}
+
+/// Line and id of every pose of a file, to name the poses left out as gross errors.
+struct PoseLabels {
+    lines: Vec<usize>,
+    ids: Vec<Option<String>>,
+}
+
+impl PoseLabels {
+    fn of(file: &rigctl::io::pose_csv::PoseFile) -> Self {
+        Self {
+            lines: file.poses.iter().map(|p| p.line).collect(),
+            ids: file.poses.iter().map(|p| p.id.clone()).collect(),
+        }
+    }
+
+    fn fill(&self, o: &mut rigctl::calib::outliers::OutlierReport) {
+        o.line = self.lines.get(o.index).copied();
+        o.id = self.ids.get(o.index).cloned().flatten();
+    }
+}
+
+/// The text lines that name the poses left out as gross errors.
+pub(super) fn outlier_lines(
+    r: &rigctl::calib::report::CalibrateReport,
+    cal: &std::path::Path,
+    val: Option<&std::path::Path>,
+) -> String {
+    let mut s = String::new();
+    for o in &r.outliers {
+        let path = if o.file == "val" {
+            val.unwrap_or(cal)
+        } else {
+            cal
+        };
+        let _ = writeln!(
+            s,
+            "outlier: {}:{}{}: {}",
+            path.display(),
+            o.line.map_or_else(|| "?".to_string(), |l| l.to_string()),
+            o.id.as_ref()
+                .map_or_else(String::new, |i| format!(" (id {i})")),
+            o.note
+        );
+    }
+    if !r.outliers.is_empty() {
+        let _ = writeln!(
+            s,
+            "the statistics above leave these {} pose(s) out (--keep-outliers keeps every pose)",
+            r.outliers.len()
+        );
+    }
+    if let Some(note) = &r.outlier_note {
+        let _ = writeln!(s, "gross errors: {note}");
+    }
+    s
 }
 
 /// What `calibrate_general` adds to the summary: the PRESS choice and the validation error of

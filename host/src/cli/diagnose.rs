@@ -63,6 +63,10 @@ pub struct Args {
     /// Seed of the cross-validation folds.
     #[arg(long, default_value_t = 1)]
     pub seed: u64,
+    /// Keep every pose: no gross-error rule (poses whose error is inconsistent with the others
+    /// are otherwise left out of every fit and of the floor's test, and listed as `outliers`).
+    #[arg(long)]
+    pub keep_outliers: bool,
     // --units LENGTH,ANGLE of the pose files.
     #[command(flatten)]
     pub pose: PoseArgs,
@@ -107,6 +111,7 @@ pub fn run(args: Args) -> Result<(), CliError> {
     let val = val.ok_or_else(|| CliError::bad_input("--validate is required"))?;
     let mut opts = DiagnoseOptions::default();
     opts.decide.seed = args.seed;
+    opts.keep_outliers = args.keep_outliers;
     if let Some(s) = args.instrument_mm {
         if !(s.is_finite() && s > 0.0) {
             return Err(CliError::bad_input(format!(

@@ -49,6 +49,9 @@ pub struct Dataset {
     /// Pose names (`id` column), when every row has one: poses measured more than once
     /// ([`super::floor::repeatability_mm`]).
     pub ids: Option<Vec<String>>,
+    /// Line of every pose in its file (1-based), when read from a pose file: names the poses
+    /// left out as gross errors.
+    pub lines: Option<Vec<usize>>,
 }
 
 impl Dataset {
@@ -77,6 +80,7 @@ impl Dataset {
             poses,
             t_s: t,
             ids,
+            lines: Some(file.poses.iter().map(|p| p.line).collect()),
             ..Self::default()
         }
         .with_approach())
@@ -119,6 +123,7 @@ impl Dataset {
             moments_kgfm: Some(moments),
             approach: None,
             ids: None,
+            lines: None,
         }
         .with_approach())
     }
@@ -170,6 +175,13 @@ impl Dataset {
         // each file keeps its own history (its first pose has none)
         self.approach = Some(a0.into_iter().chain(a1).collect());
         self.ids = match (self.ids.take(), other.ids) {
+            (Some(mut a), Some(b)) => {
+                a.extend(b);
+                Some(a)
+            }
+            _ => None,
+        };
+        self.lines = match (self.lines.take(), other.lines) {
             (Some(mut a), Some(b)) => {
                 a.extend(b);
                 Some(a)
@@ -340,6 +352,10 @@ impl Dataset {
                 .ids
                 .as_ref()
                 .map(|v| indices.iter().map(|&k| v[k].clone()).collect()),
+            lines: self
+                .lines
+                .as_ref()
+                .map(|v| indices.iter().map(|&k| v[k]).collect()),
         }
     }
 }

@@ -45,6 +45,7 @@ pub mod residual;
 pub mod select;
 pub mod stat;
 
+use crate::calib::outliers::{self, OutlierReport};
 use nalgebra::Vector3;
 
 use crate::calib::fit::fit_parameters;
@@ -101,6 +102,8 @@ pub struct DiagnoseOptions {
     pub instrument_mm: Option<f64>,
     /// Settings of the probe of the final residual (its folds and seed are the selection's).
     pub probe: probe::ProbeConfig,
+    /// Keep every pose: no gross-error rule ([`crate::calib::outliers`]).
+    pub keep_outliers: bool,
 }
 
 /// One accepted effect with what the plots need.
@@ -173,6 +176,20 @@ pub fn declared_fit(
         converged: f.converged,
     };
     Ok((fit, requested))
+}
+
+/// Error norms of error vectors (mm).
+fn norms(errors: &[Vector3<f64>]) -> Vec<f64> {
+    errors.iter().map(|e| e.norm()).collect()
+}
+
+/// `reports` with the line and id of each pose of `data`.
+fn labelled(mut reports: Vec<OutlierReport>, data: &Dataset) -> Vec<OutlierReport> {
+    for r in &mut reports {
+        r.line = data.lines.as_ref().and_then(|l| l.get(r.index).copied());
+        r.id = data.ids.as_ref().and_then(|i| i.get(r.index).cloned());
+    }
+    reports
 }
 
 /// Said first in `unexplained.note` when the final fit stopped on its iteration budget.
@@ -397,13 +414,71 @@ pub fn diagnose(
         ..cfg.clone()
     };
     let cfg = &cfg_owned;
-    let cal = cal.clone().with_approach();
-    let val = &val.clone().with_approach();
-    let (cal, outliers, declared, requested) = trim_outliers(model, &cal, cfg)?;
+    let cal_all = cal.clone().with_approach();
+    let val_all = val.clone().with_approach();
+    let gross = !opts.keep_outliers
+        && !cal_all.is_serial()
+        && cal_all.len() >= crate::calib::calibrate::MIN_POSES_FOR_OUTLIERS;
+    // Gross errors: fit-and-flag with the declared fit, the selection on the kept poses, then
+    // the flags re-checked under the final model (once more from there when they changed).
+    let mut flagged: Vec<usize> = Vec::new();
+    let mut outlier_note = None;
+    if gross {
+        let t = outliers::trim(cal_all.len(), 3, cfg.floor_mm, |keep| {
+            let (fit, _) = declared_fit(model, &cal_all.subset(keep), cfg)?;
+            Ok::<_, DiagnoseError>(norms(&fit.ext.errors(&cal_all)?))
+        })?;
+        flagged = t.flagged;
+        outlier_note = t.note;
+    }
+    let mut pass = 0;
+    let (cal, outliers, declared, requested, selection) = loop {
+        let kept_cal = cal_all.subset(&outliers::kept(cal_all.len(), &flagged));
+        let (cal, outliers, declared, requested) = trim_outliers(model, &kept_cal, cfg)?;
+        let selection = forward_selection(declared.clone(), &requested, &cal, cfg)?;
+        pass += 1;
+        if !gross || pass > 1 {
+            break (cal, outliers, declared, requested, selection);
+        }
+        let all = norms(&selection.last.ext.errors(&cal_all)?);
+        let kept_norms: Vec<f64> = outliers::kept(all.len(), &flagged)
+            .iter()
+            .map(|&k| all[k])
+            .collect();
+        let thr = outliers::threshold_mm(outliers::robust_sigma_mm(&kept_norms, 3), cfg.floor_mm);
+        let (again, _) = outliers::flag_held_out(&all, thr);
+        if again == flagged {
+            break (cal, outliers, declared, requested, selection);
+        }
+        flagged = again;
+    };
     let cal = &cal;
+    // held-out poses judged by the calibration's threshold under the final model
+    let mut outlier_reports = Vec::new();
+    let val_kept;
+    let val = if gross {
+        let thr = outliers::threshold_mm(
+            outliers::robust_sigma_mm(&norms(&selection.last.ext.errors(cal)?), 3),
+            cfg.floor_mm,
+        );
+        let all = norms(&selection.last.ext.errors(&cal_all)?);
+        outlier_reports.extend(labelled(
+            outliers::reports("cal", &flagged, &all, thr),
+            &cal_all,
+        ));
+        let vn = norms(&selection.last.ext.errors(&val_all)?);
+        let (vflag, vthr) = outliers::flag_held_out(&vn, thr);
+        outlier_reports.extend(labelled(
+            outliers::reports("val", &vflag, &vn, vthr),
+            &val_all,
+        ));
+        val_kept = val_all.subset(&outliers::kept(val_all.len(), &vflag));
+        &val_kept
+    } else {
+        &val_all
+    };
     let declared_cal = declared.ext.errors(cal)?;
     let declared_val = declared.ext.errors(val)?;
-    let selection = forward_selection(declared.clone(), &requested, cal, cfg)?;
     let regs = regressors(&selection.last.ext, cal)?;
 
     let (mut effects, traces) = effect_reports(&selection, &regs, cal, val, cfg)?;
@@ -458,6 +533,8 @@ pub fn diagnose(
         }
         .to_string(),
         outliers_left_out: outliers,
+        outliers: outlier_reports,
+        outlier_note,
         converged: last.converged && declared.converged,
         probe: probe.report(&probe_cfg),
         residual_model: None,

@@ -168,6 +168,11 @@ pub struct DiagnoseReport {
     /// Calibration samples left out as outliers of the declared tilting law
     /// ([`super::trim_outliers`]; always 0 for full positions).
     pub outliers_left_out: usize,
+    /// Poses left out as gross errors (FORMATS.md); the statistics are over the other poses.
+    pub outliers: Vec<crate::calib::outliers::OutlierReport>,
+    /// Set when the gross-error rule was not applied as such (heavy tails) or did not settle.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub outlier_note: Option<String>,
     /// Whether the declared and the final fits converged (false: an iteration budget was spent
     /// while the solver still made progress; `diagnose` then exits 1).
     pub converged: bool,
@@ -314,6 +319,27 @@ impl DiagnoseReport {
             "unexplained: structured = {}; {}",
             self.unexplained.structured, self.unexplained.note
         );
+        for o in &self.outliers {
+            let _ = writeln!(
+                s,
+                "outlier: {} line {}{}: {}",
+                o.file,
+                o.line.map_or_else(|| "?".to_string(), |l| l.to_string()),
+                o.id.as_ref()
+                    .map_or_else(String::new, |i| format!(" (id {i})")),
+                o.note
+            );
+        }
+        if !self.outliers.is_empty() {
+            let _ = writeln!(
+                s,
+                "the statistics leave these {} pose(s) out (--keep-outliers keeps every pose)",
+                self.outliers.len()
+            );
+        }
+        if let Some(note) = &self.outlier_note {
+            let _ = writeln!(s, "gross errors: {note}");
+        }
         s
     }
 }

@@ -156,6 +156,41 @@ fn next_steps(
 ) -> Vec<String> {
     let mut out = Vec::new();
     let robot = robot.unwrap_or("katana450");
+    // poses left out as gross errors, by any document
+    for (name, doc) in run.calibrate.iter().chain(&run.diagnose) {
+        let listed: Vec<String> = doc
+            .get("outliers")
+            .and_then(serde_json::Value::as_array)
+            .map(|a| {
+                a.iter()
+                    .map(|o| {
+                        format!(
+                            "{} line {}{} ({} mm)",
+                            o.get("file")
+                                .and_then(serde_json::Value::as_str)
+                                .unwrap_or("?"),
+                            o.get("line")
+                                .and_then(serde_json::Value::as_u64)
+                                .map_or_else(|| "?".to_string(), |l| l.to_string()),
+                            o.get("id")
+                                .and_then(serde_json::Value::as_str)
+                                .map_or_else(String::new, |i| format!(" id {i}")),
+                            o.get("error_mm")
+                                .and_then(serde_json::Value::as_f64)
+                                .map_or_else(|| "?".to_string(), |e| format!("{e:.3}"))
+                        )
+                    })
+                    .collect()
+            })
+            .unwrap_or_default();
+        if !listed.is_empty() {
+            out.push(format!(
+                "{name} left {} pose(s) out as gross errors (their error is inconsistent with the others; the numbers above are without them): {}. Check these measurements.",
+                listed.len(),
+                listed.join(", ")
+            ));
+        }
+    }
     for d in diags {
         let lacking = d
             .verdict

@@ -17,6 +17,7 @@ mod diagnose_sim;
 mod diagnose_transmission;
 mod diagnose_ur5;
 mod fusion_session;
+mod gross_errors;
 mod joints_fit;
 mod model_cli;
 mod model_effects;

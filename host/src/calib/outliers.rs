@@ -1,0 +1,267 @@
+//! Gross errors in measured poses (a broken tracker beam, the wrong marker, a typo), found the
+//! same way by `calibrate` and `diagnose`: fit, take the error of every pose under the fit, and
+//! flag the poses whose error is inconsistent with the others; refit without them and look
+//! again, until the flagged set no longer changes ([`trim`]).
+//!
+//! The rule: a pose is flagged when its error exceeds [`OUTLIER_SIGMAS`] times the robust
+//! per-coordinate scale of the errors (the median error norm over the median of the chi
+//! distribution with as many degrees of freedom as the pose measures coordinates), or of the
+//! known floor when that is larger. For Gaussian errors at the scale, a 3-D pose passes 5 sigma
+//! with probability 1.5e-5, so a clean set of 1000 poses has a flag about once in 70 sets. When
+//! more than [`MAX_OUTLIER_SHARE`] of the poses would be flagged, the errors are not a few
+//! gross ones but heavy tails (a missing effect, or the wrong model): nothing is flagged and
+//! [`Trimmed::note`] says so.
+
+use serde::Serialize;
+
+/// Flag threshold in robust standard deviations per coordinate.
+pub const OUTLIER_SIGMAS: f64 = 5.0;
+/// Largest share of the poses that may be flagged as gross errors.
+pub const MAX_OUTLIER_SHARE: f64 = 0.1;
+/// Most fit-and-flag rounds of [`trim`].
+pub const MAX_ROUNDS: usize = 6;
+
+/// A pose left out as a gross error (the `outliers` entries of the `calibrate` and `diagnose`
+/// JSON, FORMATS.md).
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct OutlierReport {
+    /// `"cal"` or `"val"`.
+    pub file: String,
+    /// Line of the pose in its file (as in error messages), when read from a file.
+    pub line: Option<usize>,
+    /// The pose's `id`, when the file has them.
+    pub id: Option<String>,
+    /// The pose's error under the final model, mm.
+    pub error_mm: f64,
+    /// Why it was flagged.
+    pub note: String,
+    /// Index of the pose in its set.
+    #[serde(skip)]
+    pub index: usize,
+}
+
+/// Median of the chi distribution with `dims` degrees of freedom (1, 2 or 3 coordinates).
+fn chi_median(dims: usize) -> f64 {
+    match dims {
+        0 | 1 => 0.674_489_75,
+        2 => 1.177_410_02,
+        _ => 1.538_172_7,
+    }
+}
+
+/// Robust per-coordinate scale of per-pose error norms (`dims` coordinates each).
+pub fn robust_sigma_mm(norms_mm: &[f64], dims: usize) -> f64 {
+    let mut v: Vec<f64> = norms_mm.iter().copied().filter(|x| x.is_finite()).collect();
+    if v.is_empty() {
+        return 0.0;
+    }
+    v.sort_by(f64::total_cmp);
+    let n = v.len();
+    let median = if n % 2 == 1 {
+        v[n / 2]
+    } else {
+        0.5 * (v[n / 2 - 1] + v[n / 2])
+    };
+    median / chi_median(dims)
+}
+
+/// The threshold (mm, on the error norm) of the rule at robust scale `sigma_mm` and floor
+/// `floor_mm`.
+pub fn threshold_mm(sigma_mm: f64, floor_mm: Option<f64>) -> f64 {
+    OUTLIER_SIGMAS * sigma_mm.max(floor_mm.unwrap_or(0.0))
+}
+
+/// Result of [`trim`].
+#[derive(Debug, Clone, PartialEq)]
+pub struct Trimmed {
+    /// Indices of the flagged poses, ascending.
+    pub flagged: Vec<usize>,
+    /// Error norm of every pose under the last fit, mm.
+    pub errors_mm: Vec<f64>,
+    /// The threshold in force at the end, mm.
+    pub threshold_mm: f64,
+    /// Robust per-coordinate scale of the kept poses' errors, mm.
+    pub sigma_mm: f64,
+    /// Set when the rule was not applied (heavy tails, see the module doc) or did not settle.
+    pub note: Option<String>,
+}
+
+/// The poses to keep: those not in `flagged` (ascending) among `n`.
+pub fn kept(n: usize, flagged: &[usize]) -> Vec<usize> {
+    (0..n)
+        .filter(|k| flagged.binary_search(k).is_err())
+        .collect()
+}
+
+/// Iterative trimming of `n` poses of `dims` coordinates: `errors_after_fit(kept)` fits on the
+/// poses `kept` and returns the error norm (mm) of **every** pose under that fit. Starts from
+/// all poses; stops when the flagged set repeats (at most [`MAX_ROUNDS`] rounds).
+pub fn trim<E>(
+    n: usize,
+    dims: usize,
+    floor_mm: Option<f64>,
+    mut errors_after_fit: impl FnMut(&[usize]) -> Result<Vec<f64>, E>,
+) -> Result<Trimmed, E> {
+    let mut flagged: Vec<usize> = Vec::new();
+    let mut seen: Vec<Vec<usize>> = Vec::new();
+    let max_flagged = ((MAX_OUTLIER_SHARE * n as f64).floor() as usize).max(1);
+    for _ in 0..MAX_ROUNDS {
+        let keep = kept(n, &flagged);
+        let errors = errors_after_fit(&keep)?;
+        let kept_errors: Vec<f64> = keep.iter().map(|&k| errors[k]).collect();
+        let sigma = robust_sigma_mm(&kept_errors, dims);
+        let threshold = threshold_mm(sigma, floor_mm);
+        let next: Vec<usize> = (0..n).filter(|&k| !(errors[k] <= threshold)).collect();
+        if next.len() > max_flagged {
+            let note = format!(
+                "{} of {n} poses lie beyond {OUTLIER_SIGMAS} robust sigmas ({threshold:.4} mm): \
+                 heavy tails rather than a few gross errors (the model may lack an effect), so \
+                 none is left out",
+                next.len()
+            );
+            let all = errors_after_fit(&(0..n).collect::<Vec<_>>())?;
+            let sigma = robust_sigma_mm(&all, dims);
+            return Ok(Trimmed {
+                flagged: Vec::new(),
+                threshold_mm: threshold_mm(sigma, floor_mm),
+                errors_mm: all,
+                sigma_mm: sigma,
+                note: Some(note),
+            });
+        }
+        if next == flagged {
+            return Ok(Trimmed {
+                flagged,
+                errors_mm: errors,
+                threshold_mm: threshold,
+                sigma_mm: sigma,
+                note: None,
+            });
+        }
+        if seen.contains(&next) {
+            // a cycle between sets: keep the union's complement fitted once more
+            let mut union = next.clone();
+            union.extend(flagged.iter().copied());
+            union.sort_unstable();
+            union.dedup();
+            let errors = errors_after_fit(&kept(n, &union))?;
+            return Ok(Trimmed {
+                flagged: union,
+                errors_mm: errors,
+                threshold_mm: threshold,
+                sigma_mm: sigma,
+                note: Some(
+                    "the flagged set alternated between rounds; the union is left out".into(),
+                ),
+            });
+        }
+        seen.push(flagged);
+        flagged = next;
+    }
+    let errors = errors_after_fit(&kept(n, &flagged))?;
+    let keep = kept(n, &flagged);
+    let sigma = robust_sigma_mm(&keep.iter().map(|&k| errors[k]).collect::<Vec<_>>(), dims);
+    Ok(Trimmed {
+        flagged,
+        errors_mm: errors,
+        threshold_mm: threshold_mm(sigma, floor_mm),
+        sigma_mm: sigma,
+        note: Some(format!(
+            "the flagged set did not settle in {MAX_ROUNDS} rounds"
+        )),
+    })
+}
+
+/// Poses of a set judged against a threshold from elsewhere (the held-out poses against the
+/// calibration's `threshold_mm`): flagged when their error norm exceeds that threshold **and**
+/// [`OUTLIER_SIGMAS`] robust sigmas of this set's own errors (inconsistent with the floor and
+/// with the other poses: held-out poses lie farther from the fit than the fitted ones, so the
+/// calibration's scale alone would flag the tail of a clean set); none when more than
+/// [`MAX_OUTLIER_SHARE`] of them would be (the set differs as a whole). Returns the flagged
+/// indices and the threshold applied.
+pub fn flag_held_out(errors_mm: &[f64], threshold_mm: f64) -> (Vec<usize>, f64) {
+    let own = threshold_mm_of(errors_mm);
+    let thr = threshold_mm.max(own);
+    let flagged: Vec<usize> = (0..errors_mm.len())
+        .filter(|&k| !(errors_mm[k] <= thr))
+        .collect();
+    let max_flagged = ((MAX_OUTLIER_SHARE * errors_mm.len() as f64).floor() as usize).max(1);
+    if flagged.len() > max_flagged {
+        (Vec::new(), thr)
+    } else {
+        (flagged, thr)
+    }
+}
+
+/// [`OUTLIER_SIGMAS`] robust sigmas of 3-D error norms.
+fn threshold_mm_of(errors_mm: &[f64]) -> f64 {
+    threshold_mm(robust_sigma_mm(errors_mm, 3), None)
+}
+
+/// The report entries of `flagged` poses of set `file` (`"cal"`, `"val"`).
+pub fn reports(
+    file: &str,
+    flagged: &[usize],
+    errors_mm: &[f64],
+    threshold_mm: f64,
+) -> Vec<OutlierReport> {
+    flagged
+        .iter()
+        .map(|&k| OutlierReport {
+            file: file.to_string(),
+            line: None,
+            id: None,
+            error_mm: errors_mm[k],
+            note: format!(
+                "error {:.4} mm > {threshold_mm:.4} mm ({OUTLIER_SIGMAS} robust sigmas): a gross error, left out of every fit",
+                errors_mm[k]
+            ),
+            index: k,
+        })
+        .collect()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn robust_sigma_of_chi3_norms_is_the_coordinate_sigma() {
+        // norms of 3-D Gaussian vectors with sigma 2: the median norm is 2 * 1.5382
+        let norms = vec![2.0 * 1.538_172_7; 11];
+        assert!((robust_sigma_mm(&norms, 3) - 2.0).abs() < 1e-9);
+    }
+
+    #[test]
+    fn trim_flags_gross_errors_and_settles() {
+        // 100 poses at 0.01 mm, three off by 1-3 mm; the "fit" does not move
+        let mut e: Vec<f64> = (0..100)
+            .map(|k| 0.01 * (1.0 + 0.5 * ((k as f64) * 0.7).sin()))
+            .collect();
+        e[5] = 1.0;
+        e[50] = 2.0;
+        e[77] = 3.0;
+        let t = trim(100, 3, None, |_| Ok::<_, ()>(e.clone())).unwrap();
+        assert_eq!(t.flagged, vec![5, 50, 77]);
+        assert!(t.note.is_none());
+    }
+
+    #[test]
+    fn heavy_tails_are_not_gross_errors() {
+        let e: Vec<f64> = (0..100)
+            .map(|k| if k % 4 == 0 { 1.0 } else { 0.01 })
+            .collect();
+        let t = trim(100, 3, None, |_| Ok::<_, ()>(e.clone())).unwrap();
+        assert!(t.flagged.is_empty());
+        assert!(t.note.is_some());
+    }
+
+    #[test]
+    fn held_out_flags_only_a_few() {
+        let mut e = vec![0.01; 60];
+        e[3] = 2.0;
+        assert_eq!(flag_held_out(&e, 0.1).0, vec![3]);
+        let all_worse = vec![0.5; 60];
+        assert!(flag_held_out(&all_worse, 0.1).0.is_empty());
+    }
+}
