@@ -46,8 +46,8 @@ pub fn spawn<S>(spawner: Spawner, token: Result<SpawnToken<S>, SpawnError>) {
     }
 }
 
-#[embassy_executor::main]
-async fn main(spawner: Spawner) {
+/// Boot, the same on every board: drivers, sensors, the shared state, then the tasks.
+async fn boot(spawner: Spawner) {
     let hw = board::init();
     info!(
         "rig firmware {} on {}",
@@ -74,4 +74,23 @@ async fn main(spawner: Spawner) {
     spawn(spawner, pot::adc_task());
     spawn(spawner, tilt::tilt_task(tilt_sensors));
     board::spawn_board_tasks(spawner, hw.board_tasks);
+}
+
+#[cfg(feature = "stm32")]
+#[embassy_executor::main]
+async fn main(spawner: Spawner) {
+    boot(spawner).await;
+}
+
+#[cfg(feature = "mps2-an386")]
+#[cortex_m_rt::entry]
+fn main() -> ! {
+    board::run_executor(|spawner| spawn(spawner, boot_task(spawner)))
+}
+
+/// [`boot`] as the emulated board's first task.
+#[cfg(feature = "mps2-an386")]
+#[embassy_executor::task]
+async fn boot_task(spawner: Spawner) {
+    boot(spawner).await;
 }

@@ -11,6 +11,7 @@
 //!
 //! `firmware/emulated/run.sh` builds and starts it.
 
+mod executor;
 mod irq;
 mod pot;
 mod semihosting;
@@ -22,6 +23,7 @@ use core::ptr::write_volatile;
 
 use embassy_executor::Spawner;
 
+pub use executor::run_executor;
 pub use pot::{PotAdc, POT_RING_LEN};
 pub use semihosting::log_line;
 pub use tilt::{probe as probe_tilt, TiltBus, TiltSensors};
