@@ -399,7 +399,16 @@ fn idle_but_alive(link: &Path) {
         }
         let n = match port.read(&mut buf) {
             Ok(n) => n,
-            Err(e) if e.kind() == std::io::ErrorKind::TimedOut => 0,
+            Err(e)
+                if matches!(
+                    e.kind(),
+                    std::io::ErrorKind::TimedOut
+                        | std::io::ErrorKind::WouldBlock
+                        | std::io::ErrorKind::Interrupted
+                ) =>
+            {
+                0
+            }
             Err(e) => panic!("read from the board: {e}"),
         };
         reader.push_slice(&buf[..n], |event| match event {
