@@ -9,9 +9,14 @@
 //! panic, which must be reported on QEMU's output and end it with a failure status.
 //!
 //! Timing: QEMU's clock follows the host's (no `-icount`), so board time is real time but the
-//! guest runs only when QEMU's thread gets the CPU. Potentiometer timestamps are computed from
-//! the trigger period and must be exact; inclinometer timestamps are taken when the read
-//! starts and may be late by the guest's scheduling latency: [`TILT_JITTER_US`].
+//! guest runs only when the host schedules QEMU. Potentiometer timestamps are computed from
+//! the trigger period and must be exact. Inclinometer timestamps are taken when the read
+//! starts: late by the wake-up latency of the emulated board (measured: median about 0.1 ms,
+//! 99th percentile about 2 ms on a loaded 2-core machine). The board's scheduler reads the most
+//! recent slot that has passed, so every reading is within one slot interval (1 / (rate x 3))
+//! after its slot, and a wake-up later than that skips a slot, which the board counts in
+//! `Status.overruns`. The test allows [`TILT_SKIPPED_MAX`] of the slots to be skipped and
+//! requires each skipped slot to be counted by the board; none may be lost on the link.
 //!
 //! Without `qemu-system-arm` the test is skipped with a message, except with `CI=true`, where
 //! it fails (`.ci/run` installs QEMU).
@@ -32,10 +37,9 @@ use rigctl::daq::link::{open_port, FrameReader, LinkEvent};
 const LONG_RUN_S: u64 = 25;
 /// Seconds of the second recording, at other rates.
 const SHORT_RUN_S: u64 = 5;
-/// Largest delay of an inclinometer read after its slot, microseconds. The board reads when
-/// its executor gets to it; in QEMU that is when QEMU's thread runs. Measured on an idle
-/// 2-core machine: well under 1 ms; the margin is for a loaded one.
-const TILT_JITTER_US: i64 = 20_000;
+/// Fraction of inclinometer slots that may be skipped because QEMU woke late (each one
+/// counted in `Status.overruns`).
+const TILT_SKIPPED_MAX: f64 = 0.01;
 /// Board clock against the host clock (Status uptime vs host receive time), relative.
 const CLOCK_RATE_TOLERANCE: f64 = 0.02;
 /// Samples against the host's recording duration, relative (the host's duration runs from its
@@ -58,7 +62,8 @@ fn qemu_or_skip() -> bool {
         .status()
         .is_ok_and(|s| s.success());
     if !found {
-        let msg = "emulated_board: qemu-system-arm is not installed (apt-get install qemu-system-arm)";
+        let msg =
+            "emulated_board: qemu-system-arm is not installed (apt-get install qemu-system-arm)";
         assert!(!rigctl::in_ci(), "{msg}; with CI=true it is required");
         eprintln!("SKIPPED {msg}");
     }
@@ -98,7 +103,9 @@ impl Emulator {
                 }
                 let text = String::from_utf8_lossy(&buf[..n]);
                 eprint!("{text}");
-                sink.lock().unwrap_or_else(|e| e.into_inner()).push_str(&text);
+                sink.lock()
+                    .unwrap_or_else(|e| e.into_inner())
+                    .push_str(&text);
             }
         });
         let deadline = Instant::now() + Duration::from_secs(600);
@@ -106,7 +113,11 @@ impl Emulator {
             if let Some(status) = child.try_wait().expect("poll run.sh") {
                 panic!("run.sh ended before linking {}: {status}", link.display());
             }
-            assert!(Instant::now() < deadline, "run.sh did not link {}", link.display());
+            assert!(
+                Instant::now() < deadline,
+                "run.sh did not link {}",
+                link.display()
+            );
             std::thread::sleep(Duration::from_millis(50));
         }
         Self {
@@ -119,7 +130,10 @@ impl Emulator {
 
     /// The console output so far.
     fn console(&self) -> String {
-        self.console.lock().unwrap_or_else(|e| e.into_inner()).clone()
+        self.console
+            .lock()
+            .unwrap_or_else(|e| e.into_inner())
+            .clone()
     }
 
     /// Waits (at most `limit`) for run.sh to end; returns its status and the whole console.
@@ -202,8 +216,11 @@ struct RunCheck {
     frames: u64,
     pot_samples: usize,
     tilt_readings: usize,
-    /// Largest distance of a tilt read from its slot, microseconds.
-    tilt_late_max_us: i64,
+    /// Tilt read lateness after its slot (relative to the earliest), microseconds: median,
+    /// 99th percentile, largest.
+    tilt_late_us: [i64; 3],
+    /// Tilt slots skipped (and counted by the board as overruns).
+    tilt_skipped: u64,
     /// Board clock rate against the host clock.
     clock_rate: f64,
 }
@@ -225,7 +242,7 @@ fn record_and_check(
         String::from_utf8_lossy(&out.stderr)
     );
     let [frames, samples, dropped, crc_errors] = summary(&out.stdout);
-    assert_eq!((dropped, crc_errors), (0, 0), "record {name}: lost frames");
+    assert_eq!(crc_errors, 0, "record {name}: corrupt frames");
 
     // The recording itself: the emulated board's Hello, the run's acknowledgements.
     let recording = rigctl::daq::recording::read_recording(&rec).expect("read the recording");
@@ -328,41 +345,101 @@ fn record_and_check(
     );
     // The board's schedule (`rig_protocol::device::TiltScheduler`): read slot `k` is for
     // sensor `k % 3` at `start + ceil(k * 1e6 / (rate * 3))`; the first read (sensor 0) is due
-    // at `Start`, so its time stands for `start`. A read is late by the guest's latency, never
-    // early (but `start` itself may be taken late).
+    // at `Start`, so its time stands for `start`. Each reading belongs to the nearest slot of
+    // its sensor; it is at most one slot interval after it (`start` itself may be late).
     let sensors = by_sensor.len() as i64;
     let slots_per_s = i64::from(tilt_hz) * sensors;
+    let slot_us = |k: i64| (k * 1_000_000 + slots_per_s - 1) / slots_per_s;
     let start = by_sensor[&0][0];
-    let mut late_max = 0i64;
+    let mut lateness = Vec::with_capacity(tilt.len());
+    let mut skipped = 0u64;
     for (&sensor, times) in &by_sensor {
-        for (j, &t) in times.iter().enumerate() {
-            let k = j as i64 * sensors + sensor;
-            let slot = start + (k * 1_000_000 + slots_per_s - 1) / slots_per_s;
-            let late = t - slot;
+        let mut last_k: Option<i64> = None;
+        let mut sensor_skipped = 0u64;
+        for &t in times {
+            let approx = ((t - start) * slots_per_s) as f64 / 1e6;
+            let k = ((approx - sensor as f64) / sensors as f64).round() as i64 * sensors + sensor;
+            let late = t - start - slot_us(k);
             assert!(
-                (-TILT_JITTER_US..=TILT_JITTER_US).contains(&late),
-                "{name}: sensor {sensor} reading {j} at {t} us is {late} us off its slot"
+                late * slots_per_s <= 1_000_000,
+                "{name}: sensor {sensor} read at {t} us, {late} us after its slot {k}"
             );
-            late_max = late_max.max(late.abs());
+            lateness.push(late);
+            if let Some(prev) = last_k {
+                assert!(k > prev, "{name}: sensor {sensor} read twice in slot {k}");
+                sensor_skipped += ((k - prev) / sensors - 1) as u64;
+            } else {
+                assert_eq!(
+                    k, sensor,
+                    "{name}: sensor {sensor}'s first read is in its first slot"
+                );
+            }
+            last_k = Some(k);
         }
+        skipped += sensor_skipped;
+        // Its slots (read or skipped) at the commanded rate over the run.
         let expected = (duration_s * u64::from(tilt_hz)) as f64;
-        let ratio = times.len() as f64 / expected;
+        let ratio = (times.len() as u64 + sensor_skipped) as f64 / expected;
         assert!(
             (ratio - 1.0).abs() <= SAMPLE_COUNT_TOLERANCE,
-            "{name}: sensor {sensor}: {} readings in {duration_s} s at {tilt_hz} Hz",
+            "{name}: sensor {sensor}: {} readings and {sensor_skipped} skipped slots in \
+             {duration_s} s at {tilt_hz} Hz",
             times.len()
         );
     }
+    let earliest = lateness.iter().copied().min().unwrap_or(0);
+    let mut lateness: Vec<i64> = lateness.iter().map(|l| l - earliest).collect();
+    lateness.sort_unstable();
+    let pick = |q: f64| lateness[((lateness.len() - 1) as f64 * q) as usize];
+    let tilt_late_us = [pick(0.5), pick(0.99), pick(1.0)];
+    let slots = tilt.len() as u64 + skipped;
+    assert!(
+        skipped as f64 <= TILT_SKIPPED_MAX * slots as f64,
+        "{name}: {skipped} of {slots} tilt slots skipped (QEMU woke late; lateness p50/p99/max \
+         {tilt_late_us:?} us)"
+    );
+    // Record's `dropped` is its estimate of the missing pot samples (none: checked above and
+    // here) plus the tilt readings missing from each sensor's grid, which it takes as the
+    // smallest interval seen: read jitter makes that grid finer than the slots, so it may
+    // count a skipped slot twice, never miss one.
+    let mut tally = rigctl::daq::tally::Tally::new();
+    for msg in &msgs {
+        tally.on_message(msg);
+    }
+    assert_eq!(tally.dropped(), dropped, "{name}: the recording's tally");
+    assert_eq!(
+        (tally.gap_samples, tally.gap_batches, tally.first_seq),
+        (0, 0, Some(0)),
+        "{name}: pot samples missing"
+    );
+    assert!(
+        tally.tilt_gap_readings >= skipped && dropped == tally.tilt_gap_readings,
+        "{name}: record's dropped {dropped} vs {skipped} skipped tilt slots"
+    );
 
     // Health: the board's own counters; its clock against the host's.
     let status = csv_rows(
         &csv.join("status.csv"),
         "host_rx_us,uptime_us,dropped_samples,dropped_frames,overruns,sensor_errors,rx_errors",
     );
-    assert!(status.len() as u64 >= duration_s, "{name}: a Status a second");
+    assert!(
+        status.len() as u64 >= duration_s,
+        "{name}: a Status a second"
+    );
+    // dropped samples, dropped frames, sensor errors, rx errors: none; overruns: exactly the
+    // skipped tilt slots (the last Status is the one sent at Stop).
     for row in &status {
-        assert_eq!(&row[2..], &[0, 0, 0, 0, 0], "{name}: status {row:?}");
+        assert_eq!(
+            [row[2], row[3], row[5], row[6]],
+            [0, 0, 0, 0],
+            "{name}: status {row:?}"
+        );
     }
+    assert_eq!(
+        status[status.len() - 1][4] as u64,
+        skipped,
+        "{name}: the board counted every skipped tilt slot as an overrun"
+    );
     let (first, last) = (&status[0], &status[status.len() - 1]);
     let clock_rate = (last[1] - first[1]) as f64 / (last[0] - first[0]) as f64;
     assert!(
@@ -374,7 +451,8 @@ fn record_and_check(
         frames,
         pot_samples: pot.len(),
         tilt_readings: tilt.len(),
-        tilt_late_max_us: late_max,
+        tilt_late_us,
+        tilt_skipped: skipped,
         clock_rate,
     }
 }
@@ -482,8 +560,15 @@ fn emulated_board_records_known_signals_and_reports_panics() {
     for (name, run) in [("1 kHz / 100 Hz", &long), ("500 Hz / 50 Hz", &short)] {
         println!(
             "emulated board, {name}: frames {}, lost 0, pot samples {}, tilt readings {}, \
-             tilt read late by at most {} us (tolerance {TILT_JITTER_US} us), board clock {:.4} x host",
-            run.frames, run.pot_samples, run.tilt_readings, run.tilt_late_max_us, run.clock_rate
+             tilt slots skipped {} (allowed {:.0} %), tilt read lateness p50/p99/max {:?} us, \
+             board clock {:.4} x host",
+            run.frames,
+            run.pot_samples,
+            run.tilt_readings,
+            run.tilt_skipped,
+            TILT_SKIPPED_MAX * 100.0,
+            run.tilt_late_us,
+            run.clock_rate
         );
     }
     println!("emulated board: stack high-water mark {used} of {size} bytes (painted stack)");

@@ -6,6 +6,8 @@
 //!   host is held back instead of losing bytes) until the reader has made room and takes it.
 //! - Transmit: a byte is written whenever the UART's one-byte buffer is free; when it is full,
 //!   the writer waits for the TX interrupt (QEMU holds the buffer full while the pty is full).
+//!   Each byte costs QEMU a write to the pty, so the writer yields to the other tasks every
+//!   [`TX_BURST`] bytes (the STM32's DMA does not hold the CPU either).
 
 use core::cell::UnsafeCell;
 use core::future::poll_fn;
@@ -35,6 +37,9 @@ const INT_RX: u32 = 1 << 1;
 
 /// PCLK / baud rate. QEMU does not pace the line, but it needs a divider of at least 16.
 const BAUD_DIVIDER: u32 = 25_000_000 / 921_600;
+
+/// Bytes written before the writer lets the other tasks run.
+const TX_BURST: usize = 16;
 
 /// Receive ring, bytes (a power of two).
 const RX_RING_LEN: usize = 256;
@@ -158,7 +163,10 @@ impl SerialRx {
 impl SerialTx {
     /// Writes all of `bytes`.
     pub async fn write(&mut self, bytes: &[u8]) -> Result<(), SerialError> {
-        for &byte in bytes {
+        for (i, &byte) in bytes.iter().enumerate() {
+            if i > 0 && i % TX_BURST == 0 {
+                embassy_futures::yield_now().await;
+            }
             poll_fn(|cx| {
                 if read(STATE) & STATE_TX_FULL == 0 {
                     write(DATA, u32::from(byte));
