@@ -157,11 +157,26 @@ impl Emulator {
 
     /// Ends run.sh (and with it QEMU) with SIGTERM.
     fn stop(self) -> String {
+        self.terminate();
+        self.wait(Duration::from_secs(20)).1
+    }
+
+    /// SIGTERM to run.sh, which stops QEMU and removes the link.
+    fn terminate(&self) {
         let _ = Command::new("kill")
             .arg("-TERM")
             .arg(self.child.id().to_string())
             .status();
-        self.wait(Duration::from_secs(20)).1
+    }
+}
+
+impl Drop for Emulator {
+    /// A failed assertion leaves no QEMU behind.
+    fn drop(&mut self) {
+        if matches!(self.child.try_wait(), Ok(None)) {
+            self.terminate();
+            let _ = self.child.wait();
+        }
     }
 }
 
