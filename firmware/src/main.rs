@@ -1,42 +1,28 @@
 //! DAQ board firmware of the calibration rig: potentiometer (ADC), up to three SCL3300
-//! inclinometers (SPI) and a framed link to the host over USART1 and USB CDC-ACM.
+//! inclinometers (SPI) and a framed link to the host over a serial link (and USB CDC-ACM).
 //!
-//! This crate is the hardware glue. Everything that can be tested on a PC (framing, batching,
-//! the command state machine, counters) lives in `rig-protocol` and is shared with the host's
-//! virtual board. See `firmware/README.md` for the tasks and how to build and flash.
+//! This crate is the glue between the hardware and `rig-protocol`'s board core, which does
+//! everything that can be tested on a PC (framing, batching, the command state machine,
+//! counters). The tasks (`pot`, `tilt`, `link`, `shared`) are the same for every board; only
+//! the drivers in `board/` differ: `board/stm32` for the DAQ board, `board/mps2` for the
+//! emulated Cortex-M4 that QEMU runs in CI. See `firmware/README.md`.
 #![no_std]
 #![no_main]
 
-mod adc_task;
 mod board;
-mod clock;
-mod link_usart;
-mod link_usb;
+mod link;
+mod log;
+mod pot;
 mod shared;
-mod tilt_task;
+mod stack;
+mod tilt;
 
-use defmt::{info, unwrap};
-use embassy_executor::Spawner;
-use embassy_stm32::gpio::{Level, Output, Speed};
-use embassy_stm32::peripherals::{DMA2_CH0, DMA2_CH2, DMA2_CH7, USART1, USB_OTG_FS};
-use embassy_stm32::{bind_interrupts, dma, usart, usb};
+use embassy_executor::{SpawnError, SpawnToken, Spawner};
 use rig_protocol::device::{Board as BoardCore, BoardInfo};
-use {defmt_rtt as _, panic_probe as _};
 
-use crate::adc_task::PotSampler;
-use crate::board::Board;
+use crate::log::info;
+use crate::pot::PotSampler;
 use crate::shared::Shared;
-
-bind_interrupts!(
-    /// Every interrupt the drivers need.
-    pub struct Irqs {
-        USART1 => usart::InterruptHandler<USART1>;
-        OTG_FS => usb::InterruptHandler<USB_OTG_FS>;
-        DMA2_STREAM0 => dma::InterruptHandler<DMA2_CH0>;
-        DMA2_STREAM2 => dma::InterruptHandler<DMA2_CH2>;
-        DMA2_STREAM7 => dma::InterruptHandler<DMA2_CH7>;
-    }
-);
 
 /// Wait after reset before the inclinometers are probed (a generous margin over their
 /// power-on start-up time).
@@ -52,32 +38,59 @@ fn firmware_version() -> [u8; 3] {
     ]
 }
 
-#[embassy_executor::main]
-async fn main(spawner: Spawner) {
-    let board = Board::new(embassy_stm32::init(clock::config()));
-    info!("rig firmware {}", env!("CARGO_PKG_VERSION"));
+/// Spawns a task; the task pools hold one of each, so a failure is a programming error.
+pub fn spawn<S>(spawner: Spawner, token: Result<SpawnToken<S>, SpawnError>) {
+    match token {
+        Ok(token) => spawner.spawn(token),
+        Err(_) => panic!("task spawned twice"),
+    }
+}
+
+/// Boot, the same on every board: drivers, sensors, the shared state, then the tasks.
+async fn boot(spawner: Spawner) {
+    let hw = board::init();
+    info!(
+        "rig firmware {} on {}",
+        env!("CARGO_PKG_VERSION"),
+        board::BOARD_NAME
+    );
 
     // The SCL3300 needs a few ms after power-up before it takes SPI commands.
     embassy_time::Timer::after_millis(SENSOR_POWER_UP_MS).await;
-    let tilt_sensors = tilt_task::probe(board.tilt);
+    let tilt_sensors = board::probe_tilt(hw.tilt);
     let info = BoardInfo {
         firmware_version: firmware_version(),
-        board_id: embassy_stm32::uid::uid(),
+        board_id: hw.board_id,
         tilt_sensors: tilt_sensors.count(),
     };
     shared::init(Shared {
         board: BoardCore::new(info),
-        pot: PotSampler::new(board.pot),
-        status_led: Output::new(board.status_led, Level::High, Speed::Low),
+        pot: PotSampler::new(hw.pot),
+        status_led: hw.status_led,
     });
-    let (usart_tx, usart_rx) = link_usart::open(board.link);
-    let (usb_device, usb_tx, usb_rx) = link_usb::open(board.usb);
 
-    spawner.spawn(unwrap!(link_usart::usart_tx_task(usart_tx)));
-    spawner.spawn(unwrap!(link_usart::usart_rx_task(usart_rx)));
-    spawner.spawn(unwrap!(link_usb::usb_device_task(usb_device)));
-    spawner.spawn(unwrap!(link_usb::usb_tx_task(usb_tx)));
-    spawner.spawn(unwrap!(link_usb::usb_rx_task(usb_rx)));
-    spawner.spawn(unwrap!(adc_task::adc_task()));
-    spawner.spawn(unwrap!(tilt_task::tilt_task(tilt_sensors)));
+    spawn(spawner, link::serial_tx_task(hw.serial_tx));
+    spawn(spawner, link::serial_rx_task(hw.serial_rx));
+    spawn(spawner, pot::adc_task());
+    spawn(spawner, tilt::tilt_task(tilt_sensors));
+    board::spawn_board_tasks(spawner, hw.board_tasks);
+}
+
+#[cfg(feature = "stm32")]
+#[embassy_executor::main]
+async fn main(spawner: Spawner) {
+    boot(spawner).await;
+}
+
+#[cfg(feature = "mps2-an386")]
+#[cortex_m_rt::entry]
+fn main() -> ! {
+    board::run_executor(|spawner| spawn(spawner, boot_task(spawner)))
+}
+
+/// [`boot`] as the emulated board's first task.
+#[cfg(feature = "mps2-an386")]
+#[embassy_executor::task]
+async fn boot_task(spawner: Spawner) {
+    boot(spawner).await;
 }

@@ -4,39 +4,48 @@
 //!
 //! Nothing here waits on a link: the board core queues frames in its own byte queue (a full
 //! queue drops whole data frames and counts them in `Status`), and the transmit tasks are
-//! only woken. Frames go out on the active link: the one that last delivered bytes (USART1
-//! until the host has spoken).
+//! only woken. Frames go out on the active link: the one that last delivered bytes (the serial
+//! link until the host has spoken).
 
 use core::cell::RefCell;
 use core::sync::atomic::{AtomicU8, Ordering};
 
-use embassy_stm32::gpio::Output;
 use embassy_sync::blocking_mutex::raw::ThreadModeRawMutex;
 use embassy_sync::blocking_mutex::ThreadModeMutex;
 use embassy_sync::signal::Signal;
 use rig_protocol::device::{Action, Board};
 
-use crate::adc_task::PotSampler;
-use crate::clock::now_us;
+use crate::board::StatusLed;
+use crate::log::info;
+use crate::pot::PotSampler;
 
-/// The host links.
-#[derive(Clone, Copy, PartialEq, Eq, defmt::Format)]
+/// The host links: the serial link (USART1 on the STM32, UART0 on the emulated board) and,
+/// on the STM32, USB.
+#[derive(Clone, Copy, PartialEq, Eq, Debug)]
+#[cfg_attr(feature = "stm32", derive(defmt::Format))]
 pub enum LinkId {
-    Usart = 0,
+    Serial = 0,
+    #[cfg_attr(not(feature = "stm32"), allow(dead_code))]
     Usb = 1,
+}
+
+/// Board time: microseconds since boot (embassy-time's `Instant`, 1 MHz tick, widened to
+/// `u64`: it does not wrap in the lifetime of the board).
+pub fn now_us() -> u64 {
+    embassy_time::Instant::now().as_micros()
 }
 
 /// Everything behind the mutex.
 pub struct Shared {
     pub board: Board,
     pub pot: PotSampler,
-    pub status_led: Output<'static>,
+    pub status_led: StatusLed,
 }
 
 static SHARED: ThreadModeMutex<RefCell<Option<Shared>>> = ThreadModeMutex::new(RefCell::new(None));
 static TX_READY: [Signal<ThreadModeRawMutex, ()>; 2] = [Signal::new(), Signal::new()];
 static SCHEDULE_CHANGED: Signal<ThreadModeRawMutex, ()> = Signal::new();
-static ACTIVE_LINK: AtomicU8 = AtomicU8::new(LinkId::Usart as u8);
+static ACTIVE_LINK: AtomicU8 = AtomicU8::new(LinkId::Serial as u8);
 
 /// Installs the shared state (once, in `main`, before any task runs) and queues the `Hello`.
 pub fn init(mut shared: Shared) {
@@ -49,8 +58,10 @@ pub fn init(mut shared: Shared) {
 pub fn with<R>(f: impl FnOnce(&mut Shared) -> R) -> R {
     SHARED.lock(|cell| {
         let mut guard = cell.borrow_mut();
-        let shared = defmt::unwrap!(guard.as_mut(), "shared::init runs before the tasks");
-        f(shared)
+        match guard.as_mut() {
+            Some(shared) => f(shared),
+            None => panic!("shared::with before shared::init"),
+        }
     })
 }
 
@@ -66,20 +77,23 @@ pub fn receive(link: LinkId, bytes: &[u8]) {
         match action {
             Action::None => {}
             Action::StartSampling(cfg) => {
-                defmt::info!("start: {}", cfg);
+                info!("start: {:?}", cfg);
                 s.pot.start(cfg.pot_period_us);
-                s.status_led.set_low();
+                s.status_led.on();
             }
             Action::StopSampling => {
-                defmt::info!("stop");
+                info!("stop");
                 s.pot.stop();
-                s.status_led.set_high();
+                s.status_led.off();
             }
         }
         action
     });
     if action != Action::None {
         SCHEDULE_CHANGED.signal(());
+    }
+    if action == Action::StopSampling {
+        crate::stack::report();
     }
     tx_ready();
 }

@@ -10,12 +10,14 @@
 //!   [`Board::on_overrun`] when the sampler fell behind, [`Board::poll`] periodically (or at
 //!   [`Board::next_deadline_us`]); send what [`Board::tx_peek`] / [`Board::tx_pop_into`] give.
 //!   Commands return an [`Action`] telling the firmware to start or stop its sampling timers.
+//! - [`known_signal`]: what the emulated board's sensors return (checked by the host's test).
 //! - Parts, usable alone: [`PotBatcher`], [`TiltScheduler`], [`FrameQueue`], [`RunConfig`].
 
 mod board;
 #[cfg(test)]
 mod board_tests;
 mod command;
+pub mod known_signal;
 mod pot;
 mod queue;
 mod tilt;

@@ -1,6 +1,7 @@
 //! End-to-end tests across the crates: one test binary, a module per area (`cargo test -p rig-tests --test e2e <area>`).
 
 mod diagnose_cli;
+mod emulated_board;
 mod record_pty;
 mod reliability_signals;
 mod report_browser;

@@ -1,11 +1,9 @@
-//! The inclinometers: up to three Murata SCL3300 on SPI1, one chip select each.
+//! The inclinometers on the STM32: up to three Murata SCL3300 on SPI1, one chip select each.
 //!
 //! At boot every chip select is probed: a sensor that starts up in mode 1 (1.2 g full scale,
 //! 6000 counts/g, 40 Hz low-pass) and answers its WHOAMI counts as present; the count goes into
-//! `Hello.tilt_sensors`. While running, the board core's tilt scheduler says which of the
-//! present sensors to read and when (round robin, reads spread evenly); every reading becomes
-//! one `TiltReading` frame. The `scl3300` driver checks each SPI frame's CRC-8 and return-status
-//! bits; a failed read counts as `Status.sensor_errors` and sends nothing.
+//! `Hello.tilt_sensors`. The `scl3300` driver checks each SPI frame's CRC-8 and return-status
+//! bits.
 //!
 //! SPI is blocking: one sensor read is 5 frames of 32 bits at 1.5 MHz with the 10 us gaps the
 //! sensor needs, about 0.2 ms, short enough not to disturb the links (the ADC runs by DMA).
@@ -13,22 +11,19 @@
 use core::cell::RefCell;
 
 use defmt::{info, warn};
-use embassy_futures::select::select;
 use embassy_stm32::gpio::{Level, Output, Speed};
 use embassy_stm32::mode::Blocking;
 use embassy_stm32::spi::mode::Master;
 use embassy_stm32::spi::{self, Spi};
 use embassy_stm32::time::Hertz;
-use embassy_time::{Delay, Instant, Timer};
+use embassy_time::Delay;
 use embedded_hal_bus::spi::RefCellDevice;
 use heapless::Vec;
 use rig_protocol::TiltReading;
 use scl3300::{Acceleration, ComponentId, MeasurementMode, Normal, Scl3300, Temperature};
 use static_cell::StaticCell;
 
-use crate::board::{TiltPins, TILT_SENSORS_MAX};
-use crate::clock::now_us;
-use crate::shared;
+use super::pins::{TiltPins, TILT_SENSORS_MAX};
 
 type TiltBus = Spi<'static, Blocking, Master>;
 type TiltDevice = RefCellDevice<'static, TiltBus, Output<'static>, Delay>;
@@ -40,6 +35,10 @@ const TILT_SPI_HZ: u32 = 2_000_000;
 
 static BUS: StaticCell<RefCell<TiltBus>> = StaticCell::new();
 
+/// A failed inclinometer read (already logged).
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct TiltReadError;
+
 /// The sensors that answered at boot, with their chip-select index.
 pub struct TiltSensors {
     sensors: Vec<(u8, Sensor), TILT_SENSORS_MAX>,
@@ -49,6 +48,30 @@ impl TiltSensors {
     /// Number of sensors found.
     pub fn count(&self) -> u8 {
         self.sensors.len() as u8
+    }
+
+    /// Reads the `slot`-th sensor found at boot (the scheduler counts only those).
+    pub fn read(&mut self, slot: u8, t_us: u64) -> Result<TiltReading, TiltReadError> {
+        let (index, sensor) = self
+            .sensors
+            .get_mut(usize::from(slot))
+            .ok_or(TiltReadError)?;
+        match sensor.read::<(Acceleration, Temperature)>() {
+            Ok((acc, temp)) => Ok(TiltReading {
+                sensor: *index,
+                t_us,
+                // Two's complement on the wire; the driver hands out the raw u16.
+                x: acc.x_raw() as i16,
+                y: acc.y_raw() as i16,
+                z: acc.z_raw() as i16,
+                temp: temp.raw() as i16,
+                status: 0, // the driver rejects any frame whose return status is not normal
+            }),
+            Err(e) => {
+                warn!("tilt {}: read failed ({})", index, error_name(&e));
+                Err(TiltReadError)
+            }
+        }
     }
 }
 
@@ -96,58 +119,6 @@ fn start_sensor(device: TiltDevice) -> Result<Sensor, &'static str> {
         Ok(id) if id == ComponentId::WHOAMI => Ok(sensor),
         Ok(_) => Err("wrong WHOAMI"),
         Err(_) => Err("WHOAMI read failed"),
-    }
-}
-
-/// Reads the inclinometer the board core's scheduler asks for, when it asks.
-#[embassy_executor::task]
-pub async fn tilt_task(mut sensors: TiltSensors) -> ! {
-    loop {
-        match shared::with(|s| s.board.next_deadline_us()) {
-            Some(deadline_us) => {
-                let deadline = Instant::from_micros(deadline_us);
-                select(Timer::at(deadline), shared::schedule_changed()).await;
-            }
-            None => shared::schedule_changed().await,
-        }
-        let read = shared::with(|s| {
-            let now = now_us();
-            // Keep the core's other deadlines moving too, so the wait above never spins.
-            s.pot.drain(&mut s.board, now);
-            s.board.poll(now);
-            let slot = s.board.tilt_due(now)?;
-            match sensors.read(slot, now) {
-                Ok(reading) => s.board.on_tilt_reading(reading),
-                Err(()) => s.board.on_sensor_error(),
-            }
-            Some(slot)
-        });
-        if read.is_some() {
-            shared::tx_ready();
-        }
-    }
-}
-
-impl TiltSensors {
-    /// Reads the `slot`-th sensor found at boot (the scheduler counts only those).
-    fn read(&mut self, slot: u8, t_us: u64) -> Result<TiltReading, ()> {
-        let (index, sensor) = self.sensors.get_mut(usize::from(slot)).ok_or(())?;
-        match sensor.read::<(Acceleration, Temperature)>() {
-            Ok((acc, temp)) => Ok(TiltReading {
-                sensor: *index,
-                t_us,
-                // Two's complement on the wire; the driver hands out the raw u16.
-                x: acc.x_raw() as i16,
-                y: acc.y_raw() as i16,
-                z: acc.z_raw() as i16,
-                temp: temp.raw() as i16,
-                status: 0, // the driver rejects any frame whose return status is not normal
-            }),
-            Err(e) => {
-                warn!("tilt {}: read failed ({})", index, error_name(&e));
-                Err(())
-            }
-        }
     }
 }
 

@@ -1,4 +1,4 @@
-//! Every pin and peripheral the DAQ board uses, named by function.
+//! Every pin and peripheral the STM32 DAQ board uses, named by function.
 //!
 //! `hardware/PINMAP.md` lists the same names. The assignment is valid for the WeAct Black Pill
 //! (STM32F411CEU6 / STM32F401CCU6, UFQFPN48) and for the 64-pin STM32F405RG / STM32F446RE, which

@@ -1,6 +1,6 @@
 //! Host link over USB full speed (PA11 D-, PA12 D+) as a CDC-ACM serial port.
 //!
-//! The same byte stream as on USART1 travels in 64-byte bulk packets. Three tasks:
+//! STM32 only (the emulated board has no USB). The same byte stream as on USART1 travels in 64-byte bulk packets. Three tasks:
 //! - [`usb_device_task`] runs the USB stack (enumeration, control requests);
 //! - [`usb_rx_task`] hands OUT packets to the board core, like the USART receiver;
 //! - [`usb_tx_task`] sends the core's queued bytes while USB is the active link, ending each
@@ -16,9 +16,9 @@ use embassy_usb::driver::EndpointError;
 use embassy_usb::{Builder, UsbDevice};
 use static_cell::{ConstStaticCell, StaticCell};
 
-use crate::board::UsbPins;
+use super::pins::UsbPins;
+use super::Irqs;
 use crate::shared::{self, LinkId};
-use crate::Irqs;
 
 /// The USB driver of this board.
 pub type UsbDriver = Driver<'static, USB_OTG_FS>;

@@ -1,4 +1,4 @@
-//! Clock tree and board time.
+//! The STM32's clock tree.
 //!
 //! Every chip runs from its crystal (HSE) through the main PLL, with PLL_Q at exactly 48 MHz for
 //! USB FS. The crystal and the dividers depend on the chip feature:
@@ -10,8 +10,7 @@
 //! | `stm32f446` | 8 MHz  | 168 MHz | 42 / 84 MHz  | 8, 336, 2, 7     |
 //! | `stm32f405` | 8 MHz  | 168 MHz | 42 / 84 MHz  | 8, 336, 2, 7     |
 //!
-//! Board time is embassy-time's `Instant` (1 MHz tick, driven by TIM9), widened to `u64`
-//! microseconds since boot: it does not wrap in the lifetime of the board.
+//! Board time (`crate::shared::now_us`) is embassy-time's `Instant`, 1 MHz tick, driven by TIM9.
 
 use embassy_stm32::rcc::{
     AHBPrescaler, APBPrescaler, Hse, HseMode, Pll, PllMul, PllPDiv, PllPreDiv, PllQDiv, PllSource,
@@ -78,9 +77,4 @@ pub fn config() -> Config {
         rcc.mux.clk48sel = embassy_stm32::rcc::mux::Clk48sel::PLL1_Q;
     }
     config
-}
-
-/// Board time: microseconds since boot.
-pub fn now_us() -> u64 {
-    embassy_time::Instant::now().as_micros()
 }
