@@ -7,7 +7,10 @@
 //! per-coordinate scale of the errors (the median error norm over the median of the chi
 //! distribution with as many degrees of freedom as the pose measures coordinates), or of the
 //! known floor when that is larger. For Gaussian errors at the scale, a 3-D pose passes 5 sigma
-//! with probability 1.5e-5, so a clean set of 1000 poses has a flag about once in 70 sets. When
+//! with probability 1.5e-5, so a clean set of 1000 poses has a flag about once in 70 sets. A
+//! gross error also stands apart from the other errors: only the poses above a jump of at least
+//! [`GAP_RATIO`] in the sorted errors, beyond the threshold, are flagged, so that the continuous
+//! tail of a missing effect (whose poses carry the evidence `diagnose` needs) stays in. When
 //! more than [`MAX_OUTLIER_SHARE`] of the poses would be flagged, the errors are not a few
 //! gross ones but heavy tails (a missing effect, or the wrong model): nothing is flagged and
 //! [`Trimmed::note`] says so.
@@ -18,6 +21,10 @@ use serde::Serialize;
 pub const OUTLIER_SIGMAS: f64 = 5.0;
 /// Largest share of the poses that may be flagged as gross errors.
 pub const MAX_OUTLIER_SHARE: f64 = 0.1;
+/// A gross error stands apart: the flagged poses are those above the first jump of at least
+/// this factor between consecutive sorted errors beyond the threshold (a missing effect or a
+/// step of the declared law leaves a continuous tail of errors, not a jump).
+pub const GAP_RATIO: f64 = 2.0;
 /// Most fit-and-flag rounds of [`trim`].
 pub const MAX_ROUNDS: usize = 6;
 
@@ -69,6 +76,34 @@ pub fn robust_sigma_mm(norms_mm: &[f64], dims: usize) -> f64 {
 /// `floor_mm`.
 pub fn threshold_mm(sigma_mm: f64, floor_mm: Option<f64>) -> f64 {
     OUTLIER_SIGMAS * sigma_mm.max(floor_mm.unwrap_or(0.0))
+}
+
+/// The poses whose error is beyond `threshold_mm` and above a jump of [`GAP_RATIO`] between
+/// consecutive sorted errors (the jump itself beyond the threshold), ascending.
+pub fn beyond_gap(errors_mm: &[f64], threshold_mm: f64) -> Vec<usize> {
+    let mut order: Vec<usize> = (0..errors_mm.len()).collect();
+    // non-finite errors sort last: they are flagged whenever anything is
+    order.sort_by(|&a, &b| {
+        let (x, y) = (errors_mm[a], errors_mm[b]);
+        match (x.is_finite(), y.is_finite()) {
+            (true, true) => x.total_cmp(&y),
+            (a_f, b_f) => b_f.cmp(&a_f),
+        }
+    });
+    let start = order
+        .iter()
+        .position(|&k| !(errors_mm[k] <= threshold_mm))
+        .unwrap_or(order.len());
+    for i in start..order.len() {
+        let e = errors_mm[order[i]];
+        let below = if i == 0 { 0.0 } else { errors_mm[order[i - 1]] };
+        if !e.is_finite() || e >= GAP_RATIO * below {
+            let mut out: Vec<usize> = order[i..].to_vec();
+            out.sort_unstable();
+            return out;
+        }
+    }
+    Vec::new()
 }
 
 /// Result of [`trim`].
@@ -182,9 +217,7 @@ pub fn trim<E>(
 pub fn flag_held_out(errors_mm: &[f64], threshold_mm: f64) -> (Vec<usize>, f64) {
     let own = threshold_mm_of(errors_mm);
     let thr = threshold_mm.max(own);
-    let flagged: Vec<usize> = (0..errors_mm.len())
-        .filter(|&k| !(errors_mm[k] <= thr))
-        .collect();
+    let flagged = beyond_gap(errors_mm, thr);
     let max_flagged = ((MAX_OUTLIER_SHARE * errors_mm.len() as f64).floor() as usize).max(1);
     if flagged.len() > max_flagged {
         (Vec::new(), thr)
@@ -244,6 +277,18 @@ mod tests {
         let t = trim(100, 3, None, |_| Ok::<_, ()>(e.clone())).unwrap();
         assert_eq!(t.flagged, vec![5, 50, 77]);
         assert!(t.note.is_none());
+    }
+
+    #[test]
+    fn a_continuous_tail_is_not_flagged() {
+        // errors rising smoothly to 10 x the typical one: no jump, nothing flagged
+        let e: Vec<f64> = (0..100)
+            .map(|k| 0.01 * (1.0 + 9.0 * (k as f64 / 99.0).powi(8)))
+            .collect();
+        assert!(beyond_gap(&e, 0.05).is_empty());
+        let mut g = e.clone();
+        g[10] = 0.5;
+        assert_eq!(beyond_gap(&g, 0.05), vec![10]);
     }
 
     #[test]

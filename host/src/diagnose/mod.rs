@@ -431,27 +431,48 @@ pub fn diagnose(
         flagged = t.flagged;
         outlier_note = t.note;
     }
-    let mut pass = 0;
-    let (cal, outliers, declared, requested, selection) = loop {
-        let kept_cal = cal_all.subset(&outliers::kept(cal_all.len(), &flagged));
-        let (cal, outliers, declared, requested) = trim_outliers(model, &kept_cal, cfg)?;
+    // the selection on the poses not in `flagged`
+    let run = |flagged: &[usize]| -> Result<(Dataset, usize, ExtFit, Vec<Unknown>, Selection), DiagnoseError> {
+        let kept_cal = cal_all.subset(&outliers::kept(cal_all.len(), flagged));
+        let (cal, left_out, declared, requested) = trim_outliers(model, &kept_cal, cfg)?;
         let selection = forward_selection(declared.clone(), &requested, &cal, cfg)?;
-        pass += 1;
-        if !gross || pass > 1 {
-            break (cal, outliers, declared, requested, selection);
-        }
+        Ok((cal, left_out, declared, requested, selection))
+    };
+    // the flags under the final model of `selection`, the scale from the poses not in `flagged`
+    let flags_under = |selection: &Selection,
+                       flagged: &[usize]|
+     -> Result<Vec<usize>, DiagnoseError> {
         let all = norms(&selection.last.ext.errors(&cal_all)?);
-        let kept_norms: Vec<f64> = outliers::kept(all.len(), &flagged)
+        let kept_norms: Vec<f64> = outliers::kept(all.len(), flagged)
             .iter()
             .map(|&k| all[k])
             .collect();
         let thr = outliers::threshold_mm(outliers::robust_sigma_mm(&kept_norms, 3), cfg.floor_mm);
-        let (again, _) = outliers::flag_held_out(&all, thr);
-        if again == flagged {
-            break (cal, outliers, declared, requested, selection);
-        }
-        flagged = again;
+        Ok(outliers::flag_held_out(&all, thr).0)
     };
+    let mut result = run(&flagged)?;
+    if gross && !flagged.is_empty() {
+        // The flagged poses may carry the evidence of a missing effect (a step of the declared
+        // tilting law, a backlash): the selection on every pose, and the flags under its final
+        // model; when its effects explain some of the flagged poses, they are kept.
+        let with_all = run(&[])?;
+        let flags_all = flags_under(&with_all.4, &[])?;
+        if flags_all.len() < flagged.len() && flags_all.iter().all(|k| flagged.contains(k)) {
+            flagged = flags_all;
+            result = if flagged.is_empty() {
+                with_all
+            } else {
+                run(&flagged)?
+            };
+        } else {
+            let again = flags_under(&result.4, &flagged)?;
+            if again != flagged {
+                flagged = again;
+                result = run(&flagged)?;
+            }
+        }
+    }
+    let (cal, outliers, declared, requested, selection) = result;
     let cal = &cal;
     // held-out poses judged by the calibration's threshold under the final model
     let mut outlier_reports = Vec::new();
