@@ -1,0 +1,624 @@
+//! Joint logs from ROS 2 bags (rosbag2, MCAP storage): the `sensor_msgs/msg/JointState`
+//! messages of one topic, joints taken by name (FORMATS.md "The robot's own ecosystem").
+//!
+//! * A path is an `.mcap` file, or a rosbag2 directory whose `metadata.yaml` lists its `.mcap`
+//!   files (`relative_file_paths`, read in order); the metadata's message count of the topic is
+//!   used to say how many messages a damaged file lost.
+//! * The file is streamed (the `mcap` crate's sans-I/O [`LinearReader`] fed from the file in
+//!   blocks): memory holds one record (a chunk) at a time, whatever the length of the bag; each
+//!   wanted joint vector is handed to the caller's function and nothing else is kept.
+//! * Chunk CRCs are checked before any message of a chunk is used. A file cut short or damaged
+//!   is read up to the last intact record; what follows is reported in [`BagDamage`] (bytes
+//!   left unread, messages lost when the metadata knows the count), as `daq::salvage` does for
+//!   recordings.
+//! * Each message: `t` = header stamp minus the first used message's stamp (s); positions rad
+//!   -> deg (m -> mm for prismatic joints); joints the caller does not ask for are ignored; a
+//!   message that lacks one of them (or holds a non-finite value for it) is skipped and
+//!   counted. Messages on other topics are not decoded.
+
+use std::fs::File;
+use std::io::Read;
+use std::path::{Path, PathBuf};
+
+use mcap::records::Record;
+use mcap::sans_io::linear_reader::{LinearReadEvent, LinearReader, LinearReaderOptions};
+
+use super::cdr::{decode_joint_state, CdrError};
+use crate::error::{Classify, ErrorKind};
+
+/// The ROS 2 type of a joint log message.
+pub const JOINT_STATE_TYPE: &str = "sensor_msgs/msg/JointState";
+
+/// Default topic of a joint log.
+pub const DEFAULT_JOINT_TOPIC: &str = "/joint_states";
+
+/// The largest record (a chunk, decompressed) read into memory: bounds memory on hostile input.
+const MAX_RECORD_BYTES: usize = 256 << 20;
+
+/// Bytes read from the file per request at most.
+const READ_BLOCK: usize = 1 << 20;
+
+/// Whether `path` is to be read as a ROS 2 bag (an `.mcap` file, or a directory with a
+/// `metadata.yaml`) rather than as a CSV table.
+pub fn is_bag(path: &Path) -> bool {
+    path.extension()
+        .is_some_and(|e| e.eq_ignore_ascii_case("mcap"))
+        || (path.is_dir() && path.join("metadata.yaml").is_file())
+}
+
+/// What to take from a bag.
+#[derive(Debug, Clone, Copy)]
+pub struct JointLogSpec<'a> {
+    /// The topic of the `JointState` messages.
+    pub topic: &'a str,
+    /// The joints wanted, in the order of the returned vectors.
+    pub names: &'a [String],
+    /// Per wanted joint: prismatic (position in m, returned in mm) or revolute (rad -> deg).
+    pub prismatic: &'a [bool],
+}
+
+/// One used message.
+#[derive(Debug, Clone, PartialEq)]
+pub struct JointReading {
+    /// 1-based number of the message among the topic's messages (for messages).
+    pub message: u64,
+    /// Header stamp minus the first used message's stamp, s.
+    pub t_s: f64,
+    /// The wanted joints' positions, deg (mm for prismatic joints).
+    pub q: Vec<f64>,
+}
+
+/// The part of a bag that could not be read.
+#[derive(Debug, Clone, PartialEq)]
+pub struct BagDamage {
+    /// The `.mcap` file.
+    pub file: PathBuf,
+    /// What stopped the reading (the MCAP reader's words).
+    pub reason: String,
+    /// Bytes of the file taken in by the reader when it stopped.
+    pub bytes_read: u64,
+    /// Size of the file.
+    pub file_bytes: u64,
+    /// Messages on the topic that the bag's `metadata.yaml` counts, when known.
+    pub expected_messages: Option<u64>,
+    /// Messages on the topic read before the damage (all files).
+    pub messages_read: u64,
+}
+
+impl BagDamage {
+    /// Messages on the topic lost, when the metadata says how many there were.
+    pub fn messages_lost(&self) -> Option<u64> {
+        self.expected_messages
+            .map(|n| n.saturating_sub(self.messages_read))
+    }
+}
+
+impl std::fmt::Display for BagDamage {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        write!(
+            f,
+            "{}: damaged or cut short ({}); read up to the last intact record, {} of {} bytes \
+             taken in; ",
+            self.file.display(),
+            self.reason,
+            self.bytes_read,
+            self.file_bytes
+        )?;
+        match self.messages_lost() {
+            Some(lost) => write!(
+                f,
+                "{lost} of the {} messages the metadata counts lost",
+                self.expected_messages.unwrap_or(0)
+            ),
+            None => write!(
+                f,
+                "{} messages read, how many followed is unknown (no metadata.yaml)",
+                self.messages_read
+            ),
+        }
+    }
+}
+
+/// What a bag held and what was used.
+#[derive(Debug, Clone, PartialEq, Default)]
+pub struct BagSummary {
+    /// The `.mcap` files read, in order.
+    pub files: Vec<PathBuf>,
+    /// `JointState` messages on the topic.
+    pub topic_messages: u64,
+    /// Messages handed to the caller.
+    pub used: u64,
+    /// Messages skipped because they lack a wanted joint (or its position is not finite).
+    pub skipped_missing: u64,
+    /// The first such message: (message number, joint name).
+    pub first_missing: Option<(u64, String)>,
+    /// Messages on the topic that do not decode as `JointState` (skipped).
+    pub undecodable: u64,
+    /// The first such message and why.
+    pub first_undecodable: Option<(u64, String)>,
+    /// Messages on other topics (ignored).
+    pub other_messages: u64,
+    /// Where the reading stopped early, if it did.
+    pub damage: Option<BagDamage>,
+}
+
+impl BagSummary {
+    /// Lines for stderr about skipped messages and damage (empty for a clean bag whose every
+    /// message was used).
+    pub fn notes(&self, path: &Path) -> Vec<String> {
+        let mut out = Vec::new();
+        if self.skipped_missing > 0 {
+            let (m, j) = self.first_missing.clone().unwrap_or_default();
+            out.push(format!(
+                "{}: skipped {} of {} messages that lack a needed joint (first: message {m}, \
+                 joint `{j}`)",
+                path.display(),
+                self.skipped_missing,
+                self.topic_messages
+            ));
+        }
+        if self.undecodable > 0 {
+            let (m, why) = self.first_undecodable.clone().unwrap_or_default();
+            out.push(format!(
+                "{}: skipped {} messages that do not decode (first: message {m}: {why})",
+                path.display(),
+                self.undecodable
+            ));
+        }
+        if let Some(d) = &self.damage {
+            out.push(d.to_string());
+        }
+        out
+    }
+}
+
+/// Why a bag cannot be read (all bad input, exit 2).
+#[derive(Debug, thiserror::Error)]
+pub enum BagError {
+    #[error("cannot read {path}: {source}")]
+    Io {
+        path: PathBuf,
+        #[source]
+        source: std::io::Error,
+    },
+    #[error("{path}: not an MCAP file ({reason})")]
+    NotMcap { path: PathBuf, reason: String },
+    #[error("{path}:{line}: {problem}")]
+    Metadata {
+        path: PathBuf,
+        line: usize,
+        problem: String,
+    },
+    #[error("{path}: topic `{topic}` carries `{found}` (encoding `{encoding}`), not {JOINT_STATE_TYPE} in cdr")]
+    TopicType {
+        path: PathBuf,
+        topic: String,
+        found: String,
+        encoding: String,
+    },
+    #[error("{path}: no {JOINT_STATE_TYPE} message on topic `{topic}` (topics: {topics}); choose one with --joint-topic")]
+    NoMessages {
+        path: PathBuf,
+        topic: String,
+        topics: String,
+    },
+    #[error("{path}: no message on `{topic}` has all the needed joints ({names}); {skipped} lacked one (first: message {message}, joint `{joint}`); name them with --joint-names")]
+    NoneComplete {
+        path: PathBuf,
+        topic: String,
+        names: String,
+        skipped: u64,
+        message: u64,
+        joint: String,
+    },
+    #[error("{path}: message {message} on `{topic}`: {source}")]
+    Message {
+        path: PathBuf,
+        topic: String,
+        message: u64,
+        #[source]
+        source: CdrError,
+    },
+    #[error("{0} (--strict refuses a damaged bag)")]
+    Damaged(Box<BagDamage>),
+}
+
+impl Classify for BagError {
+    fn kind(&self) -> ErrorKind {
+        ErrorKind::BadInput
+    }
+}
+
+/// The `.mcap` files of `path` and, for a rosbag2 directory, the message count of `topic` in
+/// its metadata.
+fn bag_files(path: &Path, topic: &str) -> Result<(Vec<PathBuf>, Option<u64>), BagError> {
+    if !path.is_dir() {
+        return Ok((vec![path.to_path_buf()], None));
+    }
+    let meta = path.join("metadata.yaml");
+    let text = std::fs::read_to_string(&meta).map_err(|source| BagError::Io {
+        path: meta.clone(),
+        source,
+    })?;
+    let (files, count) = parse_metadata(&text, topic).map_err(|(line, problem)| {
+        BagError::Metadata {
+            path: meta.clone(),
+            line,
+            problem,
+        }
+    })?;
+    Ok((files.into_iter().map(|f| path.join(f)).collect(), count))
+}
+
+/// The `relative_file_paths` of a rosbag2 `metadata.yaml` and the `message_count` of `topic`
+/// in `topics_with_message_count` (the subset of YAML these files use: block mappings and
+/// sequences, plain or quoted scalars). Errors are (1-based line, problem).
+pub fn parse_metadata(text: &str, topic: &str) -> Result<(Vec<String>, Option<u64>), (usize, String)> {
+    fn indent(l: &str) -> usize {
+        l.len() - l.trim_start_matches([' ', '-']).len()
+    }
+    fn scalar(v: &str) -> String {
+        let v = v.trim();
+        let unq = v
+            .strip_prefix('"')
+            .and_then(|s| s.strip_suffix('"'))
+            .or_else(|| v.strip_prefix('\'').and_then(|s| s.strip_suffix('\'')));
+        unq.unwrap_or(v).to_string()
+    }
+    let lines: Vec<&str> = text.lines().collect();
+    let mut files = Vec::new();
+    let mut storage: Option<(usize, String)> = None;
+    let mut count = None;
+    let mut i = 0;
+    while i < lines.len() {
+        let l = lines[i];
+        let t = l.trim();
+        if let Some(v) = t.strip_prefix("storage_identifier:") {
+            storage = Some((i + 1, scalar(v)));
+        }
+        if t == "relative_file_paths:" {
+            let base = indent(l);
+            i += 1;
+            while i < lines.len() {
+                let item = lines[i].trim();
+                if item.is_empty() {
+                    i += 1;
+                    continue;
+                }
+                if indent(lines[i]) <= base && !item.starts_with('-') {
+                    break;
+                }
+                match item.strip_prefix('-') {
+                    Some(f) => files.push((i + 1, scalar(f))),
+                    None => break,
+                }
+                i += 1;
+            }
+            continue;
+        }
+        if t == "topics_with_message_count:" {
+            let base = indent(l);
+            let mut current: Option<String> = None;
+            i += 1;
+            while i < lines.len() {
+                let item = lines[i].trim();
+                if !item.is_empty() && indent(lines[i]) <= base && !item.starts_with('-') {
+                    break;
+                }
+                let key = item.trim_start_matches(['-', ' ']);
+                if item.starts_with('-') {
+                    current = None;
+                }
+                if let Some(v) = key.strip_prefix("name:") {
+                    current = Some(scalar(v));
+                } else if let Some(v) = key.strip_prefix("message_count:") {
+                    if current.as_deref() == Some(topic) {
+                        count = Some(scalar(v).parse::<u64>().map_err(|_| {
+                            (i + 1, format!("message_count `{}` is not a count", v.trim()))
+                        })?);
+                    }
+                }
+                i += 1;
+            }
+            continue;
+        }
+        i += 1;
+    }
+    if let Some((line, s)) = storage {
+        if s != "mcap" {
+            return Err((
+                line,
+                format!("storage `{s}`: only MCAP bags are read (ros2 bag convert writes one)"),
+            ));
+        }
+    }
+    if files.is_empty() {
+        return Err((1, "no relative_file_paths: which file holds the bag?".into()));
+    }
+    for (line, f) in &files {
+        if !f.to_ascii_lowercase().ends_with(".mcap") {
+            return Err((*line, format!("`{f}` is not an .mcap file (only MCAP bags are read)")));
+        }
+    }
+    Ok((files.into_iter().map(|(_, f)| f).collect(), count))
+}
+
+/// Reads the joint log of `path` (see the module doc), handing every used message to `each` in
+/// file order; returns what the bag held. An error of `each` stops the reading and is returned.
+pub fn read_joint_log<E: From<BagError>>(
+    path: &Path,
+    spec: &JointLogSpec,
+    mut each: impl FnMut(JointReading) -> Result<(), E>,
+) -> Result<BagSummary, E> {
+    let (files, expected) = bag_files(path, spec.topic)?;
+    let mut summary = BagSummary {
+        files: files.clone(),
+        ..Default::default()
+    };
+    let mut state = State {
+        spec,
+        first_stamp_ns: None,
+        topics: Vec::new(),
+    };
+    for file in &files {
+        if !read_file(file, &mut state, &mut summary, &mut each)? {
+            if let Some(d) = &mut summary.damage {
+                d.expected_messages = expected;
+                d.messages_read = summary.topic_messages;
+            }
+            break;
+        }
+    }
+    if summary.topic_messages == 0 && summary.damage.is_none() {
+        return Err(BagError::NoMessages {
+            path: path.to_path_buf(),
+            topic: spec.topic.to_string(),
+            topics: if state.topics.is_empty() {
+                "none".into()
+            } else {
+                state.topics.join(", ")
+            },
+        }
+        .into());
+    }
+    if summary.used == 0 && summary.skipped_missing > 0 {
+        let (message, joint) = summary.first_missing.clone().unwrap_or_default();
+        return Err(BagError::NoneComplete {
+            path: path.to_path_buf(),
+            topic: spec.topic.to_string(),
+            names: spec.names.join(", "),
+            skipped: summary.skipped_missing,
+            message,
+            joint,
+        }
+        .into());
+    }
+    Ok(summary)
+}
+
+struct State<'s, 'a> {
+    spec: &'s JointLogSpec<'a>,
+    first_stamp_ns: Option<i64>,
+    /// Every topic seen, for messages.
+    topics: Vec<String>,
+}
+
+/// Reads one `.mcap` file; `Ok(false)` when it stopped at damage (recorded in `summary`).
+fn read_file<E: From<BagError>>(
+    file: &Path,
+    state: &mut State,
+    summary: &mut BagSummary,
+    each: &mut impl FnMut(JointReading) -> Result<(), E>,
+) -> Result<bool, E> {
+    let io_err = |source| BagError::Io {
+        path: file.to_path_buf(),
+        source,
+    };
+    let mut f = File::open(file).map_err(io_err)?;
+    let file_bytes = f.metadata().map_err(io_err)?.len();
+    let mut reader = LinearReader::new_with_options(
+        LinearReaderOptions::default()
+            .with_prevalidate_chunk_crcs(true)
+            .with_record_length_limit(MAX_RECORD_BYTES),
+    );
+    let mut bytes_read = 0u64;
+    let mut records = 0u64;
+    // Per channel id: Some(topic) for the wanted JointState topic, None for others.
+    let mut channels: std::collections::HashMap<u16, bool> = Default::default();
+    let mut schemas: std::collections::HashMap<u16, String> = Default::default();
+    while let Some(event) = reader.next_event() {
+        let event = match event {
+            Ok(e) => e,
+            Err(e) => {
+                if records == 0 {
+                    return Err(BagError::NotMcap {
+                        path: file.to_path_buf(),
+                        reason: e.to_string(),
+                    }
+                    .into());
+                }
+                summary.damage = Some(BagDamage {
+                    file: file.to_path_buf(),
+                    reason: e.to_string(),
+                    bytes_read,
+                    file_bytes,
+                    expected_messages: None,
+                    messages_read: 0,
+                });
+                return Ok(false);
+            }
+        };
+        match event {
+            LinearReadEvent::ReadRequest(need) => {
+                let buf = reader.insert(need.clamp(1, READ_BLOCK));
+                let n = f.read(buf).map_err(io_err)?;
+                reader.notify_read(n);
+                bytes_read += n as u64;
+            }
+            LinearReadEvent::Record { opcode, data } => {
+                records += 1;
+                let record = match mcap::parse_record(opcode, data) {
+                    Ok(r) => r,
+                    Err(e) => {
+                        summary.damage = Some(BagDamage {
+                            file: file.to_path_buf(),
+                            reason: e.to_string(),
+                            bytes_read,
+                            file_bytes,
+                            expected_messages: None,
+                            messages_read: 0,
+                        });
+                        return Ok(false);
+                    }
+                };
+                match record {
+                    Record::Schema { header, .. } => {
+                        schemas.insert(header.id, header.name);
+                    }
+                    Record::Channel(c) => {
+                        if !state.topics.contains(&c.topic) {
+                            state.topics.push(c.topic.clone());
+                        }
+                        let wanted = c.topic == state.spec.topic;
+                        if wanted {
+                            let found = schemas.get(&c.schema_id).cloned().unwrap_or_default();
+                            if found != JOINT_STATE_TYPE || c.message_encoding != "cdr" {
+                                return Err(BagError::TopicType {
+                                    path: file.to_path_buf(),
+                                    topic: c.topic,
+                                    found,
+                                    encoding: c.message_encoding,
+                                }
+                                .into());
+                            }
+                        }
+                        channels.insert(c.id, wanted);
+                    }
+                    Record::Message { header, data } => {
+                        if channels.get(&header.channel_id) == Some(&true) {
+                            summary.topic_messages += 1;
+                            message(&data, state, summary, each)?;
+                        } else {
+                            summary.other_messages += 1;
+                        }
+                    }
+                    _ => {}
+                }
+            }
+        }
+    }
+    Ok(true)
+}
+
+/// One message of the wanted topic.
+fn message<E: From<BagError>>(
+    data: &[u8],
+    state: &mut State,
+    summary: &mut BagSummary,
+    each: &mut impl FnMut(JointReading) -> Result<(), E>,
+) -> Result<(), E> {
+    let n = summary.topic_messages;
+    let msg = match decode_joint_state(data) {
+        Ok(m) => m,
+        Err(e) => {
+            summary.undecodable += 1;
+            if summary.first_undecodable.is_none() {
+                summary.first_undecodable = Some((n, e.to_string()));
+            }
+            return Ok(());
+        }
+    };
+    let spec = state.spec;
+    let mut q = Vec::with_capacity(spec.names.len());
+    for (k, name) in spec.names.iter().enumerate() {
+        let v = msg
+            .names
+            .iter()
+            .position(|m| m == name)
+            .and_then(|i| msg.position.get(i))
+            .copied()
+            .filter(|v| v.is_finite());
+        match v {
+            Some(v) => q.push(if spec.prismatic.get(k).copied().unwrap_or(false) {
+                v * 1e3
+            } else {
+                v.to_degrees()
+            }),
+            None => {
+                summary.skipped_missing += 1;
+                if summary.first_missing.is_none() {
+                    summary.first_missing = Some((n, name.clone()));
+                }
+                return Ok(());
+            }
+        }
+    }
+    let stamp = msg.stamp_ns();
+    let first = *state.first_stamp_ns.get_or_insert(stamp);
+    summary.used += 1;
+    each(JointReading {
+        message: n,
+        t_s: (stamp - first) as f64 / 1e9,
+        q,
+    })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    const METADATA: &str = "rosbag2_bagfile_information:
+  version: 8
+  storage_identifier: mcap
+  message_count: 12
+  topics_with_message_count:
+    - topic_metadata:
+        name: /other
+        type: std_msgs/msg/String
+        serialization_format: cdr
+        offered_qos_profiles: ''
+      message_count: 2
+    - topic_metadata:
+        name: /joint_states
+        type: sensor_msgs/msg/JointState
+        serialization_format: cdr
+        offered_qos_profiles: \"\"
+      message_count: 10
+  compression_format: ''
+  relative_file_paths:
+    - session_0.mcap
+    - 'session_1.mcap'
+  files:
+    - path: session_0.mcap
+      message_count: 12
+";
+
+    #[test]
+    fn metadata_files_and_topic_count() {
+        let (files, n) = parse_metadata(METADATA, "/joint_states").unwrap();
+        assert_eq!(files, ["session_0.mcap", "session_1.mcap"]);
+        assert_eq!(n, Some(10));
+        let (_, n) = parse_metadata(METADATA, "/other").unwrap();
+        assert_eq!(n, Some(2));
+        let (_, n) = parse_metadata(METADATA, "/absent").unwrap();
+        assert_eq!(n, None);
+    }
+
+    #[test]
+    fn metadata_refuses_sqlite_and_no_files() {
+        let sqlite = METADATA.replace("storage_identifier: mcap", "storage_identifier: sqlite3");
+        assert_eq!(parse_metadata(&sqlite, "/x").unwrap_err().0, 3);
+        let none = "rosbag2_bagfile_information:\n  version: 8\n";
+        assert!(parse_metadata(none, "/x").is_err());
+        let db3 = METADATA.replace("session_0.mcap\n    - 'session_1.mcap'", "bag.db3");
+        let err = parse_metadata(&db3, "/x").unwrap_err();
+        assert!(err.1.contains("bag.db3"), "{err:?}");
+    }
+
+    #[test]
+    fn bag_paths() {
+        assert!(is_bag(Path::new("a/b.mcap")));
+        assert!(is_bag(Path::new("a/b.MCAP")));
+        assert!(!is_bag(Path::new("a/b.csv")));
+    }
+}
