@@ -298,27 +298,52 @@ pub fn parse_metadata(text: &str, topic: &str) -> Result<(Vec<String>, Option<u6
         }
         if t == "topics_with_message_count:" {
             let base = indent(l);
-            let mut current: Option<String> = None;
-            i += 1;
-            while i < lines.len() {
-                let item = lines[i].trim();
-                if !item.is_empty() && indent(lines[i]) <= base && !item.starts_with('-') {
-                    break;
-                }
-                let key = item.trim_start_matches(['-', ' ']);
-                if item.starts_with('-') {
-                    current = None;
-                }
-                if let Some(v) = key.strip_prefix("name:") {
-                    current = Some(scalar(v));
-                } else if let Some(v) = key.strip_prefix("message_count:") {
-                    if current.as_deref() == Some(topic) {
-                        count = Some(scalar(v).parse::<u64>().map_err(|_| {
-                            (i + 1, format!("message_count `{}` is not a count", v.trim()))
-                        })?);
+            // One list item per topic; its keys (`message_count`, `topic_metadata.name`) come
+            // in any order.
+            let mut item_indent = None;
+            let mut item: (Option<String>, Option<(usize, String)>) = (None, None);
+            let close = |item: &mut (Option<String>, Option<(usize, String)>)| {
+                if let (Some(name), Some((line, v))) = (item.0.take(), item.1.take()) {
+                    if name == topic {
+                        return Some((line, v));
                     }
                 }
+                None
+            };
+            let mut found = None;
+            i += 1;
+            while i < lines.len() {
+                let raw = lines[i];
+                let item_text = raw.trim();
+                if item_text.is_empty() {
+                    i += 1;
+                    continue;
+                }
+                if indent(raw) <= base && !item_text.starts_with('-') {
+                    break;
+                }
+                let lead = raw.len() - raw.trim_start_matches(' ').len();
+                if item_text.starts_with('-') && *item_indent.get_or_insert(lead) == lead {
+                    if let Some(f) = close(&mut item) {
+                        found = Some(f);
+                    }
+                }
+                let key = item_text.trim_start_matches(['-', ' ']);
+                if let Some(v) = key.strip_prefix("name:") {
+                    item.0 = Some(scalar(v));
+                } else if let Some(v) = key.strip_prefix("message_count:") {
+                    item.1 = Some((i + 1, scalar(v)));
+                }
                 i += 1;
+            }
+            if let Some(f) = close(&mut item) {
+                found = Some(f);
+            }
+            if let Some((line, v)) = found {
+                count = Some(
+                    v.parse::<u64>()
+                        .map_err(|_| (line, format!("message_count `{v}` is not a count")))?,
+                );
             }
             continue;
         }
@@ -602,6 +627,35 @@ mod tests {
         assert_eq!(n, Some(2));
         let (_, n) = parse_metadata(METADATA, "/absent").unwrap();
         assert_eq!(n, None);
+    }
+
+    /// rosbags writes the keys sorted: an item's count before its topic's name.
+    #[test]
+    fn metadata_count_before_name() {
+        let text = "rosbag2_bagfile_information:
+  files:
+  - message_count: 99
+    path: b.mcap
+  relative_file_paths:
+  - b.mcap
+  storage_identifier: mcap
+  topics_with_message_count:
+  - message_count: 7
+    topic_metadata:
+      name: /other
+      type: std_msgs/msg/String
+  - message_count: 1348
+    topic_metadata:
+      name: /joint_states
+      type_description_hash: 
+        RIHS01_a13e
+      type: sensor_msgs/msg/JointState
+  version: 8
+";
+        let (files, n) = parse_metadata(text, "/joint_states").unwrap();
+        assert_eq!(files, ["b.mcap"]);
+        assert_eq!(n, Some(1348));
+        assert_eq!(parse_metadata(text, "/other").unwrap().1, Some(7));
     }
 
     #[test]

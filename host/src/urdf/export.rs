@@ -100,10 +100,13 @@ impl Frame {
         }
     }
 
+    /// The URDF origin; rounding noise below 1e-15 (m, rad) is written as 0 (it moves the tool
+    /// point by less than 1e-11 mm).
     fn origin(&self) -> Origin {
+        let clean = |v: [f64; 3]| v.map(|x| if x.abs() < 1e-15 { 0.0 } else { x });
         Origin {
-            xyz_m: self.t.into(),
-            rpy_rad: rpy_of(&self.r),
+            xyz_m: clean(self.t.into()),
+            rpy_rad: clean(rpy_of(&self.r)),
         }
     }
 }
@@ -122,7 +125,7 @@ fn chain_frames(model: &Model, scale: f64) -> Vec<Frame> {
             },
             Motion::Trans => {
                 let mut t = Vector3::zeros();
-                t[e.axis.index()] = v * 1e-3 * scale;
+                t[e.axis.index()] = v / 1e3 * scale;
                 Frame {
                     r: Matrix3::identity(),
                     t,
