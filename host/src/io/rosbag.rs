@@ -7,11 +7,13 @@
 //! * The file is streamed (the `mcap` crate's sans-I/O [`LinearReader`] fed from the file in
 //!   blocks): memory holds one record (a chunk) at a time, whatever the length of the bag; each
 //!   wanted joint vector is handed to the caller's function and nothing else is kept.
-//! * Chunk CRCs are checked before any message of a chunk is used. A file cut short or damaged
-//!   is read up to the last intact record; what follows is reported in [`BagDamage`] (bytes
-//!   left unread, messages lost when the metadata knows the count), as `daq::salvage` does for
-//!   recordings.
-//! * Each message: `t` = header stamp minus the first used message's stamp (s); positions rad
+//! * Chunks are decompressed here (`zstd`: `ruzstd`, `lz4`: `lz4_flex`, pure Rust) and their
+//!   CRC checked (when the writer stored one) before any message of the chunk is used; a chunk
+//!   that fails is skipped and counted, and reading goes on with the next one. A file cut short
+//!   (or whose record structure breaks) is read up to the last intact record; what follows is
+//!   reported in [`BagDamage`] (bytes lost, messages lost when the metadata knows the count),
+//!   as `daq::salvage` does for recordings.
+//! * Each message: `t` = header stamp minus the topic's first message's stamp (s); positions rad
 //!   -> deg (m -> mm for prismatic joints); joints the caller does not ask for are ignored; a
 //!   message that lacks one of them (or holds a non-finite value for it) is skipped and
 //!   counted. Messages on other topics are not decoded.
@@ -62,7 +64,7 @@ pub struct JointLogSpec<'a> {
 pub struct JointReading {
     /// 1-based number of the message among the topic's messages (for messages).
     pub message: u64,
-    /// Header stamp minus the first used message's stamp, s.
+    /// Header stamp minus the stamp of the topic's first (decodable) message, s.
     pub t_s: f64,
     /// The wanted joints' positions, deg (mm for prismatic joints).
     pub q: Vec<f64>,
@@ -75,8 +77,8 @@ pub struct BagDamage {
     pub file: PathBuf,
     /// What stopped the reading (the MCAP reader's words).
     pub reason: String,
-    /// Bytes of the file taken in by the reader when it stopped.
-    pub bytes_read: u64,
+    /// End of the last intact record (bytes from the start of the file): what follows is lost.
+    pub intact_bytes: u64,
     /// Size of the file.
     pub file_bytes: u64,
     /// Messages on the topic that the bag's `metadata.yaml` counts, when known.
@@ -97,12 +99,13 @@ impl std::fmt::Display for BagDamage {
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
         write!(
             f,
-            "{}: damaged or cut short ({}); read up to the last intact record, {} of {} bytes \
-             taken in; ",
+            "{}: damaged or cut short ({}); intact up to byte {} of {}, the {} bytes after it \
+             are lost; ",
             self.file.display(),
             self.reason,
-            self.bytes_read,
-            self.file_bytes
+            self.intact_bytes,
+            self.file_bytes,
+            self.file_bytes.saturating_sub(self.intact_bytes)
         )?;
         match self.messages_lost() {
             Some(lost) => write!(
@@ -138,8 +141,17 @@ pub struct BagSummary {
     pub first_undecodable: Option<(u64, String)>,
     /// Messages on other topics (ignored).
     pub other_messages: u64,
+    /// Chunks skipped as damaged (CRC mismatch, undecodable compression, broken records);
+    /// reading goes on after them.
+    pub skipped_chunks: u64,
+    /// Their bytes (compressed).
+    pub skipped_chunk_bytes: u64,
+    /// Where the first one was and why.
+    pub first_skipped_chunk: Option<String>,
     /// Where the reading stopped early, if it did.
     pub damage: Option<BagDamage>,
+    /// Messages on the topic that the bag's `metadata.yaml` counts, when known.
+    pub expected_messages: Option<u64>,
 }
 
 impl BagSummary {
@@ -164,6 +176,29 @@ impl BagSummary {
                 path.display(),
                 self.undecodable
             ));
+        }
+        if self.skipped_chunks > 0 {
+            out.push(format!(
+                "{}: skipped {} damaged chunk(s), {} bytes (first {})",
+                path.display(),
+                self.skipped_chunks,
+                self.skipped_chunk_bytes,
+                self.first_skipped_chunk.clone().unwrap_or_default()
+            ));
+            if self.damage.is_none() {
+                out.push(match self.expected_messages {
+                    Some(n) => format!(
+                        "{}: {} of the {n} messages the metadata counts lost",
+                        path.display(),
+                        n.saturating_sub(self.topic_messages)
+                    ),
+                    None => format!(
+                        "{}: how many messages the damaged chunks held is unknown (no \
+                         metadata.yaml)",
+                        path.display()
+                    ),
+                });
+            }
         }
         if let Some(d) = &self.damage {
             out.push(d.to_string());
@@ -218,6 +253,11 @@ pub enum BagError {
         message: u64,
         #[source]
         source: CdrError,
+    },
+    #[error("{damage}; no usable {JOINT_STATE_TYPE} message on `{topic}` before it")]
+    NothingReadable {
+        topic: String,
+        damage: Box<BagDamage>,
     },
     #[error("{0} (--strict refuses a damaged bag)")]
     Damaged(Box<BagDamage>),
@@ -378,6 +418,7 @@ pub fn read_joint_log<E: From<BagError>>(
     let (files, expected) = bag_files(path, spec.topic)?;
     let mut summary = BagSummary {
         files: files.clone(),
+        expected_messages: expected,
         ..Default::default()
     };
     let mut state = State {
@@ -394,7 +435,16 @@ pub fn read_joint_log<E: From<BagError>>(
             break;
         }
     }
-    if summary.topic_messages == 0 && summary.damage.is_none() {
+    if summary.used == 0 {
+        if let Some(damage) = summary.damage {
+            return Err(BagError::NothingReadable {
+                topic: spec.topic.to_string(),
+                damage: Box::new(damage),
+            }
+            .into());
+        }
+    }
+    if summary.topic_messages == 0 {
         return Err(BagError::NoMessages {
             path: path.to_path_buf(),
             topic: spec.topic.to_string(),
@@ -423,9 +473,18 @@ pub fn read_joint_log<E: From<BagError>>(
 
 struct State<'s, 'a> {
     spec: &'s JointLogSpec<'a>,
+    /// Stamp of the topic's first decodable message, ns.
     first_stamp_ns: Option<i64>,
     /// Every topic seen, for messages.
     topics: Vec<String>,
+}
+
+/// The schemas and channels of one file.
+#[derive(Default)]
+struct Channels {
+    /// Per channel id: whether it is the wanted JointState topic.
+    wanted: std::collections::HashMap<u16, bool>,
+    schemas: std::collections::HashMap<u16, String>,
 }
 
 /// Reads one `.mcap` file; `Ok(false)` when it stopped at damage (recorded in `summary`).
@@ -441,16 +500,25 @@ fn read_file<E: From<BagError>>(
     };
     let mut f = File::open(file).map_err(io_err)?;
     let file_bytes = f.metadata().map_err(io_err)?.len();
+    // Whole chunks come out (decompressed and checked here, one at a time).
     let mut reader = LinearReader::new_with_options(
         LinearReaderOptions::default()
-            .with_prevalidate_chunk_crcs(true)
+            .with_emit_chunks(true)
             .with_record_length_limit(MAX_RECORD_BYTES),
     );
+    // Bytes given to the reader; at a record it has asked for no byte past that record.
     let mut bytes_read = 0u64;
+    let mut intact_bytes = 0u64;
     let mut records = 0u64;
-    // Per channel id: Some(topic) for the wanted JointState topic, None for others.
-    let mut channels: std::collections::HashMap<u16, bool> = Default::default();
-    let mut schemas: std::collections::HashMap<u16, String> = Default::default();
+    let mut channels = Channels::default();
+    let damage = |reason: String, intact_bytes: u64| BagDamage {
+        file: file.to_path_buf(),
+        reason,
+        intact_bytes,
+        file_bytes,
+        expected_messages: None,
+        messages_read: 0,
+    };
     while let Some(event) = reader.next_event() {
         let event = match event {
             Ok(e) => e,
@@ -462,14 +530,7 @@ fn read_file<E: From<BagError>>(
                     }
                     .into());
                 }
-                summary.damage = Some(BagDamage {
-                    file: file.to_path_buf(),
-                    reason: e.to_string(),
-                    bytes_read,
-                    file_bytes,
-                    expected_messages: None,
-                    messages_read: 0,
-                });
+                summary.damage = Some(damage(e.to_string(), intact_bytes));
                 return Ok(false);
             }
         };
@@ -482,57 +543,181 @@ fn read_file<E: From<BagError>>(
             }
             LinearReadEvent::Record { opcode, data } => {
                 records += 1;
+                let record_start = intact_bytes;
+                intact_bytes = bytes_read;
                 let record = match mcap::parse_record(opcode, data) {
                     Ok(r) => r,
                     Err(e) => {
-                        summary.damage = Some(BagDamage {
-                            file: file.to_path_buf(),
-                            reason: e.to_string(),
-                            bytes_read,
-                            file_bytes,
-                            expected_messages: None,
-                            messages_read: 0,
-                        });
+                        summary.damage = Some(damage(e.to_string(), record_start));
                         return Ok(false);
                     }
                 };
-                match record {
-                    Record::Schema { header, .. } => {
-                        schemas.insert(header.id, header.name);
-                    }
-                    Record::Channel(c) => {
-                        if !state.topics.contains(&c.topic) {
-                            state.topics.push(c.topic.clone());
-                        }
-                        let wanted = c.topic == state.spec.topic;
-                        if wanted {
-                            let found = schemas.get(&c.schema_id).cloned().unwrap_or_default();
-                            if found != JOINT_STATE_TYPE || c.message_encoding != "cdr" {
-                                return Err(BagError::TopicType {
-                                    path: file.to_path_buf(),
-                                    topic: c.topic,
-                                    found,
-                                    encoding: c.message_encoding,
+                if let Record::Chunk { header, data } = record {
+                    match unchunk(&header, &data) {
+                        Ok(inner) => {
+                            for r in ChunkRecords(&inner) {
+                                match r {
+                                    Ok((op, body)) => match mcap::parse_record(op, body) {
+                                        Ok(r) => {
+                                            channels.record(r, file, state, summary, each)?
+                                        }
+                                        Err(e) => {
+                                            summary.skip_chunk(record_start, &data, e.to_string());
+                                            break;
+                                        }
+                                    },
+                                    Err(why) => {
+                                        summary.skip_chunk(record_start, &data, why);
+                                        break;
+                                    }
                                 }
-                                .into());
                             }
                         }
-                        channels.insert(c.id, wanted);
+                        Err(why) => summary.skip_chunk(record_start, &data, why),
                     }
-                    Record::Message { header, data } => {
-                        if channels.get(&header.channel_id) == Some(&true) {
-                            summary.topic_messages += 1;
-                            message(&data, state, summary, each)?;
-                        } else {
-                            summary.other_messages += 1;
-                        }
-                    }
-                    _ => {}
+                } else {
+                    channels.record(record, file, state, summary, each)?;
                 }
             }
         }
     }
     Ok(true)
+}
+
+/// The records `opcode, u64 length, body` of a decompressed chunk.
+struct ChunkRecords<'a>(&'a [u8]);
+
+impl<'a> Iterator for ChunkRecords<'a> {
+    type Item = Result<(u8, &'a [u8]), String>;
+
+    fn next(&mut self) -> Option<Self::Item> {
+        if self.0.is_empty() {
+            return None;
+        }
+        let head = match self.0.get(..9) {
+            Some(h) => h,
+            None => {
+                self.0 = &[];
+                return Some(Err("a record header cut short inside the chunk".into()));
+            }
+        };
+        let mut len = [0u8; 8];
+        len.copy_from_slice(&head[1..9]);
+        let len = u64::from_le_bytes(len);
+        let body = usize::try_from(len)
+            .ok()
+            .and_then(|n| self.0.get(9..9usize.checked_add(n)?));
+        match body {
+            Some(b) => {
+                let op = head[0];
+                self.0 = &self.0[9 + b.len()..];
+                Some(Ok((op, b)))
+            }
+            None => {
+                self.0 = &[];
+                Some(Err(format!("a record of {len} bytes overruns the chunk")))
+            }
+        }
+    }
+}
+
+/// The records of a chunk: decompressed (`zstd`, `lz4` or none), length and CRC checked.
+fn unchunk(h: &mcap::records::ChunkHeader, data: &[u8]) -> Result<Vec<u8>, String> {
+    let size = usize::try_from(h.uncompressed_size)
+        .ok()
+        .filter(|n| *n <= MAX_RECORD_BYTES)
+        .ok_or_else(|| format!("chunk of {} bytes uncompressed", h.uncompressed_size))?;
+    let out = match h.compression.as_str() {
+        "" => data.to_vec(),
+        "zstd" => {
+            let mut out = Vec::with_capacity(size);
+            let mut src = data;
+            while !src.is_empty() && out.len() <= size {
+                let dec = ruzstd::decoding::StreamingDecoder::new(&mut src)
+                    .map_err(|e| format!("zstd: {e}"))?;
+                dec.take((size - out.len()) as u64 + 1)
+                    .read_to_end(&mut out)
+                    .map_err(|e| format!("zstd: {e}"))?;
+            }
+            out
+        }
+        "lz4" => {
+            let mut out = Vec::with_capacity(size);
+            lz4_flex::frame::FrameDecoder::new(data)
+                .take(size as u64 + 1)
+                .read_to_end(&mut out)
+                .map_err(|e| format!("lz4: {e}"))?;
+            out
+        }
+        other => return Err(format!("chunk compression `{other}` is not read (zstd, lz4, none)")),
+    };
+    if out.len() != size {
+        return Err(format!(
+            "chunk holds {} bytes, its header says {size}",
+            out.len()
+        ));
+    }
+    if h.uncompressed_crc != 0 && crc32fast::hash(&out) != h.uncompressed_crc {
+        return Err("chunk CRC mismatch".into());
+    }
+    Ok(out)
+}
+
+impl BagSummary {
+    fn skip_chunk(&mut self, offset: u64, data: &[u8], why: String) {
+        self.skipped_chunks += 1;
+        self.skipped_chunk_bytes += data.len() as u64;
+        if self.first_skipped_chunk.is_none() {
+            self.first_skipped_chunk = Some(format!("at byte {offset}: {why}"));
+        }
+    }
+}
+
+impl Channels {
+    /// A schema, channel or message record (of the file or of a chunk).
+    fn record<E: From<BagError>>(
+        &mut self,
+        record: Record,
+        file: &Path,
+        state: &mut State,
+        summary: &mut BagSummary,
+        each: &mut impl FnMut(JointReading) -> Result<(), E>,
+    ) -> Result<(), E> {
+        match record {
+            Record::Schema { header, .. } => {
+                self.schemas.insert(header.id, header.name);
+            }
+            Record::Channel(c) => {
+                if !state.topics.contains(&c.topic) {
+                    state.topics.push(c.topic.clone());
+                }
+                let wanted = c.topic == state.spec.topic;
+                if wanted {
+                    let found = self.schemas.get(&c.schema_id).cloned().unwrap_or_default();
+                    if found != JOINT_STATE_TYPE || c.message_encoding != "cdr" {
+                        return Err(BagError::TopicType {
+                            path: file.to_path_buf(),
+                            topic: c.topic,
+                            found,
+                            encoding: c.message_encoding,
+                        }
+                        .into());
+                    }
+                }
+                self.wanted.insert(c.id, wanted);
+            }
+            Record::Message { header, data } => {
+                if self.wanted.get(&header.channel_id) == Some(&true) {
+                    summary.topic_messages += 1;
+                    message(&data, state, summary, each)?;
+                } else {
+                    summary.other_messages += 1;
+                }
+            }
+            _ => {}
+        }
+        Ok(())
+    }
 }
 
 /// One message of the wanted topic.
@@ -553,6 +738,9 @@ fn message<E: From<BagError>>(
             return Ok(());
         }
     };
+    // t counts from the first message on the topic (FORMATS.md), used or not.
+    let stamp = msg.stamp_ns();
+    let first = *state.first_stamp_ns.get_or_insert(stamp);
     let spec = state.spec;
     let mut q = Vec::with_capacity(spec.names.len());
     for (k, name) in spec.names.iter().enumerate() {
@@ -578,8 +766,6 @@ fn message<E: From<BagError>>(
             }
         }
     }
-    let stamp = msg.stamp_ns();
-    let first = *state.first_stamp_ns.get_or_insert(stamp);
     summary.used += 1;
     each(JointReading {
         message: n,
@@ -667,6 +853,111 @@ mod tests {
         let db3 = METADATA.replace("session_0.mcap\n    - 'session_1.mcap'", "bag.db3");
         let err = parse_metadata(&db3, "/x").unwrap_err();
         assert!(err.1.contains("bag.db3"), "{err:?}");
+    }
+
+    /// An MCAP file of `n` JointState messages (joints `a`, `b`; `a` = 0.001 k rad) in
+    /// uncompressed chunks of about 2 kB with CRCs, written by the `mcap` crate.
+    fn bag_bytes(n: u32) -> Vec<u8> {
+        let mut buf = std::io::Cursor::new(Vec::new());
+        let mut w = mcap::WriteOptions::new()
+            .compression(None)
+            .chunk_size(Some(2000))
+            .create(&mut buf)
+            .unwrap();
+        let schema = w.add_schema(JOINT_STATE_TYPE, "ros2msg", b"").unwrap();
+        let ch = w
+            .add_channel(schema, "/joint_states", "cdr", &Default::default())
+            .unwrap();
+        for k in 0..n {
+            let m = crate::io::cdr::JointState {
+                sec: 10,
+                nanosec: k * 1000,
+                frame_id: String::new(),
+                names: vec!["b".into(), "a".into()],
+                position: vec![-0.2, 0.001 * f64::from(k)],
+            };
+            let header = mcap::records::MessageHeader {
+                channel_id: ch,
+                sequence: k,
+                log_time: u64::from(k),
+                publish_time: u64::from(k),
+            };
+            w.write_to_known_channel(&header, &crate::io::cdr::encode_joint_state(&m))
+                .unwrap();
+        }
+        w.finish().unwrap();
+        drop(w);
+        buf.into_inner()
+    }
+
+    fn read(bytes: &[u8]) -> Result<(BagSummary, Vec<JointReading>), BagError> {
+        let dir = tempfile::tempdir().unwrap();
+        let path = dir.path().join("b.mcap");
+        std::fs::write(&path, bytes).unwrap();
+        let names = ["a".to_string()];
+        let spec = JointLogSpec {
+            topic: DEFAULT_JOINT_TOPIC,
+            names: &names,
+            prismatic: &[false],
+        };
+        let mut got = Vec::new();
+        let summary = read_joint_log(&path, &spec, |r| {
+            got.push(r);
+            Ok::<(), BagError>(())
+        })?;
+        Ok((summary, got))
+    }
+
+    #[test]
+    fn reads_every_message_by_name() {
+        let (summary, got) = read(&bag_bytes(100)).unwrap();
+        assert_eq!(summary.used, 100);
+        assert!(summary.notes(Path::new("b")).is_empty());
+        for (k, r) in got.iter().enumerate() {
+            assert_eq!(r.message, k as u64 + 1);
+            assert!((r.t_s - k as f64 * 1e-6).abs() < 1e-15);
+            assert!((r.q[0] - (0.001 * k as f64).to_degrees()).abs() < 1e-12);
+        }
+    }
+
+    #[test]
+    fn a_chunk_with_a_bad_crc_is_skipped_and_reading_goes_on() {
+        let mut bytes = bag_bytes(100);
+        // Flip a byte of message 50's position `a` (0.05 rad): its chunk's CRC no longer holds.
+        let needle = 0.05f64.to_le_bytes();
+        let at = bytes
+            .windows(8)
+            .position(|w| w == needle)
+            .expect("message 50 is in the file");
+        bytes[at] ^= 0x01;
+        let (summary, got) = read(&bytes).unwrap();
+        assert_eq!(summary.skipped_chunks, 1);
+        assert!(summary.damage.is_none());
+        assert!(got.len() < 100 && got.len() > 50, "{}", got.len());
+        assert!(got.iter().all(|r| (r.q[0] - 0.05f64.to_degrees()).abs() > 1e-9));
+        // Messages after the skipped chunk are read.
+        assert!((got.last().unwrap().q[0] - 0.099f64.to_degrees()).abs() < 1e-12);
+        let notes = summary.notes(Path::new("b")).join("\n");
+        assert!(notes.contains("skipped 1 damaged chunk(s)"), "{notes}");
+        assert!(notes.contains("CRC"), "{notes}");
+    }
+
+    #[test]
+    fn every_cut_reads_a_prefix_or_refuses() {
+        let bytes = bag_bytes(60);
+        let (_, all) = read(&bytes).unwrap();
+        for cut in (0..bytes.len()).step_by(37) {
+            match read(&bytes[..cut]) {
+                Ok((summary, got)) => {
+                    assert!(summary.damage.is_some(), "cut at {cut}");
+                    assert_eq!(got[..], all[..got.len()], "cut at {cut}");
+                }
+                Err(e) => assert!(
+                    matches!(e, BagError::NotMcap { .. } | BagError::NothingReadable { .. }),
+                    "cut at {cut}: {e}"
+                ),
+            }
+        }
     }
 
     #[test]

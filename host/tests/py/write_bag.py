@@ -9,7 +9,8 @@ usage:
       positions in rad (m). --extra adds joints the model does not have; --shuffle puts the
       names in another order in every message; --other-topic adds a std_msgs/msg/String topic
       and a second JointState topic; --partial-every K adds, after every K-th row, a message on
-      /joint_states with only the extra joints (a gripper controller's).
+      /joint_states with only the extra joints (a gripper controller's); --zstd compresses the
+      chunks (rosbag2's storage compression).
   write_bag.py synthetic BAG_DIR --count N --names N1,...,Nk [--extra E1,E2]
       N messages at 1 kHz, positions sin waves (rad), serialised once per message by hand as
       CDR and written with rosbags (fast enough for 10^6 messages).
@@ -21,6 +22,7 @@ from decimal import Decimal
 
 import numpy as np
 from rosbags.rosbag2 import StoragePlugin, Writer
+from rosbags.rosbag2.enums import CompressionFormat, CompressionMode
 from rosbags.typesys import Stores, get_typestore
 
 BASE_NS = 1_700_000_000 * 10**9
@@ -50,7 +52,10 @@ def from_csv(a):
     header = lines[0].split(",")
     ti = header.index("t")
     qi = [header.index(f"q{i + 1}") for i in range(len(names))]
-    with Writer(a.bag, version=8, storage_plugin=StoragePlugin.MCAP) as w:
+    w = Writer(a.bag, version=8, storage_plugin=StoragePlugin.MCAP)
+    if a.zstd:
+        w.set_compression(CompressionMode.STORAGE, CompressionFormat.ZSTD)
+    with w:
         js = w.add_connection("/joint_states", JointState.__msgtype__, typestore=TS)
         if a.other_topic:
             txt = w.add_connection("/rosout_text", String.__msgtype__, typestore=TS)
@@ -126,6 +131,7 @@ def main():
     p.add_argument("--shuffle", action="store_true")
     p.add_argument("--partial-every", type=int, default=0)
     p.add_argument("--count", type=int, default=0)
+    p.add_argument("--zstd", action="store_true")
     a = p.parse_args()
     if a.mode == "csv":
         a.joints, a.bag = a.args
