@@ -94,7 +94,13 @@ fn fuse_and_fk_from_a_rosbags_bag_equal_the_csv() {
     let trace = sim.join("trace.csv");
     ok(&["trace", s(&sim.join("scan.png")), "--out", s(&trace)]);
     let pot = sim.join("pot.toml");
-    ok(&["potcal", "--points", s(&sim.join("potjig.csv")), "--out", s(&pot)]);
+    ok(&[
+        "potcal",
+        "--points",
+        s(&sim.join("potjig.csv")),
+        "--out",
+        s(&pot),
+    ]);
     let joints_csv = sim.join("joints.csv");
     let bag = d.join("session_bag");
     write_bag(
@@ -144,7 +150,9 @@ fn fuse_and_fk_from_a_rosbags_bag_equal_the_csv() {
     eprintln!("fuse: {n_rows} fused samples, bag vs CSV max difference {worst:.3e}");
     assert!(worst <= 1e-6, "fused samples differ by {worst}");
     // The messages of the gripper controller (only the finger joints) are skipped and counted.
-    let n_joint_rows = numbers(&std::fs::read_to_string(&joints_csv).unwrap()).1.len();
+    let n_joint_rows = numbers(&std::fs::read_to_string(&joints_csv).unwrap())
+        .1
+        .len();
     let partial = n_joint_rows.div_ceil(25);
     let err = String::from_utf8_lossy(&b.stderr);
     assert!(
@@ -165,6 +173,28 @@ fn fuse_and_fk_from_a_rosbags_bag_equal_the_csv() {
     eprintln!("fk: bag vs CSV max difference {worst_fk:.3e}");
     assert!(worst_fk <= 1e-6, "fk differs by {worst_fk}");
 
+    // zstd-compressed chunks (rosbag2's storage compression) read the same.
+    let zbag = d.join("zstd_bag");
+    write_bag(
+        &py,
+        &[
+            "csv",
+            s(&joints_csv),
+            s(&zbag),
+            "--names",
+            KATANA_NAMES,
+            "--extra",
+            "katana_r_finger_joint,katana_l_finger_joint",
+            "--other-topic",
+            "--shuffle",
+            "--partial-every",
+            "25",
+            "--zstd",
+        ],
+    );
+    let fk_zstd = ok(&["fk", "--joints", s(&zbag), "--joint-names", KATANA_NAMES]);
+    assert_eq!(fk_zstd.stdout, fk_bag.stdout);
+
     // The bare .mcap file reads the same.
     let mcap = bag.join("session_bag.mcap");
     let fk_mcap = ok(&["fk", "--joints", s(&mcap), "--joint-names", KATANA_NAMES]);
@@ -174,13 +204,7 @@ fn fuse_and_fk_from_a_rosbags_bag_equal_the_csv() {
     let no_names = rigctl(&["fk", "--joints", s(&bag)]);
     assert_eq!(no_names.status.code(), Some(2));
     assert!(String::from_utf8_lossy(&no_names.stderr).contains("--joint-names"));
-    let wrong = rigctl(&[
-        "fk",
-        "--joints",
-        s(&bag),
-        "--joint-names",
-        "a,b,c,d,e",
-    ]);
+    let wrong = rigctl(&["fk", "--joints", s(&bag), "--joint-names", "a,b,c,d,e"]);
     assert_eq!(wrong.status.code(), Some(2));
     assert!(String::from_utf8_lossy(&wrong.stderr).contains("joint `a`"));
     let topic = rigctl(&[
@@ -194,7 +218,13 @@ fn fuse_and_fk_from_a_rosbags_bag_equal_the_csv() {
     ]);
     assert_eq!(topic.status.code(), Some(2));
     assert!(String::from_utf8_lossy(&topic.stderr).contains("std_msgs/msg/String"));
-    let csv_opt = rigctl(&["fk", "--joints", s(&joints_csv), "--joint-names", KATANA_NAMES]);
+    let csv_opt = rigctl(&[
+        "fk",
+        "--joints",
+        s(&joints_csv),
+        "--joint-names",
+        KATANA_NAMES,
+    ]);
     assert_eq!(csv_opt.status.code(), Some(2));
 }
 
@@ -203,8 +233,7 @@ const UR5_NAMES: &str =
 
 #[test]
 fn truncated_bag_reads_what_is_intact_and_says_what_was_lost() {
-    let Some(py) =
-        common::python_env("truncated_bag_reads_what_is_intact_and_says_what_was_lost")
+    let Some(py) = common::python_env("truncated_bag_reads_what_is_intact_and_says_what_was_lost")
     else {
         return;
     };
@@ -238,7 +267,11 @@ fn truncated_bag_reads_what_is_intact_and_says_what_was_lost() {
     };
     let full = fk(&bag);
     assert!(full.status.success());
-    assert!(full.stderr.is_empty(), "{}", String::from_utf8_lossy(&full.stderr));
+    assert!(
+        full.stderr.is_empty(),
+        "{}",
+        String::from_utf8_lossy(&full.stderr)
+    );
     let full_rows: Vec<&[u8]> = full.stdout.split(|b| *b == b'\n').collect();
     assert_eq!(full_rows.len(), n + 2, "header, rows and the final newline");
 
@@ -249,16 +282,27 @@ fn truncated_bag_reads_what_is_intact_and_says_what_was_lost() {
     let bytes = std::fs::read(bag.join("bag.mcap")).unwrap();
     std::fs::write(cut.join("bag.mcap"), &bytes[..bytes.len() * 6 / 10]).unwrap();
     let part = fk(&cut);
-    assert!(part.status.success(), "{}", String::from_utf8_lossy(&part.stderr));
+    assert!(
+        part.status.success(),
+        "{}",
+        String::from_utf8_lossy(&part.stderr)
+    );
     let rows: Vec<&[u8]> = part.stdout.split(|b| *b == b'\n').collect();
     let read = rows.len() - 2;
     assert!(read > n / 3 && read < n * 6 / 10, "{read} messages read");
-    assert_eq!(rows[..rows.len() - 1], full_rows[..rows.len() - 1], "the intact part is exact");
+    assert_eq!(
+        rows[..rows.len() - 1],
+        full_rows[..rows.len() - 1],
+        "the intact part is exact"
+    );
     let err = String::from_utf8_lossy(&part.stderr);
     eprintln!("truncated bag: {read} of {n} rows; stderr: {err}");
     assert!(err.contains("damaged or cut short"), "{err}");
     assert!(
-        err.contains(&format!("{} of the {n} messages the metadata counts lost", n - read)),
+        err.contains(&format!(
+            "{} of the {n} messages the metadata counts lost",
+            n - read
+        )),
         "{err}"
     );
     // The bare file: the count of what followed is unknown, and said so.
@@ -327,7 +371,11 @@ fn a_million_messages_stream_in_bounded_memory() {
     let code: i32 = it.next().and_then(|v| v.parse().ok()).expect("exit code");
     let rss_kb: u64 = it.next().and_then(|v| v.parse().ok()).expect("max rss");
     assert_eq!(code, 0, "{}", String::from_utf8_lossy(&run.stderr));
-    let rows = std::fs::read(&out).unwrap().iter().filter(|b| **b == b'\n').count();
+    let rows = std::fs::read(&out)
+        .unwrap()
+        .iter()
+        .filter(|b| **b == b'\n')
+        .count();
     assert_eq!(rows, n + 1, "a row per message");
     eprintln!(
         "{n} messages, bag {:.1} MB: rigctl fk peak RSS {:.1} MB",

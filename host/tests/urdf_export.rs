@@ -131,7 +131,10 @@ fn compare(
          the model's FK at full precision max {worst:.3e} mm",
         q.len()
     );
-    assert!(worst_cli <= 1e-6, "{case}: pinocchio vs rigctl fk {worst_cli} mm");
+    assert!(
+        worst_cli <= 1e-6,
+        "{case}: pinocchio vs rigctl fk {worst_cli} mm"
+    );
     assert!(worst <= 1e-6, "{case}: pinocchio vs model FK {worst} mm");
     worst
 }
@@ -179,15 +182,12 @@ fn ur5_tracker_after_calibrate_base_in_pinocchio() {
         assert!(model.param(p).unwrap() != 0.0, "{p} was calibrated");
     }
     let urdf = d.join("ur5cal.urdf");
-    let out = rigctl(&[
-        "model2urdf",
-        "--model",
-        s(&model_path),
-        "--out",
-        s(&urdf),
-    ]);
+    let out = rigctl(&["model2urdf", "--model", s(&model_path), "--out", s(&urdf)]);
     let report = String::from_utf8_lossy(&out.stdout);
-    assert!(report.contains("joint_1") && report.contains("tool0_joint"), "{report}");
+    assert!(
+        report.contains("joint_1") && report.contains("tool0_joint"),
+        "{report}"
+    );
     let test_poses = data.join("random.csv");
     let fk_csv = d.join("fk.csv");
     let fk = rigctl(&["fk", "--model", s(&model_path), "--joints", s(&test_poses)]);
@@ -195,7 +195,13 @@ fn ur5_tracker_after_calibrate_base_in_pinocchio() {
     let q = pose_joints(&model, &test_poses, "mm,deg");
     let names: Vec<String> = (1..=6).map(|i| format!("joint_{i}")).collect();
     let pin = pinocchio_fk(&py, d, &urdf, &model, &names, &q);
-    compare("UR5 after calibrate --base", &pin, &xyz_rows(&fk_csv), &model, &q);
+    compare(
+        "UR5 after calibrate --base",
+        &pin,
+        &xyz_rows(&fk_csv),
+        &model,
+        &q,
+    );
 }
 
 #[test]
@@ -242,7 +248,13 @@ fn calibrated_katana_in_pinocchio_names_the_tilting() {
         .map(|i| format!("joint_{i}"))
         .collect();
     let pin = pinocchio_fk(&py, d, &urdf, &model, &names, &q);
-    compare("calibrated Katana (tilting off)", &pin, &xyz_rows(&fk_csv), &model, &q);
+    compare(
+        "calibrated Katana (tilting off)",
+        &pin,
+        &xyz_rows(&fk_csv),
+        &model,
+        &q,
+    );
 }
 
 const TIAGO_JOINTS: [&str; 8] = [
@@ -259,8 +271,10 @@ const TIAGO_JOINTS: [&str; 8] = [
 #[test]
 fn tiago_round_trip_keeps_the_urdf_and_matches_pinocchio() {
     let test = "tiago_round_trip_keeps_the_urdf_and_matches_pinocchio";
-    let Some(t) = common::shared_file(test, "data/real/thanhndv212__figaroh-examples/examples/tiago")
-    else {
+    let Some(t) = common::shared_file(
+        test,
+        "data/real/thanhndv212__figaroh-examples/examples/tiago",
+    ) else {
         return;
     };
     let Some(py) = common::python_env(test) else {
@@ -325,7 +339,10 @@ fn tiago_round_trip_keeps_the_urdf_and_matches_pinocchio() {
         s(&urdf),
     ]);
     let report = String::from_utf8_lossy(&out.stdout);
-    assert!(report.contains("arm_5_joint\n  before xyz -0.162"), "{report}");
+    assert!(
+        report.contains("arm_5_joint\n  before xyz -0.162"),
+        "{report}"
+    );
 
     // The XML trees: everything of the original but the chain's joint origins is unchanged.
     let tree = Command::new(&py)
@@ -333,14 +350,23 @@ fn tiago_round_trip_keeps_the_urdf_and_matches_pinocchio() {
         .args([s(&original), s(&urdf), &TIAGO_JOINTS.join(",")])
         .output()
         .expect("python runs");
-    assert!(tree.status.success(), "{}", String::from_utf8_lossy(&tree.stderr));
+    assert!(
+        tree.status.success(),
+        "{}",
+        String::from_utf8_lossy(&tree.stderr)
+    );
     let verdict: serde_json::Value = serde_json::from_slice(&tree.stdout).unwrap();
     eprintln!("TIAGo XML trees: {verdict}");
     assert_eq!(verdict["same_elsewhere"], true, "{verdict}");
     assert_eq!(verdict["removed"], serde_json::json!([]), "{verdict}");
     assert_eq!(
         verdict["added"],
-        serde_json::json!(["link:world", "joint:world_joint", "link:tool0", "joint:tool0_joint"]),
+        serde_json::json!([
+            "link:world",
+            "joint:world_joint",
+            "link:tool0",
+            "joint:tool0_joint"
+        ]),
         "{verdict}"
     );
     let changed: Vec<&str> = verdict["changed_origins"]
@@ -350,7 +376,10 @@ fn tiago_round_trip_keeps_the_urdf_and_matches_pinocchio() {
         .filter_map(|v| v.as_str())
         .collect();
     for j in ["arm_1_joint", "arm_3_joint", "arm_5_joint"] {
-        assert!(changed.contains(&j), "{j} carries calibrated values: {verdict}");
+        assert!(
+            changed.contains(&j),
+            "{j} carries calibrated values: {verdict}"
+        );
     }
 
     // pinocchio's FK of the whole TIAGo (its other joints at their neutral values) vs rigctl.
@@ -368,7 +397,13 @@ fn tiago_round_trip_keeps_the_urdf_and_matches_pinocchio() {
     let q = pose_joints(&model, &val, "m,rad");
     let names: Vec<String> = TIAGO_JOINTS.iter().map(|n| n.to_string()).collect();
     let pin = pinocchio_fk(&py, d, &urdf, &model, &names, &q);
-    compare("TIAGo urdf2model -> calibrate -> model2urdf --urdf", &pin, &xyz_rows(&fk_csv), &model, &q);
+    compare(
+        "TIAGo urdf2model -> calibrate -> model2urdf --urdf",
+        &pin,
+        &xyz_rows(&fk_csv),
+        &model,
+        &q,
+    );
 }
 
 #[test]
@@ -398,7 +433,12 @@ fn exported_urdf_reads_back_as_the_same_model() {
     // The export read by rigctl's own URDF import gives the same FK (no Python needed).
     let dir = tmp();
     let mut model = rigctl::model::katana450(200.0).unwrap();
-    for (p, v) in [("base_x", 2.0), ("base_ry", 0.3), ("a2", 191.2), ("dth3", -0.4)] {
+    for (p, v) in [
+        ("base_x", 2.0),
+        ("base_ry", 0.3),
+        ("a2", 191.2),
+        ("dth3", -0.4),
+    ] {
         let v = model.param(p).unwrap() + v;
         model.set_param(p, v).unwrap();
     }

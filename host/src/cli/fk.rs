@@ -38,7 +38,12 @@ pub struct Args {
     pub joint_log: JointLogArgs,
 }
 
-fn fk_row(out: &mut String, model: &rigctl::model::Model, q: &[f64], tilt: Tilt) -> Result<(), CliError> {
+fn fk_row(
+    out: &mut String,
+    model: &rigctl::model::Model,
+    q: &[f64],
+    tilt: Tilt,
+) -> Result<(), CliError> {
     let fk = model.fk(q, tilt)?;
     let p = fk.position_mm;
     let [phi, theta, psi] = fk.zxz_deg();

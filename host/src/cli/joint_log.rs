@@ -55,7 +55,10 @@ impl JointLogArgs {
             )));
         }
         if names.len() != model.n_joints()
-            || names.iter().enumerate().any(|(i, n)| names[..i].contains(n))
+            || names
+                .iter()
+                .enumerate()
+                .any(|(i, n)| names[..i].contains(n))
         {
             return Err(CliError::bad_input(format!(
                 "--joint-names: {} different names needed (one per model joint), got {}",

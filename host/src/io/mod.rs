@@ -6,7 +6,7 @@ pub mod atomic;
 pub mod cdr;
 pub mod interrupt;
 pub mod pose_csv;
-pub mod rosbag;
 pub mod ranges;
+pub mod rosbag;
 pub mod table;
 pub mod units;

@@ -280,20 +280,22 @@ fn bag_files(path: &Path, topic: &str) -> Result<(Vec<PathBuf>, Option<u64>), Ba
         path: meta.clone(),
         source,
     })?;
-    let (files, count) = parse_metadata(&text, topic).map_err(|(line, problem)| {
-        BagError::Metadata {
+    let (files, count) =
+        parse_metadata(&text, topic).map_err(|(line, problem)| BagError::Metadata {
             path: meta.clone(),
             line,
             problem,
-        }
-    })?;
+        })?;
     Ok((files.into_iter().map(|f| path.join(f)).collect(), count))
 }
 
 /// The `relative_file_paths` of a rosbag2 `metadata.yaml` and the `message_count` of `topic`
 /// in `topics_with_message_count` (the subset of YAML these files use: block mappings and
 /// sequences, plain or quoted scalars). Errors are (1-based line, problem).
-pub fn parse_metadata(text: &str, topic: &str) -> Result<(Vec<String>, Option<u64>), (usize, String)> {
+pub fn parse_metadata(
+    text: &str,
+    topic: &str,
+) -> Result<(Vec<String>, Option<u64>), (usize, String)> {
     fn indent(l: &str) -> usize {
         l.len() - l.trim_start_matches([' ', '-']).len()
     }
@@ -398,11 +400,17 @@ pub fn parse_metadata(text: &str, topic: &str) -> Result<(Vec<String>, Option<u6
         }
     }
     if files.is_empty() {
-        return Err((1, "no relative_file_paths: which file holds the bag?".into()));
+        return Err((
+            1,
+            "no relative_file_paths: which file holds the bag?".into(),
+        ));
     }
     for (line, f) in &files {
         if !f.to_ascii_lowercase().ends_with(".mcap") {
-            return Err((*line, format!("`{f}` is not an .mcap file (only MCAP bags are read)")));
+            return Err((
+                *line,
+                format!("`{f}` is not an .mcap file (only MCAP bags are read)"),
+            ));
         }
     }
     Ok((files.into_iter().map(|(_, f)| f).collect(), count))
@@ -558,9 +566,7 @@ fn read_file<E: From<BagError>>(
                             for r in ChunkRecords(&inner) {
                                 match r {
                                     Ok((op, body)) => match mcap::parse_record(op, body) {
-                                        Ok(r) => {
-                                            channels.record(r, file, state, summary, each)?
-                                        }
+                                        Ok(r) => channels.record(r, file, state, summary, each)?,
                                         Err(e) => {
                                             summary.skip_chunk(record_start, &data, e.to_string());
                                             break;
@@ -622,13 +628,17 @@ impl<'a> Iterator for ChunkRecords<'a> {
 }
 
 /// The records of a chunk: decompressed (`zstd`, `lz4` or none), length and CRC checked.
-fn unchunk(h: &mcap::records::ChunkHeader, data: &[u8]) -> Result<Vec<u8>, String> {
+fn unchunk<'d>(
+    h: &mcap::records::ChunkHeader,
+    data: &'d [u8],
+) -> Result<std::borrow::Cow<'d, [u8]>, String> {
+    use std::borrow::Cow;
     let size = usize::try_from(h.uncompressed_size)
         .ok()
         .filter(|n| *n <= MAX_RECORD_BYTES)
         .ok_or_else(|| format!("chunk of {} bytes uncompressed", h.uncompressed_size))?;
     let out = match h.compression.as_str() {
-        "" => data.to_vec(),
+        "" => Cow::Borrowed(data),
         "zstd" => {
             let mut out = Vec::with_capacity(size);
             let mut src = data;
@@ -639,7 +649,7 @@ fn unchunk(h: &mcap::records::ChunkHeader, data: &[u8]) -> Result<Vec<u8>, Strin
                     .read_to_end(&mut out)
                     .map_err(|e| format!("zstd: {e}"))?;
             }
-            out
+            Cow::Owned(out)
         }
         "lz4" => {
             let mut out = Vec::with_capacity(size);
@@ -647,9 +657,13 @@ fn unchunk(h: &mcap::records::ChunkHeader, data: &[u8]) -> Result<Vec<u8>, Strin
                 .take(size as u64 + 1)
                 .read_to_end(&mut out)
                 .map_err(|e| format!("lz4: {e}"))?;
-            out
+            Cow::Owned(out)
         }
-        other => return Err(format!("chunk compression `{other}` is not read (zstd, lz4, none)")),
+        other => {
+            return Err(format!(
+                "chunk compression `{other}` is not read (zstd, lz4, none)"
+            ))
+        }
     };
     if out.len() != size {
         return Err(format!(
@@ -934,7 +948,9 @@ mod tests {
         assert_eq!(summary.skipped_chunks, 1);
         assert!(summary.damage.is_none());
         assert!(got.len() < 100 && got.len() > 50, "{}", got.len());
-        assert!(got.iter().all(|r| (r.q[0] - 0.05f64.to_degrees()).abs() > 1e-9));
+        assert!(got
+            .iter()
+            .all(|r| (r.q[0] - 0.05f64.to_degrees()).abs() > 1e-9));
         // Messages after the skipped chunk are read.
         assert!((got.last().unwrap().q[0] - 0.099f64.to_degrees()).abs() < 1e-12);
         let notes = summary.notes(Path::new("b")).join("\n");
@@ -953,7 +969,10 @@ mod tests {
                     assert_eq!(got[..], all[..got.len()], "cut at {cut}");
                 }
                 Err(e) => assert!(
-                    matches!(e, BagError::NotMcap { .. } | BagError::NothingReadable { .. }),
+                    matches!(
+                        e,
+                        BagError::NotMcap { .. } | BagError::NothingReadable { .. }
+                    ),
                     "cut at {cut}: {e}"
                 ),
             }

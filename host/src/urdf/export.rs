@@ -250,7 +250,9 @@ fn xml_escape(s: &str) -> String {
 /// The model's joint names, or `joint_1..joint_N`.
 fn joint_names(model: &Model) -> Vec<String> {
     if model.joint_names().is_empty() {
-        (1..=model.n_joints()).map(|i| format!("joint_{i}")).collect()
+        (1..=model.n_joints())
+            .map(|i| format!("joint_{i}"))
+            .collect()
     } else {
         model.joint_names().to_vec()
     }
@@ -371,7 +373,11 @@ pub fn model_into_urdf(
             return Err(invalid(format!(
                 "joint `{name}` is {} in the URDF but {} in the model",
                 uj.joint_type.as_str(),
-                if mj.prismatic { "prismatic" } else { "revolute" }
+                if mj.prismatic {
+                    "prismatic"
+                } else {
+                    "revolute"
+                }
             )));
         }
         last_child = Some(uj.child.clone());
@@ -403,7 +409,10 @@ pub fn model_into_urdf(
         Some(e) if model.params()[e.param].name == "base_rz" => robot_start,
         _ => robot_start.wrapping_sub(1),
     };
-    let base_frame = frames.get(base_end).copied().unwrap_or_else(Frame::identity);
+    let base_frame = frames
+        .get(base_end)
+        .copied()
+        .unwrap_or_else(Frame::identity);
 
     let doc = roxmltree::Document::parse(text).map_err(|e| UrdfError::Xml {
         source_name: source_name.to_string(),

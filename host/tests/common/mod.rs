@@ -109,7 +109,10 @@ pub fn python_env(test: &str) -> Option<PathBuf> {
         .output();
     if !pip.as_ref().is_ok_and(|o| o.status.success()) {
         let _ = std::fs::remove_dir_all(&tmp);
-        fail(format!("pip install {} failed: {pip:?}", PY_PACKAGES.join(" ")));
+        fail(format!(
+            "pip install {} failed: {pip:?}",
+            PY_PACKAGES.join(" ")
+        ));
         return None;
     }
     // Another test may have made it meanwhile: then use that one. (A venv's scripts name their
@@ -120,7 +123,10 @@ pub fn python_env(test: &str) -> Option<PathBuf> {
     if works(&python) {
         Some(python)
     } else {
-        fail(format!("{} cannot import pinocchio and rosbags", python.display()));
+        fail(format!(
+            "{} cannot import pinocchio and rosbags",
+            python.display()
+        ));
         None
     }
 }
