@@ -1,6 +1,7 @@
 //! `rigctl fuse --joints JOINTS.csv --recording REC --trace TRACE.csv --placement SHEET.toml
 //! --pot POT.toml [--robot NAME | --model FILE] [--tool-mm L] --out FUSED.csv`: joint readings +
 //! potentiometer recording + pencil trace -> partial error samples (`rigctl::fusion::fuse`).
+//! The joint log may be a ROS 2 bag (`--joint-topic`, `--joint-names`; `rigctl::io::rosbag`).
 
 use std::path::PathBuf;
 

@@ -25,7 +25,7 @@ use std::path::{Path, PathBuf};
 use mcap::records::Record;
 use mcap::sans_io::linear_reader::{LinearReadEvent, LinearReader, LinearReaderOptions};
 
-use super::cdr::{decode_joint_state, CdrError};
+use super::cdr::decode_joint_state;
 use crate::error::{Classify, ErrorKind};
 
 /// The ROS 2 type of a joint log message.
@@ -246,13 +246,13 @@ pub enum BagError {
         message: u64,
         joint: String,
     },
-    #[error("{path}: message {message} on `{topic}`: {source}")]
-    Message {
+    #[error("{path}: none of the {count} messages on `{topic}` decodes as {JOINT_STATE_TYPE} (first: message {message}: {why})")]
+    Undecodable {
         path: PathBuf,
         topic: String,
+        count: u64,
         message: u64,
-        #[source]
-        source: CdrError,
+        why: String,
     },
     #[error("{damage}; no usable {JOINT_STATE_TYPE} message on `{topic}` before it")]
     NothingReadable {
@@ -473,6 +473,17 @@ pub fn read_joint_log<E: From<BagError>>(
             skipped: summary.skipped_missing,
             message,
             joint,
+        }
+        .into());
+    }
+    if summary.used == 0 {
+        let (message, why) = summary.first_undecodable.clone().unwrap_or_default();
+        return Err(BagError::Undecodable {
+            path: path.to_path_buf(),
+            topic: spec.topic.to_string(),
+            count: summary.undecodable,
+            message,
+            why,
         }
         .into());
     }
