@@ -119,17 +119,18 @@ fn fuse_and_fk_from_a_rosbags_bag_equal_the_csv() {
             "25",
         ],
     );
+    let (rec, placement) = (sim.join("pot.rec"), sim.join("placement.toml"));
     let fuse = |joints: &Path, out: &Path, extra: &[&str]| {
         let mut args = vec![
             "fuse",
             "--joints",
             s(joints),
             "--recording",
-            s(&sim.join("pot.rec")),
+            s(&rec),
             "--trace",
             s(&trace),
             "--placement",
-            s(&sim.join("placement.toml")),
+            s(&placement),
             "--pot",
             s(&pot),
             "--out",
