@@ -347,15 +347,13 @@ fn a_million_messages_stream_in_bounded_memory() {
     let bag_bytes = std::fs::metadata(bag.join("long.mcap")).unwrap().len();
     // The peak RSS of rigctl alone: a Python parent that runs it and reads its rusage.
     let out = d.join("fk.csv");
-    let probe = format!(
-        "import resource, subprocess, sys\n\
+    let probe = "import resource, subprocess, sys\n\
          with open(sys.argv[1], 'wb') as f:\n\
          \x20   r = subprocess.run(sys.argv[2:], stdout=f, stderr=subprocess.PIPE)\n\
          sys.stderr.write(r.stderr.decode())\n\
-         print(r.returncode, resource.getrusage(resource.RUSAGE_CHILDREN).ru_maxrss)\n"
-    );
+         print(r.returncode, resource.getrusage(resource.RUSAGE_CHILDREN).ru_maxrss)\n";
     let run = Command::new("python3")
-        .args(["-c", &probe, s(&out), env!("CARGO_BIN_EXE_rigctl")])
+        .args(["-c", probe, s(&out), env!("CARGO_BIN_EXE_rigctl")])
         .args([
             "fk",
             "--robot",

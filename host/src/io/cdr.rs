@@ -181,7 +181,7 @@ pub fn decode_joint_state(msg: &[u8]) -> Result<JointState, CdrError> {
 /// of [`decode_joint_state`]; for tests and tools that write bags).
 pub fn encode_joint_state(m: &JointState) -> Vec<u8> {
     fn pad(out: &mut Vec<u8>, align: usize) {
-        while (out.len() - 4) % align != 0 {
+        while !(out.len() - 4).is_multiple_of(align) {
             out.push(0);
         }
     }
