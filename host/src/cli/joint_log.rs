@@ -131,8 +131,9 @@ impl JointLogArgs {
             out.q_deg.push(r.q);
             Ok(())
         })?;
-        if let (true, Some(d)) = (strict, summary.damage) {
-            return Err(BagError::Damaged(Box::new(d)).into());
+        let damage = summary.damage_notes(path);
+        if strict && !damage.is_empty() {
+            return Err(BagError::Damaged(damage).into());
         }
         Ok(out)
     }

@@ -169,6 +169,14 @@ impl BagSummary {
                 self.topic_messages
             ));
         }
+        out.extend(self.damage_notes(path));
+        out
+    }
+
+    /// The lines about damage only (undecodable messages, skipped chunks, a file cut short):
+    /// empty for an intact bag.
+    pub fn damage_notes(&self, path: &Path) -> Vec<String> {
+        let mut out = Vec::new();
         if self.undecodable > 0 {
             let (m, why) = self.first_undecodable.clone().unwrap_or_default();
             out.push(format!(
@@ -259,8 +267,8 @@ pub enum BagError {
         topic: String,
         damage: Box<BagDamage>,
     },
-    #[error("{0} (--strict refuses a damaged bag)")]
-    Damaged(Box<BagDamage>),
+    #[error("{} (--strict refuses a damaged bag)", .0.join("; "))]
+    Damaged(Vec<String>),
 }
 
 impl Classify for BagError {
