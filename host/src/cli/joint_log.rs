@@ -138,3 +138,95 @@ impl JointLogArgs {
         Ok(out)
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use rigctl::io::cdr::{encode_joint_state, JointState};
+    use rigctl::model::{Axis, ModelBuilder, Motion};
+
+    /// A one-joint model named `a` and a bag of 100 messages in CRC-checked chunks of ~2 kB,
+    /// one byte of message 50 flipped (its chunk fails its CRC).
+    fn damaged_bag(dir: &Path) -> (Model, std::path::PathBuf) {
+        let mut b = ModelBuilder::new("one");
+        b.constant(Motion::Trans, Axis::Z, "h", 100.0).unwrap();
+        b.joint(false, "o1", 0.0, [-180.0, 180.0], None).unwrap();
+        let mut model = b.build().unwrap();
+        model.set_joint_names(vec!["a".into()]).unwrap();
+        let mut buf = std::io::Cursor::new(Vec::new());
+        let mut w = mcap::WriteOptions::new()
+            .compression(None)
+            .chunk_size(Some(2000))
+            .create(&mut buf)
+            .unwrap();
+        let schema = w
+            .add_schema("sensor_msgs/msg/JointState", "ros2msg", b"")
+            .unwrap();
+        let ch = w
+            .add_channel(schema, "/joint_states", "cdr", &Default::default())
+            .unwrap();
+        for k in 0..100u32 {
+            let m = JointState {
+                sec: 1,
+                nanosec: k * 1_000_000,
+                frame_id: String::new(),
+                names: vec!["a".into()],
+                position: vec![0.001 * f64::from(k)],
+            };
+            let h = mcap::records::MessageHeader {
+                channel_id: ch,
+                sequence: k,
+                log_time: u64::from(k),
+                publish_time: u64::from(k),
+            };
+            w.write_to_known_channel(&h, &encode_joint_state(&m))
+                .unwrap();
+        }
+        w.finish().unwrap();
+        drop(w);
+        let mut bytes = buf.into_inner();
+        let at = bytes
+            .windows(8)
+            .position(|x| x == 0.05f64.to_le_bytes())
+            .unwrap();
+        bytes[at] ^= 1;
+        let path = dir.join("damaged.mcap");
+        std::fs::write(&path, bytes).unwrap();
+        (model, path)
+    }
+
+    #[test]
+    fn strict_refuses_a_damaged_bag_and_the_default_reads_the_rest() {
+        let dir = tempfile::tempdir().unwrap();
+        let (model, path) = damaged_bag(dir.path());
+        let args = JointLogArgs {
+            joint_topic: DEFAULT_JOINT_TOPIC.into(),
+            joint_names: Vec::new(),
+        };
+        let samples = args.read_samples(&path, &model, false).unwrap();
+        assert!(samples.t_s.len() > 50 && samples.t_s.len() < 100);
+        let err = args.read_samples(&path, &model, true).unwrap_err();
+        assert_eq!(err.exit_code(), 2);
+        assert!(err.message.contains("--strict refuses"), "{}", err.message);
+        assert!(err.message.contains("CRC"), "{}", err.message);
+    }
+
+    #[test]
+    fn joint_names_must_fit_the_model() {
+        let dir = tempfile::tempdir().unwrap();
+        let (model, path) = damaged_bag(dir.path());
+        let args = JointLogArgs {
+            joint_topic: DEFAULT_JOINT_TOPIC.into(),
+            joint_names: vec!["a".into(), "b".into()],
+        };
+        let err = args.read_samples(&path, &model, false).unwrap_err();
+        assert_eq!(err.exit_code(), 2);
+        assert!(
+            err.message.contains("1 different names needed"),
+            "{}",
+            err.message
+        );
+        // A CSV with the bag options is refused.
+        assert!(args.check_for(Path::new("j.csv")).is_err());
+    }
+}
