@@ -2,7 +2,10 @@
 //! [--robot NAME | --model FILE.toml] [--units m,rad]`: forward kinematics of every row, CSV
 //! `x,y,z,phi,theta,psi` (mm in frame R, ZXZ Euler angles in deg, whatever `--units` says of
 //! the input) on stdout. A model file's transmission terms are applied to the readings first,
-//! hysteresis in the pose order of the file (by `t` when every row has one).
+//! hysteresis in the pose order of the file (by `t` when every row has one). A ROS 2 bag as
+//! `--joints` (`.mcap` or rosbag2 directory; `--joint-topic`, `--joint-names`) is streamed:
+//! each message's row is written as it is read (all rows are gathered first only when the
+//! model's hysteresis needs the pose order).
 
 use std::fmt::Write as _;
 use std::path::PathBuf;
@@ -10,6 +13,7 @@ use std::path::PathBuf;
 use rigctl::io::pose_csv::read_poses;
 use rigctl::model::{ModelError, Tilt};
 
+use super::joint_log::JointLogArgs;
 use super::model_args::ModelArgs;
 use super::pose_args::PoseArgs;
 use super::CliError;
@@ -17,8 +21,8 @@ use super::CliError;
 #[derive(clap::Args, Debug)]
 pub struct Args {
     /// Pose file with columns q1..qN (deg), or the model's joint names; other columns are
-    /// ignored.
-    #[arg(long, value_name = "FILE.csv")]
+    /// ignored. Or a ROS 2 bag: an .mcap file or a rosbag2 directory (JointState, rad and m).
+    #[arg(long, value_name = "FILE.csv|BAG")]
     pub joints: PathBuf,
     /// Add joint tilting with the declared values (MODEL.md).
     #[arg(long)]
@@ -29,6 +33,65 @@ pub struct Args {
     // --units LENGTH,ANGLE of the joint readings.
     #[command(flatten)]
     pub pose: PoseArgs,
+    // --joint-topic, --joint-names of a bag.
+    #[command(flatten)]
+    pub joint_log: JointLogArgs,
+}
+
+fn fk_row(
+    out: &mut String,
+    model: &rigctl::model::Model,
+    q: &[f64],
+    tilt: Tilt,
+) -> Result<(), CliError> {
+    let fk = model.fk(q, tilt)?;
+    let p = fk.position_mm;
+    let [phi, theta, psi] = fk.zxz_deg();
+    let _ = writeln!(
+        out,
+        "{:.9},{:.9},{:.9},{phi:.9},{theta:.9},{psi:.9}",
+        p.x, p.y, p.z
+    );
+    Ok(())
+}
+
+/// `fk` of a bag: rows written as the messages are read.
+fn run_bag(args: &Args, model: &rigctl::model::Model, tilt: Tilt) -> Result<(), CliError> {
+    use std::io::Write as _;
+    if args.pose.units != Default::default() {
+        return Err(CliError::bad_input(format!(
+            "{}: --units applies to CSV files; a bag's JointState positions are in rad and m",
+            args.joints.display()
+        )));
+    }
+    let stdout = std::io::stdout();
+    let mut w = std::io::BufWriter::with_capacity(1 << 16, stdout.lock());
+    w.write_all(b"x,y,z,phi,theta,psi\n")
+        .map_err(super::out::stdout_error)?;
+    let mut line = String::new();
+    if model.transmission().uses_pose_order() {
+        let (mut q, mut t) = (Vec::new(), Vec::new());
+        args.joint_log.read_bag(&args.joints, model, |r| {
+            q.push(r.q);
+            t.push(r.t_s);
+            Ok(())
+        })?;
+        for qe in model.effective_pose_joints(&q, Some(&t))? {
+            line.clear();
+            fk_row(&mut line, model, &qe, tilt)?;
+            w.write_all(line.as_bytes())
+                .map_err(super::out::stdout_error)?;
+        }
+    } else {
+        args.joint_log.read_bag(&args.joints, model, |r| {
+            let qe = model.effective_pose_joints(std::slice::from_ref(&r.q), None)?;
+            line.clear();
+            fk_row(&mut line, model, &qe[0], tilt)?;
+            w.write_all(line.as_bytes())
+                .map_err(super::out::stdout_error)
+        })?;
+    }
+    w.flush().map_err(super::out::stdout_error)
 }
 
 pub fn run(args: Args) -> Result<(), CliError> {
@@ -39,21 +102,17 @@ pub fn run(args: Args) -> Result<(), CliError> {
         }
         .into());
     }
-    let poses = read_poses(&args.joints, &args.pose.spec(&model, false, 0))?;
     let tilt = if args.tilt { Tilt::Static } else { Tilt::Off };
+    if args.joint_log.check_for(&args.joints)? {
+        return run_bag(&args, &model, tilt);
+    }
+    let poses = read_poses(&args.joints, &args.pose.spec(&model, false, 0))?;
     // The model's transmission terms map the readings to the joints' angles, with the
     // directions of approach from the file's pose order (FORMATS.md "Pose order").
     let q_eff = model.effective_pose_joints(&poses.joints(), pose_times(&poses).as_deref())?;
     let mut out = String::from("x,y,z,phi,theta,psi\n");
     for q in &q_eff {
-        let fk = model.fk(q, tilt)?;
-        let p = fk.position_mm;
-        let [phi, theta, psi] = fk.zxz_deg();
-        let _ = writeln!(
-            out,
-            "{:.9},{:.9},{:.9},{phi:.9},{theta:.9},{psi:.9}",
-            p.x, p.y, p.z
-        );
+        fk_row(&mut out, &model, q, tilt)?;
     }
     super::out::stdout_bytes(out.as_bytes())
 }

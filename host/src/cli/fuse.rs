@@ -1,6 +1,7 @@
 //! `rigctl fuse --joints JOINTS.csv --recording REC --trace TRACE.csv --placement SHEET.toml
 //! --pot POT.toml [--robot NAME | --model FILE] [--tool-mm L] --out FUSED.csv`: joint readings +
 //! potentiometer recording + pencil trace -> partial error samples (`rigctl::fusion::fuse`).
+//! The joint log may be a ROS 2 bag (`--joint-topic`, `--joint-names`; `rigctl::io::rosbag`).
 
 use std::path::PathBuf;
 
@@ -11,15 +12,20 @@ use rigctl::fusion::{
 };
 use rigctl::model::KATANA_PENCIL_TOOL_MM;
 
+use super::joint_log::JointLogArgs;
 use super::model_args::ModelArgs;
 use super::out::outln;
 use super::{note_damage, CliError};
 
 #[derive(clap::Args, Debug)]
 pub struct Args {
-    /// Joint readings of the robot controller: CSV `t` (s, robot clock), `q1..qN` (deg).
-    #[arg(long, value_name = "JOINTS.csv")]
+    /// Joint readings of the robot controller: CSV `t` (s, robot clock), `q1..qN` (deg), or a
+    /// ROS 2 bag (.mcap file or rosbag2 directory) of sensor_msgs/msg/JointState.
+    #[arg(long, value_name = "JOINTS.csv|BAG")]
     pub joints: PathBuf,
+    // --joint-topic, --joint-names of a bag.
+    #[command(flatten)]
+    pub joint_log: JointLogArgs,
     /// The board recording (potentiometer samples, board clock).
     #[arg(long, value_name = "REC")]
     pub recording: PathBuf,
@@ -41,7 +47,7 @@ pub struct Args {
     /// Output: the fused samples (CSV, format rigctl-fused/1).
     #[arg(long, value_name = "FUSED.csv")]
     pub out: PathBuf,
-    /// Refuse a damaged recording (exit 2) instead of skipping its damaged records.
+    /// Refuse a damaged recording or bag (exit 2) instead of skipping what is damaged.
     #[arg(long)]
     pub strict: bool,
 }
@@ -56,7 +62,12 @@ pub fn run(args: Args) -> Result<(), CliError> {
             "--max-in-plane-mm must be a positive number",
         ));
     }
-    let joints = JointSamples::read(&args.joints, &model)?;
+    let joints = if args.joint_log.check_for(&args.joints)? {
+        args.joint_log
+            .read_samples(&args.joints, &model, args.strict)?
+    } else {
+        JointSamples::read(&args.joints, &model)?
+    };
     let cal = PotCalibration::read(&args.pot)?;
     let samples = read_pot_samples(&args.recording, args.strict, &mut note_damage)?;
     if samples.is_empty() {

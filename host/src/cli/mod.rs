@@ -9,7 +9,9 @@ mod diagnose;
 mod export;
 mod fk;
 mod fuse;
+mod joint_log;
 mod joints;
+mod model2urdf;
 mod model_args;
 pub mod out;
 mod plan;
@@ -64,6 +66,8 @@ pub enum Command {
     Fuse(fuse::Args),
     /// Write a URDF serial chain (base link .. tip link) as a model file.
     Urdf2model(urdf2model::Args),
+    /// Write the model as a URDF (world .. tool0), or into the URDF it was imported from.
+    Model2urdf(model2urdf::Args),
     /// Joint clearance, backlash and stiffness from inclinometer readings, into a model file.
     Joints(joints::Args),
     /// Joints that put the calibrated, tilting arm on a Cartesian path (eq. 5.22).
@@ -89,6 +93,7 @@ pub fn run(cli: Cli) -> Result<(), CliError> {
         Command::Potcal(a) => potcal::run(a),
         Command::Fuse(a) => fuse::run(a),
         Command::Urdf2model(a) => urdf2model::run(a),
+        Command::Model2urdf(a) => model2urdf::run(a),
         Command::Joints(a) => joints::run(a),
         Command::Compensate(a) => compensate::run(a),
         Command::Plan(a) => plan::run(a),

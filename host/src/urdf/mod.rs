@@ -8,10 +8,12 @@
 //!   elementary transforms; the structure and parameter names are documented in [`import`].
 
 pub mod error;
+pub mod export;
 pub mod import;
 pub mod parse;
 
 pub use error::UrdfError;
+pub use export::{model_into_urdf, model_to_urdf, Exported, Origin, OriginChange};
 pub use import::{
     import_chain, import_chain_with_masses, param_stem, rpy_matrix, rpy_of, widen_limits,
     ImportOptions, Imported,

@@ -240,6 +240,16 @@ fn commands(dir: &Path) -> Vec<(&'static str, Vec<OsString>)> {
             ],
         ),
         (
+            "model2urdf",
+            vec![
+                o("model2urdf"),
+                o("--robot"),
+                o("ur5"),
+                o("--out"),
+                d("ur5.urdf"),
+            ],
+        ),
+        (
             "joints",
             vec![
                 o("joints"),

@@ -62,3 +62,78 @@ pub fn path_row(t_s: f64, x: &nalgebra::Vector3<f64>, a: &nalgebra::Vector3<f64>
         x.x, x.y, x.z, a.x, a.y, a.z
     )
 }
+
+/// Packages of the Python consumers the ROS-ecosystem tests run (PyPI names and versions).
+pub const PY_PACKAGES: [&str; 2] = ["pin==4.1.0", "rosbags==0.11.9"];
+
+/// The Python interpreter of a virtual environment with [`PY_PACKAGES`] (pinocchio, rosbags),
+/// `target/pyenv` (`.ci/run` makes it; made here when absent: `python3 -m venv` and `pip
+/// install` into a temporary folder, renamed into place). `None` after a `SKIPPED` message when
+/// it cannot be made; with `CI=true` that fails the test instead.
+pub fn python_env(test: &str) -> Option<PathBuf> {
+    use std::process::Command;
+    let target = std::env::var_os("CARGO_TARGET_DIR")
+        .map(PathBuf::from)
+        .unwrap_or_else(|| PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../target"));
+    let dir = target.join("pyenv");
+    let python = dir.join("bin/python");
+    let works = |py: &std::path::Path| {
+        Command::new(py)
+            .args(["-c", "import pinocchio, rosbags"])
+            .output()
+            .is_ok_and(|o| o.status.success())
+    };
+    if works(&python) {
+        return Some(python);
+    }
+    let fail = |msg: String| {
+        if rigctl::in_ci() {
+            panic!("{test}: {msg}; with CI=true the Python consumers are required");
+        }
+        eprintln!("SKIPPED {test}: {msg}");
+    };
+    let _ = std::fs::create_dir_all(&target);
+    let tmp = target.join(format!("pyenv.tmp{}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&tmp);
+    let made = Command::new("python3")
+        .args(["-m", "venv"])
+        .arg(&tmp)
+        .output();
+    if !made.as_ref().is_ok_and(|o| o.status.success()) {
+        fail(format!("python3 -m venv failed: {made:?}"));
+        return None;
+    }
+    let pip = Command::new(tmp.join("bin/python"))
+        .args(["-m", "pip", "install", "-q"])
+        .args(PY_PACKAGES)
+        .output();
+    if !pip.as_ref().is_ok_and(|o| o.status.success()) {
+        let _ = std::fs::remove_dir_all(&tmp);
+        fail(format!(
+            "pip install {} failed: {pip:?}",
+            PY_PACKAGES.join(" ")
+        ));
+        return None;
+    }
+    // Another test may have made it meanwhile: then use that one. (A venv's scripts name their
+    // folder, so the renamed one is used through `bin/python`, which does not.)
+    if std::fs::rename(&tmp, &dir).is_err() {
+        let _ = std::fs::remove_dir_all(&tmp);
+    }
+    if works(&python) {
+        Some(python)
+    } else {
+        fail(format!(
+            "{} cannot import pinocchio and rosbags",
+            python.display()
+        ));
+        None
+    }
+}
+
+/// A helper script of `host/tests/py/`.
+pub fn py_script(name: &str) -> PathBuf {
+    PathBuf::from(env!("CARGO_MANIFEST_DIR"))
+        .join("tests/py")
+        .join(name)
+}

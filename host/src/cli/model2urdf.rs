@@ -1,0 +1,77 @@
+//! `rigctl model2urdf --model M.toml [--urdf ORIGINAL.urdf [--base-link LINK]] --out M.urdf`:
+//! the model as a URDF chain from link `world` (frame R) to link `tool0` (the tool point),
+//! calibrated geometry and joint offsets in the joint origins (m, rad); with `--urdf`, the
+//! original is kept whole and only the chain's joint origins change
+//! (`rigctl::urdf::export`). What a URDF cannot hold is named on stderr; the joint origins
+//! before and after are printed on stdout.
+
+use std::path::PathBuf;
+
+use rigctl::io::atomic::write_bytes_atomic;
+use rigctl::urdf::{model_into_urdf, model_to_urdf, Origin, UrdfError};
+
+use super::model_args::ModelArgs;
+use super::out::{errln, outln};
+use super::CliError;
+
+#[derive(clap::Args, Debug)]
+pub struct Args {
+    // The model choice: --robot NAME | --model FILE.toml, --tool-mm L, --set NAME=VALUE.
+    #[command(flatten)]
+    pub model: ModelArgs,
+    /// The URDF the model was imported from (`urdf2model`): kept whole, only the origins of the
+    /// chain's joints (found by name) change.
+    #[arg(long, value_name = "ORIGINAL.urdf")]
+    pub urdf: Option<PathBuf>,
+    /// With --urdf: the chain's first link, as given to `urdf2model --base-link` (default: the
+    /// root link).
+    #[arg(long, value_name = "LINK", requires = "urdf")]
+    pub base_link: Option<String>,
+    /// Output URDF.
+    #[arg(long, value_name = "M.urdf")]
+    pub out: PathBuf,
+}
+
+fn show(o: &Origin) -> String {
+    let [x, y, z] = o.xyz_m;
+    let [r, p, w] = o.rpy_rad;
+    format!("xyz {x:+.9} {y:+.9} {z:+.9} m, rpy {r:+.12} {p:+.12} {w:+.12} rad")
+}
+
+pub fn run(args: Args) -> Result<(), CliError> {
+    super::check_outputs([Some(args.out.as_path())])?;
+    let model = args.model.choose()?;
+    let exported = match &args.urdf {
+        None => model_to_urdf(&model),
+        Some(path) => {
+            let text = std::fs::read_to_string(path).map_err(|source| UrdfError::Read {
+                path: path.clone(),
+                source,
+            })?;
+            model_into_urdf(
+                &model,
+                &text,
+                &path.display().to_string(),
+                args.base_link.as_deref(),
+            )?
+        }
+    };
+    write_bytes_atomic(&args.out, exported.text.as_bytes())?;
+    for line in &exported.not_representable {
+        errln!("rigctl model2urdf: not in the URDF: {line}");
+    }
+    for c in &exported.origins {
+        outln!("{}", c.joint)?;
+        match &c.before {
+            Some(b) => outln!("  before {}", show(b))?,
+            None => outln!("  before (none: added)")?,
+        }
+        outln!("  after  {}", show(&c.after))?;
+    }
+    outln!(
+        "{} joint origins written -> {}",
+        exported.origins.len(),
+        args.out.display()
+    )?;
+    Ok(())
+}
