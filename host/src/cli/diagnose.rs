@@ -192,12 +192,14 @@ pub fn run(args: Args) -> Result<(), CliError> {
 
 /// Whether `path` is a fused-samples file (its first line names the format).
 fn is_fused(path: &Path) -> bool {
+    use std::io::Read as _;
+    // the first line only, and at most 4 KiB of it (a device or FIFO may never end a line)
+    let mut head = Vec::new();
     std::fs::File::open(path)
-        .ok()
-        .and_then(|f| {
-            let mut line = String::new();
-            std::io::BufRead::read_line(&mut std::io::BufReader::new(f), &mut line).ok()?;
-            Some(line.contains(rigctl::fusion::fuse::FUSED_FORMAT))
+        .and_then(|f| f.take(4096).read_to_end(&mut head))
+        .map(|_| {
+            let first = head.split(|&b| b == b'\n').next().unwrap_or(&[]);
+            String::from_utf8_lossy(first).contains(rigctl::fusion::fuse::FUSED_FORMAT)
         })
         .unwrap_or(false)
 }

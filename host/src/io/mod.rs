@@ -3,6 +3,7 @@
 //! for regular files, direct for devices and FIFOs) and the process's interruption handling.
 
 pub mod atomic;
+pub mod read;
 pub mod interrupt;
 pub mod pose_csv;
 pub mod ranges;

@@ -382,10 +382,11 @@ impl Model {
 
     /// Reads a model file.
     pub fn from_file(path: &Path) -> Result<Model, ModelError> {
-        let text = std::fs::read_to_string(path).map_err(|source| ModelError::Read {
-            path: path.to_path_buf(),
-            source,
-        })?;
+        let text = crate::io::read::read_text_capped(path, crate::io::read::CAP_SMALL_TEXT)
+            .map_err(|source| ModelError::Read {
+                path: path.to_path_buf(),
+                source,
+            })?;
         Self::from_toml_str(&text, &path.display().to_string())
     }
 

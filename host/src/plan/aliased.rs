@@ -195,7 +195,7 @@ impl FromDiagnose {
     /// Reads the diagnose JSON `path`.
     pub fn read(path: &Path) -> Result<Self, PlanError> {
         let shown = path.display().to_string();
-        let text = std::fs::read_to_string(path)
+        let text = crate::io::read::read_text_capped(path, crate::io::read::CAP_SMALL_TEXT)
             .map_err(|e| field_err(&shown, format!("cannot read: {e}")))?;
         Self::parse(&shown, &text)
     }

@@ -64,7 +64,7 @@ pub fn sha256_hex(bytes: &[u8]) -> String {
 }
 
 fn read_json(path: &Path, name: &str, notes: &mut Vec<String>) -> Option<Value> {
-    let text = std::fs::read_to_string(path)
+    let text = crate::io::read::read_text_capped(path, crate::io::read::CAP_SMALL_TEXT)
         .map_err(|e| notes.push(format!("{name}: cannot read: {e}")))
         .ok()?;
     serde_json::from_str(&text)
@@ -94,7 +94,7 @@ impl RunDir {
         };
         for name in names {
             let path = dir.join(&name);
-            let bytes = match std::fs::read(&path) {
+            let bytes = match crate::io::read::read_capped(&path, crate::io::read::CAP_TABLE) {
                 Ok(b) => b,
                 Err(e) => {
                     run.notes.push(format!("{name}: cannot read: {e}"));

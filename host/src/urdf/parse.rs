@@ -97,10 +97,12 @@ pub struct Urdf {
 impl Urdf {
     /// Reads and parses a URDF file.
     pub fn from_file(path: &std::path::Path) -> Result<Self, UrdfError> {
-        let text = std::fs::read_to_string(path).map_err(|source| UrdfError::Read {
-            path: path.to_path_buf(),
-            source,
-        })?;
+        let text = crate::io::read::read_text_capped(path, crate::io::read::CAP_URDF).map_err(
+            |source| UrdfError::Read {
+                path: path.to_path_buf(),
+                source,
+            },
+        )?;
         Self::parse(&text, &path.display().to_string())
     }
 
