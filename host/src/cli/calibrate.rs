@@ -113,12 +113,17 @@ fn parse_method(s: &str) -> Result<Method, String> {
 }
 
 pub fn run(args: Args) -> Result<(), CliError> {
-    super::check_outputs([
-        args.json.as_deref(),
-        args.out.as_deref(),
-        args.errors_csv.as_deref(),
-        args.plot.as_deref(),
-    ])?;
+    super::files()
+        .input("--poses", args.poses.as_deref())
+        .input("--samples", args.samples.as_deref())
+        .input("--validate", args.validate.as_deref())
+        .input("--model", args.model.model.as_deref())
+        .output("--json", args.json.as_deref())
+        .output("--out", args.out.as_deref())
+        .output("--errors-csv", args.errors_csv.as_deref())
+        .output("--plot", args.plot.as_deref())
+        .apart("--poses", "--validate")
+        .check()?;
     if let Some(samples) = &args.samples {
         return run_samples(&args, samples);
     }

@@ -73,7 +73,17 @@ pub struct Args {
 }
 
 pub fn run(args: Args) -> Result<(), CliError> {
-    super::check_outputs([args.json.as_deref(), args.out.as_deref()])?;
+    super::files()
+        .input("--poses", args.poses.as_deref())
+        .inputs("--samples", &args.samples)
+        .inputs("--validate", &args.validate)
+        .input("--model", args.model.model.as_deref())
+        .output("--json", args.json.as_deref())
+        .output("--out", args.out.as_deref())
+        .output_dir("--plots", args.plots.as_deref(), |n| n.ends_with(".svg"))
+        .apart("--poses", "--validate")
+        .apart("--samples", "--validate")
+        .check()?;
     // the pencil holder is on the arm when the rig's samples are measured
     let default_tool_mm = (!args.samples.is_empty()).then_some(KATANA_PENCIL_TOOL_MM);
     let model = args.model.choose_with_default_tool(default_tool_mm)?;

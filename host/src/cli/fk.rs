@@ -32,6 +32,10 @@ pub struct Args {
 }
 
 pub fn run(args: Args) -> Result<(), CliError> {
+    super::files()
+        .input("--joints", Some(&args.joints))
+        .input("--model", args.model.model.as_deref())
+        .check()?;
     let model = args.model.choose()?;
     if args.tilt && !model.has_tilt() {
         return Err(ModelError::NoTiltData {

@@ -134,11 +134,15 @@ fn parse_criterion(s: &str) -> Result<Criterion, String> {
 }
 
 pub fn run(args: Args) -> Result<(), CliError> {
-    super::check_outputs([
-        Some(args.out.as_path()),
-        args.json.as_deref(),
-        args.plot.as_deref(),
-    ])?;
+    super::files()
+        .input("--model", args.model.model.as_deref())
+        .input("--poses", args.poses.as_deref())
+        .input("--candidates-from", args.candidates_from.as_deref())
+        .input("--from-diagnose", args.from_diagnose.as_deref())
+        .output("--out", Some(&args.out))
+        .output("--json", args.json.as_deref())
+        .output("--plot", args.plot.as_deref())
+        .check()?;
     let model = args.model.choose()?;
     let mut cfg = PlanConfig::new(&model, args.n);
     cfg.seed = args.seed;

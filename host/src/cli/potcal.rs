@@ -30,7 +30,11 @@ pub struct Args {
 }
 
 pub fn run(args: Args) -> Result<(), CliError> {
-    super::check_outputs([Some(args.out.as_path())])?;
+    super::files()
+        .input("--points", Some(&args.points))
+        .input("--recording", args.recording.as_deref())
+        .output("--out", Some(&args.out))
+        .check()?;
     let points = match read_jig_csv(&args.points)? {
         JigFile::Points(p) => p,
         JigFile::Windows(w) => {

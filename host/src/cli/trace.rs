@@ -49,7 +49,11 @@ pub enum PathArg {
 }
 
 pub fn run(args: Args) -> Result<(), CliError> {
-    super::check_outputs([Some(args.out.as_path()), args.overlay.as_deref()])?;
+    super::files()
+        .input("SCAN", Some(&args.scan))
+        .output("--out", Some(&args.out))
+        .output("--overlay", args.overlay.as_deref())
+        .check()?;
     let mapping = match (args.no_fiducials, args.mm_per_px) {
         (true, Some(mm_per_px)) => Mapping::Scale { mm_per_px },
         (true, None) => return Err(CliError::bad_input("--no-fiducials needs --mm-per-px")),

@@ -34,8 +34,13 @@ pub enum AtomicWriteError {
 }
 
 impl crate::error::Classify for AtomicWriteError {
+    /// An unusable path (a directory, a missing parent) is bad input; the system refusing the
+    /// write (no space, permission denied) is a failure of the run.
     fn kind(&self) -> crate::error::ErrorKind {
-        crate::error::ErrorKind::Failure
+        match self {
+            Self::Io { .. } => crate::error::ErrorKind::Failure,
+            Self::Unusable { .. } => crate::error::ErrorKind::BadInput,
+        }
     }
 }
 

@@ -3,9 +3,10 @@
 //! for regular files, direct for devices and FIFOs) and the process's interruption handling.
 
 pub mod atomic;
-pub mod read;
+pub mod files;
 pub mod interrupt;
 pub mod pose_csv;
 pub mod ranges;
+pub mod read;
 pub mod table;
 pub mod units;

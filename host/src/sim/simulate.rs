@@ -96,7 +96,8 @@ impl crate::error::Classify for SimError {
             SimError::Config(_) | SimError::Effect(_) => ErrorKind::BadInput,
             SimError::Plan(e) => e.kind(),
             SimError::Model(e) => e.kind(),
-            SimError::Write { .. } | SimError::Atomic(_) => ErrorKind::Failure,
+            SimError::Atomic(e) => e.kind(),
+            SimError::Write { .. } => ErrorKind::Failure,
         }
     }
 }
