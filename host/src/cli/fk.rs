@@ -49,10 +49,21 @@ pub fn run(args: Args) -> Result<(), CliError> {
     // directions of approach from the file's pose order (FORMATS.md "Pose order").
     let q_eff = model.effective_pose_joints(&poses.joints(), pose_times(&poses).as_deref())?;
     let mut out = String::from("x,y,z,phi,theta,psi\n");
-    for q in &q_eff {
+    for (k, q) in q_eff.iter().enumerate() {
         let fk = model.fk(q, tilt)?;
         let p = fk.position_mm;
         let [phi, theta, psi] = fk.zxz_deg();
+        if ![p.x, p.y, p.z, phi, theta, psi]
+            .iter()
+            .all(|v| v.is_finite())
+        {
+            return Err(CliError::failure(format!(
+                "{}: pose {} (row {}): the pose is not a finite number (model and joints out of any physical range)",
+                args.joints.display(),
+                k + 1,
+                k + 1
+            )));
+        }
         let _ = writeln!(
             out,
             "{:.9},{:.9},{:.9},{phi:.9},{theta:.9},{psi:.9}",

@@ -72,6 +72,7 @@ mod kinematics;
 mod param;
 mod pose_spec;
 mod presets;
+pub mod ranges;
 pub mod rnea;
 mod tilt;
 pub mod toml_file;

@@ -307,6 +307,7 @@ fn build(file: ModelFile) -> Result<Model, String> {
     if terms.is_active() {
         model.set_transmission(terms);
     }
+    model.check_ranges()?;
     Ok(model)
 }
 
@@ -343,6 +344,22 @@ fn joint_terms(joints: &[JointEntry]) -> Result<JointTerms, String> {
     Ok(t)
 }
 
+/// The line (1-based) of the value a build message quotes (`... = VALUE: ...`): the first line
+/// holding that number after an `=`.
+fn locate(text: &str, message: &str) -> Option<usize> {
+    let (_, rest) = message.split_once(" = ")?;
+    let quoted = rest.split([':', ' ']).next()?;
+    let value: f64 = quoted.parse().ok()?;
+    text.lines()
+        .position(|line| {
+            let line = line.split('#').next().unwrap_or("");
+            line.split(['=', ',', '{', '}', '[', ']'])
+                .skip(1)
+                .any(|v| v.trim().parse::<f64>().ok() == Some(value))
+        })
+        .map(|i| i + 1)
+}
+
 /// The `[[joint]]` transmission lines of joint `i` (only the non-zero terms).
 fn write_joint_terms(s: &mut String, t: &JointTerms, i: usize) {
     let (scale, hyst, comp) = t.joint_values(i);
@@ -370,14 +387,21 @@ fn write_joint_terms(s: &mut String, t: &JointTerms, i: usize) {
 }
 
 impl Model {
-    /// Parses a model file's text; `source` names it in error messages.
+    /// Parses a model file's text; `source` names it in error messages (with the line of the
+    /// value a message is about, when it can be found).
     pub fn from_toml_str(text: &str, source: &str) -> Result<Model, ModelError> {
         let file_err = |message: String| ModelError::File {
             file: source.to_string(),
             message,
         };
         let file: ModelFile = toml::from_str(text).map_err(|e| file_err(e.to_string()))?;
-        build(file).map_err(file_err)
+        build(file).map_err(|message| match locate(text, &message) {
+            Some(line) => ModelError::File {
+                file: format!("{source}:{line}"),
+                message,
+            },
+            None => file_err(message),
+        })
     }
 
     /// Reads a model file.
