@@ -176,6 +176,7 @@ pub fn run(args: Args) -> Result<(), CliError> {
         notes = general_notes(&g, &cal);
         g.outcome
     };
+    no_redundancy(poses, 3 * cal.len(), outcome.report.rank)?;
     if let Some(path) = &args.json {
         let text = serde_json::to_string_pretty(&outcome.report)
             .map_err(|e| CliError::failure(format!("encoding JSON: {e}")))?;
@@ -290,6 +291,7 @@ fn run_samples(args: &Args, samples: &std::path::Path) -> Result<(), CliError> {
         ..Default::default()
     };
     let outcome = calibrate_projected(&model, &data, tilt, &opts)?;
+    no_redundancy(samples, data.rows.len(), outcome.report.rank)?;
     if let Some(path) = &args.json {
         let text = serde_json::to_string_pretty(&outcome.report)
             .map_err(|e| CliError::failure(format!("encoding JSON: {e}")))?;
@@ -321,6 +323,18 @@ fn run_samples(args: &Args, samples: &std::path::Path) -> Result<(), CliError> {
         rigctl::calib::projected::OUTLIER_SIGMAS
     );
     out!("{s}")?;
+    Ok(())
+}
+
+/// Refuses a fit with no measured coordinate left over its rank: the residual is then zero
+/// whatever the errors, and the sigmas (0) would claim a perfect calibration.
+fn no_redundancy(file: &std::path::Path, measured: usize, rank: usize) -> Result<(), CliError> {
+    if measured <= rank {
+        return Err(CliError::bad_input(format!(
+            "{}: {measured} measured coordinates for {rank} identifiable directions: nothing left to estimate the errors; measure more poses",
+            file.display()
+        )));
+    }
     Ok(())
 }
 

@@ -156,6 +156,29 @@ pub fn run(args: Args) -> Result<(), CliError> {
     if args.no_structured {
         cfg.structured = Some(false);
     }
+    let finite = |flag: &str, v: &[f64]| {
+        if v.iter()
+            .all(|x| x.is_finite() && x.abs() <= rigctl::io::ranges::MAX_POSITION_MM)
+        {
+            Ok(())
+        } else {
+            Err(CliError::bad_input(format!(
+                "{flag} {v:?}: finite positions within +-100 m (mm)"
+            )))
+        }
+    };
+    finite("--box", args.box_mm.as_deref().unwrap_or(&[]))?;
+    finite(
+        "--visible-from",
+        args.visible_from.as_deref().unwrap_or(&[]),
+    )?;
+    finite("--min-z-mm", args.min_z_mm.as_slice())?;
+    if !(args.cone_deg.is_finite() && args.cone_deg > 0.0 && args.cone_deg <= 180.0) {
+        return Err(CliError::bad_input(format!(
+            "--cone-deg {}: a half angle in (0, 180] deg",
+            args.cone_deg
+        )));
+    }
     if let Some(b) = &args.box_mm {
         let b: [f64; 6] = b
             .as_slice()

@@ -332,7 +332,7 @@ fn joint_terms(joints: &[JointEntry]) -> Result<JointTerms, String> {
             let k = key
                 .strip_prefix('j')
                 .and_then(|d| d.parse::<usize>().ok())
-                .filter(|k| (1..=n).contains(k) && *k != i + 1)
+                .filter(|k| (1..=n).contains(k) && *k != i + 1 && format!("j{k}") == *key)
                 .ok_or_else(|| {
                     at(format!(
                         "joint_coupling key `{key}`: use j<k> with k another joint in 1..={n}"

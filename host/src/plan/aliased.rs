@@ -139,9 +139,16 @@ impl FromDiagnose {
                             )
                         })
                 };
+                let (a, b) = (name("a")?, name("b")?);
+                if a == b {
+                    return Err(field_err(
+                        path,
+                        format!("field `aliased[{k}]`: `a` and `b` are the same (`{a}`)"),
+                    ));
+                }
                 pairs.push(AliasedPair {
-                    a: name("a")?,
-                    b: name("b")?,
+                    a,
+                    b,
                     correlation: item
                         .get("correlation")
                         .and_then(Value::as_f64)
@@ -152,7 +159,14 @@ impl FromDiagnose {
         let mut effects = Vec::new();
         let mut loose = Vec::new();
         let mut fitted = Vec::new();
-        if let Some(list) = doc.get("effects").and_then(Value::as_array) {
+        let effects_list = match doc.get("effects") {
+            None | Some(Value::Null) => None,
+            Some(v) => Some(
+                v.as_array()
+                    .ok_or_else(|| field_err(path, "field `effects`: not an array".into()))?,
+            ),
+        };
+        if let Some(list) = effects_list {
             for (k, e) in list.iter().enumerate() {
                 if let Some(mp) = e.get("model_parameters").and_then(Value::as_object) {
                     fitted.extend(

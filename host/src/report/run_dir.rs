@@ -72,6 +72,35 @@ fn read_json(path: &Path, name: &str, notes: &mut Vec<String>) -> Option<Value> 
         .ok()
 }
 
+/// The fields of FORMATS.md "diagnose --json" that the report's conclusions read.
+fn diagnose_shape(doc: &Value) -> Result<(), String> {
+    let obj = doc
+        .as_object()
+        .ok_or("not a diagnose --json document (not a JSON object)")?;
+    for key in ["declared", "final"] {
+        if !obj.get(key).is_some_and(Value::is_object) {
+            return Err(format!(
+                "not a diagnose --json document: `{key}` missing or not an object"
+            ));
+        }
+    }
+    let effects = obj
+        .get("effects")
+        .and_then(Value::as_array)
+        .ok_or("not a diagnose --json document: `effects` missing or not an array")?;
+    for (k, e) in effects.iter().enumerate() {
+        if !e.get("id").is_some_and(Value::is_string) {
+            return Err(format!("`effects[{k}].id` missing or not a string"));
+        }
+    }
+    if let Some(a) = obj.get("aliased") {
+        if !a.is_array() {
+            return Err("`aliased` is not an array".into());
+        }
+    }
+    Ok(())
+}
+
 impl RunDir {
     /// Scans `dir` (not recursively). Unreadable or malformed files become notes; only a
     /// missing or unreadable directory is an error.
@@ -125,6 +154,11 @@ impl RunDir {
             } else if lower.starts_with("diagnose") && lower.ends_with(".json") {
                 match read_json(&path, &name, &mut run.notes) {
                     Some(v) => {
+                        // a conclusion drawn from a document of another shape would be wrong
+                        diagnose_shape(&v).map_err(|reason| ReportError::Shape {
+                            path: path.clone(),
+                            reason,
+                        })?;
                         run.diagnose.push((name.clone(), v));
                         "diagnose result"
                     }

@@ -390,6 +390,11 @@ fn import(urdf: &Urdf, opts: &ImportOptions, masses: bool) -> Result<Imported, U
             source_name: urdf.source_name.clone(),
             source: e,
         })?;
+    // every value of the file within its physical range (a link mass of 1e308 kg is refused)
+    model.check_ranges().map_err(|message| UrdfError::Model {
+        source_name: urdf.source_name.clone(),
+        source: ModelError::Invalid(message),
+    })?;
     Ok(Imported { model, joint_names })
 }
 
