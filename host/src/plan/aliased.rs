@@ -19,8 +19,7 @@ use super::robust::{self, DEFAULT_EFFECT_RMS_MM};
 use super::setup::Setup;
 use super::PlanError;
 use crate::calib::default_selection;
-use crate::diagnose::candidates::library;
-use crate::diagnose::data::Dataset;
+use crate::diagnose::candidates::library_for;
 use crate::diagnose::extended::{ExtModel, Unknown};
 use crate::model::Model;
 
@@ -221,7 +220,7 @@ impl FromDiagnose {
         id: &str,
         field: &str,
     ) -> Result<Vec<Unknown>, PlanError> {
-        if let Some(c) = library(ext, &[], &Dataset::default())
+        if let Some(c) = library_for(ext, &[], true, true)
             .into_iter()
             .find(|c| c.id == id)
         {
