@@ -148,10 +148,19 @@ impl Model {
 
     /// Names the joints (one name per joint, all different; an empty list removes the names).
     pub fn set_joint_names(&mut self, names: Vec<String>) -> Result<(), ModelError> {
-        let distinct = names
-            .iter()
-            .enumerate()
-            .all(|(i, n)| !names[..i].contains(n));
+        let mut seen = std::collections::HashSet::with_capacity(names.len());
+        let distinct = names.iter().all(|n| seen.insert(n.as_str()));
+        // a joint name is a pose-file column: no separator, control character or outer blank
+        if let Some(bad) = names.iter().find(|n| {
+            n.is_empty()
+                || n.trim() != n.as_str()
+                || n.contains(',')
+                || n.chars().any(char::is_control)
+        }) {
+            return Err(ModelError::Invalid(format!(
+                "joint name {bad:?}: not usable as a pose-file column (empty, a comma, a control character or outer blanks)"
+            )));
+        }
         if !names.is_empty() && (names.len() != self.joints.len() || !distinct) {
             return Err(ModelError::Invalid(format!(
                 "{} joint names (all different) needed, got {names:?}",

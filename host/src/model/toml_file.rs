@@ -164,6 +164,28 @@ fn op_name(motion: Motion, axis: Axis) -> &'static str {
     }
 }
 
+/// `s` as a TOML basic string (quotes included): every character TOML does not take literally
+/// (`"`, `\`, control characters, DEL) escaped, so that any name reads back identically.
+pub fn toml_string(s: &str) -> String {
+    let mut out = String::with_capacity(s.len() + 2);
+    out.push('"');
+    for c in s.chars() {
+        match c {
+            '"' => out.push_str("\\\""),
+            '\\' => out.push_str("\\\\"),
+            '\n' => out.push_str("\\n"),
+            '\t' => out.push_str("\\t"),
+            '\r' => out.push_str("\\r"),
+            c if c.is_control() => {
+                let _ = write!(out, "\\u{:04X}", c as u32);
+            }
+            c => out.push(c),
+        }
+    }
+    out.push('"');
+    out
+}
+
 /// Round-trip-exact decimal form of a finite f64 that TOML reads as a float.
 fn fmt_f64(v: f64) -> String {
     format!("{v:?}")
@@ -422,11 +444,7 @@ impl Model {
             s,
             "# rigctl model file (format: see rigctl::model::toml_file)"
         );
-        let _ = writeln!(
-            s,
-            "name = \"{}\"",
-            self.name.replace('\\', "\\\\").replace('"', "\\\"")
-        );
+        let _ = writeln!(s, "name = {}", toml_string(&self.name));
         let law = match self.gamma_law {
             GammaLaw::Linear => "linear",
             GammaLaw::Atan2 => "atan2",
@@ -438,13 +456,17 @@ impl Model {
             if let Some(j) = e.joint {
                 let _ = writeln!(s, "joint = {}", j + 1);
             }
-            let _ = writeln!(s, "name = \"{}\"\nvalue = {}", p.name, fmt_f64(p.value));
+            let _ = writeln!(
+                s,
+                "name = {}\nvalue = {}",
+                toml_string(&p.name),
+                fmt_f64(p.value)
+            );
         }
         let tilt = self.tilt_values();
         for (j, joint) in self.joints.iter().enumerate() {
             if let Some(n) = self.joint_names.get(j) {
-                let n = n.replace('\\', "\\\\").replace('"', "\\\"");
-                let _ = writeln!(s, "\n[[joint]]\nname = \"{n}\"");
+                let _ = writeln!(s, "\n[[joint]]\nname = {}", toml_string(n));
             } else {
                 let _ = writeln!(s, "\n[[joint]]");
             }
