@@ -124,10 +124,14 @@ impl Urdf {
         let mut links = Vec::new();
         let mut joints = Vec::new();
         let mut inertials = Vec::new();
+        let mut seen = std::collections::HashSet::new();
         for node in robot.children().filter(|n| n.is_element()) {
             match node.tag_name().name() {
                 "link" => {
                     let name = ctx.attr(node, "name")?.to_string();
+                    if !seen.insert(name.clone()) {
+                        return Err(ctx.err(node, format!("a second link named `{name}`")));
+                    }
                     if let Some(i) = ctx.inertial(node, &name)? {
                         inertials.push(i);
                     }
