@@ -193,6 +193,7 @@ pub fn run(args: Args) -> Result<(), CliError> {
         write_bytes_atomic(path, text.as_bytes())?;
     }
     if let Some(dir) = &args.plots {
+        let _lock = rigctl::io::atomic::lock_dir(dir)?;
         write_plots(dir, &diag)?;
         write_probe_plots(dir, &diag.probe)?;
     }
