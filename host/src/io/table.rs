@@ -118,8 +118,9 @@ impl Table {
             .next()
             .ok_or_else(|| TableError::NoHeader { file: file.into() })?;
         let header = split(head);
-        for (i, h) in header.iter().enumerate() {
-            if header[..i].contains(h) {
+        let mut seen = std::collections::HashSet::with_capacity(header.len());
+        for h in &header {
+            if !seen.insert(h.as_str()) {
                 return Err(TableError::DuplicateColumn {
                     file: file.into(),
                     line: header_line,

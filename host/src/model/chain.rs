@@ -364,6 +364,8 @@ pub struct ModelBuilder {
     masses: Vec<PointMass>,
     tilt_values: Vec<Option<TiltValues>>,
     gamma_law: GammaLaw,
+    /// The names in `params` (a name is checked once, not against every earlier one).
+    param_names: std::collections::HashSet<String>,
 }
 
 impl ModelBuilder {
@@ -379,6 +381,7 @@ impl ModelBuilder {
             masses: Vec::new(),
             tilt_values: Vec::new(),
             gamma_law: GammaLaw::Linear,
+            param_names: std::collections::HashSet::new(),
         };
         let base = [
             (Motion::Trans, Axis::X, "base_x"),
@@ -394,6 +397,7 @@ impl ModelBuilder {
                 Unit::Mm
             };
             let param = b.params.len();
+            b.param_names.insert(name.to_string());
             b.params.push(Param {
                 name: name.into(),
                 value: 0.0,
@@ -418,7 +422,7 @@ impl ModelBuilder {
         unit: Unit,
         kind: ParamKind,
     ) -> Result<usize, ModelError> {
-        if self.params.iter().any(|p| p.name == name) {
+        if self.param_names.contains(name) {
             return Err(ModelError::Invalid(format!(
                 "parameter name `{name}` used twice"
             )));
@@ -434,6 +438,7 @@ impl ModelBuilder {
                 value,
             });
         }
+        self.param_names.insert(name.to_string());
         self.params.push(Param {
             name: name.into(),
             value,

@@ -153,9 +153,11 @@ impl Urdf {
     }
 
     fn check_links(&self) -> Result<(), UrdfError> {
+        let links: std::collections::HashSet<&str> =
+            self.links.iter().map(String::as_str).collect();
         for j in &self.joints {
             for link in [&j.parent, &j.child] {
-                if !self.links.iter().any(|l| l == link) {
+                if !links.contains(link.as_str()) {
                     return Err(UrdfError::UnknownLink {
                         source_name: self.source_name.clone(),
                         link: link.clone(),
@@ -168,10 +170,12 @@ impl Urdf {
 
     /// The root link: the only link that is no joint's child.
     pub fn root_link(&self) -> Result<&str, UrdfError> {
+        let children: std::collections::HashSet<&str> =
+            self.joints.iter().map(|j| j.child.as_str()).collect();
         let roots: Vec<&str> = self
             .links
             .iter()
-            .filter(|l| !self.joints.iter().any(|j| &j.child == *l))
+            .filter(|l| !children.contains(l.as_str()))
             .map(String::as_str)
             .collect();
         match roots.as_slice() {
@@ -205,18 +209,27 @@ impl Urdf {
             }
         }
         // A URDF is a tree: a loop anywhere is refused, even when the chain asked for avoids it.
+        // Each link is walked towards the root once: a walk stops at a link already known to
+        // reach the root (linear in the number of links).
+        let mut reaches_root: std::collections::HashSet<&str> =
+            std::collections::HashSet::with_capacity(self.links.len());
         for start in &self.links {
+            let mut path: Vec<&str> = Vec::new();
+            let mut on_path: std::collections::HashSet<&str> = std::collections::HashSet::new();
             let mut link = start.as_str();
-            let mut steps = 0;
-            while let Some(&i) = by_child.get(link) {
-                steps += 1;
-                if steps > self.joints.len() {
+            while !reaches_root.contains(link) {
+                if !on_path.insert(link) {
                     return Err(self.tree_err(format!(
                         "the joints form a loop through link `{start}` (a URDF must be a tree)"
                     )));
                 }
-                link = &self.joints[i].parent;
+                path.push(link);
+                match by_child.get(link) {
+                    Some(&i) => link = &self.joints[i].parent,
+                    None => break,
+                }
             }
+            reaches_root.extend(path);
         }
         let mut out = Vec::new();
         let mut link = tip;
