@@ -115,6 +115,12 @@ impl Urdf {
         let ctx = Ctx {
             doc: &doc,
             source_name,
+            newlines: text
+                .bytes()
+                .enumerate()
+                .filter(|(_, b)| *b == b'\n')
+                .map(|(i, _)| i)
+                .collect(),
         };
         let robot = doc.root_element();
         if robot.tag_name().name() != "robot" {
@@ -262,9 +268,18 @@ impl Urdf {
 struct Ctx<'d, 'i> {
     doc: &'d roxmltree::Document<'i>,
     source_name: &'d str,
+    /// Byte offsets of the text's line feeds: the line of an element by binary search (the
+    /// document's own `text_pos_at` scans from the start, quadratic over every joint).
+    newlines: Vec<usize>,
 }
 
 impl Ctx<'_, '_> {
+    /// 1-based line of byte offset `pos`.
+    fn line_at(&self, pos: usize) -> u32 {
+        let row = self.newlines.partition_point(|&nl| nl < pos) + 1;
+        u32::try_from(row).unwrap_or(u32::MAX)
+    }
+
     fn err(&self, node: roxmltree::Node, message: String) -> UrdfError {
         let pos = self.doc.text_pos_at(node.range().start);
         UrdfError::Element {
@@ -392,7 +407,7 @@ impl Ctx<'_, '_> {
             origin_rpy_rad: rpy,
             axis,
             limits,
-            line: self.doc.text_pos_at(node.range().start).row,
+            line: self.line_at(node.range().start),
         })
     }
 }
