@@ -888,3 +888,28 @@ fn item9_a_duplicate_link_is_named() {
         r.show()
     );
 }
+
+// 9. A truncated JPEG is named as such.
+#[test]
+fn item9_a_truncated_jpeg_is_reported() {
+    let dir = tempfile::tempdir().unwrap();
+    let img = image::RgbImage::from_fn(256, 256, |x, y| {
+        image::Rgb([(x % 251) as u8, (y % 241) as u8, ((x * y) % 239) as u8])
+    });
+    let mut bytes = Vec::new();
+    image::DynamicImage::ImageRgb8(img)
+        .write_to(
+            &mut std::io::Cursor::new(&mut bytes),
+            image::ImageFormat::Jpeg,
+        )
+        .unwrap();
+    let whole = dir.path().join("whole.jpg");
+    let cut = dir.path().join("cut.jpg");
+    std::fs::write(&whole, &bytes).unwrap();
+    std::fs::write(&cut, &bytes[..bytes.len() / 2]).unwrap();
+    let r = rig!(60; "trace", cut, "--out", dir.path().join("t.csv"));
+    assert!(r.stderr.contains("truncated"), "{}", r.show());
+    assert!(matches!(r.code, Some(1..=2)), "{}", r.show());
+    let r = rig!(60; "trace", whole, "--out", dir.path().join("t.csv"));
+    assert!(!r.stderr.contains("truncated"), "{}", r.show());
+}
