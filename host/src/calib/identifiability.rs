@@ -76,6 +76,15 @@ pub struct Identifiability {
 /// vectors `V` (columns) of `jac` with unit-norm columns.
 pub fn scaled_svd(jac: &DMatrix<f64>) -> (DVector<f64>, Vec<f64>, DMatrix<f64>) {
     let n = jac.ncols();
+    if jac.nrows() == 0 || n == 0 || jac.iter().any(|v| !v.is_finite()) {
+        // nothing to decompose (no rows, or values that are not numbers): no direction is
+        // identifiable; the callers report rank 0 instead of the SVD panicking
+        return (
+            DVector::from_element(n, 1.0),
+            vec![0.0; n],
+            DMatrix::identity(n, n),
+        );
+    }
     let raw: Vec<f64> = (0..n).map(|j| jac.column(j).norm()).collect();
     let top = raw.iter().copied().fold(0.0, f64::max);
     let mut js = jac.clone();

@@ -78,6 +78,14 @@ pub fn threshold_mm(sigma_mm: f64, floor_mm: Option<f64>) -> f64 {
     OUTLIER_SIGMAS * sigma_mm.max(floor_mm.unwrap_or(0.0))
 }
 
+/// Whether `e` is beyond `threshold` (a NaN error is).
+fn beyond(e: f64, threshold: f64) -> bool {
+    !matches!(
+        e.partial_cmp(&threshold),
+        Some(std::cmp::Ordering::Less | std::cmp::Ordering::Equal)
+    )
+}
+
 /// The poses whose error is beyond `threshold_mm` and above a jump of [`GAP_RATIO`] between
 /// consecutive sorted errors (the jump itself beyond the threshold), ascending.
 pub fn beyond_gap(errors_mm: &[f64], threshold_mm: f64) -> Vec<usize> {
@@ -92,7 +100,7 @@ pub fn beyond_gap(errors_mm: &[f64], threshold_mm: f64) -> Vec<usize> {
     });
     let start = order
         .iter()
-        .position(|&k| !(errors_mm[k] <= threshold_mm))
+        .position(|&k| beyond(errors_mm[k], threshold_mm))
         .unwrap_or(order.len());
     for i in start..order.len() {
         let e = errors_mm[order[i]];
@@ -146,7 +154,7 @@ pub fn trim<E>(
         let kept_errors: Vec<f64> = keep.iter().map(|&k| errors[k]).collect();
         let sigma = robust_sigma_mm(&kept_errors, dims);
         let threshold = threshold_mm(sigma, floor_mm);
-        let next: Vec<usize> = (0..n).filter(|&k| !(errors[k] <= threshold)).collect();
+        let next = beyond_gap(&errors, threshold);
         if next.len() > max_flagged {
             let note = format!(
                 "{} of {n} poses lie beyond {OUTLIER_SIGMAS} robust sigmas ({threshold:.4} mm): \

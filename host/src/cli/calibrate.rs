@@ -117,12 +117,17 @@ fn parse_method(s: &str) -> Result<Method, String> {
 }
 
 pub fn run(args: Args) -> Result<(), CliError> {
-    super::check_outputs([
-        args.json.as_deref(),
-        args.out.as_deref(),
-        args.errors_csv.as_deref(),
-        args.plot.as_deref(),
-    ])?;
+    super::files()
+        .input("--poses", args.poses.as_deref())
+        .input("--samples", args.samples.as_deref())
+        .input("--validate", args.validate.as_deref())
+        .input("--model", args.model.model.as_deref())
+        .output("--json", args.json.as_deref())
+        .output("--out", args.out.as_deref())
+        .output("--errors-csv", args.errors_csv.as_deref())
+        .output("--plot", args.plot.as_deref())
+        .apart("--poses", "--validate")
+        .check()?;
     if let Some(samples) = &args.samples {
         return run_samples(&args, samples);
     }
@@ -179,6 +184,7 @@ pub fn run(args: Args) -> Result<(), CliError> {
         notes = general_notes(&g, &cal);
         g.outcome
     };
+    no_redundancy(poses, 3 * cal.len(), outcome.report.rank)?;
     let mut outcome = outcome;
     for o in &mut outcome.report.outliers {
         let labels = if o.file == "val" {
@@ -393,6 +399,7 @@ fn run_samples(args: &Args, samples: &std::path::Path) -> Result<(), CliError> {
         ..Default::default()
     };
     let outcome = calibrate_projected(&model, &data, tilt, &opts)?;
+    no_redundancy(samples, data.rows.len(), outcome.report.rank)?;
     if let Some(path) = &args.json {
         let text = serde_json::to_string_pretty(&outcome.report)
             .map_err(|e| CliError::failure(format!("encoding JSON: {e}")))?;
@@ -426,6 +433,18 @@ fn run_samples(args: &Args, samples: &std::path::Path) -> Result<(), CliError> {
     );
     out!("{s}")?;
     not_converged(&outcome.report)
+}
+
+/// Refuses a fit with no measured coordinate left over its rank: the residual is then zero
+/// whatever the errors, and the sigmas (0) would claim a perfect calibration.
+fn no_redundancy(file: &std::path::Path, measured: usize, rank: usize) -> Result<(), CliError> {
+    if measured <= rank {
+        return Err(CliError::bad_input(format!(
+            "{}: {measured} measured coordinates for {rank} identifiable directions: nothing left to estimate the errors; measure more poses",
+            file.display()
+        )));
+    }
+    Ok(())
 }
 
 /// Method, rank, condition, unidentifiable parameters and the parameter table.

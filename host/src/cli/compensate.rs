@@ -36,7 +36,11 @@ pub struct Args {
 }
 
 pub fn run(args: Args) -> Result<(), CliError> {
-    super::check_outputs([Some(args.out.as_path())])?;
+    super::files()
+        .input("--path", Some(&args.path))
+        .input("--model", args.model.model.as_deref())
+        .output("--out", Some(&args.out))
+        .check()?;
     let model = args.model.choose()?;
     let points = read_path(&args.path)?;
     let nominal = if args.no_nominal {

@@ -77,7 +77,17 @@ pub struct Args {
 }
 
 pub fn run(args: Args) -> Result<(), CliError> {
-    super::check_outputs([args.json.as_deref(), args.out.as_deref()])?;
+    super::files()
+        .input("--poses", args.poses.as_deref())
+        .inputs("--samples", &args.samples)
+        .inputs("--validate", &args.validate)
+        .input("--model", args.model.model.as_deref())
+        .output("--json", args.json.as_deref())
+        .output("--out", args.out.as_deref())
+        .output_dir("--plots", args.plots.as_deref(), |n| n.ends_with(".svg"))
+        .apart("--poses", "--validate")
+        .apart("--samples", "--validate")
+        .check()?;
     // the pencil holder is on the arm when the rig's samples are measured
     let default_tool_mm = (!args.samples.is_empty()).then_some(KATANA_PENCIL_TOOL_MM);
     let model = args.model.choose_with_default_tool(default_tool_mm)?;
@@ -188,6 +198,7 @@ pub fn run(args: Args) -> Result<(), CliError> {
         write_bytes_atomic(path, text.as_bytes())?;
     }
     if let Some(dir) = &args.plots {
+        let _lock = rigctl::io::atomic::lock_dir(dir)?;
         write_plots(dir, &diag)?;
         write_probe_plots(dir, &diag.probe)?;
     }
@@ -203,12 +214,14 @@ pub fn run(args: Args) -> Result<(), CliError> {
 
 /// Whether `path` is a fused-samples file (its first line names the format).
 fn is_fused(path: &Path) -> bool {
+    use std::io::Read as _;
+    // the first line only, and at most 4 KiB of it (a device or FIFO may never end a line)
+    let mut head = Vec::new();
     std::fs::File::open(path)
-        .ok()
-        .and_then(|f| {
-            let mut line = String::new();
-            std::io::BufRead::read_line(&mut std::io::BufReader::new(f), &mut line).ok()?;
-            Some(line.contains(rigctl::fusion::fuse::FUSED_FORMAT))
+        .and_then(|f| f.take(4096).read_to_end(&mut head))
+        .map(|_| {
+            let first = head.split(|&b| b == b'\n').next().unwrap_or(&[]);
+            String::from_utf8_lossy(first).contains(rigctl::fusion::fuse::FUSED_FORMAT)
         })
         .unwrap_or(false)
 }

@@ -22,6 +22,12 @@ pub struct Args {
 }
 
 pub fn run(args: Args) -> Result<(), CliError> {
+    super::files()
+        .input("FILE", Some(&args.file))
+        .output_dir("--csv", Some(&args.csv), |n| {
+            matches!(n, "pot.csv" | "tilt.csv" | "status.csv")
+        })
+        .check()?;
     let summary = export_csv(&args.file, &args.csv, args.strict)?;
     for d in &summary.damaged {
         errln!("rigctl export: {}: skipped {d}", args.file.display());

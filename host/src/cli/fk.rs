@@ -47,6 +47,14 @@ fn fk_row(
     let fk = model.fk(q, tilt)?;
     let p = fk.position_mm;
     let [phi, theta, psi] = fk.zxz_deg();
+    if ![p.x, p.y, p.z, phi, theta, psi]
+        .iter()
+        .all(|v| v.is_finite())
+    {
+        return Err(CliError::failure(
+            "the pose is not a finite number (model and joints out of any physical range)",
+        ));
+    }
     let _ = writeln!(
         out,
         "{:.9},{:.9},{:.9},{phi:.9},{theta:.9},{psi:.9}",
@@ -95,6 +103,10 @@ fn run_bag(args: &Args, model: &rigctl::model::Model, tilt: Tilt) -> Result<(), 
 }
 
 pub fn run(args: Args) -> Result<(), CliError> {
+    super::files()
+        .input("--joints", Some(&args.joints))
+        .input("--model", args.model.model.as_deref())
+        .check()?;
     let model = args.model.choose()?;
     if args.tilt && !model.has_tilt() {
         return Err(ModelError::NoTiltData {
@@ -111,8 +123,8 @@ pub fn run(args: Args) -> Result<(), CliError> {
     // directions of approach from the file's pose order (FORMATS.md "Pose order").
     let q_eff = model.effective_pose_joints(&poses.joints(), pose_times(&poses).as_deref())?;
     let mut out = String::from("x,y,z,phi,theta,psi\n");
-    for q in &q_eff {
-        fk_row(&mut out, &model, q, tilt)?;
+    for (k, q) in q_eff.iter().enumerate() {
+        fk_row(&mut out, &model, q, tilt).map_err(|e| e.in_file(&args.joints).with_row(k + 1))?;
     }
     super::out::stdout_bytes(out.as_bytes())
 }

@@ -53,7 +53,15 @@ pub struct Args {
 }
 
 pub fn run(args: Args) -> Result<(), CliError> {
-    super::check_outputs([Some(args.out.as_path())])?;
+    super::files()
+        .input("--joints", Some(&args.joints))
+        .input("--recording", Some(&args.recording))
+        .input("--trace", Some(&args.trace))
+        .input("--placement", Some(&args.placement))
+        .input("--pot", Some(&args.pot))
+        .input("--model", args.model.model.as_deref())
+        .output("--out", Some(&args.out))
+        .check()?;
     let model = args
         .model
         .choose_with_default_tool(Some(KATANA_PENCIL_TOOL_MM))?;

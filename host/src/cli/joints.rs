@@ -27,7 +27,12 @@ pub struct Args {
 }
 
 pub fn run(args: Args) -> Result<(), CliError> {
-    super::check_outputs([Some(args.out.as_path()), args.json.as_deref()])?;
+    super::files()
+        .input("--readings", Some(&args.readings))
+        .input("--model", args.model.model.as_deref())
+        .output("--out", Some(&args.out))
+        .output("--json", args.json.as_deref())
+        .check()?;
     let model = args.model.choose()?;
     let readings = read_readings(&args.readings, &model)?;
     let result = identify(&model, &readings)?;

@@ -100,13 +100,11 @@ pub fn run(cli: Cli) -> Result<(), CliError> {
     }
 }
 
-/// Checks every output path of a command before its work, so that an unwritable one cannot
-/// leave the others written (the issue-15 "all or none" rule).
-pub fn check_outputs<'a>(
-    paths: impl IntoIterator<Item = Option<&'a std::path::Path>>,
-) -> Result<(), CliError> {
-    rigctl::io::atomic::check_outputs(paths.into_iter().flatten())?;
-    Ok(())
+/// A command's files, declared with [`rigctl::io::files::RunFiles`] and checked before its work:
+/// every output usable, none of them an input or written twice (exit 2 otherwise), so that an
+/// unwritable output cannot leave the others written and no output destroys an input.
+pub fn files() -> rigctl::io::files::RunFiles {
+    rigctl::io::files::RunFiles::new()
 }
 
 /// Reports on stderr what a damaged recording lost (it was skipped, the run goes on).
@@ -156,6 +154,14 @@ impl CliError {
     pub fn in_file(self, path: &std::path::Path) -> Self {
         Self {
             message: format!("{}: {}", path.display(), self.message),
+            ..self
+        }
+    }
+
+    /// The same error with the pose (1-based row of the joint file) it is about.
+    pub fn with_row(self, row: usize) -> Self {
+        Self {
+            message: format!("pose {row}: {}", self.message),
             ..self
         }
     }

@@ -39,15 +39,20 @@ fn show(o: &Origin) -> String {
 }
 
 pub fn run(args: Args) -> Result<(), CliError> {
-    super::check_outputs([Some(args.out.as_path())])?;
+    super::files()
+        .input("--model", args.model.model.as_deref())
+        .input("--urdf", args.urdf.as_deref())
+        .output("--out", Some(&args.out))
+        .check()?;
     let model = args.model.choose()?;
     let exported = match &args.urdf {
         None => model_to_urdf(&model),
         Some(path) => {
-            let text = std::fs::read_to_string(path).map_err(|source| UrdfError::Read {
-                path: path.clone(),
-                source,
-            })?;
+            let text = rigctl::io::read::read_text_capped(path, rigctl::io::read::CAP_URDF)
+                .map_err(|source| UrdfError::Read {
+                    path: path.clone(),
+                    source,
+                })?;
             model_into_urdf(
                 &model,
                 &text,

@@ -51,12 +51,17 @@ impl ModelArgs {
             (None, None) if katana => default_tool_mm,
             (_, given) => given,
         };
-        Ok(choose_model(&ModelChoice {
+        let model = choose_model(&ModelChoice {
             robot: self.robot.as_deref(),
             model_file: self.model.as_deref(),
             tool_mm,
             sets: &self.sets,
-        })?)
+        })?;
+        // --tool-mm and --set values: the physical ranges of a model file
+        model
+            .check_ranges()
+            .map_err(|e| CliError::bad_input(format!("--tool-mm / --set: {e}")))?;
+        Ok(model)
     }
 }
 

@@ -134,11 +134,15 @@ fn parse_criterion(s: &str) -> Result<Criterion, String> {
 }
 
 pub fn run(args: Args) -> Result<(), CliError> {
-    super::check_outputs([
-        Some(args.out.as_path()),
-        args.json.as_deref(),
-        args.plot.as_deref(),
-    ])?;
+    super::files()
+        .input("--model", args.model.model.as_deref())
+        .input("--poses", args.poses.as_deref())
+        .input("--candidates-from", args.candidates_from.as_deref())
+        .input("--from-diagnose", args.from_diagnose.as_deref())
+        .output("--out", Some(&args.out))
+        .output("--json", args.json.as_deref())
+        .output("--plot", args.plot.as_deref())
+        .check()?;
     let model = args.model.choose()?;
     let mut cfg = PlanConfig::new(&model, args.n);
     cfg.seed = args.seed;
@@ -151,6 +155,29 @@ pub fn run(args: Args) -> Result<(), CliError> {
     cfg.refine_sweeps = args.refine_sweeps;
     if args.no_structured {
         cfg.structured = Some(false);
+    }
+    let finite = |flag: &str, v: &[f64]| {
+        if v.iter()
+            .all(|x| x.is_finite() && x.abs() <= rigctl::io::ranges::MAX_POSITION_MM)
+        {
+            Ok(())
+        } else {
+            Err(CliError::bad_input(format!(
+                "{flag} {v:?}: finite positions within +-100 m (mm)"
+            )))
+        }
+    };
+    finite("--box", args.box_mm.as_deref().unwrap_or(&[]))?;
+    finite(
+        "--visible-from",
+        args.visible_from.as_deref().unwrap_or(&[]),
+    )?;
+    finite("--min-z-mm", args.min_z_mm.as_slice())?;
+    if !(args.cone_deg.is_finite() && args.cone_deg > 0.0 && args.cone_deg <= 180.0) {
+        return Err(CliError::bad_input(format!(
+            "--cone-deg {}: a half angle in (0, 180] deg",
+            args.cone_deg
+        )));
     }
     if let Some(b) = &args.box_mm {
         let b: [f64; 6] = b

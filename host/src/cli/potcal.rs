@@ -30,8 +30,18 @@ pub struct Args {
 }
 
 pub fn run(args: Args) -> Result<(), CliError> {
-    super::check_outputs([Some(args.out.as_path())])?;
+    super::files()
+        .input("--points", Some(&args.points))
+        .input("--recording", args.recording.as_deref())
+        .output("--out", Some(&args.out))
+        .check()?;
     let points = match read_jig_csv(&args.points)? {
+        JigFile::Points(_) if args.recording.is_some() => {
+            return Err(CliError::bad_input(format!(
+                "{}: the jig gives raw counts; --recording is only for a jig of time windows (start_s,end_s)",
+                args.points.display()
+            )))
+        }
         JigFile::Points(p) => p,
         JigFile::Windows(w) => {
             let rec = args.recording.as_deref().ok_or_else(|| {

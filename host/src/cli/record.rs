@@ -102,6 +102,10 @@ impl Live {
 }
 
 pub fn run(args: Args) -> Result<(), CliError> {
+    super::files()
+        .input("--port", Some(&args.port))
+        .output("--out", Some(&args.out))
+        .check()?;
     // Ctrl-C and SIGTERM stop the recording cleanly: summary, exit 0.
     let stop = rigctl::io::interrupt::cooperative_stop();
     let cfg = RecordConfig {

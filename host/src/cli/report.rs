@@ -26,7 +26,10 @@ pub struct Args {
 }
 
 pub fn run(args: Args) -> Result<(), CliError> {
-    super::check_outputs([Some(args.html.as_path())])?;
+    super::files()
+        .input("RUN_DIR", Some(&args.run_dir))
+        .output("--html", Some(&args.html))
+        .check()?;
     let opts = ReportOptions {
         robot: args.robot,
         tool_mm: args.tool_mm,

@@ -26,7 +26,7 @@ pub enum PathKind {
 }
 
 pub fn run(args: Args) -> Result<(), CliError> {
-    super::check_outputs([Some(args.out.as_path())])?;
+    super::files().output("--out", Some(&args.out)).check()?;
     let paths: Vec<ReferencePath> = args
         .paths
         .iter()

@@ -49,7 +49,11 @@ pub enum PathArg {
 }
 
 pub fn run(args: Args) -> Result<(), CliError> {
-    super::check_outputs([Some(args.out.as_path()), args.overlay.as_deref()])?;
+    super::files()
+        .input("SCAN", Some(&args.scan))
+        .output("--out", Some(&args.out))
+        .output("--overlay", args.overlay.as_deref())
+        .check()?;
     let mapping = match (args.no_fiducials, args.mm_per_px) {
         (true, Some(mm_per_px)) => Mapping::Scale { mm_per_px },
         (true, None) => return Err(CliError::bad_input("--no-fiducials needs --mm-per-px")),
@@ -74,6 +78,12 @@ pub fn run(args: Args) -> Result<(), CliError> {
         },
         ..TraceOptions::default()
     };
+    if jpeg_truncated(&args.scan) {
+        errln!(
+            "rigctl trace: {}: warning: the JPEG has no end-of-image marker (truncated): only its first part is decoded, the rest is blank",
+            args.scan.display()
+        );
+    }
     // A PNG's whole-image maps are built while it is decoded.
     let (img, prepared) = load_prepared(&args.scan)?;
     let progress = if u64::from(img.width()) * u64::from(img.height()) > 4_000_000 {
@@ -176,4 +186,20 @@ fn missing_message(trace: &Trace) -> String {
         "the pencil trace is not the whole drawn path: missing {} (gaps longer than --max-gap-mm); nothing written",
         parts.join("; ")
     )
+}
+
+/// Whether `path` is a JPEG (starts with SOI) whose scan data is not followed by an end-of-image
+/// marker: a file cut short, which the decoder fills with blank blocks without an error.
+fn jpeg_truncated(path: &std::path::Path) -> bool {
+    // a PNG or anything else: reading stops after its first block
+    let Ok(bytes) = rigctl::io::read::read_capped_magic(path, 1 << 30, &[0xFF, 0xD8]) else {
+        return false; // the decoder reports an unreadable file
+    };
+    if !bytes.starts_with(&[0xFF, 0xD8]) {
+        return false;
+    }
+    let Some(sos) = bytes.windows(2).position(|w| w == [0xFF, 0xDA]) else {
+        return true;
+    };
+    !bytes[sos..].windows(2).any(|w| w == [0xFF, 0xD9])
 }

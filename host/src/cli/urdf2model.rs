@@ -35,7 +35,10 @@ pub struct Args {
 }
 
 pub fn run(args: Args) -> Result<(), CliError> {
-    super::check_outputs([Some(args.out.as_path())])?;
+    super::files()
+        .input("--urdf", Some(&args.urdf))
+        .output("--out", Some(&args.out))
+        .check()?;
     let tool_mm = match args.tool_mm.as_deref() {
         None => [0.0; 3],
         Some(&[x, y, z]) if [x, y, z].iter().all(|v| v.is_finite()) => [x, y, z],

@@ -55,7 +55,8 @@ impl crate::error::Classify for ExportError {
         match self {
             Self::Recording(e) => e.kind(),
             Self::BadFrame { .. } => ErrorKind::BadInput,
-            Self::Dir { .. } | Self::Write(_) => ErrorKind::Failure,
+            Self::Dir { .. } => ErrorKind::Failure,
+            Self::Write(e) => e.kind(),
         }
     }
 }
@@ -101,10 +102,8 @@ pub fn decode_recording(
 pub fn export_csv(path: &Path, dir: &Path, strict: bool) -> Result<ExportSummary, ExportError> {
     let salvaged = read_salvaged(path, strict)?;
     let frames = &salvaged.frames;
-    std::fs::create_dir_all(dir).map_err(|source| ExportError::Dir {
-        path: dir.to_path_buf(),
-        source,
-    })?;
+    // the three files of one run, never a mix of concurrent exports into the same directory
+    let _lock = crate::io::atomic::lock_dir(dir)?;
     let mut tally = Tally::new();
     for (_, msg) in frames {
         tally.on_message(msg);

@@ -293,10 +293,11 @@ pub fn header_bytes(meta: &RecordingMeta) -> Vec<u8> {
 
 /// Reads a whole recording file.
 pub fn read_recording(path: &Path) -> Result<Recording, RecordingError> {
-    let bytes = std::fs::read(path).map_err(|source| RecordingError::Open {
-        path: path.to_path_buf(),
-        source,
-    })?;
+    let bytes = crate::io::read::read_capped_magic(path, crate::io::read::CAP_RECORDING, MAGIC)
+        .map_err(|source| RecordingError::Open {
+            path: path.to_path_buf(),
+            source,
+        })?;
     parse_recording(path, &bytes)
 }
 

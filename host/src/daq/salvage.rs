@@ -79,7 +79,12 @@ impl SalvagedRecording {
 
 /// Reads and salvages the recording at `path`.
 pub fn read_salvaged(path: &Path, strict: bool) -> Result<SalvagedRecording, RecordingError> {
-    let bytes = std::fs::read(path).map_err(|source| RecordingError::Open {
+    let bytes = crate::io::read::read_capped_magic(
+        path,
+        crate::io::read::CAP_RECORDING,
+        crate::daq::recording::MAGIC,
+    )
+    .map_err(|source| RecordingError::Open {
         path: path.to_path_buf(),
         source,
     })?;

@@ -47,6 +47,19 @@ fn is_link_length_name(name: &str) -> bool {
 
 /// All candidates for `ext` and `data`, minus the unknowns in `current`.
 pub fn library(ext: &ExtModel, current: &[Unknown], data: &Dataset) -> Vec<Candidate> {
+    library_for(ext, current, data.has_approach(), data.has_time())
+}
+
+/// All candidates for `ext` minus the unknowns in `current`, with the path-dependent ones
+/// (`hysteresis:j<i>` when `approach`, `time_drift`, `time_drift:j<i>` when `time`): every
+/// effect id `diagnose` can report, for a reader of its JSON that has no data set
+/// (`plan --from-diagnose`).
+pub fn library_for(
+    ext: &ExtModel,
+    current: &[Unknown],
+    approach: bool,
+    time: bool,
+) -> Vec<Candidate> {
     let model = &ext.model;
     let idx = |name: &str| model.param_index(name).map(Unknown::Param);
     let mut out: Vec<Candidate> = Vec::new();
@@ -154,7 +167,7 @@ pub fn library(ext: &ExtModel, current: &[Unknown], data: &Dataset) -> Vec<Candi
             );
         }
     }
-    if data.has_approach() {
+    if approach {
         for j in 0..n {
             push(
                 format!("hysteresis:j{}", j + 1),
@@ -163,7 +176,7 @@ pub fn library(ext: &ExtModel, current: &[Unknown], data: &Dataset) -> Vec<Candi
             );
         }
     }
-    if data.has_time() {
+    if time {
         push(
             "time_drift".into(),
             (0..3).map(|a| Some(Unknown::PositionDrift(a))).collect(),

@@ -482,6 +482,18 @@ fn fused_from_table(
                 ));
             }
         }
+        // u lies in the sheet, n is the sheet's normal: two independent measured directions
+        if u.dot(&n).abs() > 1e-3 {
+            return Err(FusionError::csv(
+                path,
+                row.line,
+                "u_x",
+                format!(
+                    "u is not perpendicular to n (u.n = {:.6}): the two measured components are not independent",
+                    u.dot(&n)
+                ),
+            ));
+        }
         out.push(FusedSample {
             t_s: v[0],
             q_deg: v[1..=n_joints].to_vec(),

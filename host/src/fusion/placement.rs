@@ -155,10 +155,11 @@ impl SheetPlacement {
 
     /// Reads a placement file.
     pub fn read(path: &Path) -> Result<Self, FusionError> {
-        let text = std::fs::read_to_string(path).map_err(|source| FusionError::Read {
-            path: path.to_path_buf(),
-            source,
-        })?;
+        let text = crate::io::read::read_text_capped(path, crate::io::read::CAP_SMALL_TEXT)
+            .map_err(|source| FusionError::Read {
+                path: path.to_path_buf(),
+                source,
+            })?;
         Self::from_toml_str(&text, path)
     }
 

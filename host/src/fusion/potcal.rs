@@ -265,15 +265,35 @@ impl PotCalibration {
                 "needs finite coefficients (at least 2) and half_range_raw > 0".into(),
             ));
         }
+        let counts = crate::io::ranges::MAX_RAW_COUNTS;
+        let in_counts = [c.raw_min, c.raw_max, c.centre_raw, c.half_range_raw]
+            .iter()
+            .all(|v| v.is_finite() && v.abs() <= counts);
+        if !in_counts || c.raw_min > c.raw_max {
+            return Err(bad(format!(
+                "raw_min {} .. raw_max {}, centre_raw, half_range_raw: finite counts within 2^32 and raw_min <= raw_max",
+                c.raw_min, c.raw_max
+            )));
+        }
+        if c.coefficients.len() > 16
+            || c.coefficients
+                .iter()
+                .any(|v| v.abs() > crate::io::ranges::MAX_POSITION_MM)
+        {
+            return Err(bad(
+                "coefficients: at most 16, each within 100 m (mm)".into()
+            ));
+        }
         Ok(c)
     }
 
     /// Reads a calibration file.
     pub fn read(path: &Path) -> Result<Self, FusionError> {
-        let text = std::fs::read_to_string(path).map_err(|source| FusionError::Read {
-            path: path.to_path_buf(),
-            source,
-        })?;
+        let text = crate::io::read::read_text_capped(path, crate::io::read::CAP_SMALL_TEXT)
+            .map_err(|source| FusionError::Read {
+                path: path.to_path_buf(),
+                source,
+            })?;
         Self::from_toml_str(&text, path)
     }
 

@@ -34,9 +34,34 @@ pub enum AtomicWriteError {
 }
 
 impl crate::error::Classify for AtomicWriteError {
+    /// An unusable path (a directory, a missing parent) is bad input; the system refusing the
+    /// write (no space, permission denied) is a failure of the run.
     fn kind(&self) -> crate::error::ErrorKind {
-        crate::error::ErrorKind::Failure
+        match self {
+            Self::Io { .. } => crate::error::ErrorKind::Failure,
+            Self::Unusable { .. } => crate::error::ErrorKind::BadInput,
+        }
     }
+}
+
+/// An exclusive lock on an output directory, held while a command writes its set of files into
+/// it, so that concurrent runs into the same directory leave the files of one run, never a mix
+/// (`simulate --out DIR` run several times at once). Released when dropped.
+pub struct DirLock {
+    _lock: nix::fcntl::Flock<File>,
+}
+
+/// Creates `dir` if missing and locks it exclusively (waits for another holder).
+pub fn lock_dir(dir: &Path) -> Result<DirLock, AtomicWriteError> {
+    let io = |source| AtomicWriteError::Io {
+        path: dir.to_path_buf(),
+        source,
+    };
+    std::fs::create_dir_all(dir).map_err(io)?;
+    let file = File::open(dir).map_err(io)?;
+    let lock = nix::fcntl::Flock::lock(file, nix::fcntl::FlockArg::LockExclusive)
+        .map_err(|(_, e)| io(std::io::Error::from(e)))?;
+    Ok(DirLock { _lock: lock })
 }
 
 /// Most symbolic links followed before giving up (as the kernel's ELOOP limit).

@@ -4,9 +4,11 @@
 
 pub mod atomic;
 pub mod cdr;
+pub mod files;
 pub mod interrupt;
 pub mod pose_csv;
 pub mod ranges;
+pub mod read;
 pub mod rosbag;
 pub mod table;
 pub mod units;

@@ -151,10 +151,13 @@ impl From<TableError> for PoseCsvError {
 /// Reads and checks a pose file.
 pub fn read_poses(path: &Path, spec: &PoseSpec) -> Result<PoseFile, PoseCsvError> {
     let file = path.display().to_string();
-    let text = std::fs::read_to_string(path).map_err(|source| PoseCsvError::Read {
-        file: file.clone(),
-        source,
-    })?;
+    let text =
+        crate::io::read::read_text_capped(path, crate::io::read::CAP_TABLE).map_err(|source| {
+            PoseCsvError::Read {
+                file: file.clone(),
+                source,
+            }
+        })?;
     parse_poses(&text, &file, spec)
 }
 

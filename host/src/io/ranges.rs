@@ -24,6 +24,16 @@ pub const MAX_RAW_COUNTS: f64 = 4_294_967_296.0;
 pub const MAX_OTHER: f64 = 1e12;
 const MAX_DIRECTION: f64 = 1e3;
 
+/// A number for a message: plain when of a readable size, else in exponent form (`1e308`, not
+/// 309 digits).
+pub fn show(v: f64) -> String {
+    if v == 0.0 || (1e-4..1e9).contains(&v.abs()) {
+        format!("{v}")
+    } else {
+        format!("{v:e}")
+    }
+}
+
 /// The kind of quantity a column holds, from its name.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub enum Quantity {

@@ -94,10 +94,12 @@ impl Table {
     /// Reads and parses `path` (named in messages as `path.display()`).
     pub fn read(path: &Path) -> Result<Self, TableError> {
         let file = path.display().to_string();
-        let text = std::fs::read_to_string(path).map_err(|source| TableError::Read {
-            file: file.clone(),
-            source,
-        })?;
+        let text = crate::io::read::read_text_capped(path, crate::io::read::CAP_TABLE).map_err(
+            |source| TableError::Read {
+                file: file.clone(),
+                source,
+            },
+        )?;
         Self::parse(&text, &file)
     }
 
@@ -116,8 +118,9 @@ impl Table {
             .next()
             .ok_or_else(|| TableError::NoHeader { file: file.into() })?;
         let header = split(head);
-        for (i, h) in header.iter().enumerate() {
-            if header[..i].contains(h) {
+        let mut seen = std::collections::HashSet::with_capacity(header.len());
+        for h in &header {
+            if !seen.insert(h.as_str()) {
                 return Err(TableError::DuplicateColumn {
                     file: file.into(),
                     line: header_line,

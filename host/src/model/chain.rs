@@ -148,10 +148,19 @@ impl Model {
 
     /// Names the joints (one name per joint, all different; an empty list removes the names).
     pub fn set_joint_names(&mut self, names: Vec<String>) -> Result<(), ModelError> {
-        let distinct = names
-            .iter()
-            .enumerate()
-            .all(|(i, n)| !names[..i].contains(n));
+        let mut seen = std::collections::HashSet::with_capacity(names.len());
+        let distinct = names.iter().all(|n| seen.insert(n.as_str()));
+        // a joint name is a pose-file column: no separator, control character or outer blank
+        if let Some(bad) = names.iter().find(|n| {
+            n.is_empty()
+                || n.trim() != n.as_str()
+                || n.contains(',')
+                || n.chars().any(char::is_control)
+        }) {
+            return Err(ModelError::Invalid(format!(
+                "joint name {bad:?}: not usable as a pose-file column (empty, a comma, a control character or outer blanks)"
+            )));
+        }
         if !names.is_empty() && (names.len() != self.joints.len() || !distinct) {
             return Err(ModelError::Invalid(format!(
                 "{} joint names (all different) needed, got {names:?}",
@@ -355,6 +364,8 @@ pub struct ModelBuilder {
     masses: Vec<PointMass>,
     tilt_values: Vec<Option<TiltValues>>,
     gamma_law: GammaLaw,
+    /// The names in `params` (a name is checked once, not against every earlier one).
+    param_names: std::collections::HashSet<String>,
 }
 
 impl ModelBuilder {
@@ -370,6 +381,7 @@ impl ModelBuilder {
             masses: Vec::new(),
             tilt_values: Vec::new(),
             gamma_law: GammaLaw::Linear,
+            param_names: std::collections::HashSet::new(),
         };
         let base = [
             (Motion::Trans, Axis::X, "base_x"),
@@ -385,6 +397,7 @@ impl ModelBuilder {
                 Unit::Mm
             };
             let param = b.params.len();
+            b.param_names.insert(name.to_string());
             b.params.push(Param {
                 name: name.into(),
                 value: 0.0,
@@ -409,7 +422,7 @@ impl ModelBuilder {
         unit: Unit,
         kind: ParamKind,
     ) -> Result<usize, ModelError> {
-        if self.params.iter().any(|p| p.name == name) {
+        if self.param_names.contains(name) {
             return Err(ModelError::Invalid(format!(
                 "parameter name `{name}` used twice"
             )));
@@ -425,6 +438,7 @@ impl ModelBuilder {
                 value,
             });
         }
+        self.param_names.insert(name.to_string());
         self.params.push(Param {
             name: name.into(),
             value,

@@ -74,6 +74,7 @@ pub mod motion;
 mod param;
 mod pose_spec;
 mod presets;
+pub mod ranges;
 pub mod rnea;
 mod tilt;
 pub mod toml_file;

@@ -164,6 +164,28 @@ fn op_name(motion: Motion, axis: Axis) -> &'static str {
     }
 }
 
+/// `s` as a TOML basic string (quotes included): every character TOML does not take literally
+/// (`"`, `\`, control characters, DEL) escaped, so that any name reads back identically.
+pub fn toml_string(s: &str) -> String {
+    let mut out = String::with_capacity(s.len() + 2);
+    out.push('"');
+    for c in s.chars() {
+        match c {
+            '"' => out.push_str("\\\""),
+            '\\' => out.push_str("\\\\"),
+            '\n' => out.push_str("\\n"),
+            '\t' => out.push_str("\\t"),
+            '\r' => out.push_str("\\r"),
+            c if c.is_control() => {
+                let _ = write!(out, "\\u{:04X}", c as u32);
+            }
+            c => out.push(c),
+        }
+    }
+    out.push('"');
+    out
+}
+
 /// Round-trip-exact decimal form of a finite f64 that TOML reads as a float.
 fn fmt_f64(v: f64) -> String {
     format!("{v:?}")
@@ -307,6 +329,7 @@ fn build(file: ModelFile) -> Result<Model, String> {
     if terms.is_active() {
         model.set_transmission(terms);
     }
+    model.check_ranges()?;
     Ok(model)
 }
 
@@ -331,7 +354,7 @@ fn joint_terms(joints: &[JointEntry]) -> Result<JointTerms, String> {
             let k = key
                 .strip_prefix('j')
                 .and_then(|d| d.parse::<usize>().ok())
-                .filter(|k| (1..=n).contains(k) && *k != i + 1)
+                .filter(|k| (1..=n).contains(k) && *k != i + 1 && format!("j{k}") == *key)
                 .ok_or_else(|| {
                     at(format!(
                         "joint_coupling key `{key}`: use j<k> with k another joint in 1..={n}"
@@ -341,6 +364,22 @@ fn joint_terms(joints: &[JointEntry]) -> Result<JointTerms, String> {
         }
     }
     Ok(t)
+}
+
+/// The line (1-based) of the value a build message quotes (`... = VALUE: ...`): the first line
+/// holding that number after an `=`.
+fn locate(text: &str, message: &str) -> Option<usize> {
+    let (_, rest) = message.split_once(" = ")?;
+    let quoted = rest.split([':', ' ']).next()?;
+    let value: f64 = quoted.parse().ok()?;
+    text.lines()
+        .position(|line| {
+            let line = line.split('#').next().unwrap_or("");
+            line.split(['=', ',', '{', '}', '[', ']'])
+                .skip(1)
+                .any(|v| v.trim().parse::<f64>().ok() == Some(value))
+        })
+        .map(|i| i + 1)
 }
 
 /// The `[[joint]]` transmission lines of joint `i` (only the non-zero terms).
@@ -370,22 +409,30 @@ fn write_joint_terms(s: &mut String, t: &JointTerms, i: usize) {
 }
 
 impl Model {
-    /// Parses a model file's text; `source` names it in error messages.
+    /// Parses a model file's text; `source` names it in error messages (with the line of the
+    /// value a message is about, when it can be found).
     pub fn from_toml_str(text: &str, source: &str) -> Result<Model, ModelError> {
         let file_err = |message: String| ModelError::File {
             file: source.to_string(),
             message,
         };
         let file: ModelFile = toml::from_str(text).map_err(|e| file_err(e.to_string()))?;
-        build(file).map_err(file_err)
+        build(file).map_err(|message| match locate(text, &message) {
+            Some(line) => ModelError::File {
+                file: format!("{source}:{line}"),
+                message,
+            },
+            None => file_err(message),
+        })
     }
 
     /// Reads a model file.
     pub fn from_file(path: &Path) -> Result<Model, ModelError> {
-        let text = std::fs::read_to_string(path).map_err(|source| ModelError::Read {
-            path: path.to_path_buf(),
-            source,
-        })?;
+        let text = crate::io::read::read_text_capped(path, crate::io::read::CAP_SMALL_TEXT)
+            .map_err(|source| ModelError::Read {
+                path: path.to_path_buf(),
+                source,
+            })?;
         Self::from_toml_str(&text, &path.display().to_string())
     }
 
@@ -397,11 +444,7 @@ impl Model {
             s,
             "# rigctl model file (format: see rigctl::model::toml_file)"
         );
-        let _ = writeln!(
-            s,
-            "name = \"{}\"",
-            self.name.replace('\\', "\\\\").replace('"', "\\\"")
-        );
+        let _ = writeln!(s, "name = {}", toml_string(&self.name));
         let law = match self.gamma_law {
             GammaLaw::Linear => "linear",
             GammaLaw::Atan2 => "atan2",
@@ -413,13 +456,17 @@ impl Model {
             if let Some(j) = e.joint {
                 let _ = writeln!(s, "joint = {}", j + 1);
             }
-            let _ = writeln!(s, "name = \"{}\"\nvalue = {}", p.name, fmt_f64(p.value));
+            let _ = writeln!(
+                s,
+                "name = {}\nvalue = {}",
+                toml_string(&p.name),
+                fmt_f64(p.value)
+            );
         }
         let tilt = self.tilt_values();
         for (j, joint) in self.joints.iter().enumerate() {
             if let Some(n) = self.joint_names.get(j) {
-                let n = n.replace('\\', "\\\\").replace('"', "\\\"");
-                let _ = writeln!(s, "\n[[joint]]\nname = \"{n}\"");
+                let _ = writeln!(s, "\n[[joint]]\nname = {}", toml_string(n));
             } else {
                 let _ = writeln!(s, "\n[[joint]]");
             }

@@ -19,8 +19,7 @@ use super::robust::{self, DEFAULT_EFFECT_RMS_MM};
 use super::setup::Setup;
 use super::PlanError;
 use crate::calib::default_selection;
-use crate::diagnose::candidates::library;
-use crate::diagnose::data::Dataset;
+use crate::diagnose::candidates::library_for;
 use crate::diagnose::extended::{ExtModel, Unknown};
 use crate::model::Model;
 
@@ -139,9 +138,16 @@ impl FromDiagnose {
                             )
                         })
                 };
+                let (a, b) = (name("a")?, name("b")?);
+                if a == b {
+                    return Err(field_err(
+                        path,
+                        format!("field `aliased[{k}]`: `a` and `b` are the same (`{a}`)"),
+                    ));
+                }
                 pairs.push(AliasedPair {
-                    a: name("a")?,
-                    b: name("b")?,
+                    a,
+                    b,
                     correlation: item
                         .get("correlation")
                         .and_then(Value::as_f64)
@@ -152,7 +158,14 @@ impl FromDiagnose {
         let mut effects = Vec::new();
         let mut loose = Vec::new();
         let mut fitted = Vec::new();
-        if let Some(list) = doc.get("effects").and_then(Value::as_array) {
+        let effects_list = match doc.get("effects") {
+            None | Some(Value::Null) => None,
+            Some(v) => Some(
+                v.as_array()
+                    .ok_or_else(|| field_err(path, "field `effects`: not an array".into()))?,
+            ),
+        };
+        if let Some(list) = effects_list {
             for (k, e) in list.iter().enumerate() {
                 if let Some(mp) = e.get("model_parameters").and_then(Value::as_object) {
                     fitted.extend(
@@ -195,7 +208,7 @@ impl FromDiagnose {
     /// Reads the diagnose JSON `path`.
     pub fn read(path: &Path) -> Result<Self, PlanError> {
         let shown = path.display().to_string();
-        let text = std::fs::read_to_string(path)
+        let text = crate::io::read::read_text_capped(path, crate::io::read::CAP_SMALL_TEXT)
             .map_err(|e| field_err(&shown, format!("cannot read: {e}")))?;
         Self::parse(&shown, &text)
     }
@@ -207,7 +220,7 @@ impl FromDiagnose {
         id: &str,
         field: &str,
     ) -> Result<Vec<Unknown>, PlanError> {
-        if let Some(c) = library(ext, &[], &Dataset::default())
+        if let Some(c) = library_for(ext, &[], true, true)
             .into_iter()
             .find(|c| c.id == id)
         {

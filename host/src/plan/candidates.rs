@@ -135,7 +135,7 @@ pub fn draw_candidates(
             .iter()
             .map(|l| {
                 let (lo, hi) = usable_range(l);
-                if hi > lo {
+                if hi > lo && (hi - lo).is_finite() {
                     rng.gen_range(lo..hi)
                 } else {
                     lo

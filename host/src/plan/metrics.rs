@@ -45,6 +45,18 @@ pub fn stack_rows(
     })
 }
 
+/// The triangular factor `R` of the prior rows (QR): the same `J^T J`, column norms and singular
+/// values as the prior rows, with at most as many rows as parameters, so that a random draw
+/// costs the same whatever the number of poses already measured (the draws stack the prior
+/// with the drawn poses hundreds of times).
+pub fn compact_prior(prior_rows: &DMatrix<f64>) -> DMatrix<f64> {
+    if prior_rows.nrows() > prior_rows.ncols() && prior_rows.iter().all(|v| v.is_finite()) {
+        prior_rows.clone().qr().r()
+    } else {
+        prior_rows.clone()
+    }
+}
+
 /// Expected sigmas (noise `noise_mm` per coordinate), condition number and O1 of the Jacobian
 /// `jac` (parameter units) of `poses` poses.
 pub fn design_stats(jac: &DMatrix<f64>, poses: usize, noise_mm: f64) -> DesignStats {
@@ -117,6 +129,7 @@ pub fn random_baseline_draws(
     let n_cand = b.nrows() / 3;
     let p = b.ncols();
     let prior_poses = prior_rows.nrows() / 3;
+    let prior_rows = &compact_prior(prior_rows);
     let mut sig: Vec<Vec<f64>> = vec![Vec::with_capacity(draws); p];
     let mut per_draw = Vec::with_capacity(draws.max(1));
     let (mut conds, mut mins, mut o1s) = (Vec::new(), Vec::new(), Vec::new());
@@ -205,6 +218,7 @@ pub fn ratio_per_draw(
 ) -> Vec<f64> {
     let n_cand = b.nrows() / 3;
     let prior_poses = prior_rows.nrows() / 3;
+    let prior_rows = &compact_prior(prior_rows);
     (0..draws)
         .map(|_| {
             let pick = sample(rng, n_cand, n.min(n_cand)).into_vec();

@@ -238,6 +238,10 @@ pub struct RefineSummary {
     pub sweeps: usize,
 }
 
+/// Most drawn candidates (`--candidates`) and random baseline draws (`--random-draws`); `--n`
+/// is at most the number of candidates (drawn, or the `--candidates-from` poses that pass).
+pub const MAX_CANDIDATES: usize = 200_000;
+
 /// Plans `cfg.n` poses for `model` (see the module docs); with `from`, the extra poses that
 /// separate the aliased effects of a diagnosis, given the poses already measured.
 pub fn plan(
@@ -253,6 +257,25 @@ pub fn plan(
     }
     if cfg.n == 0 {
         return Err(PlanError::Config("--n must be at least 1".into()));
+    }
+    if cfg.candidates > MAX_CANDIDATES {
+        return Err(PlanError::Config(format!(
+            "--candidates {}: at most {MAX_CANDIDATES}",
+            cfg.candidates
+        )));
+    }
+    // the poses are chosen among the candidates: never more than they allow
+    if cfg.pool_q.is_none() && cfg.n > cfg.candidates {
+        return Err(PlanError::TooFewCandidates {
+            n: cfg.n,
+            candidates: cfg.candidates,
+        });
+    }
+    if cfg.random_draws > MAX_CANDIDATES {
+        return Err(PlanError::Config(format!(
+            "--random-draws {}: at most {MAX_CANDIDATES}",
+            cfg.random_draws
+        )));
     }
     let mut rng = ChaCha8Rng::seed_from_u64(cfg.seed);
     let (mut cands, pool_index) = match &cfg.pool_q {

@@ -58,6 +58,9 @@ pub enum ReportError {
     /// The page could not be written.
     #[error(transparent)]
     Write(#[from] AtomicWriteError),
+    /// A result file of the run that is valid JSON but not the document its name says.
+    #[error("{path}: {reason}")]
+    Shape { path: PathBuf, reason: String },
 }
 
 fn notes_suffix(notes: &[String]) -> String {
@@ -71,8 +74,10 @@ fn notes_suffix(notes: &[String]) -> String {
 impl Classify for ReportError {
     fn kind(&self) -> ErrorKind {
         match self {
-            ReportError::Dir { .. } | ReportError::NothingUsable { .. } => ErrorKind::BadInput,
-            ReportError::Write(_) => ErrorKind::Failure,
+            ReportError::Dir { .. }
+            | ReportError::NothingUsable { .. }
+            | ReportError::Shape { .. } => ErrorKind::BadInput,
+            ReportError::Write(e) => e.kind(),
         }
     }
 }

@@ -64,12 +64,41 @@ pub fn sha256_hex(bytes: &[u8]) -> String {
 }
 
 fn read_json(path: &Path, name: &str, notes: &mut Vec<String>) -> Option<Value> {
-    let text = std::fs::read_to_string(path)
+    let text = crate::io::read::read_text_capped(path, crate::io::read::CAP_SMALL_TEXT)
         .map_err(|e| notes.push(format!("{name}: cannot read: {e}")))
         .ok()?;
     serde_json::from_str(&text)
         .map_err(|e| notes.push(format!("{name}: not valid JSON ({e}); skipped")))
         .ok()
+}
+
+/// The fields of FORMATS.md "diagnose --json" that the report's conclusions read.
+fn diagnose_shape(doc: &Value) -> Result<(), String> {
+    let obj = doc
+        .as_object()
+        .ok_or("not a diagnose --json document (not a JSON object)")?;
+    for key in ["declared", "final"] {
+        if !obj.get(key).is_some_and(Value::is_object) {
+            return Err(format!(
+                "not a diagnose --json document: `{key}` missing or not an object"
+            ));
+        }
+    }
+    let effects = obj
+        .get("effects")
+        .and_then(Value::as_array)
+        .ok_or("not a diagnose --json document: `effects` missing or not an array")?;
+    for (k, e) in effects.iter().enumerate() {
+        if !e.get("id").is_some_and(Value::is_string) {
+            return Err(format!("`effects[{k}].id` missing or not a string"));
+        }
+    }
+    if let Some(a) = obj.get("aliased") {
+        if !a.is_array() {
+            return Err("`aliased` is not an array".into());
+        }
+    }
+    Ok(())
 }
 
 impl RunDir {
@@ -94,7 +123,7 @@ impl RunDir {
         };
         for name in names {
             let path = dir.join(&name);
-            let bytes = match std::fs::read(&path) {
+            let bytes = match crate::io::read::read_capped(&path, crate::io::read::CAP_TABLE) {
                 Ok(b) => b,
                 Err(e) => {
                     run.notes.push(format!("{name}: cannot read: {e}"));
@@ -125,6 +154,11 @@ impl RunDir {
             } else if lower.starts_with("diagnose") && lower.ends_with(".json") {
                 match read_json(&path, &name, &mut run.notes) {
                     Some(v) => {
+                        // a conclusion drawn from a document of another shape would be wrong
+                        diagnose_shape(&v).map_err(|reason| ReportError::Shape {
+                            path: path.clone(),
+                            reason,
+                        })?;
                         run.diagnose.push((name.clone(), v));
                         "diagnose result"
                     }

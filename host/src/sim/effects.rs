@@ -235,11 +235,39 @@ pub fn parse_effect(arg: &str) -> Result<Effect, EffectError> {
         }
         _ => return Err(EffectError::UnknownId { id: id.to_string() }),
     };
+    effect_in_range(id, raw, &kind)?;
     Ok(Effect {
         id: id.to_string(),
         values,
         kind,
     })
+}
+
+/// The physical range of an effect's value ([`crate::model::ranges`]; parameter deltas are
+/// checked on the truth model they produce, see [`crate::sim::simulate::truth_model`]).
+fn effect_in_range(id: &str, raw: &str, kind: &EffectKind) -> Result<(), EffectError> {
+    use crate::io::ranges::{MAX_ANGLE_DEG, MAX_POSITION_MM};
+    use crate::model::ranges as r;
+    let (values, limit): (Vec<f64>, f64) = match kind {
+        EffectKind::Params(list) => (list.iter().map(|(_, v)| *v).collect(), MAX_POSITION_MM),
+        EffectKind::PositionDrift(v) => (v.iter().copied().collect(), MAX_POSITION_MM),
+        EffectKind::JointDrift(_, v) => (vec![*v], MAX_ANGLE_DEG),
+        EffectKind::Joint(JointTerm::Scale(_, v)) => (vec![*v], r::MAX_JOINT_SCALE),
+        EffectKind::Joint(JointTerm::Coupling(_, _, v)) => (vec![*v], r::MAX_COUPLING),
+        EffectKind::Joint(JointTerm::Hysteresis(_, v)) => (vec![*v], r::MAX_HYSTERESIS_DEG),
+        EffectKind::Joint(JointTerm::Compliance(_, v)) => (vec![*v], r::MAX_COMPLIANCE),
+    };
+    match values.iter().find(|v| !(v.is_finite() && v.abs() <= limit)) {
+        Some(v) => Err(EffectError::BadValue {
+            id: id.into(),
+            value: raw.into(),
+            reason: format!(
+                "{} is out of physical range (|value| <= {limit})",
+                crate::io::ranges::show(*v)
+            ),
+        }),
+        None => Ok(()),
+    }
 }
 
 impl Effect {

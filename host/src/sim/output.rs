@@ -106,10 +106,21 @@ pub fn truth_json(out: &SimOutput, cfg: &SimConfig) -> Value {
 
 /// Writes `cal.csv`, `val.csv`, `truth.toml` and `truth.json` into `dir` (created if missing).
 pub fn write_outputs(dir: &Path, out: &SimOutput, cfg: &SimConfig) -> Result<(), SimError> {
-    std::fs::create_dir_all(dir).map_err(|source| SimError::Write {
-        path: dir.to_path_buf(),
-        source,
-    })?;
+    // no NaN or absurd coordinate in a written file
+    let bad = out.cal.iter().chain(&out.val).find(|p| {
+        !p.measured_mm
+            .iter()
+            .chain(&p.q_deg)
+            .all(|v| v.is_finite() && v.abs() <= crate::io::ranges::MAX_POSITION_MM)
+    });
+    if let Some(p) = bad {
+        return Err(SimError::Config(format!(
+            "pose {}: the simulated measurement is beyond 100 m or not a number",
+            p.id
+        )));
+    }
+    // the four files of one run, never a mix of concurrent runs into the same directory
+    let _lock = crate::io::atomic::lock_dir(dir)?;
     let n = out.declared.n_joints();
     let json_text = serde_json::to_string_pretty(&truth_json(out, cfg))
         .map_err(|e| SimError::Config(format!("cannot serialise truth.json: {e}")))?;

@@ -659,7 +659,8 @@ pub fn write_session(dir: &Path, s: &Session, cfg: &SessionConfig) -> Result<(),
         let path = path.to_path_buf();
         move |source| SessionError::Write { path, source }
     };
-    std::fs::create_dir_all(dir).map_err(io(dir))?;
+    // the files of one session, never a mix of concurrent runs into the same directory
+    let _lock = crate::io::atomic::lock_dir(dir)?;
     let nj = s.q_deg.first().map_or(0, Vec::len);
     let qhead: Vec<String> = (1..=nj).map(|j| format!("q{j}")).collect();
     let mut joints = format!("t,{}\n", qhead.join(","));

@@ -96,7 +96,8 @@ impl crate::error::Classify for SimError {
             SimError::Config(_) | SimError::Effect(_) => ErrorKind::BadInput,
             SimError::Plan(e) => e.kind(),
             SimError::Model(e) => e.kind(),
-            SimError::Write { .. } | SimError::Atomic(_) => ErrorKind::Failure,
+            SimError::Atomic(e) => e.kind(),
+            SimError::Write { .. } => ErrorKind::Failure,
         }
     }
 }
@@ -180,6 +181,9 @@ pub fn truth_model(
     for e in &cfg.effects {
         e.apply(&mut truth)?;
     }
+    truth
+        .check_ranges()
+        .map_err(|e| SimError::Config(format!("the truth model with the effects: {e}")))?;
     Ok((truth, errors))
 }
 
@@ -192,13 +196,19 @@ fn as_written(q: &[f64]) -> Vec<f64> {
 
 /// Runs a session (see the module documentation).
 pub fn simulate(declared: &Model, cfg: &SimConfig) -> Result<SimOutput, SimError> {
-    if !(cfg.noise_mm.is_finite() && cfg.noise_mm >= 0.0) {
+    if !(cfg.noise_mm.is_finite()
+        && cfg.noise_mm >= 0.0
+        && cfg.noise_mm <= crate::io::ranges::MAX_POSITION_MM)
+    {
         return Err(SimError::Config(format!(
-            "--noise-mm {}: must be a finite number >= 0",
+            "--noise-mm {}: must be a finite number in [0, 100 000] mm",
             cfg.noise_mm
         )));
     }
-    if !(cfg.geometric_sigma_deg.is_finite() && cfg.geometric_sigma_deg >= 0.0) {
+    if !(cfg.geometric_sigma_deg.is_finite()
+        && cfg.geometric_sigma_deg >= 0.0
+        && cfg.geometric_sigma_deg <= crate::io::ranges::MAX_ANGLE_DEG)
+    {
         return Err(SimError::Config(format!(
             "geometric sigma {}: must be >= 0",
             cfg.geometric_sigma_deg

@@ -285,9 +285,35 @@ pub fn import_chain_with_masses(urdf: &Urdf, opts: &ImportOptions) -> Result<Imp
     import(urdf, opts, true)
 }
 
+/// The URDF's links by name for [`rigid_mass`]: inertials and child joints of every link, and
+/// the joints a rigid body stops at (linear in the size of the file, not quadratic).
+struct Tree<'a> {
+    inertials: std::collections::HashMap<&'a str, Vec<usize>>,
+    children: std::collections::HashMap<&'a str, Vec<usize>>,
+    stop: std::collections::HashSet<&'a str>,
+}
+
+impl<'a> Tree<'a> {
+    fn new(urdf: &'a Urdf, stop: &[&'a str]) -> Self {
+        let mut inertials: std::collections::HashMap<&str, Vec<usize>> = Default::default();
+        for (k, i) in urdf.inertials.iter().enumerate() {
+            inertials.entry(i.link.as_str()).or_default().push(k);
+        }
+        let mut children: std::collections::HashMap<&str, Vec<usize>> = Default::default();
+        for (k, j) in urdf.joints.iter().enumerate() {
+            children.entry(j.parent.as_str()).or_default().push(k);
+        }
+        Self {
+            inertials,
+            children,
+            stop: stop.iter().copied().collect(),
+        }
+    }
+}
+
 /// Mass (kg) and centre of mass (m, in `link`'s frame) of the links moved rigidly with `link`:
 /// its subtree, not crossing the joints in `stop` (joints off the chain at zero).
-fn rigid_mass(urdf: &Urdf, link: &str, stop: &[&str]) -> (f64, Vector3<f64>) {
+fn rigid_mass(tree: &Tree, urdf: &Urdf, link: &str) -> (f64, Vector3<f64>) {
     let mut mass_kg = 0.0;
     let mut moment = Vector3::zeros();
     let mut stack = vec![(link.to_string(), Frame::identity())];
@@ -297,14 +323,18 @@ fn rigid_mass(urdf: &Urdf, link: &str, stop: &[&str]) -> (f64, Vector3<f64>) {
         if visited > urdf.links.len() {
             break; // a cycle; `chain` reports it for the chain itself
         }
-        for i in urdf.inertials.iter().filter(|i| i.link == l) {
+        for &k in tree.inertials.get(l.as_str()).into_iter().flatten() {
+            let i = &urdf.inertials[k];
             mass_kg += i.mass_kg;
             moment += i.mass_kg * (f.r * Vector3::from(i.com_xyz_m) + f.t);
         }
-        for j in urdf
-            .joints
-            .iter()
-            .filter(|j| j.parent == l && !stop.contains(&j.name.as_str()))
+        for j in tree
+            .children
+            .get(l.as_str())
+            .into_iter()
+            .flatten()
+            .map(|&k| &urdf.joints[k])
+            .filter(|j| !tree.stop.contains(j.name.as_str()))
         {
             stack.push((
                 j.child.clone(),
@@ -345,6 +375,7 @@ fn import(urdf: &Urdf, opts: &ImportOptions, masses: bool) -> Result<Imported, U
         .filter(|j| j.joint_type != JointType::Fixed)
         .map(|j| j.name.as_str())
         .collect();
+    let tree = Tree::new(urdf, &movable);
     for j in &chain {
         if j.joint_type == JointType::Fixed {
             pending = pending.then(&Frame::origin(j.origin_xyz_m, j.origin_rpy_rad));
@@ -356,7 +387,7 @@ fn import(urdf: &Urdf, opts: &ImportOptions, masses: bool) -> Result<Imported, U
         em.joint(&stem, j)?;
         joint_names.push(j.name.clone());
         if masses {
-            let (mass_kg, com_m) = rigid_mass(urdf, &j.child, &movable);
+            let (mass_kg, com_m) = rigid_mass(&tree, urdf, &j.child);
             // The URDF child frame is the joint frame turned by `align^T`.
             let com_mm: [f64; 3] = (align.transpose() * com_m * 1e3).into();
             em.builder
@@ -390,6 +421,11 @@ fn import(urdf: &Urdf, opts: &ImportOptions, masses: bool) -> Result<Imported, U
             source_name: urdf.source_name.clone(),
             source: e,
         })?;
+    // every value of the file within its physical range (a link mass of 1e308 kg is refused)
+    model.check_ranges().map_err(|message| UrdfError::Model {
+        source_name: urdf.source_name.clone(),
+        source: ModelError::Invalid(message),
+    })?;
     Ok(Imported { model, joint_names })
 }
 

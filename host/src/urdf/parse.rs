@@ -97,10 +97,12 @@ pub struct Urdf {
 impl Urdf {
     /// Reads and parses a URDF file.
     pub fn from_file(path: &std::path::Path) -> Result<Self, UrdfError> {
-        let text = std::fs::read_to_string(path).map_err(|source| UrdfError::Read {
-            path: path.to_path_buf(),
-            source,
-        })?;
+        let text = crate::io::read::read_text_capped(path, crate::io::read::CAP_URDF).map_err(
+            |source| UrdfError::Read {
+                path: path.to_path_buf(),
+                source,
+            },
+        )?;
         Self::parse(&text, &path.display().to_string())
     }
 
@@ -113,6 +115,12 @@ impl Urdf {
         let ctx = Ctx {
             doc: &doc,
             source_name,
+            newlines: text
+                .bytes()
+                .enumerate()
+                .filter(|(_, b)| *b == b'\n')
+                .map(|(i, _)| i)
+                .collect(),
         };
         let robot = doc.root_element();
         if robot.tag_name().name() != "robot" {
@@ -122,10 +130,14 @@ impl Urdf {
         let mut links = Vec::new();
         let mut joints = Vec::new();
         let mut inertials = Vec::new();
+        let mut seen = std::collections::HashSet::new();
         for node in robot.children().filter(|n| n.is_element()) {
             match node.tag_name().name() {
                 "link" => {
                     let name = ctx.attr(node, "name")?.to_string();
+                    if !seen.insert(name.clone()) {
+                        return Err(ctx.err(node, format!("a second link named `{name}`")));
+                    }
                     if let Some(i) = ctx.inertial(node, &name)? {
                         inertials.push(i);
                     }
@@ -147,9 +159,11 @@ impl Urdf {
     }
 
     fn check_links(&self) -> Result<(), UrdfError> {
+        let links: std::collections::HashSet<&str> =
+            self.links.iter().map(String::as_str).collect();
         for j in &self.joints {
             for link in [&j.parent, &j.child] {
-                if !self.links.iter().any(|l| l == link) {
+                if !links.contains(link.as_str()) {
                     return Err(UrdfError::UnknownLink {
                         source_name: self.source_name.clone(),
                         link: link.clone(),
@@ -162,10 +176,12 @@ impl Urdf {
 
     /// The root link: the only link that is no joint's child.
     pub fn root_link(&self) -> Result<&str, UrdfError> {
+        let children: std::collections::HashSet<&str> =
+            self.joints.iter().map(|j| j.child.as_str()).collect();
         let roots: Vec<&str> = self
             .links
             .iter()
-            .filter(|l| !self.joints.iter().any(|j| &j.child == *l))
+            .filter(|l| !children.contains(l.as_str()))
             .map(String::as_str)
             .collect();
         match roots.as_slice() {
@@ -199,18 +215,27 @@ impl Urdf {
             }
         }
         // A URDF is a tree: a loop anywhere is refused, even when the chain asked for avoids it.
+        // Each link is walked towards the root once: a walk stops at a link already known to
+        // reach the root (linear in the number of links).
+        let mut reaches_root: std::collections::HashSet<&str> =
+            std::collections::HashSet::with_capacity(self.links.len());
         for start in &self.links {
+            let mut path: Vec<&str> = Vec::new();
+            let mut on_path: std::collections::HashSet<&str> = std::collections::HashSet::new();
             let mut link = start.as_str();
-            let mut steps = 0;
-            while let Some(&i) = by_child.get(link) {
-                steps += 1;
-                if steps > self.joints.len() {
+            while !reaches_root.contains(link) {
+                if !on_path.insert(link) {
                     return Err(self.tree_err(format!(
                         "the joints form a loop through link `{start}` (a URDF must be a tree)"
                     )));
                 }
-                link = &self.joints[i].parent;
+                path.push(link);
+                match by_child.get(link) {
+                    Some(&i) => link = &self.joints[i].parent,
+                    None => break,
+                }
             }
+            reaches_root.extend(path);
         }
         let mut out = Vec::new();
         let mut link = tip;
@@ -243,9 +268,18 @@ impl Urdf {
 struct Ctx<'d, 'i> {
     doc: &'d roxmltree::Document<'i>,
     source_name: &'d str,
+    /// Byte offsets of the text's line feeds: the line of an element by binary search (the
+    /// document's own `text_pos_at` scans from the start, quadratic over every joint).
+    newlines: Vec<usize>,
 }
 
 impl Ctx<'_, '_> {
+    /// 1-based line of byte offset `pos`.
+    fn line_at(&self, pos: usize) -> u32 {
+        let row = self.newlines.partition_point(|&nl| nl < pos) + 1;
+        u32::try_from(row).unwrap_or(u32::MAX)
+    }
+
     fn err(&self, node: roxmltree::Node, message: String) -> UrdfError {
         let pos = self.doc.text_pos_at(node.range().start);
         UrdfError::Element {
@@ -373,7 +407,7 @@ impl Ctx<'_, '_> {
             origin_rpy_rad: rpy,
             axis,
             limits,
-            line: self.doc.text_pos_at(node.range().start).row,
+            line: self.line_at(node.range().start),
         })
     }
 }

@@ -18,6 +18,7 @@ mod diagnose_transmission;
 mod diagnose_ur5;
 mod fusion_session;
 mod gross_errors;
+mod hostile_inputs;
 mod joints_fit;
 mod model_cli;
 mod model_effects;

@@ -220,7 +220,8 @@ fn defect6_no_litter_and_all_or_none_outputs() {
         .args(["--out", "/nonexistent-dir/m.toml"])
         .output()
         .unwrap();
-    assert_eq!(o.status.code(), Some(1), "{}", text(&o.stderr));
+    // a missing directory is bad input (exit 2), found before the work
+    assert_eq!(o.status.code(), Some(2), "{}", text(&o.stderr));
     assert!(text(&o.stderr).contains("/nonexistent-dir"));
     assert_eq!(std::fs::read_to_string(&ok).unwrap(), "old");
 

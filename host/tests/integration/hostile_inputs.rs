@@ -1,0 +1,915 @@
+//! Hostile inputs (docs/reliability.md): outputs that are inputs, finite absurd values, endless
+//! files, the diagnose -> plan loop, files that must read back, concurrent runs, inputs that must
+//! be refused. Every test spawns the CLI with a time bound and never accepts exit 101.
+
+use std::io::Read;
+use std::path::{Path, PathBuf};
+use std::process::{Command, Stdio};
+use std::time::{Duration, Instant};
+
+use rand::{Rng, SeedableRng};
+
+/// The outcome of one run: exit code (`None` when killed at the time bound), stdout, stderr.
+struct Run {
+    code: Option<i32>,
+    stdout: String,
+    stderr: String,
+    timed_out: bool,
+}
+
+impl Run {
+    fn show(&self) -> String {
+        format!(
+            "exit {:?}{}; stderr: {}",
+            self.code,
+            if self.timed_out { " (killed)" } else { "" },
+            self.stderr.chars().take(600).collect::<String>()
+        )
+    }
+}
+
+/// The binary under test (`RIGCTL_UNDER_TEST` runs these tests against another build, e.g. an
+/// older one, to see which of them it fails).
+fn bin() -> std::ffi::OsString {
+    std::env::var_os("RIGCTL_UNDER_TEST").unwrap_or_else(|| env!("CARGO_BIN_EXE_rigctl").into())
+}
+
+/// Runs `rigctl args` for at most `limit`.
+fn run_for(args: &[&std::ffi::OsStr], limit: Duration) -> Run {
+    let mut child = Command::new(bin())
+        .args(args)
+        .stdin(Stdio::null())
+        .stdout(Stdio::piped())
+        .stderr(Stdio::piped())
+        .spawn()
+        .expect("rigctl runs");
+    let mut out = child.stdout.take().unwrap();
+    let mut err = child.stderr.take().unwrap();
+    let t_out = std::thread::spawn(move || {
+        let mut s = Vec::new();
+        let _ = out.read_to_end(&mut s);
+        s
+    });
+    let t_err = std::thread::spawn(move || {
+        let mut s = Vec::new();
+        let _ = err.read_to_end(&mut s);
+        s
+    });
+    let start = Instant::now();
+    let mut timed_out = false;
+    let status = loop {
+        if let Some(s) = child.try_wait().unwrap() {
+            break Some(s);
+        }
+        if start.elapsed() > limit {
+            let _ = child.kill();
+            let _ = child.wait();
+            timed_out = true;
+            break None;
+        }
+        std::thread::sleep(Duration::from_millis(20));
+    };
+    Run {
+        code: status.and_then(|s| s.code()),
+        stdout: String::from_utf8_lossy(&t_out.join().unwrap()).into_owned(),
+        stderr: String::from_utf8_lossy(&t_err.join().unwrap()).into_owned(),
+        timed_out,
+    }
+}
+
+fn os<S: AsRef<std::ffi::OsStr> + ?Sized>(s: &S) -> &std::ffi::OsStr {
+    s.as_ref()
+}
+
+/// Runs with arguments given as strings and paths.
+macro_rules! rig {
+    ($limit:expr; $($a:expr),* $(,)?) => {
+        run_for(&[$(os(&$a)),*], Duration::from_secs($limit))
+    };
+}
+
+fn simulated(dir: &Path) -> PathBuf {
+    let out = dir.join("sim");
+    let r = rig!(120; "simulate", "--seed", "3", "--out", out);
+    assert_eq!(r.code, Some(0), "{}", r.show());
+    out
+}
+
+/// Exit 2 and the file unchanged.
+fn refused_and_kept(r: &Run, file: &Path, before: &[u8], what: &str) {
+    assert_eq!(r.code, Some(2), "{what}: {}", r.show());
+    assert_eq!(
+        std::fs::read(file).unwrap(),
+        before,
+        "{what}: {} was changed",
+        file.display()
+    );
+}
+
+const URDF: &str = r#"<robot name="two">
+  <link name="base"/>
+  <link name="l1"><inertial><mass value="2"/><origin xyz="0.1 0 0"/></inertial></link>
+  <link name="l2"><inertial><mass value="1"/><origin xyz="0.1 0 0"/></inertial></link>
+  <joint name="j1" type="revolute"><parent link="base"/><child link="l1"/>
+    <origin xyz="0 0 0.2" rpy="0 0 0"/><axis xyz="0 0 1"/><limit lower="-3" upper="3"/></joint>
+  <joint name="j2" type="revolute"><parent link="l1"/><child link="l2"/>
+    <origin xyz="0.3 0 0" rpy="1.5707963 0 0"/><axis xyz="0 0 1"/><limit lower="-2" upper="2"/></joint>
+</robot>
+"#;
+
+// ---------------------------------------------------------------------------------------------
+// 1. An output that is an input is refused (exit 2), the input kept; all outputs checked first.
+
+#[test]
+fn item1_output_equal_to_an_input_is_refused_and_the_input_kept() {
+    let dir = tempfile::tempdir().unwrap();
+    let sim = simulated(dir.path());
+    let cal = sim.join("cal.csv");
+    let val = sim.join("val.csv");
+    let cal_bytes = std::fs::read(&cal).unwrap();
+    let val_bytes = std::fs::read(&val).unwrap();
+    let scan = dir.path().join("S.png");
+    std::fs::write(&scan, b"\x89PNG\r\n\x1a\nnot really").unwrap();
+    let scan_bytes = std::fs::read(&scan).unwrap();
+    let jig = dir.path().join("jig.csv");
+    std::fs::write(&jig, "raw,travel_mm\n1000,0\n2000,5\n3000,10\n").unwrap();
+    let jig_bytes = std::fs::read(&jig).unwrap();
+    let urdf = dir.path().join("u.urdf");
+    std::fs::write(&urdf, URDF).unwrap();
+    let link = dir.path().join("link.csv");
+    std::os::unix::fs::symlink(&cal, &link).unwrap();
+
+    let r = rig!(60; "trace", scan, "--out", scan);
+    refused_and_kept(&r, &scan, &scan_bytes, "trace --out SCAN");
+    let r = rig!(60; "trace", scan, "--out", dir.path().join("t.csv"), "--overlay", scan);
+    refused_and_kept(&r, &scan, &scan_bytes, "trace --overlay SCAN");
+    let r = rig!(60; "calibrate", "--poses", cal, "--json", cal);
+    refused_and_kept(&r, &cal, &cal_bytes, "calibrate --json CAL");
+    let r = rig!(60; "calibrate", "--poses", cal, "--validate", val, "--out", val);
+    refused_and_kept(&r, &val, &val_bytes, "calibrate --out VAL");
+    let r = rig!(60; "calibrate", "--poses", cal, "--out", link);
+    refused_and_kept(&r, &cal, &cal_bytes, "calibrate --out LINK-TO-CAL");
+    let r = rig!(60; "diagnose", "--poses", cal, "--validate", val, "--json", val);
+    refused_and_kept(&r, &val, &val_bytes, "diagnose --json VAL");
+    let r = rig!(60; "diagnose", "--poses", cal, "--validate", val, "--out", cal);
+    refused_and_kept(&r, &cal, &cal_bytes, "diagnose --out CAL");
+    let r = rig!(60; "plan", "--n", "8", "--candidates", "200", "--poses", cal, "--out", cal);
+    refused_and_kept(&r, &cal, &cal_bytes, "plan --out CAL");
+    let r = rig!(60; "plan", "--n", "8", "--candidates-from", cal, "--out",
+        dir.path().join("p.csv"), "--json", cal);
+    refused_and_kept(&r, &cal, &cal_bytes, "plan --json CAL");
+    let r = rig!(60; "potcal", "--points", jig, "--out", jig);
+    refused_and_kept(&r, &jig, &jig_bytes, "potcal --out JIG");
+    let r = rig!(60; "urdf2model", "--urdf", urdf, "--tip", "l2", "--out", urdf);
+    refused_and_kept(&r, &urdf, URDF.as_bytes(), "urdf2model --out URDF");
+    // the same new file as two outputs
+    let both = dir.path().join("both.json");
+    let r = rig!(60; "calibrate", "--poses", cal, "--json", both, "--out", both);
+    assert_eq!(r.code, Some(2), "{}", r.show());
+    assert!(!both.exists());
+}
+
+#[test]
+fn item1_every_output_is_checked_before_the_work() {
+    let dir = tempfile::tempdir().unwrap();
+    let sim = simulated(dir.path());
+    let keep = dir.path().join("keep.json");
+    std::fs::write(&keep, "old").unwrap();
+    let file = dir.path().join("a_file");
+    std::fs::write(&file, "x").unwrap();
+    let r = rig!(120; "diagnose", "--poses", sim.join("cal.csv"), "--validate",
+        sim.join("val.csv"), "--json", keep, "--plots", file);
+    refused_and_kept(&r, &keep, b"old", "diagnose --plots FILE");
+    // plots into the directory of the inputs would overwrite nothing; an input named as an
+    // output directory's file would be
+    let r = rig!(60; "simulate", "--model", sim.join("truth.toml"), "--out", sim);
+    refused_and_kept(
+        &r,
+        &sim.join("truth.toml"),
+        &std::fs::read(sim.join("truth.toml")).unwrap(),
+        "simulate --model DIR/truth.toml --out DIR",
+    );
+}
+
+// 9. An output that is a directory or under a missing parent is bad input.
+#[test]
+fn item9_unusable_output_paths_are_bad_input() {
+    let dir = tempfile::tempdir().unwrap();
+    let sim = simulated(dir.path());
+    let cal = sim.join("cal.csv");
+    let r = rig!(60; "calibrate", "--poses", cal, "--json", dir.path());
+    assert_eq!(r.code, Some(2), "{}", r.show());
+    let r = rig!(60; "calibrate", "--poses", cal, "--json", dir.path().join("no/such/x.json"));
+    assert_eq!(r.code, Some(2), "{}", r.show());
+    assert!(r.stderr.contains("does not exist"), "{}", r.show());
+}
+
+// ---------------------------------------------------------------------------------------------
+// 2. Finite extreme values: refused at the edge, never a panic, a hang or NaN with exit 0.
+
+const MODEL_TEMPLATE: &str = r#"name = "prop"
+[[chain]]
+op = "tz"
+name = "mount_z"
+value = {0}
+[[chain]]
+op = "rz"
+joint = 1
+name = "dth1"
+value = {1}
+[[chain]]
+op = "dh"
+joint = 2
+theta = {2}
+d = {3}
+a = {4}
+alpha = {5}
+[[chain]]
+op = "mdh"
+joint = 3
+alpha = {6}
+a = {7}
+beta = {8}
+theta = {9}
+d = {10}
+[[joint]]
+min = {11}
+max = {12}
+clearance_deg = {13}
+backlash_deg = {14}
+stiffness_kgfm_per_deg = {15}
+joint_scale = {16}
+joint_coupling = { j2 = {17} }
+hysteresis_deg = {18}
+compliance_deg_per_kgfm = {19}
+[[joint]]
+min = -170.0
+max = 170.0
+clearance_deg = 0.02
+backlash_deg = 0.06
+stiffness_kgfm_per_deg = 120.0
+[[joint]]
+min = -170.0
+max = 170.0
+clearance_deg = 0.02
+backlash_deg = 0.06
+stiffness_kgfm_per_deg = 120.0
+[[mass]]
+joint = 2
+after = 0
+kg = {20}
+com_mm = [{21}, 0.0, 0.0]
+[params]
+tool_dz = {22}
+payload_kg = {23}
+scale_ppm = {24}
+"#;
+
+/// Valid values of the template's fields.
+const MODEL_DEFAULTS: [f64; 25] = [
+    200.0, 0.0, 0.0, 0.0, 190.0, 90.0, 0.0, 139.0, 0.0, 0.0, 0.0, -170.0, 170.0, 0.02, 0.06, 120.0,
+    1e-4, 0.002, 0.03, 0.01, 1.5, 100.0, 12.5, 0.5, 10.0,
+];
+
+fn toml_float(v: f64) -> String {
+    let s = format!("{v:e}");
+    // TOML needs a digit after a decimal point only; `{:e}` gives `1e300`, `-2.5e-7`
+    s
+}
+
+fn model_text(values: &[f64; 25]) -> String {
+    let mut s = MODEL_TEMPLATE.to_string();
+    for (k, v) in values.iter().enumerate().rev() {
+        s = s.replace(&format!("{{{k}}}"), &toml_float(*v));
+    }
+    s
+}
+
+fn with(k: usize, v: f64) -> [f64; 25] {
+    let mut vals = MODEL_DEFAULTS;
+    vals[k] = v;
+    vals
+}
+
+const JOINTS_CSV: &str = "q1,q2,q3\n10,20,30\n-5,40,-60\n0,0,0\n";
+
+/// fk on a model: exit 0 with finite output, or 1 / 2; never 101, never longer than the bound.
+fn fk_is_sane(dir: &Path, model: &str, what: &str) -> Option<i32> {
+    let m = dir.join("m.toml");
+    let q = dir.join("q.csv");
+    std::fs::write(&m, model).unwrap();
+    std::fs::write(&q, JOINTS_CSV).unwrap();
+    let r = rig!(30; "fk", "--model", m, "--joints", q);
+    assert!(!r.timed_out, "{what}: fk hung: {}", r.show());
+    assert!(
+        matches!(r.code, Some(0..=2)),
+        "{what}: fk exit {:?}: {}",
+        r.code,
+        r.show()
+    );
+    if r.code == Some(0) {
+        let lower = r.stdout.to_ascii_lowercase();
+        assert!(
+            !lower.contains("nan") && !lower.contains("inf"),
+            "{what}: exit 0 with non-finite output: {}",
+            r.stdout
+        );
+    }
+    r.code
+}
+
+#[test]
+fn item2_extreme_model_values_are_refused_with_their_line() {
+    let dir = tempfile::tempdir().unwrap();
+    let m = dir.path().join("m.toml");
+    let q = dir.path().join("q.csv");
+    std::fs::write(&q, JOINTS_CSV).unwrap();
+    assert_eq!(
+        fk_is_sane(dir.path(), &model_text(&MODEL_DEFAULTS), "defaults"),
+        Some(0)
+    );
+    for (k, v, what) in [
+        (16, 1e308, "joint_scale = 1e308"),
+        (17, 1e308, "joint_coupling j2 = 1e308"),
+        (4, 1e308, "a chain value 1e308"),
+        (11, -1e308, "joint min -1e308"),
+        (12, 1e308, "joint max 1e308"),
+        (20, 1e308, "mass 1e308 kg"),
+    ] {
+        std::fs::write(&m, model_text(&with(k, v))).unwrap();
+        let r = rig!(30; "fk", "--model", m, "--joints", q);
+        assert_eq!(r.code, Some(2), "fk, {what}: {}", r.show());
+        let r = rig!(60; "plan", "--model", m, "--n", "8", "--candidates", "200", "--out",
+            dir.path().join("p.csv"));
+        assert_eq!(r.code, Some(2), "plan, {what}: {}", r.show());
+        let r = rig!(60; "calibrate", "--model", m, "--poses", q);
+        assert_eq!(r.code, Some(2), "calibrate, {what}: {}", r.show());
+    }
+    // the message names the file and the line of the value
+    std::fs::write(&m, model_text(&with(4, 1e308))).unwrap();
+    let r = rig!(30; "fk", "--model", m, "--joints", q);
+    let line = model_text(&with(4, 1e308))
+        .lines()
+        .position(|l| l == "a = 1e308")
+        .unwrap()
+        + 1;
+    assert!(
+        r.stderr.contains(&format!("m.toml:{line}")),
+        "no file:line in {}",
+        r.show()
+    );
+}
+
+#[test]
+fn item2_extreme_effects_and_noise_are_refused() {
+    let dir = tempfile::tempdir().unwrap();
+    for args in [
+        vec!["--effect", "joint_scale:j1=1e308"],
+        vec!["--effect", "joint_coupling:j2:j1=1e308"],
+        vec!["--effect", "link_length:a2=1e308"],
+        vec!["--effect", "time_drift=1e308,0,0"],
+        vec!["--noise-mm", "1e308"],
+    ] {
+        let out = dir.path().join("s");
+        let mut a: Vec<&std::ffi::OsStr> = vec![os("simulate"), os("--out"), os(&out)];
+        a.extend(args.iter().map(os));
+        let r = run_for(&a, Duration::from_secs(60));
+        assert_eq!(r.code, Some(2), "simulate {args:?}: {}", r.show());
+        assert!(
+            !out.join("cal.csv").exists(),
+            "simulate {args:?} wrote cal.csv"
+        );
+    }
+}
+
+/// Random finite values (1e+-300 included) in every model-file field: fk exits 0 with finite
+/// output, 1 or 2, within its bound.
+#[test]
+fn item2_property_random_finite_values_in_every_model_field() {
+    let dir = tempfile::tempdir().unwrap();
+    let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(26);
+    let specials = [
+        1e300, -1e300, 1e-300, -1e-300, 1e308, -1e308, 0.0, -0.0, 1e15, -1e15, 5e-324,
+    ];
+    for case in 0..120 {
+        let mut vals = MODEL_DEFAULTS;
+        let changes = rng.gen_range(1..=3);
+        for _ in 0..changes {
+            let k = rng.gen_range(0..vals.len());
+            vals[k] = if rng.gen_bool(0.5) {
+                specials[rng.gen_range(0..specials.len())]
+            } else {
+                let e: i32 = rng.gen_range(-300..=300);
+                rng.gen_range(-10.0..10.0) * 10f64.powi(e)
+            };
+        }
+        fk_is_sane(
+            dir.path(),
+            &model_text(&vals),
+            &format!("case {case}: {vals:?}"),
+        );
+    }
+}
+
+/// Random finite values in every URDF number: urdf2model exits 0, 1 or 2 within its bound, and
+/// a model it writes is read back by fk (exit 0 with finite output, 1 or 2).
+#[test]
+fn item2_property_random_finite_values_in_every_urdf_number() {
+    let dir = tempfile::tempdir().unwrap();
+    let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(2626);
+    let numbers: Vec<(usize, usize)> = {
+        // spans of the numbers in URDF (attribute values split on blanks)
+        let mut out = Vec::new();
+        let b = URDF.as_bytes();
+        let mut i = 0;
+        while i < b.len() {
+            let starts = (b[i].is_ascii_digit() || b[i] == b'-')
+                && i > 0
+                && (b[i - 1] == b'"' || b[i - 1] == b' ');
+            if starts {
+                let mut j = i + 1;
+                while j < b.len()
+                    && (b[j].is_ascii_digit() || b[j] == b'.' || b[j] == b'e' || b[j] == b'-')
+                {
+                    j += 1;
+                }
+                if j < b.len() && (b[j] == b'"' || b[j] == b' ') {
+                    out.push((i, j));
+                }
+                i = j;
+            } else {
+                i += 1;
+            }
+        }
+        out
+    };
+    assert!(numbers.len() > 15, "{}", numbers.len());
+    let out = dir.path().join("out.toml");
+    let q = dir.path().join("q.csv");
+    std::fs::write(&q, "j1,j2\n10,20\n-30,45\n").unwrap();
+    for case in 0..60 {
+        let (i, j) = numbers[rng.gen_range(0..numbers.len())];
+        let v: f64 = match rng.gen_range(0..4) {
+            0 => 1e300,
+            1 => -1e308,
+            2 => 1e-300,
+            _ => rng.gen_range(-10.0..10.0) * 10f64.powi(rng.gen_range(-300..=300)),
+        };
+        let text = format!("{}{v:e}{}", &URDF[..i], &URDF[j..]);
+        let u = dir.path().join("u.urdf");
+        std::fs::write(&u, &text).unwrap();
+        let _ = std::fs::remove_file(&out);
+        let r = rig!(30; "urdf2model", "--urdf", u, "--tip", "l2", "--out", out);
+        assert!(
+            !r.timed_out && matches!(r.code, Some(0..=2)),
+            "case {case} ({v:e} at {i}): {}",
+            r.show()
+        );
+        if r.code == Some(0) {
+            let model = std::fs::read_to_string(&out).unwrap();
+            let r = rig!(30; "fk", "--model", out, "--joints", q);
+            assert!(
+                matches!(r.code, Some(0..=2)),
+                "case {case}: fk {}\n{model}",
+                r.show()
+            );
+            if r.code == Some(0) {
+                assert!(
+                    !r.stdout.contains("NaN") && !r.stdout.contains("inf"),
+                    "{}",
+                    r.stdout
+                );
+            }
+        }
+    }
+}
+
+// ---------------------------------------------------------------------------------------------
+// 3. diagnose -> plan --from-diagnose for the path-dependent effect ids.
+
+#[test]
+fn item3_from_diagnose_takes_hysteresis_and_time_drift() {
+    let dir = tempfile::tempdir().unwrap();
+    for (a, b) in [
+        ("hysteresis:j2", "dth2"),
+        ("time_drift", "base_z"),
+        ("time_drift:j3", "dth3"),
+    ] {
+        let doc = serde_json::json!({
+            "declared": {"calibration": {"rms_mm": 0.05}},
+            "effects": [],
+            "final": {},
+            "aliased": [{"a": a, "b": b, "correlation": 0.95, "note": ""}]
+        });
+        let d = dir.path().join("d.json");
+        std::fs::write(&d, doc.to_string()).unwrap();
+        let r = rig!(240; "plan", "--n", "8", "--candidates", "300", "--from-diagnose", d,
+            "--out", dir.path().join("p.csv"));
+        assert!(
+            !r.stderr.contains("is neither an effect id"),
+            "{a}: {}",
+            r.show()
+        );
+        assert_eq!(r.code, Some(0), "{a}: {}", r.show());
+        assert!(
+            r.stdout.contains(&format!("aliased {a} / {b}")),
+            "{a}: {}",
+            r.stdout
+        );
+    }
+}
+
+// ---------------------------------------------------------------------------------------------
+// 4. Endless inputs are refused at once.
+
+#[test]
+fn item4_dev_zero_is_refused_by_every_reader() {
+    if !Path::new("/dev/zero").exists() {
+        return;
+    }
+    let dir = tempfile::tempdir().unwrap();
+    let sim = simulated(dir.path());
+    let z = Path::new("/dev/zero");
+    let p = dir.path().join("p.csv");
+    let runs = [
+        (
+            "fk --model",
+            rig!(20; "fk", "--model", z, "--joints", sim.join("cal.csv")),
+        ),
+        ("calibrate --poses", rig!(20; "calibrate", "--poses", z)),
+        (
+            "plan --from-diagnose",
+            rig!(20; "plan", "--n", "8", "--from-diagnose", z, "--out", p),
+        ),
+        (
+            "urdf2model --urdf",
+            rig!(20; "urdf2model", "--urdf", z, "--tip", "x", "--out",
+            dir.path().join("m.toml")),
+        ),
+        (
+            "export",
+            rig!(20; "export", z, "--csv", dir.path().join("csv")),
+        ),
+        (
+            "diagnose --validate",
+            rig!(20; "diagnose", "--poses", sim.join("cal.csv"),
+            "--validate", z),
+        ),
+    ];
+    for (what, r) in runs {
+        assert!(!r.timed_out, "{what} /dev/zero: {}", r.show());
+        assert_eq!(r.code, Some(2), "{what} /dev/zero: {}", r.show());
+    }
+}
+
+// ---------------------------------------------------------------------------------------------
+// 5. Scaling: the header check is linear; urdf2model on a long chain; plan --n bounded.
+
+#[test]
+fn item5_a_header_of_200k_columns_is_checked_in_linear_time() {
+    let dir = tempfile::tempdir().unwrap();
+    let f = dir.path().join("wide.csv");
+    let mut head: Vec<String> = (1..=5).map(|j| format!("q{j}")).collect();
+    head.extend((0..200_000).map(|k| format!("c{k}")));
+    let row = vec!["0"; head.len()].join(",");
+    std::fs::write(&f, format!("{}\n{row}\n", head.join(","))).unwrap();
+    let t = Instant::now();
+    let r = rig!(60; "fk", "--joints", f);
+    assert_eq!(r.code, Some(0), "{}", r.show());
+    assert!(t.elapsed() < Duration::from_secs(20), "{:?}", t.elapsed());
+}
+
+fn long_urdf(n: usize) -> String {
+    let mut s = String::from("<robot name=\"long\">\n<link name=\"l0\"/>\n");
+    for k in 1..=n {
+        s.push_str(&format!(
+            "<link name=\"l{k}\"><inertial><mass value=\"0.1\"/><origin xyz=\"0.01 0 0\"/></inertial></link>\n\
+             <joint name=\"j{k}\" type=\"revolute\"><parent link=\"l{}\"/><child link=\"l{k}\"/>\
+             <origin xyz=\"0.001 0 0.001\" rpy=\"0 0.1 0\"/><axis xyz=\"0 0 1\"/>\
+             <limit lower=\"-1\" upper=\"1\"/></joint>\n",
+            k - 1
+        ));
+    }
+    s.push_str("</robot>\n");
+    s
+}
+
+#[test]
+fn item5_urdf2model_on_a_10k_joint_chain() {
+    let dir = tempfile::tempdir().unwrap();
+    let u = dir.path().join("long.urdf");
+    std::fs::write(&u, long_urdf(10_000)).unwrap();
+    let t = Instant::now();
+    let r = rig!(120; "urdf2model", "--urdf", u, "--tip", "l10000", "--out",
+        dir.path().join("m.toml"));
+    assert_eq!(r.code, Some(0), "{}", r.show());
+    assert!(t.elapsed() < Duration::from_secs(30), "{:?}", t.elapsed());
+}
+
+#[test]
+fn item5_plan_n_is_bounded_by_the_candidates() {
+    let dir = tempfile::tempdir().unwrap();
+    let r = rig!(30; "plan", "--n", "1000000", "--out", dir.path().join("p.csv"));
+    assert_eq!(r.code, Some(2), "{}", r.show());
+    let r = rig!(30; "plan", "--n", "8", "--candidates", "100000000", "--out",
+        dir.path().join("p.csv"));
+    assert_eq!(r.code, Some(2), "{}", r.show());
+}
+
+// ---------------------------------------------------------------------------------------------
+// 6. Files written read back.
+
+#[test]
+fn item6_a_model_name_with_a_newline_reads_back() {
+    let dir = tempfile::tempdir().unwrap();
+    let sim = simulated(dir.path());
+    let m = dir.path().join("m.toml");
+    let text = std::fs::read_to_string(sim.join("truth.toml")).unwrap();
+    let name_line = text.lines().find(|l| l.starts_with("name = ")).unwrap();
+    std::fs::write(
+        &m,
+        text.replacen(name_line, "name = \"two\\nlines \\\"q\\\" \\u0007\"", 1),
+    )
+    .unwrap();
+    let out = dir.path().join("out.toml");
+    let r = rig!(60; "calibrate", "--model", m, "--poses", sim.join("cal.csv"), "--out", out);
+    assert_eq!(r.code, Some(0), "{}", r.show());
+    let r = rig!(30; "fk", "--model", out, "--joints", sim.join("val.csv"));
+    assert_eq!(
+        r.code,
+        Some(0),
+        "the written model does not read back: {}",
+        r.show()
+    );
+    let back = rigctl::model::Model::from_file(&out).unwrap();
+    assert_eq!(back.name(), "two\nlines \"q\" \u{7}");
+}
+
+#[test]
+fn item6_a_urdf_joint_name_that_is_no_column_is_refused() {
+    let dir = tempfile::tempdir().unwrap();
+    let u = dir.path().join("u.urdf");
+    std::fs::write(&u, URDF.replace("name=\"j2\"", "name=\"j&#10;2\"")).unwrap();
+    let out = dir.path().join("m.toml");
+    let r = rig!(30; "urdf2model", "--urdf", u, "--tip", "l2", "--out", out);
+    if r.code == Some(0) {
+        let q = dir.path().join("q.csv");
+        std::fs::write(&q, "q1,q2\n1,2\n").unwrap();
+        let r = rig!(30; "fk", "--model", out, "--joints", q);
+        assert_eq!(r.code, Some(0), "written, not read back: {}", r.show());
+    } else {
+        assert_eq!(r.code, Some(2), "{}", r.show());
+        assert!(!out.exists());
+    }
+}
+
+#[test]
+fn item6_property_model_names_round_trip() {
+    let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(6);
+    let base = rigctl::model::katana450(200.0).unwrap();
+    let text = base.to_toml_string();
+    for _ in 0..300 {
+        let len = rng.gen_range(0..12);
+        let name: String = (0..len)
+            .map(|_| match rng.gen_range(0..4) {
+                0 => char::from(rng.gen_range(0u8..0x20)),
+                1 => ['"', '\\', '\u{7f}', '\u{85}', '\'', '#'][rng.gen_range(0..6)],
+                2 => char::from_u32(rng.gen_range(0x80..0x3000)).unwrap_or('x'),
+                _ => char::from(rng.gen_range(b' '..b'~')),
+            })
+            .collect();
+        let line = text.lines().find(|l| l.starts_with("name = ")).unwrap();
+        let renamed = text.replacen(
+            line,
+            &format!("name = {}", rigctl::model::toml_file::toml_string(&name)),
+            1,
+        );
+        let m = rigctl::model::Model::from_toml_str(&renamed, "t")
+            .unwrap_or_else(|e| panic!("{name:?}: {e}"));
+        assert_eq!(m.name(), name);
+        let again = rigctl::model::Model::from_toml_str(&m.to_toml_string(), "t").unwrap();
+        assert_eq!(again.name(), name);
+        assert_eq!(again.to_toml_string(), m.to_toml_string());
+    }
+}
+
+// ---------------------------------------------------------------------------------------------
+// 7. Concurrent runs into one directory leave the files of one run.
+
+#[test]
+fn item7_concurrent_simulate_runs_leave_one_consistent_set() {
+    let dir = tempfile::tempdir().unwrap();
+    // a mix needs the runs to interleave: 16 at once, three rounds
+    for round in 0..3 {
+        let out = dir.path().join(format!("shared{round}"));
+        let children: Vec<_> = (1..=16)
+            .map(|seed| {
+                Command::new(bin())
+                    .args(["simulate", "--seed", &seed.to_string(), "--out"])
+                    .arg(&out)
+                    .stdout(Stdio::null())
+                    .stderr(Stdio::null())
+                    .spawn()
+                    .unwrap()
+            })
+            .collect();
+        for mut c in children {
+            assert!(c.wait().unwrap().success());
+        }
+        let truth: serde_json::Value =
+            serde_json::from_str(&std::fs::read_to_string(out.join("truth.json")).unwrap())
+                .unwrap();
+        let seed = truth["seed"].as_u64().expect("truth.json has the seed");
+        let single = dir.path().join(format!("single{round}"));
+        let r = rig!(120; "simulate", "--seed", seed.to_string(), "--out", single);
+        assert_eq!(r.code, Some(0), "{}", r.show());
+        for f in ["cal.csv", "val.csv", "truth.toml", "truth.json"] {
+            assert_eq!(
+                std::fs::read(out.join(f)).unwrap(),
+                std::fs::read(single.join(f)).unwrap(),
+                "round {round}: {f} is not from seed {seed}"
+            );
+        }
+    }
+}
+
+// ---------------------------------------------------------------------------------------------
+// 8. Inputs that must be refused.
+
+#[test]
+fn item8_inputs_that_must_be_refused() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    let sim = simulated(d);
+    let cal = sim.join("cal.csv");
+    let val = sim.join("val.csv");
+    let p = d.join("p.csv");
+
+    // report on a diagnose.json of the wrong shape
+    let run = d.join("run");
+    std::fs::create_dir(&run).unwrap();
+    std::fs::copy(&cal, run.join("cal.csv")).unwrap();
+    std::fs::write(run.join("diagnose.json"), r#"{"effects": "none"}"#).unwrap();
+    let r = rig!(60; "report", run, "--html", d.join("r.html"));
+    assert_eq!(r.code, Some(2), "report: {}", r.show());
+
+    // potcal --recording with a jig of raw counts (the recording is not used)
+    let jig = d.join("jig.csv");
+    std::fs::write(&jig, "raw,travel_mm\n1000,0\n2000,5\n3000,10\n").unwrap();
+    let pot_out = d.join("pot.toml");
+    for strict in [false, true] {
+        let mut a = vec![
+            os("potcal"),
+            os("--points"),
+            os(&jig),
+            os("--recording"),
+            os("/nonexistent"),
+            os("--out"),
+            os(&pot_out),
+        ];
+        if strict {
+            a.push(os("--strict"));
+        }
+        let r = run_for(&a, Duration::from_secs(30));
+        assert_eq!(r.code, Some(2), "potcal --recording: {}", r.show());
+    }
+
+    // URDF link mass 1e308
+    let u = d.join("u.urdf");
+    std::fs::write(
+        &u,
+        URDF.replace("<mass value=\"2\"/>", "<mass value=\"1e308\"/>"),
+    )
+    .unwrap();
+    let r = rig!(30; "urdf2model", "--urdf", u, "--tip", "l2", "--out", d.join("m.toml"));
+    assert_eq!(r.code, Some(2), "URDF mass 1e308: {}", r.show());
+
+    // fused samples with u parallel to n
+    let fused = d.join("fused.csv");
+    let mut text = format!(
+        "# {}\n{}\n",
+        rigctl::fusion::fuse::FUSED_FORMAT,
+        rigctl::fusion::fuse::fused_header(5)
+    );
+    for k in 0..40 {
+        let q = 5.0 * k as f64;
+        text.push_str(&format!(
+            "{k},{q},{},{},{},0,300,0,200,0.01,0,0,1,0.02,0,0,1\n",
+            80.0 + q / 10.0,
+            -30.0,
+            q / 2.0
+        ));
+    }
+    std::fs::write(&fused, text).unwrap();
+    let r = rig!(60; "calibrate", "--samples", fused);
+    assert_eq!(r.code, Some(2), "u parallel to n: {}", r.show());
+    assert!(r.stderr.contains("perpendicular"), "{}", r.show());
+
+    // plan --cone-deg nan
+    let r = rig!(30; "plan", "--n", "8", "--visible-from", "0,0,2000", "--cone-deg", "nan",
+        "--out", p);
+    assert_eq!(r.code, Some(2), "--cone-deg nan: {}", r.show());
+
+    // a pot calibration with raw_min > raw_max
+    let pot = |min: f64, max: f64| {
+        format!(
+            "format = \"rigctl-potcal/1\"\npoints = 3\ncoefficients = [0.0, 5.0]\n\
+             centre_raw = 2000.0\nhalf_range_raw = 1000.0\nraw_min = {min:?}\nraw_max = {max:?}\n"
+        )
+    };
+    let read = |text: String| {
+        rigctl::fusion::potcal::PotCalibration::from_toml_str(&text, Path::new("pot.toml"))
+    };
+    assert!(
+        read(pot(1000.0, 3000.0)).is_ok(),
+        "{:?}",
+        read(pot(1000.0, 3000.0)).err()
+    );
+    assert!(
+        read(pot(3000.0, 1000.0)).is_err(),
+        "raw_min > raw_max accepted"
+    );
+
+    // two spellings of one coupling key
+    let m = d.join("m.toml");
+    let model = model_text(&MODEL_DEFAULTS).replace("{ j2 = ", "{ j02 = 0.2, j2 = ");
+    std::fs::write(&m, model).unwrap();
+    let q = d.join("q.csv");
+    std::fs::write(&q, JOINTS_CSV).unwrap();
+    let r = rig!(30; "fk", "--model", m, "--joints", q);
+    assert_eq!(r.code, Some(2), "j2 and j02: {}", r.show());
+
+    // a from-diagnose file with a == b, or effects that are not an array
+    for doc in [
+        r#"{"aliased": [{"a": "dth2", "b": "dth2", "correlation": 1.0}]}"#,
+        r#"{"effects": "x", "aliased": [{"a": "dth2", "b": "dth3", "correlation": 0.95}]}"#,
+    ] {
+        let f = d.join("d.json");
+        std::fs::write(&f, doc).unwrap();
+        let r = rig!(60; "plan", "--n", "8", "--candidates", "200", "--from-diagnose", f,
+            "--out", p);
+        assert_eq!(r.code, Some(2), "{doc}: {}", r.show());
+    }
+
+    // calibrate on one pose
+    let one = d.join("one.csv");
+    let cal_text = std::fs::read_to_string(&cal).unwrap();
+    let mut lines = cal_text.lines().filter(|l| !l.starts_with('#'));
+    std::fs::write(
+        &one,
+        format!("{}\n{}\n", lines.next().unwrap(), lines.next().unwrap()),
+    )
+    .unwrap();
+    let r = rig!(60; "calibrate", "--poses", one);
+    assert_eq!(r.code, Some(2), "calibrate on 1 pose: {}", r.show());
+
+    // the same file as calibration and held-out data
+    let r = rig!(60; "diagnose", "--poses", cal, "--validate", cal);
+    assert_eq!(r.code, Some(2), "--poses X --validate X: {}", r.show());
+    let r = rig!(60; "calibrate", "--poses", val, "--validate", val);
+    assert_eq!(r.code, Some(2), "--poses X --validate X: {}", r.show());
+}
+
+// 9. A duplicate link name is named as such.
+#[test]
+fn item9_a_duplicate_link_is_named() {
+    let dir = tempfile::tempdir().unwrap();
+    let u = dir.path().join("u.urdf");
+    std::fs::write(
+        &u,
+        URDF.replace("<link name=\"l1\">", "<link name=\"base\">"),
+    )
+    .unwrap();
+    let r = rig!(30; "urdf2model", "--urdf", u, "--tip", "l2", "--out", dir.path().join("m.toml"));
+    assert_eq!(r.code, Some(2), "{}", r.show());
+    assert!(
+        r.stderr.contains("second link named `base`"),
+        "{}",
+        r.show()
+    );
+}
+
+// 9. A truncated JPEG is named as such.
+#[test]
+fn item9_a_truncated_jpeg_is_reported() {
+    let dir = tempfile::tempdir().unwrap();
+    let img = image::RgbImage::from_fn(256, 256, |x, y| {
+        image::Rgb([(x % 251) as u8, (y % 241) as u8, ((x * y) % 239) as u8])
+    });
+    let mut bytes = Vec::new();
+    image::DynamicImage::ImageRgb8(img)
+        .write_to(
+            &mut std::io::Cursor::new(&mut bytes),
+            image::ImageFormat::Jpeg,
+        )
+        .unwrap();
+    let whole = dir.path().join("whole.jpg");
+    let cut = dir.path().join("cut.jpg");
+    std::fs::write(&whole, &bytes).unwrap();
+    std::fs::write(&cut, &bytes[..bytes.len() / 2]).unwrap();
+    let r = rig!(60; "trace", cut, "--out", dir.path().join("t.csv"));
+    assert!(r.stderr.contains("truncated"), "{}", r.show());
+    assert!(matches!(r.code, Some(1..=2)), "{}", r.show());
+    let r = rig!(60; "trace", whole, "--out", dir.path().join("t.csv"));
+    assert!(!r.stderr.contains("truncated"), "{}", r.show());
+}
