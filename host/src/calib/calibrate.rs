@@ -231,6 +231,7 @@ pub(super) fn fit_report(
         converged: fit.converged,
         tilting_applied,
         terms: NamedValues::default(),
+        unphysical: Vec::new(),
         outliers: Vec::new(),
         outlier_note: None,
     }

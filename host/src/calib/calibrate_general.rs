@@ -260,7 +260,19 @@ pub fn calibrate_general(
     for (u, s) in chosen.fitted.iter().zip(&chosen.sigma) {
         if !matches!(u, Unknown::Param(_)) {
             let name = chosen.state.name(*u, cal);
-            report.terms.0.push((name.clone(), chosen.state.value(*u)));
+            let value = chosen.state.value(*u);
+            if matches!(u, Unknown::Compliance(_)) && value < 0.0 {
+                report.unphysical.push(format!(
+                    "{name} = {value:.4} +- {s:.4}: a negative compliance, which no joint has (the term \
+                     stands in for something the model lacks, e.g. a length or the link masses){}",
+                    if value + 2.0 * s >= 0.0 {
+                        "; within 2 sigma of 0"
+                    } else {
+                        ""
+                    }
+                ));
+            }
+            report.terms.0.push((name.clone(), value));
             report.sigma.0.push((name, *s));
         }
     }

@@ -94,6 +94,10 @@ pub struct CalibrateReport {
     /// `compliance_j<i>_deg_per_kgfm`; their sigmas are in `sigma`. Absent when empty.
     #[serde(skip_serializing_if = "NamedValues::is_empty")]
     pub terms: NamedValues,
+    /// Identified values outside their physical range (a negative compliance): reported, not
+    /// silently kept; each entry names the value and why. Absent when empty.
+    #[serde(skip_serializing_if = "Vec::is_empty")]
+    pub unphysical: Vec<String>,
     /// Poses left out as gross errors (FORMATS.md "Gross errors in measured poses"); the
     /// statistics above are over the other poses.
     pub outliers: Vec<super::outliers::OutlierReport>,
@@ -131,6 +135,7 @@ mod tests {
             converged: true,
             tilting_applied: true,
             terms: NamedValues::default(),
+            unphysical: Vec::new(),
             outliers: Vec::new(),
             outlier_note: None,
         };

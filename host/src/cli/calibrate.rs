@@ -276,6 +276,9 @@ pub(super) fn outlier_lines(
             r.outliers.len()
         );
     }
+    for u in &r.unphysical {
+        let _ = writeln!(s, "unphysical: {u}");
+    }
     if let Some(note) = &r.outlier_note {
         let _ = writeln!(s, "gross errors: {note}");
     }
