@@ -144,7 +144,7 @@ fn report(trace: &Trace) {
     let l = &trace.linking;
     for g in l.gaps.iter().filter(|g| g.bridged) {
         errln!(
-            "rigctl trace: skip bridged: {:.2} mm from ({:.2}, {:.2}) to ({:.2}, {:.2}) mm",
+            "rigctl trace: gap bridged: {:.2} mm from ({:.2}, {:.2}) to ({:.2}, {:.2}) mm",
             g.length_mm,
             g.from_mm[0],
             g.from_mm[1],

@@ -3,7 +3,9 @@
 //! or closed, any shape; the printed reference is never a mask, only a hint between chains of
 //! similar length.
 //!
-//! Every end of an open piece gets its outward tangent and curvature from the last 4 mm. A link
+//! Open pieces are first cut where they turn sharply (a corner, or the tracker turning onto a
+//! stroke that crosses the path). Every end of an open piece gets its outward tangent and
+//! curvature from the 6.5 mm before its last 1.5 mm. A link
 //! between two ends is admissible when each end's arc, extrapolated over the gap, lands on the
 //! other end and the directions agree (tolerances grow with the gap); ends that nearly touch
 //! (< 1 mm) need only not double back (a corner). Links are taken cheapest first, each end once, a cycle only as
@@ -26,8 +28,18 @@ use crate::sheet::{ReferencePath, CIRCLE_RADIUS_MM, LINE_HALF_LENGTH_MM};
 pub const MIN_MARK_MM: f64 = 5.0;
 /// A left-out line at least this share of the path's length is a drawn line of its own.
 const SEPARATE_SHARE: f64 = 0.3;
-/// Length of an end used for its tangent and curvature, mm.
-const END_SPAN_MM: f64 = 4.0;
+/// Length of an end used for its tangent and curvature, mm, and the part of it next to the end
+/// left out.
+const END_SPAN_MM: f64 = 8.0;
+const END_SKIP_MM: f64 = 1.5;
+/// A piece turning by more than this between its chords of [`KINK_CHORD_MM`] is cut there.
+const KINK_DEG: f64 = 25.0;
+const KINK_CHORD_MM: f64 = 1.0;
+/// A mark ending this close to the path touches it; the path is bridged over this radius
+/// around the place, mm.
+const CROSS_TOUCH_MM: f64 = 1.5;
+const CROSS_CUT_MM: f64 = 3.0;
+const CROSS_MAX_MM: f64 = 15.0;
 /// Spacing of bridge points, mm.
 const BRIDGE_STEP_MM: f64 = 0.2;
 
@@ -108,6 +120,13 @@ struct End {
     p: [f64; 2],
     t: [f64; 2],
     k: f64,
+    /// The anchor of a bridge, `skip` mm back from the end (the last millimetre may be pulled
+    /// aside), and the tangent there.
+    anchor: [f64; 2],
+    ta: [f64; 2],
+    skip: f64,
+    /// Uncertainty of the tangent, rad (short pieces give poor directions).
+    sigma: f64,
 }
 
 /// A candidate link between end `a` and end `b` (end index = 2 * piece + side; side 0 head,
@@ -169,31 +188,50 @@ fn point_back(pts: &[[f64; 2]], l: f64) -> [f64; 2] {
     pts[0]
 }
 
-/// The end at the last point of `pts`.
+/// The end at the last point of `pts`: tangent and curvature from the circle through the points
+/// [`END_SKIP_MM`], halfway and [`END_SPAN_MM`] back (the last millimetre may be pulled aside
+/// by a stroke that crosses there), carried to the end point.
 fn end_of(pts: &[[f64; 2]]) -> Option<End> {
+    end_with(pts, END_SKIP_MM)
+}
+
+/// [`end_of`] with the anchor `skip` mm back (0: the last point).
+fn end_with(pts: &[[f64; 2]], skip: f64) -> Option<End> {
     let len = polyline_length(pts, false);
     if len <= 0.0 {
         return None;
     }
-    let span = END_SPAN_MM.min(0.5 * len);
+    let span = END_SPAN_MM.min(0.7 * len);
+    let skip = skip.min(0.2 * span);
     let p0 = pts[pts.len() - 1];
-    let p1 = point_back(pts, 0.5 * span);
-    let p2 = point_back(pts, span);
-    let d = sub(p0, p2);
+    let q1 = point_back(pts, skip);
+    let q2 = point_back(pts, 0.5 * (skip + span));
+    let q3 = point_back(pts, span);
+    let d = sub(q1, q3);
     let n = norm(d);
     if n <= 1e-9 {
         return None;
     }
-    // Tangent at the end: the chord's direction turned by half the chord's turn.
-    let (a, b) = (sub(p1, p2), sub(p0, p1));
+    let (a, b) = (sub(q2, q3), sub(q1, q2));
     let cross = a[0] * b[1] - a[1] * b[0];
-    let k = if span >= 1.0 {
+    // Curvature only from a span long enough to tell it from the centreline's noise.
+    let k = if span >= 5.0 {
         (2.0 * cross / (norm(a) * norm(b) * n).max(1e-12)).clamp(-0.1, 0.1)
     } else {
         0.0
     };
-    let t = rot([d[0] / n, d[1] / n], 0.5 * k * n);
-    Some(End { p: p0, t, k })
+    // The chord's direction is the tangent at its middle; turn it on to the anchor and the end.
+    let ta = rot([d[0] / n, d[1] / n], k * 0.5 * n);
+    let t = rot(ta, k * dist(q1, p0));
+    Some(End {
+        p: p0,
+        t,
+        k,
+        anchor: q1,
+        ta,
+        skip,
+        sigma: 0.15 / span.max(0.5),
+    })
 }
 
 /// Piece ends; `None` for closed pieces.
@@ -205,6 +243,70 @@ fn ends(piece: &PieceMm) -> Option<[End; 2]> {
     let rev: Vec<[f64; 2]> = piece.pts.iter().rev().copied().collect();
     let head = end_of(&rev)?;
     Some([head, tail])
+}
+
+/// Open pieces cut where they turn by more than [`KINK_DEG`] between the chords of the
+/// [`KINK_CHORD_MM`] before and after a point (a corner, or the tracker turning onto a stroke
+/// that crosses the path): the linker decides which way the path goes on.
+fn split_kinks(pieces: &[PieceMm]) -> Vec<PieceMm> {
+    let mut out = Vec::with_capacity(pieces.len());
+    for p in pieces {
+        let n = p.pts.len();
+        if p.closed || n < 5 {
+            out.push(p.clone());
+            continue;
+        }
+        // Chord ends by arc length: for each point the indices ~KINK_CHORD_MM back and ahead.
+        let mut s = vec![0.0; n];
+        for i in 1..n {
+            s[i] = s[i - 1] + dist(p.pts[i - 1], p.pts[i]);
+        }
+        let turn_at = |i: usize| -> f64 {
+            let back = s[..i].partition_point(|&v| v < s[i] - KINK_CHORD_MM);
+            let ahead = i + s[i..].partition_point(|&v| v < s[i] + KINK_CHORD_MM);
+            if back >= i || ahead >= n || s[i] - s[back] < 0.8 * KINK_CHORD_MM {
+                return 0.0;
+            }
+            let (u, v) = (sub(p.pts[i], p.pts[back]), sub(p.pts[ahead], p.pts[i]));
+            let (nu, nv) = (norm(u), norm(v));
+            if nu < 1e-9 || nv < 1e-9 {
+                return 0.0;
+            }
+            ((u[0] * v[0] + u[1] * v[1]) / (nu * nv))
+                .clamp(-1.0, 1.0)
+                .acos()
+        };
+        let turns: Vec<f64> = (0..n).map(turn_at).collect();
+        let limit = KINK_DEG.to_radians();
+        let mut cuts = Vec::new();
+        let mut i = 0;
+        while i < n {
+            if turns[i] > limit {
+                let mut j = i;
+                while j + 1 < n && turns[j + 1] > limit {
+                    j += 1;
+                }
+                let best = (i..=j)
+                    .max_by(|&a, &b| turns[a].total_cmp(&turns[b]))
+                    .unwrap_or(i);
+                cuts.push(best);
+                i = j + 1;
+            } else {
+                i += 1;
+            }
+        }
+        let mut from = 0;
+        for c in cuts.into_iter().chain(std::iter::once(n - 1)) {
+            if c > from {
+                out.push(PieceMm {
+                    pts: p.pts[from..=c].to_vec(),
+                    closed: false,
+                });
+            }
+            from = c;
+        }
+    }
+    out
 }
 
 /// Continuity of `a` into `b` across their gap: `None` when not admissible, else the cost.
@@ -224,12 +326,13 @@ fn continuity(a: &End, b: &End, reach: f64) -> Option<f64> {
             .acos()
     };
     if g < 1.0 {
-        return (turn_ab <= 120f64.to_radians()).then_some(g + 2.0 * turn_ab);
+        return (turn_ab <= 120f64.to_radians()).then_some(g + 10.0 * turn_ab);
     }
     // Each end's arc, carried over the gap, lands on the other end.
     let lat = 0.5 * (dist(arc_point(a, g), b.p) + dist(arc_point(b, g), a.p));
-    let lat_tol = 0.3 + 0.12 * g;
-    let ang_tol = (25.0 + 15.0 * (g / 20.0).min(1.0)).to_radians();
+    let sigma = a.sigma + b.sigma;
+    let lat_tol = 0.3 + 0.12 * g + 2.0 * sigma * g;
+    let ang_tol = (25.0 + 15.0 * (g / 20.0).min(1.0)).to_radians() + 2.0 * sigma;
     // The chord must leave each end forwards.
     let chord = [(b.p[0] - a.p[0]) / g, (b.p[1] - a.p[1]) / g];
     let fwd_a = chord[0] * a.t[0] + chord[1] * a.t[1];
@@ -237,14 +340,28 @@ fn continuity(a: &End, b: &End, reach: f64) -> Option<f64> {
     if lat > lat_tol || turn_ab > ang_tol || fwd_a < 0.5 || fwd_b < 0.5 {
         return None;
     }
-    Some(g + 2.0 * lat + 4.0 * turn_ab * g.max(1.0))
+    Some(g + 2.0 * lat + 10.0 * turn_ab)
 }
 
-/// Cubic Hermite bridge from `a` to `b` (inner points only), and its length.
+/// Cubic Hermite bridge from end `a` to end `b` (inner points only), and its length.
 fn bridge(a: &End, b: &End) -> (Vec<[f64; 2]>, f64) {
-    let g = dist(a.p, b.p);
-    let m = g;
-    let (ta, tb) = (a.t, [-b.t[0], -b.t[1]]);
+    hermite(a.p, a.t, b.p, [-b.t[0], -b.t[1]])
+}
+
+/// Cubic Hermite curve from `pa` (tangent `ta`) to `pb` (arriving along `tb`), tangent lengths
+/// the chord: its inner points every [`BRIDGE_STEP_MM`] and its length.
+fn hermite(pa: [f64; 2], ta: [f64; 2], pb: [f64; 2], tb: [f64; 2]) -> (Vec<[f64; 2]>, f64) {
+    let a = End {
+        p: pa,
+        t: ta,
+        k: 0.0,
+        anchor: pa,
+        ta,
+        skip: 0.0,
+        sigma: 0.0,
+    };
+    let b = End { p: pb, ..a };
+    let m = dist(a.p, b.p);
     let at = |u: f64| {
         let (u2, u3) = (u * u, u * u * u);
         let h00 = 2.0 * u3 - 3.0 * u2 + 1.0;
@@ -285,7 +402,8 @@ pub(crate) fn link(
     max_gap_mm: f64,
     hint: Option<ReferencePath>,
 ) -> Option<Linking> {
-    let pieces: Vec<&PieceMm> = pieces.iter().filter(|p| p.pts.len() >= 2).collect();
+    let split = split_kinks(pieces);
+    let pieces: Vec<&PieceMm> = split.iter().filter(|p| p.pts.len() >= 2).collect();
     if pieces.is_empty() {
         return None;
     }
@@ -335,6 +453,13 @@ pub(crate) fn link(
                 .then(lengths[j].total_cmp(&lengths[i]))
         })?;
     let (path, mut gaps) = built[main].clone();
+    let others_pts: Vec<&[[f64; 2]]> = built
+        .iter()
+        .enumerate()
+        .filter(|(i, (s, _))| *i != main && s.points_mm.len() >= 2)
+        .map(|(_, (s, _))| s.points_mm.as_slice())
+        .collect();
+    let path = cut_crossings(path, &others_pts, &mut gaps);
     let main_chain = &chains[main];
     // Free ends of the path and what lies beyond them.
     let mut free: Vec<End> = Vec::new();
@@ -515,6 +640,123 @@ fn walk_chains(
     chains
 }
 
+/// Where another mark touches the path (a stroke crossing it, whether the tracker cut it or the
+/// path there), the path's centroids were pulled towards it: the path within [`CROSS_CUT_MM`]
+/// of every place where another mark comes within [`CROSS_TOUCH_MM`] is replaced by a bridge
+/// between the undisturbed sides (a stretch longer than [`CROSS_MAX_MM`], a mark running along
+/// the path, is kept).
+fn cut_crossings(path: Stroke, marks: &[&[[f64; 2]]], gaps: &mut Vec<Gap>) -> Stroke {
+    let pts = &path.points_mm;
+    let n = pts.len();
+    if n < 8 {
+        return path;
+    }
+    let cell = CROSS_CUT_MM;
+    let key = |p: [f64; 2]| ((p[0] / cell).floor() as i64, (p[1] / cell).floor() as i64);
+    let mut grid: std::collections::HashMap<(i64, i64), Vec<usize>> = Default::default();
+    for (i, p) in pts.iter().enumerate() {
+        grid.entry(key(*p)).or_default().push(i);
+    }
+    let mut cut = vec![false; n];
+    for m in marks {
+        for q in m.iter() {
+            let (kx, ky) = key(*q);
+            let mut best: Option<(usize, f64)> = None;
+            for dx in -1..=1 {
+                for dy in -1..=1 {
+                    for &i in grid.get(&(kx + dx, ky + dy)).into_iter().flatten() {
+                        let d = dist(pts[i], *q);
+                        if d <= CROSS_TOUCH_MM && best.is_none_or(|(_, bd)| d < bd) {
+                            best = Some((i, d));
+                        }
+                    }
+                }
+            }
+            let Some((i, _)) = best else { continue };
+            let c = pts[i];
+            let (kx, ky) = key(c);
+            for dx in -2..=2 {
+                for dy in -2..=2 {
+                    for &k in grid.get(&(kx + dx, ky + dy)).into_iter().flatten() {
+                        if dist(pts[k], c) <= CROSS_CUT_MM {
+                            cut[k] = true;
+                        }
+                    }
+                }
+            }
+        }
+    }
+    // Long runs are kept.
+    let mut i = 0;
+    while i < n {
+        if !cut[i] {
+            i += 1;
+            continue;
+        }
+        let mut j = i;
+        while j + 1 < n && cut[j + 1] {
+            j += 1;
+        }
+        if polyline_length(&pts[i..=j], false) > CROSS_MAX_MM {
+            cut[i..=j].iter_mut().for_each(|c| *c = false);
+        }
+        i = j + 1;
+    }
+    if !cut.iter().any(|c| *c) || cut.iter().all(|c| *c) {
+        return path;
+    }
+    // Start a closed path at a kept point, so no cut run wraps around.
+    let (pts, cut): (Vec<[f64; 2]>, Vec<bool>) = if path.closed {
+        let start = cut.iter().position(|c| !c).unwrap_or(0);
+        let mut p = pts.clone();
+        let mut c = cut.clone();
+        p.rotate_left(start);
+        c.rotate_left(start);
+        (p, c)
+    } else {
+        (pts.clone(), cut)
+    };
+    let mut out: Vec<[f64; 2]> = Vec::with_capacity(n);
+    let mut bridged = path.bridged_mm;
+    let mut i = 0;
+    while i < n {
+        if !cut[i] {
+            out.push(pts[i]);
+            i += 1;
+            continue;
+        }
+        let mut j = i;
+        while j + 1 < n && cut[j + 1] {
+            j += 1;
+        }
+        let after = if path.closed && j + 1 == n {
+            // Up to the (kept) start of the closed path.
+            let mut v: Vec<[f64; 2]> = out.clone();
+            v.reverse();
+            v
+        } else {
+            pts[j + 1..].iter().rev().copied().collect()
+        };
+        if let (Some(a), Some(b), false) = (end_of(&out), end_of(&after), after.is_empty()) {
+            let (inner, len) = bridge(&a, &b);
+            gaps.push(Gap {
+                from_mm: a.p,
+                to_mm: b.p,
+                length_mm: len,
+                bridged: true,
+            });
+            bridged += len;
+            out.extend(inner);
+        }
+        i = j + 1;
+    }
+    Stroke {
+        points_mm: out,
+        closed: path.closed,
+        bridged_mm: bridged,
+    }
+}
+
 /// Total length of piece segments within `band_mm` of the printed `path` (to pick the hint).
 pub(crate) fn length_near(pieces: &[PieceMm], path: ReferencePath, band_mm: f64) -> f64 {
     pieces
@@ -591,9 +833,25 @@ fn build(
     let mut pts: Vec<[f64; 2]> = Vec::new();
     let mut gaps = Vec::new();
     let mut bridged = 0.0;
-    let oriented = |&(p, rev): &(usize, bool)| -> Vec<[f64; 2]> {
+    let n = chain.order.len();
+    let linked_cycle = chain.closed && piece_ends[chain.order[0].0].is_some();
+    // A piece in its direction along the chain, cut back to the anchors of its linked ends.
+    let oriented = |i: usize| -> Vec<[f64; 2]> {
+        let (p, rev) = chain.order[i];
         let mut v = pieces[p].pts.clone();
         if rev {
+            v.reverse();
+        }
+        let Some(e) = piece_ends[p] else {
+            return v;
+        };
+        let (entry, exit) = if rev { (e[1], e[0]) } else { (e[0], e[1]) };
+        if i + 1 < n || linked_cycle {
+            trim_back(&mut v, exit.skip);
+        }
+        if i > 0 || linked_cycle {
+            v.reverse();
+            trim_back(&mut v, entry.skip);
             v.reverse();
         }
         v
@@ -602,38 +860,38 @@ fn build(
     let exit_end = |&(p, rev): &(usize, bool)| piece_ends[p].map(|e| if rev { e[0] } else { e[1] });
     let entry_end =
         |&(p, rev): &(usize, bool)| piece_ends[p].map(|e| if rev { e[1] } else { e[0] });
-    let n = chain.order.len();
+    // Bridges run between the anchors: the pencil's own gap and the millimetre before each end.
+    // The side already written gives its direction from the chain so far (a short piece alone
+    // gives a poor one).
+    let mut link = |a: End, b: End, pts: &mut Vec<[f64; 2]>| {
+        let (from, ta) = match end_with(pts, 0.0) {
+            Some(e) if pts.len() >= 2 => (e.p, e.t),
+            _ => (a.anchor, a.ta),
+        };
+        let (inner, len) = hermite(from, ta, b.anchor, [-b.ta[0], -b.ta[1]]);
+        let gap = dist(a.p, b.p);
+        if gap > 1e-9 {
+            gaps.push(Gap {
+                from_mm: a.p,
+                to_mm: b.p,
+                length_mm: (len - a.skip - b.skip).max(gap),
+                bridged: true,
+            });
+            bridged += len;
+        }
+        pts.extend(inner);
+    };
     for (i, item) in chain.order.iter().enumerate() {
         if i > 0 {
             if let (Some(a), Some(b)) = (exit_end(&chain.order[i - 1]), entry_end(item)) {
-                let (inner, len) = bridge(&a, &b);
-                if dist(a.p, b.p) > 1e-9 {
-                    gaps.push(Gap {
-                        from_mm: a.p,
-                        to_mm: b.p,
-                        length_mm: len,
-                        bridged: true,
-                    });
-                    bridged += len;
-                }
-                pts.extend(inner);
+                link(a, b, &mut pts);
             }
         }
-        pts.extend(oriented(item));
+        pts.extend(oriented(i));
     }
-    if chain.closed && n >= 1 && piece_ends[chain.order[0].0].is_some() {
+    if linked_cycle {
         if let (Some(a), Some(b)) = (exit_end(&chain.order[n - 1]), entry_end(&chain.order[0])) {
-            let (inner, len) = bridge(&a, &b);
-            if dist(a.p, b.p) > 1e-9 {
-                gaps.push(Gap {
-                    from_mm: a.p,
-                    to_mm: b.p,
-                    length_mm: len,
-                    bridged: true,
-                });
-                bridged += len;
-            }
-            pts.extend(inner);
+            link(a, b, &mut pts);
         }
     }
     pts.dedup();
@@ -645,6 +903,26 @@ fn build(
         },
         gaps,
     )
+}
+
+/// Shortens the polyline `v` by `len` mm at its end (never below one point).
+fn trim_back(v: &mut Vec<[f64; 2]>, len: f64) {
+    if len <= 0.0 || v.len() < 2 {
+        return;
+    }
+    let cut = point_back(v, len);
+    let mut acc = 0.0;
+    while v.len() >= 2 {
+        let d = dist(v[v.len() - 2], v[v.len() - 1]);
+        if acc + d >= len {
+            break;
+        }
+        acc += d;
+        v.pop();
+    }
+    if let Some(last) = v.last_mut() {
+        *last = cut;
+    }
 }
 
 /// A fixed order: a closed path counter-clockwise from its point at the smallest polar angle
