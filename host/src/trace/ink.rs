@@ -43,7 +43,7 @@ impl InkModel {
             let row = &raw[3 * w * y..3 * w * (y + 1)];
             for (i, px) in row.chunks_exact(3).enumerate().step_by(step) {
                 // Every 7th sample (offset within its block) for the paper's own darkness.
-                if (i / step + y / step) % 7 == 0 {
+                if (i / step + y / step).is_multiple_of(7) {
                     let q = (i + step / 2).min(w - 1);
                     let local = paper_map.at(q as f64 + 0.5, y as f64 + 0.5);
                     if local[0] > 1.0 {
