@@ -348,8 +348,8 @@ fn bridge(a: &End, b: &End) -> (Vec<[f64; 2]>, f64) {
     hermite(a.p, a.t, b.p, [-b.t[0], -b.t[1]])
 }
 
-/// Cubic Hermite curve from `pa` (tangent `ta`) to `pb` (arriving along `tb`), tangent lengths
-/// the chord: its inner points every [`BRIDGE_STEP_MM`] and its length.
+/// Cubic Hermite curve from `pa` (tangent `ta`) to `pb` (arriving along `tb`): its inner points
+/// every [`BRIDGE_STEP_MM`] and its length.
 fn hermite(pa: [f64; 2], ta: [f64; 2], pb: [f64; 2], tb: [f64; 2]) -> (Vec<[f64; 2]>, f64) {
     let a = End {
         p: pa,
@@ -361,7 +361,10 @@ fn hermite(pa: [f64; 2], ta: [f64; 2], pb: [f64; 2], tb: [f64; 2]) -> (Vec<[f64;
         sigma: 0.0,
     };
     let b = End { p: pb, ..a };
-    let m = dist(a.p, b.p);
+    // Tangent length: exact for a circular arc turning by theta (4 R tan(theta / 4) =
+    // chord / cos^2(theta / 4)); the chord for a straight bridge.
+    let theta = (ta[0] * tb[0] + ta[1] * tb[1]).clamp(-1.0, 1.0).acos();
+    let m = dist(a.p, b.p) / (0.25 * theta).cos().powi(2);
     let at = |u: f64| {
         let (u2, u3) = (u * u, u * u * u);
         let h00 = 2.0 * u3 - 3.0 * u2 + 1.0;
