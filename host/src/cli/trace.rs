@@ -8,7 +8,8 @@ use indicatif::{ProgressBar, ProgressDrawTarget, ProgressStyle};
 use rigctl::sheet::ReferencePath;
 use rigctl::trace::overlay::{render_overlay, write_overlay};
 use rigctl::trace::{
-    load_prepared, trace_prepared, write_csv, Mapping, PathChoice, Trace, TraceOptions,
+    load_prepared, trace_prepared, write_csv, LeftOut, LeftOutKind, Mapping, PathChoice, Trace,
+    TraceOptions,
 };
 use std::path::PathBuf;
 
@@ -28,11 +29,12 @@ pub struct Args {
     /// Scale for --no-fiducials, mm per pixel.
     #[arg(long, requires = "no_fiducials")]
     pub mm_per_px: Option<f64>,
-    /// The printed path the pencil followed (auto: whichever the pencil runs along; free: no
-    /// printed path, the longest stroke is written).
+    /// The printed path the pencil was meant to follow, a hint between chains of graphite of
+    /// similar length (auto: whichever the pencil runs along; free: no hint).
     #[arg(long, value_enum, default_value = "auto")]
     pub path: PathArg,
-    /// Pencil skips up to this long (along the path) are bridged; longer gaps fail, mm.
+    /// Pencil skips up to this long (between ends that continue each other) are bridged; longer
+    /// gaps fail, mm.
     #[arg(long, default_value_t = 10.0)]
     pub max_gap_mm: f64,
     /// Also write the overlay (trace and fitted marks drawn on the input) as PNG.
@@ -149,41 +151,80 @@ fn report(trace: &Trace) {
         },
         trace.px_per_mm,
     );
-    match &trace.assembly {
-        Some((path, a)) => errln!(
-            "rigctl trace: along the printed {}: {:.1} of {:.1} mm covered by pencil, {} skip(s) bridged, {:.1} mm of other marks left out",
-            if *path == ReferencePath::Circle { "circle" } else { "line" },
-            a.covered_mm,
-            a.reference_mm,
-            a.gaps.iter().filter(|g| g.bridged).count(),
-            a.unused_mm
-        ),
-        None if trace.strokes.len() > 1 => {
-            let rest: f64 = trace.strokes[1..].iter().map(|s| s.length_mm()).sum();
-            errln!(
-                "rigctl trace: warning: {} other stroke(s), {rest:.1} mm in all, not written (only the longest is)",
-                trace.strokes.len() - 1
-            );
-        }
-        None => {}
+    let l = &trace.linking;
+    for g in l.gaps.iter().filter(|g| g.bridged) {
+        errln!(
+            "rigctl trace: gap bridged: {:.2} mm from ({:.2}, {:.2}) to ({:.2}, {:.2}) mm",
+            g.length_mm,
+            g.from_mm[0],
+            g.from_mm[1],
+            g.to_mm[0],
+            g.to_mm[1]
+        );
+    }
+    if let Some((path, mean)) = l.hint {
+        errln!(
+            "rigctl trace: {} piece(s) linked; the path lies {mean:.1} mm from the printed {} on average",
+            l.pieces,
+            if path == ReferencePath::Circle { "circle" } else { "line" },
+        );
+    }
+    let specks: Vec<&LeftOut> = l
+        .left_out
+        .iter()
+        .filter(|o| o.kind == LeftOutKind::Speck)
+        .collect();
+    if !specks.is_empty() {
+        errln!(
+            "rigctl trace: left out {} speck(s) (dust, fibres, flicks; {:.1} mm in all)",
+            specks.len(),
+            specks.iter().map(|o| o.length_mm).sum::<f64>()
+        );
+    }
+    for o in l.left_out.iter().filter(|o| o.kind != LeftOutKind::Speck) {
+        errln!(
+            "rigctl trace: left out {}: {}",
+            match o.kind {
+                LeftOutKind::Mark => "a mark apart from the path",
+                LeftOutKind::Continues => "a mark that may continue the path",
+                _ => "a drawn line of its own",
+            },
+            describe(o)
+        );
     }
 }
 
+fn describe(o: &LeftOut) -> String {
+    format!(
+        "{:.1} mm from ({:.1}, {:.1}) to ({:.1}, {:.1}) mm",
+        o.length_mm, o.from_mm[0], o.from_mm[1], o.to_mm[0], o.to_mm[1]
+    )
+}
+
 fn missing_message(trace: &Trace) -> String {
-    let Some((_, a)) = &trace.assembly else {
-        return String::from("the trace is incomplete");
-    };
-    let parts: Vec<String> = a
+    let l = &trace.linking;
+    let mut parts: Vec<String> = l
         .missing()
         .map(|g| {
             format!(
-                "{:.1} mm from ({:.1}, {:.1}) to ({:.1}, {:.1}) mm",
+                "a gap of {:.1} mm from ({:.1}, {:.1}) to ({:.1}, {:.1}) mm (longer than --max-gap-mm)",
                 g.length_mm, g.from_mm[0], g.from_mm[1], g.to_mm[0], g.to_mm[1]
             )
         })
         .collect();
+    for o in l.left_out.iter().filter(|o| o.could_be_path()) {
+        parts.push(format!(
+            "{} {}",
+            if o.kind == LeftOutKind::Continues {
+                "a mark that may continue it,"
+            } else {
+                "another drawn line,"
+            },
+            describe(o)
+        ));
+    }
     format!(
-        "the pencil trace is not the whole drawn path: missing {} (gaps longer than --max-gap-mm); nothing written",
+        "the pencil trace is not the whole drawn path: missing {}; nothing written",
         parts.join("; ")
     )
 }

@@ -1,5 +1,5 @@
-//! Ordering tracked pieces into strokes (joining ends closer than a gap limit) and resampling
-//! them at a fixed arc-length spacing.
+//! Strokes in sheet mm: tracked pieces, their lengths, and resampling at a fixed arc-length
+//! spacing.
 
 /// A polyline in sheet mm, ordered along the pencil's path.
 #[derive(Debug, Clone, PartialEq)]
@@ -9,7 +9,7 @@ pub struct Stroke {
     pub points_mm: Vec<[f64; 2]>,
     /// Whether the stroke closes on itself.
     pub closed: bool,
-    /// Total length of the gaps between pieces that were bridged by straight segments, mm.
+    /// Total length of the bridges across pencil skips, mm.
     pub bridged_mm: f64,
 }
 
@@ -34,68 +34,6 @@ pub fn polyline_length(pts: &[[f64; 2]], closed: bool) -> f64 {
         (true, Some(a), Some(b)) => open + dist(*a, *b),
         _ => open,
     }
-}
-
-/// Joins pieces greedily, longest first: the nearest free end within `max_gap_mm` of either end
-/// of the growing stroke is attached (reversing the piece as needed). Closed pieces stand alone.
-/// Strokes come out longest first.
-pub(crate) fn chain(pieces: Vec<PieceMm>, max_gap_mm: f64) -> Vec<Stroke> {
-    let mut free: Vec<PieceMm> = pieces.into_iter().filter(|p| p.pts.len() >= 2).collect();
-    free.sort_by(|a, b| {
-        polyline_length(&b.pts, b.closed).total_cmp(&polyline_length(&a.pts, a.closed))
-    });
-    let mut strokes = Vec::new();
-    while !free.is_empty() {
-        let first = free.remove(0);
-        if first.closed {
-            strokes.push(Stroke {
-                points_mm: first.pts,
-                closed: true,
-                bridged_mm: 0.0,
-            });
-            continue;
-        }
-        let mut pts = first.pts;
-        let mut bridged = 0.0;
-        loop {
-            let (head, tail) = (pts[0], pts[pts.len() - 1]);
-            let mut best: Option<(f64, usize, bool, bool)> = None; // gap, index, at_tail, reversed
-            for (i, p) in free.iter().enumerate().filter(|(_, p)| !p.closed) {
-                let (a, b) = (p.pts[0], p.pts[p.pts.len() - 1]);
-                for (gap, at_tail, rev) in [
-                    (dist(tail, a), true, false),
-                    (dist(tail, b), true, true),
-                    (dist(head, b), false, false),
-                    (dist(head, a), false, true),
-                ] {
-                    if gap <= max_gap_mm && best.is_none_or(|(g, ..)| gap < g) {
-                        best = Some((gap, i, at_tail, rev));
-                    }
-                }
-            }
-            let Some((gap, i, at_tail, rev)) = best else {
-                break;
-            };
-            let mut piece = free.remove(i).pts;
-            if rev {
-                piece.reverse();
-            }
-            bridged += gap;
-            if at_tail {
-                pts.extend(piece);
-            } else {
-                piece.extend(pts);
-                pts = piece;
-            }
-        }
-        strokes.push(Stroke {
-            points_mm: pts,
-            closed: false,
-            bridged_mm: bridged,
-        });
-    }
-    strokes.sort_by(|a, b| b.length_mm().total_cmp(&a.length_mm()));
-    strokes
 }
 
 /// Resamples a polyline at equal arc-length steps no longer than `spacing_mm` (both ends of an
@@ -156,29 +94,5 @@ mod tests {
         let c = resample(&square, true, 0.3);
         assert_eq!(c.len(), 14);
         assert!(dist(c[13], c[0]) <= 0.3);
-    }
-
-    #[test]
-    fn chain_joins_near_ends_in_order() {
-        let a = PieceMm {
-            pts: vec![[0.0, 0.0], [10.0, 0.0]],
-            closed: false,
-        };
-        let b = PieceMm {
-            pts: vec![[15.0, 0.0], [11.0, 0.0]],
-            closed: false,
-        }; // reversed, gap 1
-        let c = PieceMm {
-            pts: vec![[50.0, 0.0], [51.0, 0.0]],
-            closed: false,
-        }; // too far
-        let strokes = chain(vec![c, b, a], 2.0);
-        assert_eq!(strokes.len(), 2);
-        assert_eq!(
-            strokes[0].points_mm,
-            vec![[0.0, 0.0], [10.0, 0.0], [11.0, 0.0], [15.0, 0.0]]
-        );
-        assert!((strokes[0].bridged_mm - 1.0).abs() < 1e-12);
-        assert!((strokes[1].length_mm() - 1.0).abs() < 1e-12);
     }
 }

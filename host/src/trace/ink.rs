@@ -14,8 +14,12 @@
 use super::paper::PaperMap;
 use image::RgbImage;
 
-/// Darkness below which a pixel counts as paper (weights are `darkness - floor`).
+/// Darkness below which a pixel counts as paper (weights are `darkness - floor`): the most it
+/// is, for noisy photos; quiet scans get a lower one from their paper noise ([`paper_floor`]),
+/// so faint graphite keeps its weight.
 pub(crate) const DEFAULT_FLOOR: f32 = 0.12;
+/// The least floor.
+const MIN_FLOOR: f32 = 0.06;
 
 /// The per-pixel graphite model of one scan.
 #[derive(Debug, Clone, Copy)]
@@ -34,9 +38,18 @@ impl InkModel {
         let (w, h) = (img.width() as usize, img.height() as usize);
         let raw = img.as_raw();
         let mut samples: Vec<[f32; 2]> = Vec::new();
+        let mut paper_dark: Vec<f32> = Vec::new();
         for y in (0..h).step_by(step) {
             let row = &raw[3 * w * y..3 * w * (y + 1)];
             for (i, px) in row.chunks_exact(3).enumerate().step_by(step) {
+                // Every 7th sample (offset within its block) for the paper's own darkness.
+                if (i / step + y / step).is_multiple_of(7) {
+                    let q = (i + step / 2).min(w - 1);
+                    let local = paper_map.at(q as f64 + 0.5, y as f64 + 0.5);
+                    if local[0] > 1.0 {
+                        paper_dark.push(1.0 - row[3 * q] as f32 / local[0]);
+                    }
+                }
                 // Only strongly red pixels matter: skip the rest before the local paper lookup.
                 if 2 * px[1] as u32 >= px[0] as u32 {
                     continue;
@@ -59,7 +72,10 @@ impl InkModel {
             let tg = core[mid][1];
             [tr.min(1.0), tg.clamp(0.0, 0.5)]
         });
-        Self { red_ink, floor }
+        Self {
+            red_ink,
+            floor: paper_floor(&mut paper_dark, floor),
+        }
     }
 
     /// Graphite darkness of one pixel on paper of level `paper`, 0 (paper, red ink) .. 1 (black).
@@ -84,8 +100,34 @@ impl InkModel {
     }
 }
 
+/// The floor for a paper whose sampled darkness (relative to the local paper level) is
+/// `dark`: the 90th percentile of the light samples (paper, not marks) plus 0.04, within
+/// [`MIN_FLOOR`]..`most`.
+fn paper_floor(dark: &mut [f32], most: f32) -> f32 {
+    let mut light: Vec<f32> = dark.iter().copied().filter(|d| *d < 0.2).collect();
+    if light.len() < 100 {
+        return most;
+    }
+    light.sort_by(f32::total_cmp);
+    let q90 = light[light.len() * 9 / 10];
+    (q90 + 0.04).clamp(MIN_FLOOR.min(most), most)
+}
+
 #[cfg(test)]
 mod tests {
+    #[test]
+    fn floor_follows_the_paper_noise() {
+        let mut quiet: Vec<f32> = (0..1000)
+            .map(|i| 0.01 * ((i % 7) as f32 - 3.0) / 3.0)
+            .collect();
+        assert!((super::paper_floor(&mut quiet, 0.12) - 0.06).abs() < 1e-6);
+        let mut noisy: Vec<f32> = (0..1000)
+            .map(|i| 0.06 * ((i % 7) as f32 - 3.0) / 3.0)
+            .collect();
+        assert!((super::paper_floor(&mut noisy, 0.12) - 0.1).abs() < 0.011);
+        assert_eq!(super::paper_floor(&mut [0.0; 10], 0.12), 0.12);
+    }
+
     use super::*;
 
     #[test]

@@ -15,8 +15,10 @@
 //!    almost invisible in the red channel and is divided out of the centroid weights);
 //! 5. centreline: tracking with darkness-weighted centroids across the stroke, stopping at
 //!    print and dust ([`centreline`], its window statistics in `centreline/section.rs`);
-//! 6. the pieces assembled along the printed path, skips bridged, gaps reported ([`path`]), or,
-//!    without a known path, joined by nearness ([`chain`]); resampled.
+//! 6. the drawn path from the graphite itself: pieces linked end to end by continuity of
+//!    position, direction and curvature, skips bridged, what is left out listed and judged
+//!    ([`link`]; the printed path only a hint between chains of similar length); resampled
+//!    ([`chain`]).
 //!
 //! [`render`] (with `render_draw`, `render_extras`) draws synthetic scans with known truth for
 //! tests, benches and simulation, [`render_photo`] phone photos. Errors: [`error`]; settings:
@@ -31,11 +33,11 @@ pub mod fiducials;
 mod files;
 pub mod homography;
 mod ink;
+pub mod link;
 mod mapping;
 mod options;
 pub mod overlay;
 mod paper;
-pub mod path;
 mod prepare;
 mod raster;
 pub mod render;
@@ -49,8 +51,8 @@ pub use error::TraceError;
 pub use fiducials::{Disc, Fiducials};
 pub use files::{load_prepared, load_scan, write_csv};
 pub use homography::Homography;
+pub use link::{Gap, LeftOut, LeftOutKind, Linking};
 pub use options::{Mapping, PathChoice, TraceOptions};
-pub use path::{Assembly, Gap};
 pub use prepare::Prepared;
 pub use render::{render_scan, RenderSpec};
 pub use render_photo::{render_photo, Camera, PhotoSpec};
@@ -62,11 +64,11 @@ use indicatif::ProgressBar;
 /// The result of [`trace_image`].
 #[derive(Debug, Clone)]
 pub struct Trace {
-    /// Strokes in sheet mm, longest first, resampled at the requested spacing. Along a printed
-    /// path: exactly one, the assembled path.
+    /// Strokes in sheet mm, resampled at the requested spacing: the drawn path first, then the
+    /// other marks of at least `min_stroke_mm`, longest first.
     pub strokes: Vec<Stroke>,
-    /// The assembly along the printed path, if the pencil followed one.
-    pub assembly: Option<(ReferencePath, Assembly)>,
+    /// How the path was linked: its gaps (bridged or missing) and what was left out.
+    pub linking: Linking,
     /// The fiducials (fiducial mapping only).
     pub fiducials: Option<Fiducials>,
     /// Distance between the orientation dot's measured and predicted positions, mm.
@@ -79,16 +81,15 @@ pub struct Trace {
 }
 
 impl Trace {
-    /// The longest stroke (`trace_image` always returns at least one).
+    /// The drawn path (`trace_image` always returns it).
     pub fn main_stroke(&self) -> Option<&Stroke> {
         self.strokes.first()
     }
 
-    /// Whether the written stroke is the whole drawn path (always true without a printed path).
+    /// Whether the written stroke is the whole drawn path: no gap longer than `max_gap_mm`,
+    /// nothing left out that could be part of it (FORMATS.md: exit 0 only then).
     pub fn is_whole(&self) -> bool {
-        self.assembly
-            .as_ref()
-            .is_none_or(|(_, a)| a.missing().next().is_none())
+        self.linking.is_whole()
     }
 }
 
@@ -152,12 +153,12 @@ pub fn trace_prepared(
         })
         .filter(|p| polyline_length(&p.pts, p.closed) >= 0.5)
         .collect();
-    let path = match (opts.path, opts.mapping) {
+    let hint = match (opts.path, opts.mapping) {
         (_, Mapping::Scale { .. }) | (PathChoice::Free, _) => None,
         (PathChoice::Known(p), _) => Some(p),
         (PathChoice::Auto, _) => {
-            let c = path::length_near(&pieces_mm, ReferencePath::Circle, opts.band_mm);
-            let l = path::length_near(&pieces_mm, ReferencePath::Line, opts.band_mm);
+            let c = link::length_near(&pieces_mm, ReferencePath::Circle, opts.band_mm);
+            let l = link::length_near(&pieces_mm, ReferencePath::Line, opts.band_mm);
             let (best, len) = if c >= l {
                 (ReferencePath::Circle, c)
             } else {
@@ -166,28 +167,28 @@ pub fn trace_prepared(
             (len >= 20.0).then_some(best)
         }
     };
-    let assembly = path
-        .and_then(|p| path::assemble(&pieces_mm, p, opts.band_mm, opts.max_gap_mm).map(|a| (p, a)));
-    let raw_strokes: Vec<Stroke> = match &assembly {
-        Some((_, a)) => vec![a.stroke.clone()],
-        None => chain::chain(pieces_mm, opts.max_gap_mm.min(2.0)),
+    let no_trace = || TraceError::NoTrace {
+        min_length_mm: opts.min_stroke_mm,
     };
-    let strokes: Vec<Stroke> = raw_strokes
-        .into_iter()
-        .filter(|s| s.length_mm() >= opts.min_stroke_mm)
+    let linking = link::link(&pieces_mm, opts.max_gap_mm, hint).ok_or_else(no_trace)?;
+    if linking.path.length_mm() < opts.min_stroke_mm {
+        return Err(no_trace());
+    }
+    let strokes: Vec<Stroke> = std::iter::once(&linking.path)
+        .chain(
+            linking
+                .others
+                .iter()
+                .filter(|s| s.length_mm() >= opts.min_stroke_mm),
+        )
         .map(|s| Stroke {
             points_mm: resample(&s.points_mm, s.closed, opts.spacing_mm),
-            ..s
+            ..s.clone()
         })
         .collect();
-    if strokes.is_empty() {
-        return Err(TraceError::NoTrace {
-            min_length_mm: opts.min_stroke_mm,
-        });
-    }
     Ok(Trace {
         strokes,
-        assembly,
+        linking,
         fiducials: fids,
         dot_residual_mm,
         camera,

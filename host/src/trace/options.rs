@@ -1,15 +1,16 @@
 //! The settings of [`super::trace_image`]: how pixels become sheet mm, which printed path the
-//! pencil followed, and the thresholds of the stroke search.
+//! pencil was meant to follow (a hint for choosing between chains of graphite, never a mask), and
+//! the thresholds of the stroke search.
 
 use crate::sheet::{ReferencePath, FIDUCIAL_SPACING_MM};
 
 /// Which printed path the pencil followed.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub enum PathChoice {
-    /// Whichever of circle and line the tracked pencil runs along.
+    /// Whichever of circle and line the tracked pencil runs along (a hint only).
     Auto,
     Known(ReferencePath),
-    /// Not along a printed path: pieces are joined by nearness and the longest stroke is kept.
+    /// No printed path: no hint.
     Free,
 }
 
@@ -31,8 +32,8 @@ pub struct TraceOptions {
     /// Least graphite darkness (fraction of the local paper level absorbed) for a pixel to seed a
     /// stroke.
     pub min_darkness: f32,
-    /// Along a printed path: skips up to this long are bridged; without one: pieces whose ends
-    /// are at most this far apart are joined. mm.
+    /// Pencil skips up to this long (between the ends of two pieces that continue each other)
+    /// are bridged; longer ones are missing, mm.
     pub max_gap_mm: f64,
     /// Strokes shorter than this are dropped, mm.
     pub min_stroke_mm: f64,
@@ -40,7 +41,7 @@ pub struct TraceOptions {
     pub max_width_mm: f64,
     /// The printed path the pencil followed.
     pub path: PathChoice,
-    /// Pencil farther than this from the printed path is not the trace, mm.
+    /// Graphite within this distance of a printed path counts for `Auto`'s choice of hint, mm.
     pub band_mm: f64,
     /// Largest RMS residual of the camera model on the printed marks, mm.
     pub max_camera_rms_mm: f64,

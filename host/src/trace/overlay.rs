@@ -1,6 +1,6 @@
 //! The overlay image: the input (reduced to at most 2400 px on its long side) with the fitted
 //! printed marks (blue rings where the camera model puts them, magenta crosses where they were
-//! measured), the written trace (green) and the missing stretches of the printed path (red), so
+//! measured), the written trace (green) and the missing stretches of the drawn path (red), so
 //! that a person can check a trace at a glance.
 
 use super::{Trace, TraceError};
@@ -77,11 +77,9 @@ pub fn render_overlay(img: &RgbImage, trace: &Trace, spacing_mm: f64) -> RgbImag
             }
             polyline(&mut out, &pts, GREEN, 1);
         }
-        if let Some((_, a)) = &trace.assembly {
-            for g in a.missing() {
-                let seg = [px(cam.to_px(g.from_mm)), px(cam.to_px(g.to_mm))];
-                polyline(&mut out, &seg, RED, 3);
-            }
+        for g in trace.linking.missing() {
+            let seg = [px(cam.to_px(g.from_mm)), px(cam.to_px(g.to_mm))];
+            polyline(&mut out, &seg, RED, 3);
         }
     }
     out

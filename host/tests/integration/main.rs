@@ -50,6 +50,7 @@ mod sim_simulate;
 mod tiago_real;
 mod trace_cli;
 mod trace_hard;
+mod trace_independent;
 mod trace_photos;
 mod trace_scan;
 mod urdf_export;

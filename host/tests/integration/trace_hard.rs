@@ -88,7 +88,7 @@ fn check_whole(name: &str, trace: &Trace, truth: &[[f64; 2]], rms_limit_mm: f64)
     let (rms, worst) = accuracy(trace, truth);
     let fit = trace.camera_fit;
     eprintln!("{name}: rms {rms:.4} mm, worst coverage gap {worst:.3} mm, camera {fit:?}");
-    assert!(trace.is_whole(), "{name}: not whole: {:?}", trace.assembly);
+    assert!(trace.is_whole(), "{name}: not whole: {:?}", trace.linking);
     assert!(
         trace.main_stroke().is_some_and(|s| s.closed),
         "{name}: open"

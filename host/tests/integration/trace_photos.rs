@@ -1,5 +1,6 @@
 //! Real photographs of plotter drawings (BrachioGraph docs, shared/data/real): they carry no
-//! fiducials, so `trace` must say so; with a plain scale the strokes are still extracted.
+//! fiducials, so `trace` must say so; with a plain scale the strokes are still extracted, one per
+//! drawn line, and the trace of one of them is never reported as the whole drawing.
 
 use crate::common;
 
@@ -57,6 +58,13 @@ fn photos_with_a_plain_scale_yield_strokes() {
             tr.main_stroke().expect("a stroke").length_mm()
         );
         assert!(total > 10.0, "{}: {total} mm", f.display());
+        // Several drawn lines (and the grid of earlier ones): one written path cannot be the
+        // whole drawing, so the trace is never reported whole (no exit 0 on a part).
+        assert!(
+            !tr.is_whole() && tr.linking.left_out.iter().any(|o| o.could_be_path()),
+            "{}: reported whole",
+            f.display()
+        );
         for s in &tr.strokes {
             assert!(s
                 .points_mm

@@ -1,0 +1,971 @@
+//! The drawn path from the graphite itself: tracked pieces are linked end to end by continuity
+//! (position, direction and curvature carried across each gap), one curve per drawn line, open
+//! or closed, any shape; the printed reference is never a mask, only a hint between chains of
+//! similar length.
+//!
+//! Open pieces are first cut where they turn sharply (a corner, or the tracker turning onto a
+//! stroke that crosses the path). Every end of an open piece gets its outward tangent and
+//! curvature from the 6.5 mm before its last 1.5 mm. A link
+//! between two ends is admissible when each end's arc, extrapolated over the gap, lands on the
+//! other end and the directions agree (tolerances grow with the gap); ends that nearly touch
+//! (< 1 mm) need only not double back (a corner). Links are taken cheapest first, each end once, a cycle only as
+//! the closing link of a chain, so a second pencil stroke crossing the path is passed over: its
+//! ends meet the path's ends at the wrong angle, and where the crossing cut the path in two the
+//! two halves continue each other across it. Gaps up to `max_gap_mm` are bridged by a cubic
+//! Hermite curve through both ends' positions and tangents.
+//!
+//! The longest chain is the drawn path. What is left out is listed: specks (shorter than
+//! [`MIN_MARK_MM`]), marks, and marks that could be part of the path: a link from one of the
+//! path's free ends that would be admissible but longer than `max_gap_mm` (a gap not bridged,
+//! including an open path whose ends continue into each other), or a mark of at least
+//! [`MIN_MARK_MM`] ahead of a free end within reach, or a separate line nearly as long as the
+//! path. Those make the trace incomplete.
+
+use super::chain::{polyline_length, PieceMm, Stroke};
+use crate::sheet::{ReferencePath, CIRCLE_RADIUS_MM, LINE_HALF_LENGTH_MM};
+
+/// Marks shorter than this are specks (dust, grain), mm.
+pub const MIN_MARK_MM: f64 = 5.0;
+/// A left-out line at least this share of the path's length is a drawn line of its own.
+const SEPARATE_SHARE: f64 = 0.3;
+/// Length of an end used for its tangent and curvature, mm, and the part of it next to the end
+/// left out.
+const END_SPAN_MM: f64 = 8.0;
+const END_SKIP_MM: f64 = 1.5;
+/// A piece turning by more than this between its chords of [`KINK_CHORD_MM`] is cut there.
+const KINK_DEG: f64 = 25.0;
+const KINK_CHORD_MM: f64 = 1.0;
+/// A mark ending this close to the path touches it; the path is bridged over this radius
+/// around the place, mm.
+const CROSS_TOUCH_MM: f64 = 1.5;
+const CROSS_CUT_MM: f64 = 3.0;
+const CROSS_MAX_MM: f64 = 15.0;
+/// Spacing of bridge points, mm.
+const BRIDGE_STEP_MM: f64 = 0.2;
+
+/// A gap between two linked pieces of the drawn path.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Gap {
+    /// Where the written trace stops and starts again, sheet mm.
+    pub from_mm: [f64; 2],
+    pub to_mm: [f64; 2],
+    /// Length of the bridge curve across it, mm.
+    pub length_mm: f64,
+    /// Bridged (at most `max_gap_mm`); otherwise missing.
+    pub bridged: bool,
+}
+
+/// Why a mark was not written.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum LeftOutKind {
+    /// Shorter than [`MIN_MARK_MM`]: dust, a fibre, a flick.
+    Speck,
+    /// A mark apart from the path (a stroke across it, a stray line).
+    Mark,
+    /// Long enough and ahead of a free end of the path, within reach: it may continue the path.
+    Continues,
+    /// A drawn line of its own, comparable in length to the path.
+    Separate,
+}
+
+/// A mark (chain of pieces) not in the written path.
+#[derive(Debug, Clone, PartialEq)]
+pub struct LeftOut {
+    pub from_mm: [f64; 2],
+    pub to_mm: [f64; 2],
+    pub length_mm: f64,
+    pub kind: LeftOutKind,
+}
+
+impl LeftOut {
+    /// Whether leaving it out means the written trace may not be the whole drawn path.
+    pub fn could_be_path(&self) -> bool {
+        matches!(self.kind, LeftOutKind::Continues | LeftOutKind::Separate)
+    }
+}
+
+/// The linked path and what was left out.
+#[derive(Debug, Clone)]
+pub struct Linking {
+    /// The drawn path (bridges included), ordered along it.
+    pub path: Stroke,
+    /// The other chains, longest first (not resampled).
+    pub others: Vec<Stroke>,
+    /// Gaps of the path: bridged ones in order along it, then the missing ones.
+    pub gaps: Vec<Gap>,
+    pub left_out: Vec<LeftOut>,
+    /// Number of tracked pieces linked into the path.
+    pub pieces: usize,
+    /// The printed path used as a hint, and the mean distance of the path from it, mm.
+    pub hint: Option<(ReferencePath, f64)>,
+}
+
+impl Linking {
+    /// The gaps too long to bridge.
+    pub fn missing(&self) -> impl Iterator<Item = &Gap> {
+        self.gaps.iter().filter(|g| !g.bridged)
+    }
+
+    /// Whether the written path is the whole drawn path: nothing missing, nothing left out that
+    /// could be part of it.
+    pub fn is_whole(&self) -> bool {
+        self.missing().next().is_none() && !self.left_out.iter().any(LeftOut::could_be_path)
+    }
+}
+
+/// The end of an open piece: position, outward unit tangent, signed curvature (1/mm, positive
+/// turning left when moving outward).
+#[derive(Debug, Clone, Copy)]
+struct End {
+    p: [f64; 2],
+    t: [f64; 2],
+    k: f64,
+    /// The anchor of a bridge, `skip` mm back from the end (the last millimetre may be pulled
+    /// aside), and the tangent there.
+    anchor: [f64; 2],
+    ta: [f64; 2],
+    skip: f64,
+    /// Uncertainty of the tangent, rad (short pieces give poor directions).
+    sigma: f64,
+}
+
+/// A candidate link between end `a` and end `b` (end index = 2 * piece + side; side 0 head,
+/// 1 tail).
+#[derive(Debug, Clone, Copy)]
+struct Cand {
+    a: usize,
+    b: usize,
+    gap: f64,
+    cost: f64,
+}
+
+fn sub(a: [f64; 2], b: [f64; 2]) -> [f64; 2] {
+    [a[0] - b[0], a[1] - b[1]]
+}
+
+fn norm(a: [f64; 2]) -> f64 {
+    a[0].hypot(a[1])
+}
+
+fn dist(a: [f64; 2], b: [f64; 2]) -> f64 {
+    norm(sub(a, b))
+}
+
+fn rot(t: [f64; 2], a: f64) -> [f64; 2] {
+    let (s, c) = a.sin_cos();
+    [c * t[0] - s * t[1], s * t[0] + c * t[1]]
+}
+
+/// The point at arc length `l` along `p`'s osculating circle (tangent `t`, curvature `k`).
+fn arc_point(e: &End, l: f64) -> [f64; 2] {
+    let phi = e.k * l;
+    let (along, across) = if phi.abs() < 1e-6 {
+        (l, 0.5 * e.k * l * l)
+    } else {
+        (phi.sin() / e.k, (1.0 - phi.cos()) / e.k)
+    };
+    let n = [-e.t[1], e.t[0]];
+    [
+        e.p[0] + along * e.t[0] + across * n[0],
+        e.p[1] + along * e.t[1] + across * n[1],
+    ]
+}
+
+/// The point `l` mm back from the end of `pts` (walking from the last point), or the first.
+fn point_back(pts: &[[f64; 2]], l: f64) -> [f64; 2] {
+    let mut acc = 0.0;
+    for w in pts.windows(2).rev() {
+        let d = dist(w[0], w[1]);
+        if acc + d >= l && d > 0.0 {
+            let f = (l - acc) / d;
+            return [
+                w[1][0] + f * (w[0][0] - w[1][0]),
+                w[1][1] + f * (w[0][1] - w[1][1]),
+            ];
+        }
+        acc += d;
+    }
+    pts[0]
+}
+
+/// The end at the last point of `pts`: tangent and curvature from the circle through the points
+/// [`END_SKIP_MM`], halfway and [`END_SPAN_MM`] back (the last millimetre may be pulled aside
+/// by a stroke that crosses there), carried to the end point.
+fn end_of(pts: &[[f64; 2]]) -> Option<End> {
+    end_with(pts, END_SKIP_MM)
+}
+
+/// [`end_of`] with the anchor `skip` mm back (0: the last point).
+fn end_with(pts: &[[f64; 2]], skip: f64) -> Option<End> {
+    let len = polyline_length(pts, false);
+    if len <= 0.0 {
+        return None;
+    }
+    let span = END_SPAN_MM.min(0.7 * len);
+    let skip = skip.min(0.2 * span);
+    let p0 = pts[pts.len() - 1];
+    let q1 = point_back(pts, skip);
+    let q2 = point_back(pts, 0.5 * (skip + span));
+    let q3 = point_back(pts, span);
+    let d = sub(q1, q3);
+    let n = norm(d);
+    if n <= 1e-9 {
+        return None;
+    }
+    let (a, b) = (sub(q2, q3), sub(q1, q2));
+    let cross = a[0] * b[1] - a[1] * b[0];
+    // Curvature only from a span long enough to tell it from the centreline's noise.
+    let k = if span >= 5.0 {
+        (2.0 * cross / (norm(a) * norm(b) * n).max(1e-12)).clamp(-0.1, 0.1)
+    } else {
+        0.0
+    };
+    // The chord's direction is the tangent at its middle; turn it on to the anchor and the end.
+    let ta = rot([d[0] / n, d[1] / n], k * 0.5 * n);
+    let t = rot(ta, k * dist(q1, p0));
+    Some(End {
+        p: p0,
+        t,
+        k,
+        anchor: q1,
+        ta,
+        skip,
+        sigma: 0.15 / span.max(0.5),
+    })
+}
+
+/// Piece ends; `None` for closed pieces.
+fn ends(piece: &PieceMm) -> Option<[End; 2]> {
+    if piece.closed || piece.pts.len() < 2 {
+        return None;
+    }
+    let tail = end_of(&piece.pts)?;
+    let rev: Vec<[f64; 2]> = piece.pts.iter().rev().copied().collect();
+    let head = end_of(&rev)?;
+    Some([head, tail])
+}
+
+/// Open pieces cut where they turn by more than [`KINK_DEG`] between the chords of the
+/// [`KINK_CHORD_MM`] before and after a point (a corner, or the tracker turning onto a stroke
+/// that crosses the path): the linker decides which way the path goes on.
+fn split_kinks(pieces: &[PieceMm]) -> Vec<PieceMm> {
+    let mut out = Vec::with_capacity(pieces.len());
+    for p in pieces {
+        let n = p.pts.len();
+        if p.closed || n < 5 {
+            out.push(p.clone());
+            continue;
+        }
+        // Chord ends by arc length: for each point the indices ~KINK_CHORD_MM back and ahead.
+        let mut s = vec![0.0; n];
+        for i in 1..n {
+            s[i] = s[i - 1] + dist(p.pts[i - 1], p.pts[i]);
+        }
+        let turn_at = |i: usize| -> f64 {
+            let back = s[..i].partition_point(|&v| v < s[i] - KINK_CHORD_MM);
+            let ahead = i + s[i..].partition_point(|&v| v < s[i] + KINK_CHORD_MM);
+            if back >= i || ahead >= n || s[i] - s[back] < 0.8 * KINK_CHORD_MM {
+                return 0.0;
+            }
+            let (u, v) = (sub(p.pts[i], p.pts[back]), sub(p.pts[ahead], p.pts[i]));
+            let (nu, nv) = (norm(u), norm(v));
+            if nu < 1e-9 || nv < 1e-9 {
+                return 0.0;
+            }
+            ((u[0] * v[0] + u[1] * v[1]) / (nu * nv))
+                .clamp(-1.0, 1.0)
+                .acos()
+        };
+        let turns: Vec<f64> = (0..n).map(turn_at).collect();
+        let limit = KINK_DEG.to_radians();
+        let mut cuts = Vec::new();
+        let mut i = 0;
+        while i < n {
+            if turns[i] > limit {
+                let mut j = i;
+                while j + 1 < n && turns[j + 1] > limit {
+                    j += 1;
+                }
+                let best = (i..=j)
+                    .max_by(|&a, &b| turns[a].total_cmp(&turns[b]))
+                    .unwrap_or(i);
+                cuts.push(best);
+                i = j + 1;
+            } else {
+                i += 1;
+            }
+        }
+        let mut from = 0;
+        for c in cuts.into_iter().chain(std::iter::once(n - 1)) {
+            if c > from {
+                out.push(PieceMm {
+                    pts: p.pts[from..=c].to_vec(),
+                    closed: false,
+                });
+            }
+            from = c;
+        }
+    }
+    out
+}
+
+/// Continuity of `a` into `b` across their gap: `None` when not admissible, else the cost.
+/// `reach` bounds the gap.
+fn continuity(a: &End, b: &End, reach: f64) -> Option<f64> {
+    let g = dist(a.p, b.p);
+    if g > reach {
+        return None;
+    }
+    // Ends that nearly touch continue each other unless they double back (a corner the
+    // tracker did not turn); straighter is cheaper.
+    let turn_ab = {
+        let expect = rot(a.t, a.k * g);
+        let into_b = [-b.t[0], -b.t[1]];
+        (expect[0] * into_b[0] + expect[1] * into_b[1])
+            .clamp(-1.0, 1.0)
+            .acos()
+    };
+    if g < 1.0 {
+        return (turn_ab <= 120f64.to_radians()).then_some(g + 10.0 * turn_ab);
+    }
+    // Each end's arc, carried over the gap, lands on the other end.
+    let lat = 0.5 * (dist(arc_point(a, g), b.p) + dist(arc_point(b, g), a.p));
+    let sigma = a.sigma + b.sigma;
+    let lat_tol = 0.3 + 0.12 * g + 2.0 * sigma * g;
+    let ang_tol = (25.0 + 15.0 * (g / 20.0).min(1.0)).to_radians() + 2.0 * sigma;
+    // The chord must leave each end forwards.
+    let chord = [(b.p[0] - a.p[0]) / g, (b.p[1] - a.p[1]) / g];
+    let fwd_a = chord[0] * a.t[0] + chord[1] * a.t[1];
+    let fwd_b = -(chord[0] * b.t[0] + chord[1] * b.t[1]);
+    if lat > lat_tol || turn_ab > ang_tol || fwd_a < 0.5 || fwd_b < 0.5 {
+        return None;
+    }
+    Some(g + 2.0 * lat + 10.0 * turn_ab)
+}
+
+/// Cubic Hermite bridge from end `a` to end `b` (inner points only), and its length.
+fn bridge(a: &End, b: &End) -> (Vec<[f64; 2]>, f64) {
+    hermite(a.p, a.t, b.p, [-b.t[0], -b.t[1]])
+}
+
+/// Cubic Hermite curve from `pa` (tangent `ta`) to `pb` (arriving along `tb`): its inner points
+/// every [`BRIDGE_STEP_MM`] and its length.
+fn hermite(pa: [f64; 2], ta: [f64; 2], pb: [f64; 2], tb: [f64; 2]) -> (Vec<[f64; 2]>, f64) {
+    let a = End {
+        p: pa,
+        t: ta,
+        k: 0.0,
+        anchor: pa,
+        ta,
+        skip: 0.0,
+        sigma: 0.0,
+    };
+    let b = End { p: pb, ..a };
+    // Tangent length: exact for a circular arc turning by theta (4 R tan(theta / 4) =
+    // chord / cos^2(theta / 4)); the chord for a straight bridge.
+    let theta = (ta[0] * tb[0] + ta[1] * tb[1]).clamp(-1.0, 1.0).acos();
+    let m = dist(a.p, b.p) / (0.25 * theta).cos().powi(2);
+    let at = |u: f64| {
+        let (u2, u3) = (u * u, u * u * u);
+        let h00 = 2.0 * u3 - 3.0 * u2 + 1.0;
+        let h10 = u3 - 2.0 * u2 + u;
+        let h01 = -2.0 * u3 + 3.0 * u2;
+        let h11 = u3 - u2;
+        [
+            h00 * a.p[0] + h10 * m * ta[0] + h01 * b.p[0] + h11 * m * tb[0],
+            h00 * a.p[1] + h10 * m * ta[1] + h01 * b.p[1] + h11 * m * tb[1],
+        ]
+    };
+    let fine: Vec<[f64; 2]> = (0..=64).map(|i| at(i as f64 / 64.0)).collect();
+    let len = polyline_length(&fine, false);
+    let n = (len / BRIDGE_STEP_MM).ceil().max(1.0) as usize;
+    let inner = (1..n).map(|i| at(i as f64 / n as f64)).collect();
+    (inner, len)
+}
+
+/// Distance from `p` to the printed path.
+fn from_printed(path: ReferencePath, p: [f64; 2]) -> f64 {
+    match path {
+        ReferencePath::Circle => (p[0].hypot(p[1]) - CIRCLE_RADIUS_MM).abs(),
+        ReferencePath::Line => (p[0].abs() - LINE_HALF_LENGTH_MM).max(0.0).hypot(p[1]),
+    }
+}
+
+/// A chain of pieces: piece indices in order, each reversed or not, and whether it closes.
+#[derive(Debug, Clone)]
+struct Chain {
+    order: Vec<(usize, bool)>,
+    closed: bool,
+}
+
+/// Links `pieces` into chains; returns the drawn path and what was left out. `hint`: the printed
+/// path, to choose between chains of similar length. `None` without pieces.
+pub(crate) fn link(
+    pieces: &[PieceMm],
+    max_gap_mm: f64,
+    hint: Option<ReferencePath>,
+) -> Option<Linking> {
+    let split = split_kinks(pieces);
+    let pieces: Vec<&PieceMm> = split.iter().filter(|p| p.pts.len() >= 2).collect();
+    if pieces.is_empty() {
+        return None;
+    }
+    let piece_ends: Vec<Option<[End; 2]>> = pieces.iter().map(|p| ends(p)).collect();
+    let end = |e: usize| piece_ends[e / 2].map(|pe| pe[e % 2]);
+    let n_ends = 2 * pieces.len();
+    // Candidate links within the bridging reach, over a coarse grid of end positions.
+    let reach = max_gap_mm.max(1.0);
+    let piece_len: Vec<f64> = pieces
+        .iter()
+        .map(|p| polyline_length(&p.pts, p.closed))
+        .collect();
+    let mut cands = candidates(&piece_ends, reach, |ea, eb, a, b| {
+        let g = dist(a.p, b.p);
+        // A piece closes on itself only across a gap short against its length.
+        if ea / 2 == eb / 2 && piece_len[ea / 2] < 3.0 * g + 10.0 {
+            return None;
+        }
+        continuity(a, b, reach).filter(|_| g <= max_gap_mm || g < 1.0)
+    });
+    cands.sort_by(|x, y| x.cost.total_cmp(&y.cost));
+    // Greedy: cheapest first, each end once. Every chain has exactly two free ends, so a link
+    // between two ends of one chain closes it.
+    let mut partner: Vec<Option<usize>> = vec![None; n_ends];
+    for c in &cands {
+        if partner[c.a].is_some() || partner[c.b].is_some() {
+            continue;
+        }
+        partner[c.a] = Some(c.b);
+        partner[c.b] = Some(c.a);
+    }
+    let chains = walk_chains(&pieces, &piece_ends, &partner);
+    let built: Vec<(Stroke, Vec<Gap>)> = chains
+        .iter()
+        .map(|c| build(c, &pieces, &piece_ends))
+        .collect();
+    let lengths: Vec<f64> = built.iter().map(|(s, _)| s.length_mm()).collect();
+    let longest = lengths.iter().copied().fold(0.0, f64::max);
+    // The drawn path: the longest chain; among chains within 80 % of it, the one nearest the
+    // printed path.
+    let main = (0..built.len())
+        .filter(|&i| lengths[i] >= 0.8 * longest)
+        .min_by(|&i, &j| {
+            let near = |k: usize| hint.map_or(0.0, |h| mean_from(&built[k].0.points_mm, h));
+            near(i)
+                .total_cmp(&near(j))
+                .then(lengths[j].total_cmp(&lengths[i]))
+        })?;
+    let (path, mut gaps) = built[main].clone();
+    let others_pts: Vec<&[[f64; 2]]> = built
+        .iter()
+        .enumerate()
+        .filter(|(i, (s, _))| *i != main && s.points_mm.len() >= 2)
+        .map(|(_, (s, _))| s.points_mm.as_slice())
+        .collect();
+    let path = cut_crossings(path, &others_pts, &mut gaps);
+    let main_chain = &chains[main];
+    // Free ends of the path and what lies beyond them.
+    let mut free: Vec<End> = Vec::new();
+    if !main_chain.closed {
+        let (first, last) = (
+            main_chain.order[0],
+            main_chain.order[main_chain.order.len() - 1],
+        );
+        let first_entry = 2 * first.0 + usize::from(first.1);
+        let last_exit = (2 * last.0 + usize::from(last.1)) ^ 1;
+        for e in [first_entry, last_exit] {
+            if let Some(x) = end(e) {
+                free.push(x);
+            }
+        }
+    }
+    let far = (5.0 * max_gap_mm).max(50.0);
+    let mut continues: Vec<bool> = vec![false; chains.len()];
+    if free.len() == 2 {
+        // The path's ends continuing into each other across a gap too long to bridge.
+        if dist(free[0].p, free[1].p) > max_gap_mm {
+            if let Some(_c) = continuity(&free[0], &free[1], far)
+                .filter(|_| path.length_mm() > 2.0 * dist(free[0].p, free[1].p))
+            {
+                let (_, len) = bridge(&free[0], &free[1]);
+                gaps.push(Gap {
+                    from_mm: free[1].p,
+                    to_mm: free[0].p,
+                    length_mm: len,
+                    bridged: false,
+                });
+            }
+        }
+    }
+    let main_pieces: Vec<bool> = {
+        let mut v = vec![false; pieces.len()];
+        for (p, _) in &main_chain.order {
+            v[*p] = true;
+        }
+        v
+    };
+    for f in &free {
+        let mut best: Option<(f64, usize, End)> = None;
+        for (ci, ch) in chains.iter().enumerate() {
+            if ci == main || lengths[ci] < 2.0 || ch.closed {
+                continue;
+            }
+            let (first, last) = (ch.order[0], ch.order[ch.order.len() - 1]);
+            for e in [
+                2 * first.0 + usize::from(first.1),
+                (2 * last.0 + usize::from(last.1)) ^ 1,
+            ] {
+                if main_pieces[e / 2] {
+                    continue;
+                }
+                let Some(x) = end(e) else { continue };
+                if dist(f.p, x.p) <= max_gap_mm {
+                    continue; // was admissible and not taken: not a continuation
+                }
+                if let Some(c) = continuity(f, &x, far) {
+                    if best.is_none_or(|(bc, ..)| c < bc) {
+                        best = Some((c, ci, x));
+                    }
+                }
+            }
+        }
+        if let Some((_, ci, x)) = best {
+            let (_, len) = bridge(f, &x);
+            gaps.push(Gap {
+                from_mm: f.p,
+                to_mm: x.p,
+                length_mm: len,
+                bridged: false,
+            });
+            continues[ci] = true;
+        }
+    }
+    let reach_ahead = (2.0 * max_gap_mm).max(15.0);
+    let main_len = lengths[main];
+    let mut left_out: Vec<LeftOut> = Vec::new();
+    let mut others: Vec<Stroke> = Vec::new();
+    for (ci, (s, _)) in built.iter().enumerate() {
+        if ci == main {
+            continue;
+        }
+        let len = lengths[ci];
+        let pts = &s.points_mm;
+        let ahead = len >= MIN_MARK_MM
+            && free.iter().any(|f| {
+                pts.iter().any(|q| {
+                    let d = sub(*q, f.p);
+                    let dn = norm(d);
+                    dn <= reach_ahead && (dn < 1e-9 || (d[0] * f.t[0] + d[1] * f.t[1]) / dn >= 0.7)
+                })
+            });
+        let kind = if continues[ci] || ahead {
+            LeftOutKind::Continues
+        } else if len >= MIN_MARK_MM.max(SEPARATE_SHARE * main_len) {
+            LeftOutKind::Separate
+        } else if len < MIN_MARK_MM {
+            LeftOutKind::Speck
+        } else {
+            LeftOutKind::Mark
+        };
+        left_out.push(LeftOut {
+            from_mm: pts[0],
+            to_mm: pts[pts.len() - 1],
+            length_mm: len,
+            kind,
+        });
+        others.push(s.clone());
+    }
+    left_out.sort_by(|a, b| b.length_mm.total_cmp(&a.length_mm));
+    others.sort_by(|a, b| b.length_mm().total_cmp(&a.length_mm()));
+    let path = orient(path);
+    let hint = hint.map(|h| (h, mean_from(&path.points_mm, h)));
+    Some(Linking {
+        path,
+        others,
+        gaps,
+        left_out,
+        pieces: main_chain.order.len(),
+        hint,
+    })
+}
+
+/// The chains of linked pieces: each from a free end (or around a cycle).
+fn walk_chains(
+    pieces: &[&PieceMm],
+    piece_ends: &[Option<[End; 2]>],
+    partner: &[Option<usize>],
+) -> Vec<Chain> {
+    let mut seen = vec![false; pieces.len()];
+    let mut chains = Vec::new();
+    for start in 0..pieces.len() {
+        if seen[start] {
+            continue;
+        }
+        seen[start] = true;
+        if piece_ends[start].is_none() {
+            chains.push(Chain {
+                order: vec![(start, false)],
+                closed: pieces[start].closed,
+            });
+            continue;
+        }
+        // Backwards from the head of `start` to a free end, or around a cycle.
+        let mut e = 2 * start;
+        let mut cycle = false;
+        for _ in 0..=pieces.len() {
+            match partner[e] {
+                Some(q) if q / 2 == start => {
+                    cycle = true;
+                    break;
+                }
+                Some(q) => e = q ^ 1,
+                None => break,
+            }
+        }
+        let mut entry = if cycle { 2 * start } else { e };
+        let mut order = Vec::new();
+        loop {
+            let p = entry / 2;
+            order.push((p, entry % 2 == 1));
+            seen[p] = true;
+            match partner[entry ^ 1] {
+                Some(q) if q / 2 != order[0].0 && !order.iter().any(|(o, _)| *o == q / 2) => {
+                    entry = q;
+                }
+                _ => break,
+            }
+        }
+        chains.push(Chain {
+            order,
+            closed: cycle,
+        });
+    }
+    chains
+}
+
+/// Where another mark touches the path (a stroke crossing it, whether the tracker cut it or the
+/// path there), the path's centroids were pulled towards it: the path within [`CROSS_CUT_MM`]
+/// of every place where another mark comes within [`CROSS_TOUCH_MM`] is replaced by a bridge
+/// between the undisturbed sides (a stretch longer than [`CROSS_MAX_MM`], a mark running along
+/// the path, is kept).
+fn cut_crossings(path: Stroke, marks: &[&[[f64; 2]]], gaps: &mut Vec<Gap>) -> Stroke {
+    let pts = &path.points_mm;
+    let n = pts.len();
+    if n < 8 {
+        return path;
+    }
+    let cell = CROSS_CUT_MM;
+    let key = |p: [f64; 2]| ((p[0] / cell).floor() as i64, (p[1] / cell).floor() as i64);
+    let mut grid: std::collections::HashMap<(i64, i64), Vec<usize>> = Default::default();
+    for (i, p) in pts.iter().enumerate() {
+        grid.entry(key(*p)).or_default().push(i);
+    }
+    let mut cut = vec![false; n];
+    for m in marks {
+        for q in m.iter() {
+            let (kx, ky) = key(*q);
+            let mut best: Option<(usize, f64)> = None;
+            for dx in -1..=1 {
+                for dy in -1..=1 {
+                    for &i in grid.get(&(kx + dx, ky + dy)).into_iter().flatten() {
+                        let d = dist(pts[i], *q);
+                        if d <= CROSS_TOUCH_MM && best.is_none_or(|(_, bd)| d < bd) {
+                            best = Some((i, d));
+                        }
+                    }
+                }
+            }
+            let Some((i, _)) = best else { continue };
+            let c = pts[i];
+            let (kx, ky) = key(c);
+            for dx in -2..=2 {
+                for dy in -2..=2 {
+                    for &k in grid.get(&(kx + dx, ky + dy)).into_iter().flatten() {
+                        if dist(pts[k], c) <= CROSS_CUT_MM {
+                            cut[k] = true;
+                        }
+                    }
+                }
+            }
+        }
+    }
+    // Long runs are kept.
+    let mut i = 0;
+    while i < n {
+        if !cut[i] {
+            i += 1;
+            continue;
+        }
+        let mut j = i;
+        while j + 1 < n && cut[j + 1] {
+            j += 1;
+        }
+        if polyline_length(&pts[i..=j], false) > CROSS_MAX_MM {
+            cut[i..=j].iter_mut().for_each(|c| *c = false);
+        }
+        i = j + 1;
+    }
+    if !cut.iter().any(|c| *c) || cut.iter().all(|c| *c) {
+        return path;
+    }
+    // Start a closed path at a kept point, so no cut run wraps around.
+    let (pts, cut): (Vec<[f64; 2]>, Vec<bool>) = if path.closed {
+        let start = cut.iter().position(|c| !c).unwrap_or(0);
+        let mut p = pts.clone();
+        let mut c = cut.clone();
+        p.rotate_left(start);
+        c.rotate_left(start);
+        (p, c)
+    } else {
+        (pts.clone(), cut)
+    };
+    let mut out: Vec<[f64; 2]> = Vec::with_capacity(n);
+    let mut bridged = path.bridged_mm;
+    let mut i = 0;
+    while i < n {
+        if !cut[i] {
+            out.push(pts[i]);
+            i += 1;
+            continue;
+        }
+        let mut j = i;
+        while j + 1 < n && cut[j + 1] {
+            j += 1;
+        }
+        let after = if path.closed && j + 1 == n {
+            // Up to the (kept) start of the closed path.
+            let mut v: Vec<[f64; 2]> = out.clone();
+            v.reverse();
+            v
+        } else {
+            pts[j + 1..].iter().rev().copied().collect()
+        };
+        if let (Some(a), Some(b), false) = (end_of(&out), end_of(&after), after.is_empty()) {
+            let (inner, len) = bridge(&a, &b);
+            gaps.push(Gap {
+                from_mm: a.p,
+                to_mm: b.p,
+                length_mm: len,
+                bridged: true,
+            });
+            bridged += len;
+            out.extend(inner);
+        }
+        i = j + 1;
+    }
+    Stroke {
+        points_mm: out,
+        closed: path.closed,
+        bridged_mm: bridged,
+    }
+}
+
+/// Total length of piece segments within `band_mm` of the printed `path` (to pick the hint).
+pub(crate) fn length_near(pieces: &[PieceMm], path: ReferencePath, band_mm: f64) -> f64 {
+    pieces
+        .iter()
+        .flat_map(|p| p.pts.windows(2))
+        .filter(|w| from_printed(path, w[0]) <= band_mm && from_printed(path, w[1]) <= band_mm)
+        .map(|w| dist(w[0], w[1]))
+        .sum()
+}
+
+/// Mean distance of `pts` from the printed path.
+fn mean_from(pts: &[[f64; 2]], h: ReferencePath) -> f64 {
+    if pts.is_empty() {
+        return f64::INFINITY;
+    }
+    pts.iter().map(|p| from_printed(h, *p)).sum::<f64>() / pts.len() as f64
+}
+
+/// Candidate links between ends of different pieces or the two ends of one piece, with the
+/// gap within `reach`; `admit` gives the cost or refuses.
+fn candidates(
+    piece_ends: &[Option<[End; 2]>],
+    reach: f64,
+    admit: impl Fn(usize, usize, &End, &End) -> Option<f64>,
+) -> Vec<Cand> {
+    let mut grid: std::collections::HashMap<(i64, i64), Vec<usize>> = Default::default();
+    let cell = reach.max(1.0);
+    let key = |p: [f64; 2]| ((p[0] / cell).floor() as i64, (p[1] / cell).floor() as i64);
+    for (i, pe) in piece_ends.iter().enumerate() {
+        if let Some(pe) = pe {
+            for (side, e) in pe.iter().enumerate() {
+                grid.entry(key(e.p)).or_default().push(2 * i + side);
+            }
+        }
+    }
+    let mut out = Vec::new();
+    for (i, pe) in piece_ends.iter().enumerate() {
+        let Some(pe) = pe else { continue };
+        for (side, a) in pe.iter().enumerate() {
+            let ea = 2 * i + side;
+            let (kx, ky) = key(a.p);
+            for dx in -1..=1 {
+                for dy in -1..=1 {
+                    for &eb in grid.get(&(kx + dx, ky + dy)).into_iter().flatten() {
+                        if eb <= ea {
+                            continue;
+                        }
+                        let Some(b) = piece_ends[eb / 2].map(|p| p[eb % 2]) else {
+                            continue;
+                        };
+                        if let Some(cost) = admit(ea, eb, a, &b) {
+                            out.push(Cand {
+                                a: ea,
+                                b: eb,
+                                gap: dist(a.p, b.p),
+                                cost,
+                            });
+                        }
+                    }
+                }
+            }
+        }
+    }
+    out.retain(|c| c.gap <= reach || c.gap < 1.0);
+    out
+}
+
+/// The polyline of a chain with its bridges, and its gaps.
+fn build(
+    chain: &Chain,
+    pieces: &[&PieceMm],
+    piece_ends: &[Option<[End; 2]>],
+) -> (Stroke, Vec<Gap>) {
+    let mut pts: Vec<[f64; 2]> = Vec::new();
+    let mut gaps = Vec::new();
+    let mut bridged = 0.0;
+    let n = chain.order.len();
+    let linked_cycle = chain.closed && piece_ends[chain.order[0].0].is_some();
+    // A piece in its direction along the chain, cut back to the anchors of its linked ends.
+    let oriented = |i: usize| -> Vec<[f64; 2]> {
+        let (p, rev) = chain.order[i];
+        let mut v = pieces[p].pts.clone();
+        if rev {
+            v.reverse();
+        }
+        let Some(e) = piece_ends[p] else {
+            return v;
+        };
+        let (entry, exit) = if rev { (e[1], e[0]) } else { (e[0], e[1]) };
+        if i + 1 < n || linked_cycle {
+            trim_back(&mut v, exit.skip);
+        }
+        if i > 0 || linked_cycle {
+            v.reverse();
+            trim_back(&mut v, entry.skip);
+            v.reverse();
+        }
+        v
+    };
+    // The end by which the chain leaves piece (p, rev), and the end by which it enters.
+    let exit_end = |&(p, rev): &(usize, bool)| piece_ends[p].map(|e| if rev { e[0] } else { e[1] });
+    let entry_end =
+        |&(p, rev): &(usize, bool)| piece_ends[p].map(|e| if rev { e[1] } else { e[0] });
+    // Bridges run between the anchors: the pencil's own gap and the millimetre before each end.
+    // The side already written gives its direction from the chain so far (a short piece alone
+    // gives a poor one).
+    let mut link = |a: End, b: End, pts: &mut Vec<[f64; 2]>| {
+        let (from, ta) = match end_with(pts, 0.0) {
+            Some(e) if pts.len() >= 2 => (e.p, e.t),
+            _ => (a.anchor, a.ta),
+        };
+        let (inner, len) = hermite(from, ta, b.anchor, [-b.ta[0], -b.ta[1]]);
+        let gap = dist(a.p, b.p);
+        if gap > 1e-9 {
+            gaps.push(Gap {
+                from_mm: a.p,
+                to_mm: b.p,
+                length_mm: (len - a.skip - b.skip).max(gap),
+                bridged: true,
+            });
+            bridged += len;
+        }
+        pts.extend(inner);
+    };
+    for (i, item) in chain.order.iter().enumerate() {
+        if i > 0 {
+            if let (Some(a), Some(b)) = (exit_end(&chain.order[i - 1]), entry_end(item)) {
+                link(a, b, &mut pts);
+            }
+        }
+        pts.extend(oriented(i));
+    }
+    if linked_cycle {
+        if let (Some(a), Some(b)) = (exit_end(&chain.order[n - 1]), entry_end(&chain.order[0])) {
+            link(a, b, &mut pts);
+        }
+    }
+    pts.dedup();
+    (
+        Stroke {
+            points_mm: pts,
+            closed: chain.closed,
+            bridged_mm: bridged,
+        },
+        gaps,
+    )
+}
+
+/// Shortens the polyline `v` by `len` mm at its end (never below one point).
+fn trim_back(v: &mut Vec<[f64; 2]>, len: f64) {
+    if len <= 0.0 || v.len() < 2 {
+        return;
+    }
+    let cut = point_back(v, len);
+    let mut acc = 0.0;
+    while v.len() >= 2 {
+        let d = dist(v[v.len() - 2], v[v.len() - 1]);
+        if acc + d >= len {
+            break;
+        }
+        acc += d;
+        v.pop();
+    }
+    if let Some(last) = v.last_mut() {
+        *last = cut;
+    }
+}
+
+/// A fixed order: a closed path counter-clockwise from its point at the smallest polar angle
+/// about its centroid; an open path from its end with the smaller x (then y).
+fn orient(mut s: Stroke) -> Stroke {
+    let pts = &mut s.points_mm;
+    if pts.len() < 2 {
+        return s;
+    }
+    if s.closed {
+        let area: f64 = (0..pts.len())
+            .map(|i| {
+                let (a, b) = (pts[i], pts[(i + 1) % pts.len()]);
+                a[0] * b[1] - a[1] * b[0]
+            })
+            .sum();
+        if area < 0.0 {
+            pts.reverse();
+        }
+        let n = pts.len() as f64;
+        let c = [
+            pts.iter().map(|p| p[0]).sum::<f64>() / n,
+            pts.iter().map(|p| p[1]).sum::<f64>() / n,
+        ];
+        let start = (0..pts.len())
+            .min_by(|&i, &j| {
+                let a = |k: usize| {
+                    (pts[k][1] - c[1])
+                        .atan2(pts[k][0] - c[0])
+                        .rem_euclid(std::f64::consts::TAU)
+                };
+                a(i).total_cmp(&a(j))
+            })
+            .unwrap_or(0);
+        pts.rotate_left(start);
+    } else {
+        let (a, b) = (pts[0], pts[pts.len() - 1]);
+        if (b[0], b[1]) < (a[0], a[1]) {
+            pts.reverse();
+        }
+    }
+    s
+}

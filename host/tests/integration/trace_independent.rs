@@ -1,0 +1,491 @@
+//! `trace` on images it was not shaped to: drawn paths offset 2-40 mm and turned 0-30 deg from the
+//! printed reference, other radii and free curves (open and closed), 3-8 skips of 1-6 mm, dust,
+//! fibres, stray flicks and a second pencil stroke across the path; rendered by the project's
+//! renderer and by an independent one (`trace_independent/render2.rs`: another stroke, skip,
+//! dust, shading and camera model). Measured by coverage (share of the true centreline within
+//! 0.1 mm of the trace) and RMS; the exit rule: exit 0 only with the whole drawn path written,
+//! so never exit 0 below 0.95 coverage, and an incomplete path exits 1 naming where.
+
+#[path = "trace_independent/cases.rs"]
+mod cases;
+#[path = "trace_independent/render2.rs"]
+mod render2;
+
+use cases::{case, measure, Case};
+use indicatif::ProgressBar;
+use rand::{Rng, SeedableRng};
+use rand_chacha::ChaCha8Rng;
+use render2::{photo_view, scan_view, Printed, Scene};
+use rigctl::sheet::ReferencePath;
+use rigctl::trace::{render_photo, render_scan, trace_image, PhotoSpec, RenderSpec, TraceOptions};
+use std::process::Command;
+
+#[derive(Clone, Copy, Debug, PartialEq)]
+enum Kind {
+    Photo,
+    Scan300,
+    Scan600,
+}
+
+/// One traced image: coverage, RMS (mm), whether the tracer would exit 0, and its message.
+struct Outcome {
+    coverage: f64,
+    rms: f64,
+    exit0: bool,
+    note: String,
+}
+
+fn printed(p: Printed) -> ReferencePath {
+    match p {
+        Printed::Circle => ReferencePath::Circle,
+        Printed::Line => ReferencePath::Line,
+    }
+}
+
+/// The camera and light of a photo or scan of `seed`, drawn independently of the path.
+struct Shot {
+    ppm: f64,
+    tilt: f64,
+    azimuth: f64,
+    roll: f64,
+    k1: f64,
+    rot_deg: f64,
+    jpeg: u8,
+}
+
+fn shot(kind: Kind, seed: u64) -> Shot {
+    let mut rng = ChaCha8Rng::seed_from_u64(seed ^ 0x5407_0000);
+    Shot {
+        ppm: match kind {
+            Kind::Photo => rng.gen_range(200.0..300.0) / 25.4,
+            Kind::Scan300 => 300.0 / 25.4,
+            Kind::Scan600 => 600.0 / 25.4,
+        },
+        tilt: rng.gen_range(0.0f64..40.0).to_radians(),
+        azimuth: rng.gen_range(0.0..std::f64::consts::TAU),
+        roll: rng.gen_range(0.0..std::f64::consts::TAU),
+        k1: rng.gen_range(-0.08..0.08),
+        rot_deg: rng.gen_range(-4.0..4.0),
+        jpeg: rng.gen_range(85..96),
+    }
+}
+
+fn render_independent(c: &Case, kind: Kind, seed: u64) -> image::RgbImage {
+    let s = shot(kind, seed);
+    let mut marks = vec![render2::Mark {
+        pts: c.truth.clone(),
+        width_mm: c.width_mm,
+        darkness: c.darkness,
+        skips: c.skips.clone(),
+    }];
+    for extra in c.crossing.iter().chain(&c.strays) {
+        marks.push(render2::Mark {
+            pts: extra.clone(),
+            width_mm: c.width_mm,
+            darkness: c.darkness,
+            skips: Vec::new(),
+        });
+    }
+    let mut rng = ChaCha8Rng::seed_from_u64(seed ^ 0x11_6417);
+    let (view, light, noise, jpeg) = match kind {
+        Kind::Photo => (
+            photo_view(
+                s.ppm,
+                s.tilt,
+                s.azimuth,
+                s.roll,
+                s.k1,
+                [rng.gen_range(-8.0..8.0), rng.gen_range(-8.0..8.0)],
+            ),
+            [
+                rng.gen_range(0.75..0.95),
+                rng.gen_range(-0.25..0.25),
+                rng.gen_range(-0.25..0.25),
+                rng.gen_range(0.0..0.3),
+            ],
+            rng.gen_range(2.0..5.0),
+            Some(s.jpeg),
+        ),
+        _ => (
+            scan_view(s.ppm * 25.4, s.rot_deg),
+            [
+                rng.gen_range(0.9..1.0),
+                rng.gen_range(-0.04..0.04),
+                rng.gen_range(-0.04..0.04),
+                0.0,
+            ],
+            rng.gen_range(1.0..3.0),
+            None,
+        ),
+    };
+    render2::render(&Scene {
+        printed: c.printed,
+        marks,
+        dust: c.dust.clone(),
+        fibres: c.fibres.clone(),
+        view,
+        light,
+        noise,
+        jpeg,
+        seed,
+    })
+}
+
+fn render_project(c: &Case, kind: Kind, seed: u64) -> image::RgbImage {
+    let s = shot(kind, seed);
+    let spec = RenderSpec {
+        dpi: if kind == Kind::Photo {
+            450.0
+        } else {
+            s.ppm * 25.4
+        },
+        pencil_mm: c.truth.clone(),
+        pencil_closed: c.closed,
+        pencil_width_mm: c.width_mm,
+        pencil_darkness: c.darkness,
+        reference: Some(printed(c.printed)),
+        ring: true,
+        rotation_deg: s.rot_deg,
+        skips_mm: c.skips.clone(),
+        dust_mm: c.dust.iter().map(|d| [d[0], d[1], d[2]]).collect(),
+        fibres_mm: c.fibres.clone(),
+        seed,
+        ..RenderSpec::default()
+    };
+    match kind {
+        Kind::Photo => {
+            let dist = 400.0;
+            let half = (s.ppm * 100.0 * 1.45) as u32;
+            render_photo(
+                &spec,
+                &PhotoSpec {
+                    width_px: 2 * half + 80,
+                    height_px: 2 * half + 80,
+                    focal_px: s.ppm * dist,
+                    distance_mm: dist,
+                    tilt_deg: s.tilt.to_degrees(),
+                    tilt_azimuth_deg: s.azimuth.to_degrees(),
+                    roll_deg: s.roll.to_degrees(),
+                    k1: s.k1,
+                    texture_dpi: 450.0,
+                    jpeg_quality: Some(s.jpeg),
+                    seed,
+                    ..PhotoSpec::default()
+                },
+            )
+        }
+        _ => render_scan(&spec),
+    }
+}
+
+fn trace_outcome(img: &image::RgbImage, c: &Case) -> Outcome {
+    match trace_image(img, &TraceOptions::default(), &ProgressBar::hidden()) {
+        Err(e) => Outcome {
+            coverage: 0.0,
+            rms: f64::INFINITY,
+            exit0: false,
+            note: format!("error: {e}"),
+        },
+        Ok(t) => {
+            let Some(main) = t.main_stroke() else {
+                return Outcome {
+                    coverage: 0.0,
+                    rms: f64::INFINITY,
+                    exit0: false,
+                    note: "no stroke".into(),
+                };
+            };
+            let (coverage, rms) = measure(&c.truth, c.closed, &main.points_mm, main.closed);
+            Outcome {
+                coverage,
+                rms,
+                exit0: t.is_whole(),
+                note: format!(
+                    "{:.1} mm{}{}",
+                    main.length_mm(),
+                    if main.closed { " closed" } else { "" },
+                    if t.is_whole() {
+                        String::new()
+                    } else {
+                        let why: Vec<String> = t
+                            .linking
+                            .missing()
+                            .map(|g| format!("gap {:.1} mm at {:.1?}", g.length_mm, g.from_mm))
+                            .chain(t.linking.left_out.iter().filter(|o| o.could_be_path()).map(
+                                |o| {
+                                    format!(
+                                        "{:?} {:.1} mm {:.1?}..{:.1?}",
+                                        o.kind, o.length_mm, o.from_mm, o.to_mm
+                                    )
+                                },
+                            ))
+                            .collect();
+                        format!("; {}", why.join("; "))
+                    }
+                ),
+            }
+        }
+    }
+}
+
+/// Runs `seeds` of one renderer and image kind; prints a row per seed and the summary; returns
+/// the outcomes.
+fn run_set(
+    name: &str,
+    kind: Kind,
+    independent: bool,
+    seeds: std::ops::Range<u64>,
+    crossing_every: u64,
+) -> Vec<Outcome> {
+    let mut out = Vec::new();
+    for seed in seeds {
+        let crossing = independent && crossing_every > 0 && seed % crossing_every == 0;
+        let c = case(seed, kind != Kind::Photo, crossing);
+        let img = if independent {
+            render_independent(&c, kind, seed)
+        } else {
+            render_project(&c, kind, seed)
+        };
+        if let Some(dir) = std::env::var_os("TRACE_INDEPENDENT_DUMP") {
+            let f =
+                std::path::Path::new(&dir).join(format!("{}_{seed}.png", name.replace(' ', "_")));
+            img.save(&f).expect("dump");
+            let rows: String = c
+                .truth
+                .iter()
+                .step_by(4)
+                .map(|p| format!("{},{}\n", p[0], p[1]))
+                .collect();
+            std::fs::write(f.with_extension("truth.csv"), rows).expect("dump truth");
+        }
+        let o = trace_outcome(&img, &c);
+        eprintln!(
+            "{name} seed {seed:>3} {:<11}{} {} skips: coverage {:.4}, rms {:.4} mm, exit {} ({})",
+            c.shape,
+            if crossing { " +cross" } else { "" },
+            c.skips.len(),
+            o.coverage,
+            o.rms,
+            if o.exit0 { 0 } else { 1 },
+            o.note
+        );
+        out.push(o);
+    }
+    let cov: Vec<f64> = out.iter().map(|o| o.coverage).collect();
+    let rms: Vec<f64> = out.iter().filter(|o| o.exit0).map(|o| o.rms).collect();
+    eprintln!(
+        "{name}: {} seeds, exit 0 on {}, coverage {:.4}..{:.4}, rms (exit 0) {:.4}..{:.4} mm, exit 0 below 0.95 coverage: {}",
+        out.len(),
+        rms.len(),
+        cov.iter().copied().fold(f64::INFINITY, f64::min),
+        cov.iter().copied().fold(0.0, f64::max),
+        rms.iter().copied().fold(f64::INFINITY, f64::min),
+        rms.iter().copied().fold(0.0, f64::max),
+        out.iter().filter(|o| o.exit0 && o.coverage < 0.95).count()
+    );
+    out
+}
+
+/// The bars: never exit 0 below 0.95 coverage; every seed exit 0 with coverage >= 0.95; RMS
+/// within `rms_bar` on every seed but at most two, which stay within 1.5 x `rms_bar` (a known
+/// shortfall: a Hermite bridge over a skip on a tightly wiggling curve, or the centroids beside a
+/// crossing stroke; docs/trace.md counts them).
+fn check(name: &str, outs: &[Outcome], rms_bar: f64) {
+    for (i, o) in outs.iter().enumerate() {
+        assert!(
+            !(o.exit0 && o.coverage < 0.95),
+            "{name} #{i}: exit 0 at coverage {:.4}",
+            o.coverage
+        );
+        assert!(
+            o.exit0 && o.coverage >= 0.95 && o.rms <= 1.5 * rms_bar,
+            "{name} #{i}: coverage {:.4}, rms {:.4}, exit0 {} ({})",
+            o.coverage,
+            o.rms,
+            o.exit0,
+            o.note
+        );
+    }
+    let over = outs.iter().filter(|o| o.rms > rms_bar).count();
+    assert!(over <= 2, "{name}: {over} seeds above rms {rms_bar}");
+}
+
+const SEEDS: std::ops::Range<u64> = 1..21;
+
+/// The seeds: 1..21, or `TRACE_INDEPENDENT_SEEDS=a..b` for a closer look.
+fn seeds() -> std::ops::Range<u64> {
+    std::env::var("TRACE_INDEPENDENT_SEEDS")
+        .ok()
+        .and_then(|v| {
+            let (a, b) = v.split_once("..")?;
+            Some(a.parse().ok()?..b.parse().ok()?)
+        })
+        .unwrap_or(SEEDS)
+}
+
+#[test]
+fn independent_photos() {
+    let outs = run_set("render2 photo", Kind::Photo, true, seeds(), 0);
+    check("render2 photo", &outs, 0.03);
+}
+
+#[test]
+fn independent_scans_600dpi() {
+    let outs = run_set("render2 scan 600", Kind::Scan600, true, seeds(), 3);
+    check("render2 scan 600", &outs, 0.015);
+}
+
+#[test]
+fn independent_scans_300dpi() {
+    let outs = run_set("render2 scan 300", Kind::Scan300, true, seeds(), 3);
+    check("render2 scan 300", &outs, 0.02);
+}
+
+#[test]
+fn project_renderer_photos() {
+    let outs = run_set("render photo", Kind::Photo, false, seeds(), 0);
+    check("render photo", &outs, 0.03);
+}
+
+#[test]
+fn project_renderer_scans_600dpi() {
+    let outs = run_set("render scan 600", Kind::Scan600, false, seeds(), 0);
+    check("render scan 600", &outs, 0.015);
+}
+
+#[test]
+fn project_renderer_scans_300dpi() {
+    let outs = run_set("render scan 300", Kind::Scan300, false, seeds(), 0);
+    check("render scan 300", &outs, 0.02);
+}
+
+/// The arc-length position `s` on the truth.
+fn truth_at(c: &Case, s: f64) -> [f64; 2] {
+    let mut acc = 0.0;
+    for w in c.truth.windows(2) {
+        acc += (w[1][0] - w[0][0]).hypot(w[1][1] - w[0][1]);
+        if acc >= s {
+            return w[1];
+        }
+    }
+    c.truth[c.truth.len() - 1]
+}
+
+/// A path that cannot be completed: one skip of 20-30 mm (beyond --max-gap-mm 10) besides the
+/// short ones. Never exit 0; the missing gap is named where it is; bridging it on purpose
+/// (a larger --max-gap-mm) gives the whole path.
+#[test]
+fn long_skip_is_never_exit_0_and_is_named() {
+    for seed in 101..109u64 {
+        let mut c = case(seed, true, false);
+        let total = cases::length(&c.truth);
+        let mut rng = ChaCha8Rng::seed_from_u64(seed);
+        let len = rng.gen_range(20.0..30.0);
+        let s0 = 0.5 * total - 0.5 * len;
+        c.skips.retain(|k| k[1] < s0 - 6.0 || k[0] > s0 + len + 6.0);
+        c.skips.push([s0, s0 + len]);
+        let img = render_independent(&c, Kind::Scan300, seed);
+        let t =
+            trace_image(&img, &TraceOptions::default(), &ProgressBar::hidden()).expect("traced");
+        let main = t.main_stroke().expect("a path");
+        let (coverage, _) = measure(&c.truth, c.closed, &main.points_mm, main.closed);
+        let missing: Vec<_> = t.linking.missing().collect();
+        eprintln!(
+            "seed {seed} {} skip {len:.1} mm: coverage of the longest chain {coverage:.3}, whole {}, missing {missing:?}",
+            c.shape,
+            t.is_whole()
+        );
+        assert!(!t.is_whole(), "seed {seed}: exit 0 with a {len:.1} mm skip");
+        // Named: a missing gap from one side of the skip to the other, or the mark beyond it
+        // (a part of the path that may continue it) starting at the skip's far side.
+        let (a, b) = (truth_at(&c, s0), truth_at(&c, s0 + len));
+        let near = |q: [f64; 2], p: [f64; 2]| (q[0] - p[0]).hypot(q[1] - p[1]) < 1.5;
+        let gap_named = missing.iter().any(|g| {
+            (near(g.from_mm, a) && near(g.to_mm, b)) || (near(g.from_mm, b) && near(g.to_mm, a))
+        });
+        let mark_named = t
+            .linking
+            .left_out
+            .iter()
+            .filter(|o| o.could_be_path())
+            .any(|o| {
+                [o.from_mm, o.to_mm]
+                    .iter()
+                    .any(|q| near(*q, a) || near(*q, b))
+            });
+        assert!(
+            gap_named || mark_named,
+            "seed {seed}: the missing stretch {a:?}..{b:?} is not named: {missing:?}, {:?}",
+            t.linking.left_out
+        );
+        // On purpose: a larger --max-gap-mm bridges it where the path is smooth at the gap's
+        // scale (circle, line); a wiggly curve may still not be extrapolated across 20-30 mm,
+        // but whenever the trace is then reported whole it covers the path.
+        let wide = TraceOptions {
+            max_gap_mm: 35.0,
+            ..TraceOptions::default()
+        };
+        let t = trace_image(&img, &wide, &ProgressBar::hidden()).expect("traced");
+        let main = t.main_stroke().expect("a path");
+        let (coverage, rms) = measure(&c.truth, c.closed, &main.points_mm, main.closed);
+        eprintln!(
+            "  --max-gap-mm 35: whole {}, coverage {coverage:.3}, rms {rms:.3} mm",
+            t.is_whole()
+        );
+        if c.shape == "circle" || c.shape == "line" {
+            assert!(t.is_whole(), "seed {seed}: not whole with --max-gap-mm 35");
+        }
+        if t.is_whole() {
+            assert!(coverage >= 0.9, "seed {seed}: coverage {coverage} bridged");
+            assert!(rms < 0.5, "seed {seed}: rms {rms} bridged");
+        }
+    }
+}
+
+/// Through the CLI: the gaps bridged are listed on exit 0; exit 1 naming the gap, and no CSV.
+#[test]
+fn cli_exit_codes_and_messages() {
+    let dir = tempfile::tempdir().expect("tempdir");
+    let mut c = case(7, true, false);
+    let scan = dir.path().join("whole.png");
+    render_independent(&c, Kind::Scan300, 7)
+        .save(&scan)
+        .expect("png");
+    let out = dir.path().join("whole.csv");
+    let o = Command::new(env!("CARGO_BIN_EXE_rigctl"))
+        .arg("trace")
+        .arg(&scan)
+        .arg("--out")
+        .arg(&out)
+        .output()
+        .expect("run");
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert_eq!(o.status.code(), Some(0), "{err}");
+    // Every skip is listed (besides any ring dot or speck of dust the pencil crossed).
+    assert!(
+        err.matches("gap bridged:").count() >= c.skips.len(),
+        "{err}"
+    );
+    assert!(out.exists());
+    let total = cases::length(&c.truth);
+    c.skips = vec![[0.5 * total, 0.5 * total + 25.0]];
+    let scan = dir.path().join("gap.png");
+    render_independent(&c, Kind::Scan300, 7)
+        .save(&scan)
+        .expect("png");
+    let out = dir.path().join("gap.csv");
+    let o = Command::new(env!("CARGO_BIN_EXE_rigctl"))
+        .arg("trace")
+        .arg(&scan)
+        .arg("--out")
+        .arg(&out)
+        .output()
+        .expect("run");
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert_eq!(o.status.code(), Some(1), "{err}");
+    assert!(
+        err.contains("not the whole drawn path") && err.contains("gap of"),
+        "{err}"
+    );
+    assert!(!out.exists());
+}
