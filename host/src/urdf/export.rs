@@ -28,10 +28,11 @@
 //! the transmission terms (scale, coupling, hysteresis, gravity compliance), encoder
 //! harmonics, the payload, and with `--urdf` a non-zero `scale_ppm`.
 
+use super::frame::Frame;
 use nalgebra::{Matrix3, Rotation3, Vector3};
 
 use super::error::UrdfError;
-use super::import::{rpy_matrix, rpy_of};
+use super::import::rpy_of;
 use super::parse::{JointType, Urdf};
 use crate::model::{axis_rotation, Model, Motion, ParamKind};
 
@@ -63,51 +64,13 @@ pub struct Exported {
     pub not_representable: Vec<String>,
 }
 
-/// A rigid transform in metres.
-#[derive(Debug, Clone, Copy, PartialEq)]
-struct Frame {
-    r: Matrix3<f64>,
-    t: Vector3<f64>,
-}
-
-impl Frame {
-    fn identity() -> Self {
-        Self {
-            r: Matrix3::identity(),
-            t: Vector3::zeros(),
-        }
-    }
-
-    fn then(&self, next: &Frame) -> Frame {
-        Frame {
-            r: self.r * next.r,
-            t: self.r * next.t + self.t,
-        }
-    }
-
-    fn inverse(&self) -> Frame {
-        let rt = self.r.transpose();
-        Frame {
-            r: rt,
-            t: -(rt * self.t),
-        }
-    }
-
-    fn of_origin(o: &Origin) -> Self {
-        Self {
-            r: rpy_matrix(o.rpy_rad),
-            t: Vector3::from(o.xyz_m),
-        }
-    }
-
-    /// The URDF origin; rounding noise below 1e-15 (m, rad) is written as 0 (it moves the tool
-    /// point by less than 1e-11 mm).
-    fn origin(&self) -> Origin {
-        let clean = |v: [f64; 3]| v.map(|x| if x.abs() < 1e-15 { 0.0 } else { x });
-        Origin {
-            xyz_m: clean(self.t.into()),
-            rpy_rad: clean(rpy_of(&self.r)),
-        }
+/// The URDF origin of a frame; rounding noise below 1e-15 (m, rad) is written as 0 (it moves the
+/// tool point by less than 1e-11 mm).
+fn origin_of(f: &Frame) -> Origin {
+    let clean = |v: [f64; 3]| v.map(|x| if x.abs() < 1e-15 { 0.0 } else { x });
+    Origin {
+        xyz_m: clean(f.t.into()),
+        rpy_rad: clean(rpy_of(&f.r)),
     }
 }
 
@@ -274,7 +237,7 @@ pub fn model_to_urdf(model: &Model) -> Exported {
     let mut parent = "world".to_string();
     for (i, j) in model.joints().iter().enumerate() {
         let here = frames[j.elem];
-        let o = prev.inverse().then(&here).origin();
+        let o = origin_of(&prev.inverse().then(&here));
         let child = format!("link_{}", i + 1);
         let [lo, hi] = j.limits;
         let (kind, limit) = if j.prismatic {
@@ -314,7 +277,7 @@ pub fn model_to_urdf(model: &Model) -> Exported {
         parent = child;
     }
     let tool = frames.last().copied().unwrap_or_else(Frame::identity);
-    let o = prev.inverse().then(&tool).origin();
+    let o = origin_of(&prev.inverse().then(&tool));
     text.push_str(&format!(
         "  <link name=\"tool0\"/>\n  <joint name=\"tool0_joint\" type=\"fixed\">\n    <parent \
          link=\"{parent}\"/>\n    <child link=\"tool0\"/>\n    {}\n  </joint>\n</robot>\n",
@@ -481,7 +444,7 @@ pub fn model_into_urdf(
                          `world_joint` exists elsewhere"
                     )));
                 }
-                let o = base_frame.origin();
+                let o = origin_of(&base_frame);
                 added.push_str(&format!(
                     "  <link name=\"world\"/>\n  <joint name=\"world_joint\" type=\"fixed\">\n    \
                      <parent link=\"world\"/>\n    <child link=\"{}\"/>\n    {}\n  </joint>\n",
@@ -497,7 +460,7 @@ pub fn model_into_urdf(
             }
             Some(j) if j.parent == "world" && j.joint_type == JointType::Fixed => {
                 let name = j.name.clone();
-                set_origin(&name, base_frame.origin(), &mut edits, &mut origins)?;
+                set_origin(&name, origin_of(&base_frame), &mut edits, &mut origins)?;
                 base_frame
             }
             Some(j) => {
@@ -543,14 +506,14 @@ pub fn model_into_urdf(
             r: model_joint.r * align.transpose(),
             t: model_joint.t,
         };
-        let o = pose.inverse().then(&child).origin();
+        let o = origin_of(&pose.inverse().then(&child));
         set_origin(&j.name, o, &mut edits, &mut origins)?;
         pose = child;
     }
 
     // The tool point.
     let tool = frames.last().copied().unwrap_or_else(Frame::identity);
-    let o = pose.inverse().then(&tool).origin();
+    let o = origin_of(&pose.inverse().then(&tool));
     match urdf.joints.iter().find(|j| j.child == "tool0") {
         Some(j) if j.parent == last_child && j.joint_type == JointType::Fixed => {
             let name = j.name.clone();

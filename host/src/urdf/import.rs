@@ -28,6 +28,7 @@
 //!   joints after it, and the last axis alignment); it is emitted only when not the identity, so
 //!   `tool_d*` is always a point in the tip link's frame.
 
+use super::frame::Frame;
 use nalgebra::{Matrix3, Rotation3, Vector3};
 
 use super::error::UrdfError;
@@ -80,40 +81,6 @@ pub fn param_stem(joint_name: &str) -> String {
             }
         })
         .collect()
-}
-
-/// A rigid transform in metres: `p -> r p + t`.
-#[derive(Debug, Clone, Copy, PartialEq)]
-struct Frame {
-    r: Matrix3<f64>,
-    t: Vector3<f64>,
-}
-
-impl Frame {
-    fn identity() -> Self {
-        Self {
-            r: Matrix3::identity(),
-            t: Vector3::zeros(),
-        }
-    }
-
-    fn is_identity(&self) -> bool {
-        self.r == Matrix3::identity() && self.t == Vector3::zeros()
-    }
-
-    fn then(&self, next: &Frame) -> Frame {
-        Frame {
-            r: self.r * next.r,
-            t: self.r * next.t + self.t,
-        }
-    }
-
-    fn origin(xyz_m: [f64; 3], rpy_rad: [f64; 3]) -> Self {
-        Self {
-            r: rpy_matrix(rpy_rad),
-            t: Vector3::from(xyz_m),
-        }
-    }
 }
 
 /// `Rz(y) Ry(p) Rx(r)` of URDF `rpy = [r, p, y]` (rad).
@@ -189,7 +156,7 @@ impl Emitter<'_> {
         if pending.is_identity() {
             return self.six(stem, j.origin_xyz_m, j.origin_rpy_rad);
         }
-        let f = pending.then(&Frame::origin(j.origin_xyz_m, j.origin_rpy_rad));
+        let f = pending.then(&Frame::at(j.origin_xyz_m, j.origin_rpy_rad));
         self.six(stem, f.t.into(), rpy_of(&f.r))
     }
 
@@ -338,7 +305,7 @@ fn rigid_mass(tree: &Tree, urdf: &Urdf, link: &str) -> (f64, Vector3<f64>) {
         {
             stack.push((
                 j.child.clone(),
-                f.then(&Frame::origin(j.origin_xyz_m, j.origin_rpy_rad)),
+                f.then(&Frame::at(j.origin_xyz_m, j.origin_rpy_rad)),
             ));
         }
     }
@@ -378,7 +345,7 @@ fn import(urdf: &Urdf, opts: &ImportOptions, masses: bool) -> Result<Imported, U
     let tree = Tree::new(urdf, &movable);
     for j in &chain {
         if j.joint_type == JointType::Fixed {
-            pending = pending.then(&Frame::origin(j.origin_xyz_m, j.origin_rpy_rad));
+            pending = pending.then(&Frame::at(j.origin_xyz_m, j.origin_rpy_rad));
             continue;
         }
         let stem = param_stem(&j.name);

@@ -9,6 +9,7 @@
 
 pub mod error;
 pub mod export;
+mod frame;
 pub mod import;
 pub mod parse;
 
