@@ -272,8 +272,10 @@ pub fn calibrate(
 ) -> Result<Outcome, CalibError> {
     let selection = resolve_selection(nominal, opts)?;
     let tilt = opts.method == Method::Tilting && nominal.has_tilt();
-    // Gross errors: fit-and-flag with the chosen method's fit (the influence method's poses are
-    // judged by the standard fit); the last fit on the kept poses is reused.
+    // Gross errors: fit-and-flag with the declared model (with its tilting when it has one, even
+    // for the standard method, whose residual carries the tilting's steps); the last fit on the
+    // kept poses is reused when it is the chosen method's.
+    let judge_tilt = nominal.has_tilt();
     let mut last: Option<(Vec<usize>, Fit)> = None;
     let trimmed = if opts.keep_outliers || cal.len() < MIN_POSES_FOR_OUTLIERS {
         None
@@ -283,11 +285,11 @@ pub fn calibrate(
                 nominal,
                 &cal.subset(keep),
                 &selection,
-                tilt,
+                judge_tilt,
                 &opts.lm,
                 opts.rtol,
             )?;
-            let errors = position_errors(&f.model, cal, tilt)?;
+            let errors = position_errors(&f.model, cal, judge_tilt)?;
             last = Some((keep.to_vec(), f));
             Ok::<_, CalibError>(errors.iter().map(|e| e.norm()).collect())
         })?)
@@ -304,7 +306,14 @@ pub fn calibrate(
         cal_kept = cal_all.subset(&keep);
         &cal_kept
     };
-    let reused = last.filter(|(k, _)| *k == keep).map(|(_, f)| f);
+    // the declared model's fit on the kept poses judges the held-out poses
+    let judge: Option<Model> = last
+        .as_ref()
+        .filter(|(k, _)| *k == keep)
+        .map(|(_, f)| f.model.clone());
+    let reused = last
+        .filter(|(k, _)| *k == keep && judge_tilt == tilt)
+        .map(|(_, f)| f);
     let standard = match (&reused, tilt) {
         (Some(f), false) => f.clone(),
         _ => fit_parameters(nominal, cal, &selection, false, &opts.lm, opts.rtol)?,
@@ -351,17 +360,39 @@ pub fn calibrate(
     let mut outlier_reports = Vec::new();
     let mut val_kept_store = None;
     if let Some(t) = &trimmed {
-        let kept_norms: Vec<f64> = cal_errors[2].iter().map(|e| e.norm()).collect();
-        let threshold = outliers::threshold_mm(outliers::robust_sigma_mm(&kept_norms, 3), None);
+        let judged = |p: &Poses| -> Result<Vec<f64>, CalibError> {
+            match &judge {
+                Some(m) => Ok(position_errors(m, p, judge_tilt)?
+                    .iter()
+                    .map(|e| e.norm())
+                    .collect()),
+                None => chosen_errors(p),
+            }
+        };
+        let threshold = outliers::threshold_mm(outliers::robust_sigma_mm(&judged(cal)?, 3), None);
         if !flagged.is_empty() {
             let all = chosen_errors(cal_all)?;
-            outlier_reports.extend(outliers::reports("cal", &flagged, &all, threshold));
+            let judged_all = judged(cal_all)?;
+            outlier_reports.extend(outliers::reports(
+                "cal",
+                &flagged,
+                &all,
+                &judged_all,
+                threshold,
+            ));
         }
         if let Some(v) = val {
-            let norms = chosen_errors(v)?;
+            let norms = judged(v)?;
             let (vflag, vthr) = outliers::flag_held_out(&norms, threshold);
             if !vflag.is_empty() {
-                outlier_reports.extend(outliers::reports("val", &vflag, &norms, vthr));
+                let final_norms = chosen_errors(v)?;
+                outlier_reports.extend(outliers::reports(
+                    "val",
+                    &vflag,
+                    &final_norms,
+                    &norms,
+                    vthr,
+                ));
                 val_kept_store = Some(v.subset(&outliers::kept(v.len(), &vflag)));
             }
         }

@@ -239,11 +239,13 @@ fn threshold_mm_of(errors_mm: &[f64]) -> f64 {
     threshold_mm(robust_sigma_mm(errors_mm, 3), None)
 }
 
-/// The report entries of `flagged` poses of set `file` (`"cal"`, `"val"`).
+/// The report entries of `flagged` poses of set `file` (`"cal"`, `"val"`): `errors_mm` under the
+/// final model, `judged_mm` under the model that judged them against `threshold_mm`.
 pub fn reports(
     file: &str,
     flagged: &[usize],
     errors_mm: &[f64],
+    judged_mm: &[f64],
     threshold_mm: f64,
 ) -> Vec<OutlierReport> {
     flagged
@@ -254,8 +256,9 @@ pub fn reports(
             id: None,
             error_mm: errors_mm[k],
             note: format!(
-                "error {:.4} mm > {threshold_mm:.4} mm ({OUTLIER_SIGMAS} robust sigmas): a gross error, left out of every fit",
-                errors_mm[k]
+                "error {:.4} mm > {threshold_mm:.4} mm ({OUTLIER_SIGMAS} robust sigmas) and apart from the \
+                 other poses' errors: a gross error, left out of every fit",
+                judged_mm[k]
             ),
             index: k,
         })

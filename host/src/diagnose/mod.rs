@@ -484,13 +484,13 @@ pub fn diagnose(
         );
         let all = norms(&selection.last.ext.errors(&cal_all)?);
         outlier_reports.extend(labelled(
-            outliers::reports("cal", &flagged, &all, thr),
+            outliers::reports("cal", &flagged, &all, &all, thr),
             &cal_all,
         ));
         let vn = norms(&selection.last.ext.errors(&val_all)?);
         let (vflag, vthr) = outliers::flag_held_out(&vn, thr);
         outlier_reports.extend(labelled(
-            outliers::reports("val", &vflag, &vn, vthr),
+            outliers::reports("val", &vflag, &vn, &vn, vthr),
             &val_all,
         ));
         val_kept = val_all.subset(&outliers::kept(val_all.len(), &vflag));
