@@ -11,7 +11,7 @@ use super::identifiability::DEFAULT_RTOL;
 use super::influence::{fit_influence, InfluenceConfig};
 use super::lm::LmConfig;
 use super::outliers;
-use super::problem::{position_errors, Poses};
+use super::problem::{error_norms_mm, position_errors, Poses};
 use super::report::{BeforeAfter, CalibrateReport, NamedValues, StandardSummary};
 use super::stats::Stats;
 use crate::model::{Model, ParamKind, KATANA_GEOMETRIC_PARAMS};
@@ -289,9 +289,9 @@ pub fn calibrate(
                 &opts.lm,
                 opts.rtol,
             )?;
-            let errors = position_errors(&f.model, cal, judge_tilt)?;
+            let errors = error_norms_mm(&f.model, cal, judge_tilt)?;
             last = Some((keep.to_vec(), f));
-            Ok::<_, CalibError>(errors.iter().map(|e| e.norm()).collect())
+            Ok::<_, CalibError>(errors)
         })?)
     };
     let flagged: Vec<usize> = trimmed
@@ -351,25 +351,17 @@ pub fn calibrate(
     let cal_errors = errs(cal)?;
     // The flagged poses' errors under the final model, and the held-out poses judged by the
     // calibration's threshold.
-    let chosen_errors = |p: &Poses| -> Result<Vec<f64>, CalibError> {
-        Ok(position_errors(&chosen.model, p, tilt)?
-            .iter()
-            .map(|e| e.norm())
-            .collect())
-    };
+    let chosen_errors =
+        |p: &Poses| -> Result<Vec<f64>, CalibError> { Ok(error_norms_mm(&chosen.model, p, tilt)?) };
     let mut outlier_reports = Vec::new();
     let mut val_kept_store = None;
-    if let Some(t) = &trimmed {
+    if let Some(threshold) = trimmed.as_ref().map(|t| t.threshold_mm) {
         let judged = |p: &Poses| -> Result<Vec<f64>, CalibError> {
             match &judge {
-                Some(m) => Ok(position_errors(m, p, judge_tilt)?
-                    .iter()
-                    .map(|e| e.norm())
-                    .collect()),
+                Some(m) => Ok(error_norms_mm(m, p, judge_tilt)?),
                 None => chosen_errors(p),
             }
         };
-        let threshold = outliers::threshold_mm(outliers::robust_sigma_mm(&judged(cal)?, 3), None);
         if !flagged.is_empty() {
             let all = chosen_errors(cal_all)?;
             let judged_all = judged(cal_all)?;
@@ -383,7 +375,7 @@ pub fn calibrate(
         }
         if let Some(v) = val {
             let norms = judged(v)?;
-            let (vflag, vthr) = outliers::flag_held_out(&norms, threshold);
+            let (vflag, vthr) = outliers::flag_set_against(&norms, threshold);
             if !vflag.is_empty() {
                 let final_norms = chosen_errors(v)?;
                 outlier_reports.extend(outliers::reports(
@@ -396,7 +388,6 @@ pub fn calibrate(
                 val_kept_store = Some(v.subset(&outliers::kept(v.len(), &vflag)));
             }
         }
-        let _ = t;
     }
     let val = val_kept_store.as_ref().or(val);
     let val_errors = match val {

@@ -15,7 +15,7 @@ use std::str::FromStr;
 use nalgebra::Vector3;
 
 use super::calibrate::{
-    error_summary, fit_report, resolve_selection, CalibrateOptions, Method, Outcome,
+    calibrate, error_summary, fit_report, resolve_selection, CalibrateOptions, Method, Outcome,
 };
 use super::error::CalibError;
 use super::fit::Fit;
@@ -58,8 +58,9 @@ pub struct GeneralOptions {
 pub struct GeneralOutcome {
     /// The calibrated model, report (with `terms`) and error vectors (one per measurement).
     pub outcome: Outcome,
-    /// The chosen identification (offsets and compliances included).
-    pub fit: GeneralFit,
+    /// The chosen identification (offsets and compliances included); `None` for the
+    /// identification on one point per pose ([`calibrate`]).
+    pub fit: Option<GeneralFit>,
     /// Names of the unknowns added by `--select press`, in order.
     pub added: Vec<String>,
     /// Validation RMS (mm) of every point slot (empty without validation data).
@@ -179,6 +180,44 @@ fn model_fit(f: &GeneralFit) -> Fit {
     }
 }
 
+/// The library's `calibrate` on measured poses, whatever the variant: `nominal`'s own terms (its
+/// joint map and time terms, from a model file) applied to the readings and the measured points
+/// ([`Measurements::through_terms`]) and kept in the calibrated model, then the identification
+/// on one point per pose ([`calibrate`]: standard, tilting, influence) or, with several points
+/// per pose, `--select press` or `--compliance`, [`calibrate_general`].
+pub fn calibrate_poses(
+    nominal: &Model,
+    cal: &Measurements,
+    val: Option<&Measurements>,
+    opts: &CalibrateOptions,
+    gen: &GeneralOptions,
+) -> Result<GeneralOutcome, CalibError> {
+    if gen.compliance && nominal.transmission().has_compliance() {
+        return Err(CalibError::Unsupported(
+            "the model already has compliance terms (compliance_deg_per_kgfm), which --compliance \
+             would fit again from zero: remove them from the model file or leave out --compliance"
+                .into(),
+        ));
+    }
+    let cal = cal.through_terms(nominal)?;
+    let val = val.map(|v| v.through_terms(nominal)).transpose()?;
+    if cal.n_slots() == 1 && *gen == GeneralOptions::default() {
+        let outcome = calibrate(
+            nominal,
+            &cal.as_poses(),
+            val.as_ref().map(Measurements::as_poses).as_ref(),
+            opts,
+        )?;
+        return Ok(GeneralOutcome {
+            outcome,
+            fit: None,
+            added: Vec::new(),
+            validation_rms_by_point_mm: Vec::new(),
+        });
+    }
+    calibrate_general(nominal, &cal, val.as_ref(), opts, gen)
+}
+
 /// Calibrates `nominal` on `cal` (several points per pose, compliance, PRESS selection) and
 /// evaluates on `val`. "before" is the nominal model without tilting, its further points at
 /// their identified offsets (they have no nominal value).
@@ -285,7 +324,7 @@ pub fn calibrate_general(
             calibration_errors: cal_errors,
             validation_errors: val_errors,
         },
-        fit: chosen,
+        fit: Some(chosen),
         validation_rms_by_point_mm,
     })
 }

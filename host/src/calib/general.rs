@@ -21,20 +21,10 @@ use super::identifiability::analyse;
 use super::lm::{solve, LmConfig, Problem};
 use super::measurements::Measurements;
 use super::problem::tilt_mode;
+pub use super::unknown::Unknown;
 use crate::model::gravity::GravityModel;
 use crate::model::transmission::{compliance_deflected, compliance_regressor};
 use crate::model::{Model, ModelError, Wrt};
-
-/// One unknown of the general identification.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
-pub enum Unknown {
-    /// A model parameter (index into [`Model::params`]).
-    Param(usize),
-    /// Coordinate `axis` (0..3) of point slot `slot` (>= 1) in the tool frame, mm.
-    Offset { slot: usize, axis: usize },
-    /// Compliance of joint j (0-based), deg per kgf.m.
-    Compliance(usize),
-}
 
 /// Gravity torques about the joint axes (kgf.m) at every pose, from the link masses of a
 /// nominal model (empty vectors when not needed).
@@ -61,17 +51,25 @@ impl PoseTorques {
     }
 }
 
-/// A model with point offsets and joint compliances.
+/// A model with point offsets; its joint compliances are the model's own
+/// ([`crate::model::transmission::JointTerms::compliance_deg_per_kgfm`]).
 #[derive(Debug, Clone)]
 pub struct GeneralModel {
-    /// The robot model (slot 0's point is its tool point).
+    /// The robot model (slot 0's point is its tool point; its joint terms hold the
+    /// compliances).
     pub model: Model,
     /// Offset of every point slot in the tool frame (mm); slot 0 mirrors the tool point.
     pub offsets_mm: Vec<Vector3<f64>>,
-    /// Compliance per joint, deg per kgf.m.
-    pub compliance_deg_per_kgfm: Vec<f64>,
     /// Whether the declared static tilting is applied.
     pub tilt: bool,
+}
+
+/// An unknown this identification does not evaluate.
+fn not_here(u: Unknown, model: &Model) -> ModelError {
+    ModelError::Invalid(format!(
+        "{} is not an unknown of the identification with point offsets and compliance",
+        u.name(model)
+    ))
 }
 
 fn tool_of(model: &Model) -> Result<[usize; 3], ModelError> {
@@ -88,12 +86,19 @@ impl GeneralModel {
         let t = tool_of(&model)?;
         let v = model.param_values();
         let tool = Vector3::new(v[t[0]], v[t[1]], v[t[2]]);
+        let mut model = model;
+        let n = model.n_joints();
+        model.transmission_mut().compliance_deg_per_kgfm = vec![0.0; n];
         Ok(Self {
-            compliance_deg_per_kgfm: vec![0.0; model.n_joints()],
             offsets_mm: vec![tool; slots.max(1)],
             model,
             tilt,
         })
+    }
+
+    /// Compliance per joint, deg per kgf.m (the model's joint terms).
+    pub fn compliance_deg_per_kgfm(&self) -> &[f64] {
+        &self.model.transmission().compliance_deg_per_kgfm
     }
 
     /// Current value of an unknown.
@@ -105,10 +110,11 @@ impl GeneralModel {
                 .get(slot)
                 .map_or(f64::NAN, |o| o[axis.min(2)]),
             Unknown::Compliance(j) => self
-                .compliance_deg_per_kgfm
+                .compliance_deg_per_kgfm()
                 .get(j)
                 .copied()
                 .unwrap_or(f64::NAN),
+            _ => f64::NAN,
         }
     }
 
@@ -122,10 +128,12 @@ impl GeneralModel {
                 }
             }
             Unknown::Compliance(j) => {
-                if let Some(c) = self.compliance_deg_per_kgfm.get_mut(j) {
+                let c = &mut self.model.transmission_mut().compliance_deg_per_kgfm;
+                if let Some(c) = c.get_mut(j) {
                     *c = v;
                 }
             }
+            other => return Err(not_here(other, &self.model)),
         }
         Ok(())
     }
@@ -139,7 +147,7 @@ impl GeneralModel {
                 .get(i)
                 .map_or_else(|| format!("param{i}"), |p| p.name.clone()),
             Unknown::Offset { slot, axis } => data.offset_name(slot, axis),
-            Unknown::Compliance(j) => format!("compliance_j{}_deg_per_kgfm", j + 1),
+            other => other.name(&self.model),
         }
     }
 
@@ -170,7 +178,7 @@ impl GeneralModel {
             .map(|m| {
                 let q = compliance_deflected(
                     &data.q_deg[m.pose],
-                    &self.compliance_deg_per_kgfm,
+                    self.compliance_deg_per_kgfm(),
                     tau.at(m.pose),
                 );
                 let model = models.get(m.slot).unwrap_or(&self.model);
@@ -195,16 +203,17 @@ impl GeneralModel {
         let wrt: Vec<Wrt> = unknowns
             .iter()
             .map(|u| match *u {
-                Unknown::Param(i) => Wrt::Param(i),
-                Unknown::Offset { axis, .. } => Wrt::Param(t[axis.min(2)]),
-                Unknown::Compliance(j) => Wrt::Joint(j),
+                Unknown::Param(i) => Ok(Wrt::Param(i)),
+                Unknown::Offset { axis, .. } => Ok(Wrt::Param(t[axis.min(2)])),
+                Unknown::Compliance(j) => Ok(Wrt::Joint(j)),
+                other => Err(not_here(other, &self.model)),
             })
-            .collect();
+            .collect::<Result<_, _>>()?;
         let Some(jac) = jac else {
             for (i, m) in data.points.iter().enumerate() {
                 let q = compliance_deflected(
                     &data.q_deg[m.pose],
-                    &self.compliance_deg_per_kgfm,
+                    self.compliance_deg_per_kgfm(),
                     tau.at(m.pose),
                 );
                 let model = models.get(m.slot).unwrap_or(&self.model);
@@ -215,7 +224,8 @@ impl GeneralModel {
         };
         for (i, m) in data.points.iter().enumerate() {
             let tau_i = tau.at(m.pose);
-            let q = compliance_deflected(&data.q_deg[m.pose], &self.compliance_deg_per_kgfm, tau_i);
+            let q =
+                compliance_deflected(&data.q_deg[m.pose], self.compliance_deg_per_kgfm(), tau_i);
             let model = models.get(m.slot).unwrap_or(&self.model);
             let (fk, j) = model.position_jacobian(&q, tilt, &wrt)?;
             r.fixed_rows_mut::<3>(3 * i)
@@ -417,7 +427,7 @@ mod tests {
         let sel = [Unknown::Compliance(0), Unknown::Compliance(1)];
         // Jacobian against central differences at a point off the solution.
         let mut at = start.clone();
-        at.compliance_deg_per_kgfm = vec![0.02, 0.1];
+        at.model.transmission_mut().compliance_deg_per_kgfm = vec![0.02, 0.1];
         let (jac, r0) = stacked(&at, &data, &tau, &sel).unwrap();
         for (c, &u) in sel.iter().enumerate() {
             let h = 1e-6;
@@ -433,7 +443,7 @@ mod tests {
             );
         }
         let fit = fit_general(&start, &data, &tau, &sel, &LmConfig::default(), 1e-6).unwrap();
-        for (f, c) in fit.state.compliance_deg_per_kgfm.iter().zip(coef) {
+        for (f, c) in fit.state.compliance_deg_per_kgfm().iter().zip(coef) {
             assert!((f - c).abs() < 1e-6, "{f} vs {c}");
         }
         let worst = fit

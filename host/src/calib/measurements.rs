@@ -7,6 +7,7 @@ use nalgebra::Vector3;
 
 use super::problem::Poses;
 use crate::io::pose_csv::PoseFile;
+use crate::model::{Model, ModelError};
 
 /// One measured point.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -28,6 +29,9 @@ pub struct Measurements {
     pub points: Vec<Measurement>,
     /// The file's point number (0-based: 0 = `x1` or `x`) of every slot.
     pub markers: Vec<usize>,
+    /// The time of every pose, s from the start of the session, when every pose of the file
+    /// has one (FORMATS.md `t`; the pose order is then by time).
+    pub t_s: Option<Vec<f64>>,
 }
 
 /// A `--markers` choice that the file cannot satisfy.
@@ -80,6 +84,31 @@ impl Measurements {
             q_deg: file.joints(),
             points,
             markers,
+            t_s: file.poses.iter().map(|p| p.t_s).collect(),
+        })
+    }
+
+    /// The measurements as `model`'s chain sees them: the readings through its joint map
+    /// ([`Model::effective_pose_joints`], hysteresis in the pose order) and the measured points
+    /// through the inverse of its time terms ([`Model::chain_mm_for`]). Without terms, `self`.
+    pub fn through_terms(&self, model: &Model) -> Result<Self, ModelError> {
+        if !model.maps_joints() && !model.time_terms().is_active() {
+            return Ok(self.clone());
+        }
+        let t_s = self.t_s.as_deref();
+        let at = |pose: usize| t_s.and_then(|t| t.get(pose)).copied().unwrap_or(0.0);
+        Ok(Self {
+            q_deg: model.effective_pose_joints(&self.q_deg, t_s)?,
+            points: self
+                .points
+                .iter()
+                .map(|m| Measurement {
+                    xyz_mm: model.chain_mm_for(&m.xyz_mm, at(m.pose)),
+                    ..*m
+                })
+                .collect(),
+            markers: self.markers.clone(),
+            t_s: self.t_s.clone(),
         })
     }
 
@@ -98,6 +127,7 @@ impl Measurements {
                 })
                 .collect(),
             markers: vec![0],
+            t_s: None,
         }
     }
 

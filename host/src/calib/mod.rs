@@ -42,6 +42,7 @@ pub mod projected;
 pub mod report;
 pub mod samples;
 pub mod stats;
+pub mod unknown;
 
 pub use calibrate::{calibrate, default_selection, CalibrateOptions, Method, Outcome};
 pub use error::CalibError;

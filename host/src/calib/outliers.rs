@@ -215,14 +215,15 @@ pub fn trim<E>(
     })
 }
 
-/// Poses of a set judged against a threshold from elsewhere (the held-out poses against the
-/// calibration's `threshold_mm`): flagged when their error norm exceeds that threshold **and**
+/// Poses of a set judged against a threshold from elsewhere (the held-out poses, or the
+/// calibration poses re-checked after a change of model, against the calibration's
+/// `threshold_mm`): flagged when their error norm exceeds that threshold **and**
 /// [`OUTLIER_SIGMAS`] robust sigmas of this set's own errors (inconsistent with the floor and
 /// with the other poses: held-out poses lie farther from the fit than the fitted ones, so the
 /// calibration's scale alone would flag the tail of a clean set); none when more than
 /// [`MAX_OUTLIER_SHARE`] of them would be (the set differs as a whole). Returns the flagged
 /// indices and the threshold applied.
-pub fn flag_held_out(errors_mm: &[f64], threshold_mm: f64) -> (Vec<usize>, f64) {
+pub fn flag_set_against(errors_mm: &[f64], threshold_mm: f64) -> (Vec<usize>, f64) {
     let own = threshold_mm_of(errors_mm);
     let thr = threshold_mm.max(own);
     let flagged = beyond_gap(errors_mm, thr);
@@ -316,8 +317,8 @@ mod tests {
     fn held_out_flags_only_a_few() {
         let mut e = vec![0.01; 60];
         e[3] = 2.0;
-        assert_eq!(flag_held_out(&e, 0.1).0, vec![3]);
+        assert_eq!(flag_set_against(&e, 0.1).0, vec![3]);
         let all_worse = vec![0.5; 60];
-        assert!(flag_held_out(&all_worse, 0.1).0.is_empty());
+        assert!(flag_set_against(&all_worse, 0.1).0.is_empty());
     }
 }

@@ -15,10 +15,10 @@ use std::fmt::Write as _;
 use std::path::PathBuf;
 
 use nalgebra::Vector3;
-use rigctl::calib::calibrate_general::{calibrate_general, GeneralOptions, Select};
+use rigctl::calib::calibrate_general::{calibrate_poses, GeneralOptions, Select};
 use rigctl::calib::measurements::Measurements;
 use rigctl::calib::stats::AxisExtremes;
-use rigctl::calib::{calibrate, CalibrateOptions, Method};
+use rigctl::calib::{CalibrateOptions, Method};
 use rigctl::io::atomic::write_bytes_atomic;
 use rigctl::io::pose_csv::read_poses;
 use rigctl::model::KATANA_PENCIL_TOOL_MM;
@@ -145,13 +145,11 @@ pub fn run(args: Args) -> Result<(), CliError> {
         Some(m) => Some(m.iter().map(|k| k - 1).collect()),
         None => None,
     };
-    // The model's transmission terms (model file `[[joint]]` keys) map the readings to the
-    // joints' angles, hysteresis in the file's pose order; the calibration keeps them fixed and
-    // writes them back with `--out`.
+    // The model's own terms (joint map, time terms) are applied by the library's calibrate,
+    // which keeps them fixed and writes them back with `--out`.
     let read = |p: &std::path::Path| -> Result<(Measurements, PoseLabels), CliError> {
         let file = read_poses(p, &args.pose.spec(&model, true, 0))?;
-        let mut m = Measurements::from_pose_file(&file, markers.as_deref())?;
-        m.q_deg = model.effective_pose_joints(&m.q_deg, super::fk::pose_times(&file).as_deref())?;
+        let m = Measurements::from_pose_file(&file, markers.as_deref())?;
         Ok((m, PoseLabels::of(&file)))
     };
     let (cal, cal_labels) = read(poses)?;
@@ -171,19 +169,9 @@ pub fn run(args: Args) -> Result<(), CliError> {
         select: args.select,
         compliance: args.compliance,
     };
-    let mut notes = String::new();
-    let outcome = if cal.n_slots() == 1 && gen == GeneralOptions::default() {
-        calibrate(
-            &model,
-            &cal.as_poses(),
-            val.as_ref().map(|v| v.as_poses()).as_ref(),
-            &opts,
-        )?
-    } else {
-        let g = calibrate_general(&model, &cal, val.as_ref(), &opts, &gen)?;
-        notes = general_notes(&g, &cal);
-        g.outcome
-    };
+    let g = calibrate_poses(&model, &cal, val.as_ref(), &opts, &gen)?;
+    let mut notes = general_notes(&g, &cal);
+    let outcome = g.outcome;
     no_redundancy(poses, 3 * cal.len(), outcome.report.rank)?;
     let mut outcome = outcome;
     for o in &mut outcome.report.outliers {

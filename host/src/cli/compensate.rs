@@ -43,6 +43,13 @@ pub fn run(args: Args) -> Result<(), CliError> {
         .check()?;
     let model = args.model.choose()?;
     let points = read_path(&args.path)?;
+    if model.time_terms().is_active() && points.iter().any(|p| p.t_s.is_none()) {
+        errln!(
+            "note: {}: the model's time terms (thermal growth, drifts) need `t` on every point; \
+             points without it are solved at t = 0, the start of the session",
+            args.path.display()
+        );
+    }
     let nominal = if args.no_nominal {
         None
     } else {

@@ -168,32 +168,12 @@ pub fn run(args: Args) -> Result<(), CliError> {
     if let Some(path) = &args.out {
         let mut text = String::new();
         let ext = &diag.model;
-        let extras: Vec<String> = ext
-            .joint_drift_deg_per_h
-            .iter()
-            .enumerate()
-            .filter(|(_, v)| **v != 0.0)
-            .map(|(j, v)| format!("joint {} offset drift {v:.6} deg/h", j + 1))
-            .chain((ext.drift_mm_per_h.norm() > 0.0).then(|| {
-                let d = ext.drift_mm_per_h;
-                format!(
-                    "position drift ({:.6}, {:.6}, {:.6}) mm/h in R",
-                    d.x, d.y, d.z
-                )
-            }))
-            .collect();
         let _ = writeln!(
             text,
             "# Written by rigctl diagnose; evaluate with{} tilting.",
             if ext.tilt { "" } else { "out" }
         );
-        for e in &extras {
-            let _ = writeln!(
-                text,
-                "# Not expressible in a model file (applied by diagnose only): {e}"
-            );
-        }
-        // Transmission terms (scale, coupling, hysteresis, compliance) are model-file keys.
+        // The joint map and the time terms (thermal growth, drifts) are model-file keys.
         text.push_str(&ext.to_model().to_toml_string());
         write_bytes_atomic(path, text.as_bytes())?;
     }

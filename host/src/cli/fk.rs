@@ -2,7 +2,9 @@
 //! [--robot NAME | --model FILE.toml] [--units m,rad]`: forward kinematics of every row, CSV
 //! `x,y,z,phi,theta,psi` (mm in frame R, ZXZ Euler angles in deg, whatever `--units` says of
 //! the input) on stdout. A model file's transmission terms are applied to the readings first,
-//! hysteresis in the pose order of the file (by `t` when every row has one). A ROS 2 bag as
+//! hysteresis in the pose order of the file (by `t` when every row has one); its time terms
+//! (`[time]`: thermal growth, drifts) at each row's `t` (s from the start of the session; 0
+//! when the file has no `t`, with a note; a bag's session starts at its first message). A ROS 2 bag as
 //! `--joints` (`.mcap` or rosbag2 directory; `--joint-topic`, `--joint-names`) is streamed:
 //! each message's row is written as it is read (all rows are gathered first only when the
 //! model's hysteresis needs the pose order).
@@ -42,10 +44,11 @@ fn fk_row(
     out: &mut String,
     model: &rigctl::model::Model,
     q: &[f64],
+    t_s: f64,
     tilt: Tilt,
 ) -> Result<(), CliError> {
     let fk = model.fk(q, tilt)?;
-    let p = fk.position_mm;
+    let p = model.measured_mm(&fk.position_mm, t_s);
     let [phi, theta, psi] = fk.zxz_deg();
     if ![p.x, p.y, p.z, phi, theta, psi]
         .iter()
@@ -84,17 +87,21 @@ fn run_bag(args: &Args, model: &rigctl::model::Model, tilt: Tilt) -> Result<(), 
             t.push(r.t_s);
             Ok(())
         })?;
-        for qe in model.effective_pose_joints(&q, Some(&t))? {
+        let t0 = t.first().copied().unwrap_or(0.0);
+        for (qe, t_s) in model.effective_pose_joints(&q, Some(&t))?.iter().zip(&t) {
             line.clear();
-            fk_row(&mut line, model, &qe, tilt)?;
+            fk_row(&mut line, model, qe, t_s - t0, tilt)?;
             w.write_all(line.as_bytes())
                 .map_err(super::out::stdout_error)?;
         }
     } else {
+        let mut t0 = None;
         args.joint_log.read_bag(&args.joints, model, |r| {
-            let qe = model.effective_pose_joints(std::slice::from_ref(&r.q), None)?;
+            // time terms: the session starts at the first message
+            let t_s = r.t_s - *t0.get_or_insert(r.t_s);
+            let qe = model.effective_pose_joints(std::slice::from_ref(&r.q), Some(&[t_s]))?;
             line.clear();
-            fk_row(&mut line, model, &qe[0], tilt)?;
+            fk_row(&mut line, model, &qe[0], t_s, tilt)?;
             w.write_all(line.as_bytes())
                 .map_err(super::out::stdout_error)
         })?;
@@ -121,10 +128,24 @@ pub fn run(args: Args) -> Result<(), CliError> {
     let poses = read_poses(&args.joints, &args.pose.spec(&model, false, 0))?;
     // The model's transmission terms map the readings to the joints' angles, with the
     // directions of approach from the file's pose order (FORMATS.md "Pose order").
-    let q_eff = model.effective_pose_joints(&poses.joints(), pose_times(&poses).as_deref())?;
+    let times = pose_times(&poses);
+    if model.time_terms().is_active() && times.is_none() {
+        super::out::errln!(
+            "note: {}: no time `t` on every row; the model's time terms (thermal growth, \
+             drifts) are evaluated at t = 0, the start of the session",
+            args.joints.display()
+        );
+    }
+    let q_eff = model.effective_pose_joints(&poses.joints(), times.as_deref())?;
     let mut out = String::from("x,y,z,phi,theta,psi\n");
     for (k, q) in q_eff.iter().enumerate() {
-        fk_row(&mut out, &model, q, tilt).map_err(|e| e.in_file(&args.joints).with_row(k + 1))?;
+        let t_s = times
+            .as_ref()
+            .and_then(|t| t.get(k))
+            .copied()
+            .unwrap_or(0.0);
+        fk_row(&mut out, &model, q, t_s, tilt)
+            .map_err(|e| e.in_file(&args.joints).with_row(k + 1))?;
     }
     super::out::stdout_bytes(out.as_bytes())
 }

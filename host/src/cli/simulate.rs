@@ -25,7 +25,7 @@ pub struct Args {
     /// An effect the declared model lacks, ID=VALUE (repeatable), e.g. `link_length:a3=0.2`,
     /// `tool_offset=0.1,0,-0.2`, `encoder_harmonic:j2:h1=0.05,30`, `stiffness:j2=-10`
     /// (deltas added to the declared values), `time_drift=0,0,0.5` (mm/h), `time_drift:j2=0.01`
-    /// (deg/h).
+    /// (deg/h), `thermal=150,20` (ppm at saturation, time constant in min).
     #[arg(long = "effect", value_name = "ID=VALUE")]
     pub effects: Vec<String>,
     /// Measurement noise, standard deviation per coordinate (mm).
@@ -40,6 +40,10 @@ pub struct Args {
     /// Number of validation poses.
     #[arg(long = "val", value_name = "N", default_value_t = 60)]
     pub n_val: usize,
+    /// Time between two measured poses, s (pose k at `t = k x interval`, calibration poses
+    /// first, then the validation poses).
+    #[arg(long, value_name = "S", default_value_t = 10.0)]
+    pub pose_interval_s: f64,
     /// Instead of poses: a low-cost rig session (thesis 5.5.2) drawing this path on a sheet on
     /// the 45-degree plane; writes joints.csv, pot.rec, potjig.csv, scan.png, placement.toml and
     /// the truth (truth.toml, truth_path.csv, session.json; see rigctl::sim::session). The same
@@ -128,6 +132,7 @@ pub fn run(args: Args) -> Result<(), CliError> {
         geometric_sigma_deg: args.geometric_sigma_deg,
         effects,
         n_val: args.n_val,
+        pose_interval_s: args.pose_interval_s,
         ..SimConfig::default()
     };
     let out = simulate(&declared, &cfg)?;

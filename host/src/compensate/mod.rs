@@ -211,9 +211,19 @@ pub fn compensate(
                 seed.clone_from(q);
             }
         }
-        let q =
-            solve(model, &p.target, &seed, tilt).map_err(|e| unreachable(p, "calibrated", e))?;
+        // the model's time terms at the point's time: the chain's position that a measurement
+        // at t gives as the target
+        let t_s = p.t_s.unwrap_or(0.0);
+        let target = ToolTarget {
+            position_mm: model.chain_mm_for(&p.target.position_mm, t_s),
+            ..p.target
+        };
+        let mut q =
+            solve(model, &target, &seed, tilt).map_err(|e| unreachable(p, "calibrated", e))?;
         seed.clone_from(&q);
+        for (j, v) in q.iter_mut().enumerate() {
+            *v -= model.time_terms().joint_drift_deg(j, t_s);
+        }
         if let Some(q) = &q_nominal {
             seed_nominal = Some(q.clone());
         }

@@ -13,6 +13,7 @@
 //! | `stiffness:j<i>` `backlash:j<i>` `clearance:j<i>` (models with tilting) | that tilting value | `stiffness_kgfm_per_deg` / `backlash_deg` / `clearance_deg` (fitted value) and `delta_*` (change from the declared value) |
 //! | `time_drift` (pose files with varying `t`) | position drift x, y, z | `vx_mm_per_h vy_mm_per_h vz_mm_per_h` |
 //! | `time_drift:j<i>` (same) | joint-offset drift | `deg_per_h` |
+//! | `thermal` (same) | warm-up growth `s` and time constant `tau` ([`crate::model::time_terms`]) | `s_ppm`, `tau_min` |
 //! | `compliance:j<i>` (models without tilting but with link masses, e.g. `ur5`) | deflection per gravity torque | `deg_per_kgfm` |
 //! | `joint_scale:j<i>` (every joint) | transmission-ratio error `q_i += s q_i` | `s` (dimensionless) |
 //! | `joint_coupling:j<i>:j<k>` (every ordered pair) | `q_i += c q_k` | `c` (deg/deg) |
@@ -189,6 +190,11 @@ pub fn library_for(
                 Some(j),
             );
         }
+        push(
+            "thermal".into(),
+            vec![Some(Unknown::ThermalPpm), Some(Unknown::ThermalTauMin)],
+            None,
+        );
     }
     out
 }
@@ -261,6 +267,11 @@ pub fn effect_values(cand: &Candidate, before: &ExtModel, fit: &ExtFit) -> Effec
                 let p = Unknown::PositionDrift(a);
                 add(label, delta(p), sig(p));
             }
+        }
+        "thermal" if u.len() == 2 => {
+            // both values are the effect's own (the declared model has no warm-up)
+            add("s_ppm", after.value(u[0]), sig(u[0]));
+            add("tau_min", after.value(u[1]), sig(u[1]));
         }
         "stiffness" | "backlash" | "clearance" if u.len() == 1 => {
             let unit = if family == "stiffness" {

@@ -398,6 +398,33 @@ pub(super) fn linear_start(cur: &ExtFit, data: &Dataset, cand: &Candidate) -> Op
     Some(ext)
 }
 
+/// The best start for a candidate with an unknown the prediction is not linear in
+/// ([`Unknown::start_values`], e.g. a time constant whose column vanishes while its growth is
+/// zero): for each start value, that value set and the [`linear_start`] step of the others; the
+/// start of least squared error. `None` when the candidate has no such unknown.
+pub(super) fn nonlinear_start(cur: &ExtFit, data: &Dataset, cand: &Candidate) -> Option<ExtModel> {
+    let (u, values) = cand
+        .unknowns
+        .iter()
+        .find_map(|u| u.start_values().map(|v| (*u, v)))?;
+    values
+        .iter()
+        .filter_map(|&v| {
+            let mut from = cur.clone();
+            from.ext.set_value(u, v).ok()?;
+            let start = linear_start(&from, data, cand)?;
+            let cost: f64 = start
+                .errors(data)
+                .ok()?
+                .iter()
+                .map(|e| e.norm_squared())
+                .sum();
+            cost.is_finite().then_some((cost, start))
+        })
+        .min_by(|a, b| a.0.total_cmp(&b.0))
+        .map(|(_, start)| start)
+}
+
 /// Per-pose contribution of an effect: predictions after minus before (mm) on `data`.
 pub fn contribution(
     before: &ExtFit,

@@ -1,153 +1,113 @@
-//! The declared model extended with the effects that are not parameters of a [`Model`]: a
-//! measurement-side position drift linear in the pose time `t`, joint-offset drifts, and joint
-//! compliance (a joint deflection proportional to the gravity torque about the joint axis, the
-//! law of [`crate::model::transmission::compliance_deflection_deg`]).
+//! The declared model extended with the effects that are not parameters of a [`Model`]'s
+//! chain but terms it carries: the joint map ([`crate::model::transmission::JointTerms`]:
+//! transmission-ratio errors, coupling, hysteresis, compliance) and the time terms
+//! ([`crate::model::time_terms::TimeTerms`]: thermal growth, position and joint-offset drifts).
+//! One [`Unknown`] names any value the fit can free; the values live in the model.
 //!
-//! Prediction of pose k (joint readings `q`, time `t` s):
+//! Prediction of pose k (joint readings `q`, time `t` s, directions of approach `d`):
 //!
 //! ```text
-//! q_eff_j = q_j + r_j t / 3600 + c_j tau_j(q)          r_j deg/h, c_j deg per kgf.m
-//! p       = fk(q_eff, declared tilt) + v t / 3600      v mm/h in frame R
+//! q_eff = Model::joint_map(q, t, d, tau(q))             tau: gravity torques about the axes
+//! p     = Model::measured_mm(fk(q_eff, declared tilt), t)
 //! ```
 //!
 //! `tau_j(q)` is the static gravity torque about joint axis j (kgf.m) of the untilted chain at the
 //! readings, from [`GravityModel`]. A file without a `t` column has `t = 0` for every pose, so
-//! the drift terms have no effect (and are never candidates).
+//! the time terms have no effect (and are never candidates).
 
 use nalgebra::{DMatrix, DVector, Vector3};
 
 use super::data::Dataset;
 use crate::calib::identifiability::analyse;
 use crate::calib::lm::{solve, LmConfig, Problem};
+pub use crate::calib::unknown::Unknown;
 use crate::calib::CalibError;
 use crate::model::gravity::GravityModel;
-use crate::model::transmission::{
-    compliance_deflection_deg, compliance_regressor, transmission_increments, JointTerms,
-};
+use crate::model::time_terms::TimeTerms;
+use crate::model::transmission::{compliance_regressor, JointTerms};
 use crate::model::{sign_1e9, Model, ModelError, Tilt, Wrt};
 
-/// Seconds per hour (drift rates are per hour).
-const S_PER_H: f64 = 3600.0;
-
-/// One unknown of an extended fit.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
-pub enum Unknown {
-    /// A model parameter (index into [`Model::params`]), in its own unit.
-    Param(usize),
-    /// Measured-position drift along axis 0/1/2 of frame R, mm per hour.
-    PositionDrift(usize),
-    /// Drift of joint j's offset (0-based), deg per hour.
-    JointDrift(usize),
-    /// Compliance of joint j (0-based): deflection per gravity torque, deg per kgf.m.
-    Compliance(usize),
-    /// Transmission-ratio error of joint j (0-based): `q_j += s q_j` (dimensionless).
-    JointScale(usize),
-    /// Coupling of joint i's angle to joint k's command (0-based `(i, k)`): `q_i += c q_k`
-    /// (deg/deg).
-    Coupling(usize, usize),
-    /// Hysteresis of joint j (0-based): `q_j += b d_j`, `d_j` the direction in which joint j
-    /// last moved before the pose (+1, -1, 0; [`Dataset::approach`]), deg.
-    Hysteresis(usize),
+/// Point offsets belong to the identification with several points per pose
+/// ([`crate::calib::general`]), not to this one.
+fn offsets_elsewhere(u: Unknown, model: &Model) -> ModelError {
+    ModelError::Invalid(format!(
+        "{}: point offsets are identified by calibrate with several points per pose",
+        u.name(model)
+    ))
 }
 
-impl Unknown {
-    /// A readable name: the model parameter's name, `drift_x_mm_per_h`, `drift_j2_deg_per_h`,
-    /// `compliance_j2_deg_per_kgfm`.
-    pub fn name(&self, model: &Model) -> String {
-        match *self {
-            Unknown::Param(i) => model
-                .params()
-                .get(i)
-                .map(|p| p.name.clone())
-                .unwrap_or_else(|| format!("param{i}")),
-            Unknown::PositionDrift(a) => format!("drift_{}_mm_per_h", ["x", "y", "z"][a.min(2)]),
-            Unknown::JointDrift(j) => format!("drift_j{}_deg_per_h", j + 1),
-            Unknown::Compliance(j) => format!("compliance_j{}_deg_per_kgfm", j + 1),
-            Unknown::JointScale(j) => format!("joint_scale_j{}", j + 1),
-            Unknown::Coupling(i, k) => format!("coupling_j{}_j{}_deg_per_deg", i + 1, k + 1),
-            Unknown::Hysteresis(j) => format!("hysteresis_j{}_deg", j + 1),
-        }
-    }
-
-    /// The joint (0-based) whose angle this unknown moves, for unknowns that act on a joint
-    /// angle before the chain.
-    pub fn joint(&self) -> Option<usize> {
-        match *self {
-            Unknown::JointDrift(j)
-            | Unknown::Compliance(j)
-            | Unknown::JointScale(j)
-            | Unknown::Coupling(j, _)
-            | Unknown::Hysteresis(j) => Some(j),
-            Unknown::Param(_) | Unknown::PositionDrift(_) => None,
-        }
-    }
-}
-
-/// A model plus the extra (non-model) effect values.
+/// A model with its joint map and time terms sized for its joints, and what the fit needs to
+/// evaluate them (tilting on or off, the link masses for the compliance torques).
 #[derive(Debug, Clone)]
 pub struct ExtModel {
-    /// The robot model (all parameters, effect parameters included).
+    /// The robot model: parameters, joint map, time terms.
     pub model: Model,
     /// Whether the declared static tilting is applied.
     pub tilt: bool,
-    /// Position drift, mm per hour in R.
-    pub drift_mm_per_h: Vector3<f64>,
-    /// Joint offset drift per joint, deg per hour.
-    pub joint_drift_deg_per_h: Vec<f64>,
-    /// Compliance per joint, deg per kgf.m.
-    pub compliance_deg_per_kgfm: Vec<f64>,
     /// Link masses for the compliance torques (None: no compliance possible).
     pub gravity: Option<GravityModel>,
-    /// Transmission-ratio error per joint (dimensionless): `q_j += s_j q_j`.
-    pub joint_scale: Vec<f64>,
-    /// Joint coupling, row i column k (deg/deg): `q_i += c_ik q_k`.
-    pub coupling: Vec<Vec<f64>>,
-    /// Hysteresis per joint (deg): `q_j += b_j d_j` with the direction of approach `d_j`.
-    pub hysteresis_deg: Vec<f64>,
 }
 
 impl ExtModel {
-    /// `model` with no extra effect; tilting when the model has tilting data.
-    pub fn new(model: Model) -> Self {
+    /// `model` with its own terms as the starting values; tilting when the model has tilting
+    /// data.
+    pub fn new(mut model: Model) -> Self {
         let n = model.n_joints();
         let tilt = model.has_tilt();
         let gravity = GravityModel::for_model(&model);
-        // The model's own transmission terms (model file) are the starting values.
-        let t = model.transmission().clone();
-        let sized = |v: Vec<f64>| if v.len() == n { v } else { vec![0.0; n] };
-        let coupling = if t.coupling.len() == n && t.coupling.iter().all(|r| r.len() == n) {
-            t.coupling
-        } else {
-            vec![vec![0.0; n]; n]
-        };
+        let t = model.transmission();
+        let sized = |v: &[f64]| v.len() == n;
+        if !(sized(&t.scale)
+            && sized(&t.hysteresis_deg)
+            && sized(&t.compliance_deg_per_kgfm)
+            && t.coupling.len() == n
+            && t.coupling.iter().all(|r| r.len() == n))
+        {
+            let mut z = JointTerms::zeros(n);
+            for (j, v) in z.scale.iter_mut().enumerate() {
+                *v = t.scale.get(j).copied().unwrap_or(0.0);
+            }
+            for (j, v) in z.hysteresis_deg.iter_mut().enumerate() {
+                *v = t.hysteresis_deg.get(j).copied().unwrap_or(0.0);
+            }
+            for (j, v) in z.compliance_deg_per_kgfm.iter_mut().enumerate() {
+                *v = t.compliance_deg_per_kgfm.get(j).copied().unwrap_or(0.0);
+            }
+            for (i, row) in z.coupling.iter_mut().enumerate() {
+                for (k, v) in row.iter_mut().enumerate() {
+                    *v = t.coupling_at(i, k);
+                }
+            }
+            model.set_transmission(z);
+        }
+        if model.time_terms().joint_drift_deg_per_h.len() != n {
+            let rates = &mut model.time_terms_mut().joint_drift_deg_per_h;
+            rates.resize(n, 0.0);
+        }
         Self {
             model,
             tilt,
-            drift_mm_per_h: Vector3::zeros(),
-            joint_drift_deg_per_h: vec![0.0; n],
-            compliance_deg_per_kgfm: sized(t.compliance_deg_per_kgfm),
             gravity,
-            joint_scale: sized(t.scale),
-            coupling,
-            hysteresis_deg: sized(t.hysteresis_deg),
         }
     }
 
-    /// The model with this fit's transmission terms (`joint_scale`, `joint_coupling`,
-    /// `hysteresis`, `compliance`) as model-file parameters, for `diagnose --out`; the drifts
-    /// are not model parameters.
+    /// The model with this fit's terms, for `diagnose --out`: terms that are all zero are left
+    /// out (so a model without terms reads back identical), and compliance only with masses.
     pub fn to_model(&self) -> Model {
         let mut m = self.model.clone();
-        m.set_transmission(JointTerms {
-            scale: self.joint_scale.clone(),
-            coupling: self.coupling.clone(),
-            hysteresis_deg: self.hysteresis_deg.clone(),
-            compliance_deg_per_kgfm: if self.gravity.is_some() {
-                self.compliance_deg_per_kgfm.clone()
-            } else {
-                Vec::new()
-            },
-        });
+        if self.gravity.is_none() {
+            m.transmission_mut().compliance_deg_per_kgfm.clear();
+        }
+        if !m.transmission().is_active() {
+            m.set_transmission(JointTerms::default());
+        }
+        if !m.time_terms().is_active() {
+            let tau = m.time_terms().thermal_tau_min;
+            m.set_time_terms(TimeTerms {
+                thermal_tau_min: tau,
+                ..TimeTerms::default()
+            });
+        }
         m
     }
 
@@ -163,19 +123,19 @@ impl ExtModel {
 
     /// Current value of an unknown.
     pub fn value(&self, u: Unknown) -> f64 {
+        let (t, time) = (self.model.transmission(), self.model.time_terms());
+        let at = |v: &[f64], j: usize| v.get(j).copied().unwrap_or(0.0);
         match u {
             Unknown::Param(i) => self.model.params().get(i).map_or(0.0, |p| p.value),
-            Unknown::PositionDrift(a) => self.drift_mm_per_h[a.min(2)],
-            Unknown::JointDrift(j) => self.joint_drift_deg_per_h.get(j).copied().unwrap_or(0.0),
-            Unknown::Compliance(j) => self.compliance_deg_per_kgfm.get(j).copied().unwrap_or(0.0),
-            Unknown::JointScale(j) => self.joint_scale.get(j).copied().unwrap_or(0.0),
-            Unknown::Coupling(i, k) => self
-                .coupling
-                .get(i)
-                .and_then(|r| r.get(k))
-                .copied()
-                .unwrap_or(0.0),
-            Unknown::Hysteresis(j) => self.hysteresis_deg.get(j).copied().unwrap_or(0.0),
+            Unknown::PositionDrift(a) => time.drift_mm_per_h[a.min(2)],
+            Unknown::JointDrift(j) => at(&time.joint_drift_deg_per_h, j),
+            Unknown::Compliance(j) => at(&t.compliance_deg_per_kgfm, j),
+            Unknown::JointScale(j) => at(&t.scale, j),
+            Unknown::Coupling(i, k) => t.coupling_at(i, k),
+            Unknown::Hysteresis(j) => at(&t.hysteresis_deg, j),
+            Unknown::ThermalPpm => time.thermal_ppm,
+            Unknown::ThermalTauMin => time.thermal_tau_min,
+            Unknown::Offset { .. } => f64::NAN,
         }
     }
 
@@ -187,34 +147,41 @@ impl ExtModel {
                 value: v,
             });
         }
+        let set = |slot: Option<&mut f64>| {
+            if let Some(x) = slot {
+                *x = v;
+            }
+        };
         match u {
             Unknown::Param(i) => self.model.set_param_at(i, v)?,
-            Unknown::PositionDrift(a) => self.drift_mm_per_h[a.min(2)] = v,
+            Unknown::PositionDrift(a) => self.model.time_terms_mut().drift_mm_per_h[a.min(2)] = v,
             Unknown::JointDrift(j) => {
-                if let Some(x) = self.joint_drift_deg_per_h.get_mut(j) {
-                    *x = v;
-                }
+                set(self.model.time_terms_mut().joint_drift_deg_per_h.get_mut(j));
             }
             Unknown::Compliance(j) => {
-                if let Some(x) = self.compliance_deg_per_kgfm.get_mut(j) {
-                    *x = v;
-                }
+                set(self
+                    .model
+                    .transmission_mut()
+                    .compliance_deg_per_kgfm
+                    .get_mut(j));
             }
-            Unknown::JointScale(j) => {
-                if let Some(x) = self.joint_scale.get_mut(j) {
-                    *x = v;
-                }
-            }
-            Unknown::Coupling(i, k) => {
-                if let Some(x) = self.coupling.get_mut(i).and_then(|r| r.get_mut(k)) {
-                    *x = v;
-                }
-            }
+            Unknown::JointScale(j) => set(self.model.transmission_mut().scale.get_mut(j)),
+            Unknown::Coupling(i, k) => set(self
+                .model
+                .transmission_mut()
+                .coupling
+                .get_mut(i)
+                .and_then(|r| r.get_mut(k))),
             Unknown::Hysteresis(j) => {
-                if let Some(x) = self.hysteresis_deg.get_mut(j) {
-                    *x = v;
-                }
+                set(self.model.transmission_mut().hysteresis_deg.get_mut(j));
             }
+            Unknown::ThermalPpm => self.model.time_terms_mut().thermal_ppm = v,
+            Unknown::ThermalTauMin => {
+                // a time constant is positive: the fit's step is kept within the bound
+                let (lo, hi) = u.bounds().unwrap_or((f64::MIN_POSITIVE, f64::MAX));
+                self.model.time_terms_mut().thermal_tau_min = v.clamp(lo, hi);
+            }
+            Unknown::Offset { .. } => return Err(offsets_elsewhere(u, &self.model)),
         }
         Ok(())
     }
@@ -228,7 +195,7 @@ impl ExtModel {
     }
 
     fn needs_torques(&self, unknowns: &[Unknown]) -> bool {
-        self.compliance_deg_per_kgfm.iter().any(|c| *c != 0.0)
+        self.model.transmission().has_compliance()
             || unknowns.iter().any(|u| matches!(u, Unknown::Compliance(_)))
     }
 
@@ -245,24 +212,7 @@ impl ExtModel {
         } else {
             Vec::new()
         };
-        let trans = transmission_increments(
-            q_deg,
-            approach,
-            &self.joint_scale,
-            &self.coupling,
-            &self.hysteresis_deg,
-        );
-        let q_eff = q_deg
-            .iter()
-            .enumerate()
-            .map(|(j, q)| {
-                let drift =
-                    self.joint_drift_deg_per_h.get(j).copied().unwrap_or(0.0) * t_s / S_PER_H;
-                let comp = compliance_deflection_deg(&self.compliance_deg_per_kgfm, &tau, j);
-                q + drift + comp + trans[j]
-            })
-            .collect();
-        Ok((q_eff, tau))
+        Ok((self.model.joint_map(q_deg, t_s, approach, &tau), tau))
     }
 
     fn approach_of(data: &Dataset, k: usize) -> Vec<f64> {
@@ -291,9 +241,11 @@ impl ExtModel {
         approach: &[f64],
         tilt: Tilt<'_>,
     ) -> Result<Vector3<f64>, ModelError> {
-        let with_tau = self.compliance_deg_per_kgfm.iter().any(|c| *c != 0.0);
+        let with_tau = self.model.transmission().has_compliance();
         let (q_eff, _) = self.effective_joints(q_deg, t_s, approach, with_tau)?;
-        Ok(self.model.position_mm(&q_eff, tilt)? + self.drift_mm_per_h * (t_s / S_PER_H))
+        Ok(self
+            .model
+            .measured_mm(&self.model.position_mm(&q_eff, tilt)?, t_s))
     }
 
     /// Predicted position of pose `k` of `data` and its Jacobian (3 x unknowns, mm per unit).
@@ -318,7 +270,8 @@ impl ExtModel {
                 | Unknown::JointScale(j)
                 | Unknown::Coupling(j, _)
                 | Unknown::Hysteresis(j) => Some(Wrt::Joint(j)),
-                Unknown::PositionDrift(_) => None,
+                Unknown::PositionDrift(_) | Unknown::ThermalPpm | Unknown::ThermalTauMin => None,
+                Unknown::Offset { .. } => return Err(offsets_elsewhere(*u, &self.model)),
             };
             slot.push(w.map(|w| {
                 wrt.push(w);
@@ -328,31 +281,38 @@ impl ExtModel {
         let (fk, jm) = self
             .model
             .position_jacobian(&q_eff, self.tilt_at(data, k), &wrt)?;
+        // the time terms scale the chain's position (and so its derivatives)
+        let thermal = self
+            .model
+            .time_terms()
+            .thermal_derivatives(&fk.position_mm, t_s);
         let mut jac = DMatrix::zeros(3, unknowns.len());
         for (c, u) in unknowns.iter().enumerate() {
             let col: Vector3<f64> = match (*u, slot[c]) {
-                (Unknown::PositionDrift(a), _) => {
-                    let mut v = Vector3::zeros();
-                    v[a.min(2)] = t_s / S_PER_H;
-                    v
+                (Unknown::PositionDrift(a), _) => TimeTerms::drift_column(a, t_s),
+                (Unknown::ThermalPpm, _) => thermal.d_ppm,
+                (Unknown::ThermalTauMin, _) => thermal.d_tau_min,
+                (Unknown::JointDrift(_), Some(s)) => {
+                    jm.column(s) * TimeTerms::joint_drift_regressor(t_s) * thermal.factor
                 }
-                (Unknown::JointDrift(_), Some(s)) => jm.column(s) * (t_s / S_PER_H),
-                (Unknown::Compliance(j), Some(s)) => jm.column(s) * compliance_regressor(&tau, j),
+                (Unknown::Compliance(j), Some(s)) => {
+                    jm.column(s) * compliance_regressor(&tau, j) * thermal.factor
+                }
                 (Unknown::JointScale(j), Some(s)) => {
-                    jm.column(s) * q.get(j).copied().unwrap_or(0.0)
+                    jm.column(s) * q.get(j).copied().unwrap_or(0.0) * thermal.factor
                 }
                 (Unknown::Coupling(_, k), Some(s)) => {
-                    jm.column(s) * q.get(k).copied().unwrap_or(0.0)
+                    jm.column(s) * q.get(k).copied().unwrap_or(0.0) * thermal.factor
                 }
                 (Unknown::Hysteresis(j), Some(s)) => {
-                    jm.column(s) * approach.get(j).copied().unwrap_or(0.0)
+                    jm.column(s) * approach.get(j).copied().unwrap_or(0.0) * thermal.factor
                 }
-                (_, Some(s)) => jm.column(s).into_owned(),
+                (_, Some(s)) => jm.column(s) * thermal.factor,
                 (_, None) => Vector3::zeros(),
             };
             jac.view_mut((0, c), (3, 1)).copy_from(&col);
         }
-        Ok((fk.position_mm + self.drift_mm_per_h * (t_s / S_PER_H), jac))
+        Ok((self.model.measured_mm(&fk.position_mm, t_s), jac))
     }
 
     /// The sign pattern of the tilting law (MODEL.md eq. 5.19, `sign(x)` = 0 for `|x| < 1e-9`):
@@ -363,7 +323,7 @@ impl ExtModel {
         if !self.tilt {
             return Ok(Vec::new());
         }
-        let with_tau = self.compliance_deg_per_kgfm.iter().any(|c| *c != 0.0);
+        let with_tau = self.model.transmission().has_compliance();
         let mut out = Vec::with_capacity(3 * data.len() * self.model.n_joints());
         for k in 0..data.len() {
             let approach = Self::approach_of(data, k);

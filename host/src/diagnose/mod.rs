@@ -46,6 +46,7 @@ pub mod select;
 pub mod stat;
 
 use crate::calib::outliers::{self, OutlierReport};
+use crate::calib::problem::norms_mm;
 use nalgebra::Vector3;
 
 use crate::calib::fit::fit_parameters;
@@ -176,11 +177,6 @@ pub fn declared_fit(
         converged: f.converged,
     };
     Ok((fit, requested))
-}
-
-/// Error norms of error vectors (mm).
-fn norms(errors: &[Vector3<f64>]) -> Vec<f64> {
-    errors.iter().map(|e| e.norm()).collect()
 }
 
 /// `reports` with the line and id of each pose of `data`.
@@ -423,18 +419,30 @@ pub fn diagnose(
     // the flags re-checked under the final model (once more from there when they changed).
     let mut flagged: Vec<usize> = Vec::new();
     let mut outlier_note = None;
+    // the declared fit of trim's last round (on the poses it keeps), reused by the selection
+    let mut last_declared: Option<(Vec<usize>, ExtFit, Vec<Unknown>)> = None;
     if gross {
         let t = outliers::trim(cal_all.len(), 3, cfg.floor_mm, |keep| {
-            let (fit, _) = declared_fit(model, &cal_all.subset(keep), cfg)?;
-            Ok::<_, DiagnoseError>(norms(&fit.ext.errors(&cal_all)?))
+            let (fit, requested) = declared_fit(model, &cal_all.subset(keep), cfg)?;
+            let norms = norms_mm(&fit.ext.errors(&cal_all)?);
+            last_declared = Some((keep.to_vec(), fit, requested));
+            Ok::<_, DiagnoseError>(norms)
         })?;
         flagged = t.flagged;
         outlier_note = t.note;
     }
-    // the selection on the poses not in `flagged`
+    // the selection on the poses not in `flagged` (gross errors only on unordered poses, so the
+    // spike rule of `trim_outliers` leaves them as they are and trim's declared fit serves)
     let run = |flagged: &[usize]| -> Result<(Dataset, usize, ExtFit, Vec<Unknown>, Selection), DiagnoseError> {
-        let kept_cal = cal_all.subset(&outliers::kept(cal_all.len(), flagged));
-        let (cal, left_out, declared, requested) = trim_outliers(model, &kept_cal, cfg)?;
+        let keep = outliers::kept(cal_all.len(), flagged);
+        let kept_cal = cal_all.subset(&keep);
+        let reused = last_declared
+            .as_ref()
+            .filter(|(k, _, _)| *k == keep && !kept_cal.is_serial());
+        let (cal, left_out, declared, requested) = match reused {
+            Some((_, fit, requested)) => (kept_cal, 0, fit.clone(), requested.clone()),
+            None => trim_outliers(model, &kept_cal, cfg)?,
+        };
         let selection = forward_selection(declared.clone(), &requested, &cal, cfg)?;
         Ok((cal, left_out, declared, requested, selection))
     };
@@ -442,13 +450,13 @@ pub fn diagnose(
     let flags_under = |selection: &Selection,
                        flagged: &[usize]|
      -> Result<Vec<usize>, DiagnoseError> {
-        let all = norms(&selection.last.ext.errors(&cal_all)?);
+        let all = norms_mm(&selection.last.ext.errors(&cal_all)?);
         let kept_norms: Vec<f64> = outliers::kept(all.len(), flagged)
             .iter()
             .map(|&k| all[k])
             .collect();
         let thr = outliers::threshold_mm(outliers::robust_sigma_mm(&kept_norms, 3), cfg.floor_mm);
-        Ok(outliers::flag_held_out(&all, thr).0)
+        Ok(outliers::flag_set_against(&all, thr).0)
     };
     let mut result = run(&flagged)?;
     if gross && !flagged.is_empty() {
@@ -479,16 +487,16 @@ pub fn diagnose(
     let val_kept;
     let val = if gross {
         let thr = outliers::threshold_mm(
-            outliers::robust_sigma_mm(&norms(&selection.last.ext.errors(cal)?), 3),
+            outliers::robust_sigma_mm(&norms_mm(&selection.last.ext.errors(cal)?), 3),
             cfg.floor_mm,
         );
-        let all = norms(&selection.last.ext.errors(&cal_all)?);
+        let all = norms_mm(&selection.last.ext.errors(&cal_all)?);
         outlier_reports.extend(labelled(
             outliers::reports("cal", &flagged, &all, &all, thr),
             &cal_all,
         ));
-        let vn = norms(&selection.last.ext.errors(&val_all)?);
-        let (vflag, vthr) = outliers::flag_held_out(&vn, thr);
+        let vn = norms_mm(&selection.last.ext.errors(&val_all)?);
+        let (vflag, vthr) = outliers::flag_set_against(&vn, thr);
         outlier_reports.extend(labelled(
             outliers::reports("val", &vflag, &vn, &vn, vthr),
             &val_all,

@@ -6,8 +6,8 @@
 use super::candidates::{library, Candidate};
 use super::data::Dataset;
 use super::decide::{
-    cv_errors, linear_start, onset_candidates, paired_gain, rank_contenders, serial_tau, Accepted,
-    DecideConfig, Selection, Trial,
+    cv_errors, linear_start, nonlinear_start, onset_candidates, paired_gain, rank_contenders,
+    serial_tau, Accepted, DecideConfig, Selection, Trial,
 };
 use super::extended::{fit, ExtFit, Unknown};
 use super::parallel::map_ordered;
@@ -140,6 +140,14 @@ pub fn refit_candidate(
     let mut req = requested.to_vec();
     req.extend(cand.unknowns.iter().copied());
     let mut best: Option<ExtFit> = fit(&cur.ext, data, &req, &cfg.lm, cfg.rtol, false).ok();
+    // a non-linear unknown (a time constant): the fit also from the best of its start values
+    if let Some(start) = nonlinear_start(cur, data, cand) {
+        if let Ok(f) = fit(&start, data, &req, &cfg.lm, cfg.rtol, false) {
+            if best.as_ref().is_none_or(|b| f.rss_mm2 < b.rss_mm2) {
+                best = Some(f);
+            }
+        }
+    }
     let mut from = cur.clone();
     let restarts = if cur.ext.tilt { 4 } else { 0 };
     for _ in 0..restarts {

@@ -138,6 +138,8 @@ pub struct Model {
     pub(crate) joint_names: Vec<String>,
     /// Transmission terms on the joint angles (model files; [`super::transmission`]).
     pub(crate) transmission: super::transmission::JointTerms,
+    /// Terms that depend on the pose time ([`super::time_terms`]).
+    pub(crate) time_terms: super::time_terms::TimeTerms,
 }
 
 impl Model {
@@ -666,6 +668,7 @@ impl ModelBuilder {
             scale_param,
             joint_names: Vec::new(),
             transmission: Default::default(),
+            time_terms: Default::default(),
         })
     }
 }

@@ -25,7 +25,8 @@
 //!   `dth1..dth5`, `al2..al5`, `be3..be5`, `a2`, `a3`, `d4`, `d5`; limits table 3.1; masses
 //!   table 4.2; tilting table 5.2). [`KATANA_GEOMETRIC_PARAMS`] lists the thesis's 12.
 //! - [`ur5`]`()` (standard DH rows `dth<i> d<i> a<i> al<i>`, i = 1..6; tool point = flange,
-//!   [`UR5_SMR_TOOL_MM`] is the laser-tracker SMR offset to `--set`; no masses, no tilting).
+//!   [`UR5_SMR_TOOL_MM`] is the laser-tracker SMR offset to `--set`; the link masses Universal
+//!   Robots publishes, [`UR5_LINK_MASS_KG`]; no tilting).
 //! - [`preset`]`(name, tool_mm)`; [`choose_model`]`(&ModelChoice { robot, model_file, tool_mm,
 //!   sets })` implements the CLI's `--robot | --model`, `--tool-mm`, `--set NAME=VALUE`
 //!   ([`parse_set`]).
@@ -53,8 +54,9 @@
 //! # Physics beyond the chain
 //! [`dynamics`] (joint moments in motion by recursive Newton-Euler, [`rnea`]; along a logged
 //! joint trajectory: [`motion`], with the model's
-//! link masses), [`gravity`] (gravity torque about each joint axis, for compliance; the UR5's
-//! published masses), [`transmission`] (gear-ratio, coupling and hysteresis terms on the joint
+//! link masses), [`gravity`] (gravity torque about each joint axis, for compliance: the axis
+//! components of the static moments), [`time_terms`] (thermal growth and drifts in the pose
+//! time), [`transmission`] (gear-ratio, coupling and hysteresis terms on the joint
 //! angles, and the direction of approach from the pose order), [`ik`] (inverse kinematics of
 //! the 5-DOF Katana on any model's FK).
 //!
@@ -77,6 +79,7 @@ mod presets;
 pub mod ranges;
 pub mod rnea;
 mod tilt;
+pub mod time_terms;
 pub mod toml_file;
 pub mod transmission;
 

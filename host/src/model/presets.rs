@@ -104,8 +104,25 @@ pub fn ur5() -> Result<Model, ModelError> {
             None,
         )?;
     }
+    // DH row i is Rz Tz Tx Rx: DH frame i is 3 elements past the joint's element
+    for (j, (kg, com)) in UR5_LINK_MASS_KG.iter().zip(UR5_LINK_COM_MM).enumerate() {
+        b.mass(j + 1, 3, *kg, com)?;
+    }
     b.build()
 }
+
+/// UR5 (CB3) link masses, kg, published by Universal Robots ("Parameters for calculations of
+/// kinematics and dynamics", support article 45257).
+pub const UR5_LINK_MASS_KG: [f64; 6] = [3.7, 8.393, 2.33, 1.219, 1.219, 0.1879];
+/// UR5 (CB3) centres of mass in DH frame i (after row i), mm (same source).
+pub const UR5_LINK_COM_MM: [[f64; 3]; 6] = [
+    [0.0, -25.61, 1.93],
+    [212.5, 0.0, 113.36],
+    [150.0, 0.0, 26.5],
+    [0.0, -1.8, 16.34],
+    [0.0, 1.8, 16.34],
+    [0.0, 0.0, -1.159],
+];
 
 /// A preset by name: `katana450` (with `tool_mm`, default 200) or `ur5` (`tool_mm` ignored).
 pub fn preset(name: &str, tool_mm: Option<f64>) -> Result<Model, ModelError> {

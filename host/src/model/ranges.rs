@@ -14,6 +14,9 @@
 //! | `joint_coupling` (deg/deg) | +-10 |
 //! | `hysteresis_deg` | +-360 |
 //! | `compliance_deg_per_kgfm` | +-1000 |
+//! | `thermal_ppm` | +-1e5 (10 %) |
+//! | `thermal_tau_min` | (0, 1e6] |
+//! | `drift_mm_per_h`, `joint_drift_deg_per_h` | +-100 m/h, +-10 000 deg/h |
 
 use super::chain::Model;
 use super::param::Unit;
@@ -31,6 +34,11 @@ pub const MAX_COUPLING: f64 = 10.0;
 pub const MAX_HYSTERESIS_DEG: f64 = 360.0;
 /// Largest compliance, deg per kgf.m.
 pub const MAX_COMPLIANCE: f64 = 1e3;
+
+/// Largest thermal growth, ppm.
+pub const MAX_THERMAL_PPM: f64 = 1e5;
+/// Largest thermal time constant, min.
+pub const MAX_THERMAL_TAU_MIN: f64 = 1e6;
 
 /// The limit of a parameter of unit `unit`.
 pub fn unit_limit(unit: Unit) -> f64 {
@@ -105,6 +113,29 @@ impl Model {
                     MAX_COUPLING,
                 )?;
             }
+        }
+        let time = &self.time_terms;
+        within("[time] thermal_ppm", time.thermal_ppm, MAX_THERMAL_PPM)?;
+        within(
+            "[time] thermal_tau_min",
+            time.thermal_tau_min,
+            MAX_THERMAL_TAU_MIN,
+        )?;
+        if time.thermal_tau_min <= 0.0 {
+            return Err(format!(
+                "[time] thermal_tau_min = {}: must be > 0",
+                crate::io::ranges::show(time.thermal_tau_min)
+            ));
+        }
+        for v in time.drift_mm_per_h.iter() {
+            within("[time] drift_mm_per_h", *v, MAX_POSITION_MM)?;
+        }
+        for (j, v) in time.joint_drift_deg_per_h.iter().enumerate() {
+            within(
+                &format!("[time] joint_drift_deg_per_h j{}", j + 1),
+                *v,
+                MAX_ANGLE_DEG,
+            )?;
         }
         Ok(())
     }

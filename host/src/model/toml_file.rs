@@ -53,6 +53,12 @@
 //! kg = 1.03
 //! com_mm = [100.0, 0.0, 0.0]
 //!
+//! [time]                          # terms of the pose time t (optional; FORMATS.md effects)
+//! thermal_ppm = 120.0             # thermal: every length x (1 + s 1e-6 (1 - exp(-t / tau)))
+//! thermal_tau_min = 25.0          #   (tau in min, > 0)
+//! drift_mm_per_h = [0.0, 0.0, 0.05]               # time_drift: measured position += v t
+//! joint_drift_deg_per_h = [0.0, 0.01, 0.0, 0.0, 0.0]  # time_drift:j<i>: offsets += r t
+//!
 //! [params]                        # overrides of any parameter, by name (deg / mm / kg / ppm)
 //! tool_dz = 12.5
 //! dth2 = 0.03
@@ -69,7 +75,7 @@
 //! ([`super::transmission::JointTerms`]): `q_eff_i = q_i + s_i q_i + sum_k c_ik q_k + b_i d_i +
 //! g_i tau_i(q)`, `d_i` the direction in which joint i last moved (file order, or `t`), `tau_i`
 //! the gravity torque of the link masses (kgf.m). `compliance_deg_per_kgfm` needs masses
-//! (`[[mass]]` rows, or the `ur5` name with 6 DH joints, whose published masses are used).
+//! (`[[mass]]` rows; the `ur5` preset writes its published masses as such rows).
 
 use serde::Deserialize;
 use std::collections::BTreeMap;
@@ -80,6 +86,7 @@ use super::chain::{Axis, GammaLaw, Model, ModelBuilder, Motion, TiltValues};
 use super::error::ModelError;
 use super::gravity::GravityModel;
 use super::param::ParamKind;
+use super::time_terms::TimeTerms;
 use super::transmission::JointTerms;
 
 #[derive(Debug, Deserialize)]
@@ -95,6 +102,17 @@ struct ModelFile {
     mass: Vec<MassEntry>,
     #[serde(default)]
     params: BTreeMap<String, f64>,
+    #[serde(default)]
+    time: Option<TimeEntry>,
+}
+
+#[derive(Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+struct TimeEntry {
+    thermal_ppm: Option<f64>,
+    thermal_tau_min: Option<f64>,
+    drift_mm_per_h: Option<[f64; 3]>,
+    joint_drift_deg_per_h: Option<Vec<f64>>,
 }
 
 #[derive(Debug, Deserialize)]
@@ -329,6 +347,9 @@ fn build(file: ModelFile) -> Result<Model, String> {
     if terms.is_active() {
         model.set_transmission(terms);
     }
+    if let Some(t) = &file.time {
+        model.set_time_terms(time_terms(t, model.n_joints())?);
+    }
     model.check_ranges()?;
     Ok(model)
 }
@@ -361,6 +382,46 @@ fn joint_terms(joints: &[JointEntry]) -> Result<JointTerms, String> {
                     ))
                 })?;
             t.coupling[i][k - 1] = finite(Some(c), "joint_coupling")?;
+        }
+    }
+    Ok(t)
+}
+
+/// The `[time]` table (FORMATS.md `thermal`, `time_drift`, `time_drift:j<i>`).
+fn time_terms(e: &TimeEntry, n_joints: usize) -> Result<TimeTerms, String> {
+    let mut t = TimeTerms::zeros(n_joints);
+    let finite = |v: f64, key: &str| -> Result<f64, String> {
+        if v.is_finite() {
+            Ok(v)
+        } else {
+            Err(format!("[time] `{key}` = {v} is not finite"))
+        }
+    };
+    if let Some(v) = e.thermal_ppm {
+        t.thermal_ppm = finite(v, "thermal_ppm")?;
+    }
+    if let Some(v) = e.thermal_tau_min {
+        if !(finite(v, "thermal_tau_min")? > 0.0) {
+            return Err(format!(
+                "[time] thermal_tau_min = {v}: a time constant must be > 0 min"
+            ));
+        }
+        t.thermal_tau_min = v;
+    }
+    if let Some(d) = e.drift_mm_per_h {
+        for (k, v) in d.iter().enumerate() {
+            t.drift_mm_per_h[k] = finite(*v, "drift_mm_per_h")?;
+        }
+    }
+    if let Some(r) = &e.joint_drift_deg_per_h {
+        if r.len() != n_joints {
+            return Err(format!(
+                "[time] joint_drift_deg_per_h has {} values for {n_joints} joints",
+                r.len()
+            ));
+        }
+        for (j, v) in r.iter().enumerate() {
+            t.joint_drift_deg_per_h[j] = finite(*v, "joint_drift_deg_per_h")?;
         }
     }
     Ok(t)
@@ -499,6 +560,24 @@ impl Model {
                 fmt_f64(c.y),
                 fmt_f64(c.z)
             );
+        }
+        let time = &self.time_terms;
+        if time.is_active() {
+            let list = |v: &[f64]| v.iter().map(|x| fmt_f64(*x)).collect::<Vec<_>>().join(", ");
+            let _ = writeln!(
+                s,
+                "\n[time]\nthermal_ppm = {}\nthermal_tau_min = {}\ndrift_mm_per_h = [{}]",
+                fmt_f64(time.thermal_ppm),
+                fmt_f64(time.thermal_tau_min),
+                list(time.drift_mm_per_h.as_slice())
+            );
+            if time.joint_drift_deg_per_h.iter().any(|r| *r != 0.0) {
+                let _ = writeln!(
+                    s,
+                    "joint_drift_deg_per_h = [{}]",
+                    list(&time.joint_drift_deg_per_h)
+                );
+            }
         }
         let _ = writeln!(s, "\n[params]");
         let extra = |k: ParamKind| {

@@ -5,7 +5,9 @@
 //! that `fk` and `calibrate` apply them.
 
 use super::gravity::GravityModel;
+use super::time_terms::TimeTerms;
 use super::{Model, ModelError};
+use nalgebra::Vector3;
 
 /// Joint-motion threshold (deg, or mm for a prismatic joint) below which a joint did not move
 /// between two poses.
@@ -222,13 +224,6 @@ impl JointTerms {
         q_deg: &[f64],
         approach: &[f64],
     ) -> Result<Vec<f64>, ModelError> {
-        let trans = transmission_increments(
-            q_deg,
-            approach,
-            &self.scale,
-            &self.coupling,
-            &self.hysteresis_deg,
-        );
         let tau = match self
             .has_compliance()
             .then(|| GravityModel::for_model(model))
@@ -237,13 +232,26 @@ impl JointTerms {
             Some(g) => g.axis_torques_kgfm(model, q_deg)?,
             None => Vec::new(),
         };
-        Ok(q_deg
+        Ok(self.apply(q_deg, approach, &tau))
+    }
+
+    /// The joint map with the gravity torques about the axes given (`tau_kgfm`, kgf.m; empty:
+    /// no compliance term): `q_eff_i = q_i + s_i q_i + sum_k c_ik q_k + b_i d_i + g_i tau_i`.
+    pub fn apply(&self, q_deg: &[f64], approach: &[f64], tau_kgfm: &[f64]) -> Vec<f64> {
+        let trans = transmission_increments(
+            q_deg,
+            approach,
+            &self.scale,
+            &self.coupling,
+            &self.hysteresis_deg,
+        );
+        q_deg
             .iter()
             .enumerate()
             .map(|(j, q)| {
-                q + trans[j] + compliance_deflection_deg(&self.compliance_deg_per_kgfm, &tau, j)
+                q + trans[j] + compliance_deflection_deg(&self.compliance_deg_per_kgfm, tau_kgfm, j)
             })
-            .collect())
+            .collect()
     }
 }
 
@@ -253,21 +261,89 @@ impl Model {
         &self.transmission
     }
 
+    /// The transmission terms, to change them in place.
+    pub fn transmission_mut(&mut self) -> &mut JointTerms {
+        &mut self.transmission
+    }
+
     /// Replaces the transmission terms.
     pub fn set_transmission(&mut self, terms: JointTerms) {
         self.transmission = terms;
     }
 
+    /// The terms that depend on the pose time (model file `[time]`).
+    pub fn time_terms(&self) -> &TimeTerms {
+        &self.time_terms
+    }
+
+    /// The time terms, to change them in place.
+    pub fn time_terms_mut(&mut self) -> &mut TimeTerms {
+        &mut self.time_terms
+    }
+
+    /// Replaces the time terms.
+    pub fn set_time_terms(&mut self, terms: TimeTerms) {
+        self.time_terms = terms;
+    }
+
+    /// Whether the readings are mapped before the chain (transmission terms or joint drifts).
+    pub fn maps_joints(&self) -> bool {
+        self.transmission.is_active()
+            || self
+                .time_terms
+                .joint_drift_deg_per_h
+                .iter()
+                .any(|r| *r != 0.0)
+    }
+
+    /// The one joint map of the model: the angles the joints take for the readings `q_deg` at
+    /// pose time `t_s`, with the directions of approach `approach` and the gravity torques
+    /// `tau_kgfm` (empty: no compliance term), i.e. [`JointTerms::apply`] plus the joint-offset
+    /// drifts of [`TimeTerms`].
+    pub fn joint_map(
+        &self,
+        q_deg: &[f64],
+        t_s: f64,
+        approach: &[f64],
+        tau_kgfm: &[f64],
+    ) -> Vec<f64> {
+        let mut q = self.transmission.apply(q_deg, approach, tau_kgfm);
+        for (j, v) in q.iter_mut().enumerate() {
+            *v += self.time_terms.joint_drift_deg(j, t_s);
+        }
+        q
+    }
+
+    /// [`Model::joint_map`] of one pose, with the gravity torques of the model's masses when it
+    /// has compliance terms.
+    pub fn effective_joints_at(
+        &self,
+        q_deg: &[f64],
+        t_s: f64,
+        approach: &[f64],
+    ) -> Result<Vec<f64>, ModelError> {
+        let tau = match self
+            .transmission
+            .has_compliance()
+            .then(|| GravityModel::for_model(self))
+            .flatten()
+        {
+            Some(g) => g.axis_torques_kgfm(self, q_deg)?,
+            None => Vec::new(),
+        };
+        Ok(self.joint_map(q_deg, t_s, approach, &tau))
+    }
+
     /// The angles fed to the chain for a sequence of joint readings (one vector per pose, in
     /// file order; `t_s` the pose times when the file has them): the readings mapped through
-    /// [`Model::transmission`], the direction of approach taken from the pose order (FORMATS.md
+    /// [`Model::joint_map`], the direction of approach taken from the pose order (FORMATS.md
     /// "Pose order"; the first pose has no history). Without terms, the readings themselves.
     pub fn effective_pose_joints(
         &self,
         q_deg: &[Vec<f64>],
         t_s: Option<&[f64]>,
     ) -> Result<Vec<Vec<f64>>, ModelError> {
-        if !self.transmission.is_active() {
+        if !self.maps_joints() {
             return Ok(q_deg.to_vec());
         }
         let approach = if self.transmission.uses_pose_order() {
@@ -275,13 +351,44 @@ impl Model {
         } else {
             Vec::new()
         };
+        let gravity = self
+            .transmission
+            .has_compliance()
+            .then(|| GravityModel::for_model(self))
+            .flatten();
         q_deg
             .iter()
             .enumerate()
             .map(|(k, q)| {
                 let a = approach.get(k).map_or(&[][..], Vec::as_slice);
-                self.transmission.effective_joints(self, q, a)
+                let tau = match &gravity {
+                    Some(g) => g.axis_torques_kgfm(self, q)?,
+                    None => Vec::new(),
+                };
+                let t = t_s.and_then(|t| t.get(k)).copied().unwrap_or(0.0);
+                Ok(self.joint_map(q, t, a, &tau))
             })
             .collect()
+    }
+
+    /// The chain's position whose measurement at `t_s` is `measured_mm` (the inverse of
+    /// [`Model::measured_mm`]).
+    pub fn chain_mm_for(&self, measured_mm: &Vector3<f64>, t_s: f64) -> Vector3<f64> {
+        if self.time_terms.is_active() {
+            let t = &self.time_terms;
+            (measured_mm - t.drift_mm(t_s)) / (1.0 + t.thermal_ppm * 1e-6 * t.warm_up(t_s))
+        } else {
+            *measured_mm
+        }
+    }
+
+    /// The position a measurement gives of the chain's position `chain_mm` at pose time `t_s`
+    /// ([`TimeTerms::measured_mm`]; the chain's own position without time terms).
+    pub fn measured_mm(&self, chain_mm: &Vector3<f64>, t_s: f64) -> Vector3<f64> {
+        if self.time_terms.is_active() {
+            self.time_terms.measured_mm(chain_mm, t_s)
+        } else {
+            *chain_mm
+        }
     }
 }

@@ -14,13 +14,17 @@
 //! | `stiffness:j<i>` | delta kgf.m/deg | **added** to the declared `stiffness_j<i>` (the result must stay > 0) |
 //! | `backlash:j<i>` `clearance:j<i>` | delta deg | **added** to the declared `backlash_j<i>` / `clearance_j<i>` |
 //! | `time_drift` | `vx,vy,vz` mm per hour (one value `v` means `0,0,v`) | measured position += v t / 3600 (a thermal drift of the instrument or base, linear in the pose time `t`) |
-//! | `time_drift:j<i>` | deg per hour | joint i's offset grows by rate x t / 3600 (thermal drift of the encoder zero) |
+//! | `time_drift:j<i>` | deg per hour | joint i's angle grows by rate x t / 3600 (thermal drift of the encoder zero) |
+//! | `thermal` | `s,tau` (ppm, min) | warm-up: every length from the origin of R to the tool point x `1 + s 1e-6 (1 - exp(-t / tau))` |
 //! | `joint_scale:j<i>` | `s` (dimensionless) | transmission-ratio error: joint i turns `(1 + s) q_i` |
 //! | `joint_coupling:j<i>:j<k>` | `c` deg/deg | joint i's angle += `c q_k` |
 //! | `hysteresis:j<i>` | `b` deg | joint i's angle += `b` when it last moved up before the pose, `- b` when down, 0 before its first move (pose order of each file, FORMATS.md) |
 //! | `compliance:j<i>` | deg per kgf.m | joint i's angle += value x the gravity torque about its axis (link masses of the model, [`crate::model::gravity`]) |
 //!
-//! Deltas (not absolute values) are used throughout so that an effect's VALUE is its size.
+//! Deltas (not absolute values) are used throughout so that an effect's VALUE is its size. The
+//! joint terms and the time terms are carried by the truth model itself
+//! ([`crate::model::transmission::JointTerms`], [`crate::model::time_terms::TimeTerms`]), so
+//! `truth.toml` evaluates to the simulated measurements without noise.
 
 use nalgebra::Vector3;
 
@@ -34,7 +38,7 @@ pub enum EffectError {
     #[error("effect `{0}`: expected ID=VALUE")]
     Syntax(String),
     /// An effect id this simulator does not know.
-    #[error("unknown effect id `{id}`; known: link_length:a2|a3|d4|d5, encoder_harmonic:j<i>:h<n>, tool_offset, base_offset, base_tilt, payload, scale, stiffness:j<i>, backlash:j<i>, clearance:j<i>, time_drift, time_drift:j<i>, joint_scale:j<i>, joint_coupling:j<i>:j<k>, hysteresis:j<i>, compliance:j<i>")]
+    #[error("unknown effect id `{id}`; known: link_length:a2|a3|d4|d5, encoder_harmonic:j<i>:h<n>, tool_offset, base_offset, base_tilt, payload, scale, stiffness:j<i>, backlash:j<i>, clearance:j<i>, time_drift, time_drift:j<i>, thermal, joint_scale:j<i>, joint_coupling:j<i>:j<k>, hysteresis:j<i>, compliance:j<i>")]
     UnknownId { id: String },
     /// A value that is not a finite number, or the wrong number of values.
     #[error("effect `{id}`: value `{value}`: {reason}")]
@@ -69,6 +73,8 @@ pub enum EffectKind {
     JointDrift(usize, f64),
     /// A term on the joint angles before the chain (transmission, hysteresis, compliance).
     Joint(JointTerm),
+    /// Warm-up growth: ppm at saturation, time constant in min.
+    Thermal { ppm: f64, tau_min: f64 },
 }
 
 /// A joint-angle term of the truth, 0-based joint indices.
@@ -228,6 +234,20 @@ pub fn parse_effect(arg: &str) -> Result<Effect, EffectError> {
             expect_count(id, raw, &values, &[1])?;
             EffectKind::Joint(JointTerm::Compliance(joint_index(id, j)? - 1, values[0]))
         }
+        ["thermal"] => {
+            expect_count(id, raw, &values, &[2])?;
+            if !(values[1] > 0.0) {
+                return Err(EffectError::BadValue {
+                    id: id.into(),
+                    value: raw.into(),
+                    reason: "the time constant (second value, min) must be > 0".into(),
+                });
+            }
+            EffectKind::Thermal {
+                ppm: values[0],
+                tau_min: values[1],
+            }
+        }
         ["time_drift", j] => {
             let ji = joint_index(id, j)?;
             expect_count(id, raw, &values, &[1])?;
@@ -256,6 +276,16 @@ fn effect_in_range(id: &str, raw: &str, kind: &EffectKind) -> Result<(), EffectE
         EffectKind::Joint(JointTerm::Coupling(_, _, v)) => (vec![*v], r::MAX_COUPLING),
         EffectKind::Joint(JointTerm::Hysteresis(_, v)) => (vec![*v], r::MAX_HYSTERESIS_DEG),
         EffectKind::Joint(JointTerm::Compliance(_, v)) => (vec![*v], r::MAX_COMPLIANCE),
+        EffectKind::Thermal { ppm, tau_min } => {
+            if *tau_min > r::MAX_THERMAL_TAU_MIN {
+                return Err(EffectError::BadValue {
+                    id: id.into(),
+                    value: raw.into(),
+                    reason: format!("tau {tau_min} min is beyond {} min", r::MAX_THERMAL_TAU_MIN),
+                });
+            }
+            (vec![*ppm], r::MAX_THERMAL_PPM)
+        }
     };
     match values.iter().find(|v| !(v.is_finite() && v.abs() <= limit)) {
         Some(v) => Err(EffectError::BadValue {
@@ -271,8 +301,8 @@ fn effect_in_range(id: &str, raw: &str, kind: &EffectKind) -> Result<(), EffectE
 }
 
 impl Effect {
-    /// Adds this effect's parameter deltas to `model` (drifts are applied per pose, see
-    /// [`TimeEffects`]). Checks that a joint-drift joint exists.
+    /// Adds this effect to `model`: parameter deltas, joint terms, time terms. Checks that the
+    /// joints it names exist.
     pub fn apply(&self, model: &mut Model) -> Result<(), EffectError> {
         let err = |source| EffectError::Model {
             id: self.id.clone(),
@@ -291,7 +321,16 @@ impl Effect {
                 }
                 Ok(())
             }
-            EffectKind::PositionDrift(_) => Ok(()),
+            EffectKind::PositionDrift(v) => {
+                model.time_terms_mut().drift_mm_per_h += v;
+                Ok(())
+            }
+            EffectKind::Thermal { ppm, tau_min } => {
+                let t = model.time_terms_mut();
+                t.thermal_ppm = *ppm;
+                t.thermal_tau_min = *tau_min;
+                Ok(())
+            }
             EffectKind::Joint(term) => {
                 for j in term.joints() {
                     if j >= model.n_joints() {
@@ -311,93 +350,33 @@ impl Effect {
                             .into(),
                     });
                 }
+                let n = model.n_joints();
+                let mut terms = model.transmission().clone();
+                if terms.scale.len() != n {
+                    terms = JointTerms::zeros(n);
+                }
+                match *term {
+                    JointTerm::Scale(j, v) => terms.scale[j] += v,
+                    JointTerm::Coupling(i, k, v) => terms.coupling[i][k] += v,
+                    JointTerm::Hysteresis(j, v) => terms.hysteresis_deg[j] += v,
+                    JointTerm::Compliance(j, v) => terms.compliance_deg_per_kgfm[j] += v,
+                }
+                model.set_transmission(terms);
                 Ok(())
             }
-            EffectKind::JointDrift(j, _) => {
-                if *j >= model.n_joints() {
+            EffectKind::JointDrift(j, rate) => {
+                let n = model.n_joints();
+                if *j >= n {
                     return Err(err(ModelError::JointIndex {
                         index: *j,
-                        count: model.n_joints(),
+                        count: n,
                     }));
                 }
+                let rates = &mut model.time_terms_mut().joint_drift_deg_per_h;
+                rates.resize(n, 0.0);
+                rates[*j] += rate;
                 Ok(())
             }
         }
     }
-}
-
-/// The time-dependent effects, applied pose by pose.
-#[derive(Debug, Clone, Default, PartialEq)]
-pub struct TimeEffects {
-    /// Position drift, mm per hour in R.
-    pub position_mm_per_h: Vector3<f64>,
-    /// Joint offset drift per joint, deg per hour.
-    pub joint_deg_per_h: Vec<f64>,
-}
-
-impl TimeEffects {
-    /// Collects the drifts of `effects` for a model with `n_joints` joints.
-    pub fn from_effects(effects: &[Effect], n_joints: usize) -> Self {
-        let mut out = Self {
-            position_mm_per_h: Vector3::zeros(),
-            joint_deg_per_h: vec![0.0; n_joints],
-        };
-        for e in effects {
-            match e.kind {
-                EffectKind::PositionDrift(v) => out.position_mm_per_h += v,
-                EffectKind::JointDrift(j, r) if j < n_joints => out.joint_deg_per_h[j] += r,
-                _ => {}
-            }
-        }
-        out
-    }
-
-    /// Whether any joint drifts.
-    pub fn has_joint_drift(&self) -> bool {
-        self.joint_deg_per_h.iter().any(|r| *r != 0.0)
-    }
-
-    /// `model` with the joint offsets drifted to time `t_s`.
-    pub fn drifted_model(&self, model: &Model, t_s: f64) -> Result<Model, ModelError> {
-        let mut m = model.clone();
-        for (j, rate) in self.joint_deg_per_h.iter().enumerate() {
-            if *rate != 0.0 {
-                let k = m.elems()[m.joints()[j].elem].param;
-                let v = m.params()[k].value;
-                m.set_param_at(k, v + rate * t_s / 3600.0)?;
-            }
-        }
-        Ok(m)
-    }
-
-    /// Position drift at time `t_s`, mm in R.
-    pub fn position_offset_mm(&self, t_s: f64) -> Vector3<f64> {
-        self.position_mm_per_h * (t_s / 3600.0)
-    }
-}
-
-/// The joint-angle terms of the truth, applied pose by pose: the model's own
-/// [`JointTerms`] (one struct and one law for the simulator, the model files and `diagnose`;
-/// [`JointTerms::effective_joints`] gives the angles the joints really take).
-pub type JointEffects = JointTerms;
-
-/// Collects the joint terms of `effects` for `n_joints` joints (terms on joints the model does
-/// not have are left out; [`Effect::apply`] refuses them first).
-pub fn joint_terms(effects: &[Effect], n_joints: usize) -> JointTerms {
-    let mut out = JointTerms::zeros(n_joints);
-    for e in effects {
-        let EffectKind::Joint(term) = e.kind else {
-            continue;
-        };
-        if term.joints().iter().any(|&j| j >= n_joints) {
-            continue;
-        }
-        match term {
-            JointTerm::Scale(j, v) => out.scale[j] += v,
-            JointTerm::Coupling(i, k, v) => out.coupling[i][k] += v,
-            JointTerm::Hysteresis(j, v) => out.hysteresis_deg[j] += v,
-            JointTerm::Compliance(j, v) => out.compliance_deg_per_kgfm[j] += v,
-        }
-    }
-    out
 }

@@ -83,7 +83,10 @@ pub fn truth_json(out: &SimOutput, cfg: &SimConfig) -> Value {
         .filter(|(t, d)| t.value != d.value)
         .map(|(t, _)| (t.name.clone(), json!(t.value)))
         .collect();
-    let drift = &out.time_effects;
+    let drift = out.truth.time_terms();
+    let joint_drift: Vec<f64> = (0..out.truth.n_joints())
+        .map(|j| drift.joint_drift_deg_per_h.get(j).copied().unwrap_or(0.0))
+        .collect();
     json!({
         "format": TRUTH_JSON_FORMAT,
         "seed": cfg.seed,
@@ -95,8 +98,8 @@ pub fn truth_json(out: &SimOutput, cfg: &SimConfig) -> Value {
         "geometric_errors": {"distribution": "gaussian", "sigma_deg": cfg.geometric_sigma_deg, "deltas": deltas},
         "effects": effects,
         "time_drift": {
-            "position_mm_per_h": [drift.position_mm_per_h.x, drift.position_mm_per_h.y, drift.position_mm_per_h.z],
-            "joint_deg_per_h": drift.joint_deg_per_h,
+            "position_mm_per_h": [drift.drift_mm_per_h.x, drift.drift_mm_per_h.y, drift.drift_mm_per_h.z],
+            "joint_deg_per_h": joint_drift,
         },
         "truth_parameters": truth_params,
         "cal_poses": out.cal.len(),

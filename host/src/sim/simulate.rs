@@ -25,7 +25,7 @@ use rand::SeedableRng;
 use rand_chacha::ChaCha8Rng;
 use rand_distr::{Distribution, Normal};
 
-use super::effects::{joint_terms, Effect, EffectError, TimeEffects};
+use super::effects::{Effect, EffectError};
 use super::iso9283::{Cube, ISO_POSE_COUNT};
 use super::plan::{iso_calibration_sequence, random_poses, PlanError, PlannedPose};
 use crate::model::ik::ArmGeometry;
@@ -122,12 +122,10 @@ pub struct SimPose {
 pub struct SimOutput {
     /// The declared model.
     pub declared: Model,
-    /// The truth model (without time drifts).
+    /// The truth model: parameters, joint terms and time terms ([`Model::time_terms`]).
     pub truth: Model,
     /// The geometric errors drawn, `(name, delta)`, in draw order.
     pub geometric_errors: Vec<(String, f64)>,
-    /// Time-dependent effects.
-    pub time_effects: TimeEffects,
     /// Whether the truth was evaluated with tilting.
     pub tilt: bool,
     /// Calibration poses (ISO 9283 sequence).
@@ -160,6 +158,9 @@ pub fn geometric_param_names(model: &Model) -> Vec<String> {
         .map(|p| p.name.clone())
         .collect()
 }
+
+/// Longest time between two poses, s (one day).
+const MAX_POSE_INTERVAL_S: f64 = 86_400.0;
 
 /// Builds the truth model: declared + geometric errors + effects.
 pub fn truth_model(
@@ -205,6 +206,15 @@ pub fn simulate(declared: &Model, cfg: &SimConfig) -> Result<SimOutput, SimError
             cfg.noise_mm
         )));
     }
+    if !(cfg.pose_interval_s.is_finite()
+        && cfg.pose_interval_s >= 0.0
+        && cfg.pose_interval_s <= MAX_POSE_INTERVAL_S)
+    {
+        return Err(SimError::Config(format!(
+            "--pose-interval-s {}: must be a finite number in [0, {MAX_POSE_INTERVAL_S}] s",
+            cfg.pose_interval_s
+        )));
+    }
     if !(cfg.geometric_sigma_deg.is_finite()
         && cfg.geometric_sigma_deg >= 0.0
         && cfg.geometric_sigma_deg <= crate::io::ranges::MAX_ANGLE_DEG)
@@ -215,8 +225,6 @@ pub fn simulate(declared: &Model, cfg: &SimConfig) -> Result<SimOutput, SimError
         )));
     }
     let (truth, geometric_errors) = truth_model(declared, cfg)?;
-    let time_effects = TimeEffects::from_effects(&cfg.effects, declared.n_joints());
-    let joint_effects = joint_terms(&cfg.effects, declared.n_joints());
     let tilt = truth.has_tilt();
     let cal_plan: Vec<PlannedPose> = if ArmGeometry::of(declared).is_ok() {
         iso_calibration_sequence(declared, &Cube::thesis_frontal())?
@@ -245,26 +253,18 @@ pub fn simulate(declared: &Model, cfg: &SimConfig) -> Result<SimOutput, SimError
                 .map(|(k, p)| {
                     let t_s = (first_index + k) as f64 * cfg.pose_interval_s;
                     let q = written[k].clone();
-                    let model_t;
-                    let m = if time_effects.has_joint_drift() {
-                        model_t = time_effects.drifted_model(&truth, t_s)?;
-                        &model_t
-                    } else {
-                        &truth
-                    };
-                    let q_true = if joint_effects.is_active() {
-                        joint_effects.effective_joints(m, &q, &approach[k])?
-                    } else {
-                        q.clone()
-                    };
-                    let truth_mm =
-                        m.position_mm(&q_true, if tilt { Tilt::Static } else { Tilt::Off })?;
+                    // the truth carries the joint map and the time terms
+                    let q_true = truth.effective_joints_at(&q, t_s, &approach[k])?;
+                    let chain_mm =
+                        truth.position_mm(&q_true, if tilt { Tilt::Static } else { Tilt::Off })?;
+                    let time = truth.time_terms();
+                    let truth_mm = time.grown_mm(&chain_mm, t_s);
                     let n = Vector3::new(
                         noise.sample(&mut noise_rng),
                         noise.sample(&mut noise_rng),
                         noise.sample(&mut noise_rng),
                     );
-                    let measured_mm = truth_mm + time_effects.position_offset_mm(t_s) + n;
+                    let measured_mm = truth_mm + time.drift_mm(t_s) + n;
                     Ok(SimPose {
                         id: p.id.clone(),
                         q_deg: q,
@@ -281,7 +281,6 @@ pub fn simulate(declared: &Model, cfg: &SimConfig) -> Result<SimOutput, SimError
         declared: declared.clone(),
         truth,
         geometric_errors,
-        time_effects,
         tilt,
         cal,
         val,

@@ -27,7 +27,7 @@ fn run(effects: &[&str], seed: u64) -> Run {
     let floor_mm = out
         .val
         .iter()
-        .map(|p| (p.measured_mm - p.truth_mm - out.time_effects.position_offset_mm(p.t_s)).norm())
+        .map(|p| (p.measured_mm - p.truth_mm - out.truth.time_terms().drift_mm(p.t_s)).norm())
         .sum::<f64>()
         / out.val.len() as f64;
     let diag = diagnose(
