@@ -5,6 +5,7 @@
 pub mod atomic;
 pub mod cdr;
 pub mod files;
+pub mod finite;
 pub mod interrupt;
 pub mod pose_csv;
 pub mod ranges;

@@ -3,6 +3,8 @@
 
 use std::path::PathBuf;
 
+pub mod spawn;
+
 /// `rel` (a file or folder) under the shared directory (`rigctl::shared_dir()`: `$RIG_SHARED_DIR`
 /// or `../shared`), or `None` after a `SKIPPED` message when it is absent. With `CI=true` its
 /// absence fails the test instead: CI runs with `../shared` beside the clone, so a missing file
