@@ -441,3 +441,48 @@ const URDF_INERTIAL: &str = r#"<robot name="two">
     <origin xyz="0.05 0 0.01" rpy="0 0 0.2"/></joint>
 </robot>
 "#;
+
+/// A writer handed a non-finite number refuses the whole file (a failure of the run, exit 1)
+/// and names the value and where it is; nothing is written.
+#[test]
+fn item2_a_non_finite_number_never_reaches_a_written_file() {
+    use rigctl::error::{Classify, ErrorKind};
+    let dir = tempfile::tempdir().unwrap();
+    let csv = dir.path().join("trace.csv");
+    let e = rigctl::trace::write_csv(&csv, &[[1.0, 2.0], [3.0, f64::NAN]]).unwrap_err();
+    assert_eq!(e.kind(), ErrorKind::Failure);
+    let msg = e.to_string();
+    assert!(
+        msg.contains("line 3, column y") && msg.contains("NaN"),
+        "{msg}"
+    );
+    assert!(!csv.exists());
+    rigctl::trace::write_csv(&csv, &[[1.0, 2.0]]).unwrap();
+    let kept = std::fs::read(&csv).unwrap();
+    assert!(rigctl::trace::write_csv(&csv, &[[f64::INFINITY, 2.0]]).is_err());
+    assert_eq!(
+        std::fs::read(&csv).unwrap(),
+        kept,
+        "the old file was replaced"
+    );
+    use rigctl::io::finite::TextFormat;
+    for (format, name, text) in [
+        (
+            TextFormat::Toml,
+            "m.toml",
+            "name = \"m\"\n[params]\ntool_dz = nan\n",
+        ),
+        (
+            TextFormat::Xml,
+            "u.urdf",
+            "<robot name=\"r\"><joint name=\"j\"><origin xyz=\"0 inf 0\"/></joint></robot>",
+        ),
+        (TextFormat::Csv, "p.csv", "q1,x\n1,-inf\n"),
+    ] {
+        let path = dir.path().join(name);
+        let e = rigctl::io::atomic::write_text_atomic(&path, format, text).unwrap_err();
+        assert_eq!(e.kind(), ErrorKind::Failure, "{name}");
+        assert!(e.to_string().contains(name), "{e}");
+        assert!(!path.exists(), "{name}");
+    }
+}
