@@ -6,21 +6,9 @@ use criterion::{criterion_group, criterion_main, Criterion};
 use rigctl::io::table::Table;
 use rigctl::urdf::{import_chain_with_masses, ImportOptions, Urdf};
 
-/// A chain of `n` revolute joints, each link with a mass.
-fn long_urdf(n: usize) -> String {
-    let mut s = String::from("<robot name=\"long\">\n<link name=\"l0\"/>\n");
-    for k in 1..=n {
-        s.push_str(&format!(
-            "<link name=\"l{k}\"><inertial><mass value=\"0.1\"/><origin xyz=\"0.01 0 0\"/></inertial></link>\n\
-             <joint name=\"j{k}\" type=\"revolute\"><parent link=\"l{}\"/><child link=\"l{k}\"/>\
-             <origin xyz=\"0.001 0 0.001\" rpy=\"0 0.1 0\"/><axis xyz=\"0 0 1\"/>\
-             <limit lower=\"-1\" upper=\"1\"/></joint>\n",
-            k - 1
-        ));
-    }
-    s.push_str("</robot>\n");
-    s
-}
+#[path = "../tests/integration/common/long_urdf.rs"]
+mod long_urdf;
+use long_urdf::long_urdf;
 
 fn bench(c: &mut Criterion) {
     let mut g = c.benchmark_group("csv_header");

@@ -158,35 +158,33 @@ mod tests {
         .is_ok());
     }
 
+    /// Each text holds one non-finite number: where it is reported and as what.
     #[test]
-    fn a_csv_nan_is_named_with_its_line_and_column() {
-        let e = check_text(TextFormat::Csv, "# c\nid,x_mm\n1,2\n2,NaN\n").unwrap_err();
-        assert_eq!(e.location, "line 4, column x_mm");
-        assert_eq!(e.value, "NaN");
-        let e = check_text(TextFormat::Csv, "a\n1,-inf\n").unwrap_err();
-        assert_eq!(e.location, "line 2, column 2");
-    }
-
-    #[test]
-    fn a_toml_infinity_is_named_with_its_key() {
-        let e = check_text(
-            TextFormat::Toml,
-            "name = \"m\"\n[[chain]]\nvalue = 1.0\n[[chain]]\nvalue = inf\n",
-        )
-        .unwrap_err();
-        assert_eq!(e.location, "key chain[1].value");
-        let e = check_text(TextFormat::Toml, "[params]\nx = nan\n").unwrap_err();
-        assert_eq!(e.location, "key params.x");
-    }
-
-    #[test]
-    fn a_urdf_nan_is_named_with_its_element() {
-        let e = check_text(
-            TextFormat::Xml,
-            "<robot name=\"r\">\n<joint name=\"j2\">\n<origin xyz=\"0 NaN 0\"/></joint></robot>",
-        )
-        .unwrap_err();
-        assert_eq!(e.location, "line 3, <origin xyz> of `j2`");
-        assert_eq!(e.value, "NaN");
+    fn a_non_finite_number_is_named_with_its_place() {
+        let cases = [
+            (TextFormat::Csv, "# c\nid,x_mm\n1,2\n2,NaN\n", "line 4, column x_mm", "NaN"),
+            (TextFormat::Csv, "a\n1,-inf\n", "line 2, column 2", "-inf"),
+            (
+                TextFormat::Toml,
+                "name = \"m\"\n[[chain]]\nvalue = 1.0\n[[chain]]\nvalue = inf\n",
+                "key chain[1].value",
+                "inf",
+            ),
+            (TextFormat::Toml, "[params]\nx = nan\n", "key params.x", "NaN"),
+            (
+                TextFormat::Xml,
+                "<robot name=\"r\">\n<joint name=\"j2\">\n<origin xyz=\"0 NaN 0\"/></joint></robot>",
+                "line 3, <origin xyz> of `j2`",
+                "NaN",
+            ),
+        ];
+        for (format, text, location, value) in cases {
+            let e = check_text(format, text).unwrap_err();
+            assert_eq!(
+                (e.location.as_str(), e.value.as_str()),
+                (location, value),
+                "{text}"
+            );
+        }
     }
 }

@@ -203,26 +203,10 @@ fn origin_xml(o: &Origin) -> String {
     )
 }
 
-/// `s` as an XML attribute value or text: the markup characters as entities, and the blanks an
-/// attribute would normalise to spaces (newline, carriage return, tab) as character references,
-/// so that a parser reads back `s` itself. The other control characters cannot appear in XML 1.0,
-/// even as references: each becomes U+FFFD.
+/// `s` as an XML attribute value or text that a parser reads back as `s`
+/// ([`crate::io::markup::Blanks::References`]).
 fn xml_escape(s: &str) -> String {
-    let mut out = String::with_capacity(s.len());
-    for c in s.chars() {
-        match c {
-            '&' => out.push_str("&amp;"),
-            '<' => out.push_str("&lt;"),
-            '>' => out.push_str("&gt;"),
-            '"' => out.push_str("&quot;"),
-            '\n' => out.push_str("&#10;"),
-            '\r' => out.push_str("&#13;"),
-            '\t' => out.push_str("&#9;"),
-            c if c.is_control() => out.push('\u{FFFD}'),
-            c => out.push(c),
-        }
-    }
-    out
+    crate::io::markup::escape(s, crate::io::markup::Blanks::References)
 }
 
 /// The model's joint names, or `joint_1..joint_N`.

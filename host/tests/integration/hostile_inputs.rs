@@ -8,6 +8,7 @@ use std::time::{Duration, Instant};
 
 use rand::{Rng, SeedableRng};
 
+use super::common::long_urdf::long_urdf;
 use super::common::spawn::{bin, os, rig, run_for, Run};
 use super::reliability_values::{model_text, JOINTS_CSV, MODEL_DEFAULTS};
 
@@ -220,21 +221,6 @@ fn item5_a_header_of_200k_columns_is_checked_in_linear_time() {
     let r = rig!(60; "fk", "--joints", f);
     assert_eq!(r.code, Some(0), "{}", r.show());
     assert!(t.elapsed() < Duration::from_secs(20), "{:?}", t.elapsed());
-}
-
-fn long_urdf(n: usize) -> String {
-    let mut s = String::from("<robot name=\"long\">\n<link name=\"l0\"/>\n");
-    for k in 1..=n {
-        s.push_str(&format!(
-            "<link name=\"l{k}\"><inertial><mass value=\"0.1\"/><origin xyz=\"0.01 0 0\"/></inertial></link>\n\
-             <joint name=\"j{k}\" type=\"revolute\"><parent link=\"l{}\"/><child link=\"l{k}\"/>\
-             <origin xyz=\"0.001 0 0.001\" rpy=\"0 0.1 0\"/><axis xyz=\"0 0 1\"/>\
-             <limit lower=\"-1\" upper=\"1\"/></joint>\n",
-            k - 1
-        ));
-    }
-    s.push_str("</robot>\n");
-    s
 }
 
 #[test]

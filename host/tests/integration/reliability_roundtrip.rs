@@ -6,7 +6,7 @@ use std::path::Path;
 
 use rand::{Rng, SeedableRng};
 use rigctl::model::{Model, Tilt};
-use rigctl::urdf::{import_chain, model_to_urdf, ImportOptions, Urdf};
+use rigctl::urdf::model_to_urdf;
 
 use super::common::spawn::rig;
 
@@ -66,17 +66,8 @@ fn urdf_joint_names_round_trip() {
             .collect();
         let model = katana_named(&names);
         let text = model_to_urdf(&model).text;
-        let urdf = Urdf::parse(&text, "written.urdf")
+        let back = super::common::import_to(&text, "tool0")
             .unwrap_or_else(|e| panic!("case {case} {names:?}: {e}\n{text}"));
-        let back = import_chain(
-            &urdf,
-            &ImportOptions {
-                base_link: None,
-                tip_link: "tool0",
-                tool_mm: [0.0; 3],
-            },
-        )
-        .unwrap_or_else(|e| panic!("case {case} {names:?}: {e}"));
         assert_eq!(back.joint_names, names, "case {case}");
         same_fk(&model, &back.model, &format!("case {case}"));
     }

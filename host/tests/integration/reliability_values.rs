@@ -9,6 +9,7 @@ use std::time::Duration;
 use rand::{Rng, SeedableRng};
 
 use super::common::spawn::{os, rig, run_for, Run};
+use super::hostile_inputs::URDF;
 
 pub(crate) const MODEL_TEMPLATE: &str = r#"name = "prop"
 [[chain]]
@@ -45,18 +46,8 @@ joint_scale = {16}
 joint_coupling = { j2 = {17} }
 hysteresis_deg = {18}
 compliance_deg_per_kgfm = {19}
-[[joint]]
-min = -170.0
-max = 170.0
-clearance_deg = 0.02
-backlash_deg = 0.06
-stiffness_kgfm_per_deg = 120.0
-[[joint]]
-min = -170.0
-max = 170.0
-clearance_deg = 0.02
-backlash_deg = 0.06
-stiffness_kgfm_per_deg = 120.0
+{plain_joint}
+{plain_joint}
 [[mass]]
 joint = 2
 after = 0
@@ -87,8 +78,16 @@ fn toml_float(v: f64) -> String {
     format!("{v:e}")
 }
 
+/// Joints 2 and 3 of the template.
+const PLAIN_JOINT: &str = "[[joint]]
+min = -170.0
+max = 170.0
+clearance_deg = 0.02
+backlash_deg = 0.06
+stiffness_kgfm_per_deg = 120.0";
+
 pub(crate) fn model_text(values: &[f64; N_FIELDS]) -> String {
-    let mut s = MODEL_TEMPLATE.to_string();
+    let mut s = MODEL_TEMPLATE.replace("{plain_joint}", PLAIN_JOINT);
     for (k, v) in values.iter().enumerate().rev() {
         s = s.replace(&format!("{{{k}}}"), &toml_float(*v));
     }
@@ -379,7 +378,8 @@ fn urdf_numbers(urdf: &str) -> Vec<(usize, usize)> {
 fn item2_property_random_finite_values_in_every_urdf_number() {
     let dir = tempfile::tempdir().unwrap();
     let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(2626);
-    let numbers = urdf_numbers(URDF_INERTIAL);
+    let full = urdf_inertial();
+    let numbers = urdf_numbers(&full);
     assert!(numbers.len() > 30, "{}", numbers.len());
     let out = dir.path().join("out.toml");
     let q = dir.path().join("q.csv");
@@ -394,8 +394,8 @@ fn item2_property_random_finite_values_in_every_urdf_number() {
             rng.gen_range(0..numbers.len())
         }];
         let v = random_finite(&mut rng);
-        let text = format!("{}{v:e}{}", &URDF_INERTIAL[..i], &URDF_INERTIAL[j..]);
-        let what = format!("case {case} ({v:e} for `{}`)", &URDF_INERTIAL[i..j]);
+        let text = format!("{}{v:e}{}", &full[..i], &full[j..]);
+        let what = format!("case {case} ({v:e} for `{}`)", &full[i..j]);
         std::fs::write(&u, &text).unwrap();
         let _ = std::fs::remove_file(&out);
         let r = rig!(30; "urdf2model", "--urdf", u, "--tip", "l2", "--out", out);
@@ -422,25 +422,24 @@ fn item2_property_random_finite_values_in_every_urdf_number() {
     }
 }
 
-/// The two-joint URDF with inertias, limits with effort and velocity, and a fixed tool joint:
-/// every kind of number a URDF holds.
-const URDF_INERTIAL: &str = r#"<robot name="two">
-  <link name="base"/>
-  <link name="l1"><inertial><mass value="2"/><origin xyz="0.1 0 0" rpy="0 0 0"/>
-    <inertia ixx="0.01" ixy="0" ixz="0" iyy="0.02" iyz="0" izz="0.03"/></inertial></link>
-  <link name="l2"><inertial><mass value="1"/><origin xyz="0.1 0 0" rpy="0 0.1 0"/>
-    <inertia ixx="0.004" ixy="0" ixz="0" iyy="0.005" iyz="0" izz="0.006"/></inertial></link>
-  <link name="tip"/>
-  <joint name="j1" type="revolute"><parent link="base"/><child link="l1"/>
-    <origin xyz="0 0 0.2" rpy="0 0 0"/><axis xyz="0 0 1"/>
-    <limit lower="-3" upper="3" effort="10" velocity="1"/></joint>
-  <joint name="j2" type="revolute"><parent link="l1"/><child link="l2"/>
-    <origin xyz="0.3 0 0" rpy="1.5707963 0 0"/><axis xyz="0 0 1"/>
-    <limit lower="-2" upper="2" effort="5" velocity="1"/></joint>
-  <joint name="tool" type="fixed"><parent link="l2"/><child link="tip"/>
-    <origin xyz="0.05 0 0.01" rpy="0 0 0.2"/></joint>
-</robot>
-"#;
+/// The two-joint URDF of the hostile-input tests with inertias, limits with effort and velocity,
+/// a rotated centre of mass and a fixed tool joint: every kind of number a URDF holds.
+fn urdf_inertial() -> String {
+    URDF.replace(
+        "<mass value=\"2\"/><origin xyz=\"0.1 0 0\"/>",
+        "<mass value=\"2\"/><origin xyz=\"0.1 0 0\" rpy=\"0 0.1 0\"/>\
+         <inertia ixx=\"0.01\" ixy=\"0\" ixz=\"0\" iyy=\"0.02\" iyz=\"0\" izz=\"0.03\"/>",
+    )
+    .replace(
+        "<limit lower=\"-2\" upper=\"2\"/>",
+        "<limit lower=\"-2\" upper=\"2\" effort=\"5\" velocity=\"1\"/>",
+    )
+    .replace(
+        "</robot>",
+        "<link name=\"tip\"/><joint name=\"tool\" type=\"fixed\"><parent link=\"l2\"/>\
+         <child link=\"tip\"/><origin xyz=\"0.05 0 0.01\" rpy=\"0 0 0.2\"/></joint></robot>",
+    )
+}
 
 /// A writer handed a non-finite number refuses the whole file (a failure of the run, exit 1)
 /// and names the value and where it is; nothing is written.
