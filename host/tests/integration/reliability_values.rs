@@ -238,16 +238,20 @@ fn assert_sane(r: &Run, what: &str, outputs: &[&Path]) {
     }
 }
 
-/// A random finite value: one of the extremes (1e+-300, 1e+-308, 0, the smallest subnormal) or
-/// a random mantissa with a random exponent in [-300, 300].
+/// A random finite value: one of the extremes (1e+-300, 1e+-308, 0, the smallest subnormal),
+/// a value at or just inside a physical limit of the model ranges (100 m, 10 000 deg, 360 deg,
+/// +-1, 1000, 1e12, 1e6 ppm), or a random mantissa with a random exponent in [-300, 300].
 fn random_finite(rng: &mut rand_chacha::ChaCha8Rng) -> f64 {
     const SPECIALS: [f64; 11] = [
         1e300, -1e300, 1e-300, -1e-300, 1e308, -1e308, 0.0, -0.0, 1e15, -1e15, 5e-324,
     ];
-    if rng.gen_bool(0.5) {
-        SPECIALS[rng.gen_range(0..SPECIALS.len())]
-    } else {
-        rng.gen_range(-10.0..10.0) * 10f64.powi(rng.gen_range(-300..=300))
+    const LIMITS: [f64; 14] = [
+        1e5, -1e5, 99_999.0, 1e4, -1e4, 360.0, -360.0, 1000.0, 1.0, -1.0, 0.9999, 1e12, 1e6, -1e6,
+    ];
+    match rng.gen_range(0..3) {
+        0 => SPECIALS[rng.gen_range(0..SPECIALS.len())],
+        1 => LIMITS[rng.gen_range(0..LIMITS.len())],
+        _ => rng.gen_range(-10.0..10.0) * 10f64.powi(rng.gen_range(-300..=300)),
     }
 }
 
