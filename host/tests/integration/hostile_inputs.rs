@@ -10,7 +10,6 @@ use rand::{Rng, SeedableRng};
 
 use super::common::long_urdf::long_urdf;
 use super::common::spawn::{bin, os, rig, run_for, Run};
-use super::reliability_values::{model_text, JOINTS_CSV, MODEL_DEFAULTS};
 
 fn simulated(dir: &Path) -> PathBuf {
     let out = dir.join("sim");
@@ -126,6 +125,189 @@ fn item9_unusable_output_paths_are_bad_input() {
     let r = rig!(60; "calibrate", "--poses", cal, "--json", dir.path().join("no/such/x.json"));
     assert_eq!(r.code, Some(2), "{}", r.show());
     assert!(r.stderr.contains("does not exist"), "{}", r.show());
+}
+
+// ---------------------------------------------------------------------------------------------
+// 2. Finite extreme values: refused at the edge, never a panic, a hang or NaN with exit 0.
+
+pub(crate) const MODEL_TEMPLATE: &str = r#"name = "prop"
+[[chain]]
+op = "tz"
+name = "mount_z"
+value = {0}
+[[chain]]
+op = "rz"
+joint = 1
+name = "dth1"
+value = {1}
+[[chain]]
+op = "dh"
+joint = 2
+theta = {2}
+d = {3}
+a = {4}
+alpha = {5}
+[[chain]]
+op = "mdh"
+joint = 3
+alpha = {6}
+a = {7}
+beta = {8}
+theta = {9}
+d = {10}
+[[joint]]
+min = {11}
+max = {12}
+clearance_deg = {13}
+backlash_deg = {14}
+stiffness_kgfm_per_deg = {15}
+joint_scale = {16}
+joint_coupling = { j2 = {17} }
+hysteresis_deg = {18}
+compliance_deg_per_kgfm = {19}
+{plain_joint}
+{plain_joint}
+[[mass]]
+joint = 2
+after = 0
+kg = {20}
+com_mm = [{21}, 0.0, 0.0]
+[params]
+tool_dz = {22}
+payload_kg = {23}
+scale_ppm = {24}
+tool_dx = {25}
+base_rx = {26}
+base_z = {27}
+"#;
+
+/// Valid values of the template's fields.
+pub(crate) const MODEL_DEFAULTS: [f64; N_FIELDS] = [
+    200.0, 0.0, 0.0, 0.0, 190.0, 90.0, 0.0, 139.0, 0.0, 0.0, 0.0, -170.0, 170.0, 0.02, 0.06, 120.0,
+    1e-4, 0.002, 0.03, 0.01, 1.5, 100.0, 12.5, 0.5, 10.0, 3.0, 0.01, 1.0,
+];
+
+/// The numbers of the template: chain values (0-10), joint limits (11, 12), tilting (13-15),
+/// transmission terms (16-19), a link mass and its centre (20, 21), tool, payload, scale, base
+/// (22-27).
+pub(crate) const N_FIELDS: usize = 28;
+
+/// `{:e}` gives `1e300`, `-2.5e-7`: valid TOML floats.
+fn toml_float(v: f64) -> String {
+    format!("{v:e}")
+}
+
+/// Joints 2 and 3 of the template.
+const PLAIN_JOINT: &str = "[[joint]]
+min = -170.0
+max = 170.0
+clearance_deg = 0.02
+backlash_deg = 0.06
+stiffness_kgfm_per_deg = 120.0";
+
+pub(crate) fn model_text(values: &[f64; N_FIELDS]) -> String {
+    let mut s = MODEL_TEMPLATE.replace("{plain_joint}", PLAIN_JOINT);
+    for (k, v) in values.iter().enumerate().rev() {
+        s = s.replace(&format!("{{{k}}}"), &toml_float(*v));
+    }
+    s
+}
+
+pub(crate) fn with(k: usize, v: f64) -> [f64; N_FIELDS] {
+    let mut vals = MODEL_DEFAULTS;
+    vals[k] = v;
+    vals
+}
+
+pub(crate) const JOINTS_CSV: &str = "q1,q2,q3\n10,20,30\n-5,40,-60\n0,0,0\n";
+
+/// fk on a model: exit 0 with finite output, or 1 / 2; never 101, never longer than the bound.
+fn fk_is_sane(dir: &Path, model: &str, what: &str) -> Option<i32> {
+    let m = dir.join("m.toml");
+    let q = dir.join("q.csv");
+    std::fs::write(&m, model).unwrap();
+    std::fs::write(&q, JOINTS_CSV).unwrap();
+    let r = rig!(30; "fk", "--model", m, "--joints", q);
+    assert!(!r.timed_out, "{what}: fk hung: {}", r.show());
+    assert!(
+        matches!(r.code, Some(0..=2)),
+        "{what}: fk exit {:?}: {}",
+        r.code,
+        r.show()
+    );
+    if r.code == Some(0) {
+        let lower = r.stdout.to_ascii_lowercase();
+        assert!(
+            !lower.contains("nan") && !lower.contains("inf"),
+            "{what}: exit 0 with non-finite output: {}",
+            r.stdout
+        );
+    }
+    r.code
+}
+
+#[test]
+fn item2_extreme_model_values_are_refused_with_their_line() {
+    let dir = tempfile::tempdir().unwrap();
+    let m = dir.path().join("m.toml");
+    let q = dir.path().join("q.csv");
+    std::fs::write(&q, JOINTS_CSV).unwrap();
+    assert_eq!(
+        fk_is_sane(dir.path(), &model_text(&MODEL_DEFAULTS), "defaults"),
+        Some(0)
+    );
+    for (k, v, what) in [
+        (16, 1e308, "joint_scale = 1e308"),
+        (17, 1e308, "joint_coupling j2 = 1e308"),
+        (4, 1e308, "a chain value 1e308"),
+        (11, -1e308, "joint min -1e308"),
+        (12, 1e308, "joint max 1e308"),
+        (20, 1e308, "mass 1e308 kg"),
+    ] {
+        std::fs::write(&m, model_text(&with(k, v))).unwrap();
+        let r = rig!(30; "fk", "--model", m, "--joints", q);
+        assert_eq!(r.code, Some(2), "fk, {what}: {}", r.show());
+        let r = rig!(60; "plan", "--model", m, "--n", "8", "--candidates", "200", "--out",
+            dir.path().join("p.csv"));
+        assert_eq!(r.code, Some(2), "plan, {what}: {}", r.show());
+        let r = rig!(60; "calibrate", "--model", m, "--poses", q);
+        assert_eq!(r.code, Some(2), "calibrate, {what}: {}", r.show());
+    }
+    // the message names the file and the line of the value
+    std::fs::write(&m, model_text(&with(4, 1e308))).unwrap();
+    let r = rig!(30; "fk", "--model", m, "--joints", q);
+    let line = model_text(&with(4, 1e308))
+        .lines()
+        .position(|l| l == "a = 1e308")
+        .unwrap()
+        + 1;
+    assert!(
+        r.stderr.contains(&format!("m.toml:{line}")),
+        "no file:line in {}",
+        r.show()
+    );
+}
+
+#[test]
+fn item2_extreme_effects_and_noise_are_refused() {
+    let dir = tempfile::tempdir().unwrap();
+    for args in [
+        vec!["--effect", "joint_scale:j1=1e308"],
+        vec!["--effect", "joint_coupling:j2:j1=1e308"],
+        vec!["--effect", "link_length:a2=1e308"],
+        vec!["--effect", "time_drift=1e308,0,0"],
+        vec!["--noise-mm", "1e308"],
+    ] {
+        let out = dir.path().join("s");
+        let mut a: Vec<&std::ffi::OsStr> = vec![os("simulate"), os("--out"), os(&out)];
+        a.extend(args.iter().map(os));
+        let r = run_for(&a, Duration::from_secs(60));
+        assert_eq!(r.code, Some(2), "simulate {args:?}: {}", r.show());
+        assert!(
+            !out.join("cal.csv").exists(),
+            "simulate {args:?} wrote cal.csv"
+        );
+    }
 }
 
 // ---------------------------------------------------------------------------------------------
