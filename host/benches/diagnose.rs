@@ -2,7 +2,8 @@
 //! ISO 9283 sequence), clean and with one undeclared encoder harmonic; and on the partial
 //! measurements of the low-cost rig (ideal fused samples of the circle sheet, held out on the
 //! line sheet, about 600 samples each) with the same harmonic. The UR5 with the whole library:
-//! the laser-tracker data (1000 poses) and simulated sessions of 1000 and 20 000 poses.
+//! the laser-tracker data (1000 poses) and simulated sessions of 1000 and 20 000 poses. The
+//! repeatability floor's grouping of repeated poses on 1e4 to 1e6 poses.
 
 use criterion::{criterion_group, criterion_main, Criterion};
 use rigctl::calib::Poses;
@@ -187,5 +188,28 @@ fn bench_ur5(c: &mut Criterion) {
     g.finish();
 }
 
-criterion_group!(benches, bench, bench_probe, bench_ur5);
+/// The repeatability floor's grouping of repeated poses on 1e4, 1e5 and 1e6 poses, each pose
+/// measured twice (random Katana joints): `O(n log n)`.
+fn bench_repeatability(c: &mut Criterion) {
+    use nalgebra::Vector3;
+    use rand::{Rng, SeedableRng};
+    use rigctl::diagnose::floor::repeatability_mm;
+    let mut g = c.benchmark_group("diagnose_repeatability");
+    g.sample_size(10);
+    for n in [10_000usize, 100_000, 1_000_000] {
+        let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(11);
+        let mut q: Vec<Vec<f64>> = (0..n / 2)
+            .map(|_| (0..5).map(|_| rng.gen_range(-170.0..170.0)).collect())
+            .collect();
+        q.extend(q.clone());
+        let data = Dataset::from_poses(Poses {
+            q_deg: q,
+            xyz_mm: vec![Vector3::zeros(); n],
+        });
+        g.bench_function(format!("poses_{n}"), |b| b.iter(|| repeatability_mm(&data)));
+    }
+    g.finish();
+}
+
+criterion_group!(benches, bench, bench_probe, bench_ur5, bench_repeatability);
 criterion_main!(benches);

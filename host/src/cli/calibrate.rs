@@ -19,7 +19,8 @@ use rigctl::calib::calibrate_general::{calibrate_poses, GeneralOptions, Select};
 use rigctl::calib::measurements::Measurements;
 use rigctl::calib::stats::AxisExtremes;
 use rigctl::calib::{CalibrateOptions, Method};
-use rigctl::io::atomic::write_bytes_atomic;
+use rigctl::io::atomic::{write_bytes_atomic, write_text_atomic};
+use rigctl::io::finite::TextFormat;
 use rigctl::io::pose_csv::read_poses;
 use rigctl::model::KATANA_PENCIL_TOOL_MM;
 
@@ -401,12 +402,12 @@ fn run_samples(args: &Args, samples: &std::path::Path) -> Result<(), CliError> {
     }
     let csv = errors_csv(&fused, &outcome.errors);
     if let Some(path) = &args.errors_csv {
-        write_bytes_atomic(path, csv.as_bytes())?;
+        write_text_atomic(path, TextFormat::Csv, &csv)?;
     }
     if let Some(path) = &args.plot {
         let errors = rigctl::plot::path_errors::parse_path_errors(&csv, "calibrate --samples")?;
         let svg = rigctl::plot::path_errors::path_errors_svg(&errors)?;
-        write_bytes_atomic(path, svg.as_bytes())?;
+        write_text_atomic(path, TextFormat::Xml, &svg)?;
     }
     let mut s = table(
         "Fused samples, measured components only in frame R (|dP| = sqrt(dev_u^2 + dev_n^2); along the path not measured)",

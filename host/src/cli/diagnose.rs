@@ -16,7 +16,8 @@ use rigctl::diagnose::plots::write_plots;
 use rigctl::diagnose::probe::plot::write_probe_plots;
 use rigctl::diagnose::probe::{hybrid_report, jacobians};
 use rigctl::diagnose::{diagnose, DiagnoseOptions};
-use rigctl::io::atomic::write_bytes_atomic;
+use rigctl::io::atomic::{write_bytes_atomic, write_text_atomic};
+use rigctl::io::finite::TextFormat;
 use rigctl::model::KATANA_PENCIL_TOOL_MM;
 
 use super::model_args::ModelArgs;
@@ -175,7 +176,7 @@ pub fn run(args: Args) -> Result<(), CliError> {
         );
         // The joint map and the time terms (thermal growth, drifts) are model-file keys.
         text.push_str(&ext.to_model().to_toml_string());
-        write_bytes_atomic(path, text.as_bytes())?;
+        write_text_atomic(path, TextFormat::Toml, &text)?;
     }
     if let Some(dir) = &args.plots {
         let _lock = rigctl::io::atomic::lock_dir(dir)?;

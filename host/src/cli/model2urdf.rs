@@ -7,7 +7,8 @@
 
 use std::path::PathBuf;
 
-use rigctl::io::atomic::write_bytes_atomic;
+use rigctl::io::atomic::write_text_atomic;
+use rigctl::io::finite::TextFormat;
 use rigctl::urdf::{model_into_urdf, model_to_urdf, Origin, UrdfError};
 
 use super::model_args::ModelArgs;
@@ -61,7 +62,7 @@ pub fn run(args: Args) -> Result<(), CliError> {
             )?
         }
     };
-    write_bytes_atomic(&args.out, exported.text.as_bytes())?;
+    write_text_atomic(&args.out, TextFormat::Xml, &exported.text)?;
     for line in &exported.not_representable {
         errln!("rigctl model2urdf: not in the URDF: {line}");
     }

@@ -8,7 +8,8 @@
 use std::path::PathBuf;
 
 use nalgebra::Vector3;
-use rigctl::io::atomic::write_bytes_atomic;
+use rigctl::io::atomic::{write_bytes_atomic, write_text_atomic};
+use rigctl::io::finite::TextFormat;
 use rigctl::io::pose_csv::read_poses;
 use rigctl::plan::output::{plan_csv, plan_json, summary_table};
 use rigctl::plan::sheets::{candidate_specs, rank_sheets, SheetRows};
@@ -253,7 +254,9 @@ pub fn run(args: Args) -> Result<(), CliError> {
             .extension()
             .is_some_and(|e| e.eq_ignore_ascii_case("svg"))
         {
-            poses_svg(&title, &planned, &background)?.into_bytes()
+            let svg = poses_svg(&title, &planned, &background)?;
+            rigctl::io::atomic::check_text_for(path, TextFormat::Xml, &svg)?;
+            svg.into_bytes()
         } else {
             rigctl::plot::png_bytes(&rigctl::plot::plan::PlanPoses {
                 title,
@@ -270,7 +273,7 @@ pub fn run(args: Args) -> Result<(), CliError> {
             .map_err(|e| CliError::failure(format!("JSON: {e}")))?;
         write_bytes_atomic(path, format!("{text}\n").as_bytes())?;
     }
-    write_bytes_atomic(&args.out, plan_csv(&result).as_bytes())?;
+    write_text_atomic(&args.out, TextFormat::Csv, &plan_csv(&result))?;
     out!("{}", summary_table(&result, cfg.noise_mm))?;
     if let Some(r) = &sheets {
         out!("{}", sheets_table(r))?;

@@ -310,6 +310,10 @@ pub fn write_joints_csv(
     n_joints: usize,
     points: &[CompensatedPoint],
 ) -> Result<(), CompensateError> {
-    crate::io::atomic::write_bytes_atomic(path, joints_csv(n_joints, points).as_bytes())?;
+    crate::io::atomic::write_text_atomic(
+        path,
+        crate::io::finite::TextFormat::Csv,
+        &joints_csv(n_joints, points),
+    )?;
     Ok(())
 }

@@ -127,42 +127,97 @@ pub fn choose_floor(
 /// Pooled repeatability (mm per coordinate) and its degrees of freedom, from the poses of
 /// `data` measured more than once; `None` without repeated poses.
 pub fn repeatability_mm(data: &Dataset) -> Option<(f64, usize)> {
-    let n = data.len();
-    let mut group: Vec<Option<usize>> = vec![None; n];
-    let mut next = 0;
-    for i in 0..n {
-        if group[i].is_some() {
-            continue;
-        }
-        let mut members = vec![i];
-        for (k, g) in group.iter().enumerate().skip(i + 1) {
-            if g.is_none() && same_pose(data, i, k) {
-                members.push(k);
-            }
-        }
-        if members.len() > 1 {
-            for m in members {
-                group[m] = Some(next);
-            }
-            next += 1;
-        }
-    }
+    let groups = repeat_groups(data);
     let dims = data.measured_dims();
     let (mut ss, mut dof) = (0.0, 0usize);
-    for g in 0..next {
-        let idx: Vec<usize> = (0..n).filter(|&k| group[k] == Some(g)).collect();
+    for idx in &groups {
         let mean = idx
             .iter()
             .map(|&k| data.poses.xyz_mm[k])
             .sum::<nalgebra::Vector3<f64>>()
             / idx.len() as f64;
-        for &k in &idx {
+        for &k in idx {
             let d = data.measured_part(k, &(data.poses.xyz_mm[k] - mean));
             ss += d.norm_squared();
         }
         dof += dims * (idx.len() - 1);
     }
     (dof > 0).then(|| ((ss / dof as f64).sqrt(), dof))
+}
+
+/// The poses measured more than once, each group in file order: a pose that is no member yet
+/// opens a group, which takes every later pose that is no member yet and has its `id` (not
+/// empty) or its joint readings within [`SAME_JOINTS_TOL`] ([`same_pose`]).
+///
+/// In `O(n log n)` for distinct poses: the candidates for the same joint readings are found in
+/// the poses sorted by a weighted sum of their readings (two poses within the tolerance on every
+/// joint are within the tolerance times the sum of the weights there), the same ids by a map.
+fn repeat_groups(data: &Dataset) -> Vec<Vec<usize>> {
+    let n = data.len();
+    let q = &data.poses.q_deg;
+    // weights in [1, 2), unequal, so that distinct poses rarely share a key
+    let weight = |j: usize| 1.0 + (j as f64 * 0.618_033_988_749_895).fract();
+    let key = |k: usize| -> f64 { q[k].iter().enumerate().map(|(j, x)| weight(j) * x).sum() };
+    let keys: Vec<f64> = (0..n).map(key).collect();
+    let mut order: Vec<usize> = (0..n).collect();
+    order.sort_by(|&a, &b| keys[a].total_cmp(&keys[b]));
+    let sorted: Vec<f64> = order.iter().map(|&k| keys[k]).collect();
+    let mut by_id: std::collections::HashMap<&str, Vec<usize>> = std::collections::HashMap::new();
+    if let Some(ids) = &data.ids {
+        for (k, id) in ids.iter().enumerate().take(n) {
+            if !id.is_empty() {
+                by_id.entry(id.as_str()).or_default().push(k);
+            }
+        }
+    }
+    let mut member = vec![false; n];
+    // `taken[k] == i + 1`: pose k is already among the members of the group pose i opens
+    let mut taken = vec![0usize; n];
+    let mut groups = Vec::new();
+    for i in 0..n {
+        if member[i] {
+            continue;
+        }
+        let mut members = vec![i];
+        taken[i] = i + 1;
+        let id = data
+            .ids
+            .as_ref()
+            .and_then(|ids| ids.get(i))
+            .filter(|id| !id.is_empty());
+        if let Some(same) = id.and_then(|id| by_id.get(id.as_str())) {
+            for &k in same.iter().filter(|&&k| k > i && !member[k]) {
+                taken[k] = i + 1;
+                members.push(k);
+            }
+        }
+        // the tolerance through the key, plus the rounding of both sums
+        let magnitude: f64 = q[i]
+            .iter()
+            .enumerate()
+            .map(|(j, x)| weight(j) * x.abs())
+            .sum();
+        let reach = SAME_JOINTS_TOL * (0..q[i].len()).map(weight).sum::<f64>();
+        let span = reach * (1.0 + 1e-9) + 16.0 * f64::EPSILON * (magnitude + reach);
+        let lo = sorted.partition_point(|&v| v < keys[i] - span);
+        for &k in order[lo..]
+            .iter()
+            .take_while(|&&k| keys[k] <= keys[i] + span)
+        {
+            if k > i && !member[k] && taken[k] != i + 1 && same_pose(data, i, k) {
+                taken[k] = i + 1;
+                members.push(k);
+            }
+        }
+        if members.len() > 1 {
+            members.sort_unstable();
+            for &m in &members {
+                member[m] = true;
+            }
+            groups.push(members);
+        }
+    }
+    groups
 }
 
 /// [`repeatability_mm`] pooled over several files (calibration and held out): a pose id names
@@ -381,6 +436,89 @@ mod tests {
         assert!((s - (0.02f64 / 3.0).sqrt()).abs() < 1e-12);
         let none = d.subset(&[0, 2, 3]);
         assert!(repeatability_mm(&none).is_none());
+    }
+
+    /// The groups by the definition: every later pose that is no member yet, compared with
+    /// the one opening the group (quadratic, for the test).
+    fn groups_by_definition(data: &Dataset) -> Vec<Vec<usize>> {
+        let n = data.len();
+        let mut member = vec![false; n];
+        let mut out = Vec::new();
+        for i in 0..n {
+            if member[i] {
+                continue;
+            }
+            let mut g = vec![i];
+            g.extend((i + 1..n).filter(|&k| !member[k] && same_pose(data, i, k)));
+            if g.len() > 1 {
+                for &m in &g {
+                    member[m] = true;
+                }
+                out.push(g);
+            }
+        }
+        out
+    }
+
+    #[test]
+    fn repeat_groups_are_those_of_the_definition() {
+        use rand::{Rng, SeedableRng};
+        let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(129);
+        for case in 0..40 {
+            let n = rng.gen_range(1..300);
+            let base: Vec<Vec<f64>> = (0..rng.gen_range(1..40))
+                .map(|_| (0..5).map(|_| rng.gen_range(-170.0..170.0)).collect())
+                .collect();
+            let q: Vec<Vec<f64>> = (0..n)
+                .map(|_| {
+                    let mut v = base[rng.gen_range(0..base.len())].clone();
+                    // within, at and beyond the tolerance, on one joint or on several
+                    for x in v.iter_mut() {
+                        if rng.gen_bool(0.3) {
+                            *x += [0.0, 0.4e-6, 1e-6, 1.5e-6, -0.9e-6, 1e-3][rng.gen_range(0..6)];
+                        }
+                    }
+                    v
+                })
+                .collect();
+            let mut d = Dataset::from_poses(Poses {
+                q_deg: q,
+                xyz_mm: (0..n).map(|_| Vector3::new(rng.gen(), 0.0, 0.0)).collect(),
+            });
+            if case % 2 == 0 {
+                d.ids = Some(
+                    (0..n)
+                        .map(|_| match rng.gen_range(0..4) {
+                            0 => String::new(),
+                            k => format!("P{k}"),
+                        })
+                        .collect(),
+                );
+            }
+            assert_eq!(repeat_groups(&d), groups_by_definition(&d), "case {case}");
+        }
+    }
+
+    /// 200 000 distinct poses and 100 000 poses measured twice: the grouping takes well under
+    /// a second (comparing every pair would take minutes).
+    #[test]
+    fn repeat_groups_of_many_poses_are_fast() {
+        use rand::{Rng, SeedableRng};
+        let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(7);
+        let n = 200_000;
+        // each pose twice in a row
+        let q: Vec<Vec<f64>> = (0..n / 2)
+            .flat_map(|_| {
+                let v: Vec<f64> = (0..5).map(|_| rng.gen_range(-170.0..170.0)).collect();
+                [v.clone(), v]
+            })
+            .collect();
+        let xyz_mm = vec![Vector3::zeros(); q.len()];
+        let d = Dataset::from_poses(Poses { q_deg: q, xyz_mm });
+        let t = std::time::Instant::now();
+        let (_, dof) = repeatability_mm(&d).expect("repeated poses");
+        assert_eq!(dof, 3 * n / 2);
+        assert!(t.elapsed().as_secs_f64() < 5.0, "{:?}", t.elapsed());
     }
 
     #[test]

@@ -13,7 +13,8 @@ use plotters::prelude::*;
 use super::residual::Regressor;
 use super::{Diagnosis, EffectTrace};
 use crate::error::{Classify, ErrorKind};
-use crate::io::atomic::{write_bytes_atomic, AtomicWriteError};
+use crate::io::atomic::{write_text_atomic, AtomicWriteError};
+use crate::io::finite::TextFormat;
 
 /// Why a plot could not be written.
 #[derive(Debug, thiserror::Error)]
@@ -141,7 +142,7 @@ pub fn write_plots(dir: &Path, diag: &Diagnosis) -> Result<Vec<PathBuf>, PlotErr
         };
         let svg = effect_svg(trace, reg)?;
         let path = dir.join(format!("{:02}_{}.svg", k + 1, trace.id.replace(':', "_")));
-        write_bytes_atomic(&path, svg.as_bytes())?;
+        write_text_atomic(&path, TextFormat::Xml, &svg)?;
         out.push(path);
     }
     Ok(out)

@@ -66,7 +66,8 @@ use super::curve::TracedCurve;
 use super::error::FusionError;
 use super::placement::SheetPlacement;
 use super::pot::TravelSeries;
-use crate::io::atomic::write_bytes_atomic;
+use crate::io::atomic::write_text_atomic;
+use crate::io::finite::TextFormat;
 use crate::io::pose_csv::{read_poses, PoseSpec};
 use crate::io::table::{Table, TableError};
 use crate::model::motion::moments_in_motion;
@@ -376,7 +377,7 @@ pub fn fused_csv(samples: &[FusedSample]) -> String {
 
 /// Writes `FUSED.csv` atomically.
 pub fn write_fused(path: &Path, samples: &[FusedSample]) -> Result<(), FusionError> {
-    write_bytes_atomic(path, fused_csv(samples).as_bytes())?;
+    write_text_atomic(path, TextFormat::Csv, &fused_csv(samples))?;
     Ok(())
 }
 

@@ -18,7 +18,8 @@ use nalgebra::Vector3;
 use serde::{Deserialize, Serialize};
 
 use super::error::FusionError;
-use crate::io::atomic::write_bytes_atomic;
+use crate::io::atomic::write_text_atomic;
+use crate::io::finite::TextFormat;
 
 /// Format tag of the placement file.
 pub const PLACEMENT_FORMAT: &str = "rigctl-placement/1";
@@ -165,7 +166,7 @@ impl SheetPlacement {
 
     /// Writes the placement file atomically.
     pub fn write(&self, path: &Path) -> Result<(), FusionError> {
-        write_bytes_atomic(path, self.to_toml_string().as_bytes())?;
+        write_text_atomic(path, TextFormat::Toml, &self.to_toml_string())?;
         Ok(())
     }
 }

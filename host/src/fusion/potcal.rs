@@ -41,7 +41,8 @@ use serde::{Deserialize, Serialize};
 
 use super::error::FusionError;
 use super::pot::PotSample;
-use crate::io::atomic::write_bytes_atomic;
+use crate::io::atomic::write_text_atomic;
+use crate::io::finite::TextFormat;
 use crate::io::table::{Table, TableError};
 
 /// Format tag of the calibration file.
@@ -299,7 +300,7 @@ impl PotCalibration {
 
     /// Writes the calibration file atomically.
     pub fn write(&self, path: &Path) -> Result<(), FusionError> {
-        write_bytes_atomic(path, self.to_toml_string().as_bytes())?;
+        write_text_atomic(path, TextFormat::Toml, &self.to_toml_string())?;
         Ok(())
     }
 }

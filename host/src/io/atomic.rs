@@ -31,6 +31,12 @@ pub enum AtomicWriteError {
     },
     #[error("cannot write {path}: {reason}")]
     Unusable { path: PathBuf, reason: String },
+    #[error("{path}: {source}")]
+    NonFinite {
+        path: PathBuf,
+        #[source]
+        source: super::finite::NonFinite,
+    },
 }
 
 impl crate::error::Classify for AtomicWriteError {
@@ -38,7 +44,7 @@ impl crate::error::Classify for AtomicWriteError {
     /// write (no space, permission denied) is a failure of the run.
     fn kind(&self) -> crate::error::ErrorKind {
         match self {
-            Self::Io { .. } => crate::error::ErrorKind::Failure,
+            Self::Io { .. } | Self::NonFinite { .. } => crate::error::ErrorKind::Failure,
             Self::Unusable { .. } => crate::error::ErrorKind::BadInput,
         }
     }
@@ -267,6 +273,31 @@ where
             result
         }
     }
+}
+
+/// Writes `text` to `path` as [`write_bytes_atomic`] does, after checking that every number
+/// in it is finite (read as `format`, [`super::finite::check_text`]); a non-finite one leaves
+/// `path` untouched (a failure of the run: exit 1).
+pub fn write_text_atomic(
+    path: &Path,
+    format: super::finite::TextFormat,
+    text: &str,
+) -> Result<(), AtomicWriteError> {
+    check_text_for(path, format, text)?;
+    write_bytes_atomic(path, text.as_bytes())
+}
+
+/// [`super::finite::check_text`] with the error naming `path`: for a command that checks a set
+/// of texts before writing any of them.
+pub fn check_text_for(
+    path: &Path,
+    format: super::finite::TextFormat,
+    text: &str,
+) -> Result<(), AtomicWriteError> {
+    super::finite::check_text(format, text).map_err(|source| AtomicWriteError::NonFinite {
+        path: path.to_path_buf(),
+        source,
+    })
 }
 
 /// Convenience: write a whole byte string atomically.

@@ -5,7 +5,9 @@
 pub mod atomic;
 pub mod cdr;
 pub mod files;
+pub mod finite;
 pub mod interrupt;
+pub mod markup;
 pub mod pose_csv;
 pub mod ranges;
 pub mod read;

@@ -602,7 +602,11 @@ impl Model {
 
     /// Writes [`Model::to_toml_string`] to `path` atomically.
     pub fn write_file(&self, path: &Path) -> Result<(), ModelError> {
-        crate::io::atomic::write_bytes_atomic(path, self.to_toml_string().as_bytes())?;
+        crate::io::atomic::write_text_atomic(
+            path,
+            crate::io::finite::TextFormat::Toml,
+            &self.to_toml_string(),
+        )?;
         Ok(())
     }
 }

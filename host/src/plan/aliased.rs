@@ -8,6 +8,11 @@
 //! columns of interest are the aliased effects' unknowns and those of accepted effects whose
 //! sigma is large (more than [`LOOSE_RELATIVE_SIGMA`] of the value); the design is Ds-optimal
 //! for them, added to the poses already measured (`--poses`).
+//!
+//! An effect that depends on the path to a pose or on time, not on the pose (`hysteresis:j<i>`,
+//! `time_drift`, `time_drift:j<i>`, `thermal`), is not separated by a choice of poses: its
+//! unknowns stay out of the design, and the report gives the measuring order that separates it
+//! ([`path_protocol`]) instead of correlations.
 
 use std::path::Path;
 
@@ -66,8 +71,11 @@ pub struct PairReport {
     /// Largest |correlation| between the two effects' estimates on the poses already measured
     /// (NaN without them).
     pub correlation_before: f64,
-    /// The same with the planned poses added.
+    /// The same with the planned poses added (NaN when a side is path-dependent).
     pub correlation_after: f64,
+    /// For a pair with a path-dependent side: how the measurements separate it
+    /// ([`path_protocol`]).
+    pub protocol: Option<String>,
 }
 
 /// The `from_diagnose` object of `plan.json`.
@@ -86,6 +94,40 @@ pub struct FromDiagnoseReport {
     pub admissible_candidates: usize,
     /// The largest nonlinearity admitted ([`robust::LINEARITY_RTOL`] unless raised).
     pub nonlinearity_threshold: f64,
+    /// The path-dependent effects of the diagnosis (accepted or aliased) with the measuring
+    /// order that separates each ([`path_protocol`]).
+    pub path_dependent: Vec<(String, String)>,
+}
+
+/// For an effect that depends on the path to a pose or on time rather than on the pose
+/// (`hysteresis:j<i>`, `time_drift`, `time_drift:j<i>`, `thermal`): the measuring order that
+/// separates it from every effect of the pose alone. `None` for any other id.
+pub fn path_protocol(id: &str) -> Option<String> {
+    let joint = |j: &str| {
+        j.strip_prefix('j')
+            .filter(|n| !n.is_empty() && n.bytes().all(|b| b.is_ascii_digit()))
+            .map(str::to_string)
+    };
+    let timed = || {
+        format!(
+            "{id} grows with the time of a reading, not with the pose: give the pose file a time \
+             column `t`, spread the planned poses over the session and measure the first of them \
+             again at its end; the repeated readings separate it from every effect of the pose alone"
+        )
+    };
+    match id.split_once(':') {
+        Some(("hysteresis", j)) => joint(j).map(|i| {
+            format!(
+                "{id} depends on the direction joint {i} last moved, not on the pose: measure every \
+                 planned pose twice, reached once with joint {i} moving up and once moving down \
+                 (diagnose reads the direction from the order of the rows); the difference of the \
+                 two readings separates it from every effect of the pose alone"
+            )
+        }),
+        Some(("time_drift", j)) => joint(j).map(|_| timed()),
+        None if id == "time_drift" || id == "thermal" => Some(timed()),
+        _ => None,
+    }
 }
 
 fn field_err(path: &str, message: String) -> PlanError {
@@ -256,6 +298,9 @@ impl FromDiagnose {
         };
         let mut interest = Vec::new();
         for (k, id) in self.effects.iter().enumerate() {
+            if path_protocol(id).is_some() {
+                continue;
+            }
             let us = self.unknowns_of(&ext, id, &format!("effects[{k}].id"))?;
             if self.loose.contains(id) {
                 interest.extend(us.iter().copied());
@@ -264,6 +309,9 @@ impl FromDiagnose {
         }
         for (k, p) in self.pairs.iter().enumerate() {
             for (f, id) in [("a", &p.a), ("b", &p.b)] {
+                if path_protocol(id).is_some() {
+                    continue;
+                }
                 let us = self.unknowns_of(&ext, id, &format!("aliased[{k}].{f}"))?;
                 interest.extend(us.iter().copied());
                 push(us, &mut requested);
@@ -318,6 +366,17 @@ impl FromDiagnose {
             .iter()
             .map(|p| {
                 let (ca, cb) = (cols_of(&p.a), cols_of(&p.b));
+                let protocol = path_protocol(&p.a).or_else(|| path_protocol(&p.b));
+                if protocol.is_some() {
+                    return PairReport {
+                        a: p.a.clone(),
+                        b: p.b.clone(),
+                        correlation_diagnose: p.correlation,
+                        correlation_before: f64::NAN,
+                        correlation_after: f64::NAN,
+                        protocol,
+                    };
+                }
                 PairReport {
                     a: p.a.clone(),
                     b: p.b.clone(),
@@ -328,6 +387,7 @@ impl FromDiagnose {
                         max_correlation(&setup.prior_rows, &ca, &cb)
                     },
                     correlation_after: max_correlation(&after_rows, &ca, &cb),
+                    protocol: None,
                 }
             })
             .collect();
@@ -353,6 +413,18 @@ impl FromDiagnose {
                 })
                 .unwrap_or_default(),
             admissible_candidates: setup.admissible.iter().filter(|a| **a).count(),
+            path_dependent: {
+                let mut ids: Vec<&String> = self.effects.iter().collect();
+                ids.extend(self.pairs.iter().flat_map(|p| [&p.a, &p.b]));
+                let mut out: Vec<(String, String)> = Vec::new();
+                for id in ids {
+                    if let Some(p) = path_protocol(id).filter(|_| !out.iter().any(|(i, _)| i == id))
+                    {
+                        out.push((id.clone(), p));
+                    }
+                }
+                out
+            },
             nonlinearity_threshold: setup
                 .linearity
                 .as_ref()

@@ -53,6 +53,11 @@ fn from_diagnose_json(f: &FromDiagnoseReport) -> Value {
             "correlation_diagnose": num(p.correlation_diagnose),
             "correlation_before": num(p.correlation_before),
             "correlation_after": num(p.correlation_after),
+            "protocol": p.protocol,
+        })).collect::<Vec<_>>(),
+        "path_dependent": f.path_dependent.iter().map(|(id, protocol)| json!({
+            "id": id,
+            "protocol": protocol,
         })).collect::<Vec<_>>(),
         "magnitudes": f.magnitudes.iter().map(|(k, v)| (k.clone(), num(*v))).collect::<Map<_, _>>(),
         "admissible_candidates": f.admissible_candidates,
@@ -195,11 +200,22 @@ pub fn summary_table(plan: &Plan, noise_mm: f64) -> String {
     }
     if let Some(f) = &plan.from_diagnose {
         for p in &f.pairs {
+            if p.protocol.is_some() {
+                let _ = writeln!(
+                    out,
+                    "aliased {} / {}: not separated by the choice of poses (see below)",
+                    p.a, p.b
+                );
+                continue;
+            }
             let _ = writeln!(
                 out,
                 "aliased {} / {}: correlation {:.3} on the {} measured poses -> {:.3} with the plan",
                 p.a, p.b, p.correlation_before, f.existing_poses, p.correlation_after
             );
+        }
+        for (_, protocol) in &f.path_dependent {
+            let _ = writeln!(out, "path-dependent: {protocol}");
         }
     }
     out

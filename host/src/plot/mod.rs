@@ -171,7 +171,11 @@ pub fn png_bytes<C: Chart>(chart: &C) -> Result<Vec<u8>, PlotError> {
 /// Writes `chart` to `path` (PNG or SVG by extension), atomically.
 pub fn write<C: Chart>(path: &Path, chart: &C) -> Result<(), PlotError> {
     let bytes = match Format::from_path(path)? {
-        Format::Svg => svg_string(chart)?.into_bytes(),
+        Format::Svg => {
+            let svg = svg_string(chart)?;
+            crate::io::atomic::check_text_for(path, crate::io::finite::TextFormat::Xml, &svg)?;
+            svg.into_bytes()
+        }
         Format::Png => png_bytes(chart)?,
     };
     write_bytes_atomic(path, &bytes)?;

@@ -7,18 +7,7 @@ use super::{Figure, Report};
 
 /// `text` with `& < > " '` escaped for HTML text and attribute values.
 pub fn escape(text: &str) -> String {
-    let mut s = String::with_capacity(text.len());
-    for c in text.chars() {
-        match c {
-            '&' => s.push_str("&amp;"),
-            '<' => s.push_str("&lt;"),
-            '>' => s.push_str("&gt;"),
-            '"' => s.push_str("&quot;"),
-            '\'' => s.push_str("&#39;"),
-            c => s.push(c),
-        }
-    }
-    s
+    crate::io::markup::escape(text, crate::io::markup::Blanks::Literal)
 }
 
 const CSS: &str = "body{font-family:'DejaVu Sans',sans-serif;margin:16px auto;max-width:1180px;padding:0 12px;color:#222;line-height:1.35}\

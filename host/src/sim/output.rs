@@ -19,7 +19,8 @@ use serde_json::{json, Map, Value};
 
 use super::effects::{EffectKind, JointTerm};
 use super::simulate::{SimConfig, SimError, SimOutput, SimPose};
-use crate::io::atomic::write_bytes_atomic;
+use crate::io::atomic::{check_text_for, write_bytes_atomic};
+use crate::io::finite::TextFormat;
 
 /// Format tag of `truth.json`.
 pub const TRUTH_JSON_FORMAT: &str = "rigctl-simulate-truth/1";
@@ -127,12 +128,18 @@ pub fn write_outputs(dir: &Path, out: &SimOutput, cfg: &SimConfig) -> Result<(),
     let n = out.declared.n_joints();
     let json_text = serde_json::to_string_pretty(&truth_json(out, cfg))
         .map_err(|e| SimError::Config(format!("cannot serialise truth.json: {e}")))?;
-    write_bytes_atomic(&dir.join("cal.csv"), poses_csv(&out.cal, n).as_bytes())?;
-    write_bytes_atomic(&dir.join("val.csv"), poses_csv(&out.val, n).as_bytes())?;
-    write_bytes_atomic(
-        &dir.join("truth.toml"),
-        out.truth.to_toml_string().as_bytes(),
-    )?;
+    let texts = [
+        ("cal.csv", TextFormat::Csv, poses_csv(&out.cal, n)),
+        ("val.csv", TextFormat::Csv, poses_csv(&out.val, n)),
+        ("truth.toml", TextFormat::Toml, out.truth.to_toml_string()),
+    ];
+    // every file checked before any is written
+    for (name, format, text) in &texts {
+        check_text_for(&dir.join(name), *format, text)?;
+    }
+    for (name, _, text) in &texts {
+        write_bytes_atomic(&dir.join(name), text.as_bytes())?;
+    }
     write_bytes_atomic(&dir.join("truth.json"), (json_text + "\n").as_bytes())?;
     Ok(())
 }

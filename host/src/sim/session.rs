@@ -676,6 +676,9 @@ pub fn write_session(dir: &Path, s: &Session, cfg: &SessionConfig) -> Result<(),
             p.z
         ));
     }
+    let csv = crate::io::finite::TextFormat::Csv;
+    crate::io::atomic::check_text_for(&dir.join("joints.csv"), csv, &joints)?;
+    crate::io::atomic::check_text_for(&dir.join("truth_path.csv"), csv, &truth_path)?;
     write_bytes_atomic(&dir.join("joints.csv"), joints.as_bytes())?;
     write_bytes_atomic(&dir.join("truth_path.csv"), truth_path.as_bytes())?;
     let mut jig =
@@ -683,7 +686,7 @@ pub fn write_session(dir: &Path, s: &Session, cfg: &SessionConfig) -> Result<(),
     for p in &s.jig {
         jig.push_str(&format!("{:.2},{}\n", p.raw, p.travel_mm));
     }
-    write_bytes_atomic(&dir.join("potjig.csv"), jig.as_bytes())?;
+    crate::io::atomic::write_text_atomic(&dir.join("potjig.csv"), csv, &jig)?;
     s.placement.write(&dir.join("placement.toml"))?;
     s.truth.write_file(&dir.join("truth.toml"))?;
     // the recording: written under a temporary name, renamed when complete

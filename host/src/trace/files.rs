@@ -7,9 +7,11 @@
 
 use super::prepare::{Bands, Prepared};
 use super::TraceError;
-use crate::io::atomic::write_atomic;
+use crate::io::atomic::write_text_atomic;
+use crate::io::finite::TextFormat;
 use image::error::{DecodingError, ImageFormatHint, LimitError, LimitErrorKind};
 use image::{ImageError, ImageFormat, RgbImage};
+use std::fmt::Write as _;
 use std::io::{BufRead, BufReader, Read};
 use std::path::Path;
 
@@ -57,17 +59,12 @@ pub fn load_prepared(path: &Path) -> Result<(RgbImage, Prepared), TraceError> {
 
 /// Writes points as CSV `x,y` (mm, 4 decimals), atomically.
 pub fn write_csv(path: &Path, points_mm: &[[f64; 2]]) -> Result<(), TraceError> {
-    write_atomic(path, |w| {
-        let io = |source| TraceError::Write {
-            path: path.to_path_buf(),
-            source,
-        };
-        writeln!(w, "x,y").map_err(io)?;
-        for p in points_mm {
-            writeln!(w, "{:.4},{:.4}", p[0], p[1]).map_err(io)?;
-        }
-        Ok(())
-    })
+    let mut text = String::from("x,y\n");
+    for p in points_mm {
+        let _ = writeln!(text, "{:.4},{:.4}", p[0], p[1]);
+    }
+    write_text_atomic(path, TextFormat::Csv, &text)?;
+    Ok(())
 }
 
 fn png_error(e: png::DecodingError) -> ImageError {

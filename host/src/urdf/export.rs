@@ -203,11 +203,10 @@ fn origin_xml(o: &Origin) -> String {
     )
 }
 
+/// `s` as an XML attribute value or text that a parser reads back as `s`
+/// ([`crate::io::markup::Blanks::References`]).
 fn xml_escape(s: &str) -> String {
-    s.replace('&', "&amp;")
-        .replace('<', "&lt;")
-        .replace('>', "&gt;")
-        .replace('"', "&quot;")
+    crate::io::markup::escape(s, crate::io::markup::Blanks::References)
 }
 
 /// The model's joint names, or `joint_1..joint_N`.

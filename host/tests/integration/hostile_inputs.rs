@@ -2,91 +2,14 @@
 //! files, the diagnose -> plan loop, files that must read back, concurrent runs, inputs that must
 //! be refused. Every test spawns the CLI with a time bound and never accepts exit 101.
 
-use std::io::Read;
 use std::path::{Path, PathBuf};
 use std::process::{Command, Stdio};
 use std::time::{Duration, Instant};
 
 use rand::{Rng, SeedableRng};
 
-/// The outcome of one run: exit code (`None` when killed at the time bound), stdout, stderr.
-struct Run {
-    code: Option<i32>,
-    stdout: String,
-    stderr: String,
-    timed_out: bool,
-}
-
-impl Run {
-    fn show(&self) -> String {
-        format!(
-            "exit {:?}{}; stderr: {}",
-            self.code,
-            if self.timed_out { " (killed)" } else { "" },
-            self.stderr.chars().take(600).collect::<String>()
-        )
-    }
-}
-
-/// The binary under test (`RIGCTL_UNDER_TEST` runs these tests against another build, e.g. an
-/// older one, to see which of them it fails).
-fn bin() -> std::ffi::OsString {
-    std::env::var_os("RIGCTL_UNDER_TEST").unwrap_or_else(|| env!("CARGO_BIN_EXE_rigctl").into())
-}
-
-/// Runs `rigctl args` for at most `limit`.
-fn run_for(args: &[&std::ffi::OsStr], limit: Duration) -> Run {
-    let mut child = Command::new(bin())
-        .args(args)
-        .stdin(Stdio::null())
-        .stdout(Stdio::piped())
-        .stderr(Stdio::piped())
-        .spawn()
-        .expect("rigctl runs");
-    let mut out = child.stdout.take().unwrap();
-    let mut err = child.stderr.take().unwrap();
-    let t_out = std::thread::spawn(move || {
-        let mut s = Vec::new();
-        let _ = out.read_to_end(&mut s);
-        s
-    });
-    let t_err = std::thread::spawn(move || {
-        let mut s = Vec::new();
-        let _ = err.read_to_end(&mut s);
-        s
-    });
-    let start = Instant::now();
-    let mut timed_out = false;
-    let status = loop {
-        if let Some(s) = child.try_wait().unwrap() {
-            break Some(s);
-        }
-        if start.elapsed() > limit {
-            let _ = child.kill();
-            let _ = child.wait();
-            timed_out = true;
-            break None;
-        }
-        std::thread::sleep(Duration::from_millis(20));
-    };
-    Run {
-        code: status.and_then(|s| s.code()),
-        stdout: String::from_utf8_lossy(&t_out.join().unwrap()).into_owned(),
-        stderr: String::from_utf8_lossy(&t_err.join().unwrap()).into_owned(),
-        timed_out,
-    }
-}
-
-fn os<S: AsRef<std::ffi::OsStr> + ?Sized>(s: &S) -> &std::ffi::OsStr {
-    s.as_ref()
-}
-
-/// Runs with arguments given as strings and paths.
-macro_rules! rig {
-    ($limit:expr; $($a:expr),* $(,)?) => {
-        run_for(&[$(os(&$a)),*], Duration::from_secs($limit))
-    };
-}
+use super::common::long_urdf::long_urdf;
+use super::common::spawn::{bin, os, rig, run_for, Run};
 
 fn simulated(dir: &Path) -> PathBuf {
     let out = dir.join("sim");
@@ -106,7 +29,7 @@ fn refused_and_kept(r: &Run, file: &Path, before: &[u8], what: &str) {
     );
 }
 
-const URDF: &str = r#"<robot name="two">
+pub(crate) const URDF: &str = r#"<robot name="two">
   <link name="base"/>
   <link name="l1"><inertial><mass value="2"/><origin xyz="0.1 0 0"/></inertial></link>
   <link name="l2"><inertial><mass value="1"/><origin xyz="0.1 0 0"/></inertial></link>
@@ -207,7 +130,7 @@ fn item9_unusable_output_paths_are_bad_input() {
 // ---------------------------------------------------------------------------------------------
 // 2. Finite extreme values: refused at the edge, never a panic, a hang or NaN with exit 0.
 
-const MODEL_TEMPLATE: &str = r#"name = "prop"
+pub(crate) const MODEL_TEMPLATE: &str = r#"name = "prop"
 [[chain]]
 op = "tz"
 name = "mount_z"
@@ -242,18 +165,8 @@ joint_scale = {16}
 joint_coupling = { j2 = {17} }
 hysteresis_deg = {18}
 compliance_deg_per_kgfm = {19}
-[[joint]]
-min = -170.0
-max = 170.0
-clearance_deg = 0.02
-backlash_deg = 0.06
-stiffness_kgfm_per_deg = 120.0
-[[joint]]
-min = -170.0
-max = 170.0
-clearance_deg = 0.02
-backlash_deg = 0.06
-stiffness_kgfm_per_deg = 120.0
+{plain_joint}
+{plain_joint}
 [[mass]]
 joint = 2
 after = 0
@@ -263,35 +176,50 @@ com_mm = [{21}, 0.0, 0.0]
 tool_dz = {22}
 payload_kg = {23}
 scale_ppm = {24}
+tool_dx = {25}
+base_rx = {26}
+base_z = {27}
 "#;
 
 /// Valid values of the template's fields.
-const MODEL_DEFAULTS: [f64; 25] = [
+pub(crate) const MODEL_DEFAULTS: [f64; N_FIELDS] = [
     200.0, 0.0, 0.0, 0.0, 190.0, 90.0, 0.0, 139.0, 0.0, 0.0, 0.0, -170.0, 170.0, 0.02, 0.06, 120.0,
-    1e-4, 0.002, 0.03, 0.01, 1.5, 100.0, 12.5, 0.5, 10.0,
+    1e-4, 0.002, 0.03, 0.01, 1.5, 100.0, 12.5, 0.5, 10.0, 3.0, 0.01, 1.0,
 ];
 
+/// The numbers of the template: chain values (0-10), joint limits (11, 12), tilting (13-15),
+/// transmission terms (16-19), a link mass and its centre (20, 21), tool, payload, scale, base
+/// (22-27).
+pub(crate) const N_FIELDS: usize = 28;
+
+/// `{:e}` gives `1e300`, `-2.5e-7`: valid TOML floats.
 fn toml_float(v: f64) -> String {
-    let s = format!("{v:e}");
-    // TOML needs a digit after a decimal point only; `{:e}` gives `1e300`, `-2.5e-7`
-    s
+    format!("{v:e}")
 }
 
-fn model_text(values: &[f64; 25]) -> String {
-    let mut s = MODEL_TEMPLATE.to_string();
+/// Joints 2 and 3 of the template.
+const PLAIN_JOINT: &str = "[[joint]]
+min = -170.0
+max = 170.0
+clearance_deg = 0.02
+backlash_deg = 0.06
+stiffness_kgfm_per_deg = 120.0";
+
+pub(crate) fn model_text(values: &[f64; N_FIELDS]) -> String {
+    let mut s = MODEL_TEMPLATE.replace("{plain_joint}", PLAIN_JOINT);
     for (k, v) in values.iter().enumerate().rev() {
         s = s.replace(&format!("{{{k}}}"), &toml_float(*v));
     }
     s
 }
 
-fn with(k: usize, v: f64) -> [f64; 25] {
+pub(crate) fn with(k: usize, v: f64) -> [f64; N_FIELDS] {
     let mut vals = MODEL_DEFAULTS;
     vals[k] = v;
     vals
 }
 
-const JOINTS_CSV: &str = "q1,q2,q3\n10,20,30\n-5,40,-60\n0,0,0\n";
+pub(crate) const JOINTS_CSV: &str = "q1,q2,q3\n10,20,30\n-5,40,-60\n0,0,0\n";
 
 /// fk on a model: exit 0 with finite output, or 1 / 2; never 101, never longer than the bound.
 fn fk_is_sane(dir: &Path, model: &str, what: &str) -> Option<i32> {
@@ -379,108 +307,6 @@ fn item2_extreme_effects_and_noise_are_refused() {
             !out.join("cal.csv").exists(),
             "simulate {args:?} wrote cal.csv"
         );
-    }
-}
-
-/// Random finite values (1e+-300 included) in every model-file field: fk exits 0 with finite
-/// output, 1 or 2, within its bound.
-#[test]
-fn item2_property_random_finite_values_in_every_model_field() {
-    let dir = tempfile::tempdir().unwrap();
-    let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(26);
-    let specials = [
-        1e300, -1e300, 1e-300, -1e-300, 1e308, -1e308, 0.0, -0.0, 1e15, -1e15, 5e-324,
-    ];
-    for case in 0..120 {
-        let mut vals = MODEL_DEFAULTS;
-        let changes = rng.gen_range(1..=3);
-        for _ in 0..changes {
-            let k = rng.gen_range(0..vals.len());
-            vals[k] = if rng.gen_bool(0.5) {
-                specials[rng.gen_range(0..specials.len())]
-            } else {
-                let e: i32 = rng.gen_range(-300..=300);
-                rng.gen_range(-10.0..10.0) * 10f64.powi(e)
-            };
-        }
-        fk_is_sane(
-            dir.path(),
-            &model_text(&vals),
-            &format!("case {case}: {vals:?}"),
-        );
-    }
-}
-
-/// Random finite values in every URDF number: urdf2model exits 0, 1 or 2 within its bound, and
-/// a model it writes is read back by fk (exit 0 with finite output, 1 or 2).
-#[test]
-fn item2_property_random_finite_values_in_every_urdf_number() {
-    let dir = tempfile::tempdir().unwrap();
-    let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(2626);
-    let numbers: Vec<(usize, usize)> = {
-        // spans of the numbers in URDF (attribute values split on blanks)
-        let mut out = Vec::new();
-        let b = URDF.as_bytes();
-        let mut i = 0;
-        while i < b.len() {
-            let starts = (b[i].is_ascii_digit() || b[i] == b'-')
-                && i > 0
-                && (b[i - 1] == b'"' || b[i - 1] == b' ');
-            if starts {
-                let mut j = i + 1;
-                while j < b.len()
-                    && (b[j].is_ascii_digit() || b[j] == b'.' || b[j] == b'e' || b[j] == b'-')
-                {
-                    j += 1;
-                }
-                if j < b.len() && (b[j] == b'"' || b[j] == b' ') {
-                    out.push((i, j));
-                }
-                i = j;
-            } else {
-                i += 1;
-            }
-        }
-        out
-    };
-    assert!(numbers.len() > 15, "{}", numbers.len());
-    let out = dir.path().join("out.toml");
-    let q = dir.path().join("q.csv");
-    std::fs::write(&q, "j1,j2\n10,20\n-30,45\n").unwrap();
-    for case in 0..60 {
-        let (i, j) = numbers[rng.gen_range(0..numbers.len())];
-        let v: f64 = match rng.gen_range(0..4) {
-            0 => 1e300,
-            1 => -1e308,
-            2 => 1e-300,
-            _ => rng.gen_range(-10.0..10.0) * 10f64.powi(rng.gen_range(-300..=300)),
-        };
-        let text = format!("{}{v:e}{}", &URDF[..i], &URDF[j..]);
-        let u = dir.path().join("u.urdf");
-        std::fs::write(&u, &text).unwrap();
-        let _ = std::fs::remove_file(&out);
-        let r = rig!(30; "urdf2model", "--urdf", u, "--tip", "l2", "--out", out);
-        assert!(
-            !r.timed_out && matches!(r.code, Some(0..=2)),
-            "case {case} ({v:e} at {i}): {}",
-            r.show()
-        );
-        if r.code == Some(0) {
-            let model = std::fs::read_to_string(&out).unwrap();
-            let r = rig!(30; "fk", "--model", out, "--joints", q);
-            assert!(
-                matches!(r.code, Some(0..=2)),
-                "case {case}: fk {}\n{model}",
-                r.show()
-            );
-            if r.code == Some(0) {
-                assert!(
-                    !r.stdout.contains("NaN") && !r.stdout.contains("inf"),
-                    "{}",
-                    r.stdout
-                );
-            }
-        }
     }
 }
 
@@ -577,21 +403,6 @@ fn item5_a_header_of_200k_columns_is_checked_in_linear_time() {
     let r = rig!(60; "fk", "--joints", f);
     assert_eq!(r.code, Some(0), "{}", r.show());
     assert!(t.elapsed() < Duration::from_secs(20), "{:?}", t.elapsed());
-}
-
-fn long_urdf(n: usize) -> String {
-    let mut s = String::from("<robot name=\"long\">\n<link name=\"l0\"/>\n");
-    for k in 1..=n {
-        s.push_str(&format!(
-            "<link name=\"l{k}\"><inertial><mass value=\"0.1\"/><origin xyz=\"0.01 0 0\"/></inertial></link>\n\
-             <joint name=\"j{k}\" type=\"revolute\"><parent link=\"l{}\"/><child link=\"l{k}\"/>\
-             <origin xyz=\"0.001 0 0.001\" rpy=\"0 0.1 0\"/><axis xyz=\"0 0 1\"/>\
-             <limit lower=\"-1\" upper=\"1\"/></joint>\n",
-            k - 1
-        ));
-    }
-    s.push_str("</robot>\n");
-    s
 }
 
 #[test]

@@ -239,16 +239,7 @@ fn ur5_dh_urdf_matches_the_ur5_preset() {
 
 #[test]
 fn names_units_and_limits() {
-    let urdf = Urdf::parse(MIXED, "mixed.urdf").unwrap();
-    let imp = import_chain(
-        &urdf,
-        &ImportOptions {
-            base_link: None,
-            tip_link: "tip",
-            tool_mm: [0.0; 3],
-        },
-    )
-    .unwrap();
+    let imp = super::common::import_to(MIXED, "tip").unwrap();
     let m = &imp.model;
     assert_eq!(imp.joint_names, ["j-1", "j2", "j3", "j4", "j5"]);
     // `j-1` sanitised; its origin folds the fixed `mount` joint in.

@@ -3,6 +3,9 @@
 
 use std::path::PathBuf;
 
+pub mod long_urdf;
+pub mod spawn;
+
 /// `rel` (a file or folder) under the shared directory (`rigctl::shared_dir()`: `$RIG_SHARED_DIR`
 /// or `../shared`), or `None` after a `SKIPPED` message when it is absent. With `CI=true` its
 /// absence fails the test instead: CI runs with `../shared` beside the clone, so a missing file
@@ -142,4 +145,20 @@ pub fn py_script(name: &str) -> PathBuf {
     PathBuf::from(env!("CARGO_MANIFEST_DIR"))
         .join("tests/py")
         .join(name)
+}
+
+/// The chain of the URDF `text` from its root link to `tip_link`, tool point at the tip's origin.
+pub fn import_to(
+    text: &str,
+    tip_link: &str,
+) -> Result<rigctl::urdf::Imported, rigctl::urdf::UrdfError> {
+    let urdf = rigctl::urdf::Urdf::parse(text, "test.urdf")?;
+    rigctl::urdf::import_chain(
+        &urdf,
+        &rigctl::urdf::ImportOptions {
+            base_link: None,
+            tip_link,
+            tool_mm: [0.0; 3],
+        },
+    )
 }
