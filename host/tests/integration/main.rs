@@ -16,6 +16,7 @@ mod diagnose_probe;
 mod diagnose_sim;
 mod diagnose_transmission;
 mod diagnose_ur5;
+mod diagnose_verdicts;
 mod fusion_session;
 mod gross_errors;
 mod hostile_inputs;

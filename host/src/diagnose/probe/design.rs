@@ -23,7 +23,7 @@
 
 use nalgebra::{DMatrix, DVector, Matrix3, Vector3};
 
-use super::basis::{push_values, Term};
+use super::basis::{Domain, Term};
 
 /// The six distinct entries of a symmetric 3 x 3 matrix.
 const SYM: [(usize, usize); 6] = [(0, 0), (1, 1), (2, 2), (0, 1), (0, 2), (1, 2)];
@@ -82,15 +82,16 @@ pub struct Design {
 }
 
 impl Design {
-    /// Builds the design of the candidate `terms` for poses `q_deg` with measured residual parts
+    /// Builds the design of the candidate `terms` of `domain` at the variables `points` of the
+    /// poses ([`super::basis::point`]) with measured residual parts
     /// `m` and projectors `proj` (`None`: full position), folds `fold` (values `< folds`), and
     /// the measured Jacobians `jac` (`L_k = P_k J_k`, 3 x p, one per pose; empty: none) of the
     /// physical parameters fitted before.
     #[allow(clippy::too_many_arguments)]
     pub fn new(
         terms: &[Term],
-        ranges_deg: &[(f64, f64)],
-        q_deg: &[Vec<f64>],
+        domain: &Domain,
+        points: &[Vec<f64>],
         m: &[Vector3<f64>],
         proj: &[Option<Matrix3<f64>>],
         fold: &[usize],
@@ -103,7 +104,7 @@ impl Design {
             offsets.push(width);
             width += t.n_basis();
         }
-        let n = q_deg.len().min(m.len()).min(proj.len()).min(fold.len());
+        let n = points.len().min(m.len()).min(proj.len()).min(fold.len());
         let partial = proj.iter().take(n).any(Option::is_some);
         let folds = folds.max(1);
         let np = if jac.len() >= n && n > 0 {
@@ -123,7 +124,7 @@ impl Design {
         for k in 0..n {
             row.clear();
             for t in terms {
-                push_values(*t, ranges_deg, &q_deg[k], &mut row);
+                domain.push_values(*t, &points[k], &mut row);
             }
             let g = fold[k].min(folds - 1);
             members[g].push(k);
@@ -350,6 +351,117 @@ impl Design {
         &self.m
     }
 
+    /// Number of fitted physical parameters whose Jacobians the design holds.
+    pub fn n_physical(&self) -> usize {
+        if self.jac.is_empty() {
+            0
+        } else {
+            self.total.n.nrows()
+        }
+    }
+
+    /// Held-out residual (measured part, mm) of every pose when the **physical parameters alone**
+    /// are refitted without its fold, linearised at the final fit: with `N_g`, `h_g` the sums of
+    /// `L^T L` and `L^T m` over fold `g`, the fit on the other folds moves the parameters by
+    /// `N_{-g}^+ (h - h_g)` and the held-out residual is `m_k - L_k N_{-g}^+ (h - h_g)` (exact for
+    /// a model linear in its parameters). Without Jacobians: the residual itself.
+    pub fn physical_cv_residuals(&self) -> Vec<Vector3<f64>> {
+        let mut out = self.m.clone();
+        if self.jac.is_empty() {
+            return out;
+        }
+        for (g, members) in self.members.iter().enumerate() {
+            let fold = &self.per_fold[g];
+            let n = &self.total.n - &fold.n;
+            let h = &self.total.h - &fold.h;
+            let Some(delta) = solve_pinv(&n, &h) else {
+                continue;
+            };
+            for &k in members {
+                out[k] = self.m[k] - &self.jac[k] * &delta;
+            }
+        }
+        out
+    }
+
+    /// Expected `sum |held-out residual|^2` of [`Design::physical_cv_residuals`] over its value
+    /// for the residual itself when the model is right and the noise independent with the same
+    /// variance in every measured component: `(m + sum_g tr(N_g N_{-g}^+)) / m`, `m` the
+    /// measured components (the exact leverage of every fold, not an average).
+    pub fn physical_cv_inflation(&self, n_components: usize) -> f64 {
+        if self.jac.is_empty() || n_components == 0 {
+            return 1.0;
+        }
+        let mut extra = 0.0;
+        for fold in &self.per_fold {
+            let n = &self.total.n - &fold.n;
+            let scale = n.diagonal().amax().max(f64::MIN_POSITIVE);
+            if let Ok(ninv) = n.pseudo_inverse(1e-10 * scale) {
+                extra += (&fold.n * ninv).trace();
+            }
+        }
+        let m = n_components as f64;
+        (m + extra.max(0.0)) / m
+    }
+
+    /// How many parameter combinations these poses support: the physical problem linearised at
+    /// the final fit, `z_k = m_k + L_k d` with `d` the fitted parameters' departure from their
+    /// starting values (`nd = N d` given), is refitted on the directions of the `r` largest
+    /// eigenvalues of the column-scaled `N` of the training folds only (a truncated-SVD fit),
+    /// for `r = 0 ..= p`; the `r` with the least k-fold held-out squared error is returned.
+    /// `None` without Jacobians.
+    pub fn supported_parameters(&self, d: &DVector<f64>) -> Option<usize> {
+        let p = self.n_physical();
+        if p == 0 || d.len() != p {
+            return None;
+        }
+        let scale: Vec<f64> = (0..p)
+            .map(|i| {
+                let v = self.total.n[(i, i)];
+                if v > 0.0 {
+                    1.0 / v.sqrt()
+                } else {
+                    0.0
+                }
+            })
+            .collect();
+        let sd = DMatrix::from_diagonal(&DVector::from_vec(scale));
+        let mut sse = vec![0.0; p + 1];
+        for (g, members) in self.members.iter().enumerate() {
+            let fold = &self.per_fold[g];
+            let n_tr = &self.total.n - &fold.n;
+            let h_tr = (&self.total.h - &fold.h) + &n_tr * d;
+            let ns = &sd * n_tr * &sd;
+            let hs = &sd * h_tr;
+            let eig = ns.symmetric_eigen();
+            let mut order: Vec<usize> = (0..p).collect();
+            order.sort_by(|&a, &b| eig.eigenvalues[b].total_cmp(&eig.eigenvalues[a]));
+            let top = eig.eigenvalues[order[0]].max(f64::MIN_POSITIVE);
+            let mut x = DVector::zeros(p);
+            let z: Vec<Vector3<f64>> = members
+                .iter()
+                .map(|&k| self.m[k] + &self.jac[k] * d)
+                .collect();
+            for r in 0..=p {
+                if r > 0 {
+                    let i = order[r - 1];
+                    let lam = eig.eigenvalues[i];
+                    if lam > 1e-12 * top {
+                        let v = eig.eigenvectors.column(i);
+                        x += &v * (v.dot(&hs) / lam);
+                    }
+                }
+                let theta = &sd * &x;
+                sse[r] += members
+                    .iter()
+                    .zip(&z)
+                    .map(|(&k, zk)| (zk - &self.jac[k] * &theta).norm_squared())
+                    .sum::<f64>();
+            }
+        }
+        (0..=p).min_by(|&a, &b| sse[a].total_cmp(&sse[b]))
+    }
+
     /// The error "slots" of a set of residuals for the paired test: the three absolute
     /// coordinates of a full position (independent noise per coordinate), the norm of the
     /// measured part of a partial one.
@@ -365,6 +477,13 @@ impl Design {
     }
 }
 
+/// `n^+ h` with the singular values below `1e-10` of the largest cut.
+fn solve_pinv(n: &DMatrix<f64>, h: &DVector<f64>) -> Option<DVector<f64>> {
+    let scale = n.diagonal().amax().max(f64::MIN_POSITIVE);
+    let x = n.clone().pseudo_inverse(1e-10 * scale).ok()? * h;
+    x.iter().all(|v| v.is_finite()).then_some(x)
+}
+
 /// Copies the upper triangle onto the lower one.
 fn mirror(m: &mut DMatrix<f64>) {
     let n = m.nrows();
@@ -378,7 +497,7 @@ fn mirror(m: &mut DMatrix<f64>) {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::diagnose::probe::basis::{candidate_terms, joint_ranges_deg};
+    use crate::diagnose::probe::basis::Domain;
 
     /// A correction that is exactly in the basis is recovered from full and partial poses alike,
     /// and its held-out errors vanish.
@@ -387,11 +506,12 @@ mod tests {
         let q: Vec<Vec<f64>> = (0..60)
             .map(|k| vec![(k as f64 * 7.3) % 90.0, (k as f64 * 3.1) % 50.0 - 20.0])
             .collect();
-        let ranges = joint_ranges_deg(&q);
-        let terms = candidate_terms(&ranges);
+        let domain = Domain::of(&q, false);
+        let terms = domain.candidate_terms();
+        let (lo, hi) = (domain.axes[0].lo, domain.axes[0].hi);
         let truth = |q: &[f64]| {
-            let x = 2.0 * (q[0] - ranges[0].0) / (ranges[0].1 - ranges[0].0) - 1.0;
-            Vector3::new(0.3 * x, -0.1 * x * x, 0.05)
+            let c = |k: f64| (k * std::f64::consts::PI * (q[0] - lo) / (hi - lo)).cos();
+            Vector3::new(0.3 * c(1.0), -0.1 * c(3.0), 0.05)
         };
         for partial in [false, true] {
             let proj: Vec<Option<Matrix3<f64>>> = (0..q.len())
@@ -410,7 +530,7 @@ mod tests {
                 .map(|(q, p)| p.map_or(truth(q), |p| p * truth(q)))
                 .collect();
             let fold: Vec<usize> = (0..q.len()).map(|k| k % 5).collect();
-            let d = Design::new(&terms, &ranges, &q, &m, &proj, &fold, 5, &[]);
+            let d = Design::new(&terms, &domain, &q, &m, &proj, &fold, 5, &[]);
             let cols = d.columns(&[0, 1]);
             let e = d.cv_residuals(&cols).unwrap();
             let worst = e.iter().map(|v| v.norm()).fold(0.0, f64::max);
