@@ -522,7 +522,8 @@ pub fn diagnose(
         (cal.measured_dims(), tau),
     );
     let aliased = aliased_pairs(&selection, &requested, cal, &mut effects)?;
-    let (probe, probe_cfg) = probe_residual(model, last, cal, &final_cal, &floor, opts)?;
+    let (probe, probe_cfg, cal_jac) = probe_residual(model, last, cal, &final_cal, &floor, opts)?;
+    let val_jac = probe::jacobians(&last.ext, val, &last.fitted)?;
     let verdict = verdict::judge(
         &floor,
         &probe,
@@ -531,6 +532,7 @@ pub fn diagnose(
             n_params: last.fitted.len(),
             tau,
             val_residuals: (0..val.len()).map(|k| val.rows(k)).sum(),
+            val_inflation: verdict::prediction_inflation(cal, &cal_jac, val, &val_jac),
         },
     );
     unexplained.note = format!("{}; {}", verdict.note, unexplained.note);
@@ -710,7 +712,7 @@ fn probe_residual(
     final_cal: &[Vector3<f64>],
     floor: &floor::FloorReport,
     opts: &DiagnoseOptions,
-) -> Result<(probe::ProbeResult, probe::ProbeConfig), DiagnoseError> {
+) -> Result<(probe::ProbeResult, probe::ProbeConfig, Vec<nalgebra::DMatrix<f64>>), DiagnoseError> {
     let cfg = &opts.decide;
     // an independent floor (instrument, repeatability) also sets the smallest term worth naming
     let known_floor_mm = match floor.used.as_str() {
@@ -732,7 +734,7 @@ fn probe_residual(
         .map(|&u| last.ext.value(u) - start.value(u))
         .collect();
     let probe = probe::probe_dataset_with(cal, final_cal, &jac, &departure, &probe_cfg);
-    Ok((probe, probe_cfg))
+    Ok((probe, probe_cfg, jac))
 }
 
 fn unexplained(

@@ -32,6 +32,9 @@ const SYM: [(usize, usize); 6] = [(0, 0), (1, 1), (2, 2), (0, 1), (0, 2), (1, 2)
 /// choice of terms, not the ridge, is what cross-validation controls.
 pub const RIDGE_REL: f64 = 1e-3;
 
+/// Up to this many poses the physical cross-validation leaves one pose out at a time.
+pub const LOO_MAX_POSES: usize = 200;
+
 /// Accumulated Gram blocks of one set of poses.
 #[derive(Debug, Clone)]
 struct Blocks {
@@ -360,48 +363,63 @@ impl Design {
         }
     }
 
-    /// Held-out residual (measured part, mm) of every pose when the **physical parameters alone**
-    /// are refitted without its fold, linearised at the final fit: with `N_g`, `h_g` the sums of
-    /// `L^T L` and `L^T m` over fold `g`, the fit on the other folds moves the parameters by
-    /// `N_{-g}^+ (h - h_g)` and the held-out residual is `m_k - L_k N_{-g}^+ (h - h_g)` (exact for
-    /// a model linear in its parameters). Without Jacobians: the residual itself.
-    pub fn physical_cv_residuals(&self) -> Vec<Vector3<f64>> {
-        let mut out = self.m.clone();
-        if self.jac.is_empty() {
-            return out;
+    /// The groups left out by the physical cross-validation: every pose alone (leave-one-out)
+    /// up to [`LOO_MAX_POSES`] poses, so that each training set keeps as many residuals per
+    /// parameter as the poses allow; the design's folds above.
+    fn physical_groups(&self) -> Vec<Vec<usize>> {
+        if self.m.len() <= LOO_MAX_POSES {
+            (0..self.m.len()).map(|k| vec![k]).collect()
+        } else {
+            self.members.clone()
         }
-        for (g, members) in self.members.iter().enumerate() {
-            let fold = &self.per_fold[g];
-            let n = &self.total.n - &fold.n;
-            let h = &self.total.h - &fold.h;
-            let Some(delta) = solve_pinv(&n, &h) else {
+    }
+
+    /// `sum L^T L` and `sum L^T m` over the poses `group`.
+    fn group_sums(&self, group: &[usize]) -> (DMatrix<f64>, DVector<f64>) {
+        let p = self.total.n.nrows();
+        let mut n = DMatrix::zeros(p, p);
+        let mut h = DVector::zeros(p);
+        for &k in group {
+            let l = &self.jac[k];
+            n += l.transpose() * l;
+            h += l.transpose() * self.m[k];
+        }
+        (n, h)
+    }
+
+    /// Held-out residual (measured part, mm) of every pose when the **physical parameters alone**
+    /// are refitted without its group ([`Design::physical_groups`]), linearised at the final
+    /// fit: with `N_g`, `h_g` the sums of `L^T L` and `L^T m` over group `g`, the fit on the
+    /// other poses moves the parameters by `N_{-g}^+ (h - h_g)` and the held-out residual is
+    /// `m_k - L_k N_{-g}^+ (h - h_g)` (exact for a model linear in its parameters). Also the
+    /// expected ratio of their sum of squares to the residual's for a right model with
+    /// independent noise of equal variance in every measured component,
+    /// `(m + sum_g tr(N_g N_{-g}^+)) / m` over the `m` = `n_components` components (the exact
+    /// leverage of every group). Without Jacobians: the residual itself and 1.
+    pub fn physical_cv(&self, n_components: usize) -> (Vec<Vector3<f64>>, f64) {
+        let mut out = self.m.clone();
+        if self.jac.is_empty() || n_components == 0 {
+            return (out, 1.0);
+        }
+        let mut extra = 0.0;
+        for group in self.physical_groups() {
+            let (ng, hg) = self.group_sums(&group);
+            let n = &self.total.n - &ng;
+            let scale = n.diagonal().amax().max(f64::MIN_POSITIVE);
+            let Ok(ninv) = n.pseudo_inverse(1e-10 * scale) else {
                 continue;
             };
-            for &k in members {
+            let delta = &ninv * (&self.total.h - hg);
+            if !delta.iter().all(|v| v.is_finite()) {
+                continue;
+            }
+            extra += (ng * &ninv).trace();
+            for &k in &group {
                 out[k] = self.m[k] - &self.jac[k] * &delta;
             }
         }
-        out
-    }
-
-    /// Expected `sum |held-out residual|^2` of [`Design::physical_cv_residuals`] over its value
-    /// for the residual itself when the model is right and the noise independent with the same
-    /// variance in every measured component: `(m + sum_g tr(N_g N_{-g}^+)) / m`, `m` the
-    /// measured components (the exact leverage of every fold, not an average).
-    pub fn physical_cv_inflation(&self, n_components: usize) -> f64 {
-        if self.jac.is_empty() || n_components == 0 {
-            return 1.0;
-        }
-        let mut extra = 0.0;
-        for fold in &self.per_fold {
-            let n = &self.total.n - &fold.n;
-            let scale = n.diagonal().amax().max(f64::MIN_POSITIVE);
-            if let Ok(ninv) = n.pseudo_inverse(1e-10 * scale) {
-                extra += (&fold.n * ninv).trace();
-            }
-        }
         let m = n_components as f64;
-        (m + extra.max(0.0)) / m
+        (out, ((m + extra.max(0.0)) / m).max(1.0))
     }
 
     /// How many parameter combinations these poses support: the physical problem linearised at
@@ -475,13 +493,6 @@ impl Design {
         }
         out
     }
-}
-
-/// `n^+ h` with the singular values below `1e-10` of the largest cut.
-fn solve_pinv(n: &DMatrix<f64>, h: &DVector<f64>) -> Option<DVector<f64>> {
-    let scale = n.diagonal().amax().max(f64::MIN_POSITIVE);
-    let x = n.clone().pseudo_inverse(1e-10 * scale).ok()? * h;
-    x.iter().all(|v| v.is_finite()).then_some(x)
 }
 
 /// Copies the upper triangle onto the lower one.

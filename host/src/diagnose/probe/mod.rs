@@ -123,12 +123,12 @@ pub struct ProbeResult {
     pub with_time: bool,
     /// Held-out RMS per measured component (mm) of the physical model alone under the same
     /// folds (its fitted parameters refitted without each fold, linearised at the final fit;
-    /// [`design::Design::physical_cv_residuals`]); NaN when the probe did not run.
+    /// [`design::Design::physical_cv`]); NaN when the probe did not run.
     pub physical_cv_rms_mm: f64,
     /// Number of measured components of the poses used.
     pub n_components: usize,
     /// Expected ratio of the physical cross-validated to the residual sum of squares for a right
-    /// model ([`design::Design::physical_cv_inflation`]; 1 when the probe did not run).
+    /// model ([`design::Design::physical_cv`]; 1 when the probe did not run).
     pub physical_cv_inflation: f64,
     /// Number of fitted physical parameters given to the probe.
     pub n_parameters: usize,
@@ -352,11 +352,8 @@ pub fn probe_dataset_with(
     let sel = select::forward(&design, serial, n_components, cfg);
     let model = ResidualModel::fit(&design, &sel.selected, &domain);
     let rms = |sse: f64| (sse / n_components.max(1) as f64).sqrt();
-    let physical_cv_rms_mm = rms(design
-        .physical_cv_residuals()
-        .iter()
-        .map(|v| v.norm_squared())
-        .sum());
+    let (physical_cv, physical_cv_inflation) = design.physical_cv(n_components);
+    let physical_cv_rms_mm = rms(physical_cv.iter().map(|v| v.norm_squared()).sum());
     let supported_parameters = (departure.len() == design.n_physical())
         .then(|| design.supported_parameters(&DVector::from_column_slice(departure)))
         .flatten();
@@ -386,7 +383,7 @@ pub fn probe_dataset_with(
         with_time,
         physical_cv_rms_mm,
         n_components,
-        physical_cv_inflation: design.physical_cv_inflation(n_components),
+        physical_cv_inflation,
         n_parameters: design.n_physical(),
         supported_parameters,
     }
