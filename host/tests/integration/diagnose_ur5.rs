@@ -51,3 +51,34 @@ fn ur5_laser_tracker_effects_lower_the_held_out_error() {
     );
     assert_eq!(r.floor.used, "instrument");
 }
+
+/// The hybrid model (`--residual-model`): the physical model plus the probe's smooth function of
+/// the joint angles, fitted to the final residual of the 1000 grid poses, on the 20 random poses.
+#[test]
+fn ur5_laser_tracker_hybrid_lowers_the_held_out_error() {
+    let Some(dir) = common::shared_file(
+        "ur5_laser_tracker_hybrid_lowers_the_held_out_error",
+        "data/real/ur5_laser_tracker",
+    ) else {
+        return;
+    };
+    let model = common::ur5_with_smr_tool();
+    let cal = Dataset::read(&dir.join("grid.csv"), &model).unwrap();
+    let val = Dataset::read(&dir.join("random.csv"), &model).unwrap();
+    let opts = DiagnoseOptions {
+        instrument_mm: Some(0.015),
+        ..DiagnoseOptions::default()
+    };
+    let d = diagnose(&model, &cal, &val, &opts).unwrap();
+    let physical = d.model.errors(&val).unwrap();
+    let fitted = &d.selection.last.fitted;
+    let jac = rigctl::diagnose::probe::jacobians(&d.model, &val, fitted).unwrap();
+    let h = rigctl::diagnose::probe::hybrid_report(&d.probe.model, &val, &physical, &jac, &[]);
+    eprintln!(
+        "probe {:?}; held out mean: physical {:.5} mm, hybrid {:.5} mm",
+        d.report.unexplained.depends_on, h.validation_physical.mean_mm, h.validation_hybrid.mean_mm
+    );
+    assert!(h.validation_physical.mean_mm < 0.08865, "{:?}", h.validation_physical);
+    // a Gaussian process with one length scale per sin/cos of each joint reaches 0.0685 mm
+    assert!(h.validation_hybrid.mean_mm <= 0.075, "{:?}", h.validation_hybrid);
+}
