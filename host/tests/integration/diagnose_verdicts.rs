@@ -165,3 +165,73 @@ fn few_poses_for_many_parameters_is_overfitting() {
         assert_ne!(kind(&d), "overfitting", "seed {seed}\n{}", d.report.table());
     }
 }
+
+fn ur5_session(effects: &[&str], seed: u64) -> (rigctl::model::Model, Dataset, Dataset) {
+    let mut declared = rigctl::model::ur5().unwrap();
+    for (name, v) in ["tool_dx", "tool_dy", "tool_dz"]
+        .iter()
+        .zip(rigctl::model::UR5_SMR_TOOL_MM)
+    {
+        declared.set_param(name, v).unwrap();
+    }
+    let cfg = SimConfig {
+        seed,
+        noise_mm: NOISE_MM,
+        effects: effects.iter().map(|e| parse_effect(e).unwrap()).collect(),
+        ..SimConfig::default()
+    };
+    let s = simulate(&declared, &cfg).unwrap();
+    (
+        declared,
+        Dataset::from_sim_poses(&s.cal),
+        Dataset::from_sim_poses(&s.val),
+    )
+}
+
+/// A joint that deflects against gravity (a negative compliance, which no joint has) is never
+/// kept as a negative compliance: the fit that includes it is handed to the bounds, which hold
+/// it at zero and refit the others; a positive compliance is kept as fitted.
+#[test]
+fn a_negative_compliance_is_held_at_its_bound() {
+    use rigctl::calib::default_selection;
+    use rigctl::diagnose::bounds;
+    use rigctl::diagnose::decide::{DecideConfig, Selection};
+    use rigctl::diagnose::extended::{fit, ExtModel, Unknown};
+    let cfg = DecideConfig::default();
+    for (truth, negative) in [(-0.01, true), (0.01, false)] {
+        let effect = format!("compliance:j3={truth}");
+        let (declared, cal, _) = ur5_session(&[effect.as_str()], 1);
+        let mut requested: Vec<Unknown> = default_selection(&declared, false)
+            .into_iter()
+            .map(Unknown::Param)
+            .collect();
+        requested.push(Unknown::Compliance(2));
+        let f = fit(&ExtModel::new(declared.clone()), &cal, &requested, &cfg.lm, cfg.rtol, false)
+            .unwrap();
+        let fitted = f.ext.value(Unknown::Compliance(2));
+        assert_eq!(fitted < 0.0, negative, "{effect}: fitted {fitted}");
+        let rss = f.rss_mm2;
+        let mut sel = Selection {
+            steps: Vec::new(),
+            last_trials: Vec::new(),
+            last: f,
+            requested,
+        };
+        let reports = bounds::enforce(&mut sel, &cal, &cfg);
+        let held = sel.last.ext.value(Unknown::Compliance(2));
+        if negative {
+            assert_eq!(reports.len(), 1, "{reports:?}");
+            assert_eq!(reports[0].parameter, "compliance_j3_deg_per_kgfm");
+            assert_eq!(reports[0].action, "held_at_bound");
+            assert!((reports[0].fitted_value - fitted).abs() < 1e-12);
+            assert!(held == 0.0, "{held}");
+            assert!(!sel.last.fitted.contains(&Unknown::Compliance(2)));
+            // the constrained refit is worse than the unconstrained one, never better
+            assert!(sel.last.rss_mm2 >= rss * (1.0 - 1e-9), "{} < {rss}", sel.last.rss_mm2);
+            assert!(bounds::sentence(&reports).contains("held at it"));
+        } else {
+            assert!(reports.is_empty(), "{reports:?}");
+            assert!((held - fitted).abs() < 1e-12);
+        }
+    }
+}
