@@ -70,11 +70,7 @@ pub fn lower_bound(u: Unknown, model: &Model) -> Option<Bound> {
 
 /// Holds every final value of `selection` below its bound at the bound and refits the others
 /// on `cal` (the final fit is replaced); returns what was done.
-pub fn enforce(
-    selection: &mut Selection,
-    cal: &Dataset,
-    cfg: &DecideConfig,
-) -> Vec<BoundReport> {
+pub fn enforce(selection: &mut Selection, cal: &Dataset, cfg: &DecideConfig) -> Vec<BoundReport> {
     let mut reports = Vec::new();
     // each pass fixes at least one more unknown: at most as many passes as unknowns
     for _ in 0..selection.last.fitted.len() {
@@ -86,7 +82,11 @@ pub fn enforce(
             .filter_map(|&u| {
                 let b = lower_bound(u, model)?;
                 let v = selection.last.ext.value(u);
-                let out = if b.hold > b.min { v <= b.min } else { v < b.min };
+                let out = if b.hold > b.min {
+                    v <= b.min
+                } else {
+                    v < b.min
+                };
                 out.then_some((u, v, b))
             })
             .collect();

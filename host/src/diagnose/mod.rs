@@ -712,7 +712,14 @@ fn probe_residual(
     final_cal: &[Vector3<f64>],
     floor: &floor::FloorReport,
     opts: &DiagnoseOptions,
-) -> Result<(probe::ProbeResult, probe::ProbeConfig, Vec<nalgebra::DMatrix<f64>>), DiagnoseError> {
+) -> Result<
+    (
+        probe::ProbeResult,
+        probe::ProbeConfig,
+        Vec<nalgebra::DMatrix<f64>>,
+    ),
+    DiagnoseError,
+> {
     let cfg = &opts.decide;
     // an independent floor (instrument, repeatability) also sets the smallest term worth naming
     let known_floor_mm = match floor.used.as_str() {

@@ -396,19 +396,19 @@ pub fn verdict(doc: &Value) -> Option<String> {
         ));
     }
     let verdict = doc.get("verdict");
-    let kind = verdict
-        .and_then(|v| v.get("kind"))
-        .and_then(Value::as_str);
+    let kind = verdict.and_then(|v| v.get("kind")).and_then(Value::as_str);
     match kind {
         Some("overfitting") => {
-            let fitted = verdict.and_then(|v| v.get("fitted_parameters")).and_then(Value::as_u64);
+            let fitted = verdict
+                .and_then(|v| v.get("fitted_parameters"))
+                .and_then(Value::as_u64);
             let supported = verdict
                 .and_then(|v| v.get("supported_parameters"))
                 .and_then(Value::as_u64);
             let counts = match (fitted, supported) {
-                (Some(p), Some(r)) => format!(
-                    ": {p} parameters fitted, the poses support about {r}"
-                ),
+                (Some(p), Some(r)) => {
+                    format!(": {p} parameters fitted, the poses support about {r}")
+                }
                 (Some(p), None) => format!(": {p} parameters fitted"),
                 _ => String::new(),
             };

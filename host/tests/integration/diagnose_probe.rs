@@ -99,8 +99,14 @@ fn a_bump_in_q2_and_a_q1_q3_interaction_are_both_named() {
         }
         let before = rms_after(&ProbeResult::empty(0, 5), &qv, &rv);
         let after = rms_after(&p, &qv, &rv);
-        eprintln!("seed {seed}: held out {before:.4} -> {after:.4} mm per coordinate, {:?}", p.depends_on);
-        assert!(after <= 1.3 * NOISE_MM, "seed {seed}: {before:.4} -> {after:.4}");
+        eprintln!(
+            "seed {seed}: held out {before:.4} -> {after:.4} mm per coordinate, {:?}",
+            p.depends_on
+        );
+        assert!(
+            after <= 1.3 * NOISE_MM,
+            "seed {seed}: {before:.4} -> {after:.4}"
+        );
     }
 }
 

@@ -78,7 +78,15 @@ fn ur5_laser_tracker_hybrid_lowers_the_held_out_error() {
         "probe {:?}; held out mean: physical {:.5} mm, hybrid {:.5} mm",
         d.report.unexplained.depends_on, h.validation_physical.mean_mm, h.validation_hybrid.mean_mm
     );
-    assert!(h.validation_physical.mean_mm < 0.08865, "{:?}", h.validation_physical);
+    assert!(
+        h.validation_physical.mean_mm < 0.08865,
+        "{:?}",
+        h.validation_physical
+    );
     // a Gaussian process with one length scale per sin/cos of each joint reaches 0.0685 mm
-    assert!(h.validation_hybrid.mean_mm <= 0.075, "{:?}", h.validation_hybrid);
+    assert!(
+        h.validation_hybrid.mean_mm <= 0.075,
+        "{:?}",
+        h.validation_hybrid
+    );
 }

@@ -82,7 +82,12 @@ fn an_effect_not_added_is_a_missing_effect() {
             &Dataset::from_sim_poses(&s.val),
             &o,
         );
-        assert_eq!(kind(&d), "missing_effect", "seed {seed}\n{}", d.report.table());
+        assert_eq!(
+            kind(&d),
+            "missing_effect",
+            "seed {seed}\n{}",
+            d.report.table()
+        );
         assert!(d.report.table().contains("lacks something"));
     }
 }
@@ -159,7 +164,11 @@ fn few_poses_for_many_parameters_is_overfitting() {
         assert_eq!(kind(&d), "overfitting", "seed {seed}\n{}", d.report.table());
         let v = &d.report.verdict;
         assert!(v.supported_parameters.is_some(), "{v:?}");
-        assert!(d.report.table().contains("poses support about"), "{}", d.report.table());
+        assert!(
+            d.report.table().contains("poses support about"),
+            "{}",
+            d.report.table()
+        );
         // the same arm on all its 118 poses is at the floor or lacks the error: never overfitting
         let (d, _) = ur5_few_poses(118, 0.05, seed);
         assert_ne!(kind(&d), "overfitting", "seed {seed}\n{}", d.report.table());
@@ -206,8 +215,15 @@ fn a_negative_compliance_is_held_at_its_bound() {
             .map(Unknown::Param)
             .collect();
         requested.push(Unknown::Compliance(2));
-        let f = fit(&ExtModel::new(declared.clone()), &cal, &requested, &cfg.lm, cfg.rtol, false)
-            .unwrap();
+        let f = fit(
+            &ExtModel::new(declared.clone()),
+            &cal,
+            &requested,
+            &cfg.lm,
+            cfg.rtol,
+            false,
+        )
+        .unwrap();
         let fitted = f.ext.value(Unknown::Compliance(2));
         assert_eq!(fitted < 0.0, negative, "{effect}: fitted {fitted}");
         let rss = f.rss_mm2;
@@ -227,7 +243,11 @@ fn a_negative_compliance_is_held_at_its_bound() {
             assert!(held == 0.0, "{held}");
             assert!(!sel.last.fitted.contains(&Unknown::Compliance(2)));
             // the constrained refit is worse than the unconstrained one, never better
-            assert!(sel.last.rss_mm2 >= rss * (1.0 - 1e-9), "{} < {rss}", sel.last.rss_mm2);
+            assert!(
+                sel.last.rss_mm2 >= rss * (1.0 - 1e-9),
+                "{} < {rss}",
+                sel.last.rss_mm2
+            );
             assert!(bounds::sentence(&reports).contains("held at it"));
         } else {
             assert!(reports.is_empty(), "{reports:?}");

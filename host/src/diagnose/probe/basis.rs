@@ -122,7 +122,11 @@ impl Axis {
             let x = if v.is_finite() { v.to_radians() } else { 0.0 };
             for n in 0..count {
                 let k = (n / 2 + 1) as f64;
-                out.push(if n % 2 == 0 { (k * x).sin() } else { (k * x).cos() });
+                out.push(if n % 2 == 0 {
+                    (k * x).sin()
+                } else {
+                    (k * x).cos()
+                });
             }
         } else {
             let span = self.hi - self.lo;

@@ -466,7 +466,7 @@ impl Design {
                     let lam = eig.eigenvalues[i];
                     if lam > 1e-12 * top {
                         let v = eig.eigenvectors.column(i);
-                        x += &v * (v.dot(&hs) / lam);
+                        x += v * (v.dot(&hs) / lam);
                     }
                 }
                 let theta = &sd * &x;
