@@ -9,21 +9,37 @@
 use nalgebra::Vector3;
 use rigctl::diagnose::data::Dataset;
 use rigctl::diagnose::{diagnose, DiagnoseOptions, Diagnosis};
-use rigctl::model::katana450;
+use rigctl::model::{katana450, Model};
 use rigctl::sim::effects::parse_effect;
 use rigctl::sim::simulate::{simulate, SimConfig, SimOutput};
 
 const NOISE_MM: f64 = 0.01;
 
-fn session(effects: &[&str], seed: u64) -> SimOutput {
-    let declared = katana450(200.0).unwrap();
+/// A simulated session of `declared` with `effects` (0.01 mm noise).
+fn sim(declared: &Model, effects: &[&str], seed: u64) -> SimOutput {
     let cfg = SimConfig {
         seed,
         noise_mm: NOISE_MM,
         effects: effects.iter().map(|e| parse_effect(e).unwrap()).collect(),
         ..SimConfig::default()
     };
-    simulate(&declared, &cfg).unwrap()
+    simulate(declared, &cfg).unwrap()
+}
+
+fn session(effects: &[&str], seed: u64) -> SimOutput {
+    sim(&katana450(200.0).unwrap(), effects, seed)
+}
+
+/// The UR5 preset with the tracker's SMR tool point.
+fn ur5() -> Model {
+    let mut declared = rigctl::model::ur5().unwrap();
+    for (name, v) in ["tool_dx", "tool_dy", "tool_dz"]
+        .iter()
+        .zip(rigctl::model::UR5_SMR_TOOL_MM)
+    {
+        declared.set_param(name, v).unwrap();
+    }
+    declared
 }
 
 fn opts() -> DiagnoseOptions {
@@ -118,19 +134,8 @@ fn another_tool_mounting_is_a_change_between_sets() {
 /// parameters absorb it on the calibration poses (residual at the floor) but predict the
 /// poses left out badly. A UR5 (27 declared parameters) on `n` of its random poses.
 fn ur5_few_poses(n: usize, amp_mm: f64, seed: u64) -> (Diagnosis, Dataset) {
-    let mut declared = rigctl::model::ur5().unwrap();
-    for (name, v) in ["tool_dx", "tool_dy", "tool_dz"]
-        .iter()
-        .zip(rigctl::model::UR5_SMR_TOOL_MM)
-    {
-        declared.set_param(name, v).unwrap();
-    }
-    let cfg = SimConfig {
-        seed,
-        noise_mm: NOISE_MM,
-        ..SimConfig::default()
-    };
-    let s = simulate(&declared, &cfg).unwrap();
+    let declared = ur5();
+    let s = sim(&declared, &[], seed);
     let bump = |q: &[f64]| {
         let u = (q[1] + 60.0) / 40.0;
         let w = (q[2] - 30.0) / 50.0;
@@ -175,26 +180,10 @@ fn few_poses_for_many_parameters_is_overfitting() {
     }
 }
 
-fn ur5_session(effects: &[&str], seed: u64) -> (rigctl::model::Model, Dataset, Dataset) {
-    let mut declared = rigctl::model::ur5().unwrap();
-    for (name, v) in ["tool_dx", "tool_dy", "tool_dz"]
-        .iter()
-        .zip(rigctl::model::UR5_SMR_TOOL_MM)
-    {
-        declared.set_param(name, v).unwrap();
-    }
-    let cfg = SimConfig {
-        seed,
-        noise_mm: NOISE_MM,
-        effects: effects.iter().map(|e| parse_effect(e).unwrap()).collect(),
-        ..SimConfig::default()
-    };
-    let s = simulate(&declared, &cfg).unwrap();
-    (
-        declared,
-        Dataset::from_sim_poses(&s.cal),
-        Dataset::from_sim_poses(&s.val),
-    )
+fn ur5_session(effects: &[&str], seed: u64) -> (Model, Dataset) {
+    let declared = ur5();
+    let s = sim(&declared, effects, seed);
+    (declared, Dataset::from_sim_poses(&s.cal))
 }
 
 /// A joint that deflects against gravity (a negative compliance, which no joint has) is never
@@ -209,7 +198,7 @@ fn a_negative_compliance_is_held_at_its_bound() {
     let cfg = DecideConfig::default();
     for (truth, negative) in [(-0.01, true), (0.01, false)] {
         let effect = format!("compliance:j3={truth}");
-        let (declared, cal, _) = ur5_session(&[effect.as_str()], 1);
+        let (declared, cal) = ur5_session(&[effect.as_str()], 1);
         let mut requested: Vec<Unknown> = default_selection(&declared, false)
             .into_iter()
             .map(Unknown::Param)
