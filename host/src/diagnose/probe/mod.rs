@@ -70,7 +70,7 @@ impl Default for ProbeConfig {
             alpha: 0.01,
             min_gain: 0.02,
             max_terms: 10,
-            max_poses: 5000,
+            max_poses: 3000,
             floor_mm: None,
             floor_min_ratio: 0.2,
         }
