@@ -365,40 +365,6 @@ pub fn judge(
     }
 }
 
-/// The plain-language verdict of a floor report.
-pub fn verdict(f: &FloorReport) -> String {
-    let fmt_p = |p: Option<f64>| p.map_or("-".to_string(), |p| format!("{p:.1e}"));
-    match f.used.as_str() {
-        "residual" => format!(
-            "no independent floor ({}): the noise is estimated from the final residual itself ({:.4} mm per coordinate), so the diagnosis cannot tell a missing effect from noise; held-out residual {:.4} mm per coordinate",
-            f.note, f.residual_mm, f.validation_rms_mm
-        ),
-        used => {
-            let floor = if used == "instrument" {
-                f.instrument_mm
-            } else {
-                f.repeatability_mm
-            }
-            .unwrap_or(f64::NAN);
-            let head = if f.above {
-                "the model still lacks something"
-            } else {
-                "at the floor"
-            };
-            format!(
-                "{head}: final calibration residual {:.4} mm per coordinate = {:.2} x the {used} floor {floor:.4} mm (p = {}), held out {:.4} mm = {:.2} x (p = {}); floor: {}",
-                f.residual_mm,
-                f.final_over_floor,
-                fmt_p(f.p_value),
-                f.validation_rms_mm,
-                f.validation_over_floor,
-                fmt_p(f.validation_p_value),
-                f.note
-            )
-        }
-    }
-}
-
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -567,7 +533,7 @@ mod tests {
         assert_eq!(a.repeatability_dof, Some(3));
         let b = judge(&r, None, few);
         assert_eq!(b.used, "residual", "{b:?}");
-        assert!(verdict(&b).contains("too uncertain"), "{}", verdict(&b));
+        assert!(b.note.contains("too uncertain"), "{}", b.note);
         // enough repeats: the repeatability is the floor, with its degrees of freedom
         let c = judge(&r, None, Some((0.02, 30)));
         assert_eq!(c.used, "repeatability");

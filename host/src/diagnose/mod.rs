@@ -13,10 +13,12 @@
 //! | [`polish`] | derivative-free polish of a refit across the sign steps of the tilting law |
 //! | [`stat`] | F distribution, BIC, noise statistics |
 //! | [`floor`] | the independent floor (`--instrument-mm`, repeatability) and its tests |
+//! | [`bounds`] | physical bounds on fitted values (a compliance, a mass cannot be negative): held at the bound and refitted |
 //! | [`alias`] | pairs of effects/parameters these poses cannot tell apart |
 //! | [`report`] | the `diagnose --json` document and the text table |
 //! | [`plots`] | SVG plots of the residual against the regressor that traced each effect |
-//! | [`probe`] | a smooth function of the joint angles fitted to the final residual under cross-validation: where the unexplained error lives |
+//! | [`probe`] | a smooth function of the joint angles (and the time) fitted to the final residual under cross-validation: where the unexplained error lives |
+//! | [`verdict`] | one verdict from the calibration, cross-validated and held-out residuals: floor, missing effect, overfitting, change between the sets |
 //!
 //! The starting point is the declared model (MODEL.md) fitted exactly as `calibrate --method
 //! tilting`: [`crate::calib::fit::fit_parameters`] on [`crate::calib::default_selection`] (the
@@ -31,6 +33,7 @@
 //! [`STRUCTURE_ALPHA`] — then something systematic remains that no candidate explained.
 
 pub mod alias;
+pub mod bounds;
 pub mod candidates;
 pub mod data;
 pub mod decide;
@@ -44,6 +47,7 @@ pub mod report;
 pub mod residual;
 pub mod select;
 pub mod stat;
+pub mod verdict;
 
 use crate::calib::outliers::{self, OutlierReport};
 use crate::calib::problem::norms_mm;
@@ -480,8 +484,9 @@ pub fn diagnose(
             }
         }
     }
-    let (cal, outliers, declared, requested, selection) = result;
+    let (cal, outliers, declared, requested, mut selection) = result;
     let cal = &cal;
+    let bound_reports = bounds::enforce(&mut selection, cal, cfg);
     // held-out poses judged by the calibration's threshold under the final model
     let mut outlier_reports = Vec::new();
     let val_kept;
@@ -524,13 +529,42 @@ pub fn diagnose(
         &selection,
         (cal.measured_dims(), tau),
     );
-    unexplained.note = format!("{}; {}", floor::verdict(&floor), unexplained.note);
+    let aliased = aliased_pairs(&selection, &requested, cal, &mut effects)?;
+    let (probe, probe_cfg, cal_jac) = probe_residual(model, last, cal, &final_cal, &floor, opts)?;
+    let val_jac = probe::jacobians(&last.ext, val, &last.fitted)?;
+    let verdict = verdict::judge(
+        &floor,
+        &probe,
+        verdict::Counts {
+            n_residuals: last.n_residuals,
+            n_params: last.fitted.len(),
+            tau,
+            val_residuals: (0..val.len()).map(|k| val.rows(k)).sum(),
+            val_inflation: verdict::prediction_inflation(cal, &cal_jac, val, &val_jac),
+        },
+    );
+    unexplained.note = format!("{}; {}", verdict.note, unexplained.note);
+    if !bound_reports.is_empty() {
+        unexplained.note = format!("{}; {}", bounds::sentence(&bound_reports), unexplained.note);
+        for e in &mut effects {
+            let hit: Vec<&bounds::BoundReport> = bound_reports
+                .iter()
+                .filter(|b| e.model_parameters.get(&b.parameter).is_some())
+                .collect();
+            for b in hit {
+                e.evidence.push_str(&format!(
+                    "; {} fitted {:.4}, below its physical bound {}: held at {} and the others refitted",
+                    b.parameter, b.fitted_value, b.bound, b.held_value
+                ));
+            }
+        }
+    }
     if !last.converged {
         unexplained.note = format!("{NOT_CONVERGED_NOTE}; {}", unexplained.note);
     }
-    unexplained.structured |= floor.above;
-    let aliased = aliased_pairs(&selection, &requested, cal, &mut effects)?;
-    let (probe, probe_cfg) = probe_residual(last, cal, &final_cal, &floor, opts)?;
+    // the calibration residual above the floor (the held-out one alone is a change between
+    // the sets or overfitting, not a structure of this residual)
+    unexplained.structured |= verdict.kind == "missing_effect";
     unexplained.add_probe(&probe);
     let report = DiagnoseReport {
         declared: SetStats {
@@ -567,6 +601,8 @@ pub fn diagnose(
         converged: last.converged && declared.converged,
         probe: probe.report(&probe_cfg),
         residual_model: None,
+        verdict,
+        bounds: bound_reports,
     };
     Ok(Diagnosis {
         report,
@@ -675,14 +711,23 @@ fn aliased_pairs(
     Ok(aliased)
 }
 
-/// The probe of the final residual for what no candidate describes.
+/// The probe of the final residual for what no candidate describes, with the physical
+/// cross-validation and the number of parameters the poses support.
 fn probe_residual(
+    model: &Model,
     last: &ExtFit,
     cal: &Dataset,
     final_cal: &[Vector3<f64>],
     floor: &floor::FloorReport,
     opts: &DiagnoseOptions,
-) -> Result<(probe::ProbeResult, probe::ProbeConfig), DiagnoseError> {
+) -> Result<
+    (
+        probe::ProbeResult,
+        probe::ProbeConfig,
+        Vec<nalgebra::DMatrix<f64>>,
+    ),
+    DiagnoseError,
+> {
     let cfg = &opts.decide;
     // an independent floor (instrument, repeatability) also sets the smallest term worth naming
     let known_floor_mm = match floor.used.as_str() {
@@ -697,8 +742,14 @@ fn probe_residual(
         ..opts.probe.clone()
     };
     let jac = probe::jacobians(&last.ext, cal, &last.fitted)?;
-    let probe = probe::probe_dataset(cal, final_cal, &jac, &probe_cfg);
-    Ok((probe, probe_cfg))
+    let start = ExtModel::new(model.clone());
+    let departure: Vec<f64> = last
+        .fitted
+        .iter()
+        .map(|&u| last.ext.value(u) - start.value(u))
+        .collect();
+    let probe = probe::probe_dataset_with(cal, final_cal, &jac, &departure, &probe_cfg);
+    Ok((probe, probe_cfg, jac))
 }
 
 fn unexplained(

@@ -182,6 +182,12 @@ pub struct DiagnoseReport {
     /// `effects`) and its held-out statistics.
     #[serde(skip_serializing_if = "Option::is_none")]
     pub residual_model: Option<super::probe::HybridReport>,
+    /// One verdict from the calibration, cross-validated and held-out residuals (extra key,
+    /// [`super::verdict`]).
+    pub verdict: super::verdict::Verdict,
+    /// Fitted values that fell below their physical bound and what was done (extra key,
+    /// [`super::bounds`]).
+    pub bounds: Vec<super::bounds::BoundReport>,
 }
 
 /// One-line statement of the decision rule in force.
@@ -195,6 +201,23 @@ pub fn rule_text(cfg: &DecideConfig) -> String {
         100.0 * cfg.cv_min_gain,
         cfg.cv_t_min
     )
+}
+
+/// The line said when no effect was added, consistent with the verdict `kind`.
+pub fn no_effect_line(kind: &str) -> &'static str {
+    match kind {
+        "floor" => "no effect added: the declared model explains the data down to the noise",
+        "missing_effect" => {
+            "no effect added: no candidate passed the tests, yet the model still lacks something (verdict below)"
+        }
+        "overfitting" => {
+            "no effect added: the declared model fits the calibration poses to the floor but does not predict the poses left out (verdict below)"
+        }
+        "change_between_sets" => {
+            "no effect added: the declared model explains the calibration poses down to the noise; the held-out set differs (verdict below)"
+        }
+        _ => "no effect added (no independent floor: verdict below)",
+    }
 }
 
 fn fmt_params(p: &Ordered<f64>) -> String {
@@ -271,17 +294,18 @@ impl DiagnoseReport {
             }
         }
         if self.effects.is_empty() {
-            let _ = writeln!(
-                s,
-                "no effect added: the declared model explains the data down to the noise"
-            );
+            let _ = writeln!(s, "{}", no_effect_line(&self.verdict.kind));
         }
         let _ = writeln!(
             s,
             "{:<28} {:>12.4} {:>12.4}",
             "final", self.final_.calibration.mean_mm, self.final_.validation.mean_mm
         );
-        let _ = writeln!(s, "floor: {}", super::floor::verdict(&self.floor));
+        let _ = writeln!(
+            s,
+            "verdict: {}: {}; floor: {}",
+            self.verdict.kind, self.verdict.note, self.floor.note
+        );
         if !self.aliased.is_empty() {
             let _ = writeln!(
                 s,
@@ -299,6 +323,13 @@ impl DiagnoseReport {
                     self.aliased.len() - max
                 );
             }
+        }
+        if !self.bounds.is_empty() {
+            let _ = writeln!(
+                s,
+                "physical bounds: {}",
+                super::bounds::sentence(&self.bounds)
+            );
         }
         if let Some(h) = &self.residual_model {
             let _ = writeln!(

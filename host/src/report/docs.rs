@@ -150,5 +150,10 @@ pub(crate) fn diagnose_section(name: &str, doc: &Value) -> DiagnoseSection {
         tables,
         effects,
         unexplained,
+        verdict_kind: doc
+            .get("verdict")
+            .and_then(|v| v.get("kind"))
+            .and_then(Value::as_str)
+            .map(String::from),
     }
 }

@@ -196,6 +196,18 @@ fn next_steps(
             .verdict
             .as_deref()
             .is_some_and(|v| v.starts_with("The model still lacks"));
+        let v = d.verdict.as_deref().unwrap_or("");
+        if v.starts_with("Overfitting") {
+            out.push(format!(
+                "{}: the poses are too few for the parameters fitted. Measure more poses (`rigctl plan --robot {robot} --n 60 --out plan.csv`) or fit fewer parameters.",
+                d.source
+            ));
+        } else if v.starts_with("A change between the sets") {
+            out.push(format!(
+                "{}: the held-out poses differ from the calibration poses. Check what changed between the two sets (tool mounting, base, temperature, day) before trusting either.",
+                d.source
+            ));
+        }
         if !d.aliased.is_empty() || lacking {
             out.push(format!(
                 "Measure poses that separate what {} leaves open: `rigctl plan --robot {robot} --n 60 --from-diagnose {} --out plan.csv`, then measure them and run diagnose again.",
@@ -231,7 +243,10 @@ fn next_steps(
     if held_out_missing {
         out.push("Nothing was held out: measure a second set (poses or another sheet) and pass it as `--validate`, so that the error to expect is known.".into());
     }
-    if out.is_empty() && !diags.is_empty() {
+    let all_at_floor = diags
+        .iter()
+        .all(|d| d.verdict.as_deref().is_none_or(|v| v.starts_with("At the")));
+    if out.is_empty() && !diags.is_empty() && all_at_floor {
         out.push("Nothing left to find in these data: the model explains them down to the measurement floor.".into());
     }
     out

@@ -177,9 +177,14 @@ fn diagnose_details(s: &mut String, r: &Report) {
             error_table(s, t, &format!("diagnose-{k}-table-{i}"));
         }
         if d.effects.is_empty() {
-            s.push_str(
-                "<p>No effect added: the declared model explains the data down to the noise.</p>\n",
-            );
+            match d.verdict_kind.as_deref() {
+                None | Some("floor") => s.push_str(
+                    "<p>No effect added: the declared model explains the data down to the noise.</p>\n",
+                ),
+                Some(kind) => {
+                    let _ = writeln!(s, "<p>No effect added (verdict: {}).</p>", escape(kind));
+                }
+            }
         } else {
             s.push_str("<table class=\"effects\"><tr><th>#</th><th>effect</th><th>final values &plusmn; &sigma; (deg, mm, kg, ppm as the id says)</th>\
                 <th class=\"num\">held-out mean before (mm)</th><th class=\"num\">held-out mean after (mm)</th><th>evidence</th></tr>\n");

@@ -158,6 +158,9 @@ pub struct DiagnoseSection {
     pub effects: Vec<EffectRow>,
     /// What remains unexplained.
     pub unexplained: String,
+    /// The verdict's kind (`floor`, `missing_effect`, `overfitting`, `change_between_sets`,
+    /// `no_floor`), when the document has one.
+    pub verdict_kind: Option<String>,
 }
 
 /// Everything on the page.

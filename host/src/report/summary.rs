@@ -395,6 +395,47 @@ pub fn verdict(doc: &Value) -> Option<String> {
              improved): no verdict{floor_words}."
         ));
     }
+    let verdict = doc.get("verdict");
+    let kind = verdict.and_then(|v| v.get("kind")).and_then(Value::as_str);
+    match kind {
+        Some("overfitting") => {
+            let fitted = verdict
+                .and_then(|v| v.get("fitted_parameters"))
+                .and_then(Value::as_u64);
+            let supported = verdict
+                .and_then(|v| v.get("supported_parameters"))
+                .and_then(Value::as_u64);
+            let counts = match (fitted, supported) {
+                (Some(p), Some(r)) => {
+                    format!(": {p} parameters fitted, the poses support about {r}")
+                }
+                (Some(p), None) => format!(": {p} parameters fitted"),
+                _ => String::new(),
+            };
+            return Some(format!(
+                "Overfitting: the calibration residual is at the floor but the poses left out are not{floor_words}{counts}. Measure more poses or fit fewer parameters."
+            ));
+        }
+        Some("change_between_sets") => {
+            return Some(format!(
+                "A change between the sets: the calibration poses and their cross-validation are at the floor, the held-out set is not{floor_words} (drift, another day, another tool mounting or base)."
+            ));
+        }
+        Some("floor") => {
+            let mut s = format!("At the {used} floor{floor_words}");
+            if structured && !depends.is_empty() {
+                s.push_str(&format!(
+                    "; a smooth function of {} still explains part of the residual out of sample, below what the floor test can call missing",
+                    depends.join(", ")
+                ));
+            } else {
+                s.push_str(": the residual left has no structure");
+            }
+            s.push('.');
+            return Some(s);
+        }
+        _ => {}
+    }
     if !structured {
         return Some(format!(
             "At the {used} floor: the residual left has no structure{floor_words}."

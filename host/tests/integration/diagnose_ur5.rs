@@ -6,26 +6,29 @@
 use crate::common;
 
 use rigctl::diagnose::data::Dataset;
-use rigctl::diagnose::{diagnose, DiagnoseOptions};
+use rigctl::diagnose::{diagnose, DiagnoseOptions, Diagnosis};
 
-#[test]
-fn ur5_laser_tracker_effects_lower_the_held_out_error() {
-    let Some(dir) = common::shared_file(
-        "ur5_laser_tracker_effects_lower_the_held_out_error",
-        "data/real/ur5_laser_tracker",
-    ) else {
-        return;
-    };
+/// `diagnose --instrument-mm 0.015` on the tracker set (the tracker's one-sigma accuracy per
+/// coordinate: the independent floor), with its held-out poses; `None` without the data.
+fn tracker_diagnosis(test: &str) -> Option<(Diagnosis, Dataset)> {
+    let dir = common::shared_file(test, "data/real/ur5_laser_tracker")?;
     let model = common::ur5_with_smr_tool();
     let cal = Dataset::read(&dir.join("grid.csv"), &model).unwrap();
     let val = Dataset::read(&dir.join("random.csv"), &model).unwrap();
     assert_eq!((cal.len(), val.len()), (1000, 20));
-    // the tracker's one-sigma accuracy per coordinate: the independent floor
     let opts = DiagnoseOptions {
         instrument_mm: Some(0.015),
         ..DiagnoseOptions::default()
     };
-    let d = diagnose(&model, &cal, &val, &opts).unwrap();
+    Some((diagnose(&model, &cal, &val, &opts).unwrap(), val))
+}
+
+#[test]
+fn ur5_laser_tracker_effects_lower_the_held_out_error() {
+    let Some((d, _)) = tracker_diagnosis("ur5_laser_tracker_effects_lower_the_held_out_error")
+    else {
+        return;
+    };
     let r = &d.report;
     eprintln!("{}", r.table());
     assert!(
@@ -50,4 +53,33 @@ fn ur5_laser_tracker_effects_lower_the_held_out_error() {
         r.table()
     );
     assert_eq!(r.floor.used, "instrument");
+}
+
+/// The hybrid model (`--residual-model`): the physical model plus the probe's smooth function of
+/// the joint angles, fitted to the final residual of the 1000 grid poses, on the 20 random poses.
+#[test]
+fn ur5_laser_tracker_hybrid_lowers_the_held_out_error() {
+    let Some((d, val)) = tracker_diagnosis("ur5_laser_tracker_hybrid_lowers_the_held_out_error")
+    else {
+        return;
+    };
+    let physical = d.model.errors(&val).unwrap();
+    let fitted = &d.selection.last.fitted;
+    let jac = rigctl::diagnose::probe::jacobians(&d.model, &val, fitted).unwrap();
+    let h = rigctl::diagnose::probe::hybrid_report(&d.probe.model, &val, &physical, &jac, &[]);
+    eprintln!(
+        "probe {:?}; held out mean: physical {:.5} mm, hybrid {:.5} mm",
+        d.report.unexplained.depends_on, h.validation_physical.mean_mm, h.validation_hybrid.mean_mm
+    );
+    assert!(
+        h.validation_physical.mean_mm < 0.08865,
+        "{:?}",
+        h.validation_physical
+    );
+    // a Gaussian process with one length scale per sin/cos of each joint reaches 0.0685 mm
+    assert!(
+        h.validation_hybrid.mean_mm <= 0.075,
+        "{:?}",
+        h.validation_hybrid
+    );
 }

@@ -17,6 +17,7 @@ mod diagnose_sim;
 mod diagnose_thermal;
 mod diagnose_transmission;
 mod diagnose_ur5;
+mod diagnose_verdicts;
 mod doc_commands;
 mod fusion_session;
 mod gross_errors;

@@ -1,16 +1,19 @@
 //! The probe for what no candidate describes: after the last accepted effect, a smooth function
-//! of the joint angles is fitted to the final residual under k-fold cross-validation, and the
-//! terms it needs say where the unexplained error lives ("depends on q2 and on q1 with q3").
+//! of the joint angles (and of the time, when the poses carry times) is fitted to the final
+//! residual under k-fold cross-validation, and the terms it needs say where the unexplained
+//! error lives ("depends on q2 and on q1 with q3").
 //!
-//! **Model** ([`basis`]): a constant, additive per-joint terms (Legendre polynomials of order
-//! [`basis::MAIN_ORDER`] in the joint angle scaled to its observed range) and pairwise interaction
-//! terms (products of order <= [`basis::PAIR_ORDER`] in each joint), each with three coefficients
-//! (x, y, z, mm) per basis function, fitted to the **measured part** of the residual (all three
-//! components of a full position, the two measured directions of a traced sample).
+//! **Model** ([`basis`]): a constant, additive one-variable terms (Fourier terms `sin, cos(k q)`,
+//! `k = 1..`[`basis::MAIN_HARMONICS`], for a joint observed over a wide range; the cosine series
+//! over the observed range for a narrow joint and for the time) and pairwise interaction terms
+//! (products of the first [`basis::PAIR_HARMONICS`] harmonics of each variable), each with three
+//! coefficients (x, y, z, mm) per basis function, fitted to the **measured part** of the residual
+//! (all three components of a full position, the two measured directions of a traced sample).
 //!
 //! **Selection** ([`select`]): forward selection of terms by cross-validated error (random
 //! folds for independent poses, contiguous blocks for samples along a path, as the effect
-//! selection). A term enters only when adding it lowers the held-out squared error by at least
+//! selection), continued while a further term explains a significant share out of sample: a
+//! term enters only when adding it lowers the held-out squared error by at least
 //! [`ProbeConfig::min_gain`] of the current one, with a one-sided paired t-test over the poses
 //! (the t statistic divided by the square root of the autocorrelation time of the differences
 //! for serial data) significant at [`ProbeConfig::alpha`] after a Bonferroni correction over the
@@ -27,14 +30,14 @@ pub mod model;
 pub mod plot;
 pub mod select;
 
-use nalgebra::{DMatrix, Matrix3, Vector3};
+use nalgebra::{DMatrix, DVector, Matrix3, Vector3};
 use serde::Serialize;
 
 use super::data::Dataset;
 use super::decide::{block_fold_assignment, fold_assignment};
 use super::extended::{ExtModel, Unknown};
 use crate::model::ModelError;
-use basis::{candidate_terms, joint_ranges_deg, Term};
+use basis::{point, Domain, Term};
 use design::Design;
 pub use model::{hybrid_report, HybridReport, ResidualModel};
 
@@ -66,8 +69,8 @@ impl Default for ProbeConfig {
             seed: 1,
             alpha: 0.01,
             min_gain: 0.02,
-            max_terms: 6,
-            max_poses: 5000,
+            max_terms: 10,
+            max_poses: 3000,
             floor_mm: None,
             floor_min_ratio: 0.2,
         }
@@ -78,7 +81,7 @@ impl Default for ProbeConfig {
 /// when it entered.
 #[derive(Debug, Clone, PartialEq, Serialize)]
 pub struct TermShare {
-    /// `const`, `q2` or `q1:q3`.
+    /// `const`, `q2`, `q1:q3`, `t` or `t:q2`.
     pub term: String,
     /// Share of the residual's held-out squared error it removed.
     pub share: f64,
@@ -89,7 +92,8 @@ pub struct TermShare {
 /// What the probe found.
 #[derive(Debug, Clone)]
 pub struct ProbeResult {
-    /// Joints (`q2`) and joint pairs (`q1:q3`) of the selected terms, in the order they entered.
+    /// Variables (`q2`, `t`) and pairs (`q1:q3`, `t:q2`) of the selected terms, in the order they
+    /// entered.
     pub depends_on: Vec<String>,
     /// Share of the residual's squared error the selected function explains out of sample
     /// (>= 0).
@@ -108,12 +112,29 @@ pub struct ProbeResult {
     pub poses: usize,
     /// Number of folds.
     pub folds: usize,
-    /// Joint angles of the poses used (deg), for the plots.
-    pub q_deg: Vec<Vec<f64>>,
+    /// Variables of the poses used (joint angles in deg, then the time in s when the probe
+    /// used it; [`basis::point`]), for the plots.
+    pub points: Vec<Vec<f64>>,
     /// Measured part of their residual (mm).
     pub residual_mm: Vec<Vector3<f64>>,
     /// Projector on their measured directions (`None`: full position).
     pub projectors: Vec<Option<Matrix3<f64>>>,
+    /// Whether the time was one of the variables (the poses carry times that differ).
+    pub with_time: bool,
+    /// Held-out RMS per measured component (mm) of the physical model alone under the same
+    /// folds (its fitted parameters refitted without each fold, linearised at the final fit;
+    /// [`design::Design::physical_cv`]); NaN when the probe did not run.
+    pub physical_cv_rms_mm: f64,
+    /// Number of measured components of the poses used.
+    pub n_components: usize,
+    /// Expected ratio of the physical cross-validated to the residual sum of squares for a right
+    /// model ([`design::Design::physical_cv`]; 1 when the probe did not run).
+    pub physical_cv_inflation: f64,
+    /// Number of fitted physical parameters given to the probe.
+    pub n_parameters: usize,
+    /// How many parameter combinations the poses support (truncated-SVD fit chosen by the same
+    /// cross-validation, [`design::Design::supported_parameters`]); `None` without Jacobians.
+    pub supported_parameters: Option<usize>,
 }
 
 /// The probe's summary in the `diagnose --json` document (extra key `probe`).
@@ -140,9 +161,15 @@ impl ProbeResult {
             model: ResidualModel::default(),
             poses,
             folds,
-            q_deg: Vec::new(),
+            points: Vec::new(),
             residual_mm: Vec::new(),
             projectors: Vec::new(),
+            with_time: false,
+            physical_cv_rms_mm: f64::NAN,
+            n_components: 0,
+            physical_cv_inflation: 1.0,
+            n_parameters: 0,
+            supported_parameters: None,
         }
     }
 
@@ -150,7 +177,8 @@ impl ProbeResult {
     pub fn sentence(&self) -> String {
         if !self.structured {
             return format!(
-                "a smooth function of the joint angles fitted to it under {}-fold cross-validation explains none of it out of sample",
+                "a smooth function of the joint angles{} fitted to it under {}-fold cross-validation explains none of it out of sample",
+                if self.with_time { " and the time" } else { "" },
                 self.folds
             );
         }
@@ -176,8 +204,9 @@ impl ProbeResult {
             s
         };
         s.push_str(&format!(
-            ": a smooth function of the joint angles explains {:.0} % of it out of sample \
+            ": a smooth function of the joint angles{} explains {:.0} % of it out of sample \
              ({}-fold cross-validated RMS per component {:.4} -> {:.4} mm)",
+            if self.with_time { " and the time" } else { "" },
             100.0 * self.explainable_share,
             self.folds,
             self.cv_rms_before_mm,
@@ -202,11 +231,15 @@ impl ProbeResult {
 /// One-line statement of the probe's rule.
 pub fn rule_text(cfg: &ProbeConfig) -> String {
     format!(
-        "forward selection of a constant, per-joint Legendre terms (order {}) and pairwise products (order {} each) \
-         fitted to the final residual; a term enters when {}-fold cross-validation lowers the held-out squared error \
-         by >= {:.0} % with a paired one-sided t-test p < {:.0e} (Bonferroni over the terms tried){}",
-        basis::MAIN_ORDER,
-        basis::PAIR_ORDER,
+        "forward selection (at most {} terms) of a constant, one-variable terms (sin, cos(k q), k = 1..{} for a joint observed over >= {:.0} deg; \
+         the cosine series cos(k pi s), k = 1..{}, over the observed range for a narrower joint and for the time t when the poses carry it) \
+         and pairwise products (the first {} functions of each variable) fitted to the final residual; a term enters while {}-fold \
+         cross-validation lowers the held-out squared error by >= {:.0} % with a paired one-sided t-test p < {:.0e} (Bonferroni over the terms tried){}",
+        cfg.max_terms,
+        basis::MAIN_HARMONICS,
+        basis::PERIODIC_MIN_RANGE_DEG,
+        2 * basis::MAIN_HARMONICS,
+        2 * basis::PAIR_HARMONICS,
         cfg.folds,
         100.0 * cfg.min_gain,
         cfg.alpha,
@@ -242,6 +275,19 @@ pub fn probe_dataset(
     jacobians: &[DMatrix<f64>],
     cfg: &ProbeConfig,
 ) -> ProbeResult {
+    probe_dataset_with(data, residual_mm, jacobians, &[], cfg)
+}
+
+/// [`probe_dataset`], with `departure` the fitted parameters' departure from their starting
+/// (declared) values, one per Jacobian column, for the number of parameters the poses support
+/// (empty: not estimated).
+pub fn probe_dataset_with(
+    data: &Dataset,
+    residual_mm: &[Vector3<f64>],
+    jacobians: &[DMatrix<f64>],
+    departure: &[f64],
+    cfg: &ProbeConfig,
+) -> ProbeResult {
     let n = data.len().min(residual_mm.len());
     let folds = cfg.folds.max(2);
     let stride = n.div_ceil(cfg.max_poses.max(1)).max(1);
@@ -249,7 +295,8 @@ pub fn probe_dataset(
     if used.len() < 2 * folds {
         return ProbeResult::empty(used.len(), folds);
     }
-    let q_deg: Vec<Vec<f64>> = used.iter().map(|&k| data.poses.q_deg[k].clone()).collect();
+    let with_time = data.has_time();
+    let points: Vec<Vec<f64>> = used.iter().map(|&k| point(data, k, with_time)).collect();
     let m: Vec<Vector3<f64>> = used
         .iter()
         .map(|&k| data.measured_part(k, &residual_mm[k]))
@@ -285,12 +332,12 @@ pub fn probe_dataset(
     } else {
         fold_assignment(used.len(), folds, cfg.seed)
     };
-    let ranges = joint_ranges_deg(&q_deg);
-    let terms = candidate_terms(&ranges);
+    let domain = Domain::of(&points, with_time);
+    let terms = domain.candidate_terms();
     let design = Design::new(
         &terms,
-        &ranges,
-        &q_deg,
+        &domain,
+        &points,
         &m,
         &projectors,
         &fold,
@@ -303,8 +350,13 @@ pub fn probe_dataset(
         .map(|(p, &k)| if p.is_some() { data.rows(k) } else { 3 })
         .sum();
     let sel = select::forward(&design, serial, n_components, cfg);
-    let model = ResidualModel::fit(&design, &sel.selected, &ranges);
+    let model = ResidualModel::fit(&design, &sel.selected, &domain);
     let rms = |sse: f64| (sse / n_components.max(1) as f64).sqrt();
+    let (physical_cv, physical_cv_inflation) = design.physical_cv(n_components);
+    let physical_cv_rms_mm = rms(physical_cv.iter().map(|v| v.norm_squared()).sum());
+    let supported_parameters = (departure.len() == design.n_physical())
+        .then(|| design.supported_parameters(&DVector::from_column_slice(departure)))
+        .flatten();
     let structured = !sel.selected.is_empty() && !model.terms.is_empty();
     ProbeResult {
         depends_on: model
@@ -325,8 +377,14 @@ pub fn probe_dataset(
         model,
         poses: used.len(),
         folds,
-        q_deg,
+        points,
         residual_mm: m,
         projectors,
+        with_time,
+        physical_cv_rms_mm,
+        n_components,
+        physical_cv_inflation,
+        n_parameters: design.n_physical(),
+        supported_parameters,
     }
 }

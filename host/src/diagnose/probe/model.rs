@@ -1,23 +1,23 @@
 //! The probe's fitted function as a correction (`diagnose --residual-model`): a hybrid model,
-//! the physical model plus this smooth function of the joint angles, always reported apart from
+//! the physical model plus this smooth function of the joint angles (and of the time), always reported apart from
 //! the physical effects (JSON key `residual_model`, never in `effects`).
 
 use nalgebra::{DMatrix, DVector, Vector3};
 use serde::Serialize;
 
-use super::basis::{push_values, Term, MAIN_ORDER, PAIR_ORDER};
+use super::basis::{point, Domain, Term};
 use super::design::Design;
 use crate::calib::Stats;
 use crate::diagnose::data::Dataset;
 use crate::diagnose::report::Ordered;
 
-/// A smooth function of the joint angles (mm, frame R) made of the probe's terms.
+/// A smooth function of the joint angles and the time (mm, frame R) made of the probe's terms.
 #[derive(Debug, Clone, PartialEq, Default)]
 pub struct ResidualModel {
     /// Its terms, in the order they entered.
     pub terms: Vec<Term>,
-    /// Observed range of every joint (deg) that scales the basis.
-    pub ranges_deg: Vec<(f64, f64)>,
+    /// Its variables and their observed ranges, which scale the basis.
+    pub domain: Domain,
     /// Coefficients (mm) of every basis function of every term, in order.
     pub coefficients_mm: Vec<Vector3<f64>>,
     /// Change of the fitted physical parameters that goes with the function (their fit
@@ -29,7 +29,7 @@ pub struct ResidualModel {
 impl ResidualModel {
     /// Fits terms `selected` (indices into the design's terms) on all the poses of `design`;
     /// empty when nothing is selected or the system is singular.
-    pub fn fit(design: &Design, selected: &[usize], ranges_deg: &[(f64, f64)]) -> Self {
+    pub fn fit(design: &Design, selected: &[usize], domain: &Domain) -> Self {
         let cols = design.columns(selected);
         if cols.is_empty() {
             return Self::default();
@@ -40,7 +40,7 @@ impl ResidualModel {
         let shift = design.shift_matrix(&cols) * &w;
         Self {
             terms: selected.iter().map(|&t| design.terms()[t]).collect(),
-            ranges_deg: ranges_deg.to_vec(),
+            domain: domain.clone(),
             coefficients_mm: (0..cols.len())
                 .map(|c| Vector3::new(w[3 * c], w[3 * c + 1], w[3 * c + 2]))
                 .collect(),
@@ -53,15 +53,15 @@ impl ResidualModel {
         self.terms.is_empty()
     }
 
-    /// The contribution of each term at `q_deg` (mm, frame R).
-    pub fn term_contributions_mm(&self, q_deg: &[f64]) -> Vec<Vector3<f64>> {
+    /// The contribution of each term at the variables `x` ([`point`]) of a pose (mm, frame R).
+    pub fn term_contributions_mm(&self, x: &[f64]) -> Vec<Vector3<f64>> {
         let mut values = Vec::new();
         let mut c = 0;
         self.terms
             .iter()
             .map(|t| {
                 values.clear();
-                push_values(*t, &self.ranges_deg, q_deg, &mut values);
+                self.domain.push_values(*t, x, &mut values);
                 let mut f = Vector3::zeros();
                 for v in &values {
                     if let Some(w) = self.coefficients_mm.get(c) {
@@ -74,9 +74,18 @@ impl ResidualModel {
             .collect()
     }
 
-    /// The correction at `q_deg` (mm, frame R): the sum of its terms.
-    pub fn predict_mm(&self, q_deg: &[f64]) -> Vector3<f64> {
-        self.term_contributions_mm(q_deg).iter().sum()
+    /// The correction at the variables `x` ([`point`]) of a pose (mm, frame R): the sum of its
+    /// terms.
+    pub fn predict_mm(&self, x: &[f64]) -> Vector3<f64> {
+        self.term_contributions_mm(x).iter().sum()
+    }
+
+    /// The correction at pose `k` of `data` (mm, frame R).
+    pub fn predict_pose_mm(&self, data: &Dataset, k: usize) -> Vector3<f64> {
+        if k >= data.len() {
+            return Vector3::zeros();
+        }
+        self.predict_mm(&point(data, k, self.domain.has_time()))
     }
 }
 
@@ -91,11 +100,11 @@ pub struct CoefficientReport {
 /// The `residual_model` key of `diagnose --json`: the correction and its held-out effect.
 #[derive(Debug, Clone, PartialEq, Serialize)]
 pub struct HybridReport {
-    /// Terms of the correction (`const`, `q2`, `q1:q3`).
+    /// Terms of the correction (`const`, `q2`, `q1:q3`, `t`, `t:q2`).
     pub terms: Vec<String>,
     /// How the basis is built.
     pub basis: String,
-    /// Observed range of every joint (deg), `q1: [lo, hi]`.
+    /// Observed range of every variable (deg; s for `t`), `q1: [lo, hi]`.
     pub ranges_deg: Ordered<[f64; 2]>,
     /// Coefficients, mm, frame R.
     pub coefficients: Vec<CoefficientReport>,
@@ -124,11 +133,7 @@ pub fn hybrid_report(
         .iter()
         .enumerate()
         .map(|(k, e)| {
-            let mut f = val
-                .poses
-                .q_deg
-                .get(k)
-                .map_or_else(Vector3::zeros, |q| model.predict_mm(q));
+            let mut f = model.predict_pose_mm(val, k);
             if let Some(j) = val_jacobians.get(k).filter(|j| j.ncols() == shift.len()) {
                 f += j * &shift;
             }
@@ -139,7 +144,7 @@ pub fn hybrid_report(
         let mut out = Vec::new();
         let mut c = 0;
         for t in &model.terms {
-            for name in t.basis_names() {
+            for name in model.domain.basis_names(*t) {
                 if let Some(w) = model.coefficients_mm.get(c) {
                     out.push(CoefficientReport {
                         term: t.name(),
@@ -154,16 +159,12 @@ pub fn hybrid_report(
     };
     HybridReport {
         terms: model.terms.iter().map(Term::name).collect(),
-        basis: format!(
-            "x_i = 2 (q_i - lo_i) / (hi_i - lo_i) - 1 clamped to [-1, 1]; q<i>: Legendre P1..P{MAIN_ORDER}(x_i); \
-             q<i>:q<j>: P_a(x_i) P_b(x_j), a, b = 1..{PAIR_ORDER}; const: 1; correction = sum of coefficient x basis (mm, frame R), \
-             subtracted from the physical model's error"
-        ),
+        basis: model.domain.describe(),
         ranges_deg: model
-            .ranges_deg
+            .domain
+            .axes
             .iter()
-            .enumerate()
-            .map(|(j, (lo, hi))| (format!("q{}", j + 1), [*lo, *hi]))
+            .map(|a| (a.var.name(), [a.lo, a.hi]))
             .collect(),
         coefficients,
         parameter_shift: param_names

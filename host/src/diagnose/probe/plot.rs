@@ -1,5 +1,5 @@
 //! `diagnose --plots DIR`: one SVG per term the probe selected, `probe_<term>.svg` (`:` replaced
-//! by `_`): the residual against the (first) joint of the term with the probe's fit of that
+//! by `_`): the residual against the (first) variable of the term with the probe's fit of that
 //! term.
 //!
 //! Both are signed along the term's main direction `d` (the unit vector along which its
@@ -12,7 +12,7 @@ use std::path::{Path, PathBuf};
 
 use nalgebra::{Matrix3, Vector3};
 
-use super::basis::Term;
+use super::basis::{Term, Var};
 use super::ProbeResult;
 use crate::plot::{write, PlotError, Scatter};
 
@@ -32,10 +32,14 @@ fn main_direction(c: &[Vector3<f64>]) -> Vector3<f64> {
 /// The scatter of term `index` of the probe's model.
 pub fn term_scatter(probe: &ProbeResult, index: usize) -> Option<Scatter> {
     let term = *probe.model.terms.get(index)?;
-    let joints = term.joints();
-    let j = *joints.first()?;
+    let vars = term.vars();
+    let v = *vars.first()?;
+    let j = match v {
+        Var::Joint(j) => j,
+        Var::Time => probe.model.domain.n_joints,
+    };
     let contributions: Vec<Vec<Vector3<f64>>> = probe
-        .q_deg
+        .points
         .iter()
         .map(|q| probe.model.term_contributions_mm(q))
         .collect();
@@ -48,7 +52,7 @@ pub fn term_scatter(probe: &ProbeResult, index: usize) -> Option<Scatter> {
     let mut x = Vec::new();
     let mut residual = Vec::new();
     let mut fit = Vec::new();
-    for (k, q) in probe.q_deg.iter().enumerate() {
+    for (k, q) in probe.points.iter().enumerate() {
         let total: Vector3<f64> = contributions[k].iter().sum();
         let r = probe.residual_mm[k] - project(k, total - own[k]);
         x.push(q.get(j).copied().unwrap_or(f64::NAN));
@@ -56,18 +60,22 @@ pub fn term_scatter(probe: &ProbeResult, index: usize) -> Option<Scatter> {
         fit.push(d.dot(&project(k, own[k])));
     }
     let with = match term {
-        Term::Pair(_, b) => format!(" (interaction with q{})", b + 1),
+        Term::Pair(_, b) => format!(" (interaction with {})", b.name()),
         _ => String::new(),
     };
     Some(Scatter {
         title: format!(
-            "probe: residual vs q{}{with}, along ({:.2}, {:.2}, {:.2})",
-            j + 1,
+            "probe: residual vs {}{with}, along ({:.2}, {:.2}, {:.2})",
+            v.name(),
             d.x,
             d.y,
             d.z
         ),
-        x_label: format!("q{} (deg)", j + 1),
+        x_label: format!(
+            "{} ({})",
+            v.name(),
+            if v == Var::Time { "s" } else { "deg" }
+        ),
         y_label: "residual without the other terms (mm)".to_string(),
         x,
         before: residual,

@@ -1,0 +1,163 @@
+//! Physical bounds on the fitted values (JSON key `bounds`): a compliance, a stiffness, a
+//! backlash, a clearance and a payload mass cannot be negative. A final value below its bound is
+//! never silently kept: it is held at the bound and the other unknowns are refitted (the
+//! constrained least-squares optimum when one bound is active), repeated while another value
+//! crosses its bound; when that refit fails the value is kept and reported `unphysical`. A
+//! stiffness enters the model as its inverse (deflection = moment / stiffness), so its bound is
+//! held as a rigid joint ([`RIGID_STIFFNESS_KGFM_PER_DEG`]).
+
+use serde::Serialize;
+
+use super::data::Dataset;
+use super::decide::{DecideConfig, Selection};
+use super::extended::{self, Unknown};
+use crate::model::Model;
+
+/// The stiffness (kgf.m per deg) that holds a joint rigid: its deflection at 1 kgf.m is 1e-6 deg.
+pub const RIGID_STIFFNESS_KGFM_PER_DEG: f64 = 1e6;
+
+/// A physical bound: values below `min` are not physical; such a value is held at `hold`.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Bound {
+    /// Smallest physical value (a value below it is unphysical; a stiffness must be above it).
+    pub min: f64,
+    /// The value it is held at.
+    pub hold: f64,
+}
+
+/// One value that fell outside its physical bound.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct BoundReport {
+    /// The parameter (`compliance_j2_deg_per_kgfm`, `payload_kg`, ...).
+    pub parameter: String,
+    /// Its value in the unconstrained fit.
+    pub fitted_value: f64,
+    /// The bound (its smallest physical value).
+    pub bound: f64,
+    /// The value it was held at (the bound; a rigid joint for a stiffness).
+    pub held_value: f64,
+    /// `held_at_bound` (the value set to the bound, the others refitted) or `unphysical` (the
+    /// refit failed: the value is kept and is not physical).
+    pub action: String,
+}
+
+/// The physical bound of `u`, when it has one.
+pub fn lower_bound(u: Unknown, model: &Model) -> Option<Bound> {
+    let zero = Bound {
+        min: 0.0,
+        hold: 0.0,
+    };
+    match u {
+        Unknown::Compliance(_) => Some(zero),
+        Unknown::Param(i) => {
+            let tp = model.tilt_params()?;
+            if tp.iter().any(|t| i == t.stiffness) {
+                Some(Bound {
+                    min: 0.0,
+                    hold: RIGID_STIFFNESS_KGFM_PER_DEG,
+                })
+            } else if i == model.payload_param()
+                || tp.iter().any(|t| i == t.backlash || i == t.clearance)
+            {
+                Some(zero)
+            } else {
+                None
+            }
+        }
+        _ => None,
+    }
+}
+
+/// Holds every final value of `selection` below its bound at the bound and refits the others
+/// on `cal` (the final fit is replaced); returns what was done.
+pub fn enforce(selection: &mut Selection, cal: &Dataset, cfg: &DecideConfig) -> Vec<BoundReport> {
+    let mut reports = Vec::new();
+    // each pass fixes at least one more unknown: at most as many passes as unknowns
+    for _ in 0..selection.last.fitted.len() {
+        let model = &selection.last.ext.model;
+        let below: Vec<(Unknown, f64, Bound)> = selection
+            .last
+            .fitted
+            .iter()
+            .filter_map(|&u| {
+                let b = lower_bound(u, model)?;
+                let v = selection.last.ext.value(u);
+                let out = if b.hold > b.min {
+                    v <= b.min
+                } else {
+                    v < b.min
+                };
+                out.then_some((u, v, b))
+            })
+            .collect();
+        if below.is_empty() {
+            break;
+        }
+        let mut start = selection.last.ext.clone();
+        let mut ok = true;
+        for &(u, _, b) in &below {
+            ok &= start.set_value(u, b.hold).is_ok();
+        }
+        let keep: Vec<Unknown> = selection
+            .requested
+            .iter()
+            .copied()
+            .filter(|u| !below.iter().any(|(b, _, _)| b == u))
+            .collect();
+        let refit = if ok {
+            extended::fit(&start, cal, &keep, &cfg.lm, cfg.rtol, false).ok()
+        } else {
+            None
+        };
+        let action = if refit.is_some() {
+            "held_at_bound"
+        } else {
+            "unphysical"
+        };
+        for &(u, v, b) in &below {
+            reports.push(BoundReport {
+                parameter: u.name(&selection.last.ext.model),
+                fitted_value: v,
+                bound: b.min,
+                held_value: b.hold,
+                action: action.to_string(),
+            });
+        }
+        match refit {
+            Some(f) => {
+                selection.last = f;
+                selection.requested = keep;
+            }
+            None => break,
+        }
+    }
+    reports
+}
+
+/// The sentence on the bounds, empty when no value crossed one.
+pub fn sentence(reports: &[BoundReport]) -> String {
+    let held: Vec<String> = reports
+        .iter()
+        .filter(|r| r.action == "held_at_bound")
+        .map(|r| format!("{} {:.4} -> {}", r.parameter, r.fitted_value, r.held_value))
+        .collect();
+    let bad: Vec<String> = reports
+        .iter()
+        .filter(|r| r.action != "held_at_bound")
+        .map(|r| format!("{} = {:.4}", r.parameter, r.fitted_value))
+        .collect();
+    let mut parts = Vec::new();
+    if !held.is_empty() {
+        parts.push(format!(
+            "below their physical bound, held at it and the others refitted: {}",
+            held.join(", ")
+        ));
+    }
+    if !bad.is_empty() {
+        parts.push(format!(
+            "unphysical (below the physical bound; the constrained refit failed): {}",
+            bad.join(", ")
+        ));
+    }
+    parts.join("; ")
+}

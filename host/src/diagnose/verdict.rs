@@ -1,0 +1,266 @@
+//! One verdict from the three residuals a diagnosis has: the final calibration residual, its
+//! k-fold cross-validation, and the held-out set (JSON key `verdict`, the text's `floor:` line,
+//! the report's first screen).
+//!
+//! Each is tested against the floor ([`super::floor`]): the calibration residual as there
+//! (`RSS / sigma^2`, `(m - p) / tau` degrees of freedom); the cross-validated one (the physical
+//! parameters refitted without each fold, [`super::probe::design::Design::physical_cv`])
+//! as `SS_cv / (sigma^2 c)` over `m / tau` degrees of freedom, `c = (m + sum_g tr(N_g
+//! N_{-g}^+)) / m` the exact inflation of a right model's held-out residuals by the
+//! uncertainty of the parameters fitted without each fold
+//! ([`super::probe::design::Design::physical_cv`]; leave-one-out up to
+//! [`super::probe::design::LOO_MAX_POSES`] poses); the held-out one both as
+//! `SS_val / sigma^2` and as `SS_val / (sigma^2 c_val)` over its `m_val` residuals, `c_val`
+//! the same inflation at the held-out poses ([`prediction_inflation`]). A residual is
+//! **above** when its p-value is below [`super::floor::FLOOR_ALPHA`]. Then, in this order:
+//!
+//! | calibration | cross-validation | held out | verdict |
+//! |---|---|---|---|
+//! | above | any | any | `missing_effect`: the model lacks something the calibration poses already show |
+//! | at | above | any | `overfitting`: the parameters absorb errors of these poses that do not carry over |
+//! | at | at | above, even with the parameters' uncertainty, which is small | `change_between_sets`: drift, another day, another tool mounting or base |
+//! | at | at | above, the parameters' uncertainty alone lifting it by [`UNCERTAIN_PREDICTION_RATIO`] or more | `overfitting` |
+//! | at | at | above the floor, not above it with the parameters' uncertainty | `overfitting`: too many parameters for the poses (the held-out error is their uncertainty) |
+//! | at | at | at | `floor` |
+//!
+//! With `overfitting` the number of parameter combinations the poses support is given
+//! ([`super::probe::design::Design::supported_parameters`]). Without an independent floor the
+//! calibration residual is the floor by definition: the cross-validated and held-out residuals
+//! are tested against it (an F ratio with its degrees of freedom), and when both agree with it
+//! the verdict is `no_floor` (a missing effect cannot be told from noise).
+
+use nalgebra::{DMatrix, Matrix3};
+use serde::Serialize;
+
+use super::data::Dataset;
+use super::floor::{chi2_upper_p, FloorReport, FLOOR_ALPHA};
+use super::probe::ProbeResult;
+use super::stat::f_test_p_value;
+
+/// When the fitted parameters' uncertainty alone lifts the expected held-out RMS by this factor
+/// or more over the floor, the poses are too few for the parameters: a held-out excess is
+/// called `overfitting`, not a change between the sets (it cannot be told from the parameters'
+/// errors).
+pub const UNCERTAIN_PREDICTION_RATIO: f64 = 1.2;
+
+/// The `verdict` object of `diagnose --json` (extra key).
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct Verdict {
+    /// `floor`, `missing_effect`, `overfitting`, `change_between_sets` or `no_floor`.
+    pub kind: String,
+    /// Final calibration residual per coordinate over the floor.
+    pub calibration_over_floor: f64,
+    /// Cross-validated residual per coordinate over the floor (null when not computed).
+    pub cv_over_floor: Option<f64>,
+    /// Held-out residual per coordinate over the floor.
+    pub validation_over_floor: f64,
+    /// p-values of the three against the floor (null when not tested).
+    pub calibration_p_value: Option<f64>,
+    pub cv_p_value: Option<f64>,
+    pub validation_p_value: Option<f64>,
+    /// Held-out RMS a right model would reach, over the floor: the square root of the
+    /// inflation of the held-out sum of squares by the uncertainty of the fitted parameters at
+    /// the held-out poses ([`prediction_inflation`]).
+    pub validation_expected_ratio: f64,
+    /// p-value of the held-out residual against the floor with that uncertainty (a change
+    /// between the sets when it is below the level and the cross-validation is at the floor).
+    pub validation_p_value_with_parameters: Option<f64>,
+    /// Physical parameters fitted.
+    pub fitted_parameters: usize,
+    /// Parameter combinations the calibration poses support (truncated-SVD fit chosen by
+    /// cross-validation; null when not estimated).
+    pub supported_parameters: Option<usize>,
+    /// The verdict in words.
+    pub note: String,
+}
+
+/// What [`judge`] needs besides the floor report and the probe.
+#[derive(Debug, Clone, Copy)]
+pub struct Counts {
+    /// Number of calibration residuals of the final fit.
+    pub n_residuals: usize,
+    /// Fitted parameters.
+    pub n_params: usize,
+    /// Serial-correlation time (1 for independent poses).
+    pub tau: f64,
+    /// Number of held-out residuals.
+    pub val_residuals: usize,
+    /// Expected held-out sum of squares of a right model over the floor's (>= 1,
+    /// [`prediction_inflation`]).
+    pub val_inflation: f64,
+}
+
+/// The measured Jacobian `P_k J_k` of pose `k` (`J_k` unchanged for a full position).
+fn measured(data: &Dataset, k: usize, j: &DMatrix<f64>) -> DMatrix<f64> {
+    match data.directions.as_ref().and_then(|d| d.get(k)) {
+        Some(d) if !d.is_empty() && j.nrows() == 3 => {
+            let p: Matrix3<f64> = d.iter().map(|u| u * u.transpose()).sum();
+            let mut out = DMatrix::zeros(3, j.ncols());
+            out.copy_from(&(p * j));
+            out
+        }
+        _ => j.clone(),
+    }
+}
+
+/// Expected held-out sum of squares of a right model over its value without parameter errors:
+/// `(m_val + sum_k tr(L_k N^+ L_k^T)) / m_val`, `N = sum L^T L` over the calibration poses and
+/// `L_k` the measured Jacobian of the fitted parameters at held-out pose `k` (the exact
+/// prediction variance at every held-out pose, which grows where the held-out poses leave the
+/// calibration poses' span). 1 without Jacobians.
+pub fn prediction_inflation(
+    cal: &Dataset,
+    cal_jac: &[DMatrix<f64>],
+    val: &Dataset,
+    val_jac: &[DMatrix<f64>],
+) -> f64 {
+    let p = cal_jac.first().map_or(0, DMatrix::ncols);
+    let m_val: usize = (0..val.len()).map(|k| val.rows(k)).sum();
+    if p == 0 || m_val == 0 || val_jac.len() != val.len() {
+        return 1.0;
+    }
+    let mut n = DMatrix::zeros(p, p);
+    for (k, j) in cal_jac.iter().enumerate() {
+        if j.ncols() == p {
+            let l = measured(cal, k, j);
+            n += l.transpose() * l;
+        }
+    }
+    let scale = n.diagonal().amax().max(f64::MIN_POSITIVE);
+    let Ok(ninv) = n.pseudo_inverse(1e-10 * scale) else {
+        return 1.0;
+    };
+    let extra: f64 = val_jac
+        .iter()
+        .enumerate()
+        .filter(|(_, j)| j.ncols() == p)
+        .map(|(k, j)| {
+            let l = measured(val, k, j);
+            (&l * &ninv * l.transpose()).trace()
+        })
+        .sum();
+    let m = m_val as f64;
+    ((m + extra.max(0.0)) / m).max(1.0)
+}
+
+/// The verdict of a diagnosis whose floor report is `floor` and whose probe (with its physical
+/// cross-validation) is `probe`.
+pub fn judge(floor: &FloorReport, probe: &ProbeResult, c: Counts) -> Verdict {
+    let sigma = match floor.used.as_str() {
+        "instrument" => floor.instrument_mm,
+        "repeatability" => floor.repeatability_mm,
+        _ => None,
+    }
+    .unwrap_or(floor.residual_mm);
+    let tau = c.tau.max(1.0);
+    let dof_cal = c.n_residuals.saturating_sub(c.n_params).max(1) as f64;
+    // the floor's own degrees of freedom when it is an estimate
+    let floor_dof = match floor.used.as_str() {
+        "repeatability" => floor.repeatability_dof.map(|d| d as f64),
+        "instrument" => None,
+        _ => Some(dof_cal / tau),
+    };
+    let test = |ss: f64, dof: f64| -> f64 {
+        let stat = ss / (sigma * sigma);
+        match floor_dof {
+            Some(d2) => f_test_p_value(stat / dof, dof, d2),
+            None => chi2_upper_p(stat, dof),
+        }
+    };
+    let m = probe.n_components;
+    let cv = (m > 0 && probe.physical_cv_rms_mm.is_finite() && sigma > 0.0).then(|| {
+        let inflation = probe.physical_cv_inflation.max(1.0);
+        let ss = probe.physical_cv_rms_mm.powi(2) * m as f64;
+        let dof = (m as f64 / tau).max(1.0);
+        (
+            probe.physical_cv_rms_mm / sigma,
+            test(ss / inflation / tau, dof),
+        )
+    });
+    let residual_floor = floor.used == "residual";
+    // the held-out residual against the floor alone, and against the floor with the exact
+    // uncertainty of the fitted parameters at the held-out poses
+    let val_ss = floor.validation_rms_mm.powi(2) * c.val_residuals.max(1) as f64;
+    let val_dof = c.val_residuals.max(1) as f64;
+    let val_raw_p = test(val_ss, val_dof);
+    let val_p = test(val_ss / c.val_inflation.max(1.0), val_dof);
+    let above = |p: Option<f64>| p.is_some_and(|p| p < FLOOR_ALPHA);
+    let cal_above = !residual_floor && above(floor.p_value);
+    let cv_above = above(cv.map(|x| x.1));
+    let val_above = above(Some(val_p));
+    let val_raw_above = above(Some(val_raw_p));
+    let expected_ratio = c.val_inflation.max(1.0).sqrt();
+    let kind = if cal_above {
+        "missing_effect"
+    } else if cv_above || (val_above && expected_ratio >= UNCERTAIN_PREDICTION_RATIO) {
+        "overfitting"
+    } else if val_above {
+        "change_between_sets"
+    } else if val_raw_above {
+        // above the floor only by the uncertainty of the fitted parameters
+        "overfitting"
+    } else if residual_floor {
+        "no_floor"
+    } else {
+        "floor"
+    };
+    let mut v = Verdict {
+        kind: kind.to_string(),
+        calibration_over_floor: floor.final_over_floor,
+        cv_over_floor: cv.map(|x| x.0),
+        validation_over_floor: floor.validation_over_floor,
+        calibration_p_value: floor.p_value,
+        cv_p_value: cv.map(|x| x.1),
+        validation_p_value: Some(val_raw_p),
+        validation_expected_ratio: expected_ratio,
+        validation_p_value_with_parameters: Some(val_p),
+        fitted_parameters: c.n_params,
+        supported_parameters: probe.supported_parameters,
+        note: String::new(),
+    };
+    v.note = sentence(&v, floor);
+    v
+}
+
+/// The verdict in words: never "at the floor" and "lacks something" at once.
+pub fn sentence(v: &Verdict, floor: &FloorReport) -> String {
+    let fmt_p = |p: Option<f64>| p.map_or("-".to_string(), |p| format!("{p:.1e}"));
+    let cv = match (v.cv_over_floor, v.cv_p_value) {
+        (Some(r), p) => format!(", cross-validated {r:.2} x (p = {})", fmt_p(p)),
+        _ => String::new(),
+    };
+    let which = if floor.used == "residual" {
+        "floor estimated from the final residual itself".to_string()
+    } else {
+        format!("{} floor", floor.used)
+    };
+    let numbers = format!(
+        "calibration residual {:.4} mm per coordinate = {:.2} x the {which} (p = {}){cv}, held out {:.4} mm = {:.2} x (p = {})",
+        floor.residual_mm,
+        v.calibration_over_floor,
+        fmt_p(v.calibration_p_value),
+        floor.validation_rms_mm,
+        v.validation_over_floor,
+        fmt_p(v.validation_p_value)
+    );
+    match v.kind.as_str() {
+        "floor" => format!("at the floor: {numbers}"),
+        "missing_effect" => format!(
+            "a missing effect: the model still lacks something the calibration poses already show: {numbers}"
+        ),
+        "overfitting" => format!(
+            "overfitting: the calibration residual is at the floor but the poses left out are not: {} fitted parameters follow these poses' noise and errors (with their uncertainty alone a right model would reach {:.2} x the floor on the held-out poses){}; measure more poses or fit fewer parameters: {numbers}",
+            v.fitted_parameters,
+            v.validation_expected_ratio,
+            v.supported_parameters
+                .map(|s| format!("; the poses support about {s} parameter combinations"))
+                .unwrap_or_default()
+        ),
+        "change_between_sets" => format!(
+            "a change between the sets: the calibration and its cross-validation are at the floor, the held-out set is not (drift, another day, another tool mounting or base): {numbers}"
+        ),
+        _ => format!(
+            "no independent floor: the calibration residual is its own floor, so a missing effect cannot be told from noise; the cross-validated and held-out residuals agree with it: {numbers}"
+        ),
+    }
+}
