@@ -133,7 +133,6 @@ pub fn run(args: Args) -> Result<(), CliError> {
         effects,
         n_val: args.n_val,
         pose_interval_s: args.pose_interval_s,
-        ..SimConfig::default()
     };
     let out = simulate(&declared, &cfg)?;
     write_outputs(&args.out, &out, &cfg)?;

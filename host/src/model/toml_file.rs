@@ -401,7 +401,7 @@ fn time_terms(e: &TimeEntry, n_joints: usize) -> Result<TimeTerms, String> {
         t.thermal_ppm = finite(v, "thermal_ppm")?;
     }
     if let Some(v) = e.thermal_tau_min {
-        if !(finite(v, "thermal_tau_min")? > 0.0) {
+        if finite(v, "thermal_tau_min")? <= 0.0 {
             return Err(format!(
                 "[time] thermal_tau_min = {v}: a time constant must be > 0 min"
             ));

@@ -236,7 +236,7 @@ pub fn parse_effect(arg: &str) -> Result<Effect, EffectError> {
         }
         ["thermal"] => {
             expect_count(id, raw, &values, &[2])?;
-            if !(values[1] > 0.0) {
+            if values[1].is_nan() || values[1] <= 0.0 {
                 return Err(EffectError::BadValue {
                     id: id.into(),
                     value: raw.into(),

@@ -4,8 +4,7 @@
 //! 1.5x of the noise floor (the held-out mean error of the true model, i.e. the mean length of
 //! the validation noise).
 
-use rigctl::diagnose::data::Dataset;
-use rigctl::diagnose::{diagnose, DiagnoseOptions, Diagnosis};
+use rigctl::diagnose::{DiagnoseOptions, Diagnosis};
 use rigctl::model::katana450;
 use rigctl::sim::effects::parse_effect;
 use rigctl::sim::simulate::{simulate, SimConfig};
@@ -24,19 +23,8 @@ fn run(effects: &[&str], seed: u64) -> Run {
         ..SimConfig::default()
     };
     let out = simulate(&declared, &cfg).unwrap();
-    let floor_mm = out
-        .val
-        .iter()
-        .map(|p| (p.measured_mm - p.truth_mm - out.truth.time_terms().drift_mm(p.t_s)).norm())
-        .sum::<f64>()
-        / out.val.len() as f64;
-    let diag = diagnose(
-        &declared,
-        &Dataset::from_sim_poses(&out.cal),
-        &Dataset::from_sim_poses(&out.val),
-        &DiagnoseOptions::default(),
-    )
-    .unwrap();
+    let floor_mm = crate::common::held_out_noise_mm(&out);
+    let diag = crate::common::diagnose_sim(&declared, &out, &DiagnoseOptions::default());
     Run { diag, floor_mm }
 }
 

@@ -27,9 +27,10 @@ struct Case {
 }
 
 fn options() -> DiagnoseOptions {
-    let mut opts = DiagnoseOptions::default();
-    opts.instrument_mm = Some(NOISE_MM);
-    opts
+    DiagnoseOptions {
+        instrument_mm: Some(NOISE_MM),
+        ..DiagnoseOptions::default()
+    }
 }
 
 /// The simulator's generator: `thermal=ppm,tau` with the poses `interval_s` apart.
@@ -43,21 +44,10 @@ fn simulated(effect: &str, seed: u64, interval_s: f64) -> Case {
         ..SimConfig::default()
     };
     let out = simulate(&declared, &cfg).unwrap();
-    let drift = out.truth.time_terms().clone();
-    let floor_mm = out
-        .val
-        .iter()
-        .map(|p| (p.measured_mm - p.truth_mm - drift.drift_mm(p.t_s)).norm())
-        .sum::<f64>()
-        / out.val.len() as f64;
-    let diag = diagnose(
-        &declared,
-        &Dataset::from_sim_poses(&out.cal),
-        &Dataset::from_sim_poses(&out.val),
-        &options(),
-    )
-    .unwrap();
-    Case { diag, floor_mm }
+    Case {
+        diag: crate::common::diagnose_sim(&declared, &out, &options()),
+        floor_mm: crate::common::held_out_noise_mm(&out),
+    }
 }
 
 /// The independent generator: a clean truth (no noise, no time terms), then every pose given a

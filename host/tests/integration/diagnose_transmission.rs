@@ -25,19 +25,8 @@ fn run_with(effects: &[&str], seed: u64, opts: &DiagnoseOptions) -> Run {
         ..SimConfig::default()
     };
     let out = simulate(&declared, &cfg).unwrap();
-    let floor_mm = out
-        .val
-        .iter()
-        .map(|p| (p.measured_mm - p.truth_mm).norm())
-        .sum::<f64>()
-        / out.val.len() as f64;
-    let diag = diagnose(
-        &declared,
-        &Dataset::from_sim_poses(&out.cal),
-        &Dataset::from_sim_poses(&out.val),
-        opts,
-    )
-    .unwrap();
+    let floor_mm = crate::common::held_out_noise_mm(&out);
+    let diag = crate::common::diagnose_sim(&declared, &out, opts);
     Run { diag, floor_mm }
 }
 

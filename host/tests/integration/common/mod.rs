@@ -162,3 +162,30 @@ pub fn import_to(
         },
     )
 }
+
+/// The held-out noise floor of a simulation: the mean length of the noise on its held-out poses
+/// (measured minus true position, the measurement drift taken out), mm.
+pub fn held_out_noise_mm(out: &rigctl::sim::simulate::SimOutput) -> f64 {
+    let drift = out.truth.time_terms();
+    out.val
+        .iter()
+        .map(|p| (p.measured_mm - p.truth_mm - drift.drift_mm(p.t_s)).norm())
+        .sum::<f64>()
+        / out.val.len().max(1) as f64
+}
+
+/// `diagnose` on a simulation's calibration and held-out poses.
+pub fn diagnose_sim(
+    declared: &rigctl::model::Model,
+    out: &rigctl::sim::simulate::SimOutput,
+    opts: &rigctl::diagnose::DiagnoseOptions,
+) -> rigctl::diagnose::Diagnosis {
+    use rigctl::diagnose::data::Dataset;
+    rigctl::diagnose::diagnose(
+        declared,
+        &Dataset::from_sim_poses(&out.cal),
+        &Dataset::from_sim_poses(&out.val),
+        opts,
+    )
+    .expect("diagnose")
+}
