@@ -9,6 +9,8 @@
 const STEP_MM: f64 = 0.2;
 /// Data collected on each side of a gap, mm of written path (candidates, smallest first).
 const SIDE_MM: [f64; 3] = [3.5, 6.0, 9.0];
+/// Gaps longer than this get sides at least as long as the excess, mm.
+const LONG_GAP_MM: f64 = 6.0;
 /// The walk outwards for data stops after this much path (bridges included) beyond the side's
 /// data length, mm.
 const WALK_EXTRA_MM: f64 = 12.0;
@@ -231,7 +233,9 @@ fn run_fit(
     let limit = if closed { n / 2 } else { n };
     let mut best: Option<(Fit, f64)> = None;
     let mut first_press = None;
-    for side_mm in SIDE_MM {
+    // A long gap (bridged on purpose) needs data from about as far on each side.
+    let long = (b.s - a.s - LONG_GAP_MM).max(0.0);
+    for side_mm in SIDE_MM.map(|v| v.max(long)) {
         if closed && 2.0 * (side_mm + WALK_EXTRA_MM) + (b.s - a.s) > total {
             break;
         }

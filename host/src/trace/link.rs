@@ -11,8 +11,9 @@
 //! (< 1 mm) need only not double back (a corner). Links are taken cheapest first, each end once, a cycle only as
 //! the closing link of a chain, so a second pencil stroke crossing the path is passed over: its
 //! ends meet the path's ends at the wrong angle, and where the crossing cut the path in two the
-//! two halves continue each other across it. Gaps up to `max_gap_mm` are bridged by a cubic
-//! Hermite curve through both ends' positions and tangents.
+//! two halves continue each other across it. Gaps up to `max_gap_mm` are bridged: a cubic
+//! Hermite curve through both ends' positions and tangents as a first guess, then refitted
+//! from the written points on both sides ([`bridge_fit`]).
 //!
 //! The longest chain is the drawn path. What is left out is listed: specks (shorter than
 //! [`MIN_MARK_MM`]), marks, and marks that could be part of the path: a link from one of the
