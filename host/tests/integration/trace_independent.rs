@@ -289,10 +289,7 @@ fn run_set(
 /// The bars, on every seed: never exit 0 below 0.95 coverage; exit 0 with coverage >= 0.95 and
 /// RMS within `rms_bar`.
 fn check(name: &str, outs: &[Outcome], rms_bar: f64) {
-    let partial_exit0 = outs
-        .iter()
-        .filter(|o| o.exit0 && o.coverage < 0.95)
-        .count();
+    let partial_exit0 = outs.iter().filter(|o| o.exit0 && o.coverage < 0.95).count();
     assert_eq!(partial_exit0, 0, "{name}: exit 0 below 0.95 coverage");
     for (i, o) in outs.iter().enumerate() {
         assert!(
