@@ -149,10 +149,8 @@ pub(crate) fn refine(
                 out.extend(points);
             }
             None => {
-                for k in i..=j {
-                    out.push(nodes[k].p);
-                    mask.push(true);
-                }
+                out.extend(nodes[i..=j].iter().map(|v| v.p));
+                mask.extend(std::iter::repeat_n(true, j + 1 - i));
                 bridged += run_length(&at, i as isize, j as isize);
             }
         }
