@@ -11,8 +11,9 @@
 //! (< 1 mm) need only not double back (a corner). Links are taken cheapest first, each end once, a cycle only as
 //! the closing link of a chain, so a second pencil stroke crossing the path is passed over: its
 //! ends meet the path's ends at the wrong angle, and where the crossing cut the path in two the
-//! two halves continue each other across it. Gaps up to `max_gap_mm` are bridged by a cubic
-//! Hermite curve through both ends' positions and tangents.
+//! two halves continue each other across it. Gaps up to `max_gap_mm` are bridged: a cubic
+//! Hermite curve through both ends' positions and tangents as a first guess, then refitted
+//! from the written points on both sides ([`bridge_fit`]).
 //!
 //! The longest chain is the drawn path. What is left out is listed: specks (shorter than
 //! [`MIN_MARK_MM`]), marks, and marks that could be part of the path: a link from one of the
@@ -21,6 +22,7 @@
 //! [`MIN_MARK_MM`] ahead of a free end within reach, or a separate line nearly as long as the
 //! path. Those make the trace incomplete.
 
+use super::bridge_fit;
 use super::chain::{polyline_length, PieceMm, Stroke};
 use crate::sheet::{ReferencePath, CIRCLE_RADIUS_MM, LINE_HALF_LENGTH_MM};
 
@@ -439,11 +441,11 @@ pub(crate) fn link(
         partner[c.b] = Some(c.a);
     }
     let chains = walk_chains(&pieces, &piece_ends, &partner);
-    let built: Vec<(Stroke, Vec<Gap>)> = chains
+    let built: Vec<(Stroke, Vec<Gap>, Vec<bool>)> = chains
         .iter()
         .map(|c| build(c, &pieces, &piece_ends))
         .collect();
-    let lengths: Vec<f64> = built.iter().map(|(s, _)| s.length_mm()).collect();
+    let lengths: Vec<f64> = built.iter().map(|(s, ..)| s.length_mm()).collect();
     let longest = lengths.iter().copied().fold(0.0, f64::max);
     // The drawn path: the longest chain; among chains within 80 % of it, the one nearest the
     // printed path.
@@ -455,14 +457,20 @@ pub(crate) fn link(
                 .total_cmp(&near(j))
                 .then(lengths[j].total_cmp(&lengths[i]))
         })?;
-    let (path, mut gaps) = built[main].clone();
+    let (path, mut gaps, mask) = built[main].clone();
     let others_pts: Vec<&[[f64; 2]]> = built
         .iter()
         .enumerate()
-        .filter(|(i, (s, _))| *i != main && s.points_mm.len() >= 2)
-        .map(|(_, (s, _))| s.points_mm.as_slice())
+        .filter(|(i, (s, ..))| *i != main && s.points_mm.len() >= 2)
+        .map(|(_, (s, ..))| s.points_mm.as_slice())
         .collect();
-    let path = cut_crossings(path, &others_pts, &mut gaps);
+    let (path, mask) = cut_crossings(path, mask, &others_pts, &mut gaps);
+    let (points_mm, _, bridged_mm) = bridge_fit::refine(&path.points_mm, &mask, path.closed);
+    let path = Stroke {
+        points_mm,
+        bridged_mm,
+        ..path
+    };
     let main_chain = &chains[main];
     // Free ends of the path and what lies beyond them.
     let mut free: Vec<End> = Vec::new();
@@ -544,7 +552,7 @@ pub(crate) fn link(
     let main_len = lengths[main];
     let mut left_out: Vec<LeftOut> = Vec::new();
     let mut others: Vec<Stroke> = Vec::new();
-    for (ci, (s, _)) in built.iter().enumerate() {
+    for (ci, (s, ..)) in built.iter().enumerate() {
         if ci == main {
             continue;
         }
@@ -648,11 +656,16 @@ fn walk_chains(
 /// of every place where another mark comes within [`CROSS_TOUCH_MM`] is replaced by a bridge
 /// between the undisturbed sides (a stretch longer than [`CROSS_MAX_MM`], a mark running along
 /// the path, is kept).
-fn cut_crossings(path: Stroke, marks: &[&[[f64; 2]]], gaps: &mut Vec<Gap>) -> Stroke {
+fn cut_crossings(
+    path: Stroke,
+    mask: Vec<bool>,
+    marks: &[&[[f64; 2]]],
+    gaps: &mut Vec<Gap>,
+) -> (Stroke, Vec<bool>) {
     let pts = &path.points_mm;
     let n = pts.len();
     if n < 8 {
-        return path;
+        return (path, mask);
     }
     let cell = CROSS_CUT_MM;
     let key = |p: [f64; 2]| ((p[0] / cell).floor() as i64, (p[1] / cell).floor() as i64);
@@ -706,25 +719,30 @@ fn cut_crossings(path: Stroke, marks: &[&[[f64; 2]]], gaps: &mut Vec<Gap>) -> St
         i = j + 1;
     }
     if !cut.iter().any(|c| *c) || cut.iter().all(|c| *c) {
-        return path;
+        return (path, mask);
     }
     // Start a closed path at a kept point, so no cut run wraps around.
-    let (pts, cut): (Vec<[f64; 2]>, Vec<bool>) = if path.closed {
+    let (pts, cut, mask): (Vec<[f64; 2]>, Vec<bool>, Vec<bool>) = if path.closed {
         let start = cut.iter().position(|c| !c).unwrap_or(0);
         let mut p = pts.clone();
         let mut c = cut.clone();
+        let mut m = mask;
         p.rotate_left(start);
         c.rotate_left(start);
-        (p, c)
+        let k = start.min(m.len());
+        m.rotate_left(k);
+        (p, c, m)
     } else {
-        (pts.clone(), cut)
+        (pts.clone(), cut, mask)
     };
+    let mut out_mask: Vec<bool> = Vec::with_capacity(n);
     let mut out: Vec<[f64; 2]> = Vec::with_capacity(n);
     let mut bridged = path.bridged_mm;
     let mut i = 0;
     while i < n {
         if !cut[i] {
             out.push(pts[i]);
+            out_mask.push(mask.get(i).copied().unwrap_or(false));
             i += 1;
             continue;
         }
@@ -749,15 +767,19 @@ fn cut_crossings(path: Stroke, marks: &[&[[f64; 2]]], gaps: &mut Vec<Gap>) -> St
                 bridged: true,
             });
             bridged += len;
+            out_mask.extend(std::iter::repeat_n(true, inner.len()));
             out.extend(inner);
         }
         i = j + 1;
     }
-    Stroke {
-        points_mm: out,
-        closed: path.closed,
-        bridged_mm: bridged,
-    }
+    (
+        Stroke {
+            points_mm: out,
+            closed: path.closed,
+            bridged_mm: bridged,
+        },
+        out_mask,
+    )
 }
 
 /// Total length of piece segments within `band_mm` of the printed `path` (to pick the hint).
@@ -827,13 +849,15 @@ fn candidates(
     out
 }
 
-/// The polyline of a chain with its bridges, and its gaps.
+/// The polyline of a chain with its bridges (a first guess, see [`bridge_fit`]), which of its
+/// points are bridge points, and its gaps.
 fn build(
     chain: &Chain,
     pieces: &[&PieceMm],
     piece_ends: &[Option<[End; 2]>],
-) -> (Stroke, Vec<Gap>) {
+) -> (Stroke, Vec<Gap>, Vec<bool>) {
     let mut pts: Vec<[f64; 2]> = Vec::new();
+    let mut mask: Vec<bool> = Vec::new();
     let mut gaps = Vec::new();
     let mut bridged = 0.0;
     let n = chain.order.len();
@@ -866,7 +890,7 @@ fn build(
     // Bridges run between the anchors: the pencil's own gap and the millimetre before each end.
     // The side already written gives its direction from the chain so far (a short piece alone
     // gives a poor one).
-    let mut link = |a: End, b: End, pts: &mut Vec<[f64; 2]>| {
+    let mut link = |a: End, b: End, pts: &mut Vec<[f64; 2]>, mask: &mut Vec<bool>| {
         let (from, ta) = match end_with(pts, 0.0) {
             Some(e) if pts.len() >= 2 => (e.p, e.t),
             _ => (a.anchor, a.ta),
@@ -882,22 +906,25 @@ fn build(
             });
             bridged += len;
         }
+        mask.extend(std::iter::repeat_n(true, inner.len()));
         pts.extend(inner);
     };
     for (i, item) in chain.order.iter().enumerate() {
         if i > 0 {
             if let (Some(a), Some(b)) = (exit_end(&chain.order[i - 1]), entry_end(item)) {
-                link(a, b, &mut pts);
+                link(a, b, &mut pts, &mut mask);
             }
         }
-        pts.extend(oriented(i));
+        let v = oriented(i);
+        mask.extend(std::iter::repeat_n(false, v.len()));
+        pts.extend(v);
     }
     if linked_cycle {
         if let (Some(a), Some(b)) = (exit_end(&chain.order[n - 1]), entry_end(&chain.order[0])) {
-            link(a, b, &mut pts);
+            link(a, b, &mut pts, &mut mask);
         }
     }
-    pts.dedup();
+    let (pts, mask) = dedup_masked(pts, mask);
     (
         Stroke {
             points_mm: pts,
@@ -905,7 +932,21 @@ fn build(
             bridged_mm: bridged,
         },
         gaps,
+        mask,
     )
+}
+
+/// Removes consecutive repeated points (and their mask entries).
+fn dedup_masked(pts: Vec<[f64; 2]>, mask: Vec<bool>) -> (Vec<[f64; 2]>, Vec<bool>) {
+    let mut p: Vec<[f64; 2]> = Vec::with_capacity(pts.len());
+    let mut m: Vec<bool> = Vec::with_capacity(mask.len());
+    for (q, b) in pts.into_iter().zip(mask) {
+        if p.last() != Some(&q) {
+            p.push(q);
+            m.push(b);
+        }
+    }
+    (p, m)
 }
 
 /// Shortens the polyline `v` by `len` mm at its end (never below one point).

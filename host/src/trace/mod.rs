@@ -25,6 +25,7 @@
 //! [`options`].
 
 mod area;
+mod bridge_fit;
 pub mod camera;
 mod centreline;
 pub mod chain;

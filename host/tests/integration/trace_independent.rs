@@ -286,28 +286,21 @@ fn run_set(
     out
 }
 
-/// The bars: never exit 0 below 0.95 coverage; every seed exit 0 with coverage >= 0.95; RMS
-/// within `rms_bar` on every seed but at most two, which stay within 1.5 x `rms_bar` (a known
-/// shortfall: a Hermite bridge over a skip on a tightly wiggling curve, or the centroids beside a
-/// crossing stroke; docs/trace.md counts them).
+/// The bars, on every seed: never exit 0 below 0.95 coverage; exit 0 with coverage >= 0.95 and
+/// RMS within `rms_bar`.
 fn check(name: &str, outs: &[Outcome], rms_bar: f64) {
+    let partial_exit0 = outs.iter().filter(|o| o.exit0 && o.coverage < 0.95).count();
+    assert_eq!(partial_exit0, 0, "{name}: exit 0 below 0.95 coverage");
     for (i, o) in outs.iter().enumerate() {
         assert!(
-            !(o.exit0 && o.coverage < 0.95),
-            "{name} #{i}: exit 0 at coverage {:.4}",
-            o.coverage
-        );
-        assert!(
-            o.exit0 && o.coverage >= 0.95 && o.rms <= 1.5 * rms_bar,
-            "{name} #{i}: coverage {:.4}, rms {:.4}, exit0 {} ({})",
+            o.exit0 && o.coverage >= 0.95 && o.rms <= rms_bar,
+            "{name} #{i}: coverage {:.4}, rms {:.4} (bar {rms_bar}), exit0 {} ({})",
             o.coverage,
             o.rms,
             o.exit0,
             o.note
         );
     }
-    let over = outs.iter().filter(|o| o.rms > rms_bar).count();
-    assert!(over <= 2, "{name}: {over} seeds above rms {rms_bar}");
 }
 
 const SEEDS: std::ops::Range<u64> = 1..21;

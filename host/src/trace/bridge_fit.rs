@@ -1,0 +1,534 @@
+//! Bridges refitted from the graphite on both sides of each gap: one smooth curve (x and y
+//! polynomials of the arc length) fitted to the written points before and after the gap, robust
+//! to dust and pulled centroids (Tukey biweight), its window and degree chosen by the data
+//! (leave-one-out residuals), then sampled across the gap. The bridge lies in the interior of
+//! the fitted stretch, so its shape comes from both ends at once, not from two tangents
+//! extrapolated over the gap.
+
+/// Spacing of bridge points, mm.
+const STEP_MM: f64 = 0.2;
+/// Data collected on each side of a gap, mm of written path (candidates, smallest first).
+const SIDE_MM: [f64; 3] = [3.5, 6.0, 9.0];
+/// Bridges longer than this keep their first guess (a gap bridged on purpose with a large
+/// `--max-gap-mm`): what the sides say about the middle of a long gap is no better than the
+/// first guess, mm.
+const MAX_REFIT_MM: f64 = 16.0;
+/// The walk outwards for data stops after this much path (bridges included) beyond the side's
+/// data length, mm.
+const WALK_EXTRA_MM: f64 = 12.0;
+/// Highest polynomial degree.
+const MAX_DEGREE: usize = 5;
+/// A larger window is taken while its leave-one-out residual stays within this factor of the
+/// smallest window's (no sign of the curve outgrowing the polynomial).
+const WIDER_OK: f64 = 1.25;
+/// Floor of the residual scale, mm (centroid noise is never below this).
+const MIN_SCALE_MM: f64 = 0.002;
+/// A fit whose leave-one-out residual exceeds this (a corner, not a smooth curve) leaves the
+/// first guess in place, mm.
+const MAX_RESIDUAL_MM: f64 = 0.05;
+/// Tukey biweight constant, in residual scales.
+const TUKEY_C: f64 = 4.685;
+
+/// A point of the unrolled path: position, arc length, whether it is a bridge point.
+#[derive(Clone, Copy)]
+struct Node {
+    p: [f64; 2],
+    s: f64,
+    bridge: bool,
+}
+
+/// A weighted polynomial fit of x(t) and y(t), t the arc length scaled to about [-1, 1].
+struct Fit {
+    cx: Vec<f64>,
+    cy: Vec<f64>,
+    s0: f64,
+    half: f64,
+    /// Mean squared leave-one-out residual (weighted), mm^2.
+    press: f64,
+}
+
+impl Fit {
+    fn at(&self, s: f64) -> [f64; 2] {
+        let t = (s - self.s0) / self.half;
+        [horner(&self.cx, t), horner(&self.cy, t)]
+    }
+}
+
+fn horner(c: &[f64], t: f64) -> f64 {
+    c.iter().rev().fold(0.0, |acc, v| acc * t + v)
+}
+
+fn dist(a: [f64; 2], b: [f64; 2]) -> f64 {
+    (a[0] - b[0]).hypot(a[1] - b[1])
+}
+
+/// Refits every run of bridge points of `pts` (`bridge[i]` marks them) from the written points
+/// around it; returns the new polyline, its mask and the total bridge length, mm. A run with
+/// too few written points around it keeps its points.
+pub(crate) fn refine(
+    pts: &[[f64; 2]],
+    bridge: &[bool],
+    closed: bool,
+) -> (Vec<[f64; 2]>, Vec<bool>, f64) {
+    let n = pts.len();
+    let unchanged = || {
+        let len = bridge_length(pts, bridge, closed);
+        (pts.to_vec(), bridge.to_vec(), len)
+    };
+    if n < 4 || bridge.len() != n || !bridge.iter().any(|b| *b) || bridge.iter().all(|b| *b) {
+        return unchanged();
+    }
+    // A closed path starts at a written point, so no run wraps around.
+    let start = if closed {
+        bridge.iter().position(|b| !b).unwrap_or(0)
+    } else {
+        0
+    };
+    let mut nodes: Vec<Node> = Vec::with_capacity(n);
+    let mut s = 0.0;
+    for k in 0..n {
+        let i = (start + k) % n;
+        if k > 0 {
+            s += dist(nodes[k - 1].p, pts[i]);
+        }
+        nodes.push(Node {
+            p: pts[i],
+            s,
+            bridge: bridge[i],
+        });
+    }
+    let total = if closed {
+        s + dist(nodes[n - 1].p, nodes[0].p)
+    } else {
+        s
+    };
+    // The node at unrolled index k (a closed path repeats around).
+    let at = |k: isize| -> Option<Node> {
+        if closed {
+            let m = k.rem_euclid(n as isize) as usize;
+            let turns = k.div_euclid(n as isize) as f64;
+            let v = nodes[m];
+            Some(Node {
+                s: v.s + turns * total,
+                ..v
+            })
+        } else if k >= 0 && (k as usize) < n {
+            Some(nodes[k as usize])
+        } else {
+            None
+        }
+    };
+    let mut out: Vec<[f64; 2]> = Vec::with_capacity(n);
+    let mut mask: Vec<bool> = Vec::with_capacity(n);
+    let mut bridged = 0.0;
+    let mut i = 0;
+    while i < n {
+        if !nodes[i].bridge {
+            out.push(nodes[i].p);
+            mask.push(false);
+            i += 1;
+            continue;
+        }
+        let mut j = i;
+        while j + 1 < n && nodes[j + 1].bridge {
+            j += 1;
+        }
+        let refit = run_fit(&at, i as isize, j as isize, n, total, closed);
+        match refit {
+            Some(points) => {
+                let (a, b) = (at(i as isize - 1), at(j as isize + 1));
+                let mut prev = a.map_or(points[0], |v| v.p);
+                for p in &points {
+                    bridged += dist(prev, *p);
+                    prev = *p;
+                }
+                if let Some(b) = b {
+                    bridged += dist(prev, b.p);
+                }
+                mask.extend(std::iter::repeat_n(true, points.len()));
+                out.extend(points);
+            }
+            None => {
+                out.extend(nodes[i..=j].iter().map(|v| v.p));
+                mask.extend(std::iter::repeat_n(true, j + 1 - i));
+                bridged += run_length(&at, i as isize, j as isize);
+            }
+        }
+        i = j + 1;
+    }
+    (out, mask, bridged)
+}
+
+/// Length of the bridge run `i..=j` with its links to the written points on both sides.
+fn run_length(at: &dyn Fn(isize) -> Option<Node>, i: isize, j: isize) -> f64 {
+    let mut len = 0.0;
+    for k in i - 1..=j {
+        if let (Some(a), Some(b)) = (at(k), at(k + 1)) {
+            len += dist(a.p, b.p);
+        }
+    }
+    len
+}
+
+fn bridge_length(pts: &[[f64; 2]], bridge: &[bool], closed: bool) -> f64 {
+    let n = pts.len();
+    let segs = if closed { n } else { n.saturating_sub(1) };
+    (0..segs)
+        .filter(|&k| bridge.get(k) == Some(&true) || bridge.get((k + 1) % n) == Some(&true))
+        .map(|k| dist(pts[k], pts[(k + 1) % n]))
+        .sum()
+}
+
+/// The written points on one side of the run, walking outwards from unrolled index `from` by
+/// `dir` (+1 / -1), until `side_mm` of written path is collected.
+fn side_points(
+    at: &dyn Fn(isize) -> Option<Node>,
+    from: isize,
+    dir: isize,
+    side_mm: f64,
+    limit: usize,
+) -> Vec<Node> {
+    let mut got = Vec::new();
+    let Some(first) = at(from) else {
+        return got;
+    };
+    let mut written = 0.0;
+    let mut prev = first;
+    let mut k = from;
+    for _ in 0..limit {
+        let Some(v) = at(k) else { break };
+        if (v.s - first.s).abs() > side_mm + WALK_EXTRA_MM {
+            break;
+        }
+        if !v.bridge {
+            if !prev.bridge {
+                written += (v.s - prev.s).abs();
+            }
+            got.push(v);
+            if written >= side_mm {
+                break;
+            }
+        }
+        prev = v;
+        k += dir;
+    }
+    got
+}
+
+/// The refitted points of the bridge run `i..=j` (unrolled indices), or `None` when the data
+/// around it do not support a fit.
+fn run_fit(
+    at: &dyn Fn(isize) -> Option<Node>,
+    i: isize,
+    j: isize,
+    n: usize,
+    total: f64,
+    closed: bool,
+) -> Option<Vec<[f64; 2]>> {
+    let (a, b) = (at(i - 1)?, at(j + 1)?);
+    if a.bridge || b.bridge {
+        return None;
+    }
+    // A closed path's two sides must not overlap.
+    let limit = if closed { n / 2 } else { n };
+    let mut best: Option<(Fit, f64)> = None;
+    let mut first_press = None;
+    if b.s - a.s > MAX_REFIT_MM {
+        return None;
+    }
+    for side_mm in SIDE_MM {
+        if closed && 2.0 * (side_mm + WALK_EXTRA_MM) + (b.s - a.s) > total {
+            break;
+        }
+        let before = side_points(at, i - 1, -1, side_mm, limit);
+        let after = side_points(at, j + 1, 1, side_mm, limit);
+        if before.len() < 6 || after.len() < 6 {
+            continue;
+        }
+        let data: Vec<Node> = before.iter().rev().chain(after.iter()).copied().collect();
+        let Some(fit) = best_degree(&data) else {
+            continue;
+        };
+        let base = *first_press.get_or_insert(fit.press);
+        if fit.press > WIDER_OK * WIDER_OK * base {
+            break;
+        }
+        best = Some((fit, side_mm));
+    }
+    let (fit, _) = best.filter(|(f, _)| f.press.sqrt() <= MAX_RESIDUAL_MM)?;
+    let (s_a, s_b) = (a.s, b.s);
+    let len = curve_length(&fit, s_a, s_b);
+    let m = (len / STEP_MM).ceil().max(1.0) as usize;
+    let pts: Vec<[f64; 2]> = (1..m)
+        .map(|k| fit.at(s_a + (s_b - s_a) * k as f64 / m as f64))
+        .collect();
+    let finite = pts.iter().all(|p| p[0].is_finite() && p[1].is_finite());
+    (finite && !pts.is_empty()).then_some(pts)
+}
+
+fn curve_length(fit: &Fit, s_a: f64, s_b: f64) -> f64 {
+    let m = 64;
+    let mut prev = fit.at(s_a);
+    let mut len = 0.0;
+    for k in 1..=m {
+        let p = fit.at(s_a + (s_b - s_a) * k as f64 / m as f64);
+        len += dist(prev, p);
+        prev = p;
+    }
+    len
+}
+
+/// The robust fit of the degree (1..=[`MAX_DEGREE`]) with the smallest leave-one-out residual.
+fn best_degree(data: &[Node]) -> Option<Fit> {
+    let mut best: Option<Fit> = None;
+    for deg in 1..=MAX_DEGREE {
+        if data.len() < 3 * (deg + 1) {
+            break;
+        }
+        if let Some(f) = robust_fit(data, deg) {
+            if best.as_ref().is_none_or(|b| f.press < b.press) {
+                best = Some(f);
+            }
+        }
+    }
+    best
+}
+
+/// Iteratively reweighted least squares with Tukey's biweight on the 2-D residual.
+fn robust_fit(data: &[Node], deg: usize) -> Option<Fit> {
+    let (lo, hi) = (data.first()?.s, data.last()?.s);
+    let half = 0.5 * (hi - lo);
+    if half <= 1e-9 {
+        return None;
+    }
+    let s0 = 0.5 * (lo + hi);
+    let ts: Vec<f64> = data.iter().map(|v| (v.s - s0) / half).collect();
+    let mut w = vec![1.0; data.len()];
+    let mut fit = None;
+    for _ in 0..5 {
+        let (cx, cy, press) = weighted_fit(data, &ts, &w, deg)?;
+        let r: Vec<f64> = data
+            .iter()
+            .zip(&ts)
+            .map(|(v, t)| (v.p[0] - horner(&cx, *t)).hypot(v.p[1] - horner(&cy, *t)))
+            .collect();
+        let mut sorted = r.clone();
+        sorted.sort_by(f64::total_cmp);
+        let scale = (1.4826 * sorted[sorted.len() / 2]).max(MIN_SCALE_MM);
+        for (wi, ri) in w.iter_mut().zip(&r) {
+            let u = ri / (TUKEY_C * scale);
+            *wi = if u < 1.0 { (1.0 - u * u).powi(2) } else { 0.0 };
+        }
+        fit = Some(Fit {
+            cx,
+            cy,
+            s0,
+            half,
+            press,
+        });
+    }
+    fit
+}
+
+/// Weighted least squares of x and y on powers of `ts` up to `deg`: coefficients and the mean
+/// squared leave-one-out residual.
+fn weighted_fit(
+    data: &[Node],
+    ts: &[f64],
+    w: &[f64],
+    deg: usize,
+) -> Option<(Vec<f64>, Vec<f64>, f64)> {
+    let m = deg + 1;
+    let mut a = vec![0.0; m * m];
+    let (mut bx, mut by) = (vec![0.0; m], vec![0.0; m]);
+    let mut pw = vec![0.0; m];
+    for ((v, t), wi) in data.iter().zip(ts).zip(w) {
+        if *wi <= 0.0 {
+            continue;
+        }
+        powers(*t, &mut pw);
+        for r in 0..m {
+            for c in 0..m {
+                a[r * m + c] += wi * pw[r] * pw[c];
+            }
+            bx[r] += wi * pw[r] * v.p[0];
+            by[r] += wi * pw[r] * v.p[1];
+        }
+    }
+    let l = cholesky(&a, m)?;
+    let cx = solve(&l, m, &bx);
+    let cy = solve(&l, m, &by);
+    // Leave-one-out residuals r / (1 - h), h the leverage w p^T A^-1 p.
+    let (mut press, mut wsum) = (0.0, 0.0);
+    for ((v, t), wi) in data.iter().zip(ts).zip(w) {
+        if *wi <= 0.0 {
+            continue;
+        }
+        powers(*t, &mut pw);
+        let z = solve(&l, m, &pw);
+        let h = wi * pw.iter().zip(&z).map(|(p, q)| p * q).sum::<f64>();
+        if h >= 1.0 - 1e-9 {
+            return None;
+        }
+        let rx = v.p[0] - horner(&cx, *t);
+        let ry = v.p[1] - horner(&cy, *t);
+        press += wi * (rx * rx + ry * ry) / ((1.0 - h) * (1.0 - h));
+        wsum += wi;
+    }
+    (wsum > 0.0).then_some((cx, cy, press / wsum))
+}
+
+fn powers(t: f64, out: &mut [f64]) {
+    let mut v = 1.0;
+    for o in out.iter_mut() {
+        *o = v;
+        v *= t;
+    }
+}
+
+/// Lower Cholesky factor of the `m` x `m` row-major matrix `a`, or `None` when not positive
+/// definite.
+fn cholesky(a: &[f64], m: usize) -> Option<Vec<f64>> {
+    let mut l = vec![0.0; m * m];
+    for r in 0..m {
+        for c in 0..=r {
+            let mut sum = a[r * m + c];
+            for k in 0..c {
+                sum -= l[r * m + k] * l[c * m + k];
+            }
+            if r == c {
+                if sum <= 1e-12 * a[r * m + r].abs().max(1e-300) {
+                    return None;
+                }
+                l[r * m + r] = sum.sqrt();
+            } else {
+                l[r * m + c] = sum / l[c * m + c];
+            }
+        }
+    }
+    Some(l)
+}
+
+/// Solves `L L^T x = b`.
+fn solve(l: &[f64], m: usize, b: &[f64]) -> Vec<f64> {
+    let mut y = vec![0.0; m];
+    for r in 0..m {
+        let mut sum = b[r];
+        for k in 0..r {
+            sum -= l[r * m + k] * y[k];
+        }
+        y[r] = sum / l[r * m + r];
+    }
+    let mut x = vec![0.0; m];
+    for r in (0..m).rev() {
+        let mut sum = y[r];
+        for k in r + 1..m {
+            sum -= l[k * m + r] * x[k];
+        }
+        x[r] = sum / l[r * m + r];
+    }
+    x
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// Written points of `f` at 0.25 mm steps of `u` outside the gap, a straight first guess
+    /// inside it.
+    fn with_gap(
+        f: impl Fn(f64) -> [f64; 2],
+        len: f64,
+        gap: [f64; 2],
+    ) -> (Vec<[f64; 2]>, Vec<bool>) {
+        let mut pts = Vec::new();
+        let mut mask = Vec::new();
+        let mut guessed = false;
+        let n = (len / 0.25) as usize;
+        for k in 0..=n {
+            let u = k as f64 * 0.25;
+            if u > gap[0] && u < gap[1] {
+                continue;
+            }
+            if u >= gap[1] && !guessed {
+                guessed = true;
+                let (a, b) = (f(gap[0]), f(gap[1]));
+                for q in 1..10 {
+                    let g = q as f64 / 10.0;
+                    pts.push([a[0] + g * (b[0] - a[0]), a[1] + g * (b[1] - a[1])]);
+                    mask.push(true);
+                }
+            }
+            pts.push(f(u));
+            mask.push(false);
+        }
+        (pts, mask)
+    }
+
+    fn worst_off(pts: &[[f64; 2]], f: impl Fn(f64) -> [f64; 2], len: f64) -> f64 {
+        let truth: Vec<[f64; 2]> = (0..=(len * 100.0) as usize)
+            .map(|k| f(k as f64 * 0.01))
+            .collect();
+        pts.iter()
+            .map(|p| {
+                truth
+                    .iter()
+                    .map(|q| dist(*p, *q))
+                    .fold(f64::INFINITY, f64::min)
+            })
+            .fold(0.0, f64::max)
+    }
+
+    #[test]
+    fn a_skip_on_an_arc_is_bridged_on_the_arc() {
+        let r = 35.0;
+        let f = |u: f64| [r * (u / r).cos(), r * (u / r).sin()];
+        let (pts, mask) = with_gap(f, 40.0, [15.0, 24.0]);
+        assert!(
+            worst_off(&pts, f, 40.0) > 0.2,
+            "the straight guess is off the arc"
+        );
+        let (out, m, len) = refine(&pts, &mask, false);
+        assert_eq!(out.len(), m.len());
+        assert!(
+            worst_off(&out, f, 40.0) < 0.002,
+            "{}",
+            worst_off(&out, f, 40.0)
+        );
+        assert!((len - 9.0).abs() < 0.05, "{len}");
+    }
+
+    #[test]
+    fn a_speck_beside_the_line_does_not_bend_the_bridge() {
+        let f = |u: f64| [u, 0.2 * u];
+        let (mut pts, mask) = with_gap(f, 30.0, [12.0, 18.0]);
+        // A centroid pulled 0.12 mm aside 4 mm after the gap (dust on the line).
+        let k = pts
+            .iter()
+            .position(|p| (p[0] - 22.0).abs() < 0.13)
+            .expect("a point");
+        pts[k][1] += 0.12;
+        pts[k + 1][1] += 0.08;
+        let (out, _, _) = refine(&pts, &mask, false);
+        let bridge_off = out
+            .iter()
+            .filter(|p| p[0] > 12.0 && p[0] < 18.0)
+            .map(|p| (p[1] - 0.2 * p[0]).abs() / 1.04f64.sqrt())
+            .fold(0.0, f64::max);
+        assert!(bridge_off < 0.003, "{bridge_off}");
+    }
+
+    #[test]
+    fn a_wiggle_is_followed_across_the_gap() {
+        let f = |u: f64| [u, 4.0 * (0.23 * u).sin()];
+        let (pts, mask) = with_gap(f, 45.0, [20.0, 27.0]);
+        assert!(
+            worst_off(&pts, f, 45.0) > 0.2,
+            "the straight guess is off the wave"
+        );
+        let (out, _, _) = refine(&pts, &mask, false);
+        // A wave of 27 mm wavelength and 4 mm amplitude, 9.5 mm of it missing.
+        let off = worst_off(&out, f, 45.0);
+        assert!(off < 0.05, "{off}");
+    }
+}
