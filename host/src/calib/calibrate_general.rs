@@ -53,7 +53,7 @@ pub struct GeneralOptions {
     pub compliance: bool,
 }
 
-/// Result of [`calibrate_general`].
+/// Result of [`calibrate_poses`].
 #[derive(Debug, Clone)]
 pub struct GeneralOutcome {
     /// The calibrated model, report (with `terms`) and error vectors (one per measurement).
@@ -220,8 +220,9 @@ pub fn calibrate_poses(
 
 /// Calibrates `nominal` on `cal` (several points per pose, compliance, PRESS selection) and
 /// evaluates on `val`. "before" is the nominal model without tilting, its further points at
-/// their identified offsets (they have no nominal value).
-pub fn calibrate_general(
+/// their identified offsets (they have no nominal value). Reached through [`calibrate_poses`],
+/// which maps the measurements through the model's terms first.
+fn calibrate_general(
     nominal: &Model,
     cal: &Measurements,
     val: Option<&Measurements>,

@@ -19,7 +19,7 @@
 //! | [`general`] | identification with point offsets and joint compliance |
 //! | [`outliers`] | gross errors in measured poses: the robust fit-and-flag rule shared by `calibrate` and `diagnose` |
 //! | [`press`] | block-PRESS (leave-one-pose-out) forward selection |
-//! | [`calibrate_general`] | `calibrate` with several points, `--compliance`, `--select press` |
+//! | [`calibrate_general`] | `calibrate_poses`: `calibrate` on pose files with the model's terms applied, and with several points, `--compliance`, `--select press` |
 //! | [`samples`] | the pencil rig's partial measurement: a fused sample (`FUSED.csv` row) |
 
 pub mod accumulate;

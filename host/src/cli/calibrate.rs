@@ -3,7 +3,7 @@
 //! [--set NAME=VALUE ...] [--params a,b,@group] [--base] [--units m,rad] [--markers 1,2]
 //! [--select press] [--compliance]`: identifies the model's parameters (and, with several
 //! measured points per pose or `--compliance`, the points' offsets and the joint compliances:
-//! `rigctl::calib::calibrate_general`) and prints a thesis-table-4.5 style summary.
+//! `rigctl::calib::calibrate_general::calibrate_poses`) and prints a thesis-table-4.5 style summary.
 //!
 //! `rigctl calibrate --samples FUSED.csv [--method standard|tilting] [--errors-csv FILE]
 //! [--plot FILE.svg] ...`:

@@ -87,21 +87,18 @@ fn run_bag(args: &Args, model: &rigctl::model::Model, tilt: Tilt) -> Result<(), 
             t.push(r.t_s);
             Ok(())
         })?;
-        let t0 = t.first().copied().unwrap_or(0.0);
         for (qe, t_s) in model.effective_pose_joints(&q, Some(&t))?.iter().zip(&t) {
             line.clear();
-            fk_row(&mut line, model, qe, t_s - t0, tilt)?;
+            fk_row(&mut line, model, qe, *t_s, tilt)?;
             w.write_all(line.as_bytes())
                 .map_err(super::out::stdout_error)?;
         }
     } else {
-        let mut t0 = None;
         args.joint_log.read_bag(&args.joints, model, |r| {
-            // time terms: the session starts at the first message
-            let t_s = r.t_s - *t0.get_or_insert(r.t_s);
-            let qe = model.effective_pose_joints(std::slice::from_ref(&r.q), Some(&[t_s]))?;
+            // a bag's times count from its first message: the session's start
+            let qe = model.effective_pose_joints(std::slice::from_ref(&r.q), Some(&[r.t_s]))?;
             line.clear();
-            fk_row(&mut line, model, &qe[0], t_s, tilt)?;
+            fk_row(&mut line, model, &qe[0], r.t_s, tilt)?;
             w.write_all(line.as_bytes())
                 .map_err(super::out::stdout_error)
         })?;

@@ -55,31 +55,8 @@ impl ExtModel {
         let n = model.n_joints();
         let tilt = model.has_tilt();
         let gravity = GravityModel::for_model(&model);
-        let t = model.transmission();
-        let sized = |v: &[f64]| v.len() == n;
-        if !(sized(&t.scale)
-            && sized(&t.hysteresis_deg)
-            && sized(&t.compliance_deg_per_kgfm)
-            && t.coupling.len() == n
-            && t.coupling.iter().all(|r| r.len() == n))
-        {
-            let mut z = JointTerms::zeros(n);
-            for (j, v) in z.scale.iter_mut().enumerate() {
-                *v = t.scale.get(j).copied().unwrap_or(0.0);
-            }
-            for (j, v) in z.hysteresis_deg.iter_mut().enumerate() {
-                *v = t.hysteresis_deg.get(j).copied().unwrap_or(0.0);
-            }
-            for (j, v) in z.compliance_deg_per_kgfm.iter_mut().enumerate() {
-                *v = t.compliance_deg_per_kgfm.get(j).copied().unwrap_or(0.0);
-            }
-            for (i, row) in z.coupling.iter_mut().enumerate() {
-                for (k, v) in row.iter_mut().enumerate() {
-                    *v = t.coupling_at(i, k);
-                }
-            }
-            model.set_transmission(z);
-        }
+        let terms = model.transmission().sized(n);
+        model.set_transmission(terms);
         if model.time_terms().joint_drift_deg_per_h.len() != n {
             let rates = &mut model.time_terms_mut().joint_drift_deg_per_h;
             rates.resize(n, 0.0);

@@ -83,10 +83,15 @@ impl TimeTerms {
         self.grown_mm(chain_mm, t_s) + self.drift_mm(t_s)
     }
 
+    /// The factor every length has grown by at `t_s`: `1 + s 1e-6 (1 - exp(-t / tau))`.
+    pub fn growth_factor(&self, t_s: f64) -> f64 {
+        1.0 + self.thermal_ppm * 1e-6 * self.warm_up(t_s)
+    }
+
     /// The chain's position `chain_mm` grown by the warm-up at `t_s` (the tool point's real
     /// position, before the drift of the measurement).
     pub fn grown_mm(&self, chain_mm: &Vector3<f64>, t_s: f64) -> Vector3<f64> {
-        chain_mm * (1.0 + self.thermal_ppm * 1e-6 * self.warm_up(t_s))
+        chain_mm * self.growth_factor(t_s)
     }
 
     /// Derivatives of [`Self::measured_mm`] at `t_s`: with respect to `thermal_ppm` and to
@@ -104,7 +109,7 @@ impl TimeTerms {
         ThermalDerivatives {
             d_ppm: chain_mm * (1e-6 * w),
             d_tau_min: chain_mm * (self.thermal_ppm * 1e-6 * dw_dtau),
-            factor: 1.0 + self.thermal_ppm * 1e-6 * w,
+            factor: self.growth_factor(t_s),
         }
     }
 

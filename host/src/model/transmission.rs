@@ -224,15 +224,43 @@ impl JointTerms {
         q_deg: &[f64],
         approach: &[f64],
     ) -> Result<Vec<f64>, ModelError> {
-        let tau = match self
+        Ok(self.apply(
+            q_deg,
+            approach,
+            &self.compliance_torques_kgfm(model, q_deg)?,
+        ))
+    }
+
+    /// The gravity torques about the axes (kgf.m) that the compliance terms need at `q_deg`,
+    /// from `model`'s masses; empty when there is no compliance term or no mass.
+    pub fn compliance_torques_kgfm(
+        &self,
+        model: &Model,
+        q_deg: &[f64],
+    ) -> Result<Vec<f64>, ModelError> {
+        match self
             .has_compliance()
             .then(|| GravityModel::for_model(model))
             .flatten()
         {
-            Some(g) => g.axis_torques_kgfm(model, q_deg)?,
-            None => Vec::new(),
-        };
-        Ok(self.apply(q_deg, approach, &tau))
+            Some(g) => g.axis_torques_kgfm(model, q_deg),
+            None => Ok(Vec::new()),
+        }
+    }
+
+    /// These terms sized for `n_joints` joints: the values present kept, the others 0.
+    pub fn sized(&self, n_joints: usize) -> JointTerms {
+        let at = |v: &[f64], j: usize| v.get(j).copied().unwrap_or(0.0);
+        let mut z = JointTerms::zeros(n_joints);
+        for j in 0..n_joints {
+            z.scale[j] = at(&self.scale, j);
+            z.hysteresis_deg[j] = at(&self.hysteresis_deg, j);
+            z.compliance_deg_per_kgfm[j] = at(&self.compliance_deg_per_kgfm, j);
+            for k in 0..n_joints {
+                z.coupling[j][k] = self.coupling_at(j, k);
+            }
+        }
+        z
     }
 
     /// The joint map with the gravity torques about the axes given (`tau_kgfm`, kgf.m; empty:
@@ -322,15 +350,7 @@ impl Model {
         t_s: f64,
         approach: &[f64],
     ) -> Result<Vec<f64>, ModelError> {
-        let tau = match self
-            .transmission
-            .has_compliance()
-            .then(|| GravityModel::for_model(self))
-            .flatten()
-        {
-            Some(g) => g.axis_torques_kgfm(self, q_deg)?,
-            None => Vec::new(),
-        };
+        let tau = self.transmission.compliance_torques_kgfm(self, q_deg)?;
         Ok(self.joint_map(q_deg, t_s, approach, &tau))
     }
 
@@ -351,22 +371,13 @@ impl Model {
         } else {
             Vec::new()
         };
-        let gravity = self
-            .transmission
-            .has_compliance()
-            .then(|| GravityModel::for_model(self))
-            .flatten();
         q_deg
             .iter()
             .enumerate()
             .map(|(k, q)| {
                 let a = approach.get(k).map_or(&[][..], Vec::as_slice);
-                let tau = match &gravity {
-                    Some(g) => g.axis_torques_kgfm(self, q)?,
-                    None => Vec::new(),
-                };
                 let t = t_s.and_then(|t| t.get(k)).copied().unwrap_or(0.0);
-                Ok(self.joint_map(q, t, a, &tau))
+                self.effective_joints_at(q, t, a)
             })
             .collect()
     }
@@ -376,7 +387,7 @@ impl Model {
     pub fn chain_mm_for(&self, measured_mm: &Vector3<f64>, t_s: f64) -> Vector3<f64> {
         if self.time_terms.is_active() {
             let t = &self.time_terms;
-            (measured_mm - t.drift_mm(t_s)) / (1.0 + t.thermal_ppm * 1e-6 * t.warm_up(t_s))
+            (measured_mm - t.drift_mm(t_s)) / t.growth_factor(t_s)
         } else {
             *measured_mm
         }

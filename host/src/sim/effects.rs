@@ -28,7 +28,6 @@
 
 use nalgebra::Vector3;
 
-use crate::model::transmission::JointTerms;
 use crate::model::{Model, ModelError};
 
 /// A bad `--effect` argument.
@@ -351,10 +350,7 @@ impl Effect {
                     });
                 }
                 let n = model.n_joints();
-                let mut terms = model.transmission().clone();
-                if terms.scale.len() != n {
-                    terms = JointTerms::zeros(n);
-                }
+                let mut terms = model.transmission().sized(n);
                 match *term {
                     JointTerm::Scale(j, v) => terms.scale[j] += v,
                     JointTerm::Coupling(i, k, v) => terms.coupling[i][k] += v,
