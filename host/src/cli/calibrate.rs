@@ -19,7 +19,7 @@ use rigctl::calib::calibrate_general::{calibrate_poses, GeneralOptions, Select};
 use rigctl::calib::measurements::Measurements;
 use rigctl::calib::stats::AxisExtremes;
 use rigctl::calib::{CalibrateOptions, Method};
-use rigctl::io::atomic::{write_bytes_atomic, write_text_atomic};
+use rigctl::io::atomic::write_text_atomic;
 use rigctl::io::finite::TextFormat;
 use rigctl::io::pose_csv::read_poses;
 use rigctl::model::KATANA_PENCIL_TOOL_MM;
@@ -191,9 +191,7 @@ pub fn run(args: Args) -> Result<(), CliError> {
         args.validate.as_deref(),
     ));
     if let Some(path) = &args.json {
-        let text = serde_json::to_string_pretty(&outcome.report)
-            .map_err(|e| CliError::failure(format!("encoding JSON: {e}")))?;
-        write_bytes_atomic(path, format!("{text}\n").as_bytes())?;
+        rigctl::io::atomic::write_json_atomic(path, &outcome.report)?;
     }
     if let Some(path) = &args.out {
         outcome.model.write_file(path)?;
@@ -393,9 +391,7 @@ fn run_samples(args: &Args, samples: &std::path::Path) -> Result<(), CliError> {
     let outcome = calibrate_projected(&model, &data, tilt, &opts)?;
     no_redundancy(samples, data.rows.len(), outcome.report.rank)?;
     if let Some(path) = &args.json {
-        let text = serde_json::to_string_pretty(&outcome.report)
-            .map_err(|e| CliError::failure(format!("encoding JSON: {e}")))?;
-        write_bytes_atomic(path, format!("{text}\n").as_bytes())?;
+        rigctl::io::atomic::write_json_atomic(path, &outcome.report)?;
     }
     if let Some(path) = &args.out {
         outcome.model.write_file(path)?;

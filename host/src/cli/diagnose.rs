@@ -16,7 +16,7 @@ use rigctl::diagnose::plots::write_plots;
 use rigctl::diagnose::probe::plot::write_probe_plots;
 use rigctl::diagnose::probe::{hybrid_report, jacobians};
 use rigctl::diagnose::{diagnose, DiagnoseOptions};
-use rigctl::io::atomic::{write_bytes_atomic, write_text_atomic};
+use rigctl::io::atomic::write_text_atomic;
 use rigctl::io::finite::TextFormat;
 use rigctl::model::KATANA_PENCIL_TOOL_MM;
 
@@ -162,9 +162,7 @@ pub fn run(args: Args) -> Result<(), CliError> {
         ));
     }
     if let Some(path) = &args.json {
-        let text = serde_json::to_string_pretty(&diag.report)
-            .map_err(|e| CliError::failure(format!("serialising the report: {e}")))?;
-        write_bytes_atomic(path, (text + "\n").as_bytes())?;
+        rigctl::io::atomic::write_json_atomic(path, &diag.report)?;
     }
     if let Some(path) = &args.out {
         let mut text = String::new();

@@ -55,9 +55,14 @@ pub fn run(args: Args) -> Result<(), CliError> {
     }
     result.model.write_file(&args.out)?;
     if let Some(path) = &args.json {
-        let text = serde_json::to_string_pretty(&report_json(&result.fits))
-            .map_err(|e| CliError::failure(format!("JSON report: {e}")))?;
-        rigctl::io::atomic::write_bytes_atomic(path, format!("{text}\n").as_bytes())
+        // the fits are checked as they are (the JSON value would already hold a NaN as null)
+        rigctl::io::finite_json::check_json(&result.fits).map_err(|source| {
+            JointsError::from(rigctl::io::atomic::AtomicWriteError::NonFinite {
+                path: path.clone(),
+                source,
+            })
+        })?;
+        rigctl::io::atomic::write_json_atomic(path, &report_json(&result.fits))
             .map_err(JointsError::from)?;
     }
     Ok(())

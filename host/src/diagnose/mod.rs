@@ -541,6 +541,15 @@ pub fn diagnose(
             tau,
             val_residuals: (0..val.len()).map(|k| val.rows(k)).sum(),
             val_inflation: verdict::prediction_inflation(cal, &cal_jac, val, &val_jac),
+            val_after_change: verdict::after_parameter_change(
+                val,
+                &final_val,
+                &probe::jacobians(
+                    &last.ext,
+                    val,
+                    &verdict::change_unknowns(&last.ext.model, &last.fitted),
+                )?,
+            ),
         },
     );
     unexplained.note = format!("{}; {}", verdict.note, unexplained.note);

@@ -18,10 +18,19 @@
 //! |---|---|---|---|
 //! | above | any | any | `missing_effect`: the model lacks something the calibration poses already show |
 //! | at | above | any | `overfitting`: the parameters absorb errors of these poses that do not carry over |
-//! | at | at | above, even with the parameters' uncertainty, which is small | `change_between_sets`: drift, another day, another tool mounting or base |
+//! | at | at | above, even with the parameters' uncertainty, which is small; at the floor once the fitted parameters may change on the held-out poses | `change_between_sets`: drift, another day, another tool mounting or base |
+//! | at | at | above, even with the parameters' uncertainty, which is small; still above with the parameters changed | `missing_effect`: an error the calibration poses barely show and the held-out poses do, which no parameter change explains |
 //! | at | at | above, the parameters' uncertainty alone lifting it by [`UNCERTAIN_PREDICTION_RATIO`] or more | `overfitting` |
 //! | at | at | above the floor, not above it with the parameters' uncertainty | `overfitting`: too many parameters for the poses (the held-out error is their uncertainty) |
 //! | at | at | at | `floor` |
+//!
+//! A change between the sets moves the parameters (a tool remounted, a base moved, a drift of
+//! the joint offsets), so the held-out residual left after the best change of the fitted
+//! parameters and of the base and tool placement ([`change_unknowns`]), fitted on the held-out
+//! poses alone ([`after_parameter_change`]), is at the floor; a missing effect is
+//! not a parameter change and leaves it above. Without more held-out residuals than fitted
+//! parameters the two cannot be told apart and the verdict stays `change_between_sets`, saying
+//! so.
 //!
 //! With `overfitting` the number of parameter combinations the poses support is given
 //! ([`super::probe::design::Design::supported_parameters`]). Without an independent floor the
@@ -29,13 +38,15 @@
 //! are tested against it (an F ratio with its degrees of freedom), and when both agree with it
 //! the verdict is `no_floor` (a missing effect cannot be told from noise).
 
-use nalgebra::{DMatrix, Matrix3};
+use nalgebra::{DMatrix, DVector, Matrix3, Vector3};
 use serde::Serialize;
 
 use super::data::Dataset;
 use super::floor::{chi2_upper_p, FloorReport, FLOOR_ALPHA};
 use super::probe::ProbeResult;
 use super::stat::f_test_p_value;
+use crate::calib::unknown::Unknown;
+use crate::model::Model;
 
 /// When the fitted parameters' uncertainty alone lifts the expected held-out RMS by this factor
 /// or more over the floor, the poses are too few for the parameters: a held-out excess is
@@ -65,6 +76,10 @@ pub struct Verdict {
     /// p-value of the held-out residual against the floor with that uncertainty (a change
     /// between the sets when it is below the level and the cross-validation is at the floor).
     pub validation_p_value_with_parameters: Option<f64>,
+    /// p-value of the held-out residual left after the best change of the fitted parameters
+    /// on the held-out poses alone (null when the held-out set has no more residuals than
+    /// parameters, or when not needed): at the floor for a change between the sets.
+    pub validation_p_value_after_parameter_change: Option<f64>,
     /// Physical parameters fitted.
     pub fitted_parameters: usize,
     /// Parameter combinations the calibration poses support (truncated-SVD fit chosen by
@@ -88,6 +103,9 @@ pub struct Counts {
     /// Expected held-out sum of squares of a right model over the floor's (>= 1,
     /// [`prediction_inflation`]).
     pub val_inflation: f64,
+    /// The held-out residual after the best parameter change on the held-out poses,
+    /// `(sum of squares mm^2, degrees of freedom)` ([`after_parameter_change`]).
+    pub val_after_change: Option<(f64, f64)>,
 }
 
 /// The measured Jacobian `P_k J_k` of pose `k` (`J_k` unchanged for a full position).
@@ -143,6 +161,75 @@ pub fn prediction_inflation(
     ((m + extra.max(0.0)) / m).max(1.0)
 }
 
+/// What may change between two sets of the same arm: the fitted parameters, and the base and
+/// tool placement (`base_x/y/z`, `base_rx/ry/rz`, `tool_dx/dy/dz` where the model has them, even
+/// when the calibration does not fit them: a remounted tool or a moved base).
+pub fn change_unknowns(model: &Model, fitted: &[Unknown]) -> Vec<Unknown> {
+    let mut out = fitted.to_vec();
+    for name in [
+        "base_x", "base_y", "base_z", "base_rx", "base_ry", "base_rz", "tool_dx", "tool_dy",
+        "tool_dz",
+    ] {
+        if let Some(u) = model.param_index(name).map(Unknown::Param) {
+            if !out.contains(&u) {
+                out.push(u);
+            }
+        }
+    }
+    out
+}
+
+/// The held-out residual left after the least-squares change of the fitted parameters on the
+/// held-out poses alone: `(|r - L x|^2, m_val - rank L)`, `r` the measured held-out errors and
+/// `L` their measured Jacobians (columns scaled to unit norm, directions below `1e-10` of the
+/// largest singular value dropped). `None` without Jacobians or when no degree of freedom is
+/// left.
+pub fn after_parameter_change(
+    val: &Dataset,
+    val_err_mm: &[Vector3<f64>],
+    val_jac: &[DMatrix<f64>],
+) -> Option<(f64, f64)> {
+    let p = val_jac.first().map_or(0, DMatrix::ncols);
+    if p == 0 || val_jac.len() != val.len() || val_err_mm.len() != val.len() {
+        return None;
+    }
+    let m_val: usize = (0..val.len()).map(|k| val.rows(k)).sum();
+    let mut n = DMatrix::zeros(p, p);
+    let mut b = DVector::zeros(p);
+    let mut rtr = 0.0;
+    for (k, (j, e)) in val_jac.iter().zip(val_err_mm).enumerate() {
+        if j.ncols() != p || j.nrows() != 3 {
+            return None;
+        }
+        let l = measured(val, k, j);
+        n += l.transpose() * &l;
+        b += l.transpose() * DVector::from_column_slice(e.as_slice());
+        rtr += e.norm_squared();
+    }
+    let scale: DVector<f64> = n
+        .diagonal()
+        .map(|d| if d > 0.0 { 1.0 / d.sqrt() } else { 0.0 });
+    let ns = DMatrix::from_fn(p, p, |r, c| n[(r, c)] * scale[r] * scale[c]);
+    let bs = b.component_mul(&scale);
+    let eig = ns.symmetric_eigen();
+    let top = eig.eigenvalues.amax();
+    if !(top.is_finite() && top > 0.0) {
+        return None;
+    }
+    // singular values below 1e-10 of the largest: eigenvalues below 1e-20 of the largest
+    let mut explained = 0.0;
+    let mut rank = 0usize;
+    for (i, &ev) in eig.eigenvalues.iter().enumerate() {
+        if ev > 1e-20 * top {
+            let proj = eig.eigenvectors.column(i).dot(&bs);
+            explained += proj * proj / ev;
+            rank += 1;
+        }
+    }
+    let dof = m_val.checked_sub(rank).filter(|&d| d > 0)? as f64;
+    Some(((rtr - explained).max(0.0), dof))
+}
+
 /// The verdict of a diagnosis whose floor report is `floor` and whose probe (with its physical
 /// cross-validation) is `probe`.
 pub fn judge(floor: &FloorReport, probe: &ProbeResult, c: Counts) -> Verdict {
@@ -190,10 +277,14 @@ pub fn judge(floor: &FloorReport, probe: &ProbeResult, c: Counts) -> Verdict {
     let val_above = above(Some(val_p));
     let val_raw_above = above(Some(val_raw_p));
     let expected_ratio = c.val_inflation.max(1.0).sqrt();
+    let after_change_p = c.val_after_change.map(|(ss, dof)| test(ss, dof));
     let kind = if cal_above {
         "missing_effect"
     } else if cv_above || (val_above && expected_ratio >= UNCERTAIN_PREDICTION_RATIO) {
         "overfitting"
+    } else if val_above && above(after_change_p) {
+        // no change of the parameters explains the held-out excess
+        "missing_effect"
     } else if val_above {
         "change_between_sets"
     } else if val_raw_above {
@@ -214,6 +305,7 @@ pub fn judge(floor: &FloorReport, probe: &ProbeResult, c: Counts) -> Verdict {
         validation_p_value: Some(val_raw_p),
         validation_expected_ratio: expected_ratio,
         validation_p_value_with_parameters: Some(val_p),
+        validation_p_value_after_parameter_change: after_change_p,
         fitted_parameters: c.n_params,
         supported_parameters: probe.supported_parameters,
         note: String::new(),
@@ -245,8 +337,12 @@ pub fn sentence(v: &Verdict, floor: &FloorReport) -> String {
     );
     match v.kind.as_str() {
         "floor" => format!("at the floor: {numbers}"),
-        "missing_effect" => format!(
+        "missing_effect" if v.calibration_p_value.is_some_and(|p| p < FLOOR_ALPHA) => format!(
             "a missing effect: the model still lacks something the calibration poses already show: {numbers}"
+        ),
+        "missing_effect" => format!(
+            "a missing effect: the model still lacks something the held-out poses show and the calibration poses barely do; no change of the fitted parameters explains it (p = {}), so it is not a change between the sets; measure more poses where the held-out ones are: {numbers}",
+            fmt_p(v.validation_p_value_after_parameter_change)
         ),
         "overfitting" => format!(
             "overfitting: the calibration residual is at the floor but the poses left out are not: {} fitted parameters follow these poses' noise and errors (with their uncertainty alone a right model would reach {:.2} x the floor on the held-out poses){}; measure more poses or fit fewer parameters: {numbers}",
@@ -257,7 +353,11 @@ pub fn sentence(v: &Verdict, floor: &FloorReport) -> String {
                 .unwrap_or_default()
         ),
         "change_between_sets" => format!(
-            "a change between the sets: the calibration and its cross-validation are at the floor, the held-out set is not (drift, another day, another tool mounting or base): {numbers}"
+            "a change between the sets: the calibration and its cross-validation are at the floor, the held-out set is not (drift, another day, another tool mounting or base){}: {numbers}",
+            match v.validation_p_value_after_parameter_change {
+                Some(p) => format!("; a change of the fitted parameters on the held-out poses brings them to the floor (p = {p:.1e})"),
+                None => "; the held-out set has too few poses to tell it from a missing effect".to_string(),
+            }
         ),
         _ => format!(
             "no independent floor: the calibration residual is its own floor, so a missing effect cannot be told from noise; the cross-validated and held-out residuals agree with it: {numbers}"

@@ -300,6 +300,24 @@ pub fn check_text_for(
     })
 }
 
+/// Writes `value` as pretty JSON (and a final newline) atomically, after
+/// [`super::finite_json::check_json`]: a non-finite number is an error naming `path` and the
+/// key, and nothing is written (`serde_json` would write it as `null`, "not available").
+pub fn write_json_atomic<T: serde::Serialize + ?Sized>(
+    path: &Path,
+    value: &T,
+) -> Result<(), AtomicWriteError> {
+    super::finite_json::check_json(value).map_err(|source| AtomicWriteError::NonFinite {
+        path: path.to_path_buf(),
+        source,
+    })?;
+    let text = serde_json::to_string_pretty(value).map_err(|e| AtomicWriteError::Io {
+        path: path.to_path_buf(),
+        source: std::io::Error::other(e),
+    })?;
+    write_bytes_atomic(path, format!("{text}\n").as_bytes())
+}
+
 /// Convenience: write a whole byte string atomically.
 pub fn write_bytes_atomic(path: &Path, bytes: &[u8]) -> Result<(), AtomicWriteError> {
     write_atomic(path, |w| {

@@ -3,8 +3,8 @@
 //! finite is refused before it is written, naming the value and where it is
 //! ([`check_text`]); [`super::atomic::write_text_atomic`] checks and writes in one call.
 //!
-//! JSON needs no guard of its own: `serde_json` writes a non-finite number as `null`, which
-//! FORMATS.md reads as "not available", never as a number.
+//! JSON reports (`calibrate`, `diagnose`, `joints`) go through [`super::finite_json`] instead:
+//! `serde_json` would write a non-finite number as `null`, which reads as "not available".
 
 use std::fmt;
 

@@ -6,6 +6,7 @@ pub mod atomic;
 pub mod cdr;
 pub mod files;
 pub mod finite;
+pub mod finite_json;
 pub mod interrupt;
 pub mod markup;
 pub mod pose_csv;
