@@ -207,12 +207,12 @@ impl<'a> ser::Serializer for &'a mut Walker {
     }
     fn serialize_struct_variant(
         self,
-        _name: &'static str,
-        _index: u32,
-        _variant: &'static str,
-        _len: usize,
+        name: &'static str,
+        index: u32,
+        variant: &'static str,
+        len: usize,
     ) -> Result<Compound<'a>, Found> {
-        Ok(Compound::new(self))
+        ser::Serializer::serialize_tuple_variant(self, name, index, variant, len)
     }
 }
 
