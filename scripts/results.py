@@ -158,7 +158,14 @@ def render(values):
 
     committed, missing, out = committed_lines(), [], []
     for i, line in enumerate(template_lines()):
-        _, kept = compare_line(i, line, values, committed, [])
+        matches, kept = compare_line(i, line, values, committed, [])
+        if not matches and PLACEHOLDER.search(line):
+            # the committed file may have other lines above (a new header): any line that
+            # matches outside the machine-dependent fields
+            for j in range(len(committed)):
+                matches, kept = compare_line(j, line, values, committed, [])
+                if matches:
+                    break
         out.append(render_line(line, values, missing, kept=kept))
     if missing:
         raise RenderError("no recorded value for: " + ", ".join(sorted(set(missing))))

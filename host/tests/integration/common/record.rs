@@ -1,7 +1,7 @@
 //! Measured values for `docs/results.md`: a test records the number it asserts on with
 //! [`record`]; `scripts/results.py` renders `docs/results.md.in` from the recorded files.
 
-use std::fs::{File, OpenOptions};
+use std::fs::OpenOptions;
 use std::io;
 use std::path::{Path, PathBuf};
 use std::sync::Mutex;
