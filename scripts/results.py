@@ -5,7 +5,8 @@ A placeholder `{{module.key}}` or `{{module.key:SPEC}}` in the template is repla
 `key` of `RESULTS_DIR/module.json` (written by the integration tests' `record(key, value)` when
 `RIG_RESULTS_DIR` is set). SPEC is a Python format spec (`.4f`, `.1e`, `.3g`); exponents are
 written without padding (`9.6e-9`). A list is written as its elements, each formatted with SPEC,
-joined by ", "; a SPEC starting with a backquote puts each element between backquotes. A
+joined by ", "; a SPEC starting with a backquote puts each element between backquotes;
+`{{module.key|min:SPEC}}` and `|max` write the smallest or largest element of a list. A
 placeholder starting with `~` (`{{~bench.x:.2f}}`) is machine-dependent (a time, a memory size):
 `--check` does not compare it.
 
@@ -41,12 +42,23 @@ TESTS = [
             "calib_ur5::ur5_held_out_mean_beats_the_published_value",
             "calib_normal::katana_normal_equations_match_the_tall_solver",
             "calib_normal::ur5_normal_equations_match_the_tall_solver",
+            "calib_convergence::nine_joint_arms_converge_in_one_run",
             "compensate_line::compensated_joints_put_the_calibrated_tilting_arm_on_the_line",
             "compensate_transmission::compensated_joints_through_fk_recover_the_path",
             "model_transmission::transmission_terms_round_trip_through_diagnose_fk_and_calibrate",
             "report_transmission::report_applies_a_model_files_transmission_terms",
             "diagnose_ur5::ur5_laser_tracker_effects_lower_the_held_out_error",
             "diagnose_ur5::ur5_laser_tracker_hybrid_lowers_the_held_out_error",
+            "diagnose_transmission::joint_scale_is_named_with_its_ratio",
+            "diagnose_transmission::joint_coupling_is_named_with_its_factor",
+            "diagnose_transmission::hysteresis_is_named_from_the_pose_order",
+            "diagnose_transmission::reported_values_are_the_final_ones",
+            "diagnose_thermal::warm_up_is_named_with_its_size_and_time_constant",
+            "diagnose_probe::a_bump_in_q2_and_a_q1_q3_interaction_are_both_named",
+            "diagnose_probe::pure_noise_false_positive_rate_over_30_seeds",
+            "diagnose_verdicts::an_effect_not_added_is_a_missing_effect",
+            "diagnose_verdicts::another_tool_mounting_is_a_change_between_sets",
+            "diagnose_verdicts::few_poses_for_many_parameters_is_overfitting",
             "tiago_real::figaroh_levels_and_the_press_compliance_model_from_the_cli",
             "tiago_real::four_markers_recover_the_rigid_body_geometry",
             "tiago_real::full_identification_converges_in_one_run",
@@ -54,12 +66,19 @@ TESTS = [
             "trace_scan::line_600dpi_rotated_is_within_10um",
             "trace_scan::circle_300dpi_is_within_20um",
             "trace_scan::line_300dpi_is_within_20um",
+            "trace_hard::photos_with_tilt_shading_distortion_and_jpeg",
+            "trace_hard::photo_12mp_at_35_degrees",
+            "trace_hard::scans_600dpi_with_skips_faint_graphite_dust_and_fibres",
+            "trace_hard::clean_600dpi_sheet_v2_is_within_5um",
+            "trace_hard::page_edge_and_desk_are_not_the_trace",
             "rosbag_joints::a_million_messages_stream_in_bounded_memory",
         ],
     ),
 ]
 
-PLACEHOLDER = re.compile(r"\{\{(~?)([A-Za-z0-9_]+)\.([A-Za-z0-9_]+)(?::([^}]*))?\}\}")
+PLACEHOLDER = re.compile(
+    r"\{\{(~?)([A-Za-z0-9_]+)\.([A-Za-z0-9_]+)(?:\|(min|max))?(?::([^}]*))?\}\}"
+)
 
 
 class RenderError(Exception):
@@ -110,7 +129,8 @@ def render_line(line, values, missing, masked=None, kept=None):
         lit = line[pos : m.start()]
         out.append(re.escape(lit) if masked is not None else lit)
         pos = m.end()
-        tilde, module, key, spec = m.group(1), m.group(2), m.group(3), m.group(4) or ""
+        tilde, module, key, agg = m.group(1), m.group(2), m.group(3), m.group(4)
+        spec = m.group(5) or ""
         name = f"{module}.{key}"
         if tilde and masked is not None:
             out.append("(.+?)")
@@ -118,7 +138,12 @@ def render_line(line, values, missing, masked=None, kept=None):
             continue
         if key in values.get(module, {}):
             try:
-                text = format_value(values[module][key], spec)
+                value = values[module][key]
+                if agg:
+                    if not isinstance(value, list) or not value:
+                        raise RenderError(f"{name}|{agg}: not a non-empty list")
+                    value = min(value) if agg == "min" else max(value)
+                text = format_value(value, spec)
             except (ValueError, TypeError) as e:
                 raise RenderError(f"{name} with spec {spec!r}: {e}") from e
         elif tilde and kept is not None and name in kept:
@@ -152,20 +177,27 @@ def compare_line(i, line, values, committed, missing):
     return True, dict(zip(masked, m.groups()))
 
 
+def kept_fields(i, line, values, committed):
+    """The committed texts of the machine-dependent fields of template line `i`: from committed
+    line `i`, else from any committed line that matches it outside those fields (the committed
+    file may have other lines above, e.g. a longer header)."""
+
+    matches, kept = compare_line(i, line, values, committed, [])
+    if not matches and "{{~" in line:
+        for j in range(len(committed)):
+            matches, kept = compare_line(j, line, values, committed, [])
+            if matches:
+                break
+    return kept
+
+
 def render(values):
     """The rendered text; a machine-dependent field without a recorded value keeps the text of
     the committed results.md."""
 
     committed, missing, out = committed_lines(), [], []
     for i, line in enumerate(template_lines()):
-        matches, kept = compare_line(i, line, values, committed, [])
-        if not matches and PLACEHOLDER.search(line):
-            # the committed file may have other lines above (a new header): any line that
-            # matches outside the machine-dependent fields
-            for j in range(len(committed)):
-                matches, kept = compare_line(j, line, values, committed, [])
-                if matches:
-                    break
+        kept = kept_fields(i, line, values, committed)
         out.append(render_line(line, values, missing, kept=kept))
     if missing:
         raise RenderError("no recorded value for: " + ", ".join(sorted(set(missing))))
@@ -180,11 +212,12 @@ def check(values):
     same = len(committed) == len(lines)
     missing, shown = [], []
     for i, line in enumerate(lines):
-        matches, kept = compare_line(i, line, values, committed, missing)
+        matches, _ = compare_line(i, line, values, committed, missing)
         if matches:
             shown.append(committed[i])
         else:
             same = False
+            kept = kept_fields(i, line, values, committed)
             shown.append(render_line(line, values, [], kept=kept))
     if missing:
         print(

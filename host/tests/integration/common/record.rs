@@ -26,7 +26,21 @@ pub fn record(key: &str, value: impl Into<serde_json::Value>) {
         return;
     };
     let module = module_of(Path::new(std::panic::Location::caller().file()));
-    if let Err(e) = merge(&PathBuf::from(dir), &module, key, value.into()) {
+    if let Err(e) = merge(&PathBuf::from(dir), &module, key, value.into(), false) {
+        panic!("{RESULTS_DIR_ENV}: cannot record {module}.{key}: {e}");
+    }
+}
+
+/// Like [`record`], but appends `value` to the list under `key`: one list filled by several
+/// tests of the module (in the order they ran, so only its smallest and largest elements are
+/// for `docs/results.md`).
+#[track_caller]
+pub fn record_push(key: &str, value: impl Into<serde_json::Value>) {
+    let Some(dir) = std::env::var_os(RESULTS_DIR_ENV) else {
+        return;
+    };
+    let module = module_of(Path::new(std::panic::Location::caller().file()));
+    if let Err(e) = merge(&PathBuf::from(dir), &module, key, value.into(), true) {
         panic!("{RESULTS_DIR_ENV}: cannot record {module}.{key}: {e}");
     }
 }
@@ -48,7 +62,13 @@ fn module_of(file: &Path) -> String {
     }
 }
 
-fn merge(dir: &Path, module: &str, key: &str, value: serde_json::Value) -> io::Result<()> {
+fn merge(
+    dir: &Path,
+    module: &str,
+    key: &str,
+    value: serde_json::Value,
+    push: bool,
+) -> io::Result<()> {
     let _threads = WRITERS.lock().unwrap_or_else(|p| p.into_inner());
     std::fs::create_dir_all(dir)?;
     let lock = OpenOptions::new()
@@ -71,7 +91,15 @@ fn merge(dir: &Path, module: &str, key: &str, value: serde_json::Value) -> io::R
         Err(e) if e.kind() == io::ErrorKind::NotFound => serde_json::Map::new(),
         Err(e) => return Err(e),
     };
-    values.insert(key.to_string(), value);
+    match values.get_mut(key) {
+        Some(serde_json::Value::Array(list)) if push => list.push(value),
+        _ if push => {
+            values.insert(key.to_string(), serde_json::Value::Array(vec![value]));
+        }
+        _ => {
+            values.insert(key.to_string(), value);
+        }
+    }
     let text = serde_json::to_string_pretty(&serde_json::Value::Object(values))?;
     let tmp = dir.join(format!("{module}.json.{}.tmp", std::process::id()));
     std::fs::write(&tmp, text + "\n")?;
