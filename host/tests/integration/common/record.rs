@@ -22,13 +22,7 @@ static WRITERS: Mutex<()> = Mutex::new(());
 /// object: a recording run must not lose a value silently.
 #[track_caller]
 pub fn record(key: &str, value: impl Into<serde_json::Value>) {
-    let Some(dir) = std::env::var_os(RESULTS_DIR_ENV) else {
-        return;
-    };
-    let module = module_of(Path::new(std::panic::Location::caller().file()));
-    if let Err(e) = merge(&PathBuf::from(dir), &module, key, value.into(), false) {
-        panic!("{RESULTS_DIR_ENV}: cannot record {module}.{key}: {e}");
-    }
+    store(key, value.into(), Store::Replace);
 }
 
 /// Like [`record`], but appends `value` to the list under `key`: one list filled by several
@@ -36,11 +30,23 @@ pub fn record(key: &str, value: impl Into<serde_json::Value>) {
 /// for `docs/results.md`).
 #[track_caller]
 pub fn record_push(key: &str, value: impl Into<serde_json::Value>) {
+    store(key, value.into(), Store::Append);
+}
+
+/// Whether a value replaces the one under its key or is appended to the list there.
+#[derive(Clone, Copy, PartialEq)]
+enum Store {
+    Replace,
+    Append,
+}
+
+#[track_caller]
+fn store(key: &str, value: serde_json::Value, how: Store) {
     let Some(dir) = std::env::var_os(RESULTS_DIR_ENV) else {
         return;
     };
     let module = module_of(Path::new(std::panic::Location::caller().file()));
-    if let Err(e) = merge(&PathBuf::from(dir), &module, key, value.into(), true) {
+    if let Err(e) = merge(&PathBuf::from(dir), &module, key, value, how) {
         panic!("{RESULTS_DIR_ENV}: cannot record {module}.{key}: {e}");
     }
 }
@@ -67,7 +73,7 @@ fn merge(
     module: &str,
     key: &str,
     value: serde_json::Value,
-    push: bool,
+    how: Store,
 ) -> io::Result<()> {
     let _threads = WRITERS.lock().unwrap_or_else(|p| p.into_inner());
     std::fs::create_dir_all(dir)?;
@@ -92,8 +98,8 @@ fn merge(
         Err(e) => return Err(e),
     };
     match values.get_mut(key) {
-        Some(serde_json::Value::Array(list)) if push => list.push(value),
-        _ if push => {
+        Some(serde_json::Value::Array(list)) if how == Store::Append => list.push(value),
+        _ if how == Store::Append => {
             values.insert(key.to_string(), serde_json::Value::Array(vec![value]));
         }
         _ => {
