@@ -72,6 +72,9 @@ TESTS = [
             "trace_hard::clean_600dpi_sheet_v2_is_within_5um",
             "trace_hard::page_edge_and_desk_are_not_the_trace",
             "rosbag_joints::a_million_messages_stream_in_bounded_memory",
+            "rosbag_joints::fuse_and_fk_from_a_rosbags_bag_equal_the_csv",
+            "gross_errors::calibrate_flags_the_gross_errors_of_the_real_ur5_set",
+            "gross_errors::clean_sets_flag_almost_nothing",
         ],
     ),
 ]

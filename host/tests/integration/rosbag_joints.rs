@@ -150,6 +150,7 @@ fn fuse_and_fk_from_a_rosbags_bag_equal_the_csv() {
     let worst = max_diff(&fused_a, &fused_b);
     let n_rows = numbers(&fused_a).1.len();
     eprintln!("fuse: {n_rows} fused samples, bag vs CSV max difference {worst:.3e}");
+    record("fuse_bag_vs_csv_worst", worst);
     assert!(worst <= 1e-6, "fused samples differ by {worst}");
     // The messages of the gripper controller (only the finger joints) are skipped and counted.
     let n_joint_rows = numbers(&std::fs::read_to_string(&joints_csv).unwrap())
@@ -173,6 +174,7 @@ fn fuse_and_fk_from_a_rosbags_bag_equal_the_csv() {
         &String::from_utf8_lossy(&fk_bag.stdout),
     );
     eprintln!("fk: bag vs CSV max difference {worst_fk:.3e}");
+    record("fk_bag_vs_csv_worst", worst_fk);
     assert!(worst_fk <= 1e-6, "fk differs by {worst_fk}");
 
     // zstd-compressed chunks (rosbag2's storage compression) read the same.
