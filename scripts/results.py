@@ -101,11 +101,16 @@ def load(results_dir):
 
 
 def format_one(value, spec):
-    if isinstance(value, bool) or value is None or isinstance(value, str):
-        return format(str(value).lower() if isinstance(value, bool) else str(value), "")
+    """One recorded value as text: a number through the format spec, exponents unpadded."""
+    if isinstance(value, bool):
+        return "true" if value else "false"
+    if value is None:
+        return "null"
+    if isinstance(value, str):
+        return value
     text = format(value, spec)
     # 9.6e-09 -> 9.6e-9, 1.0e+03 -> 1.0e3
-    return re.sub(r"e([+-])0*(\d)", lambda m: "e" + ("-" if m.group(1) == "-" else "") + m.group(2), text)
+    return re.sub(r"e([+-])0*(\d)", lambda m: "e" + m.group(1).replace("+", "") + m.group(2), text)
 
 
 def format_value(value, spec):
