@@ -5,6 +5,8 @@
 //! nominal model with errors of up to 1 deg and 3 mm. Each run says it converged, and a second
 //! run from its result cannot lower the residual.
 
+use crate::common::record::record;
+
 use nalgebra::Vector3;
 use rand::{Rng, SeedableRng};
 use rigctl::calib::calibrate::{calibrate, default_selection, CalibrateOptions, Method};
@@ -67,6 +69,8 @@ fn training_rms(model: &Model, poses: &Poses) -> f64 {
 
 #[test]
 fn nine_joint_arms_converge_in_one_run() {
+    let (mut unknowns, mut ranks, mut conditions) = (Vec::new(), Vec::new(), Vec::new());
+    let (mut iterations, mut rms_mm, mut second_rms_mm) = (Vec::new(), Vec::new(), Vec::new());
     for seed in [3_u64, 17, 29, 41, 53] {
         let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(seed);
         let urdf = Urdf::parse(&nine_joint_urdf(&mut rng), "arm9.urdf").unwrap();
@@ -135,5 +139,17 @@ fn nine_joint_arms_converge_in_one_run() {
             r2 >= r1 * (1.0 - 1e-6),
             "seed {seed}: second run improved {r1} -> {r2}"
         );
+        unknowns.push(selection.len());
+        ranks.push(first.report.rank);
+        conditions.push(first.report.condition_number);
+        iterations.push(first.report.iterations);
+        rms_mm.push(r1);
+        second_rms_mm.push(r2);
     }
+    record("unknowns", unknowns);
+    record("rank", ranks);
+    record("condition_number", conditions);
+    record("iterations", iterations);
+    record("rms_mm", rms_mm);
+    record("second_rms_mm", second_rms_mm);
 }

@@ -5,6 +5,7 @@
 //! count, with or without the problem's helper thread; the fit is a Gauss-Newton fixed point.
 
 use crate::common;
+use crate::common::record::record;
 
 use nalgebra::Vector3;
 use rand::{Rng, SeedableRng};
@@ -26,7 +27,8 @@ fn tall_fit(start: &Model, poses: &Poses, sel: &[usize], tilt: bool) -> Fit {
     fit_problem(start, sel, &jac0, make, &lm, DEFAULT_RTOL).unwrap()
 }
 
-fn assert_same(a: &Fit, b: &Fit, what: &str) {
+/// Asserts `a` and `b` are the same fit; returns the largest parameter difference (deg / mm).
+fn assert_same(a: &Fit, b: &Fit, what: &str) -> f64 {
     assert_eq!(a.fitted, b.fitted, "{what}: fitted");
     assert_eq!(a.fixed, b.fixed, "{what}: fixed");
     assert_eq!(a.unidentifiable, b.unidentifiable, "{what}");
@@ -52,6 +54,7 @@ fn assert_same(a: &Fit, b: &Fit, what: &str) {
         a.iterations,
         b.iterations
     );
+    worst
 }
 
 fn katana_poses(n: usize, seed: u64) -> (Model, Poses) {
@@ -86,13 +89,15 @@ fn katana_normal_equations_match_the_tall_solver() {
     let (nominal, poses) = katana_poses(118, 118);
     let sel = default_selection(&nominal, false);
     let lm = LmConfig::default();
+    let mut worst: f64 = 0.0;
     for tilt in [false, true] {
         let tall = tall_fit(&nominal, &poses, &sel, tilt);
         let normal =
             fit_parameters_normal(&nominal, &poses, &sel, tilt, &lm, DEFAULT_RTOL).unwrap();
-        assert_same(&tall, &normal, &format!("katana tilt={tilt}"));
+        worst = worst.max(assert_same(&tall, &normal, &format!("katana tilt={tilt}")));
         assert!(normal.converged);
     }
+    record("katana_worst_difference", worst);
 }
 
 #[test]
@@ -105,7 +110,9 @@ fn ur5_normal_equations_match_the_tall_solver() {
     let tall = tall_fit(&model, &grid, &sel, false);
     let lm = LmConfig::default();
     let normal = fit_parameters_normal(&model, &grid, &sel, false, &lm, DEFAULT_RTOL).unwrap();
-    assert_same(&tall, &normal, "ur5 grid");
+    let worst = assert_same(&tall, &normal, "ur5 grid");
+    record("ur5_worst_difference", worst);
+    record("ur5_parameters", normal.fitted.len());
 }
 
 /// More than one chunk: one thread and two threads give bitwise the same sums, and the sums

@@ -8,6 +8,8 @@ use rand_distr::{Distribution, Normal};
 use rigctl::calib::{calibrate, position_errors, CalibrateOptions, Method, Poses, Stats};
 use rigctl::model::{katana450, Model, Tilt};
 
+use crate::common::record::record;
+
 /// Measurement noise per axis (mm), about the Optotrack's resolution.
 const NOISE_MM: f64 = 0.01;
 
@@ -78,6 +80,10 @@ fn tilting_reaches_the_noise_floor_and_standard_does_not() {
         "floor {floor:.4} tilting {:.4} standard {:.4} before {:.4}",
         v.after.mean_mm, std_val.mean_mm, v.before.mean_mm
     );
+    record("floor_mm", floor);
+    record("tilting_mm", v.after.mean_mm);
+    record("standard_mm", std_val.mean_mm);
+    record("before_mm", v.before.mean_mm);
     assert!(
         v.after.mean_mm <= 1.25 * floor,
         "tilting {} vs floor {floor}",

@@ -3,6 +3,7 @@
 //! network): mean 2.5664 mm before, 0.1549 mm after on the 20 test poses.
 
 use crate::common;
+use crate::common::record::record;
 
 use rigctl::calib::{calibrate, CalibrateOptions, Method};
 
@@ -25,6 +26,8 @@ fn ur5_held_out_mean_beats_the_published_value() {
         "UR5 held-out mean {:.4} -> {:.4} mm (published 2.5664 -> 0.1549)",
         v.before.mean_mm, v.after.mean_mm
     );
+    record("before_mm", v.before.mean_mm);
+    record("after_mm", v.after.mean_mm);
     // The nominal model with the SMR offset reproduces the published "before".
     assert!(
         (v.before.mean_mm - 2.5664).abs() < 0.01,

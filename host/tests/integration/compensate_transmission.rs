@@ -6,6 +6,7 @@
 //! failed.
 
 use crate::common;
+use crate::common::record::record;
 
 use std::path::Path;
 use std::process::{Command, Output};
@@ -109,7 +110,8 @@ fn compensated_joints_through_fk_recover_the_path() {
         .skip(1)
         .filter_map(|s| s.split_whitespace().next()?.parse().ok())
         .collect();
-    let (mut worst, mut worst_held, mut least_without) = (0.0f64, 0.0f64, f64::INFINITY);
+    let (mut worst, mut worst_held) = (0.0f64, 0.0f64);
+    let (mut least_without, mut worst_without) = (f64::INFINITY, 0.0f64);
     for (i, ((w, g), n)) in want.iter().zip(&got).zip(&without).enumerate() {
         let d = |p: &[f64]| {
             (0..3)
@@ -122,12 +124,19 @@ fn compensated_joints_through_fk_recover_the_path() {
             false => worst = worst.max(d(g)),
         }
         least_without = least_without.min(d(n));
+        worst_without = worst_without.max(d(n));
     }
     println!(
         "through the terms: worst {worst:.2e} mm, {} held point(s) worst {worst_held:.3} mm; \
          without the terms at least {least_without:.3} mm",
         held.len()
     );
+    record("free_points", want.len() - held.len());
+    record("held_points", held.len());
+    record("worst_mm", worst);
+    record("worst_held_mm", worst_held);
+    record("least_without_mm", least_without);
+    record("worst_without_mm", worst_without);
     assert!(worst < 1e-6, "compensated path missed by {worst} mm");
     assert!(
         least_without > 0.05,

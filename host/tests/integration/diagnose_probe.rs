@@ -4,6 +4,8 @@
 //! smooth error that no library effect describes makes the residual `structured` with the
 //! right `depends_on`, clean data do not, and `--residual-model` lowers the held-out error.
 
+use crate::common::record::record;
+
 use nalgebra::Vector3;
 use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
@@ -71,6 +73,7 @@ fn rms_after(p: &ProbeResult, q: &[Vec<f64>], r: &[Vector3<f64>]) -> f64 {
 /// probe's function predicts new poses down to 1.3 x the noise.
 #[test]
 fn a_bump_in_q2_and_a_q1_q3_interaction_are_both_named() {
+    let (mut rms_before, mut rms_after_mm) = (Vec::new(), Vec::new());
     for seed in [31, 32, 33] {
         let n = 800;
         let q = random_q(n, seed);
@@ -107,7 +110,13 @@ fn a_bump_in_q2_and_a_q1_q3_interaction_are_both_named() {
             after <= 1.3 * NOISE_MM,
             "seed {seed}: {before:.4} -> {after:.4}"
         );
+        rms_before.push(before);
+        rms_after_mm.push(after);
     }
+    let over_noise: Vec<f64> = rms_after_mm.iter().map(|a| a / NOISE_MM).collect();
+    record("bump_rms_before_mm", rms_before);
+    record("bump_rms_after_mm", rms_after_mm);
+    record("bump_after_over_noise", over_noise);
 }
 
 /// Pure noise over many seeds: the rate at which the probe names anything.
@@ -124,6 +133,7 @@ fn pure_noise_false_positive_rate_over_30_seeds() {
         }
     }
     eprintln!("pure noise: something named on {named} of 30 seeds");
+    record("pure_noise_named_of_30", named);
     assert!(named <= 1, "{named} of 30");
 }
 

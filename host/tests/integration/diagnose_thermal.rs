@@ -7,6 +7,8 @@
 //! error within 1.25 x the floor (the held-out mean error of the true model); a linear drift is
 //! still named `time_drift`; a file without times never gets a time candidate.
 
+use crate::common::record::record;
+
 use nalgebra::Vector3;
 use rand::seq::SliceRandom;
 use rand::{Rng, SeedableRng};
@@ -156,8 +158,23 @@ fn warm_up_is_named_with_its_size_and_time_constant() {
     .enumerate()
     {
         let effect = format!("thermal={ppm},{tau}");
-        let c = simulated(&effect, 3 + k as u64, interval_s);
+        let seed = 3 + k as u64;
+        let c = simulated(&effect, seed, interval_s);
         assert_thermal(&c, ppm, tau, &effect);
+        let r = &c.diag.report;
+        let e = &r.effects[0];
+        for name in ["s_ppm", "tau_min"] {
+            record(&format!("s{seed}_{name}"), e.parameters.get(name));
+            record(
+                &format!("s{seed}_{name}_sigma"),
+                e.sigma.get(name).flatten(),
+            );
+        }
+        record(
+            &format!("s{seed}_declared_mm"),
+            r.declared.validation.mean_mm,
+        );
+        record(&format!("s{seed}_final_mm"), r.final_.validation.mean_mm);
     }
 }
 

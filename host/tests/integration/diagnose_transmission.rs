@@ -2,6 +2,8 @@
 //! `hysteresis`), the independent floor (`--instrument-mm`), the final values and aliasing, on
 //! the simulated Katana (118 ISO 9283 poses to calibrate, 60 held out, 0.01 mm noise).
 
+use crate::common::record::record;
+
 use rigctl::diagnose::data::Dataset;
 use rigctl::diagnose::{diagnose, DiagnoseOptions, Diagnosis};
 use rigctl::model::katana450;
@@ -68,6 +70,17 @@ fn assert_found(effect: &str, id: &str, name: &str, truth: f64, seed: u64) {
         "{effect}: {name} = {v:.3e} +- {s:.1e}; held out {:.4} -> {:.4} mm (floor {:.4})",
         rep.declared.validation.mean_mm, rep.final_.validation.mean_mm, r.floor_mm
     );
+    // `joint_scale_j2_s11` for `joint_scale:j2=2e-4` on seed 11
+    let kind = effect.split('=').next().unwrap_or(effect).replace(':', "_");
+    let key = format!("{kind}_s{seed}");
+    record(&format!("{key}_value"), v);
+    record(&format!("{key}_sigma"), s);
+    record(
+        &format!("{key}_declared_mm"),
+        rep.declared.validation.mean_mm,
+    );
+    record(&format!("{key}_final_mm"), rep.final_.validation.mean_mm);
+    record(&format!("{key}_floor_mm"), r.floor_mm);
 }
 
 #[test]
@@ -186,6 +199,7 @@ fn reported_values_are_the_final_ones() {
             rep.table()
         );
         assert!(e.parameters_at_entry.get(name).is_some());
+        record(&format!("base_tilt_s7_{name}"), v);
     }
     let json = serde_json::to_value(rep).unwrap();
     for key in ["floor", "aliased"] {

@@ -4,6 +4,7 @@
 //! 0.1549 mm mean (README of the data set).
 
 use crate::common;
+use crate::common::record::record;
 
 use rigctl::diagnose::data::Dataset;
 use rigctl::diagnose::{diagnose, DiagnoseOptions, Diagnosis};
@@ -53,6 +54,16 @@ fn ur5_laser_tracker_effects_lower_the_held_out_error() {
         r.table()
     );
     assert_eq!(r.floor.used, "instrument");
+    record("declared_validation_mm", r.declared.validation.mean_mm);
+    let effects: Vec<String> = r.effects.iter().map(|e| e.id.clone()).collect();
+    record("effects", effects);
+    record("final_validation_mm", r.final_.validation.mean_mm);
+    record("final_residual_mm", r.floor.residual_mm);
+    record("final_over_floor", r.floor.final_over_floor);
+    record("validation_rms_mm", r.floor.validation_rms_mm);
+    record("validation_over_floor", r.floor.validation_over_floor);
+    record("cv_over_floor", r.verdict.cv_over_floor);
+    record("verdict", r.verdict.kind.as_str());
 }
 
 /// The hybrid model (`--residual-model`): the physical model plus the probe's smooth function of
@@ -82,4 +93,14 @@ fn ur5_laser_tracker_hybrid_lowers_the_held_out_error() {
         "{:?}",
         h.validation_hybrid
     );
+    record("probe_depends_on", d.probe.depends_on.clone());
+    let shares: Vec<f64> = d.probe.terms.iter().map(|t| t.share).collect();
+    let t: Vec<f64> = d.probe.terms.iter().map(|t| t.t).collect();
+    record("probe_shares", shares);
+    record("probe_t", t);
+    record("probe_explainable_share", d.probe.explainable_share);
+    record("probe_cv_rms_before_mm", d.probe.cv_rms_before_mm);
+    record("probe_cv_rms_after_mm", d.probe.cv_rms_after_mm);
+    record("hybrid_physical_mm", h.validation_physical.mean_mm);
+    record("hybrid_mm", h.validation_hybrid.mean_mm);
 }

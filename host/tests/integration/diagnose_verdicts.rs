@@ -6,6 +6,8 @@
 //! held-out file measured with another tool offset); no output says "down to the noise" and
 //! "lacks something" at once. Also the physical bounds (`rigctl::diagnose::bounds`).
 
+use crate::common::record::record;
+
 use nalgebra::Vector3;
 use rigctl::diagnose::data::Dataset;
 use rigctl::diagnose::{diagnose, DiagnoseOptions, Diagnosis};
@@ -91,6 +93,7 @@ fn clean_data_is_at_the_floor() {
 fn an_effect_not_added_is_a_missing_effect() {
     let mut o = opts();
     o.decide.max_effects = 0;
+    let (mut calibration, mut cv) = (Vec::new(), Vec::new());
     for seed in [1, 2, 3] {
         let s = session(&["joint_scale:j2=5e-4"], seed);
         let d = run(
@@ -105,7 +108,11 @@ fn an_effect_not_added_is_a_missing_effect() {
             d.report.table()
         );
         assert!(d.report.table().contains("lacks something"));
+        calibration.push(d.report.verdict.calibration_over_floor);
+        cv.push(d.report.verdict.cv_over_floor);
     }
+    record("missing_effect_calibration_over_floor", calibration);
+    record("missing_effect_cv_over_floor", cv);
 }
 
 /// A held-out file measured after the tool was remounted (another tool offset, same arm) or
@@ -113,6 +120,7 @@ fn an_effect_not_added_is_a_missing_effect() {
 /// is not, and a change of the placement brings it to the floor.
 #[test]
 fn another_tool_mounting_is_a_change_between_sets() {
+    let (mut calibration, mut cv, mut held_out) = (Vec::new(), Vec::new(), Vec::new());
     for seed in [1, 2, 3] {
         let s = session(&[], seed);
         // same seed: same arm, same poses, same noise; only the tool differs
@@ -136,7 +144,13 @@ fn another_tool_mounting_is_a_change_between_sets() {
             "seed {seed}\n{}",
             d.report.table()
         );
+        calibration.push(d.report.verdict.calibration_over_floor);
+        cv.push(d.report.verdict.cv_over_floor);
+        held_out.push(d.report.verdict.validation_over_floor);
     }
+    record("change_calibration_over_floor", calibration);
+    record("change_cv_over_floor", cv);
+    record("change_validation_over_floor", held_out);
 }
 
 /// Few poses for the parameters fitted, and an error the declared model lacks: the fitted
@@ -173,11 +187,18 @@ fn ur5_few_poses(n: usize, amp_mm: f64, seed: u64) -> (Diagnosis, Dataset) {
 /// overfitting, with the number of parameter combinations the poses support.
 #[test]
 fn few_poses_for_many_parameters_is_overfitting() {
+    let (mut calibration, mut held_out) = (Vec::new(), Vec::new());
+    let (mut expected, mut supported) = (Vec::new(), Vec::new());
     for seed in [1, 2, 3, 4] {
         let (d, _) = ur5_few_poses(14, 0.05, seed);
         assert_eq!(kind(&d), "overfitting", "seed {seed}\n{}", d.report.table());
         let v = &d.report.verdict;
         assert!(v.supported_parameters.is_some(), "{v:?}");
+        calibration.push(v.calibration_over_floor);
+        held_out.push(v.validation_over_floor);
+        expected.push(v.validation_expected_ratio);
+        supported.push(v.supported_parameters);
+        record("overfitting_fitted_parameters", v.fitted_parameters);
         assert!(
             d.report.table().contains("poses support about"),
             "{}",
@@ -193,6 +214,10 @@ fn few_poses_for_many_parameters_is_overfitting() {
             d.report.table()
         );
     }
+    record("overfitting_calibration_over_floor", calibration);
+    record("overfitting_validation_over_floor", held_out);
+    record("overfitting_expected_ratio", expected);
+    record("overfitting_supported_parameters", supported);
 }
 
 fn ur5_session(effects: &[&str], seed: u64) -> (Model, Dataset) {

@@ -7,6 +7,7 @@
 //! in random directions, to the calibration and to the held-out file.
 
 use crate::common;
+use crate::common::record::record;
 
 use nalgebra::Vector3;
 use rand::{Rng, SeedableRng};
@@ -156,6 +157,11 @@ fn calibrate_flags_the_gross_errors_of_the_real_ur5_set() {
             .collect::<Vec<_>>(),
         clean.validation.unwrap().after.mean_mm
     );
+    record("ur5_clean_flagged", clean.outliers.len());
+    record(
+        "ur5_clean_held_out_mm",
+        clean.validation.unwrap().after.mean_mm,
+    );
     let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(5);
     let (mut g, mut r): (Poses, Poses) = (grid.clone(), random.clone());
     let bad_cal = corrupt(&mut g.xyz_mm, 0.02, &mut rng);
@@ -199,6 +205,7 @@ fn calibrate_flags_the_gross_errors_of_the_real_ur5_set() {
 fn clean_sets_flag_almost_nothing() {
     let declared = katana450(200.0).unwrap();
     let (mut poses, mut flags_cal, mut flags_diag) = (0_usize, 0_usize, 0_usize);
+    let mut flagged_cal_mm = Vec::new();
     for seed in 0..50_u64 {
         let (cal, val) = sim(1000 + seed, &["encoder_harmonic:j3:h2=0.02,10"]);
         let to_poses = |p: &[SimPose]| Poses {
@@ -214,6 +221,7 @@ fn clean_sets_flag_almost_nothing() {
         .unwrap()
         .report;
         flags_cal += rep.outliers.len();
+        flagged_cal_mm.extend(rep.outliers.iter().map(|o| o.error_mm));
         for o in &rep.outliers {
             println!(
                 "seed {seed}: calibrate flagged {} pose {} at {:.4} mm: {}",
@@ -237,6 +245,10 @@ fn clean_sets_flag_almost_nothing() {
     println!(
         "clean: {poses} poses per command, calibrate flagged {flags_cal}, diagnose {flags_diag}"
     );
+    record("clean_poses", poses);
+    record("clean_calibrate_flagged", flags_cal);
+    record("clean_calibrate_flagged_mm", flagged_cal_mm);
+    record("clean_diagnose_flagged", flags_diag);
     assert!(
         flags_cal * 1000 <= poses,
         "calibrate flagged {flags_cal} of {poses}"

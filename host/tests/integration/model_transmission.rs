@@ -6,6 +6,8 @@
 use std::path::Path;
 use std::process::{Command, Output};
 
+use crate::common::record::record;
+
 use rigctl::model::{katana450, Model};
 
 const NOISE_MM: f64 = 0.01;
@@ -119,6 +121,8 @@ fn transmission_terms_round_trip_through_diagnose_fk_and_calibrate() {
     // the noise floor: mean of |3-D Gaussian| with sigma per coordinate = 1.596 sigma
     let after = fk_mean_error_mm(&found, &val);
     eprintln!("fk held out: declared {before:.4} mm, diagnosed model {after:.4} mm");
+    record("declared_mm", before);
+    record("diagnosed_mm", after);
     assert!(
         before > 2.0 * 1.596 * NOISE_MM,
         "effect too small: {before}"

@@ -5,6 +5,8 @@
 
 use std::process::Command;
 
+use crate::common::record::record;
+
 use rigctl::model::katana450;
 use rigctl::model::transmission::JointTerms;
 use rigctl::report::{build_report, ReportOptions};
@@ -48,6 +50,12 @@ fn report_applies_a_model_files_transmission_terms() {
         };
         let (w, wo) = (mean("with.toml"), mean("without.toml"));
         println!("{title}: with the terms {w:.4} mm, without {wo:.4} mm");
+        let set = match title {
+            "Calibration poses" => "calibration",
+            _ => "held_out",
+        };
+        record(&format!("{set}_with_mm"), w);
+        record(&format!("{set}_without_mm"), wo);
         assert!(w < 0.005, "{title}: with the terms {w} mm");
         assert!(wo > 0.1, "{title}: without the terms {wo} mm");
     }

@@ -5,6 +5,7 @@
 //! bag reads what is intact and says what was lost; 10^6 messages stream in bounded memory.
 
 use crate::common;
+use crate::common::record::record;
 
 use std::path::Path;
 use std::process::{Command, Output};
@@ -149,6 +150,7 @@ fn fuse_and_fk_from_a_rosbags_bag_equal_the_csv() {
     let worst = max_diff(&fused_a, &fused_b);
     let n_rows = numbers(&fused_a).1.len();
     eprintln!("fuse: {n_rows} fused samples, bag vs CSV max difference {worst:.3e}");
+    record("fuse_bag_vs_csv_worst", worst);
     assert!(worst <= 1e-6, "fused samples differ by {worst}");
     // The messages of the gripper controller (only the finger joints) are skipped and counted.
     let n_joint_rows = numbers(&std::fs::read_to_string(&joints_csv).unwrap())
@@ -172,6 +174,7 @@ fn fuse_and_fk_from_a_rosbags_bag_equal_the_csv() {
         &String::from_utf8_lossy(&fk_bag.stdout),
     );
     eprintln!("fk: bag vs CSV max difference {worst_fk:.3e}");
+    record("fk_bag_vs_csv_worst", worst_fk);
     assert!(worst_fk <= 1e-6, "fk differs by {worst_fk}");
 
     // zstd-compressed chunks (rosbag2's storage compression) read the same.
@@ -345,13 +348,16 @@ fn a_million_messages_stream_in_bounded_memory() {
         ],
     );
     let bag_bytes = std::fs::metadata(bag.join("long.mcap")).unwrap().len();
-    // The peak RSS of rigctl alone: a Python parent that runs it and reads its rusage.
+    // The peak RSS and wall time of rigctl alone: a Python parent that runs it and reads its
+    // rusage.
     let out = d.join("fk.csv");
-    let probe = "import resource, subprocess, sys\n\
+    let probe = "import resource, subprocess, sys, time\n\
          with open(sys.argv[1], 'wb') as f:\n\
+         \x20   t0 = time.monotonic()\n\
          \x20   r = subprocess.run(sys.argv[2:], stdout=f, stderr=subprocess.PIPE)\n\
+         \x20   wall_s = time.monotonic() - t0\n\
          sys.stderr.write(r.stderr.decode())\n\
-         print(r.returncode, resource.getrusage(resource.RUSAGE_CHILDREN).ru_maxrss)\n";
+         print(r.returncode, resource.getrusage(resource.RUSAGE_CHILDREN).ru_maxrss, wall_s)\n";
     let run = Command::new("python3")
         .args(["-c", probe, s(&out), env!("CARGO_BIN_EXE_rigctl")])
         .args([
@@ -369,6 +375,7 @@ fn a_million_messages_stream_in_bounded_memory() {
     let mut it = text.split_whitespace();
     let code: i32 = it.next().and_then(|v| v.parse().ok()).expect("exit code");
     let rss_kb: u64 = it.next().and_then(|v| v.parse().ok()).expect("max rss");
+    let wall_s: f64 = it.next().and_then(|v| v.parse().ok()).expect("wall time");
     assert_eq!(code, 0, "{}", String::from_utf8_lossy(&run.stderr));
     let rows = std::fs::read(&out)
         .unwrap()
@@ -377,10 +384,12 @@ fn a_million_messages_stream_in_bounded_memory() {
         .count();
     assert_eq!(rows, n + 1, "a row per message");
     eprintln!(
-        "{n} messages, bag {:.1} MB: rigctl fk peak RSS {:.1} MB",
+        "{n} messages, bag {:.1} MB: rigctl fk peak RSS {:.1} MB, {wall_s:.2} s",
         bag_bytes as f64 / 1e6,
         rss_kb as f64 / 1e3
     );
+    record("million_messages_fk_peak_rss_mb", rss_kb as f64 / 1e3);
+    record("million_messages_fk_wall_s", wall_s);
     assert!(
         rss_kb < 64 * 1024,
         "peak RSS {rss_kb} kB for a {bag_bytes}-byte bag: not streamed"

@@ -10,6 +10,7 @@
 //! training postures, with gravity compliance as candidates, go below 3.07 and below 2.816 mm.
 
 use crate::common;
+use crate::common::record::record;
 
 use std::path::{Path, PathBuf};
 use std::process::Command;
@@ -133,6 +134,8 @@ fn figaroh_levels_and_the_press_compliance_model_from_the_cli() {
             rms(d, "validation"),
             d["terms"]
         );
+        record(&format!("{name}_training_mm"), rms(d, "calibration"));
+        record(&format!("{name}_validation_mm"), rms(d, "validation"));
     }
     // FIGAROH's published values (2 decimals) for the two levels defined identically.
     assert_eq!(reg["parameters"].as_object().unwrap().len(), 9);
@@ -176,6 +179,8 @@ fn four_markers_recover_the_rigid_body_geometry() {
     };
     let (bl_br, bl_tr) = (dist(bl, point(2)), dist(bl, point(3)));
     println!("|BL-BR| {bl_br:.2} mm, |BL-TR| {bl_tr:.2} mm");
+    record("bl_br_mm", bl_br);
+    record("bl_tr_mm", bl_tr);
     assert!((bl_br - 158.24).abs() < 0.5, "{bl_br}");
     assert!((bl_tr - 165.65).abs() < 0.5, "{bl_tr}");
     let _ = std::fs::remove_dir_all(&tmp);
@@ -231,6 +236,11 @@ fn full_identification_converges_in_one_run() {
         "full identification: {} iterations, training RMS {r1:.6} mm; second run {} iterations, {r2:.6} mm; validation {:.4} mm",
         first["iterations"], second["iterations"], rms(&first, "validation")
     );
+    record("full_training_mm", r1);
+    record("full_iterations", first["iterations"].clone());
+    record("full_second_iterations", second["iterations"].clone());
+    record("full_second_training_mm", r2);
+    record("full_validation_mm", rms(&first, "validation"));
     assert!(
         r2 >= r1 * (1.0 - 1e-6),
         "a second run improved: {r1} -> {r2}"

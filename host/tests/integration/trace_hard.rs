@@ -3,6 +3,8 @@
 //! flatbed scans of sheet v2 (pencil skips, faint graphite, dust on the line, fibres, the ring
 //! dots crossing the circle, the page edge and the desk).
 
+use crate::common::record::{record, record_push};
+
 use indicatif::ProgressBar;
 use rigctl::sheet::ReferencePath;
 use rigctl::trace::{
@@ -84,10 +86,22 @@ fn run(img: &image::RgbImage, opts: &TraceOptions) -> Result<Trace, TraceError> 
     trace_image(img, opts, &ProgressBar::hidden())
 }
 
-fn check_whole(name: &str, trace: &Trace, truth: &[[f64; 2]], rms_limit_mm: f64) {
+/// Checks the trace is whole and within `rms_limit_mm`; records its RMS, worst gap and camera
+/// check under `key`.
+fn check_whole(key: &str, name: &str, trace: &Trace, truth: &[[f64; 2]], rms_limit_mm: f64) {
     let (rms, worst) = accuracy(trace, truth);
     let fit = trace.camera_fit;
     eprintln!("{name}: rms {rms:.4} mm, worst coverage gap {worst:.3} mm, camera {fit:?}");
+    record(&format!("{key}_rms_mm"), rms);
+    record_push("worst_gap_mm", worst);
+    if let Some(f) = fit {
+        let kind = if key.starts_with("photo") {
+            "photo"
+        } else {
+            "scan"
+        };
+        record_push(&format!("{kind}_camera_rms_mm"), f.rms_mm);
+    }
     assert!(trace.is_whole(), "{name}: not whole: {:?}", trace.linking);
     assert!(
         trace.main_stroke().is_some_and(|s| s.closed),
@@ -126,6 +140,7 @@ fn photos_with_tilt_shading_distortion_and_jpeg() {
         let img = render_photo(&s, &photo(tilt, az, k1, seed));
         let trace = run(&img, &TraceOptions::default()).expect("traced");
         check_whole(
+            &format!("photo_{tilt}deg"),
             &format!("photo tilt {tilt} k1 {k1}"),
             &trace,
             &s.pencil_mm,
@@ -145,7 +160,7 @@ fn photo_12mp_at_35_degrees() {
     };
     let img = render_photo(&s, &p);
     let trace = run(&img, &TraceOptions::default()).expect("traced");
-    check_whole("photo 12 MP", &trace, &s.pencil_mm, 0.05);
+    check_whole("photo_12mp", "photo 12 MP", &trace, &s.pencil_mm, 0.05);
 }
 
 #[test]
@@ -177,7 +192,13 @@ fn scans_600dpi_with_skips_faint_graphite_dust_and_fibres() {
         let s = hard_scan(seed);
         let img = render_scan(&s);
         let trace = run(&img, &TraceOptions::default()).expect("traced");
-        check_whole(&format!("hard scan {seed}"), &trace, &s.pencil_mm, 0.015);
+        check_whole(
+            &format!("hard_scan_s{seed}"),
+            &format!("hard scan {seed}"),
+            &trace,
+            &s.pencil_mm,
+            0.015,
+        );
     }
 }
 
@@ -188,7 +209,13 @@ fn clean_600dpi_sheet_v2_is_within_5um() {
         ..sheet(21)
     };
     let trace = run(&render_scan(&s), &TraceOptions::default()).expect("traced");
-    check_whole("clean 600 dpi v2", &trace, &s.pencil_mm, 0.005);
+    check_whole(
+        "clean_600dpi",
+        "clean 600 dpi v2",
+        &trace,
+        &s.pencil_mm,
+        0.005,
+    );
 }
 
 #[test]
@@ -200,7 +227,13 @@ fn page_edge_and_desk_are_not_the_trace() {
         ..sheet(31)
     };
     let trace = run(&render_scan(&s), &TraceOptions::default()).expect("traced");
-    check_whole("page edge 300 dpi", &trace, &s.pencil_mm, 0.02);
+    check_whole(
+        "page_edge_300dpi",
+        "page edge 300 dpi",
+        &trace,
+        &s.pencil_mm,
+        0.02,
+    );
 }
 
 #[test]

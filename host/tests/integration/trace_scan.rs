@@ -1,6 +1,8 @@
 //! `trace` on rendered scans with known truth: sub-pixel accuracy, full coverage, orientation
 //! handling and the typed errors.
 
+use crate::common::record::record;
+
 use indicatif::ProgressBar;
 use rigctl::sheet::ReferencePath;
 use rigctl::trace::{
@@ -93,7 +95,8 @@ fn accuracy(points: &[[f64; 2]], truth: &[[f64; 2]], closed: bool) -> (f64, f64,
     ((sum2 / points.len() as f64).sqrt(), max, coverage)
 }
 
-fn check(spec: &RenderSpec, opts: &TraceOptions, rms_limit_mm: f64) {
+/// Traces `spec` and checks it against its truth; returns the RMS distance (mm).
+fn check(spec: &RenderSpec, opts: &TraceOptions, rms_limit_mm: f64) -> f64 {
     let tr = trace(spec, opts).expect("trace");
     let stroke = tr.main_stroke().expect("a stroke");
     assert_eq!(
@@ -117,42 +120,47 @@ fn check(spec: &RenderSpec, opts: &TraceOptions, rms_limit_mm: f64) {
     );
     assert!(rms <= rms_limit_mm, "rms {rms} mm > {rms_limit_mm} mm");
     assert!(coverage > 0.99, "coverage {coverage}");
+    rms
 }
 
 #[test]
 fn circle_600dpi_rotated_is_within_10um() {
-    check(
+    let rms = check(
         &spec(wobbly_circle(), true, 600.0, 2.5, 11),
         &TraceOptions::default(),
         0.01,
     );
+    record("circle_600dpi_rms_mm", rms);
 }
 
 #[test]
 fn line_600dpi_rotated_is_within_10um() {
-    check(
+    let rms = check(
         &spec(wobbly_line(), false, 600.0, -2.0, 12),
         &TraceOptions::default(),
         0.01,
     );
+    record("line_600dpi_rms_mm", rms);
 }
 
 #[test]
 fn circle_300dpi_is_within_20um() {
-    check(
+    let rms = check(
         &spec(wobbly_circle(), true, 300.0, -3.0, 13),
         &TraceOptions::default(),
         0.02,
     );
+    record("circle_300dpi_rms_mm", rms);
 }
 
 #[test]
 fn line_300dpi_is_within_20um() {
-    check(
+    let rms = check(
         &spec(wobbly_line(), false, 300.0, 1.5, 14),
         &TraceOptions::default(),
         0.02,
     );
+    record("line_300dpi_rms_mm", rms);
 }
 
 #[test]

@@ -4,6 +4,7 @@
 use std::path::PathBuf;
 
 pub mod long_urdf;
+pub mod record;
 pub mod spawn;
 
 /// `rel` (a file or folder) under the shared directory (`rigctl::shared_dir()`: `$RIG_SHARED_DIR`
