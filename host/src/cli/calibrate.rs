@@ -16,8 +16,8 @@ use std::path::PathBuf;
 
 use nalgebra::Vector3;
 use rigctl::calib::calibrate_general::{calibrate_poses, GeneralOptions, Select};
-use rigctl::calib::measurements::Measurements;
 use rigctl::calib::stats::AxisExtremes;
+use rigctl::calib::MeasuredSet;
 use rigctl::calib::{CalibrateOptions, Method};
 use rigctl::io::atomic::{write_bytes_atomic, write_text_atomic};
 use rigctl::io::finite::TextFormat;
@@ -148,9 +148,9 @@ pub fn run(args: Args) -> Result<(), CliError> {
     };
     // The model's own terms (joint map, time terms) are applied by the library's calibrate,
     // which keeps them fixed and writes them back with `--out`.
-    let read = |p: &std::path::Path| -> Result<(Measurements, PoseLabels), CliError> {
+    let read = |p: &std::path::Path| -> Result<(MeasuredSet, PoseLabels), CliError> {
         let file = read_poses(p, &args.pose.spec(&model, true, 0))?;
-        let m = Measurements::from_pose_file(&file, markers.as_deref())?;
+        let m = MeasuredSet::from_pose_points(&file, markers.as_deref())?;
         Ok((m, PoseLabels::of(&file)))
     };
     let (cal, cal_labels) = read(poses)?;
@@ -173,7 +173,7 @@ pub fn run(args: Args) -> Result<(), CliError> {
     let g = calibrate_poses(&model, &cal, val.as_ref(), &opts, &gen)?;
     let mut notes = general_notes(&g, &cal);
     let outcome = g.outcome;
-    no_redundancy(poses, 3 * cal.len(), outcome.report.rank)?;
+    no_redundancy(poses, 3 * cal.n_points(), outcome.report.rank)?;
     let mut outcome = outcome;
     for o in &mut outcome.report.outliers {
         let labels = if o.file == "val" {
@@ -278,7 +278,7 @@ pub(super) fn outlier_lines(
 /// every point.
 fn general_notes(
     g: &rigctl::calib::calibrate_general::GeneralOutcome,
-    cal: &Measurements,
+    cal: &MeasuredSet,
 ) -> String {
     let mut s = String::new();
     if !g.added.is_empty() {
@@ -363,7 +363,7 @@ fn summary(o: &rigctl::calib::Outcome, with_val: bool) -> String {
 
 /// `calibrate --samples`: identification from partial (projected) measurements.
 fn run_samples(args: &Args, samples: &std::path::Path) -> Result<(), CliError> {
-    use rigctl::calib::projected::{calibrate_projected, errors_csv, ProjectedData, SampleTilt};
+    use rigctl::calib::projected::errors_csv;
     let model = args
         .model
         .choose_with_default_tool(Some(KATANA_PENCIL_TOOL_MM))?;
@@ -373,10 +373,10 @@ fn run_samples(args: &Args, samples: &std::path::Path) -> Result<(), CliError> {
         ));
     }
     let fused = rigctl::fusion::read_fused(samples, model.n_joints())?;
-    let data = ProjectedData::from_fused(&fused);
-    let (data, tilt) = match args.method {
-        Method::Standard => (data, SampleTilt::Off),
-        Method::Tilting => (data.with_dynamic_moments(&model)?, SampleTilt::Dynamic),
+    let data = MeasuredSet::from_fused(&fused)?;
+    let data = match args.method {
+        Method::Standard => data,
+        Method::Tilting => data.with_inertial_moments(&model)?,
         Method::Influence => {
             return Err(CliError::bad_input(
                 "--method influence needs full positions (--poses); use standard or tilting with --samples",
@@ -390,8 +390,9 @@ fn run_samples(args: &Args, samples: &std::path::Path) -> Result<(), CliError> {
         rtol: args.rtol,
         ..Default::default()
     };
-    let outcome = calibrate_projected(&model, &data, tilt, &opts)?;
-    no_redundancy(samples, data.rows.len(), outcome.report.rank)?;
+    let g = calibrate_poses(&model, &data, None, &opts, &GeneralOptions::default())?;
+    let (outcome, rejected) = (g.outcome, g.rejected);
+    no_redundancy(samples, data.n_residuals(), outcome.report.rank)?;
     if let Some(path) = &args.json {
         let text = serde_json::to_string_pretty(&outcome.report)
             .map_err(|e| CliError::failure(format!("encoding JSON: {e}")))?;
@@ -400,7 +401,7 @@ fn run_samples(args: &Args, samples: &std::path::Path) -> Result<(), CliError> {
     if let Some(path) = &args.out {
         outcome.model.write_file(path)?;
     }
-    let csv = errors_csv(&fused, &outcome.errors);
+    let csv = errors_csv(&fused, &outcome.calibration_errors);
     if let Some(path) = &args.errors_csv {
         write_text_atomic(path, TextFormat::Csv, &csv)?;
     }
@@ -412,15 +413,15 @@ fn run_samples(args: &Args, samples: &std::path::Path) -> Result<(), CliError> {
     let mut s = table(
         "Fused samples, measured components only in frame R (|dP| = sqrt(dev_u^2 + dev_n^2); along the path not measured)",
         "samples",
-        &outcome.errors,
+        &outcome.calibration_errors,
         &outcome.report.method,
     );
     s.push_str(&report_tail(&outcome.report));
     let _ = writeln!(
         s,
         "outliers left out of the fit: {} of {} measured components (> {} robust sigmas)",
-        outcome.rejected,
-        data.rows.len(),
+        rejected,
+        data.n_residuals(),
         rigctl::calib::projected::OUTLIER_SIGMAS
     );
     out!("{s}")?;
