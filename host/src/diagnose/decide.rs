@@ -234,7 +234,7 @@ pub fn cv_errors(
         test.iter()
             .map(|&i| {
                 let p = refit.ext.predict_pose(data, i)?;
-                Ok((i, data.measured_part(i, &(data.poses.xyz_mm[i] - p)).norm()))
+                Ok((i, data.error_mm(i, &p).norm()))
             })
             .collect()
     });

@@ -320,13 +320,10 @@ impl ExtModel {
     }
 
     /// Errors `measured - predicted` of every pose (mm): the measured part for partial
-    /// measurements ([`MeasuredSet::measured_part`]).
+    /// measurements ([`MeasuredSet::error_mm`]).
     pub fn errors(&self, data: &MeasuredSet) -> Result<Vec<Vector3<f64>>, ModelError> {
         (0..data.len())
-            .map(|k| {
-                let e = data.poses.xyz_mm[k] - self.predict_pose(data, k)?;
-                Ok(data.measured_part(k, &e))
-            })
+            .map(|k| Ok(data.error_mm(k, &self.predict_pose(data, k)?)))
             .collect()
     }
 
@@ -402,7 +399,7 @@ impl Problem for ExtProblem<'_> {
                 let mut row = 0;
                 for k in 0..self.data.len() {
                     let p = self.ext.predict_pose(self.data, k)?;
-                    let e = self.data.components(k, &(p - self.data.poses.xyz_mm[k]));
+                    let e = self.data.residual(k, &p);
                     for (i, c) in e.into_iter().enumerate() {
                         r[row + i] = c;
                     }
