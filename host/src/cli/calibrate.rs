@@ -274,7 +274,7 @@ pub(super) fn outlier_lines(
     s
 }
 
-/// What `calibrate_general` adds to the summary: the PRESS choice and the validation error of
+/// What the variants with several points, PRESS or compliance add to the summary: the PRESS choice and the validation error of
 /// every point.
 fn general_notes(
     g: &rigctl::calib::calibrate_general::GeneralOutcome,
