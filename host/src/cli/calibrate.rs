@@ -274,8 +274,8 @@ pub(super) fn outlier_lines(
     s
 }
 
-/// What the variants with several points, PRESS or compliance add to the summary: the PRESS choice and the validation error of
-/// every point.
+/// What the variants with several points, PRESS or compliance add to the summary: the PRESS
+/// choice and the validation error of every point.
 fn general_notes(
     g: &rigctl::calib::calibrate_general::GeneralOutcome,
     cal: &MeasuredSet,
