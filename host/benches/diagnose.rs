@@ -6,8 +6,8 @@
 //! repeatability floor's grouping of repeated poses on 1e4 to 1e6 poses.
 
 use criterion::{criterion_group, criterion_main, Criterion};
+use rigctl::calib::MeasuredSet;
 use rigctl::calib::Poses;
-use rigctl::diagnose::data::Dataset;
 use rigctl::diagnose::{diagnose, DiagnoseOptions};
 use rigctl::model::{katana450, KATANA_PENCIL_TOOL_MM};
 use rigctl::sim::effects::parse_effect;
@@ -31,8 +31,8 @@ fn bench(c: &mut Criterion) {
         };
         let out = simulate(&declared, &cfg).expect("simulate");
         let (cal, val) = (
-            Dataset::from_sim_poses(&out.cal),
-            Dataset::from_sim_poses(&out.val),
+            MeasuredSet::from_sim_poses(&out.cal),
+            MeasuredSet::from_sim_poses(&out.val),
         );
         g.bench_function(name, |b| {
             b.iter(|| {
@@ -51,7 +51,9 @@ fn bench(c: &mut Criterion) {
         };
         let s = simulate_session(&pencil, &cfg).expect("session");
         let f = s.ideal_fused_samples(&pencil, 0.003, 1).expect("samples");
-        Dataset::from_fused(&f, &pencil).expect("dataset")
+        MeasuredSet::from_fused(&f)
+            .and_then(|d| d.with_inertial_moments(&pencil))
+            .expect("dataset")
     };
     let (cal, val) = (sheet(SessionPath::Circle), sheet(SessionPath::Line));
     let mut g = c.benchmark_group("diagnose_samples_circle_line");
@@ -88,7 +90,7 @@ fn bench_probe(c: &mut Criterion) {
         let jac: Vec<DMatrix<f64>> = (0..n)
             .map(|_| DMatrix::from_fn(3, 12, |_, _| rng.gen_range(-1.0..1.0)))
             .collect();
-        let data = Dataset::from_poses(Poses {
+        let data = MeasuredSet::from_poses(Poses {
             q_deg: q,
             xyz_mm: vec![Vector3::zeros(); n],
         });
@@ -102,7 +104,7 @@ fn bench_probe(c: &mut Criterion) {
 /// A simulated UR5 session of `n` random poses within +-170 deg (joint 2 in -170..-10) plus 20
 /// held out: the truth has a base tilt, a joint-2 first harmonic and a joint-3 gear-ratio error,
 /// the tracker noise is 0.015 mm per coordinate.
-fn ur5_session(n: usize, seed: u64) -> (rigctl::model::Model, Dataset, Dataset) {
+fn ur5_session(n: usize, seed: u64) -> (rigctl::model::Model, MeasuredSet, MeasuredSet) {
     use nalgebra::Vector3;
     use rand::{Rng, SeedableRng};
     use rand_distr::{Distribution, Normal};
@@ -144,7 +146,7 @@ fn ur5_session(n: usize, seed: u64) -> (rigctl::model::Model, Dataset, Dataset) 
                     + Vector3::from_fn(|_, _| noise.sample(&mut rng))
             })
             .collect();
-        Dataset::from_poses(Poses {
+        MeasuredSet::from_poses(Poses {
             q_deg: q,
             xyz_mm: xyz,
         })
@@ -172,8 +174,8 @@ fn bench_ur5(c: &mut Criterion) {
             {
                 model.set_param(name, v).expect("tool");
             }
-            let cal = Dataset::read(&dir.join("grid.csv"), &model).expect("grid.csv");
-            let val = Dataset::read(&dir.join("random.csv"), &model).expect("random.csv");
+            let cal = MeasuredSet::read(&dir.join("grid.csv"), &model).expect("grid.csv");
+            let val = MeasuredSet::read(&dir.join("random.csv"), &model).expect("random.csv");
             g.bench_function("tracker_1000", |b| {
                 b.iter(|| diagnose(&model, &cal, &val, &opts).expect("diagnose"))
             });
@@ -202,7 +204,7 @@ fn bench_repeatability(c: &mut Criterion) {
             .map(|_| (0..5).map(|_| rng.gen_range(-170.0..170.0)).collect())
             .collect();
         q.extend(q.clone());
-        let data = Dataset::from_poses(Poses {
+        let data = MeasuredSet::from_poses(Poses {
             q_deg: q,
             xyz_mm: vec![Vector3::zeros(); n],
         });

@@ -191,16 +191,18 @@ pub struct Outcome {
 }
 
 /// The `calibrate --json` document of the chosen `fit`: its parameters (fitted and fixed, in
-/// `selection` order), sigmas and identifiability, with the error statistics given.
+/// `selection` order), sigmas and identifiability, with the error statistics of the error
+/// vectors `[before, standard, chosen]` of the calibration poses `cal` and, with validation
+/// poses, of those ([`error_summary`]).
 pub(super) fn fit_report(
     fit: &Fit,
     selection: &[usize],
     method: &str,
-    calibration: BeforeAfter,
-    validation: Option<BeforeAfter>,
-    standard: StandardSummary,
+    cal: &[Vec<Vector3<f64>>; 3],
+    val: Option<&[Vec<Vector3<f64>>; 3]>,
     tilting_applied: bool,
 ) -> CalibrateReport {
+    let (calibration, validation, standard) = error_summary(cal, val);
     let params = fit.model.params();
     let name = |c: usize| params.get(c).map_or_else(String::new, |p| p.name.clone());
     let mut reported: Vec<usize> = fit.fitted.iter().chain(&fit.fixed).copied().collect();
@@ -239,7 +241,7 @@ pub(super) fn fit_report(
 
 /// The error statistics of `calibrate --json` from the error vectors `[before, standard,
 /// chosen]` of the calibration poses and, with validation poses, of those.
-pub(super) fn error_summary(
+fn error_summary(
     cal: &[Vec<Vector3<f64>>; 3],
     val: Option<&[Vec<Vector3<f64>>; 3]>,
 ) -> (BeforeAfter, Option<BeforeAfter>, StandardSummary) {
@@ -394,14 +396,12 @@ pub fn calibrate(
         Some(v) => errs(v)?,
         None => [Vec::new(), Vec::new(), Vec::new()],
     };
-    let (calibration, validation, standard) = error_summary(&cal_errors, val.map(|_| &val_errors));
     let mut report = fit_report(
         &chosen,
         &selection,
         opts.method.as_str(),
-        calibration,
-        validation,
-        standard,
+        &cal_errors,
+        val.map(|_| &val_errors),
         tilt,
     );
     report.outliers = outlier_reports;

@@ -15,13 +15,14 @@ use std::str::FromStr;
 use nalgebra::Vector3;
 
 use super::calibrate::{
-    calibrate, error_summary, fit_report, resolve_selection, CalibrateOptions, Method, Outcome,
+    calibrate, fit_report, resolve_selection, CalibrateOptions, Method, Outcome,
 };
 use super::error::CalibError;
 use super::fit::Fit;
 use super::general::{fit_general, stacked, GeneralFit, GeneralModel, PoseTorques, Unknown};
-use super::measurements::Measurements;
+use super::measured::MeasuredSet;
 use super::press::forward_select;
+use super::projected::{calibrate_projected, SampleTilt};
 use crate::model::{Model, ParamKind};
 
 /// How the identified set is chosen (`--select`).
@@ -65,6 +66,9 @@ pub struct GeneralOutcome {
     pub added: Vec<String>,
     /// Validation RMS (mm) of every point slot (empty without validation data).
     pub validation_rms_by_point_mm: Vec<f64>,
+    /// Measured components left out of the fit as outliers (partial measurements,
+    /// [`super::projected::fit_projected_robust`]; 0 otherwise).
+    pub rejected: usize,
 }
 
 fn chain_constant(model: &Model, i: usize) -> bool {
@@ -77,7 +81,7 @@ fn chain_constant(model: &Model, i: usize) -> bool {
 /// The always-fitted unknowns and the PRESS candidates (empty with [`Select::All`]).
 fn unknown_sets(
     nominal: &Model,
-    data: &Measurements,
+    data: &MeasuredSet,
     opts: &CalibrateOptions,
     gen: &GeneralOptions,
 ) -> Result<(Vec<Unknown>, Vec<Unknown>), CalibError> {
@@ -116,7 +120,7 @@ fn unknown_sets(
 /// fits them all.
 fn identify(
     start: &GeneralModel,
-    data: &Measurements,
+    data: &MeasuredSet,
     tau: &PoseTorques,
     sets: &(Vec<Unknown>, Vec<Unknown>),
     opts: &CalibrateOptions,
@@ -144,7 +148,7 @@ fn identify(
     Ok((fit, added))
 }
 
-fn torques(nominal: &Model, data: &Measurements, needed: bool) -> Result<PoseTorques, CalibError> {
+fn torques(nominal: &Model, data: &MeasuredSet, needed: bool) -> Result<PoseTorques, CalibError> {
     if !needed {
         return Ok(PoseTorques::default());
     }
@@ -180,15 +184,17 @@ fn model_fit(f: &GeneralFit) -> Fit {
     }
 }
 
-/// The library's `calibrate` on measured poses, whatever the variant: `nominal`'s own terms (its
+/// The library's `calibrate` on a measured set, whatever the variant: `nominal`'s own terms (its
 /// joint map and time terms, from a model file) applied to the readings and the measured points
-/// ([`Measurements::through_terms`]) and kept in the calibrated model, then the identification
-/// on one point per pose ([`calibrate`]: standard, tilting, influence) or, with several points
-/// per pose, `--select press` or `--compliance`, [`calibrate_general`].
+/// ([`MeasuredSet::through_terms`]) and kept in the calibrated model, then the identification
+/// on partial measurements ([`super::projected`], `calibrate --samples`: the declared tilting
+/// with the set's inertial moments when it has them), on one point per pose ([`calibrate`]:
+/// standard, tilting, influence) or, with several points per pose, `--select press` or
+/// `--compliance`, [`calibrate_general`].
 pub fn calibrate_poses(
     nominal: &Model,
-    cal: &Measurements,
-    val: Option<&Measurements>,
+    cal: &MeasuredSet,
+    val: Option<&MeasuredSet>,
     opts: &CalibrateOptions,
     gen: &GeneralOptions,
 ) -> Result<GeneralOutcome, CalibError> {
@@ -199,13 +205,21 @@ pub fn calibrate_poses(
                 .into(),
         ));
     }
-    let cal = cal.through_terms(nominal)?;
-    let val = val.map(|v| v.through_terms(nominal)).transpose()?;
-    if cal.n_slots() == 1 && *gen == GeneralOptions::default() {
+    let run = Run {
+        nominal,
+        cal: cal.through_terms(nominal)?,
+        val: val.map(|v| v.through_terms(nominal)).transpose()?,
+        opts,
+        gen,
+    };
+    if run.cal.is_serial() {
+        return run.partial();
+    }
+    if run.cal.n_slots() == 1 && *gen == GeneralOptions::default() {
         let outcome = calibrate(
             nominal,
-            &cal.as_poses(),
-            val.as_ref().map(Measurements::as_poses).as_ref(),
+            &run.cal.as_poses(),
+            run.val.as_ref().map(MeasuredSet::as_poses).as_ref(),
             opts,
         )?;
         return Ok(GeneralOutcome {
@@ -213,96 +227,108 @@ pub fn calibrate_poses(
             fit: None,
             added: Vec::new(),
             validation_rms_by_point_mm: Vec::new(),
+            rejected: 0,
         });
     }
-    calibrate_general(nominal, &cal, val.as_ref(), opts, gen)
+    run.general()
 }
 
-/// Calibrates `nominal` on `cal` (several points per pose, compliance, PRESS selection) and
-/// evaluates on `val`. "before" is the nominal model without tilting, its further points at
-/// their identified offsets (they have no nominal value). Reached through [`calibrate_poses`],
-/// which maps the measurements through the model's terms first.
-fn calibrate_general(
-    nominal: &Model,
-    cal: &Measurements,
-    val: Option<&Measurements>,
-    opts: &CalibrateOptions,
-    gen: &GeneralOptions,
-) -> Result<GeneralOutcome, CalibError> {
-    if opts.method == Method::Influence {
-        return Err(CalibError::Unsupported(
-            "--method influence works on one point per pose without --select/--compliance".into(),
-        ));
-    }
-    if let Some(v) = val.filter(|v| v.n_slots() != cal.n_slots()) {
-        return Err(CalibError::Unsupported(format!(
-            "the validation poses have {} measured point(s) per pose, the calibration poses {}",
-            v.n_slots(),
-            cal.n_slots()
-        )));
-    }
-    let sets = unknown_sets(nominal, cal, opts, gen)?;
-    let tau_cal = torques(nominal, cal, gen.compliance)?;
-    let tau_val = match val {
-        Some(v) => torques(nominal, v, gen.compliance)?,
-        None => PoseTorques::default(),
-    };
-    let tilt = opts.method == Method::Tilting && nominal.has_tilt();
-    let run = |tilt: bool| {
-        let start = GeneralModel::new(nominal.clone(), cal.n_slots(), tilt)?;
-        identify(&start, cal, &tau_cal, &sets, opts)
-    };
-    let (chosen, added) = run(tilt)?;
-    let standard = if tilt { run(false)?.0 } else { chosen.clone() };
-    let mut before = GeneralModel::new(nominal.clone(), cal.n_slots(), false)?;
-    for (b, c) in before
-        .offsets_mm
-        .iter_mut()
-        .zip(&chosen.state.offsets_mm)
-        .skip(1)
-    {
-        *b = *c;
-    }
-    let errs = |m: &GeneralModel, d: &Measurements, t: &PoseTorques| m.errors(d, t);
-    let cal_errors = [
-        errs(&before, cal, &tau_cal)?,
-        errs(&standard.state, cal, &tau_cal)?,
-        errs(&chosen.state, cal, &tau_cal)?,
-    ];
-    let val_errors = match val {
-        Some(v) => [
-            errs(&before, v, &tau_val)?,
-            errs(&standard.state, v, &tau_val)?,
-            errs(&chosen.state, v, &tau_val)?,
-        ],
-        None => [Vec::new(), Vec::new(), Vec::new()],
-    };
-    let validation_rms_by_point_mm = match val {
-        Some(v) => rms_by_slot(v, &val_errors[2]),
-        None => Vec::new(),
-    };
-    let mut selection: Vec<usize> = resolve_selection(nominal, opts)?;
-    for u in &added {
-        if let Unknown::Param(i) = u {
-            selection.push(*i);
+/// One `calibrate`: the model, its settings, and the calibration and validation sets as the
+/// model's chain sees them ([`MeasuredSet::through_terms`]).
+struct Run<'a> {
+    nominal: &'a Model,
+    cal: MeasuredSet,
+    val: Option<MeasuredSet>,
+    opts: &'a CalibrateOptions,
+    gen: &'a GeneralOptions,
+}
+
+impl Run<'_> {
+    /// Calibrates `nominal` on `cal` (several points per pose, compliance, PRESS selection) and
+    /// evaluates on `val`. "before" is the nominal model without tilting, its further points at
+    /// their identified offsets (they have no nominal value).
+    fn general(&self) -> Result<GeneralOutcome, CalibError> {
+        let Run {
+            nominal,
+            cal,
+            val,
+            opts,
+            gen,
+        } = self;
+        let (nominal, opts, gen, val) = (*nominal, *opts, *gen, val.as_ref());
+        if opts.method == Method::Influence {
+            return Err(CalibError::Unsupported(
+                "--method influence works on one point per pose without --select/--compliance"
+                    .into(),
+            ));
         }
-    }
-    let (calibration, validation, standard) = error_summary(&cal_errors, val.map(|_| &val_errors));
-    let mut report = fit_report(
-        &model_fit(&chosen),
-        &selection,
-        opts.method.as_str(),
-        calibration,
-        validation,
-        standard,
-        tilt,
-    );
-    for (u, s) in chosen.fitted.iter().zip(&chosen.sigma) {
-        if !matches!(u, Unknown::Param(_)) {
-            let name = chosen.state.name(*u, cal);
-            let value = chosen.state.value(*u);
-            if matches!(u, Unknown::Compliance(_)) && value < 0.0 {
-                report.unphysical.push(format!(
+        if let Some(v) = val.filter(|v| v.n_slots() != cal.n_slots()) {
+            return Err(CalibError::Unsupported(format!(
+                "the validation poses have {} measured point(s) per pose, the calibration poses {}",
+                v.n_slots(),
+                cal.n_slots()
+            )));
+        }
+        let sets = unknown_sets(nominal, cal, opts, gen)?;
+        let tau_cal = torques(nominal, cal, gen.compliance)?;
+        let tau_val = match val {
+            Some(v) => torques(nominal, v, gen.compliance)?,
+            None => PoseTorques::default(),
+        };
+        let tilt = opts.method == Method::Tilting && nominal.has_tilt();
+        let run = |tilt: bool| {
+            let start = GeneralModel::new(nominal.clone(), cal.n_slots(), tilt)?;
+            identify(&start, cal, &tau_cal, &sets, opts)
+        };
+        let (chosen, added) = run(tilt)?;
+        let standard = if tilt { run(false)?.0 } else { chosen.clone() };
+        let mut before = GeneralModel::new(nominal.clone(), cal.n_slots(), false)?;
+        for (b, c) in before
+            .offsets_mm
+            .iter_mut()
+            .zip(&chosen.state.offsets_mm)
+            .skip(1)
+        {
+            *b = *c;
+        }
+        let errs = |m: &GeneralModel, d: &MeasuredSet, t: &PoseTorques| m.errors(d, t);
+        let cal_errors = [
+            errs(&before, cal, &tau_cal)?,
+            errs(&standard.state, cal, &tau_cal)?,
+            errs(&chosen.state, cal, &tau_cal)?,
+        ];
+        let val_errors = match val {
+            Some(v) => [
+                errs(&before, v, &tau_val)?,
+                errs(&standard.state, v, &tau_val)?,
+                errs(&chosen.state, v, &tau_val)?,
+            ],
+            None => [Vec::new(), Vec::new(), Vec::new()],
+        };
+        let validation_rms_by_point_mm = match val {
+            Some(v) => rms_by_slot(v, &val_errors[2]),
+            None => Vec::new(),
+        };
+        let mut selection: Vec<usize> = resolve_selection(nominal, opts)?;
+        for u in &added {
+            if let Unknown::Param(i) = u {
+                selection.push(*i);
+            }
+        }
+        let mut report = fit_report(
+            &model_fit(&chosen),
+            &selection,
+            opts.method.as_str(),
+            &cal_errors,
+            val.map(|_| &val_errors),
+            tilt,
+        );
+        for (u, s) in chosen.fitted.iter().zip(&chosen.sigma) {
+            if !matches!(u, Unknown::Param(_)) {
+                let name = chosen.state.name(*u, cal);
+                let value = chosen.state.value(*u);
+                if matches!(u, Unknown::Compliance(_)) && value < 0.0 {
+                    report.unphysical.push(format!(
                     "{name} = {value:.4} +- {s:.4}: a negative compliance, which no joint has (the term \
                      stands in for something the model lacks, e.g. a length or the link masses){}",
                     if value + 2.0 * s >= 0.0 {
@@ -311,32 +337,65 @@ fn calibrate_general(
                         ""
                     }
                 ));
+                }
+                report.terms.0.push((name.clone(), value));
+                report.sigma.0.push((name, *s));
             }
-            report.terms.0.push((name.clone(), value));
-            report.sigma.0.push((name, *s));
         }
+        Ok(GeneralOutcome {
+            added: added.iter().map(|&u| chosen.state.name(u, cal)).collect(),
+            outcome: Outcome {
+                model: chosen.state.model.clone(),
+                tilt,
+                report,
+                calibration_errors: cal_errors,
+                validation_errors: val_errors,
+            },
+            fit: Some(chosen),
+            validation_rms_by_point_mm,
+            rejected: 0,
+        })
     }
-    Ok(GeneralOutcome {
-        added: added.iter().map(|&u| chosen.state.name(u, cal)).collect(),
-        outcome: Outcome {
-            model: chosen.state.model.clone(),
-            tilt,
-            report,
-            calibration_errors: cal_errors,
-            validation_errors: val_errors,
-        },
-        fit: Some(chosen),
-        validation_rms_by_point_mm,
-    })
+
+    /// The identification on partial measurements ([`super::projected::calibrate_projected`]):
+    /// one point per pose, no validation set, no PRESS selection or compliance.
+    fn partial(&self) -> Result<GeneralOutcome, CalibError> {
+        let (nominal, cal, opts) = (self.nominal, &self.cal, self.opts);
+        if self.val.is_some() || *self.gen != GeneralOptions::default() || cal.n_slots() != 1 {
+            return Err(CalibError::Unsupported(
+            "partial measurements (fused samples) are calibrated on one point per pose, without \
+             validation poses, --select or --compliance"
+                .into(),
+        ));
+        }
+        let tilt = match (opts.method, cal.moments_kgfm.is_some()) {
+            (Method::Tilting, true) => SampleTilt::Dynamic,
+            (Method::Tilting, false) => SampleTilt::Static,
+            _ => SampleTilt::Off,
+        };
+        let p = calibrate_projected(nominal, cal, tilt, opts)?;
+        Ok(GeneralOutcome {
+            outcome: Outcome {
+                model: p.model,
+                tilt: p.tilt != SampleTilt::Off,
+                report: p.report,
+                calibration_errors: p.errors,
+                validation_errors: [Vec::new(), Vec::new(), Vec::new()],
+            },
+            fit: None,
+            added: Vec::new(),
+            validation_rms_by_point_mm: Vec::new(),
+            rejected: p.rejected,
+        })
+    }
 }
 
 /// RMS of the error lengths of every slot (mm).
-fn rms_by_slot(data: &Measurements, errors: &[Vector3<f64>]) -> Vec<f64> {
+fn rms_by_slot(data: &MeasuredSet, errors: &[Vector3<f64>]) -> Vec<f64> {
     (0..data.n_slots())
         .map(|slot| {
             let e: Vec<f64> = data
-                .points
-                .iter()
+                .points()
                 .zip(errors)
                 .filter(|(m, _)| m.slot == slot)
                 .map(|(_, e)| e.norm_squared())

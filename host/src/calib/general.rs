@@ -1,5 +1,5 @@
 //! The identification beyond one tool point and the chain parameters: several measured points
-//! per pose ([`Measurements`], each point with its own offset in the tool frame) and joint
+//! per pose ([`MeasuredSet`], each point with its own offset in the tool frame) and joint
 //! compliance (a joint deflection proportional to the gravity torque about its axis, the
 //! `compliance:j<i>` law of [`crate::model::transmission::compliance_deflection_deg`]).
 //!
@@ -19,7 +19,7 @@ use super::error::CalibError;
 use super::fit::parameter_sigmas;
 use super::identifiability::analyse;
 use super::lm::{solve, LmConfig, Problem};
-use super::measurements::Measurements;
+use super::measured::MeasuredSet;
 use super::problem::tilt_mode;
 pub use super::unknown::Unknown;
 use crate::model::gravity::GravityModel;
@@ -34,11 +34,12 @@ pub struct PoseTorques(pub Vec<Vec<f64>>);
 impl PoseTorques {
     /// Torques of `nominal` (its masses, [`GravityModel::for_model`]) at the poses of `data`;
     /// `None` if the model has no link masses.
-    pub fn of(nominal: &Model, data: &Measurements) -> Result<Option<Self>, ModelError> {
+    pub fn of(nominal: &Model, data: &MeasuredSet) -> Result<Option<Self>, ModelError> {
         let Some(g) = GravityModel::for_model(nominal) else {
             return Ok(None);
         };
         let tau = data
+            .poses
             .q_deg
             .iter()
             .map(|q| g.axis_torques_kgfm(nominal, q))
@@ -139,7 +140,7 @@ impl GeneralModel {
     }
 
     /// The name of an unknown: the parameter's, `marker<k>_x_mm`, `compliance_j<i>_deg_per_kgfm`.
-    pub fn name(&self, u: Unknown, data: &Measurements) -> String {
+    pub fn name(&self, u: Unknown, data: &MeasuredSet) -> String {
         match u {
             Unknown::Param(i) => self
                 .model
@@ -168,16 +169,15 @@ impl GeneralModel {
     /// Errors `measured - predicted` of every measurement (mm).
     pub fn errors(
         &self,
-        data: &Measurements,
+        data: &MeasuredSet,
         tau: &PoseTorques,
     ) -> Result<Vec<Vector3<f64>>, ModelError> {
         let models = self.slot_models()?;
         let tilt = tilt_mode(self.tilt);
-        data.points
-            .iter()
+        data.points()
             .map(|m| {
                 let q = compliance_deflected(
-                    &data.q_deg[m.pose],
+                    &data.poses.q_deg[m.pose],
                     self.compliance_deg_per_kgfm(),
                     tau.at(m.pose),
                 );
@@ -191,7 +191,7 @@ impl GeneralModel {
     /// `unknowns`.
     pub fn rows(
         &self,
-        data: &Measurements,
+        data: &MeasuredSet,
         tau: &PoseTorques,
         unknowns: &[Unknown],
         r: &mut DVector<f64>,
@@ -210,9 +210,9 @@ impl GeneralModel {
             })
             .collect::<Result<_, _>>()?;
         let Some(jac) = jac else {
-            for (i, m) in data.points.iter().enumerate() {
+            for (i, m) in data.points().enumerate() {
                 let q = compliance_deflected(
-                    &data.q_deg[m.pose],
+                    &data.poses.q_deg[m.pose],
                     self.compliance_deg_per_kgfm(),
                     tau.at(m.pose),
                 );
@@ -222,10 +222,13 @@ impl GeneralModel {
             }
             return Ok(());
         };
-        for (i, m) in data.points.iter().enumerate() {
+        for (i, m) in data.points().enumerate() {
             let tau_i = tau.at(m.pose);
-            let q =
-                compliance_deflected(&data.q_deg[m.pose], self.compliance_deg_per_kgfm(), tau_i);
+            let q = compliance_deflected(
+                &data.poses.q_deg[m.pose],
+                self.compliance_deg_per_kgfm(),
+                tau_i,
+            );
             let model = models.get(m.slot).unwrap_or(&self.model);
             let (fk, j) = model.position_jacobian(&q, tilt, &wrt)?;
             r.fixed_rows_mut::<3>(3 * i)
@@ -249,7 +252,7 @@ impl GeneralModel {
 /// The general identification as a least-squares problem.
 struct GeneralProblem<'a> {
     state: GeneralModel,
-    data: &'a Measurements,
+    data: &'a MeasuredSet,
     tau: &'a PoseTorques,
     unknowns: Vec<Unknown>,
 }
@@ -271,7 +274,7 @@ impl Problem for GeneralProblem<'_> {
     }
 
     fn n_residuals(&self) -> usize {
-        3 * self.data.len()
+        3 * self.data.n_points()
     }
 
     fn evaluate(
@@ -309,12 +312,12 @@ pub struct GeneralFit {
 /// Stacked Jacobian (rows `predicted - measured`) and residuals of `state` wrt `unknowns`.
 pub fn stacked(
     state: &GeneralModel,
-    data: &Measurements,
+    data: &MeasuredSet,
     tau: &PoseTorques,
     unknowns: &[Unknown],
 ) -> Result<(DMatrix<f64>, DVector<f64>), ModelError> {
-    let mut r = DVector::zeros(3 * data.len());
-    let mut jac = DMatrix::zeros(3 * data.len(), unknowns.len());
+    let mut r = DVector::zeros(3 * data.n_points());
+    let mut jac = DMatrix::zeros(3 * data.n_points(), unknowns.len());
     state.rows(data, tau, unknowns, &mut r, Some(&mut jac))?;
     Ok((jac, r))
 }
@@ -323,7 +326,7 @@ pub fn stacked(
 /// is unidentifiable, threshold `rtol`) from `start` on `data`.
 pub fn fit_general(
     start: &GeneralModel,
-    data: &Measurements,
+    data: &MeasuredSet,
     tau: &PoseTorques,
     selection: &[Unknown],
     lm: &LmConfig,
@@ -421,7 +424,7 @@ mod tests {
                 poses.q_deg.push(q);
             }
         }
-        let data = Measurements::from_poses(&poses);
+        let data = MeasuredSet::from_poses(poses);
         let tau = PoseTorques::of(&model, &data).unwrap().unwrap();
         let start = GeneralModel::new(model.clone(), 1, false).unwrap();
         let sel = [Unknown::Compliance(0), Unknown::Compliance(1)];

@@ -10,16 +10,16 @@
 //! | [`report`] | the `calibrate --json` document |
 //! | [`accumulate`] | the geometric identification on normal equations: per-pose accumulation in reusable model workspaces, chunked on two threads |
 //! | `helper` | the second core of an identification: a thread for the problem's lifetime that accumulates half of the chunks |
-//! | [`problem`] | measured poses, position errors, the identification as a least-squares problem |
-//! | [`projected`] | identification from partial measurements (projections on known directions, `calibrate --samples`) |
+//! | [`problem`] | joint readings with one full point each (`Poses`, the set's core), position errors, the identification as a least-squares problem |
+//! | [`projected`] | identification from partial measurements (projections on known directions, `calibrate --samples`), reached through `calibrate_poses` |
 //! | [`fit`] | identifiability + LM + covariance on a parameter subset |
 //! | [`influence`] | influence-based identification (thesis eq. 3.7-3.8) |
 //! | [`calibrate`] | the whole `calibrate` command: selection, methods, report |
-//! | [`measurements`] | poses with several measured points each (pose, point slot, xyz) |
+//! | [`measured`] | the one measurement set: joint readings, one or several points per pose, partial projections, times, ids, file lines, approach directions, inertial moments |
 //! | [`general`] | identification with point offsets and joint compliance |
 //! | [`outliers`] | gross errors in measured poses: the robust fit-and-flag rule shared by `calibrate` and `diagnose` |
 //! | [`press`] | block-PRESS (leave-one-pose-out) forward selection |
-//! | [`calibrate_general`] | `calibrate_poses`: `calibrate` on pose files with the model's terms applied, and with several points, `--compliance`, `--select press` |
+//! | [`calibrate_general`] | `calibrate_poses`, the one library entry of `calibrate` on a [`MeasuredSet`]: the model's terms applied, then partial measurements, one point per pose, or several points, `--compliance`, `--select press` |
 //! | [`samples`] | the pencil rig's partial measurement: a fused sample (`FUSED.csv` row) |
 
 pub mod accumulate;
@@ -33,7 +33,7 @@ pub mod identifiability;
 pub mod influence;
 mod iterate;
 pub mod lm;
-pub mod measurements;
+pub mod measured;
 pub mod normal;
 pub mod outliers;
 pub mod press;
@@ -46,5 +46,6 @@ pub mod unknown;
 
 pub use calibrate::{calibrate, default_selection, CalibrateOptions, Method, Outcome};
 pub use error::CalibError;
+pub use measured::MeasuredSet;
 pub use problem::{position_errors, Poses};
 pub use stats::Stats;

@@ -23,23 +23,12 @@ use super::calibrate::{fit_report, resolve_selection, CalibrateOptions};
 use super::error::CalibError;
 use super::fit::{fit_problem, Fit};
 use super::lm::{LmConfig, Problem};
+use super::measured::MeasuredSet;
 use super::problem::{ModelProblem, Unknowns};
-use super::report::{BeforeAfter, CalibrateReport, StandardSummary};
+use super::report::CalibrateReport;
 use super::samples::FusedSample;
-use super::stats::{self, Stats};
-use crate::model::motion::moments_in_motion;
+use super::stats;
 use crate::model::{Model, ModelError, Tilt};
-
-/// One measured projection.
-#[derive(Debug, Clone, Copy, PartialEq)]
-pub struct Projection {
-    /// Index of the sample (joint reading) it belongs to.
-    pub sample: usize,
-    /// Unit direction in R.
-    pub direction: Vector3<f64>,
-    /// Measured `direction . P`, mm.
-    pub value_mm: f64,
-}
 
 /// How the model is evaluated at the samples.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
@@ -49,133 +38,78 @@ pub enum SampleTilt {
     Off,
     /// Declared tilting from the static (gravity) moments.
     Static,
-    /// Declared tilting from the moments in motion (RNEA on the sampled joint trajectory,
-    /// [`ProjectedData::with_dynamic_moments`]).
+    /// Declared tilting from the moments in motion: the static moments of the model evaluated
+    /// plus the set's inertial moments ([`MeasuredSet::with_inertial_moments`]; static only
+    /// where the set has none).
     Dynamic,
 }
 
-/// Samples (joint readings) and their measured projections.
-#[derive(Debug, Clone, PartialEq, Default)]
-pub struct ProjectedData {
-    /// Robot-clock time of each sample, s.
-    pub t_s: Vec<f64>,
-    /// Joint readings of each sample, deg.
-    pub q_deg: Vec<Vec<f64>>,
-    /// The measurements.
-    pub rows: Vec<Projection>,
-    /// Joint moments in motion per sample (kgf.m, joint frames); empty until computed.
-    pub moments_kgfm: Vec<Vec<Vector3<f64>>>,
-}
-
-impl ProjectedData {
-    /// Two projections (`u` and `n`) per fused sample: `u . nom + dev_u`, `n . nom + dev_n`.
-    pub fn from_fused(samples: &[FusedSample]) -> Self {
-        let mut d = Self::default();
-        for (k, s) in samples.iter().enumerate() {
-            d.t_s.push(s.t_s);
-            d.q_deg.push(s.q_deg.clone());
-            for (dir, dev) in [(s.u, s.dev_u_mm), (s.n, s.dev_n_mm)] {
-                d.rows.push(Projection {
-                    sample: k,
-                    direction: dir,
-                    value_mm: dir.dot(&s.nominal_mm) + dev,
-                });
-            }
-        }
-        d
-    }
-
-    /// Number of samples.
-    pub fn len(&self) -> usize {
-        self.q_deg.len()
-    }
-
-    /// Whether there is no sample.
-    pub fn is_empty(&self) -> bool {
-        self.q_deg.is_empty()
-    }
-
-    /// Computes the joint moments in motion of `model` at every sample
-    /// ([`crate::model::motion::moments_in_motion`]: finite differences over the samples, RNEA).
-    pub fn with_dynamic_moments(mut self, model: &Model) -> Result<Self, ModelError> {
-        self.moments_kgfm = moments_in_motion(model, &self.t_s, &self.q_deg)?;
-        Ok(self)
-    }
-
-    /// The model's tool point at every sample (mm).
-    fn positions_mm(
-        &self,
-        model: &Model,
-        mode: SampleTilt,
-    ) -> Result<Vec<Vector3<f64>>, ModelError> {
-        self.q_deg
-            .iter()
-            .enumerate()
-            .map(|(k, q)| model.position_mm(q, self.tilt(k, mode)))
-            .collect()
-    }
-
-    fn tilt(&self, k: usize, mode: SampleTilt) -> Tilt<'_> {
-        match mode {
+impl SampleTilt {
+    /// The tilt of pose `k` of `data`.
+    pub fn at(self, data: &MeasuredSet, k: usize) -> Tilt<'_> {
+        match self {
             SampleTilt::Off => Tilt::Off,
             SampleTilt::Static => Tilt::Static,
-            SampleTilt::Dynamic => match self.moments_kgfm.get(k) {
-                Some(m) => Tilt::Moments(m),
-                None => Tilt::Static,
-            },
+            SampleTilt::Dynamic => data.moments(k).map_or(Tilt::Static, Tilt::StaticPlus),
         }
     }
 }
 
-/// The measured part of the error, `sum_d (value - d . p_model) d`, of every sample (mm).
+/// `f(k, p)` at every pose `k` with the model's tool point `p` (mm) there.
+fn at_poses<T>(
+    model: &Model,
+    data: &MeasuredSet,
+    mode: SampleTilt,
+    f: impl Fn(usize, &Vector3<f64>) -> T,
+) -> Result<Vec<T>, ModelError> {
+    data.poses
+        .q_deg
+        .iter()
+        .enumerate()
+        .map(|(k, q)| Ok(f(k, &model.position_mm(q, mode.at(data, k))?)))
+        .collect()
+}
+
+/// The measured part of the error, `sum_d (d . (measured - p_model)) d`, of every pose (mm).
 pub fn measured_errors(
     model: &Model,
-    data: &ProjectedData,
+    data: &MeasuredSet,
     tilt: SampleTilt,
 ) -> Result<Vec<Vector3<f64>>, ModelError> {
-    let pos = data.positions_mm(model, tilt)?;
-    let mut err = vec![Vector3::zeros(); data.len()];
-    for r in &data.rows {
-        if let (Some(e), Some(p)) = (err.get_mut(r.sample), pos.get(r.sample)) {
-            *e += r.direction * (r.value_mm - r.direction.dot(p));
-        }
-    }
-    Ok(err)
+    at_poses(model, data, tilt, |k, p| data.error_mm(k, p))
 }
 
-/// The stacked projected Jacobian (one row per measurement) wrt `cols`.
+/// The stacked projected Jacobian (one row per measured component, [`MeasuredSet::jacobian_rows`])
+/// wrt `cols`.
 pub fn projected_jacobian(
     model: &Model,
-    data: &ProjectedData,
+    data: &MeasuredSet,
     cols: &[usize],
     tilt: SampleTilt,
 ) -> Result<DMatrix<f64>, ModelError> {
-    let mut jac = DMatrix::zeros(data.rows.len(), cols.len());
-    let mut cache: Option<(usize, nalgebra::Matrix3xX<f64>)> = None;
-    for (i, r) in data.rows.iter().enumerate() {
-        if cache.as_ref().map(|c| c.0) != Some(r.sample) {
-            let (_, j) =
-                model.param_jacobian(&data.q_deg[r.sample], data.tilt(r.sample, tilt), cols)?;
-            cache = Some((r.sample, j));
-        }
-        if let Some((_, j)) = &cache {
-            jac.row_mut(i).copy_from(&(r.direction.transpose() * j));
-        }
+    let mut jac = DMatrix::zeros(data.n_residuals(), cols.len());
+    let mut row = 0;
+    for (k, q) in data.poses.q_deg.iter().enumerate() {
+        let (_, j) = model.param_jacobian(q, tilt.at(data, k), cols)?;
+        let j = DMatrix::from_column_slice(3, cols.len(), j.as_slice());
+        let rows = data.jacobian_rows(k, &j);
+        jac.rows_mut(row, rows.nrows()).copy_from(&rows);
+        row += rows.nrows();
     }
     Ok(jac)
 }
 
 /// The identification on projected measurements as a least-squares [`Problem`]: unknowns are
-/// the parameters `cols`, residuals `d . p_model - value` (mm).
+/// the parameters `cols`, residuals `d . (p_model - measured)` (mm, [`MeasuredSet::residual`]).
 pub struct ProjectedProblem<'a> {
     unknowns: Unknowns,
-    data: &'a ProjectedData,
+    data: &'a MeasuredSet,
     tilt: SampleTilt,
 }
 
 impl<'a> ProjectedProblem<'a> {
     /// A problem on a copy of `model`.
-    pub fn new(model: &Model, data: &'a ProjectedData, cols: Vec<usize>, tilt: SampleTilt) -> Self {
+    pub fn new(model: &Model, data: &'a MeasuredSet, cols: Vec<usize>, tilt: SampleTilt) -> Self {
         Self {
             unknowns: Unknowns::new(model, cols),
             data,
@@ -198,7 +132,7 @@ impl Problem for ProjectedProblem<'_> {
     }
 
     fn n_residuals(&self) -> usize {
-        self.data.rows.len()
+        self.data.n_residuals()
     }
 
     fn evaluate(
@@ -225,7 +159,7 @@ impl Problem for ProjectedProblem<'_> {
 /// the identifiable parameters, sigmas and condition number at the solution).
 pub fn fit_projected(
     start: &Model,
-    data: &ProjectedData,
+    data: &MeasuredSet,
     selection: &[usize],
     tilt: SampleTilt,
     lm: &LmConfig,
@@ -245,17 +179,15 @@ pub fn fit_projected(
     )
 }
 
-/// Residuals `d . p_model - value` of every measurement (mm).
+/// Residuals `d . (p_model - measured)` of every measured component (mm), pose by pose.
 pub fn residuals(
     model: &Model,
-    data: &ProjectedData,
+    data: &MeasuredSet,
     tilt: SampleTilt,
 ) -> Result<Vec<f64>, ModelError> {
-    let pos = data.positions_mm(model, tilt)?;
-    Ok(data
-        .rows
-        .iter()
-        .map(|r| r.direction.dot(&pos[r.sample]) - r.value_mm)
+    Ok(at_poses(model, data, tilt, |k, p| data.residual(k, p))?
+        .into_iter()
+        .flatten()
         .collect())
 }
 
@@ -264,16 +196,8 @@ pub fn residuals(
 /// plane) taken as a series in sample order. The largest over the slots; at least 1. Residuals of a traced
 /// path are serially correlated (the tracer's error and unmodelled effects vary slowly along
 /// the path), so `sqrt` of this inflates the white-noise parameter sigmas.
-pub fn autocorrelation_time(data: &ProjectedData, r: &[f64]) -> f64 {
-    let mut slot_of = Vec::with_capacity(data.rows.len());
-    let mut count = vec![0usize; data.len()];
-    for row in &data.rows {
-        let c = count.get_mut(row.sample).map_or(0, |c| {
-            *c += 1;
-            *c - 1
-        });
-        slot_of.push(c);
-    }
+pub fn autocorrelation_time(data: &MeasuredSet, r: &[f64]) -> f64 {
+    let slot_of: Vec<usize> = (0..data.len()).flat_map(|k| 0..data.rows(k)).collect();
     let slots = slot_of.iter().copied().max().map_or(0, |m| m + 1);
     (0..slots)
         .map(|slot| {
@@ -300,7 +224,7 @@ pub const OUTLIER_SIGMAS: f64 = 5.0;
 /// the fit and the number of measurements left out.
 pub fn fit_projected_robust(
     start: &Model,
-    data: &ProjectedData,
+    data: &MeasuredSet,
     selection: &[usize],
     tilt: SampleTilt,
     lm: &LmConfig,
@@ -308,30 +232,27 @@ pub fn fit_projected_robust(
     k: f64,
 ) -> Result<(Fit, usize), CalibError> {
     let mut kept = data.clone();
+    let mut n_kept = data.n_residuals();
     let mut fit = fit_projected(start, &kept, selection, tilt, lm, rtol)?;
     for _ in 0..3 {
         let r = residuals(&fit.model, data, tilt)?;
         let mut abs: Vec<f64> = r.iter().map(|x| x.abs()).collect();
         abs.sort_by(f64::total_cmp);
         let sigma = 1.4826 * abs.get(abs.len() / 2).copied().unwrap_or(0.0);
-        let rows: Vec<Projection> = data
-            .rows
-            .iter()
-            .zip(&r)
-            .filter(|(_, ri)| ri.abs() <= k * sigma)
-            .map(|(row, _)| *row)
-            .collect();
-        if rows.len() == kept.rows.len() || rows.len() < selection.len() {
+        let keep: Vec<bool> = r.iter().map(|ri| ri.abs() <= k * sigma).collect();
+        let n = keep.iter().filter(|&&x| x).count();
+        if n == n_kept || n < selection.len() {
             break;
         }
-        kept.rows = rows;
+        kept = data.keep_components(&keep);
+        n_kept = n;
         fit = fit_projected(start, &kept, selection, tilt, lm, rtol)?;
     }
     let tau = autocorrelation_time(&kept, &residuals(&fit.model, &kept, tilt)?);
     for s in &mut fit.sigma {
         *s *= tau.sqrt();
     }
-    Ok((fit, data.rows.len() - kept.rows.len()))
+    Ok((fit, data.n_residuals() - n_kept))
 }
 
 /// Extra passes of [`calibrate_projected`] with `SampleTilt::Dynamic`, each recomputing the
@@ -340,13 +261,11 @@ pub const DYNAMIC_PASSES: usize = 2;
 
 /// Result of [`calibrate_projected`].
 #[derive(Debug, Clone)]
-pub struct ProjectedOutcome {
+pub(super) struct ProjectedOutcome {
     /// The calibrated model.
     pub model: Model,
     /// How the calibrated model is evaluated.
     pub tilt: SampleTilt,
-    /// The identification (fitted, fixed, sigmas).
-    pub fit: Fit,
     /// The `calibrate --json` document (stats over the measured components).
     pub report: CalibrateReport,
     /// Measured error vectors per sample: nominal (rigid), standard fit (rigid), chosen method.
@@ -362,14 +281,14 @@ pub struct ProjectedOutcome {
 /// ([`DYNAMIC_PASSES`]); `data`'s own moments (e.g. of the nominal model) start it.
 /// `opts.method` names the method in the report; the influence method needs full positions and
 /// is treated as `standard`.
-pub fn calibrate_projected(
+pub(super) fn calibrate_projected(
     nominal: &Model,
-    data: &ProjectedData,
+    data: &MeasuredSet,
     tilt: SampleTilt,
     opts: &CalibrateOptions,
 ) -> Result<ProjectedOutcome, CalibError> {
     let selection = resolve_selection(nominal, opts)?;
-    let robust = |d: &ProjectedData, t: SampleTilt| {
+    let robust = |d: &MeasuredSet, t: SampleTilt| {
         fit_projected_robust(
             nominal,
             d,
@@ -395,7 +314,7 @@ pub fn calibrate_projected(
             // (the arm's moments are those of its true chain, not of the nominal one)
             let mut fit = robust(data, tilt)?;
             for _ in 0..DYNAMIC_PASSES {
-                moved = moved.with_dynamic_moments(&fit.0.model)?;
+                moved = moved.with_inertial_moments(&fit.0.model)?;
                 fit = robust(&moved, tilt)?;
             }
             fit
@@ -415,21 +334,13 @@ pub fn calibrate_projected(
         } else {
             "tilting"
         },
-        BeforeAfter {
-            before: Stats::from_errors(&errors[0]),
-            after: Stats::from_errors(&errors[2]),
-        },
+        &errors,
         None,
-        StandardSummary {
-            calibration: Stats::from_errors(&errors[1]),
-            validation: None,
-        },
         tilt != SampleTilt::Off,
     );
     Ok(ProjectedOutcome {
-        model: chosen.model.clone(),
+        model: chosen.model,
         tilt,
-        fit: chosen,
         report,
         errors,
         rejected,
@@ -480,20 +391,20 @@ mod tests {
         truth.set_param("dth3", -0.03).unwrap();
         let h = std::f64::consts::FRAC_1_SQRT_2;
         let (u, n) = (Vector3::new(1.0, 0.0, 0.0), Vector3::new(0.0, h, h));
-        let mut data = ProjectedData::default();
+        let mut data = MeasuredSet::default();
+        let mut t_s = Vec::new();
+        let mut directions = Vec::new();
         for k in 0..30 {
             let q = vec![-90.0 + k as f64, 60.0 + 0.5 * k as f64, -60.0, 10.0, 90.0];
-            let p = truth.position_mm(&q, Tilt::Off).unwrap();
-            data.t_s.push(k as f64);
-            for d in [u, n] {
-                data.rows.push(Projection {
-                    sample: k,
-                    direction: d,
-                    value_mm: d.dot(&p),
-                });
-            }
-            data.q_deg.push(q);
+            data.poses
+                .xyz_mm
+                .push(truth.position_mm(&q, Tilt::Off).unwrap());
+            data.poses.q_deg.push(q);
+            t_s.push(k as f64);
+            directions.push(vec![u, n]);
         }
+        data.t_s = Some(t_s);
+        data.directions = Some(directions);
         let cols = vec![
             nominal.param_index("dth2").unwrap(),
             nominal.param_index("dth3").unwrap(),
@@ -503,9 +414,10 @@ mod tests {
         for (c, &col) in cols.iter().enumerate() {
             let mut m = nominal.clone();
             m.set_param_at(col, eps).unwrap();
-            for (i, r) in data.rows.iter().enumerate().step_by(7) {
-                let q = &data.q_deg[r.sample];
-                let fd = r.direction.dot(
+            for i in (0..data.n_residuals()).step_by(7) {
+                let (k, d) = (i / 2, [u, n][i % 2]);
+                let q = &data.poses.q_deg[k];
+                let fd = d.dot(
                     &(m.position_mm(q, Tilt::Off).unwrap()
                         - nominal.position_mm(q, Tilt::Off).unwrap()),
                 ) / eps;

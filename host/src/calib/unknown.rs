@@ -27,14 +27,14 @@ pub enum Unknown {
     /// (deg/deg).
     Coupling(usize, usize),
     /// Hysteresis of joint j (0-based): `q_j += b d_j`, `d_j` the direction in which joint j
-    /// last moved before the pose (+1, -1, 0; `Dataset::approach`), deg.
+    /// last moved before the pose (+1, -1, 0; `MeasuredSet::approach`), deg.
     Hysteresis(usize),
     /// Thermal growth at saturation, ppm ([`crate::model::time_terms::TimeTerms::thermal_ppm`]).
     ThermalPpm,
     /// Thermal time constant, min ([`crate::model::time_terms::TimeTerms::thermal_tau_min`]); non-linear.
     ThermalTauMin,
     /// Coordinate `axis` (0..3) of point slot `slot` (>= 1) in the tool frame, mm: the other
-    /// measured points of a pose ([`super::measurements::Measurements`]).
+    /// measured points of a pose ([`super::measured::MeasuredSet`]).
     Offset { slot: usize, axis: usize },
 }
 

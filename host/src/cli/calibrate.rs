@@ -16,8 +16,8 @@ use std::path::PathBuf;
 
 use nalgebra::Vector3;
 use rigctl::calib::calibrate_general::{calibrate_poses, GeneralOptions, Select};
-use rigctl::calib::measurements::Measurements;
 use rigctl::calib::stats::AxisExtremes;
+use rigctl::calib::MeasuredSet;
 use rigctl::calib::{CalibrateOptions, Method};
 use rigctl::io::atomic::write_text_atomic;
 use rigctl::io::finite::TextFormat;
@@ -148,9 +148,9 @@ pub fn run(args: Args) -> Result<(), CliError> {
     };
     // The model's own terms (joint map, time terms) are applied by the library's calibrate,
     // which keeps them fixed and writes them back with `--out`.
-    let read = |p: &std::path::Path| -> Result<(Measurements, PoseLabels), CliError> {
+    let read = |p: &std::path::Path| -> Result<(MeasuredSet, PoseLabels), CliError> {
         let file = read_poses(p, &args.pose.spec(&model, true, 0))?;
-        let m = Measurements::from_pose_file(&file, markers.as_deref())?;
+        let m = MeasuredSet::from_pose_points(&file, markers.as_deref())?;
         Ok((m, PoseLabels::of(&file)))
     };
     let (cal, cal_labels) = read(poses)?;
@@ -173,7 +173,7 @@ pub fn run(args: Args) -> Result<(), CliError> {
     let g = calibrate_poses(&model, &cal, val.as_ref(), &opts, &gen)?;
     let mut notes = general_notes(&g, &cal);
     let outcome = g.outcome;
-    no_redundancy(poses, 3 * cal.len(), outcome.report.rank)?;
+    no_redundancy(poses, 3 * cal.n_points(), outcome.report.rank)?;
     let mut outcome = outcome;
     for o in &mut outcome.report.outliers {
         let labels = if o.file == "val" {
@@ -272,11 +272,11 @@ pub(super) fn outlier_lines(
     s
 }
 
-/// What `calibrate_general` adds to the summary: the PRESS choice and the validation error of
-/// every point.
+/// What the variants with several points, PRESS or compliance add to the summary: the PRESS
+/// choice and the validation error of every point.
 fn general_notes(
     g: &rigctl::calib::calibrate_general::GeneralOutcome,
-    cal: &Measurements,
+    cal: &MeasuredSet,
 ) -> String {
     let mut s = String::new();
     if !g.added.is_empty() {
@@ -361,7 +361,7 @@ fn summary(o: &rigctl::calib::Outcome, with_val: bool) -> String {
 
 /// `calibrate --samples`: identification from partial (projected) measurements.
 fn run_samples(args: &Args, samples: &std::path::Path) -> Result<(), CliError> {
-    use rigctl::calib::projected::{calibrate_projected, errors_csv, ProjectedData, SampleTilt};
+    use rigctl::calib::projected::errors_csv;
     let model = args
         .model
         .choose_with_default_tool(Some(KATANA_PENCIL_TOOL_MM))?;
@@ -371,10 +371,10 @@ fn run_samples(args: &Args, samples: &std::path::Path) -> Result<(), CliError> {
         ));
     }
     let fused = rigctl::fusion::read_fused(samples, model.n_joints())?;
-    let data = ProjectedData::from_fused(&fused);
-    let (data, tilt) = match args.method {
-        Method::Standard => (data, SampleTilt::Off),
-        Method::Tilting => (data.with_dynamic_moments(&model)?, SampleTilt::Dynamic),
+    let data = MeasuredSet::from_fused(&fused)?;
+    let data = match args.method {
+        Method::Standard => data,
+        Method::Tilting => data.with_inertial_moments(&model)?,
         Method::Influence => {
             return Err(CliError::bad_input(
                 "--method influence needs full positions (--poses); use standard or tilting with --samples",
@@ -388,15 +388,16 @@ fn run_samples(args: &Args, samples: &std::path::Path) -> Result<(), CliError> {
         rtol: args.rtol,
         ..Default::default()
     };
-    let outcome = calibrate_projected(&model, &data, tilt, &opts)?;
-    no_redundancy(samples, data.rows.len(), outcome.report.rank)?;
+    let g = calibrate_poses(&model, &data, None, &opts, &GeneralOptions::default())?;
+    let (outcome, rejected) = (g.outcome, g.rejected);
+    no_redundancy(samples, data.n_residuals(), outcome.report.rank)?;
     if let Some(path) = &args.json {
         rigctl::io::atomic::write_json_atomic(path, &outcome.report)?;
     }
     if let Some(path) = &args.out {
         outcome.model.write_file(path)?;
     }
-    let csv = errors_csv(&fused, &outcome.errors);
+    let csv = errors_csv(&fused, &outcome.calibration_errors);
     if let Some(path) = &args.errors_csv {
         write_text_atomic(path, TextFormat::Csv, &csv)?;
     }
@@ -408,15 +409,15 @@ fn run_samples(args: &Args, samples: &std::path::Path) -> Result<(), CliError> {
     let mut s = table(
         "Fused samples, measured components only in frame R (|dP| = sqrt(dev_u^2 + dev_n^2); along the path not measured)",
         "samples",
-        &outcome.errors,
+        &outcome.calibration_errors,
         &outcome.report.method,
     );
     s.push_str(&report_tail(&outcome.report));
     let _ = writeln!(
         s,
         "outliers left out of the fit: {} of {} measured components (> {} robust sigmas)",
-        outcome.rejected,
-        data.rows.len(),
+        rejected,
+        data.n_residuals(),
         rigctl::calib::projected::OUTLIER_SIGMAS
     );
     out!("{s}")?;

@@ -11,7 +11,7 @@
 use std::fmt::Write as _;
 use std::path::{Path, PathBuf};
 
-use rigctl::diagnose::data::Dataset;
+use rigctl::calib::MeasuredSet;
 use rigctl::diagnose::plots::write_plots;
 use rigctl::diagnose::probe::plot::write_probe_plots;
 use rigctl::diagnose::probe::{hybrid_report, jacobians};
@@ -94,10 +94,10 @@ pub fn run(args: Args) -> Result<(), CliError> {
     let model = args.model.choose_with_default_tool(default_tool_mm)?;
     let marker = usize::try_from(args.marker - 1).unwrap_or(usize::MAX);
     let spec = args.pose.spec(&model, true, marker);
-    let mut cal: Option<Dataset> = args
+    let mut cal: Option<MeasuredSet> = args
         .poses
         .as_deref()
-        .map(|p| Dataset::read_with(p, &spec))
+        .map(|p| MeasuredSet::read_with(p, &spec))
         .transpose()?;
     for path in &args.samples {
         let d = read_samples(path, &model)?;
@@ -107,12 +107,12 @@ pub fn run(args: Args) -> Result<(), CliError> {
         });
     }
     let cal = cal.ok_or_else(|| CliError::bad_input("--poses or --samples is required"))?;
-    let mut val: Option<Dataset> = None;
+    let mut val: Option<MeasuredSet> = None;
     for path in &args.validate {
         let d = if is_fused(path) {
             read_samples(path, &model)?
         } else {
-            Dataset::read_with(path, &spec)?
+            MeasuredSet::read_with(path, &spec)?
         };
         val = Some(match val {
             Some(v) => v.concat(d),
@@ -206,7 +206,7 @@ fn is_fused(path: &Path) -> bool {
 }
 
 /// One sheet's fused samples as partial measurements (moments in motion of `model`).
-fn read_samples(path: &Path, model: &rigctl::model::Model) -> Result<Dataset, CliError> {
+fn read_samples(path: &Path, model: &rigctl::model::Model) -> Result<MeasuredSet, CliError> {
     let fused = rigctl::fusion::read_fused(path, model.n_joints())?;
-    Ok(Dataset::from_fused(&fused, model)?)
+    Ok(MeasuredSet::from_fused(&fused)?.with_inertial_moments(model)?)
 }

@@ -18,9 +18,9 @@
 use nalgebra::{DMatrix, DVector};
 
 use super::candidates::Candidate;
-use super::data::Dataset;
 use super::extended::{ExtFit, Unknown};
 use crate::calib::CalibError;
+use crate::calib::MeasuredSet;
 
 /// Smallest |correlation| (or cosine to a span) of two columns that the poses cannot separate.
 pub const ALIAS_MIN: f64 = 0.9;
@@ -85,7 +85,7 @@ pub fn aliased(
     declared: &[Unknown],
     accepted: &[Candidate],
     others: &[Candidate],
-    data: &Dataset,
+    data: &MeasuredSet,
 ) -> Result<Vec<AliasReport>, CalibError> {
     let model = &last.ext.model;
     let mut groups: Vec<Group> = Vec::new();

@@ -8,9 +8,9 @@
 
 use serde::Serialize;
 
-use super::data::Dataset;
 use super::decide::{DecideConfig, Selection};
 use super::extended::{self, Unknown};
+use crate::calib::MeasuredSet;
 use crate::model::Model;
 
 /// The stiffness (kgf.m per deg) that holds a joint rigid: its deflection at 1 kgf.m is 1e-6 deg.
@@ -70,7 +70,11 @@ pub fn lower_bound(u: Unknown, model: &Model) -> Option<Bound> {
 
 /// Holds every final value of `selection` below its bound at the bound and refits the others
 /// on `cal` (the final fit is replaced); returns what was done.
-pub fn enforce(selection: &mut Selection, cal: &Dataset, cfg: &DecideConfig) -> Vec<BoundReport> {
+pub fn enforce(
+    selection: &mut Selection,
+    cal: &MeasuredSet,
+    cfg: &DecideConfig,
+) -> Vec<BoundReport> {
     let mut reports = Vec::new();
     // each pass fixes at least one more unknown: at most as many passes as unknowns
     for _ in 0..selection.last.fitted.len() {

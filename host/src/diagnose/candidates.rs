@@ -23,8 +23,8 @@
 //! link lengths and tool point are declared parameters), and a candidate with nothing left is not
 //! offered.
 
-use super::data::Dataset;
 use super::extended::{ExtFit, ExtModel, Unknown};
+use crate::calib::MeasuredSet;
 use crate::model::{harmonic_amplitude_phase, ParamKind};
 
 /// One candidate effect.
@@ -47,7 +47,7 @@ fn is_link_length_name(name: &str) -> bool {
 }
 
 /// All candidates for `ext` and `data`, minus the unknowns in `current`.
-pub fn library(ext: &ExtModel, current: &[Unknown], data: &Dataset) -> Vec<Candidate> {
+pub fn library(ext: &ExtModel, current: &[Unknown], data: &MeasuredSet) -> Vec<Candidate> {
     library_for(ext, current, data.has_approach(), data.has_time())
 }
 
@@ -315,10 +315,10 @@ mod tests {
     #[test]
     fn katana_library_has_every_formats_family() {
         let ext = ExtModel::new(katana450(200.0).unwrap());
-        let data = Dataset {
+        let data = MeasuredSet {
             poses: Poses::default(),
             t_s: Some(vec![0.0, 10.0]),
-            ..Dataset::default()
+            ..MeasuredSet::default()
         };
         let ids: Vec<String> = library(&ext, &[], &data)
             .into_iter()
@@ -358,7 +358,7 @@ mod tests {
             .iter()
             .map(|n| Unknown::Param(m.param_index(n).unwrap()))
             .collect();
-        let ids: Vec<String> = library(&ext, &declared, &Dataset::default())
+        let ids: Vec<String> = library(&ext, &declared, &MeasuredSet::default())
             .into_iter()
             .map(|c| c.id)
             .collect();

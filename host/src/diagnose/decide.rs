@@ -38,12 +38,12 @@ use rand::SeedableRng;
 use rand_chacha::ChaCha8Rng;
 
 use super::candidates::Candidate;
-use super::data::Dataset;
 use super::extended::{fit, ExtFit, ExtModel, Unknown};
 use super::parallel::map_ordered;
 use crate::calib::lm::LmConfig;
 use crate::calib::stats::autocorrelation_time;
 use crate::calib::CalibError;
+use crate::calib::MeasuredSet;
 
 /// Settings of the selection.
 #[derive(Debug, Clone, PartialEq)]
@@ -187,7 +187,7 @@ pub fn block_fold_assignment(n: usize, k: usize) -> Vec<usize> {
 /// ([`crate::calib::stats::autocorrelation_time`] of each measured component's series in sample
 /// order; the largest), 1 for independent poses (full positions). The statistics of the
 /// selection count `residuals / tau` independent residuals.
-pub fn serial_tau(ext: &ExtModel, data: &Dataset) -> Result<f64, CalibError> {
+pub fn serial_tau(ext: &ExtModel, data: &MeasuredSet) -> Result<f64, CalibError> {
     if !data.is_serial() {
         return Ok(1.0);
     }
@@ -209,7 +209,11 @@ pub fn serial_tau(ext: &ExtModel, data: &Dataset) -> Result<f64, CalibError> {
 
 /// Held-out error (mm, the measured part) of every pose under k-fold cross-validation of
 /// `fit`'s unknowns (contiguous folds for serial data, [`block_fold_assignment`]).
-pub fn cv_errors(f: &ExtFit, data: &Dataset, cfg: &DecideConfig) -> Result<Vec<f64>, CalibError> {
+pub fn cv_errors(
+    f: &ExtFit,
+    data: &MeasuredSet,
+    cfg: &DecideConfig,
+) -> Result<Vec<f64>, CalibError> {
     let n = data.len();
     let k = cfg.folds.clamp(2, n.max(2));
     let fold = if data.is_serial() {
@@ -230,7 +234,7 @@ pub fn cv_errors(f: &ExtFit, data: &Dataset, cfg: &DecideConfig) -> Result<Vec<f
         test.iter()
             .map(|&i| {
                 let p = refit.ext.predict_pose(data, i)?;
-                Ok((i, data.measured_part(i, &(data.poses.xyz_mm[i] - p)).norm()))
+                Ok((i, data.error_mm(i, &p).norm()))
             })
             .collect()
     });
@@ -335,7 +339,7 @@ pub use super::select::forward_selection;
 pub fn onset_candidates(
     cur: &ExtFit,
     cands: &[Candidate],
-    data: &Dataset,
+    data: &MeasuredSet,
     cfg: &DecideConfig,
 ) -> Result<Vec<usize>, CalibError> {
     let base = cur.ext.moment_signs(data).map_err(CalibError::Model)?;
@@ -370,7 +374,7 @@ pub fn onset_candidates(
 
 /// The current model moved by the Gauss-Newton step of its fitted unknowns plus `cand`'s
 /// (minimum-norm least squares on column-scaled Jacobians), or `None` if it cannot be computed.
-pub(super) fn linear_start(cur: &ExtFit, data: &Dataset, cand: &Candidate) -> Option<ExtModel> {
+pub(super) fn linear_start(cur: &ExtFit, data: &MeasuredSet, cand: &Candidate) -> Option<ExtModel> {
     let mut unknowns = cur.fitted.clone();
     unknowns.extend(
         cand.unknowns
@@ -402,7 +406,11 @@ pub(super) fn linear_start(cur: &ExtFit, data: &Dataset, cand: &Candidate) -> Op
 /// ([`Unknown::start_values`], e.g. a time constant whose column vanishes while its growth is
 /// zero): for each start value, that value set and the [`linear_start`] step of the others; the
 /// start of least squared error. `None` when the candidate has no such unknown.
-pub(super) fn nonlinear_start(cur: &ExtFit, data: &Dataset, cand: &Candidate) -> Option<ExtModel> {
+pub(super) fn nonlinear_start(
+    cur: &ExtFit,
+    data: &MeasuredSet,
+    cand: &Candidate,
+) -> Option<ExtModel> {
     let (u, values) = cand
         .unknowns
         .iter()
@@ -429,7 +437,7 @@ pub(super) fn nonlinear_start(cur: &ExtFit, data: &Dataset, cand: &Candidate) ->
 pub fn contribution(
     before: &ExtFit,
     after: &ExtFit,
-    data: &Dataset,
+    data: &MeasuredSet,
 ) -> Result<Vec<Vector3<f64>>, CalibError> {
     let e0 = before.ext.errors(data)?;
     let e1 = after.ext.errors(data)?;

@@ -17,11 +17,11 @@
 
 use nalgebra::{DMatrix, DVector, Vector3};
 
-use super::data::Dataset;
 use crate::calib::identifiability::analyse;
 use crate::calib::lm::{solve, LmConfig, Problem};
 pub use crate::calib::unknown::Unknown;
 use crate::calib::CalibError;
+use crate::calib::MeasuredSet;
 use crate::model::gravity::GravityModel;
 use crate::model::time_terms::TimeTerms;
 use crate::model::transmission::{compliance_regressor, JointTerms};
@@ -90,7 +90,7 @@ impl ExtModel {
 
     /// The tilting applied at pose `k` of `data`: none, or the static moments plus the dataset's
     /// inertial ones when it carries them.
-    fn tilt_at<'d>(&self, data: &'d Dataset, k: usize) -> Tilt<'d> {
+    fn tilt_at<'d>(&self, data: &'d MeasuredSet, k: usize) -> Tilt<'d> {
         match (self.tilt, data.moments(k)) {
             (false, _) => Tilt::Off,
             (true, Some(m)) => Tilt::StaticPlus(m),
@@ -192,7 +192,7 @@ impl ExtModel {
         Ok((self.model.joint_map(q_deg, t_s, approach, &tau), tau))
     }
 
-    fn approach_of(data: &Dataset, k: usize) -> Vec<f64> {
+    fn approach_of(data: &MeasuredSet, k: usize) -> Vec<f64> {
         data.approach
             .as_ref()
             .and_then(|a| a.get(k))
@@ -201,7 +201,7 @@ impl ExtModel {
     }
 
     /// Predicted measured position (mm, R) of pose `k` of `data` (with its moments, if any).
-    pub fn predict_pose(&self, data: &Dataset, k: usize) -> Result<Vector3<f64>, ModelError> {
+    pub fn predict_pose(&self, data: &MeasuredSet, k: usize) -> Result<Vector3<f64>, ModelError> {
         let approach = Self::approach_of(data, k);
         self.predict_with(
             &data.poses.q_deg[k],
@@ -228,7 +228,7 @@ impl ExtModel {
     /// Predicted position of pose `k` of `data` and its Jacobian (3 x unknowns, mm per unit).
     pub fn predict_with_jacobian(
         &self,
-        data: &Dataset,
+        data: &MeasuredSet,
         k: usize,
         unknowns: &[Unknown],
     ) -> Result<(Vector3<f64>, DMatrix<f64>), ModelError> {
@@ -296,7 +296,7 @@ impl ExtModel {
     /// per pose, per joint, the signs of the three components of the static joint moment, in
     /// that order. The prediction is smooth in the unknowns only while this pattern stays the
     /// same; empty without tilting.
-    pub fn moment_signs(&self, data: &Dataset) -> Result<Vec<i8>, ModelError> {
+    pub fn moment_signs(&self, data: &MeasuredSet) -> Result<Vec<i8>, ModelError> {
         if !self.tilt {
             return Ok(Vec::new());
         }
@@ -320,13 +320,10 @@ impl ExtModel {
     }
 
     /// Errors `measured - predicted` of every pose (mm): the measured part for partial
-    /// measurements ([`Dataset::measured_part`]).
-    pub fn errors(&self, data: &Dataset) -> Result<Vec<Vector3<f64>>, ModelError> {
+    /// measurements ([`MeasuredSet::error_mm`]).
+    pub fn errors(&self, data: &MeasuredSet) -> Result<Vec<Vector3<f64>>, ModelError> {
         (0..data.len())
-            .map(|k| {
-                let e = data.poses.xyz_mm[k] - self.predict_pose(data, k)?;
-                Ok(data.measured_part(k, &e))
-            })
+            .map(|k| Ok(data.error_mm(k, &self.predict_pose(data, k)?)))
             .collect()
     }
 
@@ -334,7 +331,7 @@ impl ExtModel {
     /// direction of a partial one) wrt `unknowns`, and the stacked errors `measured - predicted`.
     pub fn stacked(
         &self,
-        data: &Dataset,
+        data: &MeasuredSet,
         unknowns: &[Unknown],
     ) -> Result<(DMatrix<f64>, DVector<f64>), ModelError> {
         let mut jac = DMatrix::zeros(data.n_residuals(), unknowns.len());
@@ -361,7 +358,7 @@ impl ExtModel {
 /// The extended fit as a least-squares problem (residual `predicted - measured`).
 struct ExtProblem<'a> {
     ext: ExtModel,
-    data: &'a Dataset,
+    data: &'a MeasuredSet,
     unknowns: Vec<Unknown>,
 }
 
@@ -402,7 +399,7 @@ impl Problem for ExtProblem<'_> {
                 let mut row = 0;
                 for k in 0..self.data.len() {
                     let p = self.ext.predict_pose(self.data, k)?;
-                    let e = self.data.components(k, &(p - self.data.poses.xyz_mm[k]));
+                    let e = self.data.residual(k, &p);
                     for (i, c) in e.into_iter().enumerate() {
                         r[row + i] = c;
                     }
@@ -452,7 +449,7 @@ impl ExtFit {
 /// reuse an earlier analysis; the solver still drops numerically null directions).
 pub fn fit(
     start: &ExtModel,
-    data: &Dataset,
+    data: &MeasuredSet,
     unknowns: &[Unknown],
     lm: &LmConfig,
     rtol: f64,
@@ -528,7 +525,7 @@ mod transmission_tests {
             vec![-20.0, 95.0, -80.0, -10.0, 60.0],
             vec![35.0, 70.0, -40.0, 40.0, -30.0],
         ];
-        let data = Dataset::from_poses(Poses {
+        let data = MeasuredSet::from_poses(Poses {
             xyz_mm: vec![Vector3::zeros(); q.len()],
             q_deg: q,
         })

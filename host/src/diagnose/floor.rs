@@ -24,8 +24,8 @@
 
 use serde::Serialize;
 
-use super::data::Dataset;
 use super::stat::f_test_p_value;
+use crate::calib::MeasuredSet;
 
 /// Joint readings that agree within this (deg, mm) are the same pose.
 pub const SAME_JOINTS_TOL: f64 = 1e-6;
@@ -126,7 +126,7 @@ pub fn choose_floor(
 
 /// Pooled repeatability (mm per coordinate) and its degrees of freedom, from the poses of
 /// `data` measured more than once; `None` without repeated poses.
-pub fn repeatability_mm(data: &Dataset) -> Option<(f64, usize)> {
+pub fn repeatability_mm(data: &MeasuredSet) -> Option<(f64, usize)> {
     let groups = repeat_groups(data);
     let dims = data.measured_dims();
     let (mut ss, mut dof) = (0.0, 0usize);
@@ -152,7 +152,7 @@ pub fn repeatability_mm(data: &Dataset) -> Option<(f64, usize)> {
 /// In `O(n log n)` for distinct poses: the candidates for the same joint readings are found in
 /// the poses sorted by a weighted sum of their readings (two poses within the tolerance on every
 /// joint are within the tolerance times the sum of the weights there), the same ids by a map.
-fn repeat_groups(data: &Dataset) -> Vec<Vec<usize>> {
+fn repeat_groups(data: &MeasuredSet) -> Vec<Vec<usize>> {
     let n = data.len();
     let q = &data.poses.q_deg;
     // weights in [1, 2), unequal, so that distinct poses rarely share a key
@@ -222,8 +222,8 @@ fn repeat_groups(data: &Dataset) -> Vec<Vec<usize>> {
 
 /// [`repeatability_mm`] pooled over several files (calibration and held out): a pose id names
 /// the same pose only within its own file; across files, the same joint readings do.
-pub fn repeatability_of_files(sets: &[&Dataset]) -> Option<(f64, usize)> {
-    let mut merged: Option<Dataset> = None;
+pub fn repeatability_of_files(sets: &[&MeasuredSet]) -> Option<(f64, usize)> {
+    let mut merged: Option<MeasuredSet> = None;
     for (f, d) in sets.iter().enumerate() {
         let mut d = (*d).clone();
         let ids: Vec<String> = (0..d.len())
@@ -244,7 +244,7 @@ pub fn repeatability_of_files(sets: &[&Dataset]) -> Option<(f64, usize)> {
     repeatability_mm(&merged?)
 }
 
-fn same_pose(data: &Dataset, a: usize, b: usize) -> bool {
+fn same_pose(data: &MeasuredSet, a: usize, b: usize) -> bool {
     if let Some(ids) = &data.ids {
         if let (Some(x), Some(y)) = (ids.get(a), ids.get(b)) {
             if !x.is_empty() && x == y {
@@ -392,7 +392,7 @@ mod tests {
             Vector3::zeros(),
             Vector3::zeros(),
         ];
-        let d = Dataset::from_poses(Poses {
+        let d = MeasuredSet::from_poses(Poses {
             q_deg: q,
             xyz_mm: xyz,
         });
@@ -406,7 +406,7 @@ mod tests {
 
     /// The groups by the definition: every later pose that is no member yet, compared with
     /// the one opening the group (quadratic, for the test).
-    fn groups_by_definition(data: &Dataset) -> Vec<Vec<usize>> {
+    fn groups_by_definition(data: &MeasuredSet) -> Vec<Vec<usize>> {
         let n = data.len();
         let mut member = vec![false; n];
         let mut out = Vec::new();
@@ -447,7 +447,7 @@ mod tests {
                     v
                 })
                 .collect();
-            let mut d = Dataset::from_poses(Poses {
+            let mut d = MeasuredSet::from_poses(Poses {
                 q_deg: q,
                 xyz_mm: (0..n).map(|_| Vector3::new(rng.gen(), 0.0, 0.0)).collect(),
             });
@@ -480,7 +480,7 @@ mod tests {
             })
             .collect();
         let xyz_mm = vec![Vector3::zeros(); q.len()];
-        let d = Dataset::from_poses(Poses { q_deg: q, xyz_mm });
+        let d = MeasuredSet::from_poses(Poses { q_deg: q, xyz_mm });
         let t = std::time::Instant::now();
         let (_, dof) = repeatability_mm(&d).expect("repeated poses");
         assert_eq!(dof, 3 * n / 2);

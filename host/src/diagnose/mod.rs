@@ -3,7 +3,6 @@
 //!
 //! | module | holds |
 //! |---|---|
-//! | [`data`] | measured poses with their times |
 //! | [`extended`] | the model plus non-parameter effects (time drift, compliance); the extended fit |
 //! | [`candidates`] | the effect library (FORMATS.md effect ids) and effect-unit parameters |
 //! | [`residual`] | regressors, linearised screening, structure tests |
@@ -20,6 +19,8 @@
 //! | [`probe`] | a smooth function of the joint angles (and the time) fitted to the final residual under cross-validation: where the unexplained error lives |
 //! | [`verdict`] | one verdict from the calibration, cross-validated and held-out residuals: floor, missing effect, overfitting, change between the sets |
 //!
+//! The measurements are a [`crate::calib::MeasuredSet`] (full positions, fused samples, or both).
+//!
 //! The starting point is the declared model (MODEL.md) fitted exactly as `calibrate --method
 //! tilting`: [`crate::calib::fit::fit_parameters`] on [`crate::calib::default_selection`] (the
 //! thesis's 12 for the Katana; offsets, twists, lengths and tool point for other models) with
@@ -35,7 +36,6 @@
 pub mod alias;
 pub mod bounds;
 pub mod candidates;
-pub mod data;
 pub mod decide;
 pub mod extended;
 pub mod floor;
@@ -54,11 +54,11 @@ use crate::calib::problem::norms_mm;
 use nalgebra::Vector3;
 
 use crate::calib::fit::fit_parameters;
+use crate::calib::MeasuredSet;
 use crate::calib::{default_selection, CalibError, Stats};
 use crate::error::{Classify, ErrorKind};
 use crate::model::{Model, ModelError};
 use candidates::effect_values;
-use data::Dataset;
 use decide::{contribution, forward_selection, DecideConfig, Selection};
 use extended::{ExtFit, ExtModel, Unknown};
 use report::{DiagnoseReport, EffectReport, NoiseReport, SetStats, TrialReport, Unexplained};
@@ -147,7 +147,7 @@ pub struct Diagnosis {
 /// unknowns.
 pub fn declared_fit(
     model: &Model,
-    cal: &Dataset,
+    cal: &MeasuredSet,
     cfg: &DecideConfig,
 ) -> Result<(ExtFit, Vec<Unknown>), DiagnoseError> {
     let selection = default_selection(model, false);
@@ -184,7 +184,7 @@ pub fn declared_fit(
 }
 
 /// `reports` with the line and id of each pose of `data`.
-fn labelled(mut reports: Vec<OutlierReport>, data: &Dataset) -> Vec<OutlierReport> {
+fn labelled(mut reports: Vec<OutlierReport>, data: &MeasuredSet) -> Vec<OutlierReport> {
     for r in &mut reports {
         r.line = data.lines.as_ref().and_then(|l| l.get(r.index).copied());
         r.id = data.ids.as_ref().and_then(|i| i.get(r.index).cloned());
@@ -213,9 +213,9 @@ pub const OUTLIER_HALF_WINDOW: usize = 5;
 /// and the declared fit on the kept set with its requested unknowns.
 pub fn trim_outliers(
     model: &Model,
-    cal: &Dataset,
+    cal: &MeasuredSet,
     cfg: &DecideConfig,
-) -> Result<(Dataset, usize, ExtFit, Vec<Unknown>), DiagnoseError> {
+) -> Result<(MeasuredSet, usize, ExtFit, Vec<Unknown>), DiagnoseError> {
     if !cal.is_serial() {
         let (fit, requested) = declared_fit(model, cal, cfg)?;
         return Ok((cal.clone(), 0, fit, requested));
@@ -289,8 +289,8 @@ fn running_median_spikes(series: &[(usize, f64)]) -> Vec<(usize, bool)> {
 fn effect_reports(
     selection: &Selection,
     regs: &[residual::Regressor],
-    cal: &Dataset,
-    val: &Dataset,
+    cal: &MeasuredSet,
+    val: &MeasuredSet,
     cfg: &DecideConfig,
 ) -> Result<(Vec<EffectReport>, Vec<EffectTrace>), DiagnoseError> {
     let mut effects = Vec::new();
@@ -400,8 +400,8 @@ fn mean_norm(e: &[Vector3<f64>]) -> f64 {
 /// Diagnoses `model` on the calibration poses `cal`, reporting held-out numbers on `val`.
 pub fn diagnose(
     model: &Model,
-    cal: &Dataset,
-    val: &Dataset,
+    cal: &MeasuredSet,
+    val: &MeasuredSet,
     opts: &DiagnoseOptions,
 ) -> Result<Diagnosis, DiagnoseError> {
     let cfg = &opts.decide;
@@ -437,7 +437,7 @@ pub fn diagnose(
     }
     // the selection on the poses not in `flagged` (gross errors only on unordered poses, so the
     // spike rule of `trim_outliers` leaves them as they are and trim's declared fit serves)
-    let run = |flagged: &[usize]| -> Result<(Dataset, usize, ExtFit, Vec<Unknown>, Selection), DiagnoseError> {
+    let run = |flagged: &[usize]| -> Result<(MeasuredSet, usize, ExtFit, Vec<Unknown>, Selection), DiagnoseError> {
         let keep = outliers::kept(cal_all.len(), flagged);
         let kept_cal = cal_all.subset(&keep);
         let reused = last_declared
@@ -624,7 +624,11 @@ pub fn diagnose(
 }
 
 /// The calibration set needs two poses per fold, the held-out set at least one.
-fn check_sizes(cal: &Dataset, val: &Dataset, cfg: &DecideConfig) -> Result<(), DiagnoseError> {
+fn check_sizes(
+    cal: &MeasuredSet,
+    val: &MeasuredSet,
+    cfg: &DecideConfig,
+) -> Result<(), DiagnoseError> {
     let min = 2 * cfg.folds.max(2);
     if cal.len() < min {
         return Err(DiagnoseError::TooFewPoses {
@@ -646,8 +650,8 @@ fn check_sizes(cal: &Dataset, val: &Dataset, cfg: &DecideConfig) -> Result<(), D
 /// The residual's noise level, its serial correlation and the verdict against the floor.
 fn judge_floor(
     last: &ExtFit,
-    cal: &Dataset,
-    val: &Dataset,
+    cal: &MeasuredSet,
+    val: &MeasuredSet,
     final_val: &[Vector3<f64>],
     instrument_mm: Option<f64>,
     repeat: Option<(f64, usize)>,
@@ -681,7 +685,7 @@ fn judge_floor(
 fn aliased_pairs(
     selection: &decide::Selection,
     requested: &[Unknown],
-    cal: &Dataset,
+    cal: &MeasuredSet,
     effects: &mut [EffectReport],
 ) -> Result<Vec<alias::AliasReport>, DiagnoseError> {
     let last = &selection.last;
@@ -725,7 +729,7 @@ fn aliased_pairs(
 fn probe_residual(
     model: &Model,
     last: &ExtFit,
-    cal: &Dataset,
+    cal: &MeasuredSet,
     final_cal: &[Vector3<f64>],
     floor: &floor::FloorReport,
     opts: &DiagnoseOptions,

@@ -19,10 +19,10 @@
 //! and the RSS values of its vertices agree to [`RSS_RTOL`], or after
 //! [`super::decide::DecideConfig::polish_max_evals`] trial points.
 
-use super::data::Dataset;
 use super::decide::DecideConfig;
 use super::extended::{fit, ExtFit, ExtModel, Unknown};
 use crate::calib::CalibError;
+use crate::calib::MeasuredSet;
 use crate::model::ModelError;
 
 /// Relative agreement of the simplex RSS values at which the search stops.
@@ -41,7 +41,7 @@ pub const STALL_MIN_DECREASE: f64 = 1.0;
 pub fn crossed_steps(
     before: &ExtModel,
     after: &ExtModel,
-    data: &Dataset,
+    data: &MeasuredSet,
 ) -> Result<usize, ModelError> {
     let a = before.moment_signs(data)?;
     let b = after.moment_signs(data)?;
@@ -53,7 +53,11 @@ pub fn crossed_steps(
 /// converged to a minimum, large where it stopped at a step edge with the smooth part of the
 /// objective still sloping (a change of 1 moves one parameter's confidence region by one
 /// standard deviation).
-pub fn predicted_decrease(f: &ExtFit, data: &Dataset, rank_rtol: f64) -> Result<f64, ModelError> {
+pub fn predicted_decrease(
+    f: &ExtFit,
+    data: &MeasuredSet,
+    rank_rtol: f64,
+) -> Result<f64, ModelError> {
     let m = data.n_residuals();
     let dof = m.saturating_sub(f.fitted.len());
     if f.fitted.is_empty() || dof == 0 || f.rss_mm2 <= 0.0 {
@@ -87,7 +91,7 @@ pub fn predicted_decrease(f: &ExtFit, data: &Dataset, rank_rtol: f64) -> Result<
 pub fn needs_polish(
     before: &ExtModel,
     after: &ExtFit,
-    data: &Dataset,
+    data: &MeasuredSet,
     rank_rtol: f64,
 ) -> Result<bool, ModelError> {
     Ok(crossed_steps(before, &after.ext, data)? > 0
@@ -96,7 +100,7 @@ pub fn needs_polish(
 
 /// Profile objective: the candidate unknowns at trial values, the others re-fitted.
 struct Profile<'a> {
-    data: &'a Dataset,
+    data: &'a MeasuredSet,
     cfg: &'a DecideConfig,
     over: Vec<Unknown>,
     others: Vec<Unknown>,
@@ -239,7 +243,7 @@ pub fn polish(
     refit: ExtFit,
     start: &ExtModel,
     over: &[Unknown],
-    data: &Dataset,
+    data: &MeasuredSet,
     cfg: &DecideConfig,
 ) -> Result<ExtFit, CalibError> {
     let over: Vec<Unknown> = over
@@ -320,12 +324,12 @@ mod tests {
     fn predicted_decrease_marks_a_fit_stopped_short() {
         let declared = katana450(200.0).expect("preset");
         let out = simulate(&declared, &SimConfig::default()).expect("simulate");
-        let data = Dataset {
+        let data = MeasuredSet {
             poses: Poses {
                 q_deg: out.cal.iter().map(|p| p.q_deg.clone()).collect(),
                 xyz_mm: out.cal.iter().map(|p| p.measured_mm).collect(),
             },
-            ..Dataset::default()
+            ..MeasuredSet::default()
         };
         let cfg = DecideConfig::default();
         let (f, _) = crate::diagnose::declared_fit(&declared, &data, &cfg).expect("fit");

@@ -17,9 +17,9 @@
 use nalgebra::{DMatrix, DVector, Vector3};
 
 use super::candidates::Candidate;
-use super::data::Dataset;
 use super::extended::{ExtModel, Unknown};
 use super::stat::f_test_p_value;
+use crate::calib::MeasuredSet;
 use crate::model::ModelError;
 
 /// A candidate direction counts as an alias of the fitted parameters when less than this
@@ -40,7 +40,7 @@ pub struct Regressor {
 }
 
 /// The regressors of every pose of `data` under `ext`.
-pub fn regressors(ext: &ExtModel, data: &Dataset) -> Result<Vec<Regressor>, ModelError> {
+pub fn regressors(ext: &ExtModel, data: &MeasuredSet) -> Result<Vec<Regressor>, ModelError> {
     let n = data.len();
     let nj = ext.model.n_joints();
     let mut out = Vec::new();
@@ -250,7 +250,7 @@ fn column_basis(a: &DMatrix<f64>, rtol: f64) -> DMatrix<f64> {
 /// Screens `candidates` at `ext` (current fit with unknowns `current`) on `data`.
 pub fn screen(
     ext: &ExtModel,
-    data: &Dataset,
+    data: &MeasuredSet,
     current: &[Unknown],
     candidates: &[Candidate],
     rtol: f64,

@@ -4,7 +4,6 @@
 //! ([`test_in_order`]). The rule is documented in [`super::decide`].
 
 use super::candidates::{library, Candidate};
-use super::data::Dataset;
 use super::decide::{
     cv_errors, linear_start, nonlinear_start, onset_candidates, paired_gain, rank_contenders,
     serial_tau, Accepted, DecideConfig, Selection, Trial,
@@ -15,9 +14,10 @@ use super::polish::{needs_polish, polish};
 use super::residual::screen;
 use super::stat::{delta_bic, nested_f_test};
 use crate::calib::CalibError;
+use crate::calib::MeasuredSet;
 
 /// Independent residuals: all of them for full positions, fewer along a traced path.
-fn m_eff(data: &Dataset, tau: f64) -> usize {
+fn m_eff(data: &MeasuredSet, tau: f64) -> usize {
     ((data.n_residuals() as f64 / tau).round() as usize).max(1)
 }
 
@@ -26,7 +26,7 @@ fn m_eff(data: &Dataset, tau: f64) -> usize {
 pub fn forward_selection(
     declared: ExtFit,
     declared_unknowns: &[Unknown],
-    data: &Dataset,
+    data: &MeasuredSet,
     cfg: &DecideConfig,
 ) -> Result<Selection, CalibError> {
     let mut cur = declared;
@@ -92,7 +92,7 @@ pub fn forward_selection(
 pub fn shortlist(
     cur: &ExtFit,
     cands: &[Candidate],
-    data: &Dataset,
+    data: &MeasuredSet,
     cfg: &DecideConfig,
 ) -> Result<Vec<usize>, CalibError> {
     let screens = screen(&cur.ext, data, &cur.fitted, cands, cfg.rtol)?;
@@ -134,7 +134,7 @@ pub fn refit_candidate(
     cur: &ExtFit,
     requested: &[Unknown],
     cand: &Candidate,
-    data: &Dataset,
+    data: &MeasuredSet,
     cfg: &DecideConfig,
 ) -> Result<Option<(Trial, ExtFit)>, CalibError> {
     let mut req = requested.to_vec();
@@ -213,7 +213,7 @@ type Ordered = (Vec<(Trial, ExtFit)>, Vec<Option<Vec<f64>>>, Vec<String>);
 /// gain above the floor added effects that made the held-out error worse (0.0886 -> 0.0951 mm).
 pub fn order_contenders(
     refits: Vec<(Trial, ExtFit)>,
-    data: &Dataset,
+    data: &MeasuredSet,
     cfg: &DecideConfig,
 ) -> Result<Ordered, CalibError> {
     let n = refits.len();
@@ -282,7 +282,7 @@ pub fn test_in_order(
     cv_cache: Vec<Option<Vec<f64>>>,
     cur: &ExtFit,
     mut cv_cur: Option<Vec<f64>>,
-    data: &Dataset,
+    data: &MeasuredSet,
     cfg: &DecideConfig,
 ) -> Result<Round, CalibError> {
     let mut chosen: Option<(Trial, ExtFit, Vec<f64>)> = None;

@@ -41,11 +41,11 @@
 use nalgebra::{DMatrix, DVector, Matrix3, Vector3};
 use serde::Serialize;
 
-use super::data::Dataset;
 use super::floor::{chi2_upper_p, FloorReport, FLOOR_ALPHA};
 use super::probe::ProbeResult;
 use super::stat::f_test_p_value;
 use crate::calib::unknown::Unknown;
+use crate::calib::MeasuredSet;
 use crate::model::Model;
 
 /// When the fitted parameters' uncertainty alone lifts the expected held-out RMS by this factor
@@ -109,7 +109,7 @@ pub struct Counts {
 }
 
 /// The measured Jacobian `P_k J_k` of pose `k` (`J_k` unchanged for a full position).
-fn measured(data: &Dataset, k: usize, j: &DMatrix<f64>) -> DMatrix<f64> {
+fn measured(data: &MeasuredSet, k: usize, j: &DMatrix<f64>) -> DMatrix<f64> {
     match data.directions.as_ref().and_then(|d| d.get(k)) {
         Some(d) if !d.is_empty() && j.nrows() == 3 => {
             let p: Matrix3<f64> = d.iter().map(|u| u * u.transpose()).sum();
@@ -127,9 +127,9 @@ fn measured(data: &Dataset, k: usize, j: &DMatrix<f64>) -> DMatrix<f64> {
 /// prediction variance at every held-out pose, which grows where the held-out poses leave the
 /// calibration poses' span). 1 without Jacobians.
 pub fn prediction_inflation(
-    cal: &Dataset,
+    cal: &MeasuredSet,
     cal_jac: &[DMatrix<f64>],
-    val: &Dataset,
+    val: &MeasuredSet,
     val_jac: &[DMatrix<f64>],
 ) -> f64 {
     let p = cal_jac.first().map_or(0, DMatrix::ncols);
@@ -185,7 +185,7 @@ pub fn change_unknowns(model: &Model, fitted: &[Unknown]) -> Vec<Unknown> {
 /// largest singular value dropped). `None` without Jacobians or when no degree of freedom is
 /// left.
 pub fn after_parameter_change(
-    val: &Dataset,
+    val: &MeasuredSet,
     val_err_mm: &[Vector3<f64>],
     val_jac: &[DMatrix<f64>],
 ) -> Option<(f64, f64)> {

@@ -8,8 +8,8 @@ use super::robust::Linearity;
 use super::PlanError;
 use crate::calib::default_selection;
 use crate::calib::identifiability::{analyse, DEFAULT_RTOL};
+use crate::calib::MeasuredSet;
 use crate::calib::Poses;
-use crate::diagnose::data::Dataset;
 use crate::diagnose::extended::{ExtModel, Unknown};
 use crate::model::Model;
 
@@ -42,8 +42,8 @@ pub struct Setup {
 }
 
 /// The poses `q` as a dataset (positions unused).
-pub fn joints_dataset(q: &[Vec<f64>]) -> Dataset {
-    Dataset::from_poses(Poses {
+pub fn joints_dataset(q: &[Vec<f64>]) -> MeasuredSet {
+    MeasuredSet::from_poses(Poses {
         q_deg: q.to_vec(),
         xyz_mm: vec![Vector3::zeros(); q.len()],
     })

@@ -28,8 +28,8 @@ use super::metrics::{design_stats, median};
 use super::PlanError;
 use crate::calib::default_selection;
 use crate::calib::identifiability::{analyse, DEFAULT_RTOL};
+use crate::calib::MeasuredSet;
 use crate::calib::Poses;
-use crate::diagnose::data::Dataset;
 use crate::diagnose::extended::{ExtModel, Unknown};
 use crate::fusion::SheetPlacement;
 use crate::model::ik::KATANA_SEED_DEG;
@@ -288,13 +288,13 @@ fn rows_of(
     q_deg: &[Vec<f64>],
     dirs: Vec<Vec<Vector3<f64>>>,
 ) -> Result<DMatrix<f64>, PlanError> {
-    let data = Dataset {
+    let data = MeasuredSet {
         poses: Poses {
             q_deg: q_deg.to_vec(),
             xyz_mm: vec![Vector3::zeros(); q_deg.len()],
         },
         directions: Some(dirs),
-        ..Dataset::default()
+        ..MeasuredSet::default()
     };
     Ok(ext.stacked(&data, unknowns)?.0)
 }

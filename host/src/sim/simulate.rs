@@ -288,7 +288,7 @@ pub fn simulate(declared: &Model, cfg: &SimConfig) -> Result<SimOutput, SimError
 }
 
 /// A simulation's poses as the diagnosis reads them.
-impl crate::diagnose::data::Dataset {
+impl crate::calib::MeasuredSet {
     /// The measured poses of a simulation (`rigctl simulate`), with their times, in the order
     /// the robot visited them.
     pub fn from_sim_poses(poses: &[SimPose]) -> Self {

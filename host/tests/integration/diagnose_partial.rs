@@ -5,7 +5,7 @@
 //! values recovered; held-out numbers come from the other sheet (calibrate on the circle,
 //! validate on the line).
 
-use rigctl::diagnose::data::Dataset;
+use rigctl::calib::MeasuredSet;
 use rigctl::diagnose::{diagnose, DiagnoseOptions};
 use rigctl::fusion::FusedSample;
 use rigctl::model::{katana450, Model, KATANA_PENCIL_TOOL_MM};
@@ -42,8 +42,12 @@ fn run(effects: &[&str]) -> rigctl::diagnose::Diagnosis {
         circle.len(),
         line.len()
     );
-    let cal = Dataset::from_fused(&circle, &declared).unwrap();
-    let val = Dataset::from_fused(&line, &declared).unwrap();
+    let cal = MeasuredSet::from_fused(&circle)
+        .and_then(|d| d.with_inertial_moments(&declared))
+        .unwrap();
+    let val = MeasuredSet::from_fused(&line)
+        .and_then(|d| d.with_inertial_moments(&declared))
+        .unwrap();
     diagnose(&declared, &cal, &val, &DiagnoseOptions::default()).expect("diagnose")
 }
 

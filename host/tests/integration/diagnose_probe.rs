@@ -10,8 +10,8 @@ use nalgebra::Vector3;
 use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
 use rand_distr::{Distribution, Normal};
+use rigctl::calib::MeasuredSet;
 use rigctl::calib::Poses;
-use rigctl::diagnose::data::Dataset;
 use rigctl::diagnose::probe::{hybrid_report, jacobians, probe_dataset, ProbeConfig, ProbeResult};
 use rigctl::diagnose::{diagnose, DiagnoseOptions, Diagnosis};
 use rigctl::model::katana450;
@@ -38,7 +38,7 @@ fn noise(n: usize, seed: u64) -> Vec<Vector3<f64>> {
 
 fn run_probe(q: Vec<Vec<f64>>, residual: &[Vector3<f64>]) -> ProbeResult {
     let n = q.len();
-    let data = Dataset::from_poses(Poses {
+    let data = MeasuredSet::from_poses(Poses {
         q_deg: q,
         xyz_mm: vec![Vector3::zeros(); n],
     });
@@ -150,13 +150,13 @@ fn time_is_a_variable_when_the_poses_carry_it() {
         e.x += 0.04 * warm;
         e.z += 0.04 * (t / 3600.0) * rad(q[1]).sin();
     }
-    let data = Dataset {
+    let data = MeasuredSet {
         poses: Poses {
             q_deg: q.clone(),
             xyz_mm: vec![Vector3::zeros(); n],
         },
         t_s: Some(t),
-        ..Dataset::default()
+        ..MeasuredSet::default()
     };
     let p = probe_dataset(&data, &r, &[], &ProbeConfig::default());
     assert!(p.depends_on.contains(&"t".to_string()), "{:?}", p.terms);
@@ -273,13 +273,13 @@ fn partial_measurements_along_a_path() {
     for k in 1..n {
         red[k] = red[k - 1] * 0.9 + white[k] * 0.44;
     }
-    let data = Dataset {
+    let data = MeasuredSet {
         poses: Poses {
             q_deg: q.clone(),
             xyz_mm: vec![Vector3::zeros(); n],
         },
         directions: Some(dirs),
-        ..Dataset::default()
+        ..MeasuredSet::default()
     };
     let clean = probe_dataset(&data, &red, &[], &ProbeConfig::default());
     assert!(!clean.structured, "{:?}", clean.terms);
@@ -292,8 +292,8 @@ fn partial_measurements_along_a_path() {
     assert_eq!(p.depends_on, vec!["q4".to_string()], "{:?}", p.terms);
 }
 
-fn dataset(poses: &[SimPose], extra: &dyn Fn(&[f64]) -> Vector3<f64>) -> Dataset {
-    Dataset {
+fn dataset(poses: &[SimPose], extra: &dyn Fn(&[f64]) -> Vector3<f64>) -> MeasuredSet {
+    MeasuredSet {
         poses: Poses {
             q_deg: poses.iter().map(|p| p.q_deg.clone()).collect(),
             xyz_mm: poses
@@ -302,11 +302,11 @@ fn dataset(poses: &[SimPose], extra: &dyn Fn(&[f64]) -> Vector3<f64>) -> Dataset
                 .collect(),
         },
         t_s: Some(poses.iter().map(|p| p.t_s).collect()),
-        ..Dataset::default()
+        ..MeasuredSet::default()
     }
 }
 
-fn diagnose_sim(seed: u64, extra: &dyn Fn(&[f64]) -> Vector3<f64>) -> (Diagnosis, Dataset) {
+fn diagnose_sim(seed: u64, extra: &dyn Fn(&[f64]) -> Vector3<f64>) -> (Diagnosis, MeasuredSet) {
     let declared = katana450(200.0).unwrap();
     let cfg = SimConfig {
         seed,

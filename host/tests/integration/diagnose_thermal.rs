@@ -14,8 +14,8 @@ use rand::seq::SliceRandom;
 use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
 use rand_distr::{Distribution, Normal};
+use rigctl::calib::MeasuredSet;
 use rigctl::calib::Poses;
-use rigctl::diagnose::data::Dataset;
 use rigctl::diagnose::{diagnose, DiagnoseOptions, Diagnosis};
 use rigctl::model::katana450;
 use rigctl::sim::effects::parse_effect;
@@ -95,7 +95,7 @@ fn independent(ppm: f64, tau_min: f64, seed: u64, session_min: f64) -> Case {
             .filter(|(i, _)| keep(*i))
             .map(|(_, p)| p)
             .collect();
-        let mut d = Dataset::from_poses(Poses {
+        let mut d = MeasuredSet::from_poses(Poses {
             q_deg: chosen.iter().map(|p| p.1.q_deg.clone()).collect(),
             xyz_mm: chosen.iter().map(|p| p.2).collect(),
         });
@@ -213,7 +213,7 @@ fn no_time_no_time_candidate() {
     };
     let out = simulate(&declared, &cfg).unwrap();
     let strip = |p: &[SimPose]| {
-        let mut d = Dataset::from_sim_poses(p);
+        let mut d = MeasuredSet::from_sim_poses(p);
         d.t_s = None;
         d
     };

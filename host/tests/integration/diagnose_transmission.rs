@@ -4,7 +4,7 @@
 
 use crate::common::record::record;
 
-use rigctl::diagnose::data::Dataset;
+use rigctl::calib::MeasuredSet;
 use rigctl::diagnose::{diagnose, DiagnoseOptions, Diagnosis};
 use rigctl::model::katana450;
 use rigctl::sim::effects::parse_effect;
@@ -160,7 +160,7 @@ fn a_residual_above_the_instrument_floor_says_the_model_lacks_something() {
     };
     let out = simulate(&declared, &cfg).unwrap();
     // drop the repeated pose so that no repeatability is known either
-    let mut cal = Dataset::from_sim_poses(&out.cal);
+    let mut cal = MeasuredSet::from_sim_poses(&out.cal);
     let n = cal.len();
     let keep: Vec<usize> = (0..n)
         .filter(|&k| {
@@ -173,7 +173,13 @@ fn a_residual_above_the_instrument_floor_says_the_model_lacks_something() {
         })
         .collect();
     cal = cal.subset(&keep);
-    let d = diagnose(&declared, &cal, &Dataset::from_sim_poses(&out.val), &opts).unwrap();
+    let d = diagnose(
+        &declared,
+        &cal,
+        &MeasuredSet::from_sim_poses(&out.val),
+        &opts,
+    )
+    .unwrap();
     assert_eq!(d.report.floor.used, "residual", "{:?}", d.report.floor);
     assert!(d
         .report
@@ -288,8 +294,8 @@ fn repeats_of_many_poses_are_pooled_into_the_floor() {
     );
     let diag = diagnose(
         &declared,
-        &Dataset::from_sim_poses(&cal),
-        &Dataset::from_sim_poses(&val),
+        &MeasuredSet::from_sim_poses(&cal),
+        &MeasuredSet::from_sim_poses(&val),
         &DiagnoseOptions::default(),
     )
     .unwrap();

@@ -6,16 +6,16 @@
 use crate::common;
 use crate::common::record::record;
 
-use rigctl::diagnose::data::Dataset;
+use rigctl::calib::MeasuredSet;
 use rigctl::diagnose::{diagnose, DiagnoseOptions, Diagnosis};
 
 /// `diagnose --instrument-mm 0.015` on the tracker set (the tracker's one-sigma accuracy per
 /// coordinate: the independent floor), with its held-out poses; `None` without the data.
-fn tracker_diagnosis(test: &str) -> Option<(Diagnosis, Dataset)> {
+fn tracker_diagnosis(test: &str) -> Option<(Diagnosis, MeasuredSet)> {
     let dir = common::shared_file(test, "data/real/ur5_laser_tracker")?;
     let model = common::ur5_with_smr_tool();
-    let cal = Dataset::read(&dir.join("grid.csv"), &model).unwrap();
-    let val = Dataset::read(&dir.join("random.csv"), &model).unwrap();
+    let cal = MeasuredSet::read(&dir.join("grid.csv"), &model).unwrap();
+    let val = MeasuredSet::read(&dir.join("random.csv"), &model).unwrap();
     assert_eq!((cal.len(), val.len()), (1000, 20));
     let opts = DiagnoseOptions {
         instrument_mm: Some(0.015),

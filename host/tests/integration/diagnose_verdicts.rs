@@ -9,7 +9,7 @@
 use crate::common::record::record;
 
 use nalgebra::Vector3;
-use rigctl::diagnose::data::Dataset;
+use rigctl::calib::MeasuredSet;
 use rigctl::diagnose::{diagnose, DiagnoseOptions, Diagnosis};
 use rigctl::model::{katana450, Model};
 use rigctl::sim::effects::parse_effect;
@@ -51,7 +51,7 @@ fn opts() -> DiagnoseOptions {
     }
 }
 
-fn run(cal: &Dataset, val: &Dataset, opts: &DiagnoseOptions) -> Diagnosis {
+fn run(cal: &MeasuredSet, val: &MeasuredSet, opts: &DiagnoseOptions) -> Diagnosis {
     diagnose(&katana450(200.0).unwrap(), cal, val, opts).unwrap()
 }
 
@@ -81,8 +81,8 @@ fn clean_data_is_at_the_floor() {
     for seed in [1, 2, 3] {
         let s = session(&[], seed);
         let d = run(
-            &Dataset::from_sim_poses(&s.cal),
-            &Dataset::from_sim_poses(&s.val),
+            &MeasuredSet::from_sim_poses(&s.cal),
+            &MeasuredSet::from_sim_poses(&s.val),
             &opts(),
         );
         assert_eq!(kind(&d), "floor", "seed {seed}\n{}", d.report.table());
@@ -97,8 +97,8 @@ fn an_effect_not_added_is_a_missing_effect() {
     for seed in [1, 2, 3] {
         let s = session(&["joint_scale:j2=5e-4"], seed);
         let d = run(
-            &Dataset::from_sim_poses(&s.cal),
-            &Dataset::from_sim_poses(&s.val),
+            &MeasuredSet::from_sim_poses(&s.cal),
+            &MeasuredSet::from_sim_poses(&s.val),
             &o,
         );
         assert_eq!(
@@ -134,8 +134,8 @@ fn another_tool_mounting_is_a_change_between_sets() {
             seed,
         );
         let d = run(
-            &Dataset::from_sim_poses(&s.cal),
-            &Dataset::from_sim_poses(&moved.val),
+            &MeasuredSet::from_sim_poses(&s.cal),
+            &MeasuredSet::from_sim_poses(&moved.val),
             &opts(),
         );
         assert_eq!(
@@ -156,7 +156,7 @@ fn another_tool_mounting_is_a_change_between_sets() {
 /// Few poses for the parameters fitted, and an error the declared model lacks: the fitted
 /// parameters absorb it on the calibration poses (residual at the floor) but predict the
 /// poses left out badly. A UR5 (27 declared parameters) on `n` of its random poses.
-fn ur5_few_poses(n: usize, amp_mm: f64, seed: u64) -> (Diagnosis, Dataset) {
+fn ur5_few_poses(n: usize, amp_mm: f64, seed: u64) -> (Diagnosis, MeasuredSet) {
     let declared = ur5();
     let s = sim(&declared, &[], seed);
     let bump = |q: &[f64]| {
@@ -164,7 +164,7 @@ fn ur5_few_poses(n: usize, amp_mm: f64, seed: u64) -> (Diagnosis, Dataset) {
         let w = (q[2] - 30.0) / 50.0;
         amp_mm * (-(u * u + w * w)).exp()
     };
-    let with = |d: Dataset| {
+    let with = |d: MeasuredSet| {
         let mut d = d;
         for k in 0..d.len() {
             let b = bump(&d.poses.q_deg[k]);
@@ -172,13 +172,19 @@ fn ur5_few_poses(n: usize, amp_mm: f64, seed: u64) -> (Diagnosis, Dataset) {
         }
         d
     };
-    let all = with(Dataset::from_sim_poses(&s.cal));
+    let all = with(MeasuredSet::from_sim_poses(&s.cal));
     let few: Vec<usize> = (0..n).collect();
     let mut o = opts();
     o.decide.max_effects = 0;
     let cal = all.subset(&few);
     (
-        diagnose(&declared, &cal, &with(Dataset::from_sim_poses(&s.val)), &o).unwrap(),
+        diagnose(
+            &declared,
+            &cal,
+            &with(MeasuredSet::from_sim_poses(&s.val)),
+            &o,
+        )
+        .unwrap(),
         cal,
     )
 }
@@ -220,10 +226,10 @@ fn few_poses_for_many_parameters_is_overfitting() {
     record("overfitting_supported_parameters", supported);
 }
 
-fn ur5_session(effects: &[&str], seed: u64) -> (Model, Dataset) {
+fn ur5_session(effects: &[&str], seed: u64) -> (Model, MeasuredSet) {
     let declared = ur5();
     let s = sim(&declared, effects, seed);
-    (declared, Dataset::from_sim_poses(&s.cal))
+    (declared, MeasuredSet::from_sim_poses(&s.cal))
 }
 
 /// A joint that deflects against gravity (a negative compliance, which no joint has) is never

@@ -3,16 +3,15 @@
 //! can be checked against the truth. (The scanner is in `tests/tests/e2e/session_e2e.rs`.)
 
 use nalgebra::Vector3;
+use rigctl::calib::calibrate_general::{calibrate_poses, GeneralOptions};
 use rigctl::calib::identifiability::DEFAULT_RTOL;
 use rigctl::calib::lm::LmConfig;
-use rigctl::calib::projected::{
-    calibrate_projected, fit_projected, measured_errors, ProjectedData, SampleTilt,
-};
-use rigctl::calib::{default_selection, CalibrateOptions, Stats};
+use rigctl::calib::projected::{fit_projected, measured_errors, SampleTilt};
+use rigctl::calib::{default_selection, CalibrateOptions, MeasuredSet, Stats};
 use rigctl::fusion::curve::TracedCurve;
 use rigctl::fusion::pot::TravelSeries;
 use rigctl::fusion::{fuse, FuseOptions, Fused, JointSamples, PotCalibration};
-use rigctl::model::{katana450, Model, Tilt, KATANA_PENCIL_TOOL_MM};
+use rigctl::model::{katana450, Model, KATANA_PENCIL_TOOL_MM};
 use rigctl::sim::session::{simulate_session, Session, SessionConfig, SessionPath};
 
 fn run(path: SessionPath, seed: u64) -> (Model, SessionConfig, Session, Fused) {
@@ -93,17 +92,18 @@ fn projected_calibration_on_two_sheets_recovers_the_identifiable_parameters() {
     let (declared, _, s1, f1) = run(SessionPath::Circle, 21);
     let (_, _, _, f2) = run(SessionPath::Line, 21);
     let samples: Vec<_> = f1.samples.iter().chain(&f2.samples).cloned().collect();
-    let data = ProjectedData::from_fused(&samples)
-        .with_dynamic_moments(&declared)
+    let data = MeasuredSet::from_fused(&samples)
+        .and_then(|d| d.with_inertial_moments(&declared))
         .unwrap();
-    let out = calibrate_projected(
+    let out = calibrate_poses(
         &declared,
         &data,
-        SampleTilt::Dynamic,
+        None,
         &CalibrateOptions::default(),
+        &GeneralOptions::default(),
     )
     .unwrap();
-    let r = &out.report;
+    let r = &out.outcome.report;
     eprintln!(
         "measured |dP| mean {:.4} -> {:.4} mm (standard {:.4}); unidentifiable {:?}; rank {}; \
          {} outliers",
@@ -121,15 +121,16 @@ fn projected_calibration_on_two_sheets_recovers_the_identifiable_parameters() {
     assert!(r.calibration.after.mean_mm < 0.02 * r.calibration.before.mean_mm);
     // the truth in the fitted parametrisation: the same identification on the truth's own exact
     // projections at these samples (its moments on its own chain)
-    let truth_moments = data.clone().with_dynamic_moments(&s1.truth).unwrap();
+    let truth_moments = data.clone().with_inertial_moments(&s1.truth).unwrap();
     let mut exact = truth_moments.clone();
-    for row in &mut exact.rows {
-        let k = row.sample;
-        let p = s1.truth.position_mm(
-            &data.q_deg[k],
-            Tilt::Moments(&truth_moments.moments_kgfm[k]),
-        );
-        row.value_mm = row.direction.dot(&p.unwrap());
+    for k in 0..exact.len() {
+        exact.poses.xyz_mm[k] = s1
+            .truth
+            .position_mm(
+                &data.poses.q_deg[k],
+                SampleTilt::Dynamic.at(&truth_moments, k),
+            )
+            .unwrap();
     }
     let sel = default_selection(&declared, false);
     let best = fit_projected(

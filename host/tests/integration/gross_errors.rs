@@ -12,8 +12,8 @@ use crate::common::record::record;
 use nalgebra::Vector3;
 use rand::{Rng, SeedableRng};
 use rigctl::calib::calibrate::{calibrate, CalibrateOptions, Method};
+use rigctl::calib::MeasuredSet;
 use rigctl::calib::Poses;
-use rigctl::diagnose::data::Dataset;
 use rigctl::diagnose::{diagnose, DiagnoseOptions};
 use rigctl::model::katana450;
 use rigctl::sim::effects::parse_effect;
@@ -79,14 +79,17 @@ fn diagnose_flags_the_gross_errors_and_names_the_same_effect() {
         let (cal, val) = sim(seed, &["encoder_harmonic:j2:h1=0.03,40"]);
         let clean = diagnose(
             &declared,
-            &Dataset::from_sim_poses(&cal),
-            &Dataset::from_sim_poses(&val),
+            &MeasuredSet::from_sim_poses(&cal),
+            &MeasuredSet::from_sim_poses(&val),
             &opts,
         )
         .unwrap()
         .report;
         let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(seed + 100);
-        let (mut c, mut v) = (Dataset::from_sim_poses(&cal), Dataset::from_sim_poses(&val));
+        let (mut c, mut v) = (
+            MeasuredSet::from_sim_poses(&cal),
+            MeasuredSet::from_sim_poses(&val),
+        );
         let bad_cal = corrupt(&mut c.poses.xyz_mm, 0.03, &mut rng);
         let bad_val = corrupt(&mut v.poses.xyz_mm, 0.03, &mut rng);
         let dirty = diagnose(&declared, &c, &v, &opts).unwrap().report;
@@ -230,8 +233,8 @@ fn clean_sets_flag_almost_nothing() {
         }
         let d = diagnose(
             &declared,
-            &Dataset::from_sim_poses(&cal),
-            &Dataset::from_sim_poses(&val),
+            &MeasuredSet::from_sim_poses(&cal),
+            &MeasuredSet::from_sim_poses(&val),
             &DiagnoseOptions {
                 instrument_mm: Some(0.01),
                 ..DiagnoseOptions::default()

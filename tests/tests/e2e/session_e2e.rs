@@ -11,7 +11,8 @@ use rig_tests::rigctl;
 use rigctl::calib::default_selection;
 use rigctl::calib::identifiability::DEFAULT_RTOL;
 use rigctl::calib::lm::LmConfig;
-use rigctl::calib::projected::{fit_projected, ProjectedData, SampleTilt};
+use rigctl::calib::projected::{fit_projected, SampleTilt};
+use rigctl::calib::MeasuredSet;
 use rigctl::fusion::read_fused;
 use rigctl::model::motion::moments_in_motion;
 use rigctl::model::{katana450, Model, Tilt, KATANA_PENCIL_TOOL_MM};
@@ -223,16 +224,14 @@ fn simulated_sessions_calibrate_through_the_cli() {
     // members' true errors into the kept ones, e.g. be4's into dth5)
     let truth = Model::from_file(&dc.join("truth.toml")).unwrap();
     let samples = read_fused(&fused, 5).unwrap();
-    let data = ProjectedData::from_fused(&samples)
-        .with_dynamic_moments(&declared)
+    let data = MeasuredSet::from_fused(&samples)
+        .and_then(|d| d.with_inertial_moments(&declared))
         .unwrap();
     let mut exact = data.clone();
-    for r in &mut exact.rows {
-        let k = r.sample;
-        let p = truth
-            .position_mm(&data.q_deg[k], Tilt::Moments(&data.moments_kgfm[k]))
+    for k in 0..exact.len() {
+        exact.poses.xyz_mm[k] = truth
+            .position_mm(&data.poses.q_deg[k], SampleTilt::Dynamic.at(&data, k))
             .unwrap();
-        r.value_mm = r.direction.dot(&p);
     }
     let sel = default_selection(&declared, false);
     let best = fit_projected(

@@ -21,7 +21,7 @@ use std::f64::consts::PI;
 
 use serde::Serialize;
 
-use crate::diagnose::data::Dataset;
+use crate::calib::MeasuredSet;
 
 /// Harmonics of a one-variable term (`2 x` this many functions).
 pub const MAIN_HARMONICS: usize = 4;
@@ -318,7 +318,7 @@ impl Domain {
 
 /// The probe's variables at pose `k` of `data`: its joint angles (deg), then its time (s) when
 /// `with_time`.
-pub fn point(data: &Dataset, k: usize, with_time: bool) -> Vec<f64> {
+pub fn point(data: &MeasuredSet, k: usize, with_time: bool) -> Vec<f64> {
     let mut p = data.poses.q_deg.get(k).cloned().unwrap_or_default();
     if with_time {
         p.push(data.t(k));

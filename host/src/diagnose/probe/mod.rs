@@ -33,9 +33,9 @@ pub mod select;
 use nalgebra::{DMatrix, DVector, Matrix3, Vector3};
 use serde::Serialize;
 
-use super::data::Dataset;
 use super::decide::{block_fold_assignment, fold_assignment};
 use super::extended::{ExtModel, Unknown};
+use crate::calib::MeasuredSet;
 use crate::model::ModelError;
 use basis::{point, Domain, Term};
 use design::Design;
@@ -258,7 +258,7 @@ pub fn rule_text(cfg: &ProbeConfig) -> String {
 /// [`hybrid_report`].
 pub fn jacobians(
     ext: &ExtModel,
-    data: &Dataset,
+    data: &MeasuredSet,
     unknowns: &[Unknown],
 ) -> Result<Vec<DMatrix<f64>>, ModelError> {
     (0..data.len())
@@ -270,7 +270,7 @@ pub fn jacobians(
 /// fit of the physical parameters whose Jacobians at the poses are `jacobians` (3 x p each,
 /// [`jacobians`]; empty: judge the residual as it is).
 pub fn probe_dataset(
-    data: &Dataset,
+    data: &MeasuredSet,
     residual_mm: &[Vector3<f64>],
     jacobians: &[DMatrix<f64>],
     cfg: &ProbeConfig,
@@ -282,7 +282,7 @@ pub fn probe_dataset(
 /// (declared) values, one per Jacobian column, for the number of parameters the poses support
 /// (empty: not estimated).
 pub fn probe_dataset_with(
-    data: &Dataset,
+    data: &MeasuredSet,
     residual_mm: &[Vector3<f64>],
     jacobians: &[DMatrix<f64>],
     departure: &[f64],

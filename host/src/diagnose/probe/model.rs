@@ -7,8 +7,8 @@ use serde::Serialize;
 
 use super::basis::{point, Domain, Term};
 use super::design::Design;
+use crate::calib::MeasuredSet;
 use crate::calib::Stats;
-use crate::diagnose::data::Dataset;
 use crate::diagnose::report::Ordered;
 
 /// A smooth function of the joint angles and the time (mm, frame R) made of the probe's terms.
@@ -81,7 +81,7 @@ impl ResidualModel {
     }
 
     /// The correction at pose `k` of `data` (mm, frame R).
-    pub fn predict_pose_mm(&self, data: &Dataset, k: usize) -> Vector3<f64> {
+    pub fn predict_pose_mm(&self, data: &MeasuredSet, k: usize) -> Vector3<f64> {
         if k >= data.len() {
             return Vector3::zeros();
         }
@@ -123,7 +123,7 @@ pub struct HybridReport {
 /// are `val_jacobians` (3 x p each, as given to the probe; empty: no parameter shift).
 pub fn hybrid_report(
     model: &ResidualModel,
-    val: &Dataset,
+    val: &MeasuredSet,
     physical_val_mm: &[Vector3<f64>],
     val_jacobians: &[DMatrix<f64>],
     param_names: &[String],

@@ -181,11 +181,11 @@ pub fn diagnose_sim(
     out: &rigctl::sim::simulate::SimOutput,
     opts: &rigctl::diagnose::DiagnoseOptions,
 ) -> rigctl::diagnose::Diagnosis {
-    use rigctl::diagnose::data::Dataset;
+    use rigctl::calib::MeasuredSet;
     rigctl::diagnose::diagnose(
         declared,
-        &Dataset::from_sim_poses(&out.cal),
-        &Dataset::from_sim_poses(&out.val),
+        &MeasuredSet::from_sim_poses(&out.cal),
+        &MeasuredSet::from_sim_poses(&out.val),
         opts,
     )
     .expect("diagnose")

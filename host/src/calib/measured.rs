@@ -1,0 +1,722 @@
+//! The one set of measurements that every identification reads (`calibrate`, `calibrate
+//! --samples`, `diagnose`, the planner's checks): joint readings, one or several measured points
+//! per pose, full positions or **partial** ones (the fused samples of the low-cost rig, `rigctl
+//! fuse`), with the times, pose names, file lines, approach directions and inertial moments
+//! that go with them.
+//!
+//! A pose carries its joint readings and a measured point ([`MeasuredSet::poses`]); a pose file
+//! with several points per pose (e.g. motion-capture markers on the hand) gives the further
+//! points in [`MeasuredSet::further_mm`], each slot with its own offset in the tool frame
+//! ([`super::general`]). For a partial measurement only some components of the point are
+//! measured: the projections on the orthonormal directions of [`MeasuredSet::directions`] (for
+//! a fused sample the across-path direction `u` in the sheet plane and the sheet normal `n`);
+//! the stored point is the fusing model's nominal point moved by the measured deviations, so its
+//! component along the path (not measured) is the nominal one and is projected out of every
+//! error, Jacobian and statistic. The error of a pose is the **measured part**
+//! `sum_d (d . (measured - predicted)) d` of the error vector (all of it for a full position),
+//! and each measured direction is one residual ([`MeasuredSet::residual`]).
+//!
+//! Samples taken densely along a traced path are serially correlated; the selection rules
+//! account for that ([`MeasuredSet::is_serial`]).
+
+use std::path::Path;
+
+use nalgebra::{DMatrix, Vector3};
+
+use super::problem::Poses;
+use super::samples::FusedSample;
+use crate::io::pose_csv::{read_poses, PoseCsvError, PoseFile, PoseSpec};
+use crate::model::motion::moments_in_motion;
+use crate::model::transmission::approach_directions;
+use crate::model::{Model, ModelError};
+
+/// One measured point of a pose.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Measurement {
+    /// Index of the pose.
+    pub pose: usize,
+    /// Slot of the point: 0 = the tool point ([`Poses::xyz_mm`]), k = [`MeasuredSet::markers`]`[k]`.
+    pub slot: usize,
+    /// Measured position (mm, frame R).
+    pub xyz_mm: Vector3<f64>,
+}
+
+/// A `--markers` choice that the file cannot satisfy.
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+#[error("{file}: point {asked} asked for (--markers), the file has {available} measured point(s) per pose")]
+pub struct MarkerChoiceError {
+    pub file: String,
+    pub asked: usize,
+    pub available: usize,
+}
+
+impl crate::error::Classify for MarkerChoiceError {
+    fn kind(&self) -> crate::error::ErrorKind {
+        crate::error::ErrorKind::BadInput
+    }
+}
+
+/// Measured poses and what is known with them (see the module docs).
+#[derive(Debug, Clone, Default, PartialEq)]
+pub struct MeasuredSet {
+    /// Joint readings and the first measured point of every pose (partial measurements: see
+    /// the module docs).
+    pub poses: Poses,
+    /// The further measured points of every pose (slots 1.., mm, frame R); empty with one
+    /// point per pose.
+    pub further_mm: Vec<Vec<Vector3<f64>>>,
+    /// The file's point number (0-based: 0 = `x1` or `x`) of every slot; empty = one point,
+    /// the file's own.
+    pub markers: Vec<usize>,
+    /// Time of every pose (s), `None` without a `t` column.
+    pub t_s: Option<Vec<f64>>,
+    /// Measured directions of every pose (orthonormal, frame R); `None` when every pose is a
+    /// full position. An empty list at a pose means all three axes.
+    pub directions: Option<Vec<Vec<Vector3<f64>>>>,
+    /// Inertial joint moments (kgf.m, joint frames) at every pose: the moments in motion along
+    /// a logged trajectory minus the static ones, both of the model the samples were read with.
+    /// The declared tilting is driven by the static moments of the model being fitted (which
+    /// follow its payload and base tilt) plus these ([`crate::model::Tilt::StaticPlus`]);
+    /// `None`: static moments only.
+    pub moments_kgfm: Option<Vec<Vec<Vector3<f64>>>>,
+    /// Direction in which every joint last moved before each pose (+1 up, -1 down, 0 no
+    /// history), from the pose order ([`crate::model::transmission::approach_directions`]); `None` until computed
+    /// ([`MeasuredSet::with_approach`]). Kept through [`MeasuredSet::subset`], so a fold keeps the
+    /// history of the full visit order.
+    pub approach: Option<Vec<Vec<f64>>>,
+    /// Pose names (`id` column), when every row has one: poses measured more than once
+    /// (the repeatability of `diagnose`).
+    pub ids: Option<Vec<String>>,
+    /// Line of every pose in its file (1-based), when read from a pose file: names the poses
+    /// left out as gross errors.
+    pub lines: Option<Vec<usize>>,
+}
+
+impl MeasuredSet {
+    /// Poses without times.
+    pub fn from_poses(poses: Poses) -> Self {
+        Self {
+            poses,
+            ..Self::default()
+        }
+    }
+
+    /// Reads a pose file with measured positions for `model` (joint count and limits checked).
+    /// `t` is used only if every row has it.
+    pub fn read(path: &Path, model: &Model) -> Result<Self, PoseCsvError> {
+        Self::read_with(path, &PoseSpec::for_model(model, true))
+    }
+
+    /// As [`MeasuredSet::read`] with the file's expectations `spec` (units, joint names, which
+    /// measured point of a file with several is the pose's point).
+    pub fn read_with(path: &Path, spec: &PoseSpec) -> Result<Self, PoseCsvError> {
+        Ok(Self::from_pose_file(&read_poses(path, spec)?))
+    }
+
+    /// The poses of a pose file with its pose point ([`PoseSpec::marker`]; no point if the file
+    /// has no positions), times (when every row has one), ids (when every row has one), lines,
+    /// and the approach directions of the file order.
+    pub fn from_pose_file(file: &PoseFile) -> Self {
+        let poses = match file.positions_mm() {
+            Some(xyz) => Poses {
+                q_deg: file.joints(),
+                xyz_mm: xyz.into_iter().map(Vector3::from).collect(),
+            },
+            None => Poses::default(),
+        };
+        Self::labelled(file, poses, Vec::new(), Vec::new())
+    }
+
+    /// The points `markers` (0-based file point numbers, in slot order; `None` = all) of every
+    /// pose of `file`, with its times, ids, lines and approach directions.
+    pub fn from_pose_points(
+        file: &PoseFile,
+        markers: Option<&[usize]>,
+    ) -> Result<Self, MarkerChoiceError> {
+        let available = file.n_markers();
+        let markers: Vec<usize> = match markers {
+            Some(m) => m.to_vec(),
+            None => (0..available).collect(),
+        };
+        if let Some(&bad) = markers.iter().find(|&&m| m >= available) {
+            return Err(MarkerChoiceError {
+                file: file.source.clone(),
+                asked: bad + 1,
+                available,
+            });
+        }
+        let point = |p: &crate::io::pose_csv::Pose, m: usize| Vector3::from(p.markers_mm[m]);
+        let poses = match markers.first() {
+            Some(&first) => Poses {
+                q_deg: file.joints(),
+                xyz_mm: file.poses.iter().map(|p| point(p, first)).collect(),
+            },
+            None => Poses::default(),
+        };
+        let further_mm = if markers.len() > 1 {
+            file.poses
+                .iter()
+                .map(|p| markers[1..].iter().map(|&m| point(p, m)).collect())
+                .collect()
+        } else {
+            Vec::new()
+        };
+        Ok(Self::labelled(file, poses, further_mm, markers))
+    }
+
+    fn labelled(
+        file: &PoseFile,
+        poses: Poses,
+        further_mm: Vec<Vec<Vector3<f64>>>,
+        markers: Vec<usize>,
+    ) -> Self {
+        Self {
+            poses,
+            further_mm,
+            markers,
+            t_s: file.poses.iter().map(|p| p.t_s).collect(),
+            ids: file.poses.iter().map(|p| p.id.clone()).collect(),
+            lines: Some(file.poses.iter().map(|p| p.line).collect()),
+            ..Self::default()
+        }
+        .with_approach()
+    }
+
+    /// Partial measurements from fused samples (one path): two measured directions per sample
+    /// (`u`, and `n` made orthogonal to it), the samples' times and approach directions. The one
+    /// place where a fused sample becomes a measurement.
+    pub fn from_fused(samples: &[FusedSample]) -> Result<Self, ModelError> {
+        let mut q_deg = Vec::with_capacity(samples.len());
+        let mut xyz_mm = Vec::with_capacity(samples.len());
+        let mut t_s = Vec::with_capacity(samples.len());
+        let mut directions = Vec::with_capacity(samples.len());
+        for s in samples {
+            let u = s.u.normalize();
+            let n = (s.n - u * u.dot(&s.n)).normalize();
+            if !(u.iter().chain(n.iter()).all(|v| v.is_finite())) {
+                return Err(ModelError::NonFinite {
+                    name: format!("measured directions of the sample at t = {} s", s.t_s),
+                    value: f64::NAN,
+                });
+            }
+            q_deg.push(s.q_deg.clone());
+            xyz_mm.push(s.nominal_mm + s.u * s.dev_u_mm + s.n * s.dev_n_mm);
+            t_s.push(s.t_s);
+            directions.push(vec![u, n]);
+        }
+        Ok(Self {
+            poses: Poses { q_deg, xyz_mm },
+            t_s: Some(t_s),
+            directions: Some(directions),
+            ..Self::default()
+        }
+        .with_approach())
+    }
+
+    /// `self` with the inertial part of the moments in motion of `model` along the logged
+    /// joints ([`MeasuredSet::moments_kgfm`]: moments in motion minus the static ones).
+    pub fn with_inertial_moments(mut self, model: &Model) -> Result<Self, ModelError> {
+        let q_deg = &self.poses.q_deg;
+        let moments = moments_in_motion(model, self.t_s.as_deref().unwrap_or(&[]), q_deg)?
+            .into_iter()
+            .zip(q_deg)
+            .map(|(m, q)| {
+                let stat = model.moments_kgfm(q)?;
+                Ok(m.iter().zip(&stat).map(|(a, b)| a - b).collect())
+            })
+            .collect::<Result<Vec<Vec<Vector3<f64>>>, ModelError>>()?;
+        self.moments_kgfm = Some(moments);
+        Ok(self)
+    }
+
+    /// The set as `model`'s chain sees it: the readings through its joint map
+    /// ([`Model::effective_pose_joints`], hysteresis in the pose order) and every measured point
+    /// through the inverse of its time terms ([`Model::chain_mm_for`]). Without terms, `self`.
+    pub fn through_terms(&self, model: &Model) -> Result<Self, ModelError> {
+        if !model.maps_joints() && !model.time_terms().is_active() {
+            return Ok(self.clone());
+        }
+        let t_s = self.t_s.as_deref();
+        let at = |pose: usize| t_s.and_then(|t| t.get(pose)).copied().unwrap_or(0.0);
+        let mut out = self.clone();
+        out.poses.q_deg = model.effective_pose_joints(&self.poses.q_deg, t_s)?;
+        for (k, p) in out.poses.xyz_mm.iter_mut().enumerate() {
+            *p = model.chain_mm_for(p, at(k));
+        }
+        for (k, more) in out.further_mm.iter_mut().enumerate() {
+            for p in more {
+                *p = model.chain_mm_for(p, at(k));
+            }
+        }
+        Ok(out)
+    }
+
+    /// Number of point slots (1 with one point per pose).
+    pub fn n_slots(&self) -> usize {
+        1 + self.further_mm.first().map_or(0, Vec::len)
+    }
+
+    /// The measured points, grouped by pose in pose order, slots in order.
+    pub fn points(&self) -> impl Iterator<Item = Measurement> + '_ {
+        let none: &[Vector3<f64>] = &[];
+        self.poses
+            .xyz_mm
+            .iter()
+            .enumerate()
+            .flat_map(move |(pose, &xyz_mm)| {
+                let more = self.further_mm.get(pose).map_or(none, Vec::as_slice);
+                std::iter::once(Measurement {
+                    pose,
+                    slot: 0,
+                    xyz_mm,
+                })
+                .chain(more.iter().enumerate().map(move |(k, &xyz_mm)| {
+                    Measurement {
+                        pose,
+                        slot: k + 1,
+                        xyz_mm,
+                    }
+                }))
+            })
+    }
+
+    /// Number of measured points.
+    pub fn n_points(&self) -> usize {
+        self.len() + self.further_mm.iter().map(Vec::len).sum::<usize>()
+    }
+
+    /// One pose per measured point (its joints and its point), e.g. for error statistics.
+    pub fn as_poses(&self) -> Poses {
+        if self.further_mm.is_empty() {
+            return self.poses.clone();
+        }
+        let (q_deg, xyz_mm) = self
+            .points()
+            .map(|m| (self.poses.q_deg[m.pose].clone(), m.xyz_mm))
+            .unzip();
+        Poses { q_deg, xyz_mm }
+    }
+
+    /// Residual rows per pose (3 per measured point), in row order: the blocks left out together
+    /// by [`super::press`].
+    pub fn row_blocks(&self) -> Vec<usize> {
+        vec![3 * self.n_slots(); self.len()]
+    }
+
+    /// The name of slot `slot`'s offset coordinate `axis` (0..3): `marker<k>_x_mm` with the
+    /// file's 1-based point number k.
+    pub fn offset_name(&self, slot: usize, axis: usize) -> String {
+        format!(
+            "marker{}_{}_mm",
+            self.markers.get(slot).map_or(slot, |m| *m) + 1,
+            ["x", "y", "z"][axis.min(2)]
+        )
+    }
+
+    /// `self` followed by `other` (e.g. the samples of two sheets, or poses and samples). Times
+    /// are kept only when both have them; directions and inertial moments when either has them
+    /// (full positions get all three axes, poses at rest zero inertial moments); the further
+    /// points when both have as many slots (otherwise the first point of every pose only).
+    pub fn concat(mut self, other: MeasuredSet) -> Self {
+        let (n0, n1) = (self.len(), other.len());
+        let same_slots = self.n_slots() == other.n_slots();
+        let a0 = self.approach_or_computed();
+        let a1 = other.approach_or_computed();
+        self.t_s = both(self.t_s.take(), other.t_s);
+        self.directions = match (self.directions.take(), other.directions) {
+            (None, None) => None,
+            (a, b) => {
+                let mut d = a.unwrap_or_else(|| vec![Vec::new(); n0]);
+                d.extend(b.unwrap_or_else(|| vec![Vec::new(); n1]));
+                Some(d)
+            }
+        };
+        // poses without inertial moments are at rest: zero extra moments (static tilting)
+        let zeros = |n: usize, like: &Vec<Vec<Vector3<f64>>>| {
+            let nj = like.first().map_or(0, Vec::len);
+            vec![vec![Vector3::zeros(); nj]; n]
+        };
+        self.moments_kgfm = match (self.moments_kgfm.take(), other.moments_kgfm) {
+            (None, None) => None,
+            (Some(mut a), Some(b)) => {
+                a.extend(b);
+                Some(a)
+            }
+            (Some(mut a), None) => {
+                let z = zeros(n1, &a);
+                a.extend(z);
+                Some(a)
+            }
+            (None, Some(b)) => {
+                let mut a = zeros(n0, &b);
+                a.extend(b);
+                Some(a)
+            }
+        };
+        // each file keeps its own history (its first pose has none)
+        self.approach = Some(a0.into_iter().chain(a1).collect());
+        self.ids = both(self.ids.take(), other.ids);
+        self.lines = both(self.lines.take(), other.lines);
+        if same_slots {
+            self.further_mm.extend(other.further_mm);
+        } else {
+            self.further_mm.clear();
+            self.markers.clear();
+        }
+        self.poses.q_deg.extend(other.poses.q_deg);
+        self.poses.xyz_mm.extend(other.poses.xyz_mm);
+        self
+    }
+
+    /// `self` with [`MeasuredSet::approach`] computed from the pose order when it is not set.
+    pub fn with_approach(mut self) -> Self {
+        if self.approach.as_ref().map(Vec::len) != Some(self.len()) {
+            self.approach = Some(self.approach_or_computed());
+        }
+        self
+    }
+
+    fn approach_or_computed(&self) -> Vec<Vec<f64>> {
+        match &self.approach {
+            Some(a) if a.len() == self.len() => a.clone(),
+            _ => approach_directions(&self.poses.q_deg, self.t_s.as_deref()),
+        }
+    }
+
+    /// Direction joint `j` last moved before pose `k` (+1, -1, 0).
+    pub fn approach(&self, k: usize, j: usize) -> f64 {
+        self.approach
+            .as_ref()
+            .and_then(|a| a.get(k))
+            .and_then(|d| d.get(j))
+            .copied()
+            .unwrap_or(0.0)
+    }
+
+    /// Whether some joint has a known direction of approach at some pose.
+    pub fn has_approach(&self) -> bool {
+        self.approach
+            .as_ref()
+            .is_some_and(|a| a.iter().any(|d| d.iter().any(|x| *x != 0.0)))
+    }
+
+    /// Number of poses.
+    pub fn len(&self) -> usize {
+        self.poses.len()
+    }
+
+    /// Whether there is no pose.
+    pub fn is_empty(&self) -> bool {
+        self.poses.is_empty()
+    }
+
+    /// Whether some poses are partial measurements (samples along a traced path, serially
+    /// correlated).
+    pub fn is_serial(&self) -> bool {
+        self.directions
+            .as_ref()
+            .is_some_and(|d| d.iter().any(|v| !v.is_empty()))
+    }
+
+    /// Number of measured components of pose `k` (3 for a full position).
+    pub fn rows(&self, k: usize) -> usize {
+        match self.directions.as_ref().and_then(|d| d.get(k)) {
+            Some(d) if !d.is_empty() => d.len(),
+            _ => 3,
+        }
+    }
+
+    /// Number of residuals (measured components) of all poses.
+    pub fn n_residuals(&self) -> usize {
+        (0..self.len()).map(|k| self.rows(k)).sum()
+    }
+
+    /// Dimension of the measured error space, when every pose has the same one (3 for full
+    /// positions, 2 for fused samples).
+    pub fn measured_dims(&self) -> usize {
+        let first = if self.is_empty() { 3 } else { self.rows(0) };
+        if (0..self.len()).all(|k| self.rows(k) == first) {
+            first
+        } else {
+            3
+        }
+    }
+
+    /// The measured components of `v` at pose `k`: `d . v` for every measured direction
+    /// (`v` itself for a full position).
+    pub fn components(&self, k: usize, v: &Vector3<f64>) -> Vec<f64> {
+        match self.directions.as_ref().and_then(|d| d.get(k)) {
+            Some(d) if !d.is_empty() => d.iter().map(|dir| dir.dot(v)).collect(),
+            _ => vec![v.x, v.y, v.z],
+        }
+    }
+
+    /// The measured part of `v` at pose `k` (`sum_d (d . v) d`; `v` for a full position).
+    pub fn measured_part(&self, k: usize, v: &Vector3<f64>) -> Vector3<f64> {
+        match self.directions.as_ref().and_then(|d| d.get(k)) {
+            Some(d) if !d.is_empty() => d.iter().map(|dir| dir * dir.dot(v)).sum(),
+            _ => *v,
+        }
+    }
+
+    /// The residuals `predicted - measured` of pose `k` along its measured components (3 for a
+    /// full position, one per measured direction for a partial one): the residual of every
+    /// identification on the set.
+    pub fn residual(&self, k: usize, predicted_mm: &Vector3<f64>) -> Vec<f64> {
+        self.components(k, &(predicted_mm - self.poses.xyz_mm[k]))
+    }
+
+    /// The measured part of the error `measured - predicted` of pose `k` (mm).
+    pub fn error_mm(&self, k: usize, predicted_mm: &Vector3<f64>) -> Vector3<f64> {
+        self.measured_part(k, &(self.poses.xyz_mm[k] - predicted_mm))
+    }
+
+    /// The measured directions of pose `k` (the three axes for a full position).
+    pub fn directions_at(&self, k: usize) -> Vec<Vector3<f64>> {
+        match self.directions.as_ref().and_then(|d| d.get(k)) {
+            Some(d) if !d.is_empty() => d.clone(),
+            _ => vec![Vector3::x(), Vector3::y(), Vector3::z()],
+        }
+    }
+
+    /// The set with only the measured components `keep` (one flag per residual, pose by pose):
+    /// a pose keeps the directions flagged, and is left out when none is.
+    pub fn keep_components(&self, keep: &[bool]) -> Self {
+        let mut flags = keep.iter().copied();
+        let mut poses = Vec::with_capacity(self.len());
+        let mut directions = Vec::with_capacity(self.len());
+        for k in 0..self.len() {
+            let all = self.directions_at(k);
+            let kept: Vec<Vector3<f64>> = all
+                .iter()
+                .filter(|_| flags.next().unwrap_or(false))
+                .copied()
+                .collect();
+            if kept.is_empty() {
+                continue;
+            }
+            poses.push(k);
+            directions.push(if kept.len() == self.rows(k) {
+                self.directions
+                    .as_ref()
+                    .and_then(|d| d.get(k))
+                    .cloned()
+                    .unwrap_or_default()
+            } else {
+                kept
+            });
+        }
+        let mut out = self.subset(&poses);
+        if self.directions.is_some() || directions.iter().any(|d| !d.is_empty()) {
+            out.directions = Some(directions);
+        }
+        out
+    }
+
+    /// The measured rows of a 3 x c Jacobian at pose `k` (`d^T J` per direction).
+    pub fn jacobian_rows(&self, k: usize, j: &DMatrix<f64>) -> DMatrix<f64> {
+        match self.directions.as_ref().and_then(|d| d.get(k)) {
+            Some(d) if !d.is_empty() => {
+                let mut out = DMatrix::zeros(d.len(), j.ncols());
+                for (r, dir) in d.iter().enumerate() {
+                    out.row_mut(r).copy_from(&(dir.transpose() * j));
+                }
+                out
+            }
+            _ => j.clone(),
+        }
+    }
+
+    /// The inertial joint moments at pose `k`, when the dataset carries them.
+    pub fn moments(&self, k: usize) -> Option<&[Vector3<f64>]> {
+        self.moments_kgfm
+            .as_ref()
+            .and_then(|m| m.get(k))
+            .map(Vec::as_slice)
+    }
+
+    /// Time of pose `k` (s), 0 without times.
+    pub fn t(&self, k: usize) -> f64 {
+        self.t_s
+            .as_ref()
+            .and_then(|t| t.get(k))
+            .copied()
+            .unwrap_or(0.0)
+    }
+
+    /// Whether the poses carry times that differ (so drifts can be told apart from offsets).
+    pub fn has_time(&self) -> bool {
+        match &self.t_s {
+            Some(t) => {
+                let lo = t.iter().copied().fold(f64::INFINITY, f64::min);
+                let hi = t.iter().copied().fold(f64::NEG_INFINITY, f64::max);
+                hi > lo
+            }
+            None => false,
+        }
+    }
+
+    /// The poses at `indices`, in that order.
+    pub fn subset(&self, indices: &[usize]) -> Self {
+        let pick = |v: &Vec<Vec<Vector3<f64>>>| indices.iter().map(|&k| v[k].clone()).collect();
+        Self {
+            poses: Poses {
+                q_deg: indices
+                    .iter()
+                    .map(|&k| self.poses.q_deg[k].clone())
+                    .collect(),
+                xyz_mm: indices.iter().map(|&k| self.poses.xyz_mm[k]).collect(),
+            },
+            further_mm: if self.further_mm.is_empty() {
+                Vec::new()
+            } else {
+                pick(&self.further_mm)
+            },
+            markers: self.markers.clone(),
+            t_s: self
+                .t_s
+                .as_ref()
+                .map(|t| indices.iter().map(|&k| t[k]).collect()),
+            directions: self.directions.as_ref().map(pick),
+            moments_kgfm: self.moments_kgfm.as_ref().map(pick),
+            approach: self
+                .approach
+                .as_ref()
+                .map(|a| indices.iter().map(|&k| a[k].clone()).collect()),
+            ids: self
+                .ids
+                .as_ref()
+                .map(|v| indices.iter().map(|&k| v[k].clone()).collect()),
+            lines: self
+                .lines
+                .as_ref()
+                .map(|v| indices.iter().map(|&k| v[k]).collect()),
+        }
+    }
+}
+
+/// `a` followed by `b` when both are known.
+fn both<T>(a: Option<Vec<T>>, b: Option<Vec<T>>) -> Option<Vec<T>> {
+    let (mut a, b) = (a?, b?);
+    a.extend(b);
+    Some(a)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::model::katana450;
+
+    fn sample(t: f64, dev_u: f64, dev_n: f64) -> FusedSample {
+        FusedSample {
+            t_s: t,
+            q_deg: vec![-90.0 + t, 60.0, -60.0, 10.0, 90.0],
+            nominal_mm: Vector3::new(100.0, -200.0, 150.0),
+            dev_u_mm: dev_u,
+            u: Vector3::new(1.0, 0.0, 0.0),
+            dev_n_mm: dev_n,
+            n: Vector3::new(0.0, 0.6, 0.8),
+        }
+    }
+
+    /// A fused sample measures exactly its two deviations; the along-path component of any
+    /// vector is projected out; full positions concatenated keep all three axes.
+    #[test]
+    fn partial_measurements_project_out_the_path_direction() {
+        let model = katana450(330.0).unwrap();
+        let s: Vec<FusedSample> = (0..5).map(|k| sample(k as f64 * 0.01, 0.1, -0.2)).collect();
+        let d = MeasuredSet::from_fused(&s)
+            .unwrap()
+            .with_inertial_moments(&model)
+            .unwrap();
+        assert!(d.is_serial());
+        assert_eq!(d.n_residuals(), 10);
+        assert_eq!(d.measured_dims(), 2);
+        let e = d.poses.xyz_mm[0] - s[0].nominal_mm;
+        let c = d.components(0, &e);
+        assert!(
+            (c[0] - 0.1).abs() < 1e-12 && (c[1] + 0.2).abs() < 1e-12,
+            "{c:?}"
+        );
+        let along = Vector3::new(0.0, 0.8, -0.6);
+        assert!(d.measured_part(0, &along).norm() < 1e-12);
+        let j = DMatrix::from_row_slice(3, 1, &[0.0, 0.8, -0.6]);
+        assert!(d.jacobian_rows(0, &j).norm() < 1e-12);
+        let full = MeasuredSet::from_poses(Poses {
+            q_deg: vec![vec![0.0; 5]],
+            xyz_mm: vec![Vector3::new(1.0, 2.0, 3.0)],
+        });
+        let both = d.concat(full);
+        assert_eq!(both.len(), 6);
+        assert_eq!(both.n_residuals(), 13);
+        assert_eq!(both.measured_dims(), 3);
+        assert_eq!(both.measured_part(5, &along), along);
+        assert!(both.t_s.is_none());
+        let m = both.moments_kgfm.as_ref().unwrap();
+        assert_eq!(m.len(), 6);
+        assert!(m[5].len() == 5 && m[5].iter().all(|v| v.norm() == 0.0));
+        let sub = both.subset(&[5, 0]);
+        assert_eq!(sub.rows(0), 3);
+        assert_eq!(sub.rows(1), 2);
+    }
+
+    /// Several points per pose come out pose by pose, slots in order; leaving out measured
+    /// components keeps the others' directions and drops a pose with none left; the residual of
+    /// a full and of a partial pose is taken along its measured directions.
+    #[test]
+    fn points_components_and_residuals() {
+        let p = |x: f64| Vector3::new(x, 0.0, 0.0);
+        let mut set = MeasuredSet::from_poses(Poses {
+            q_deg: vec![vec![0.0], vec![1.0]],
+            xyz_mm: vec![p(1.0), p(2.0)],
+        });
+        set.further_mm = vec![vec![p(10.0), p(11.0)], vec![p(20.0), p(21.0)]];
+        set.markers = vec![0, 2, 3];
+        let pts: Vec<(usize, usize, f64)> =
+            set.points().map(|m| (m.pose, m.slot, m.xyz_mm.x)).collect();
+        assert_eq!(
+            pts,
+            vec![
+                (0, 0, 1.0),
+                (0, 1, 10.0),
+                (0, 2, 11.0),
+                (1, 0, 2.0),
+                (1, 1, 20.0),
+                (1, 2, 21.0)
+            ]
+        );
+        assert_eq!((set.n_slots(), set.n_points()), (3, 6));
+        assert_eq!(set.row_blocks(), vec![9, 9]);
+        assert_eq!(set.as_poses().len(), 6);
+        assert_eq!(set.offset_name(2, 1), "marker4_y_mm");
+        assert_eq!(set.subset(&[1]).further_mm, vec![vec![p(20.0), p(21.0)]]);
+
+        let h = std::f64::consts::FRAC_1_SQRT_2;
+        let (u, n) = (Vector3::new(h, h, 0.0), Vector3::new(0.0, 0.0, 1.0));
+        set.further_mm.clear();
+        set.directions = Some(vec![Vec::new(), vec![u, n]]);
+        assert_eq!(set.n_residuals(), 5);
+        let off = Vector3::new(1.0, 2.0, 3.0);
+        assert_eq!(
+            set.residual(0, &(set.poses.xyz_mm[0] + off)),
+            vec![1.0, 2.0, 3.0]
+        );
+        let r1 = set.residual(1, &(set.poses.xyz_mm[1] + off));
+        assert!(
+            (r1[0] - 3.0 * h).abs() < 1e-12 && (r1[1] - 3.0).abs() < 1e-12,
+            "{r1:?}"
+        );
+        let e1 = set.error_mm(1, &(set.poses.xyz_mm[1] + Vector3::new(1.0, -1.0, 0.0)));
+        assert!(
+            e1.norm() < 1e-12,
+            "along-path error is not measured: {e1:?}"
+        );
+        let kept = set.keep_components(&[true, false, true, false, false]);
+        assert_eq!(kept.len(), 1);
+        assert_eq!(kept.directions_at(0), vec![Vector3::x(), Vector3::z()]);
+        assert_eq!(kept.n_residuals(), 2);
+        let kept = set.keep_components(&[true, true, true, false, true]);
+        assert_eq!((kept.len(), kept.rows(0), kept.rows(1)), (2, 3, 1));
+        assert_eq!(kept.directions_at(1), vec![n]);
+    }
+}
