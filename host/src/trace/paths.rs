@@ -60,38 +60,27 @@ pub(super) fn drawing(pieces: &[PieceMm], opts: &TraceOptions, px_per_mm: f64) -
     let mut paths = Vec::new();
     let mut strays = Vec::new();
     for (ci, &len) in net.lengths.iter().enumerate() {
-        if len < min_len_mm {
-            let pts = &net.chain_stroke(ci).points_mm;
-            if let (Some(&from_mm), Some(&to_mm)) = (pts.first(), pts.last()) {
-                strays.push(LeftOut {
-                    from_mm,
-                    to_mm,
-                    length_mm: len,
-                    kind: if len < MIN_MARK_MM {
-                        LeftOutKind::Speck
-                    } else {
-                        LeftOutKind::Mark
-                    },
-                });
+        let path = (len >= min_len_mm).then(|| judged_path(&net, ci, opts));
+        // A chain is a stray when shorter than a path, also once cut across what touches it.
+        let length_mm = path.as_ref().map_or(len, |p| p.stroke.length_mm());
+        match path {
+            Some(p) if length_mm >= min_len_mm => paths.push(p),
+            _ => {
+                let pts = &net.chain_stroke(ci).points_mm;
+                if let (Some(&from_mm), Some(&to_mm)) = (pts.first(), pts.last()) {
+                    strays.push(LeftOut {
+                        from_mm,
+                        to_mm,
+                        length_mm,
+                        kind: if length_mm < MIN_MARK_MM {
+                            LeftOutKind::Speck
+                        } else {
+                            LeftOutKind::Mark
+                        },
+                    });
+                }
             }
-            continue;
         }
-        let judged = net.judge(ci);
-        let continued_by = net
-            .left_out(ci, &judged)
-            .into_iter()
-            .filter(|o| o.kind == LeftOutKind::Continues)
-            .collect();
-        let mut path = DrawnPath {
-            stroke: judged.path,
-            gaps: judged.gaps,
-            continued_by,
-            overshoot_mm: 0.0,
-        };
-        close_on_itself(&mut path, opts.max_gap_mm);
-        let s = &path.stroke;
-        path.stroke.points_mm = resample(&s.points_mm, s.closed, opts.spacing_mm);
-        paths.push(path);
     }
     paths.sort_by(|a, b| b.stroke.length_mm().total_cmp(&a.stroke.length_mm()));
     strays.sort_by(|a, b| b.length_mm.total_cmp(&a.length_mm));
@@ -100,6 +89,26 @@ pub(super) fn drawing(pieces: &[PieceMm], opts: &TraceOptions, px_per_mm: f64) -
         strays,
         px_per_mm,
     })
+}
+
+/// Chain `ci` judged as a drawn line, closed where it ends on itself, resampled.
+fn judged_path(net: &Network, ci: usize, opts: &TraceOptions) -> DrawnPath {
+    let judged = net.judge(ci);
+    let continued_by = net
+        .left_out(ci, &judged)
+        .into_iter()
+        .filter(|o| o.kind == LeftOutKind::Continues)
+        .collect();
+    let mut path = DrawnPath {
+        stroke: judged.path,
+        gaps: judged.gaps,
+        continued_by,
+        overshoot_mm: 0.0,
+    };
+    close_on_itself(&mut path, opts.max_gap_mm);
+    let s = &path.stroke;
+    path.stroke.points_mm = resample(&s.points_mm, s.closed, opts.spacing_mm);
+    path
 }
 
 /// An end of an open line this close to the line near its other end closes it there, mm.

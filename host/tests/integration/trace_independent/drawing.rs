@@ -23,7 +23,7 @@ fn dense(f: impl Fn(f64) -> [f64; 2], closed: bool) -> Vec<[f64; 2]> {
     out
 }
 
-/// The drawn lines: a wavy line, a closed ellipse, an open arc, a straight slanted line; each
+/// The drawn lines: a wavy line, a closed ellipse, a half circle, a straight slanted line; each
 /// with its pencil skips (arc-length intervals, mm) and whether it closes.
 fn lines() -> Vec<(Vec<[f64; 2]>, bool, Vec<[f64; 2]>)> {
     use std::f64::consts::TAU;
@@ -53,13 +53,13 @@ fn lines() -> Vec<(Vec<[f64; 2]>, bool, Vec<[f64; 2]>)> {
         (
             dense(
                 |u| {
-                    let a = (-60.0 + 260.0 * u).to_radians();
+                    let a = (-60.0 + 180.0 * u).to_radians();
                     [45.0 + 25.0 * a.cos(), -35.0 + 25.0 * a.sin()]
                 },
                 false,
             ),
             false,
-            vec![[40.0, 43.0]],
+            vec![[40.0, 42.5]],
         ),
         (
             dense(|u| [-75.0 + 45.0 * u, 10.0 + 10.0 * u], false),
