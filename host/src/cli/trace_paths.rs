@@ -24,7 +24,7 @@ pub fn finish(dir: &Path, drawing: &Drawing) -> Result<(), CliError> {
             a[1],
             b[0],
             b[1],
-            p.stroke.bridged_mm,
+            p.stroke.bridged_mm + 0.0,
             if p.is_whole() { "" } else { ", NOT whole" },
         );
     }

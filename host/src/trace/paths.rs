@@ -242,7 +242,8 @@ fn summary_json(d: &Drawing) -> Value {
                 "points": pts.len(),
                 "from_mm": ends(0),
                 "to_mm": ends(pts.len().saturating_sub(1)),
-                "bridged_mm": round4(p.stroke.bridged_mm),
+                // + 0.0 writes a bridge sum of -0 as 0
+                "bridged_mm": round4(p.stroke.bridged_mm) + 0.0,
                 "overshoot_mm": round4(p.overshoot_mm),
                 "gaps_bridged": p.gaps.iter().filter(|g| g.bridged).map(gap_json).collect::<Vec<_>>(),
                 "gaps_missing": p.gaps.iter().filter(|g| !g.bridged).map(gap_json).collect::<Vec<_>>(),
