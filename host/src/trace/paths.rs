@@ -259,3 +259,82 @@ fn summary_json(d: &Drawing) -> Value {
         "strays": d.strays.iter().map(mark_json).collect::<Vec<_>>(),
     })
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn open_path(pts: Vec<[f64; 2]>) -> DrawnPath {
+        DrawnPath {
+            stroke: Stroke {
+                points_mm: pts,
+                closed: false,
+                bridged_mm: 0.0,
+            },
+            gaps: Vec::new(),
+            continued_by: Vec::new(),
+            overshoot_mm: 0.0,
+        }
+    }
+
+    /// A polyline through `corners`, a point every 0.25 mm.
+    fn through(corners: &[[f64; 2]]) -> Vec<[f64; 2]> {
+        let mut out = Vec::new();
+        for w in corners.windows(2) {
+            let n = ((w[1][0] - w[0][0]).hypot(w[1][1] - w[0][1]) / 0.25).ceil() as usize;
+            out.extend((0..n).map(|k| {
+                let t = k as f64 / n as f64;
+                [
+                    w[0][0] + t * (w[1][0] - w[0][0]),
+                    w[0][1] + t * (w[1][1] - w[0][1]),
+                ]
+            }));
+        }
+        out.extend(corners.last());
+        out
+    }
+
+    #[test]
+    fn a_box_drawn_past_its_last_corner_closes_there() {
+        // From 2 mm left of the bottom-left corner, round the box and down onto the bottom.
+        let mut p = open_path(through(&[
+            [-2.0, 0.0],
+            [40.0, 0.0],
+            [40.0, 45.0],
+            [0.0, 45.0],
+            [0.0, 0.4],
+        ]));
+        close_on_itself(&mut p, 10.0);
+        assert!(p.stroke.closed);
+        assert!((p.overshoot_mm - 2.0).abs() < 0.3, "{}", p.overshoot_mm);
+        let len = p.stroke.length_mm();
+        assert!((len - 170.0).abs() < 0.5, "{len}");
+    }
+
+    #[test]
+    fn lines_that_do_not_end_on_themselves_stay_open() {
+        // A U: its ends 40 mm apart.
+        let mut u = open_path(through(&[
+            [0.0, 45.0],
+            [0.0, 0.0],
+            [40.0, 0.0],
+            [40.0, 45.0],
+        ]));
+        close_on_itself(&mut u, 10.0);
+        assert!(!u.stroke.closed && u.overshoot_mm == 0.0);
+        // A short hook whose end comes back onto its start: shorter than 4 x the reach.
+        let mut hook = open_path(through(&[[0.0, 0.0], [12.0, 0.0], [12.0, 8.0], [0.5, 0.5]]));
+        close_on_itself(&mut hook, 10.0);
+        assert!(!hook.stroke.closed);
+        // A box whose end stops 3 mm from the line: farther than the touch distance.
+        let mut gap = open_path(through(&[
+            [0.0, 0.0],
+            [40.0, 0.0],
+            [40.0, 45.0],
+            [0.0, 45.0],
+            [0.0, 3.0],
+        ]));
+        close_on_itself(&mut gap, 10.0);
+        assert!(!gap.stroke.closed);
+    }
+}
