@@ -9,8 +9,8 @@ use crate::common;
 use indicatif::ProgressBar;
 use rigctl::trace::link::MIN_MARK_MM;
 use rigctl::trace::{
-    load_scan, path_file_name, polyline_length, trace_image, trace_paths, Mapping, Prepared,
-    TraceError, TraceOptions, SUMMARY_FILE,
+    load_scan, path_file_name, polyline_length, trace_image, trace_paths, Drawing, Mapping,
+    Prepared, TraceError, TraceOptions, SUMMARY_FILE,
 };
 use std::process::Command;
 
@@ -81,11 +81,13 @@ fn photos_with_a_plain_scale_yield_strokes() {
     }
 }
 
-fn scale_opts() -> TraceOptions {
-    TraceOptions {
+/// Every drawn line of a photo (`--paths`, scale 0.2 mm per pixel).
+fn paths_of(img: &image::RgbImage) -> Drawing {
+    let opts = TraceOptions {
         mapping: Mapping::Scale { mm_per_px: 0.2 },
         ..TraceOptions::default()
-    }
+    };
+    trace_paths(img, &Prepared::build(img), &opts, &ProgressBar::hidden()).expect("paths")
 }
 
 /// The box of `wobbly-box.jpg`, located by hand on the photo (pixels, x right, y down): its
@@ -177,13 +179,7 @@ fn the_wobbly_box_is_one_closed_path_of_its_drawn_length() {
     let by_hand: Vec<[f64; 2]> = BOX_PX.iter().map(|p| to_mm(*p)).collect();
     let hand_mm = polyline_length(&by_hand, false);
     let corners: Vec<[f64; 2]> = BOX_CORNERS.iter().map(|&i| by_hand[i]).collect();
-    let d = trace_paths(
-        &img,
-        &Prepared::build(&img),
-        &scale_opts(),
-        &ProgressBar::hidden(),
-    )
-    .expect("paths");
+    let d = paths_of(&img);
     let near = |pts: &[[f64; 2]], q: [f64; 2]| {
         pts.iter()
             .map(|p| (p[0] - q[0]).hypot(p[1] - q[1]))
@@ -254,13 +250,7 @@ fn drawings_give_every_line_once_and_never_exit_0_on_a_part() {
     let dir = tempfile::tempdir().expect("tempdir");
     for f in files {
         let img = load_scan(&f).expect("decode jpeg");
-        let d = trace_paths(
-            &img,
-            &Prepared::build(&img),
-            &scale_opts(),
-            &ProgressBar::hidden(),
-        )
-        .expect("paths");
+        let d = paths_of(&img);
         let whole = d.paths.iter().filter(|p| p.is_whole()).count();
         eprintln!(
             "{}: {} paths ({whole} whole), {} strays",
