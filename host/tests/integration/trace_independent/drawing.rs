@@ -23,49 +23,56 @@ fn dense(f: impl Fn(f64) -> [f64; 2], closed: bool) -> Vec<[f64; 2]> {
     out
 }
 
-/// The drawn lines: a wavy line, a closed ellipse, a half circle, a straight slanted line; each
-/// with its pencil skips (arc-length intervals, mm) and whether it closes.
-fn lines() -> Vec<(Vec<[f64; 2]>, bool, Vec<[f64; 2]>)> {
+/// A drawn line: its dense centreline, whether it closes, its pencil skips (arc-length
+/// intervals, mm).
+struct Line {
+    pts: Vec<[f64; 2]>,
+    closed: bool,
+    skips: Vec<[f64; 2]>,
+}
+
+/// The drawn lines: a wavy line, a closed ellipse, a half circle, a straight slanted line.
+fn lines() -> Vec<Line> {
     use std::f64::consts::TAU;
     vec![
-        (
-            dense(
+        Line {
+            pts: dense(
                 |u| {
                     let x = -70.0 + 130.0 * u;
                     [x, 55.0 + 4.0 * (x / 9.0).sin()]
                 },
                 false,
             ),
-            false,
-            vec![[30.0, 32.5], [90.0, 93.5]],
-        ),
-        (
-            dense(
+            closed: false,
+            skips: vec![[30.0, 32.5], [90.0, 93.5]],
+        },
+        Line {
+            pts: dense(
                 |u| {
                     let a = TAU * u;
                     [-40.0 + 22.0 * a.cos(), -30.0 + 14.0 * a.sin()]
                 },
                 true,
             ),
-            true,
-            vec![[20.0, 22.0], [70.0, 73.0]],
-        ),
-        (
-            dense(
+            closed: true,
+            skips: vec![[20.0, 22.0], [70.0, 73.0]],
+        },
+        Line {
+            pts: dense(
                 |u| {
                     let a = (-60.0 + 180.0 * u).to_radians();
                     [45.0 + 25.0 * a.cos(), -35.0 + 25.0 * a.sin()]
                 },
                 false,
             ),
-            false,
-            vec![[40.0, 42.5]],
-        ),
-        (
-            dense(|u| [-75.0 + 45.0 * u, 10.0 + 10.0 * u], false),
-            false,
-            vec![[18.0, 19.5]],
-        ),
+            closed: false,
+            skips: vec![[40.0, 42.5]],
+        },
+        Line {
+            pts: dense(|u| [-75.0 + 45.0 * u, 10.0 + 10.0 * u], false),
+            closed: false,
+            skips: vec![[18.0, 19.5]],
+        },
     ]
 }
 
@@ -74,11 +81,11 @@ fn a_sheet_of_several_lines_gives_one_path_per_line() {
     let truths = lines();
     let marks = truths
         .iter()
-        .map(|(pts, _, skips)| Mark {
-            pts: pts.clone(),
+        .map(|l| Mark {
+            pts: l.pts.clone(),
             width_mm: 0.45,
             darkness: 0.4,
-            skips: skips.clone(),
+            skips: l.skips.clone(),
         })
         .collect();
     let img = render2::render(&Scene {
@@ -107,7 +114,13 @@ fn a_sheet_of_several_lines_gives_one_path_per_line() {
             .map(|p| p.stroke.length_mm())
             .collect::<Vec<_>>()
     );
-    for (k, (truth, closed, _)) in truths.iter().enumerate() {
+    for (
+        k,
+        Line {
+            pts: truth, closed, ..
+        },
+    ) in truths.iter().enumerate()
+    {
         // The path that covers this line best; no other path covers any of it.
         let cov: Vec<f64> = d
             .paths
