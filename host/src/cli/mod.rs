@@ -23,6 +23,7 @@ mod report;
 mod sheet;
 mod simulate;
 mod trace;
+mod trace_paths;
 mod urdf2model;
 
 #[derive(clap::Parser, Debug)]

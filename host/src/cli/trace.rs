@@ -1,6 +1,8 @@
 //! `rigctl trace`: the pencil centreline of a scanned or photographed sheet as CSV `x,y`
 //! (sheet mm). Exit 0 only when the written trace is the whole drawn path; 1 when part of it is
-//! missing (nothing is written then but the overlay); 2 for unusable input.
+//! missing (nothing is written then but the overlay); 2 for unusable input. With `--paths DIR`
+//! every drawn line is written as a path of its own with a JSON summary; exit 0 only when every
+//! path is whole.
 
 use super::out::errln;
 use super::CliError;
@@ -8,8 +10,8 @@ use indicatif::{ProgressBar, ProgressDrawTarget, ProgressStyle};
 use rigctl::sheet::ReferencePath;
 use rigctl::trace::overlay::{render_overlay, write_overlay};
 use rigctl::trace::{
-    load_prepared, trace_prepared, write_csv, LeftOut, LeftOutKind, Mapping, PathChoice, Trace,
-    TraceOptions,
+    load_prepared, trace_paths, trace_prepared, write_csv, LeftOut, LeftOutKind, Mapping,
+    PathChoice, Trace, TraceOptions,
 };
 use std::path::PathBuf;
 
@@ -21,8 +23,13 @@ pub struct Args {
     #[arg(long, default_value_t = 180.0)]
     pub fiducial_spacing_mm: f64,
     /// Output CSV `x,y` (mm).
-    #[arg(long)]
-    pub out: PathBuf,
+    #[arg(long, required_unless_present = "paths", conflicts_with = "paths")]
+    pub out: Option<PathBuf>,
+    /// Write every drawn line as a path of its own into this directory: `path-001.csv`, ...
+    /// (CSV `x,y`, mm, longest first) and `paths.json` (each path's length, ends, gaps and
+    /// whether it is whole; the strays).
+    #[arg(long, value_name = "DIR")]
+    pub paths: Option<PathBuf>,
     /// The image has no fiducials: map pixels by --mm-per-px about the image centre.
     #[arg(long, requires = "mm_per_px")]
     pub no_fiducials: bool,
@@ -53,7 +60,7 @@ pub enum PathArg {
 pub fn run(args: Args) -> Result<(), CliError> {
     super::files()
         .input("SCAN", Some(&args.scan))
-        .output("--out", Some(&args.out))
+        .output("--out", args.out.as_deref())
         .output("--overlay", args.overlay.as_deref())
         .check()?;
     let mapping = match (args.no_fiducials, args.mm_per_px) {
@@ -98,6 +105,13 @@ pub fn run(args: Args) -> Result<(), CliError> {
     } else {
         ProgressBar::hidden()
     };
+    if let Some(dir) = &args.paths {
+        let drawing = trace_paths(&img, &prepared, &opts, &progress);
+        drop(prepared);
+        progress.finish_and_clear();
+        let drawing = drawing.map_err(|e| CliError::from(e).in_file(&args.scan))?;
+        return super::trace_paths::finish(dir, &drawing);
+    }
     let trace = trace_prepared(&img, &prepared, &opts, &progress);
     drop(prepared);
     progress.finish_and_clear();
@@ -115,20 +129,27 @@ pub fn run(args: Args) -> Result<(), CliError> {
     let main = trace
         .main_stroke()
         .ok_or_else(|| CliError::bad_input("no pencil trace found").in_file(&args.scan))?;
-    write_csv(&args.out, &main.points_mm)?;
+    if let Some(out) = &args.out {
+        write_csv(out, &main.points_mm)?;
+    }
     Ok(())
+}
+
+/// Warns when the image is coarser than the tracer is made for.
+pub(super) fn warn_resolution(px_per_mm: f64) {
+    if px_per_mm < 300.0 / 25.4 * 0.97 {
+        errln!(
+            "rigctl trace: warning: {:.0} dpi on the sheet, below the 300 dpi the tracer is made for; expect a coarser trace",
+            px_per_mm * 25.4
+        );
+    }
 }
 
 fn report(trace: &Trace) {
     let Some(main) = trace.main_stroke() else {
         return;
     };
-    if trace.px_per_mm < 300.0 / 25.4 * 0.97 {
-        errln!(
-            "rigctl trace: warning: {:.0} dpi on the sheet, below the 300 dpi the tracer is made for; expect a coarser trace",
-            trace.px_per_mm * 25.4
-        );
-    }
+    warn_resolution(trace.px_per_mm);
     let camera = match (&trace.camera_fit, &trace.camera) {
         (Some(q), Some(c)) => format!(
             ", camera check {:.3} mm RMS ({:.3} max) on {} of {} marks, k1 {:.4} k2 {:.4}",
@@ -194,7 +215,7 @@ fn report(trace: &Trace) {
     }
 }
 
-fn describe(o: &LeftOut) -> String {
+pub(super) fn describe(o: &LeftOut) -> String {
     format!(
         "{:.1} mm from ({:.1}, {:.1}) to ({:.1}, {:.1}) mm",
         o.length_mm, o.from_mm[0], o.from_mm[1], o.to_mm[0], o.to_mm[1]

@@ -400,6 +400,246 @@ struct Chain {
     closed: bool,
 }
 
+/// Tracked pieces linked into chains (one per drawn line), each built with its bridges.
+pub(super) struct Network {
+    pieces: Vec<PieceMm>,
+    piece_ends: Vec<Option<[End; 2]>>,
+    chains: Vec<Chain>,
+    /// Each chain's polyline, gaps and bridge mask ([`build`]).
+    built: Vec<(Stroke, Vec<Gap>, Vec<bool>)>,
+    /// Each chain's length, mm.
+    pub(super) lengths: Vec<f64>,
+    max_gap_mm: f64,
+}
+
+/// One chain judged as a drawn line: its refined polyline, its gaps (bridged in order along
+/// it, then the missing ones), its free ends, and which other chains may continue it.
+pub(super) struct Judged {
+    pub(super) path: Stroke,
+    pub(super) gaps: Vec<Gap>,
+    free: Vec<End>,
+    continues: Vec<bool>,
+}
+
+impl Network {
+    /// Links `pieces` end to end by continuity. `None` without pieces.
+    pub(super) fn build(pieces: &[PieceMm], max_gap_mm: f64) -> Option<Self> {
+        let pieces: Vec<PieceMm> = split_kinks(pieces)
+            .into_iter()
+            .filter(|p| p.pts.len() >= 2)
+            .collect();
+        if pieces.is_empty() {
+            return None;
+        }
+        let piece_ends: Vec<Option<[End; 2]>> = pieces.iter().map(ends).collect();
+        let n_ends = 2 * pieces.len();
+        // Candidate links within the bridging reach, over a coarse grid of end positions.
+        let reach = max_gap_mm.max(1.0);
+        let piece_len: Vec<f64> = pieces
+            .iter()
+            .map(|p| polyline_length(&p.pts, p.closed))
+            .collect();
+        let mut cands = candidates(&piece_ends, reach, |ea, eb, a, b| {
+            let g = dist(a.p, b.p);
+            // A piece closes on itself only across a gap short against its length.
+            if ea / 2 == eb / 2 && piece_len[ea / 2] < 3.0 * g + 10.0 {
+                return None;
+            }
+            continuity(a, b, reach).filter(|_| g <= max_gap_mm || g < 1.0)
+        });
+        cands.sort_by(|x, y| x.cost.total_cmp(&y.cost));
+        // Greedy: cheapest first, each end once. Every chain has exactly two free ends, so a
+        // link between two ends of one chain closes it.
+        let mut partner: Vec<Option<usize>> = vec![None; n_ends];
+        for c in &cands {
+            if partner[c.a].is_some() || partner[c.b].is_some() {
+                continue;
+            }
+            partner[c.a] = Some(c.b);
+            partner[c.b] = Some(c.a);
+        }
+        let chains = walk_chains(&pieces, &piece_ends, &partner);
+        let built: Vec<(Stroke, Vec<Gap>, Vec<bool>)> = chains
+            .iter()
+            .map(|c| build(c, &pieces, &piece_ends))
+            .collect();
+        let lengths: Vec<f64> = built.iter().map(|(s, ..)| s.length_mm()).collect();
+        Some(Self {
+            pieces,
+            piece_ends,
+            chains,
+            built,
+            lengths,
+            max_gap_mm,
+        })
+    }
+
+    fn end(&self, e: usize) -> Option<End> {
+        self.piece_ends[e / 2].map(|pe| pe[e % 2])
+    }
+
+    /// The drawn path: the longest chain; among chains within 80 % of it, the one nearest the
+    /// printed path.
+    fn choose_main(&self, hint: Option<ReferencePath>) -> Option<usize> {
+        let longest = self.lengths.iter().copied().fold(0.0, f64::max);
+        (0..self.built.len())
+            .filter(|&i| self.lengths[i] >= 0.8 * longest)
+            .min_by(|&i, &j| {
+                let near =
+                    |k: usize| hint.map_or(0.0, |h| mean_from(&self.built[k].0.points_mm, h));
+                near(i)
+                    .total_cmp(&near(j))
+                    .then(self.lengths[j].total_cmp(&self.lengths[i]))
+            })
+    }
+
+    /// Chain `main` as a drawn line: bridged across the marks that touch it, its bridges
+    /// refitted, its free ends and the gaps beyond them that are too long to bridge.
+    pub(super) fn judge(&self, main: usize) -> Judged {
+        let max_gap_mm = self.max_gap_mm;
+        let (path, mut gaps, mask) = self.built[main].clone();
+        let others_pts: Vec<&[[f64; 2]]> = self
+            .built
+            .iter()
+            .enumerate()
+            .filter(|(i, (s, ..))| *i != main && s.points_mm.len() >= 2)
+            .map(|(_, (s, ..))| s.points_mm.as_slice())
+            .collect();
+        let (path, mask) = cut_crossings(path, mask, &others_pts, &mut gaps);
+        let (points_mm, _, bridged_mm) = bridge_fit::refine(&path.points_mm, &mask, path.closed);
+        let path = Stroke {
+            points_mm,
+            bridged_mm,
+            ..path
+        };
+        let main_chain = &self.chains[main];
+        // Free ends of the path and what lies beyond them.
+        let mut free: Vec<End> = Vec::new();
+        if !main_chain.closed {
+            let (first, last) = (
+                main_chain.order[0],
+                main_chain.order[main_chain.order.len() - 1],
+            );
+            let first_entry = 2 * first.0 + usize::from(first.1);
+            let last_exit = (2 * last.0 + usize::from(last.1)) ^ 1;
+            for e in [first_entry, last_exit] {
+                if let Some(x) = self.end(e) {
+                    free.push(x);
+                }
+            }
+        }
+        let far = (5.0 * max_gap_mm).max(50.0);
+        let mut continues: Vec<bool> = vec![false; self.chains.len()];
+        if free.len() == 2 {
+            // The path's ends continuing into each other across a gap too long to bridge.
+            if dist(free[0].p, free[1].p) > max_gap_mm {
+                if let Some(_c) = continuity(&free[0], &free[1], far)
+                    .filter(|_| path.length_mm() > 2.0 * dist(free[0].p, free[1].p))
+                {
+                    let (_, len) = bridge(&free[0], &free[1]);
+                    gaps.push(Gap {
+                        from_mm: free[1].p,
+                        to_mm: free[0].p,
+                        length_mm: len,
+                        bridged: false,
+                    });
+                }
+            }
+        }
+        let mut main_pieces = vec![false; self.pieces.len()];
+        for (p, _) in &main_chain.order {
+            main_pieces[*p] = true;
+        }
+        for f in &free {
+            let mut best: Option<(f64, usize, End)> = None;
+            for (ci, ch) in self.chains.iter().enumerate() {
+                if ci == main || self.lengths[ci] < 2.0 || ch.closed {
+                    continue;
+                }
+                let (first, last) = (ch.order[0], ch.order[ch.order.len() - 1]);
+                for e in [
+                    2 * first.0 + usize::from(first.1),
+                    (2 * last.0 + usize::from(last.1)) ^ 1,
+                ] {
+                    if main_pieces[e / 2] {
+                        continue;
+                    }
+                    let Some(x) = self.end(e) else { continue };
+                    if dist(f.p, x.p) <= max_gap_mm {
+                        continue; // was admissible and not taken: not a continuation
+                    }
+                    if let Some(c) = continuity(f, &x, far) {
+                        if best.is_none_or(|(bc, ..)| c < bc) {
+                            best = Some((c, ci, x));
+                        }
+                    }
+                }
+            }
+            if let Some((_, ci, x)) = best {
+                let (_, len) = bridge(f, &x);
+                gaps.push(Gap {
+                    from_mm: f.p,
+                    to_mm: x.p,
+                    length_mm: len,
+                    bridged: false,
+                });
+                continues[ci] = true;
+            }
+        }
+        Judged {
+            path: orient(path),
+            gaps,
+            free,
+            continues,
+        }
+    }
+
+    /// What the judged chain `main` leaves out: every other chain, longest first, with why.
+    pub(super) fn left_out(&self, main: usize, judged: &Judged) -> Vec<LeftOut> {
+        let reach_ahead = (2.0 * self.max_gap_mm).max(15.0);
+        let main_len = self.lengths[main];
+        let mut left_out: Vec<LeftOut> = Vec::new();
+        for (ci, (s, ..)) in self.built.iter().enumerate() {
+            if ci == main {
+                continue;
+            }
+            let len = self.lengths[ci];
+            let pts = &s.points_mm;
+            let ahead = len >= MIN_MARK_MM
+                && judged.free.iter().any(|f| {
+                    pts.iter().any(|q| {
+                        let d = sub(*q, f.p);
+                        let dn = norm(d);
+                        dn <= reach_ahead
+                            && (dn < 1e-9 || (d[0] * f.t[0] + d[1] * f.t[1]) / dn >= 0.7)
+                    })
+                });
+            let kind = if judged.continues[ci] || ahead {
+                LeftOutKind::Continues
+            } else if len >= MIN_MARK_MM.max(SEPARATE_SHARE * main_len) {
+                LeftOutKind::Separate
+            } else if len < MIN_MARK_MM {
+                LeftOutKind::Speck
+            } else {
+                LeftOutKind::Mark
+            };
+            left_out.push(LeftOut {
+                from_mm: pts[0],
+                to_mm: pts[pts.len() - 1],
+                length_mm: len,
+                kind,
+            });
+        }
+        left_out.sort_by(|a, b| b.length_mm.total_cmp(&a.length_mm));
+        left_out
+    }
+
+    /// The chain of index `ci` as built (bridges as first guesses, not refitted).
+    pub(super) fn chain_stroke(&self, ci: usize) -> &Stroke {
+        &self.built[ci].0
+    }
+}
+
 /// Links `pieces` into chains; returns the drawn path and what was left out. `hint`: the printed
 /// path, to choose between chains of similar length. `None` without pieces.
 pub(crate) fn link(
@@ -407,199 +647,30 @@ pub(crate) fn link(
     max_gap_mm: f64,
     hint: Option<ReferencePath>,
 ) -> Option<Linking> {
-    let split = split_kinks(pieces);
-    let pieces: Vec<&PieceMm> = split.iter().filter(|p| p.pts.len() >= 2).collect();
-    if pieces.is_empty() {
-        return None;
-    }
-    let piece_ends: Vec<Option<[End; 2]>> = pieces.iter().map(|p| ends(p)).collect();
-    let end = |e: usize| piece_ends[e / 2].map(|pe| pe[e % 2]);
-    let n_ends = 2 * pieces.len();
-    // Candidate links within the bridging reach, over a coarse grid of end positions.
-    let reach = max_gap_mm.max(1.0);
-    let piece_len: Vec<f64> = pieces
-        .iter()
-        .map(|p| polyline_length(&p.pts, p.closed))
+    let net = Network::build(pieces, max_gap_mm)?;
+    let main = net.choose_main(hint)?;
+    let judged = net.judge(main);
+    let left_out = net.left_out(main, &judged);
+    let mut others: Vec<Stroke> = (0..net.built.len())
+        .filter(|&ci| ci != main)
+        .map(|ci| net.chain_stroke(ci).clone())
         .collect();
-    let mut cands = candidates(&piece_ends, reach, |ea, eb, a, b| {
-        let g = dist(a.p, b.p);
-        // A piece closes on itself only across a gap short against its length.
-        if ea / 2 == eb / 2 && piece_len[ea / 2] < 3.0 * g + 10.0 {
-            return None;
-        }
-        continuity(a, b, reach).filter(|_| g <= max_gap_mm || g < 1.0)
-    });
-    cands.sort_by(|x, y| x.cost.total_cmp(&y.cost));
-    // Greedy: cheapest first, each end once. Every chain has exactly two free ends, so a link
-    // between two ends of one chain closes it.
-    let mut partner: Vec<Option<usize>> = vec![None; n_ends];
-    for c in &cands {
-        if partner[c.a].is_some() || partner[c.b].is_some() {
-            continue;
-        }
-        partner[c.a] = Some(c.b);
-        partner[c.b] = Some(c.a);
-    }
-    let chains = walk_chains(&pieces, &piece_ends, &partner);
-    let built: Vec<(Stroke, Vec<Gap>, Vec<bool>)> = chains
-        .iter()
-        .map(|c| build(c, &pieces, &piece_ends))
-        .collect();
-    let lengths: Vec<f64> = built.iter().map(|(s, ..)| s.length_mm()).collect();
-    let longest = lengths.iter().copied().fold(0.0, f64::max);
-    // The drawn path: the longest chain; among chains within 80 % of it, the one nearest the
-    // printed path.
-    let main = (0..built.len())
-        .filter(|&i| lengths[i] >= 0.8 * longest)
-        .min_by(|&i, &j| {
-            let near = |k: usize| hint.map_or(0.0, |h| mean_from(&built[k].0.points_mm, h));
-            near(i)
-                .total_cmp(&near(j))
-                .then(lengths[j].total_cmp(&lengths[i]))
-        })?;
-    let (path, mut gaps, mask) = built[main].clone();
-    let others_pts: Vec<&[[f64; 2]]> = built
-        .iter()
-        .enumerate()
-        .filter(|(i, (s, ..))| *i != main && s.points_mm.len() >= 2)
-        .map(|(_, (s, ..))| s.points_mm.as_slice())
-        .collect();
-    let (path, mask) = cut_crossings(path, mask, &others_pts, &mut gaps);
-    let (points_mm, _, bridged_mm) = bridge_fit::refine(&path.points_mm, &mask, path.closed);
-    let path = Stroke {
-        points_mm,
-        bridged_mm,
-        ..path
-    };
-    let main_chain = &chains[main];
-    // Free ends of the path and what lies beyond them.
-    let mut free: Vec<End> = Vec::new();
-    if !main_chain.closed {
-        let (first, last) = (
-            main_chain.order[0],
-            main_chain.order[main_chain.order.len() - 1],
-        );
-        let first_entry = 2 * first.0 + usize::from(first.1);
-        let last_exit = (2 * last.0 + usize::from(last.1)) ^ 1;
-        for e in [first_entry, last_exit] {
-            if let Some(x) = end(e) {
-                free.push(x);
-            }
-        }
-    }
-    let far = (5.0 * max_gap_mm).max(50.0);
-    let mut continues: Vec<bool> = vec![false; chains.len()];
-    if free.len() == 2 {
-        // The path's ends continuing into each other across a gap too long to bridge.
-        if dist(free[0].p, free[1].p) > max_gap_mm {
-            if let Some(_c) = continuity(&free[0], &free[1], far)
-                .filter(|_| path.length_mm() > 2.0 * dist(free[0].p, free[1].p))
-            {
-                let (_, len) = bridge(&free[0], &free[1]);
-                gaps.push(Gap {
-                    from_mm: free[1].p,
-                    to_mm: free[0].p,
-                    length_mm: len,
-                    bridged: false,
-                });
-            }
-        }
-    }
-    let main_pieces: Vec<bool> = {
-        let mut v = vec![false; pieces.len()];
-        for (p, _) in &main_chain.order {
-            v[*p] = true;
-        }
-        v
-    };
-    for f in &free {
-        let mut best: Option<(f64, usize, End)> = None;
-        for (ci, ch) in chains.iter().enumerate() {
-            if ci == main || lengths[ci] < 2.0 || ch.closed {
-                continue;
-            }
-            let (first, last) = (ch.order[0], ch.order[ch.order.len() - 1]);
-            for e in [
-                2 * first.0 + usize::from(first.1),
-                (2 * last.0 + usize::from(last.1)) ^ 1,
-            ] {
-                if main_pieces[e / 2] {
-                    continue;
-                }
-                let Some(x) = end(e) else { continue };
-                if dist(f.p, x.p) <= max_gap_mm {
-                    continue; // was admissible and not taken: not a continuation
-                }
-                if let Some(c) = continuity(f, &x, far) {
-                    if best.is_none_or(|(bc, ..)| c < bc) {
-                        best = Some((c, ci, x));
-                    }
-                }
-            }
-        }
-        if let Some((_, ci, x)) = best {
-            let (_, len) = bridge(f, &x);
-            gaps.push(Gap {
-                from_mm: f.p,
-                to_mm: x.p,
-                length_mm: len,
-                bridged: false,
-            });
-            continues[ci] = true;
-        }
-    }
-    let reach_ahead = (2.0 * max_gap_mm).max(15.0);
-    let main_len = lengths[main];
-    let mut left_out: Vec<LeftOut> = Vec::new();
-    let mut others: Vec<Stroke> = Vec::new();
-    for (ci, (s, ..)) in built.iter().enumerate() {
-        if ci == main {
-            continue;
-        }
-        let len = lengths[ci];
-        let pts = &s.points_mm;
-        let ahead = len >= MIN_MARK_MM
-            && free.iter().any(|f| {
-                pts.iter().any(|q| {
-                    let d = sub(*q, f.p);
-                    let dn = norm(d);
-                    dn <= reach_ahead && (dn < 1e-9 || (d[0] * f.t[0] + d[1] * f.t[1]) / dn >= 0.7)
-                })
-            });
-        let kind = if continues[ci] || ahead {
-            LeftOutKind::Continues
-        } else if len >= MIN_MARK_MM.max(SEPARATE_SHARE * main_len) {
-            LeftOutKind::Separate
-        } else if len < MIN_MARK_MM {
-            LeftOutKind::Speck
-        } else {
-            LeftOutKind::Mark
-        };
-        left_out.push(LeftOut {
-            from_mm: pts[0],
-            to_mm: pts[pts.len() - 1],
-            length_mm: len,
-            kind,
-        });
-        others.push(s.clone());
-    }
-    left_out.sort_by(|a, b| b.length_mm.total_cmp(&a.length_mm));
     others.sort_by(|a, b| b.length_mm().total_cmp(&a.length_mm()));
-    let path = orient(path);
+    let path = judged.path;
     let hint = hint.map(|h| (h, mean_from(&path.points_mm, h)));
     Some(Linking {
         path,
         others,
-        gaps,
+        gaps: judged.gaps,
         left_out,
-        pieces: main_chain.order.len(),
+        pieces: net.chains[main].order.len(),
         hint,
     })
 }
 
 /// The chains of linked pieces: each from a free end (or around a cycle).
 fn walk_chains(
-    pieces: &[&PieceMm],
+    pieces: &[PieceMm],
     piece_ends: &[Option<[End; 2]>],
     partner: &[Option<usize>],
 ) -> Vec<Chain> {
@@ -853,7 +924,7 @@ fn candidates(
 /// points are bridge points, and its gaps.
 fn build(
     chain: &Chain,
-    pieces: &[&PieceMm],
+    pieces: &[PieceMm],
     piece_ends: &[Option<[End; 2]>],
 ) -> (Stroke, Vec<Gap>, Vec<bool>) {
     let mut pts: Vec<[f64; 2]> = Vec::new();
@@ -971,7 +1042,7 @@ fn trim_back(v: &mut Vec<[f64; 2]>, len: f64) {
 
 /// A fixed order: a closed path counter-clockwise from its point at the smallest polar angle
 /// about its centroid; an open path from its end with the smaller x (then y).
-fn orient(mut s: Stroke) -> Stroke {
+pub(super) fn orient(mut s: Stroke) -> Stroke {
     let pts = &mut s.points_mm;
     if pts.len() < 2 {
         return s;

@@ -21,7 +21,8 @@
 //!    ([`chain`]).
 //!
 //! [`render`] (with `render_draw`, `render_extras`) draws synthetic scans with known truth for
-//! tests, benches and simulation, [`render_photo`] phone photos. Errors: [`error`]; settings:
+//! tests, benches and simulation, [`render_photo`] phone photos. [`trace_paths`] writes every
+//! drawn line of a drawing as a path of its own ([`paths`]). Errors: [`error`]; settings:
 //! [`options`].
 
 mod area;
@@ -39,6 +40,7 @@ mod mapping;
 mod options;
 pub mod overlay;
 mod paper;
+mod paths;
 mod prepare;
 mod raster;
 pub mod render;
@@ -54,6 +56,7 @@ pub use files::{load_prepared, load_scan, write_csv};
 pub use homography::Homography;
 pub use link::{Gap, LeftOut, LeftOutKind, Linking};
 pub use options::{Mapping, PathChoice, TraceOptions};
+pub use paths::{path_file_name, write_drawing, Drawing, DrawnPath, SUMMARY_FILE};
 pub use prepare::Prepared;
 pub use render::{render_scan, RenderSpec};
 pub use render_photo::{render_photo, Camera, PhotoSpec};
@@ -113,47 +116,7 @@ pub fn trace_prepared(
     opts: &TraceOptions,
     progress: &ProgressBar,
 ) -> Result<Trace, TraceError> {
-    area::check_options(opts)?;
-    let rebuilt;
-    let prepared = if prepared.fits(img) {
-        prepared
-    } else {
-        rebuilt = Prepared::build(img);
-        &rebuilt
-    };
-    let (paper, map) = (&prepared.paper, &prepared.map);
-    let ink = ink::InkModel::estimate(img, paper, ink::DEFAULT_FLOOR, map.k);
-    let (w_px, h_px) = (img.width() as f64, img.height() as f64);
-    let mapped = mapping::map_pixels(img, map, paper, opts)?;
-    let mapping::Mapped {
-        to_mm,
-        fiducials: fids,
-        camera,
-        camera_fit,
-        dot_residual_mm,
-        px_per_mm,
-        occluders,
-    } = mapped;
-
-    let roi = area::roi_predicate(opts.mapping, &to_mm, w_px, h_px);
-    let seeds = area::seed_mask(map, paper, opts, fids.is_some(), &roi, px_per_mm);
-    let params = centreline::TrackParams {
-        px_per_mm,
-        step_px: 0.25 * px_per_mm,
-        max_width_px: opts.max_width_mm * px_per_mm,
-        min_mass: 0.03 * px_per_mm,
-    };
-    let pieces = centreline::track_all(
-        img, &ink, paper, &occluders, map, &seeds, &roi, &params, progress,
-    );
-    let pieces_mm: Vec<chain::PieceMm> = pieces
-        .into_iter()
-        .map(|p| chain::PieceMm {
-            pts: p.pts_px.iter().map(|q| to_mm(*q)).collect(),
-            closed: p.closed,
-        })
-        .filter(|p| polyline_length(&p.pts, p.closed) >= 0.5)
-        .collect();
+    let Tracked { pieces_mm, meta } = track(img, prepared, opts, progress)?;
     let hint = match (opts.path, opts.mapping) {
         (_, Mapping::Scale { .. }) | (PathChoice::Free, _) => None,
         (PathChoice::Known(p), _) => Some(p),
@@ -190,10 +153,108 @@ pub fn trace_prepared(
     Ok(Trace {
         strokes,
         linking,
+        fiducials: meta.fiducials,
+        dot_residual_mm: meta.dot_residual_mm,
+        camera: meta.camera,
+        camera_fit: meta.camera_fit,
+        px_per_mm: meta.px_per_mm,
+    })
+}
+
+/// Every drawn line of a scan or photo as a path of its own ([`paths`]), with the whole-image
+/// maps already built as for [`trace_prepared`].
+pub fn trace_paths(
+    img: &RgbImage,
+    prepared: &Prepared,
+    opts: &TraceOptions,
+    progress: &ProgressBar,
+) -> Result<Drawing, TraceError> {
+    let Tracked { pieces_mm, meta } = track(img, prepared, opts, progress)?;
+    let no_trace = || TraceError::NoTrace {
+        min_length_mm: opts.min_stroke_mm,
+    };
+    let drawing = paths::drawing(&pieces_mm, opts, meta.px_per_mm).ok_or_else(no_trace)?;
+    if drawing.paths.is_empty() {
+        return Err(no_trace());
+    }
+    Ok(drawing)
+}
+
+/// How the image was mapped to sheet mm.
+struct Meta {
+    fiducials: Option<Fiducials>,
+    dot_residual_mm: Option<f64>,
+    camera: Option<CameraModel>,
+    camera_fit: Option<FitQuality>,
+    px_per_mm: f64,
+}
+
+/// The tracked pieces of graphite in sheet mm (steps 1-5 of the pipeline).
+struct Tracked {
+    pieces_mm: Vec<chain::PieceMm>,
+    meta: Meta,
+}
+
+fn track(
+    img: &RgbImage,
+    prepared: &Prepared,
+    opts: &TraceOptions,
+    progress: &ProgressBar,
+) -> Result<Tracked, TraceError> {
+    area::check_options(opts)?;
+    let rebuilt;
+    let prepared = if prepared.fits(img) {
+        prepared
+    } else {
+        rebuilt = Prepared::build(img);
+        &rebuilt
+    };
+    let (paper, map) = (&prepared.paper, &prepared.map);
+    let ink = ink::InkModel::estimate(img, paper, ink::DEFAULT_FLOOR, map.k);
+    let (w_px, h_px) = (img.width() as f64, img.height() as f64);
+    let mapped = mapping::map_pixels(img, map, paper, opts)?;
+    let mapping::Mapped {
+        to_mm,
         fiducials: fids,
-        dot_residual_mm,
         camera,
         camera_fit,
+        dot_residual_mm,
         px_per_mm,
+        occluders,
+    } = mapped;
+
+    let roi = area::roi_predicate(opts.mapping, &to_mm, w_px, h_px);
+    let seeds = area::seed_mask(map, paper, opts, fids.is_some(), &roi, px_per_mm);
+    let params = centreline::TrackParams {
+        px_per_mm,
+        step_px: 0.25 * px_per_mm,
+        max_width_px: opts.max_width_mm * px_per_mm,
+        min_mass: 0.03 * px_per_mm,
+        black_darkness: if fids.is_some() {
+            centreline::BLACK_DARKNESS
+        } else {
+            f32::INFINITY
+        },
+    };
+    let pieces = centreline::track_all(
+        img, &ink, paper, &occluders, map, &seeds, &roi, &params, progress,
+    );
+    let pieces_mm: Vec<chain::PieceMm> = pieces
+        .into_iter()
+        .map(|p| chain::PieceMm {
+            pts: p.pts_px.iter().map(|q| to_mm(*q)).collect(),
+            closed: p.closed,
+        })
+        .filter(|p| polyline_length(&p.pts, p.closed) >= 0.5)
+        .collect();
+    Ok(Tracked {
+        pieces_mm,
+        meta: Meta {
+            fiducials: fids,
+            dot_residual_mm,
+            camera,
+            camera_fit,
+            px_per_mm,
+        },
     })
 }

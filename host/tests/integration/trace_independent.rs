@@ -8,6 +8,8 @@
 
 #[path = "trace_independent/cases.rs"]
 mod cases;
+#[path = "trace_independent/drawing.rs"]
+mod drawing;
 #[path = "trace_independent/render2.rs"]
 mod render2;
 

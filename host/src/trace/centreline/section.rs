@@ -4,9 +4,9 @@
 
 use super::{dist, Tracker};
 
-/// Darkness above which a pixel is print or dust, never graphite: a window holding one is
-/// occluded.
-const BLACK_DARKNESS: f32 = 0.82;
+/// Darkness above which a pixel on a sheet with printed marks is print or dust, never
+/// graphite: a window holding one is occluded.
+pub(crate) const BLACK_DARKNESS: f32 = 0.82;
 
 /// Printed marks (ring dots) in pixel coordinates that the pencil may cross: windows touching
 /// them are occluded, the stroke is bridged across them.
@@ -82,7 +82,7 @@ impl Tracker<'_> {
                 }
                 let i = 3 * x as usize;
                 let dark = self.ink.darkness_on(&row[i..i + 3], paper);
-                if dark > BLACK_DARKNESS {
+                if dark > self.p.black_darkness {
                     return None;
                 }
                 let wgt = (dark - self.ink.floor).max(0.0) as f64;
