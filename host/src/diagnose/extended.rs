@@ -18,8 +18,12 @@
 use nalgebra::{DMatrix, DVector, Vector3};
 
 use super::data::Dataset;
+use crate::calib::fit::parameter_sigmas_m;
 use crate::calib::identifiability::analyse;
 use crate::calib::lm::{solve, LmConfig, Problem};
+use crate::calib::normal::{
+    solve_normal, solve_normal_from, use_normal_equations, Normal, NormalProblem,
+};
 pub use crate::calib::unknown::Unknown;
 use crate::calib::CalibError;
 use crate::model::gravity::GravityModel;
@@ -192,12 +196,11 @@ impl ExtModel {
         Ok((self.model.joint_map(q_deg, t_s, approach, &tau), tau))
     }
 
-    fn approach_of(data: &Dataset, k: usize) -> Vec<f64> {
+    fn approach_of(data: &Dataset, k: usize) -> &[f64] {
         data.approach
             .as_ref()
             .and_then(|a| a.get(k))
-            .cloned()
-            .unwrap_or_default()
+            .map_or(&[], Vec::as_slice)
     }
 
     /// Predicted measured position (mm, R) of pose `k` of `data` (with its moments, if any).
@@ -206,7 +209,7 @@ impl ExtModel {
         self.predict_with(
             &data.poses.q_deg[k],
             data.t(k),
-            &approach,
+            approach,
             self.tilt_at(data, k),
         )
     }
@@ -236,7 +239,7 @@ impl ExtModel {
         let with_tau = self.needs_torques(unknowns);
         let approach = Self::approach_of(data, k);
         let q = &data.poses.q_deg[k];
-        let (q_eff, tau) = self.effective_joints(q, t_s, &approach, with_tau)?;
+        let (q_eff, tau) = self.effective_joints(q, t_s, approach, with_tau)?;
         let mut wrt: Vec<Wrt> = Vec::with_capacity(unknowns.len());
         let mut slot = Vec::with_capacity(unknowns.len());
         for u in unknowns {
@@ -305,7 +308,7 @@ impl ExtModel {
         for k in 0..data.len() {
             let approach = Self::approach_of(data, k);
             let (q_eff, _) =
-                self.effective_joints(&data.poses.q_deg[k], data.t(k), &approach, with_tau)?;
+                self.effective_joints(&data.poses.q_deg[k], data.t(k), approach, with_tau)?;
             let mut moments = self.model.moments_kgfm(&q_eff)?;
             if let Some(extra) = data.moments(k) {
                 for (m, e) in moments.iter_mut().zip(extra) {
@@ -356,6 +359,57 @@ impl ExtModel {
         }
         Ok((jac, err))
     }
+
+    /// Normal equations of the residual `predicted - measured` over `data` wrt `unknowns`
+    /// (both triangles of `J^T J`), accumulated pose by pose: memory `O(p^2)` whatever the
+    /// number of poses, the same rows as [`ExtModel::stacked`].
+    pub fn normal(&self, data: &Dataset, unknowns: &[Unknown]) -> Result<Normal, ModelError> {
+        let mut eq = Normal::zeros(unknowns.len());
+        self.normal_into(data, unknowns, &mut eq)?;
+        Ok(eq)
+    }
+
+    /// [`ExtModel::normal`] into `eq` (sized for `unknowns`).
+    pub fn normal_into(
+        &self,
+        data: &Dataset,
+        unknowns: &[Unknown],
+        eq: &mut Normal,
+    ) -> Result<(), ModelError> {
+        eq.clear();
+        for k in 0..data.len() {
+            let (p, j) = self.predict_with_jacobian(data, k, unknowns)?;
+            let rows = data.jacobian_rows(k, &j);
+            let r = DVector::from_vec(data.components(k, &(p - data.poses.xyz_mm[k])));
+            eq.jtj.gemm_tr(1.0, &rows, &rows, 1.0);
+            eq.jtr.gemv_tr(1.0, &rows, &r, 1.0);
+            eq.rtr += r.norm_squared();
+            eq.m += r.len();
+        }
+        Ok(())
+    }
+
+    /// Sum of the squared residuals (measured components) over `data`.
+    pub fn sum_sq(&self, data: &Dataset) -> Result<f64, ModelError> {
+        let mut s = 0.0;
+        for k in 0..data.len() {
+            let p = self.predict_pose(data, k)?;
+            s += data
+                .components(k, &(p - data.poses.xyz_mm[k]))
+                .iter()
+                .map(|c| c * c)
+                .sum::<f64>();
+        }
+        Ok(s)
+    }
+}
+
+/// Whether the fits on `data` go through normal equations: from
+/// [`super::compress::COMPRESS_MIN_RESIDUALS`] residuals on (below, the tall Jacobian is small
+/// and its QR keeps the full precision), when the identifiability threshold allows them
+/// ([`use_normal_equations`]).
+pub fn uses_normal(data: &Dataset, rtol: f64) -> bool {
+    use_normal_equations(rtol) && data.n_residuals() >= super::compress::COMPRESS_MIN_RESIDUALS
 }
 
 /// The extended fit as a least-squares problem (residual `predicted - measured`).
@@ -371,6 +425,28 @@ impl ExtProblem<'_> {
             self.ext.set_value(u, v)?;
         }
         Ok(())
+    }
+}
+
+impl NormalProblem for ExtProblem<'_> {
+    type Error = ModelError;
+
+    fn n_params(&self) -> usize {
+        self.unknowns.len()
+    }
+
+    fn n_residuals(&self) -> usize {
+        self.data.n_residuals()
+    }
+
+    fn sum_sq(&mut self, x: &DVector<f64>) -> Result<f64, ModelError> {
+        self.set(x)?;
+        self.ext.sum_sq(self.data)
+    }
+
+    fn normal(&mut self, x: &DVector<f64>, eq: &mut Normal) -> Result<(), ModelError> {
+        self.set(x)?;
+        self.ext.normal_into(self.data, &self.unknowns, eq)
     }
 }
 
@@ -461,6 +537,9 @@ pub fn fit(
     if data.is_empty() {
         return Err(CalibError::NoPoses);
     }
+    if uses_normal(data, rtol) {
+        return fit_normal(start, data, unknowns, lm, rtol, skip_analysis);
+    }
     let names: Vec<String> = unknowns.iter().map(|u| u.name(&start.model)).collect();
     let (fitted, fixed, unidentifiable) = if skip_analysis {
         (unknowns.to_vec(), Vec::new(), Vec::new())
@@ -508,6 +587,73 @@ pub fn fit(
         unidentifiable,
         sigma,
         rss_mm2: rss,
+        n_residuals: n_res,
+        converged: rep.termination.converged(),
+    })
+}
+
+/// [`fit`] on normal equations accumulated pose by pose ([`ExtModel::normal`]): the
+/// identifiability analysis and the sigmas on the square root of `J^T J`, which has the tall
+/// Jacobian's column norms and singular values; memory `O(p^2)`.
+fn fit_normal(
+    start: &ExtModel,
+    data: &Dataset,
+    unknowns: &[Unknown],
+    lm: &LmConfig,
+    rtol: f64,
+    skip_analysis: bool,
+) -> Result<ExtFit, CalibError> {
+    let n_res = data.n_residuals();
+    let (fitted, fixed, unidentifiable, eq0) = if skip_analysis {
+        (unknowns.to_vec(), Vec::new(), Vec::new(), None)
+    } else {
+        let full = start.normal(data, unknowns)?;
+        let id = analyse(&full.jacobian_root(), rtol);
+        let names: Vec<String> = unknowns.iter().map(|u| u.name(&start.model)).collect();
+        let name_refs: Vec<&str> = names.iter().map(String::as_str).collect();
+        (
+            id.kept.iter().map(|&k| unknowns[k]).collect::<Vec<_>>(),
+            id.fixed.iter().map(|&k| unknowns[k]).collect::<Vec<_>>(),
+            id.combinations
+                .iter()
+                .map(|c| c.name(&name_refs))
+                .collect::<Vec<_>>(),
+            Some(full.select(&id.kept)),
+        )
+    };
+    if fitted.is_empty() {
+        return Ok(ExtFit {
+            ext: start.clone(),
+            fitted,
+            fixed,
+            unidentifiable,
+            sigma: Vec::new(),
+            rss_mm2: start.sum_sq(data)?,
+            n_residuals: n_res,
+            converged: true,
+        });
+    }
+    let mut problem = ExtProblem {
+        ext: start.clone(),
+        data,
+        unknowns: fitted.clone(),
+    };
+    let x0 = DVector::from_iterator(fitted.len(), fitted.iter().map(|&u| start.value(u)));
+    let rep = match eq0 {
+        Some(eq) => solve_normal_from(&mut problem, x0, eq, lm),
+        None => solve_normal(&mut problem, x0, lm),
+    }
+    .map_err(CalibError::from_lm)?;
+    problem.set(&rep.x)?;
+    let root = rep.normal.jacobian_root();
+    let sigma = parameter_sigmas_m(&root, rep.normal.m, rep.normal.rtr, rtol);
+    Ok(ExtFit {
+        ext: problem.ext,
+        fitted,
+        fixed,
+        unidentifiable,
+        sigma,
+        rss_mm2: rep.normal.rtr,
         n_residuals: n_res,
         converged: rep.termination.converged(),
     })
