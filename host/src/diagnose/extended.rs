@@ -377,15 +377,33 @@ impl ExtModel {
         eq: &mut Normal,
     ) -> Result<(), ModelError> {
         eq.clear();
+        let n = unknowns.len();
         for k in 0..data.len() {
             let (p, j) = self.predict_with_jacobian(data, k, unknowns)?;
-            let rows = data.jacobian_rows(k, &j);
-            let r = DVector::from_vec(data.components(k, &(p - data.poses.xyz_mm[k])));
-            eq.jtj.gemm_tr(1.0, &rows, &rows, 1.0);
-            eq.jtr.gemv_tr(1.0, &rows, &r, 1.0);
-            eq.rtr += r.norm_squared();
+            let r = data.components(k, &(p - data.poses.xyz_mm[k]));
+            let partial;
+            let rows = if !data.has_directions(k) {
+                &j
+            } else {
+                partial = data.jacobian_rows(k, &j);
+                &partial
+            };
+            for (i, ri) in r.iter().enumerate() {
+                for a in 0..n {
+                    let ja = rows[(i, a)];
+                    if ja == 0.0 {
+                        continue;
+                    }
+                    eq.jtr[a] += ja * ri;
+                    for b in a..n {
+                        eq.jtj[(a, b)] += ja * rows[(i, b)];
+                    }
+                }
+                eq.rtr += ri * ri;
+            }
             eq.m += r.len();
         }
+        eq.symmetrise();
         Ok(())
     }
 
