@@ -137,4 +137,31 @@ mod tests {
         let s1 = r.svd(true, true).solve(&z, 1e-12).unwrap();
         assert!((s0 - s1).amax() <= 1e-8 * s0.amax().max(1e-12));
     }
+
+    #[test]
+    fn the_normal_equation_fit_of_many_poses_matches_the_tall_one() {
+        use super::super::extended::{fit, uses_normal};
+        use crate::calib::lm::LmConfig;
+        let d = data(2500);
+        // without the tilting law the problem is smooth: both solvers reach the same minimum
+        let mut ext = ExtModel::new(katana450());
+        ext.tilt = false;
+        let unknowns: Vec<Unknown> = crate::calib::default_selection(&ext.model, false)
+            .into_iter()
+            .map(Unknown::Param)
+            .chain([Unknown::JointScale(1)])
+            .collect();
+        let lm = LmConfig::default();
+        // rtol 1e-4 takes the normal equations on 7500 residuals, 1e-7 the tall QR
+        assert!(uses_normal(&d, 1e-4) && !uses_normal(&d, 1e-7));
+        let normal = fit(&ext, &d, &unknowns, &lm, 1e-4, false).unwrap();
+        let tall = fit(&ext, &d, &unknowns, &lm, 1e-7, false).unwrap();
+        assert_eq!(normal.fitted, tall.fitted);
+        assert!((normal.rss_mm2 - tall.rss_mm2).abs() <= 1e-9 * tall.rss_mm2);
+        for (k, &u) in tall.fitted.iter().enumerate() {
+            let (a, b) = (normal.ext.value(u), tall.ext.value(u));
+            assert!((a - b).abs() <= 1e-3 * tall.sigma[k], "{u:?}: {a} vs {b}");
+            assert!((normal.sigma[k] - tall.sigma[k]).abs() <= 1e-6 * tall.sigma[k]);
+        }
+    }
 }
