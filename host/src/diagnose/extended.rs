@@ -19,7 +19,7 @@ use nalgebra::{DMatrix, DVector, Vector3};
 
 use super::data::Dataset;
 use crate::calib::fit::parameter_sigmas_m;
-use crate::calib::identifiability::analyse;
+use crate::calib::identifiability::{analyse, Identifiability};
 use crate::calib::lm::{solve, LmConfig, Problem};
 use crate::calib::normal::{
     solve_normal, solve_normal_from, use_normal_equations, Normal, NormalProblem,
@@ -544,6 +544,11 @@ impl ExtFit {
 /// (unknowns listed first are preferred; see [`analyse`]), then Levenberg-Marquardt on the
 /// identifiable ones. `skip_analysis` fits all of them as given (for cross-validation refits that
 /// reuse an earlier analysis; the solver still drops numerically null directions).
+///
+/// On many poses ([`uses_normal`]) the analysis, the solver and the sigmas work on normal
+/// equations accumulated pose by pose ([`ExtModel::normal`]; the analysis and the sigmas on the
+/// square root of `J^T J`, which has the tall Jacobian's column norms and singular values):
+/// memory `O(p^2)`. Otherwise on the tall Jacobian (QR).
 pub fn fit(
     start: &ExtModel,
     data: &Dataset,
@@ -555,25 +560,29 @@ pub fn fit(
     if data.is_empty() {
         return Err(CalibError::NoPoses);
     }
-    if uses_normal(data, rtol) {
-        return fit_normal(start, data, unknowns, lm, rtol, skip_analysis);
-    }
-    let names: Vec<String> = unknowns.iter().map(|u| u.name(&start.model)).collect();
-    let (fitted, fixed, unidentifiable) = if skip_analysis {
-        (unknowns.to_vec(), Vec::new(), Vec::new())
+    let normal = uses_normal(data, rtol);
+    // the normal equations of the fitted unknowns at the start, when the analysis built them
+    let mut eq0 = None;
+    let split = if skip_analysis {
+        Split {
+            fitted: unknowns.to_vec(),
+            fixed: Vec::new(),
+            unidentifiable: Vec::new(),
+        }
+    } else if normal {
+        let full = start.normal(data, unknowns)?;
+        let id = analyse(&full.jacobian_root(), rtol);
+        eq0 = Some(full.select(&id.kept));
+        Split::of(start, unknowns, &id)
     } else {
         let (jac0, _) = start.stacked(data, unknowns)?;
-        let id = analyse(&jac0, rtol);
-        let name_refs: Vec<&str> = names.iter().map(String::as_str).collect();
-        (
-            id.kept.iter().map(|&k| unknowns[k]).collect::<Vec<_>>(),
-            id.fixed.iter().map(|&k| unknowns[k]).collect::<Vec<_>>(),
-            id.combinations
-                .iter()
-                .map(|c| c.name(&name_refs))
-                .collect::<Vec<_>>(),
-        )
+        Split::of(start, unknowns, &analyse(&jac0, rtol))
     };
+    let Split {
+        fitted,
+        fixed,
+        unidentifiable,
+    } = split;
     let n_res = data.n_residuals();
     if fitted.is_empty() {
         let rss = start.errors(data)?.iter().map(|e| e.norm_squared()).sum();
@@ -594,10 +603,22 @@ pub fn fit(
         unknowns: fitted.clone(),
     };
     let x0 = DVector::from_iterator(fitted.len(), fitted.iter().map(|&u| start.value(u)));
-    let rep = solve(&mut problem, x0, lm).map_err(CalibError::from_lm)?;
-    problem.set(&rep.x)?;
-    let rss = rep.residuals.norm_squared();
-    let sigma = crate::calib::fit::parameter_sigmas(&rep.jacobian, rss, rtol);
+    let (x, rss, sigma, converged) = if normal {
+        let rep = match eq0 {
+            Some(eq) => solve_normal_from(&mut problem, x0, eq, lm),
+            None => solve_normal(&mut problem, x0, lm),
+        }
+        .map_err(CalibError::from_lm)?;
+        let root = rep.normal.jacobian_root();
+        let sigma = parameter_sigmas_m(&root, rep.normal.m, rep.normal.rtr, rtol);
+        (rep.x, rep.normal.rtr, sigma, rep.termination.converged())
+    } else {
+        let rep = solve(&mut problem, x0, lm).map_err(CalibError::from_lm)?;
+        let rss = rep.residuals.norm_squared();
+        let sigma = crate::calib::fit::parameter_sigmas(&rep.jacobian, rss, rtol);
+        (rep.x, rss, sigma, rep.termination.converged())
+    };
+    problem.set(&x)?;
     Ok(ExtFit {
         ext: problem.ext,
         fitted,
@@ -606,75 +627,28 @@ pub fn fit(
         sigma,
         rss_mm2: rss,
         n_residuals: n_res,
-        converged: rep.termination.converged(),
+        converged,
     })
 }
 
-/// [`fit`] on normal equations accumulated pose by pose ([`ExtModel::normal`]): the
-/// identifiability analysis and the sigmas on the square root of `J^T J`, which has the tall
-/// Jacobian's column norms and singular values; memory `O(p^2)`.
-fn fit_normal(
-    start: &ExtModel,
-    data: &Dataset,
-    unknowns: &[Unknown],
-    lm: &LmConfig,
-    rtol: f64,
-    skip_analysis: bool,
-) -> Result<ExtFit, CalibError> {
-    let n_res = data.n_residuals();
-    let (fitted, fixed, unidentifiable, eq0) = if skip_analysis {
-        (unknowns.to_vec(), Vec::new(), Vec::new(), None)
-    } else {
-        let full = start.normal(data, unknowns)?;
-        let id = analyse(&full.jacobian_root(), rtol);
+/// The requested unknowns split by an identifiability analysis.
+struct Split {
+    fitted: Vec<Unknown>,
+    fixed: Vec<Unknown>,
+    unidentifiable: Vec<String>,
+}
+
+impl Split {
+    /// `unknowns` split by the analysis `id` of their columns.
+    fn of(start: &ExtModel, unknowns: &[Unknown], id: &Identifiability) -> Self {
         let names: Vec<String> = unknowns.iter().map(|u| u.name(&start.model)).collect();
         let name_refs: Vec<&str> = names.iter().map(String::as_str).collect();
-        (
-            id.kept.iter().map(|&k| unknowns[k]).collect::<Vec<_>>(),
-            id.fixed.iter().map(|&k| unknowns[k]).collect::<Vec<_>>(),
-            id.combinations
-                .iter()
-                .map(|c| c.name(&name_refs))
-                .collect::<Vec<_>>(),
-            Some(full.select(&id.kept)),
-        )
-    };
-    if fitted.is_empty() {
-        return Ok(ExtFit {
-            ext: start.clone(),
-            fitted,
-            fixed,
-            unidentifiable,
-            sigma: Vec::new(),
-            rss_mm2: start.sum_sq(data)?,
-            n_residuals: n_res,
-            converged: true,
-        });
+        Self {
+            fitted: id.kept.iter().map(|&k| unknowns[k]).collect(),
+            fixed: id.fixed.iter().map(|&k| unknowns[k]).collect(),
+            unidentifiable: id.combinations.iter().map(|c| c.name(&name_refs)).collect(),
+        }
     }
-    let mut problem = ExtProblem {
-        ext: start.clone(),
-        data,
-        unknowns: fitted.clone(),
-    };
-    let x0 = DVector::from_iterator(fitted.len(), fitted.iter().map(|&u| start.value(u)));
-    let rep = match eq0 {
-        Some(eq) => solve_normal_from(&mut problem, x0, eq, lm),
-        None => solve_normal(&mut problem, x0, lm),
-    }
-    .map_err(CalibError::from_lm)?;
-    problem.set(&rep.x)?;
-    let root = rep.normal.jacobian_root();
-    let sigma = parameter_sigmas_m(&root, rep.normal.m, rep.normal.rtr, rtol);
-    Ok(ExtFit {
-        ext: problem.ext,
-        fitted,
-        fixed,
-        unidentifiable,
-        sigma,
-        rss_mm2: rep.normal.rtr,
-        n_residuals: n_res,
-        converged: rep.termination.converged(),
-    })
 }
 
 #[cfg(test)]
