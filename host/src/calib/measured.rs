@@ -513,6 +513,11 @@ impl MeasuredSet {
         out
     }
 
+    /// Whether pose `k` measures directions (a partial position) rather than the full position.
+    pub fn has_directions(&self, k: usize) -> bool {
+        matches!(self.directions.as_ref().and_then(|d| d.get(k)), Some(d) if !d.is_empty())
+    }
+
     /// The measured rows of a 3 x c Jacobian at pose `k` (`d^T J` per direction).
     pub fn jacobian_rows(&self, k: usize, j: &DMatrix<f64>) -> DMatrix<f64> {
         match self.directions.as_ref().and_then(|d| d.get(k)) {

@@ -18,6 +18,7 @@
 use nalgebra::{DMatrix, DVector};
 
 use super::candidates::Candidate;
+use super::compress::stacked_or_compressed;
 use super::extended::{ExtFit, Unknown};
 use crate::calib::CalibError;
 use crate::calib::MeasuredSet;
@@ -119,7 +120,7 @@ pub fn aliased(
             }
         }
     }
-    let (mut jac, _) = last.ext.stacked(data, &all)?;
+    let (mut jac, _) = stacked_or_compressed(&last.ext, data, &all)?;
     let norms: Vec<f64> = (0..jac.ncols()).map(|k| jac.column(k).norm()).collect();
     let top = norms.iter().copied().fold(0.0, f64::max);
     for (k, n) in norms.iter().enumerate() {

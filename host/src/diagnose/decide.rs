@@ -38,6 +38,7 @@ use rand::SeedableRng;
 use rand_chacha::ChaCha8Rng;
 
 use super::candidates::Candidate;
+use super::compress::stacked_or_compressed;
 use super::extended::{fit, ExtFit, ExtModel, Unknown};
 use super::parallel::map_ordered;
 use crate::calib::lm::LmConfig;
@@ -382,7 +383,7 @@ pub(super) fn linear_start(cur: &ExtFit, data: &MeasuredSet, cand: &Candidate) -
             .copied()
             .filter(|u| !cur.fitted.contains(u)),
     );
-    let (mut jac, err) = cur.ext.stacked(data, &unknowns).ok()?;
+    let (mut jac, err) = stacked_or_compressed(&cur.ext, data, &unknowns).ok()?;
     let norms: Vec<f64> = (0..jac.ncols()).map(|k| jac.column(k).norm()).collect();
     for (k, n) in norms.iter().enumerate() {
         if *n > 0.0 {

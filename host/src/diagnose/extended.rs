@@ -17,8 +17,12 @@
 
 use nalgebra::{DMatrix, DVector, Vector3};
 
-use crate::calib::identifiability::analyse;
+use crate::calib::fit::parameter_sigmas_m;
+use crate::calib::identifiability::{analyse, Identifiability};
 use crate::calib::lm::{solve, LmConfig, Problem};
+use crate::calib::normal::{
+    solve_normal, solve_normal_from, use_normal_equations, Normal, NormalProblem,
+};
 pub use crate::calib::unknown::Unknown;
 use crate::calib::CalibError;
 use crate::calib::MeasuredSet;
@@ -192,12 +196,11 @@ impl ExtModel {
         Ok((self.model.joint_map(q_deg, t_s, approach, &tau), tau))
     }
 
-    fn approach_of(data: &MeasuredSet, k: usize) -> Vec<f64> {
+    fn approach_of(data: &MeasuredSet, k: usize) -> &[f64] {
         data.approach
             .as_ref()
             .and_then(|a| a.get(k))
-            .cloned()
-            .unwrap_or_default()
+            .map_or(&[], Vec::as_slice)
     }
 
     /// Predicted measured position (mm, R) of pose `k` of `data` (with its moments, if any).
@@ -206,7 +209,7 @@ impl ExtModel {
         self.predict_with(
             &data.poses.q_deg[k],
             data.t(k),
-            &approach,
+            approach,
             self.tilt_at(data, k),
         )
     }
@@ -236,7 +239,7 @@ impl ExtModel {
         let with_tau = self.needs_torques(unknowns);
         let approach = Self::approach_of(data, k);
         let q = &data.poses.q_deg[k];
-        let (q_eff, tau) = self.effective_joints(q, t_s, &approach, with_tau)?;
+        let (q_eff, tau) = self.effective_joints(q, t_s, approach, with_tau)?;
         let mut wrt: Vec<Wrt> = Vec::with_capacity(unknowns.len());
         let mut slot = Vec::with_capacity(unknowns.len());
         for u in unknowns {
@@ -305,7 +308,7 @@ impl ExtModel {
         for k in 0..data.len() {
             let approach = Self::approach_of(data, k);
             let (q_eff, _) =
-                self.effective_joints(&data.poses.q_deg[k], data.t(k), &approach, with_tau)?;
+                self.effective_joints(&data.poses.q_deg[k], data.t(k), approach, with_tau)?;
             let mut moments = self.model.moments_kgfm(&q_eff)?;
             if let Some(extra) = data.moments(k) {
                 for (m, e) in moments.iter_mut().zip(extra) {
@@ -353,6 +356,75 @@ impl ExtModel {
         }
         Ok((jac, err))
     }
+
+    /// Normal equations of the residual `predicted - measured` over `data` wrt `unknowns`
+    /// (both triangles of `J^T J`), accumulated pose by pose: memory `O(p^2)` whatever the
+    /// number of poses, the same rows as [`ExtModel::stacked`].
+    pub fn normal(&self, data: &MeasuredSet, unknowns: &[Unknown]) -> Result<Normal, ModelError> {
+        let mut eq = Normal::zeros(unknowns.len());
+        self.normal_into(data, unknowns, &mut eq)?;
+        Ok(eq)
+    }
+
+    /// [`ExtModel::normal`] into `eq` (sized for `unknowns`).
+    pub fn normal_into(
+        &self,
+        data: &MeasuredSet,
+        unknowns: &[Unknown],
+        eq: &mut Normal,
+    ) -> Result<(), ModelError> {
+        eq.clear();
+        let n = unknowns.len();
+        for k in 0..data.len() {
+            let (p, j) = self.predict_with_jacobian(data, k, unknowns)?;
+            let r = data.components(k, &(p - data.poses.xyz_mm[k]));
+            let partial;
+            let rows = if !data.has_directions(k) {
+                &j
+            } else {
+                partial = data.jacobian_rows(k, &j);
+                &partial
+            };
+            for (i, ri) in r.iter().enumerate() {
+                for a in 0..n {
+                    let ja = rows[(i, a)];
+                    if ja == 0.0 {
+                        continue;
+                    }
+                    eq.jtr[a] += ja * ri;
+                    for b in a..n {
+                        eq.jtj[(a, b)] += ja * rows[(i, b)];
+                    }
+                }
+                eq.rtr += ri * ri;
+            }
+            eq.m += r.len();
+        }
+        eq.symmetrise();
+        Ok(())
+    }
+
+    /// Sum of the squared residuals (measured components) over `data`.
+    pub fn sum_sq(&self, data: &MeasuredSet) -> Result<f64, ModelError> {
+        let mut s = 0.0;
+        for k in 0..data.len() {
+            let p = self.predict_pose(data, k)?;
+            s += data
+                .components(k, &(p - data.poses.xyz_mm[k]))
+                .iter()
+                .map(|c| c * c)
+                .sum::<f64>();
+        }
+        Ok(s)
+    }
+}
+
+/// Whether the fits on `data` go through normal equations: from
+/// [`super::compress::COMPRESS_MIN_RESIDUALS`] residuals on (below, the tall Jacobian is small
+/// and its QR keeps the full precision), when the identifiability threshold allows them
+/// ([`use_normal_equations`]).
+pub fn uses_normal(data: &MeasuredSet, rtol: f64) -> bool {
+    use_normal_equations(rtol) && data.n_residuals() >= super::compress::COMPRESS_MIN_RESIDUALS
 }
 
 /// The extended fit as a least-squares problem (residual `predicted - measured`).
@@ -368,6 +440,28 @@ impl ExtProblem<'_> {
             self.ext.set_value(u, v)?;
         }
         Ok(())
+    }
+}
+
+impl NormalProblem for ExtProblem<'_> {
+    type Error = ModelError;
+
+    fn n_params(&self) -> usize {
+        self.unknowns.len()
+    }
+
+    fn n_residuals(&self) -> usize {
+        self.data.n_residuals()
+    }
+
+    fn sum_sq(&mut self, x: &DVector<f64>) -> Result<f64, ModelError> {
+        self.set(x)?;
+        self.ext.sum_sq(self.data)
+    }
+
+    fn normal(&mut self, x: &DVector<f64>, eq: &mut Normal) -> Result<(), ModelError> {
+        self.set(x)?;
+        self.ext.normal_into(self.data, &self.unknowns, eq)
     }
 }
 
@@ -447,6 +541,11 @@ impl ExtFit {
 /// (unknowns listed first are preferred; see [`analyse`]), then Levenberg-Marquardt on the
 /// identifiable ones. `skip_analysis` fits all of them as given (for cross-validation refits that
 /// reuse an earlier analysis; the solver still drops numerically null directions).
+///
+/// On many poses ([`uses_normal`]) the analysis, the solver and the sigmas work on normal
+/// equations accumulated pose by pose ([`ExtModel::normal`]; the analysis and the sigmas on the
+/// square root of `J^T J`, which has the tall Jacobian's column norms and singular values):
+/// memory `O(p^2)`. Otherwise on the tall Jacobian (QR).
 pub fn fit(
     start: &ExtModel,
     data: &MeasuredSet,
@@ -458,22 +557,29 @@ pub fn fit(
     if data.is_empty() {
         return Err(CalibError::NoPoses);
     }
-    let names: Vec<String> = unknowns.iter().map(|u| u.name(&start.model)).collect();
-    let (fitted, fixed, unidentifiable) = if skip_analysis {
-        (unknowns.to_vec(), Vec::new(), Vec::new())
+    let normal = uses_normal(data, rtol);
+    // the normal equations of the fitted unknowns at the start, when the analysis built them
+    let mut eq0 = None;
+    let split = if skip_analysis {
+        Split {
+            fitted: unknowns.to_vec(),
+            fixed: Vec::new(),
+            unidentifiable: Vec::new(),
+        }
+    } else if normal {
+        let full = start.normal(data, unknowns)?;
+        let id = analyse(&full.jacobian_root(), rtol);
+        eq0 = Some(full.select(&id.kept));
+        Split::of(start, unknowns, &id)
     } else {
         let (jac0, _) = start.stacked(data, unknowns)?;
-        let id = analyse(&jac0, rtol);
-        let name_refs: Vec<&str> = names.iter().map(String::as_str).collect();
-        (
-            id.kept.iter().map(|&k| unknowns[k]).collect::<Vec<_>>(),
-            id.fixed.iter().map(|&k| unknowns[k]).collect::<Vec<_>>(),
-            id.combinations
-                .iter()
-                .map(|c| c.name(&name_refs))
-                .collect::<Vec<_>>(),
-        )
+        Split::of(start, unknowns, &analyse(&jac0, rtol))
     };
+    let Split {
+        fitted,
+        fixed,
+        unidentifiable,
+    } = split;
     let n_res = data.n_residuals();
     if fitted.is_empty() {
         let rss = start.errors(data)?.iter().map(|e| e.norm_squared()).sum();
@@ -494,10 +600,22 @@ pub fn fit(
         unknowns: fitted.clone(),
     };
     let x0 = DVector::from_iterator(fitted.len(), fitted.iter().map(|&u| start.value(u)));
-    let rep = solve(&mut problem, x0, lm).map_err(CalibError::from_lm)?;
-    problem.set(&rep.x)?;
-    let rss = rep.residuals.norm_squared();
-    let sigma = crate::calib::fit::parameter_sigmas(&rep.jacobian, rss, rtol);
+    let (x, rss, sigma, converged) = if normal {
+        let rep = match eq0 {
+            Some(eq) => solve_normal_from(&mut problem, x0, eq, lm),
+            None => solve_normal(&mut problem, x0, lm),
+        }
+        .map_err(CalibError::from_lm)?;
+        let root = rep.normal.jacobian_root();
+        let sigma = parameter_sigmas_m(&root, rep.normal.m, rep.normal.rtr, rtol);
+        (rep.x, rep.normal.rtr, sigma, rep.termination.converged())
+    } else {
+        let rep = solve(&mut problem, x0, lm).map_err(CalibError::from_lm)?;
+        let rss = rep.residuals.norm_squared();
+        let sigma = crate::calib::fit::parameter_sigmas(&rep.jacobian, rss, rtol);
+        (rep.x, rss, sigma, rep.termination.converged())
+    };
+    problem.set(&x)?;
     Ok(ExtFit {
         ext: problem.ext,
         fitted,
@@ -506,8 +624,28 @@ pub fn fit(
         sigma,
         rss_mm2: rss,
         n_residuals: n_res,
-        converged: rep.termination.converged(),
+        converged,
     })
+}
+
+/// The requested unknowns split by an identifiability analysis.
+struct Split {
+    fitted: Vec<Unknown>,
+    fixed: Vec<Unknown>,
+    unidentifiable: Vec<String>,
+}
+
+impl Split {
+    /// `unknowns` split by the analysis `id` of their columns.
+    fn of(start: &ExtModel, unknowns: &[Unknown], id: &Identifiability) -> Self {
+        let names: Vec<String> = unknowns.iter().map(|u| u.name(&start.model)).collect();
+        let name_refs: Vec<&str> = names.iter().map(String::as_str).collect();
+        Self {
+            fitted: id.kept.iter().map(|&k| unknowns[k]).collect(),
+            fixed: id.fixed.iter().map(|&k| unknowns[k]).collect(),
+            unidentifiable: id.combinations.iter().map(|c| c.name(&name_refs)).collect(),
+        }
+    }
 }
 
 #[cfg(test)]

@@ -5,6 +5,7 @@
 //! |---|---|
 //! | [`extended`] | the model plus non-parameter effects (time drift, compliance); the extended fit |
 //! | [`candidates`] | the effect library (FORMATS.md effect ids) and effect-unit parameters |
+//! | [`compress`] | the stacked Jacobian of many poses reduced to its triangular factor (bounded memory) |
 //! | [`residual`] | regressors, linearised screening, structure tests |
 //! | [`decide`] | the decision rule: F-test + BIC + k-fold cross-validation, its settings and tests |
 //! | [`select`] | the greedy forward selection in named steps (shortlist, refit, near ties, tests) |
@@ -36,6 +37,7 @@
 pub mod alias;
 pub mod bounds;
 pub mod candidates;
+pub mod compress;
 pub mod decide;
 pub mod extended;
 pub mod floor;

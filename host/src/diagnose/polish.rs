@@ -19,6 +19,7 @@
 //! and the RSS values of its vertices agree to [`RSS_RTOL`], or after
 //! [`super::decide::DecideConfig::polish_max_evals`] trial points.
 
+use super::compress::stacked_or_compressed;
 use super::decide::DecideConfig;
 use super::extended::{fit, ExtFit, ExtModel, Unknown};
 use crate::calib::CalibError;
@@ -63,7 +64,7 @@ pub fn predicted_decrease(
     if f.fitted.is_empty() || dof == 0 || f.rss_mm2 <= 0.0 {
         return Ok(0.0);
     }
-    let (mut jac, err) = f.ext.stacked(data, &f.fitted)?;
+    let (mut jac, err) = stacked_or_compressed(&f.ext, data, &f.fitted)?;
     for mut c in jac.column_iter_mut() {
         let n = c.norm();
         if n > 0.0 {

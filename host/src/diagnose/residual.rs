@@ -17,6 +17,7 @@
 use nalgebra::{DMatrix, DVector, Vector3};
 
 use super::candidates::Candidate;
+use super::compress::stacked_or_compressed;
 use super::extended::{ExtModel, Unknown};
 use super::stat::f_test_p_value;
 use crate::calib::MeasuredSet;
@@ -263,7 +264,7 @@ pub fn screen(
             }
         }
     }
-    let (jac, r) = ext.stacked(data, &all)?;
+    let (jac, r) = stacked_or_compressed(ext, data, &all)?;
     let m = jac.nrows();
     let ja = jac.columns(0, current.len()).into_owned();
     let qa = column_basis(&ja, rtol);
