@@ -29,8 +29,9 @@
 //! parameters and of the base and tool placement ([`change_unknowns`]), fitted on the held-out
 //! poses alone ([`after_parameter_change`]), is at the floor; a missing effect is
 //! not a parameter change and leaves it above. Without more held-out residuals than fitted
-//! parameters the two cannot be told apart and the verdict stays `change_between_sets`, saying
-//! so.
+//! parameters, without an independent floor, or along a traced path (serially correlated
+//! residuals, [`SERIAL_TAU_MAX`]), a held-out set measured with more noise cannot be told from a
+//! missing effect: the verdict stays `change_between_sets`, saying so.
 //!
 //! With `overfitting` the number of parameter combinations the poses support is given
 //! ([`super::probe::design::Design::supported_parameters`]). Without an independent floor the
@@ -53,6 +54,11 @@ use crate::model::Model;
 /// called `overfitting`, not a change between the sets (it cannot be told from the parameters'
 /// errors).
 pub const UNCERTAIN_PREDICTION_RATIO: f64 = 1.2;
+
+/// Largest serial-correlation time (in poses) for which the held-out residual is tested against
+/// a change of the parameters ([`after_parameter_change`]): beyond it the residuals are a traced
+/// path's, whose held-out excess may be another session's noise.
+pub const SERIAL_TAU_MAX: f64 = 1.5;
 
 /// The `verdict` object of `diagnose --json` (extra key).
 #[derive(Debug, Clone, PartialEq, Serialize)]
@@ -277,7 +283,13 @@ pub fn judge(floor: &FloorReport, probe: &ProbeResult, c: Counts) -> Verdict {
     let val_above = above(Some(val_p));
     let val_raw_above = above(Some(val_raw_p));
     let expected_ratio = c.val_inflation.max(1.0).sqrt();
-    let after_change_p = c.val_after_change.map(|(ss, dof)| test(ss, dof));
+    // only against an independent floor and on independent poses: with the residual as its
+    // own floor, or along a traced path, a held-out set measured with more noise (another
+    // session, another sheet) cannot be told from an error no parameter change explains
+    let after_change_p = c
+        .val_after_change
+        .filter(|_| !residual_floor && tau <= SERIAL_TAU_MAX)
+        .map(|(ss, dof)| test(ss, dof));
     let kind = if cal_above {
         "missing_effect"
     } else if cv_above || (val_above && expected_ratio >= UNCERTAIN_PREDICTION_RATIO) {
@@ -356,7 +368,7 @@ pub fn sentence(v: &Verdict, floor: &FloorReport) -> String {
             "a change between the sets: the calibration and its cross-validation are at the floor, the held-out set is not (drift, another day, another tool mounting or base){}: {numbers}",
             match v.validation_p_value_after_parameter_change {
                 Some(p) => format!("; a change of the fitted parameters on the held-out poses brings them to the floor (p = {p:.1e})"),
-                None => "; the held-out set has too few poses to tell it from a missing effect".to_string(),
+                None => "; whether a parameter change explains it is not tested here (no more held-out residuals than unknowns, no independent floor, or a traced path)".to_string(),
             }
         ),
         _ => format!(
