@@ -533,7 +533,14 @@ pub fn diagnose(
     );
     let aliased = aliased_pairs(&selection, &requested, cal, &mut effects)?;
     let (probe, probe_cfg, cal_jac) = probe_residual(model, last, cal, &final_cal, &floor, opts)?;
-    let val_jac = probe::jacobians(&last.ext, val, &last.fitted)?;
+    // the held-out Jacobians of the fitted unknowns are the first columns of those of the
+    // unknowns a change between the sets may move (`change_unknowns` starts with them)
+    let change = verdict::change_unknowns(&last.ext.model, &last.fitted);
+    let val_jac_change = probe::jacobians(&last.ext, val, &change)?;
+    let val_jac: Vec<nalgebra::DMatrix<f64>> = val_jac_change
+        .iter()
+        .map(|j| j.columns(0, last.fitted.len()).into_owned())
+        .collect();
     let verdict = verdict::judge(
         &floor,
         &probe,
@@ -543,15 +550,7 @@ pub fn diagnose(
             tau,
             val_residuals: (0..val.len()).map(|k| val.rows(k)).sum(),
             val_inflation: verdict::prediction_inflation(cal, &cal_jac, val, &val_jac),
-            val_after_change: verdict::after_parameter_change(
-                val,
-                &final_val,
-                &probe::jacobians(
-                    &last.ext,
-                    val,
-                    &verdict::change_unknowns(&last.ext.model, &last.fitted),
-                )?,
-            ),
+            val_after_change: verdict::after_parameter_change(val, &final_val, &val_jac_change),
         },
     );
     unexplained.note = format!("{}; {}", verdict.note, unexplained.note);

@@ -39,7 +39,7 @@
 //! are tested against it (an F ratio with its degrees of freedom), and when both agree with it
 //! the verdict is `no_floor` (a missing effect cannot be told from noise).
 
-use nalgebra::{DMatrix, DVector, Matrix3, Vector3};
+use nalgebra::{DMatrix, DVector, Vector3};
 use serde::Serialize;
 
 use super::floor::{chi2_upper_p, FloorReport, FLOOR_ALPHA};
@@ -114,19 +114,6 @@ pub struct Counts {
     pub val_after_change: Option<(f64, f64)>,
 }
 
-/// The measured Jacobian `P_k J_k` of pose `k` (`J_k` unchanged for a full position).
-fn measured(data: &MeasuredSet, k: usize, j: &DMatrix<f64>) -> DMatrix<f64> {
-    match data.directions.as_ref().and_then(|d| d.get(k)) {
-        Some(d) if !d.is_empty() && j.nrows() == 3 => {
-            let p: Matrix3<f64> = d.iter().map(|u| u * u.transpose()).sum();
-            let mut out = DMatrix::zeros(3, j.ncols());
-            out.copy_from(&(p * j));
-            out
-        }
-        _ => j.clone(),
-    }
-}
-
 /// Expected held-out sum of squares of a right model over its value without parameter errors:
 /// `(m_val + sum_k tr(L_k N^+ L_k^T)) / m_val`, `N = sum L^T L` over the calibration poses and
 /// `L_k` the measured Jacobian of the fitted parameters at held-out pose `k` (the exact
@@ -146,7 +133,7 @@ pub fn prediction_inflation(
     let mut n = DMatrix::zeros(p, p);
     for (k, j) in cal_jac.iter().enumerate() {
         if j.ncols() == p {
-            let l = measured(cal, k, j);
+            let l = cal.jacobian_rows(k, j);
             n += l.transpose() * l;
         }
     }
@@ -159,7 +146,7 @@ pub fn prediction_inflation(
         .enumerate()
         .filter(|(_, j)| j.ncols() == p)
         .map(|(k, j)| {
-            let l = measured(val, k, j);
+            let l = val.jacobian_rows(k, j);
             (&l * &ninv * l.transpose()).trace()
         })
         .sum();
@@ -207,10 +194,11 @@ pub fn after_parameter_change(
         if j.ncols() != p || j.nrows() != 3 {
             return None;
         }
-        let l = measured(val, k, j);
+        let l = val.jacobian_rows(k, j);
         n += l.transpose() * &l;
-        b += l.transpose() * DVector::from_column_slice(e.as_slice());
-        rtr += e.norm_squared();
+        let r = DVector::from_vec(val.components(k, e));
+        b += l.transpose() * &r;
+        rtr += r.norm_squared();
     }
     let scale: DVector<f64> = n
         .diagonal()
