@@ -18,7 +18,7 @@ Without a recorded value, `--render` keeps the committed text of a `~` or `^` fi
 
   python3 scripts/results.py --run [--debug]   run the tests that feed results.md (and size the
                                                firmware when built), render it
-  python3 scripts/results.py --run-examples DIR
+  python3 scripts/results.py --run-examples DIR [--debug]
                                                run the plan examples (release; minutes) and the
                                                ignored six-seed test, writing their values to DIR
   python3 scripts/results.py --render DIR      render docs/results.md from the values in DIR
@@ -434,12 +434,13 @@ def parse_n_table(text):
     return values
 
 
-def run_examples(results_dir):
-    """Runs the plan examples (release) and the ignored six-seed test; writes their values to
-    `results_dir` (merged with what is there)."""
+def run_examples(results_dir, debug=False):
+    """Runs the plan examples (release, or the test profile with `debug`) and the ignored
+    six-seed test; writes their values to `results_dir` (merged with what is there)."""
     results_dir.mkdir(parents=True, exist_ok=True)
+    profile = ["--profile", "test"] if debug else ["--release"]
     for module, example, args in EXAMPLES:
-        cmd = ["cargo", "run", "--release", "--locked", "-p", "rigctl", "--example", example, "--", *args]
+        cmd = ["cargo", "run", *profile, "--locked", "-p", "rigctl", "--example", example, "--", *args]
         print("+", " ".join(cmd), file=sys.stderr)
         out = subprocess.run(cmd, cwd=ROOT, check=True, stdout=subprocess.PIPE, text=True).stdout
         sys.stdout.write(out)
@@ -452,7 +453,7 @@ def run_examples(results_dir):
         path.write_text(json.dumps(doc, indent=2, sort_keys=True) + "\n", encoding="utf-8")
     env = dict(os.environ, RIG_RESULTS_DIR=str(results_dir))
     for package, target, names in SLOW_TESTS:
-        cmd = ["cargo", "test", "--release", "-p", package, "--test", target, "--",
+        cmd = ["cargo", "test", *([] if debug else ["--release"]), "-p", package, "--test", target, "--",
                "--exact", "--ignored", *names]
         print("+", " ".join(cmd), file=sys.stderr)
         subprocess.run(cmd, cwd=ROOT, env=env, check=True)
@@ -466,14 +467,15 @@ def main():
                       help="run the plan examples and the slow test, writing their values to DIR")
     mode.add_argument("--render", metavar="DIR", help="render from the values in DIR")
     mode.add_argument("--check", metavar="DIR", help="compare the rendering from DIR with results.md")
-    ap.add_argument("--debug", action="store_true", help="with --run: the test profile instead of release")
+    ap.add_argument("--debug", action="store_true",
+                    help="with --run or --run-examples: the test profile instead of release")
     args = ap.parse_args()
     try:
         if args.check:
             return check(load(args.check))
         if args.run_examples:
             try:
-                run_examples(Path(args.run_examples).resolve())
+                run_examples(Path(args.run_examples).resolve(), args.debug)
             except subprocess.CalledProcessError as e:
                 print(f"results.py: {e}", file=sys.stderr)
                 return 1
