@@ -27,6 +27,11 @@ fn tall_fit(start: &Model, poses: &Poses, sel: &[usize], tilt: bool) -> Fit {
     fit_problem(start, sel, &jac0, make, &lm, DEFAULT_RTOL).unwrap()
 }
 
+/// Relative difference allowed between the two solvers' sigmas.
+const SIGMA_REL_TOL: f64 = 1e-6;
+/// Largest Gauss-Newton step allowed from the UR5 solution (deg / mm).
+const FIXED_POINT_TOL: f64 = 1e-10;
+
 /// Asserts `a` and `b` are the same fit; returns the largest parameter difference (deg / mm).
 fn assert_same(a: &Fit, b: &Fit, what: &str) -> f64 {
     assert_eq!(a.fitted, b.fitted, "{what}: fitted");
@@ -44,7 +49,10 @@ fn assert_same(a: &Fit, b: &Fit, what: &str) -> f64 {
         );
     }
     for (s, t) in a.sigma.iter().zip(&b.sigma) {
-        assert!((s - t).abs() <= 1e-6 * s.abs(), "{what}: sigma {s} vs {t}");
+        assert!(
+            (s - t).abs() <= SIGMA_REL_TOL * s.abs(),
+            "{what}: sigma {s} vs {t}"
+        );
     }
     let rel = (a.condition_number / b.condition_number - 1.0).abs();
     assert!(rel < 1e-6, "{what}: condition {rel}");
@@ -113,6 +121,7 @@ fn ur5_normal_equations_match_the_tall_solver() {
     let worst = assert_same(&tall, &normal, "ur5 grid");
     record("ur5_worst_difference", worst);
     record("ur5_parameters", normal.fitted.len());
+    record("sigma_tolerance", SIGMA_REL_TOL);
 }
 
 /// More than one chunk: one thread and two threads give bitwise the same sums, and the sums
@@ -171,11 +180,12 @@ fn ur5_fit_is_a_gauss_newton_fixed_point() {
     for (k, &c) in fit.fitted.iter().enumerate() {
         let dx = step[k] / norms[k];
         assert!(
-            dx.abs() < 1e-10,
+            dx.abs() < FIXED_POINT_TOL,
             "{}: Gauss-Newton step {dx:e} from the solution",
             fit.model.params()[c].name
         );
     }
+    record("fixed_point_tolerance", FIXED_POINT_TOL);
 }
 
 /// The identification problem with its helper thread (two cores for the problem's lifetime)

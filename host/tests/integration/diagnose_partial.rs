@@ -12,6 +12,8 @@ use rigctl::model::{katana450, Model, KATANA_PENCIL_TOOL_MM};
 use rigctl::sim::effects::parse_effect;
 use rigctl::sim::session::{simulate_session, SessionConfig, SessionPath};
 
+use crate::common::record::record;
+
 /// Noise of each measured component, mm (about what trace + potentiometer give).
 const NOISE_MM: f64 = 0.003;
 
@@ -82,6 +84,10 @@ fn an_encoder_harmonic_is_named_from_traced_samples() {
         "{:?}",
         r.noise
     );
+    record("harmonic_a_deg", a);
+    record("harmonic_phi_deg", phi);
+    record("harmonic_declared_mm", r.declared.validation.mean_mm);
+    record("harmonic_final_mm", r.final_.validation.mean_mm);
 }
 
 #[test]
@@ -94,6 +100,9 @@ fn a_payload_is_found_through_the_moments() {
     let kg = first.parameters.0[0].1;
     assert!((kg - 0.3).abs() < 0.1, "payload {kg} kg");
     assert!(r.final_.validation.mean_mm < 0.5 * r.declared.validation.mean_mm);
+    record("payload_kg", kg);
+    record("payload_declared_mm", r.declared.validation.mean_mm);
+    record("payload_final_mm", r.final_.validation.mean_mm);
 }
 
 #[test]
@@ -101,7 +110,10 @@ fn clean_traced_samples_add_no_effect_of_any_size() {
     let d = run(&[]);
     let r = &d.report;
     eprintln!("{}", r.table());
+    let mut largest_change_mm: f64 = 0.0;
     for e in &r.effects {
+        largest_change_mm =
+            largest_change_mm.max(e.calibration_mean_mm_before - e.calibration_mean_mm_after);
         // a pipeline artefact may be named, but nothing that changes the error by a micrometre
         assert!(
             e.calibration_mean_mm_before - e.calibration_mean_mm_after < 0.001,
@@ -111,4 +123,6 @@ fn clean_traced_samples_add_no_effect_of_any_size() {
         );
     }
     assert!(!r.unexplained.structured, "{}", r.unexplained.note);
+    record("clean_named", r.effects.len());
+    record("clean_largest_change_mm", largest_change_mm);
 }

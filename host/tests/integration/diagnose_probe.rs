@@ -4,7 +4,7 @@
 //! smooth error that no library effect describes makes the residual `structured` with the
 //! right `depends_on`, clean data do not, and `--residual-model` lowers the held-out error.
 
-use crate::common::record::record;
+use crate::common::record::{record, record_push};
 
 use nalgebra::Vector3;
 use rand::{Rng, SeedableRng};
@@ -184,6 +184,7 @@ fn pure_noise_gives_nothing() {
         );
         assert!(p.explainable_share < 0.01, "{}", p.explainable_share);
         assert!(p.sentence().contains("explains none"));
+        record_push("unit_noise_share", p.explainable_share);
     }
 }
 
@@ -350,6 +351,13 @@ fn katana_smooth_non_physical_error_is_structured_with_the_right_joint() {
         "hybrid {:.4} vs physical {:.4}",
         h.validation_hybrid.mean_mm,
         h.validation_physical.mean_mm
+    );
+    let q3 = diag.probe.terms.iter().find(|t| t.term == "q3").unwrap();
+    record("cable_t", q3.t);
+    record("cable_share_percent", 100.0 * q3.share);
+    record(
+        "cable_hybrid_gain_percent",
+        100.0 * (1.0 - h.validation_hybrid.mean_mm / h.validation_physical.mean_mm),
     );
 }
 

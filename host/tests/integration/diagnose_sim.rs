@@ -9,6 +9,8 @@ use rigctl::model::katana450;
 use rigctl::sim::effects::parse_effect;
 use rigctl::sim::simulate::{simulate, SimConfig};
 
+use crate::common::record::record_push;
+
 struct Run {
     diag: Diagnosis,
     /// Held-out mean error of the true model (mm).
@@ -58,6 +60,8 @@ fn assert_found(effect: &str, expected_id: &str, ratio: f64) -> Run {
         "{effect}: too small to test ({})",
         r.diag.report.table()
     );
+    record_push("named_first", effect);
+    record_push("final_over_floor", final_val(&r) / r.floor_mm);
     r
 }
 
@@ -78,6 +82,7 @@ fn clean_data_adds_nothing() {
         r.diag.report.unexplained.note
     );
     assert!(final_val(&r) <= 1.5 * r.floor_mm);
+    crate::common::record::record("clean_final_over_floor", final_val(&r) / r.floor_mm);
 }
 
 #[test]

@@ -7,7 +7,7 @@
 //! in random directions, to the calibration and to the held-out file.
 
 use crate::common;
-use crate::common::record::record;
+use crate::common::record::{record, record_push};
 
 use nalgebra::Vector3;
 use rand::{Rng, SeedableRng};
@@ -133,6 +133,13 @@ fn diagnose_flags_the_gross_errors_and_names_the_same_effect() {
         .report;
         assert!(kept.outliers.is_empty());
         assert!(kept.final_.validation.mean_mm > 1.5 * dirty.final_.validation.mean_mm);
+        record_push("katana_moved_poses", bad_cal.len() + bad_val.len());
+        record_push("katana_clean_held_out_mm", clean.final_.validation.mean_mm);
+        record_push("katana_held_out_mm", dirty.final_.validation.mean_mm);
+        record_push(
+            "katana_kept_over_left_out",
+            kept.final_.validation.mean_mm / dirty.final_.validation.mean_mm,
+        );
     }
 }
 
@@ -194,6 +201,8 @@ fn calibrate_flags_the_gross_errors_of_the_real_ur5_set() {
         within(d, c, 0.1),
         "held out {d} with gross errors left out, {c} clean"
     );
+    record("ur5_moved_poses", bad_cal.len() + bad_val.len());
+    record("ur5_held_out_mm", d);
     for (name, v) in &clean.parameters.0 {
         let w = dirty.parameters.get(name).unwrap();
         let s = clean.sigma.get(name).unwrap_or(0.0);

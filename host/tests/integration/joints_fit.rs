@@ -13,6 +13,8 @@ use rigctl::joints::{
 };
 use rigctl::model::{katana450, Model};
 
+use crate::common::record::record_push;
+
 /// Truth values (deg, deg, kgf.m/deg); joint 1's b and k equal table 5.2 because inclinometers
 /// cannot identify them (eta_z = 0 under gravity).
 const TRUTH_C: [f64; 5] = [0.030, 0.028, 0.021, 0.019, 0.025];
@@ -91,6 +93,8 @@ fn check(name: &str, got: f64, sigma: f64, want: f64, max_rel: f64) {
         "{name}: {got} vs {want}: {:.2} %",
         rel * 100.0
     );
+    record_push("sigmas_from_truth", (got - want).abs() / sigma);
+    record_push("percent_from_truth", rel * 100.0);
 }
 
 #[test]

@@ -6,6 +6,8 @@ use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
 use rigctl::model::{katana450, ur5, GammaLaw, Model, Tilt, Wrt};
 
+use crate::common::record::record;
+
 /// Relative tolerance of a column: |analytic - fd| <= REL * |fd| + ABS.
 const REL: f64 = 1e-6;
 /// Floor for columns that are (near) zero, mm per unit.
@@ -167,6 +169,7 @@ fn katana_jacobian_matches_finite_differences() {
         checked += 1;
     }
     assert!(checked >= 8, "only {checked} poses clear of the sign steps");
+    record("relative_tolerance", REL);
 }
 
 #[test]

@@ -10,6 +10,7 @@
 //! row pair, where that rounding cancels, must match within 1e-6.
 
 use crate::common;
+use crate::common::record::record;
 
 use rigctl::model::{katana450, Model, Tilt};
 
@@ -168,6 +169,9 @@ fn katana_fk_reference_rows() {
         }
     }
     assert!(exact_rows >= 2, "expected the q = 0 rows");
+    record("fk_tolerance", TOL);
+    record("fk_nonzero_rows", rows.len() - exact_rows);
+    record("q_rounding_deg", Q_ROUNDING_DEG);
 }
 
 #[test]
@@ -192,6 +196,7 @@ fn katana_fk_reference_tilt_increments() {
         }
     }
     assert!(pairs >= 50, "only {pairs} tilt on/off row pairs");
+    record("tilt_pairs", pairs);
 }
 
 #[test]
@@ -224,4 +229,5 @@ fn katana_tilt_reference_rows() {
             }
         }
     }
+    record("tilt_tolerance", TOL);
 }

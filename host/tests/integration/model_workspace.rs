@@ -13,6 +13,13 @@ use rigctl::calib::normal::{solve_normal, Normal, NormalProblem};
 use rigctl::calib::{default_selection, Poses};
 use rigctl::model::{katana450, ur5, Data, Model, Tilt, Wrt};
 
+use crate::common::record::record;
+
+/// Workspace against the allocating wrappers (mm, mm per unit).
+const WRAPPER_TOL: f64 = 1e-12;
+/// Analytic columns against central differences, relative.
+const FD_REL_TOL: f64 = 1e-6;
+
 struct Counting;
 
 thread_local! {
@@ -91,9 +98,12 @@ fn workspace_matches_wrappers_and_finite_differences() {
         for tilt in [Tilt::Off, Tilt::Static] {
             model.jacobian_with(&mut d, &q, tilt, &all).unwrap();
             let (fk, jac) = model.position_jacobian(&q, tilt, &all).unwrap();
-            assert!((d.position_mm() - fk.position_mm).norm() < 1e-12);
+            assert!((d.position_mm() - fk.position_mm).norm() < WRAPPER_TOL);
             for (k, w) in all.iter().enumerate() {
-                assert!((d.jacobian()[k] - jac.column(k)).norm() < 1e-12, "{w:?}");
+                assert!(
+                    (d.jacobian()[k] - jac.column(k)).norm() < WRAPPER_TOL,
+                    "{w:?}"
+                );
                 // Central differences of the workspace FK.
                 let h = 1e-6;
                 let eval = |delta: f64| {
@@ -112,7 +122,7 @@ fn workspace_matches_wrappers_and_finite_differences() {
                 };
                 let fd = (eval(h) - eval(-h)) / (2.0 * h);
                 let an = d.jacobian()[k];
-                let tol = 1e-6 * an.norm().max(1.0);
+                let tol = FD_REL_TOL * an.norm().max(1.0);
                 assert!(
                     (fd - an).norm() <= tol,
                     "{w:?} {tilt:?}: fd {fd:?} vs {an:?}"
@@ -120,6 +130,8 @@ fn workspace_matches_wrappers_and_finite_differences() {
             }
         }
     }
+    record("wrapper_tolerance", WRAPPER_TOL);
+    record("fd_tolerance", FD_REL_TOL);
 }
 
 #[test]
@@ -151,6 +163,7 @@ fn warm_workspace_does_not_allocate() {
         n, 0,
         "FK / tilted FK / Jacobian allocated {n} times for 50 poses"
     );
+    record("katana_warm_allocations", n);
 
     // A parameter change refreshes the cache in place.
     let mut moved = model.clone();
@@ -166,6 +179,7 @@ fn warm_workspace_does_not_allocate() {
     ur.jacobian_with(&mut du, &q6, Tilt::Off, &wrt).unwrap();
     let n = allocations(|| ur.jacobian_with(&mut du, &q6, Tilt::Off, &wrt).unwrap());
     assert_eq!(n, 0);
+    record("ur5_warm_allocations", n);
 }
 
 fn measured(model: &Model, n: usize) -> Poses {
@@ -232,4 +246,7 @@ fn lm_iteration_allocations_do_not_grow_with_the_poses() {
         "{per_solve:?}"
     );
     assert!(per_solve[0] < 200 && per_solve[1] < 400, "{per_solve:?}");
+    // the counts beyond one chunk depend on the threads of the machine
+    record("iteration_allocations", per_iteration);
+    record("solve_allocations", per_solve);
 }

@@ -8,6 +8,8 @@ use rigctl::plan::sheets::{candidate_specs, rank_sheets, SheetPath, SheetRows, S
 use rigctl::plan::{plan, PlanConfig, Workspace};
 use rigctl::sim::session::SESSION_SHEET_ORIGIN_MM;
 
+use crate::common::record::record;
+
 /// On the pencil rig (Katana with the 330 mm holder): the thesis's circle is reachable; a
 /// single sheet can leave parameters blind (named null-space combinations: lines, in-plane
 /// measurement) and the best pair of sheets leaves fewer (none) with smaller sigmas than the
@@ -62,6 +64,27 @@ fn blind_parameters_of_single_sheets_and_pairs() {
         assert_eq!(
             worst.identifiable.len() + worst.blind.len(),
             r.parameters.len()
+        );
+        let mode = format!("{what:?}").to_lowercase();
+        record("reachable", r.sheets.len());
+        record("tried", r.tried);
+        record("parameters", r.parameters.len());
+        record(&format!("{mode}_thesis_blind"), thesis.blind.len());
+        record(&format!("{mode}_thesis_condition"), thesis.condition_number);
+        record(
+            &format!("{mode}_thesis_median_sigma_mm"),
+            thesis.median_scaled_sigma,
+        );
+        record(&format!("{mode}_worst_label"), label(worst));
+        record(&format!("{mode}_worst_blind"), worst.blind.clone());
+        record(&format!("{mode}_best_pair_blind"), best_pair.blind.len());
+        record(
+            &format!("{mode}_best_pair_median_sigma_mm"),
+            best_pair.median_scaled_sigma,
+        );
+        record(
+            &format!("{mode}_thesis_over_best_pair"),
+            thesis.median_scaled_sigma / best_pair.median_scaled_sigma,
         );
     }
 }

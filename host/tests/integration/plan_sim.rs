@@ -9,6 +9,15 @@ use rigctl::plan::metrics::median;
 use rigctl::plan::{plan, FromDiagnose, PlanConfig};
 use rigctl::sim::simulate::{truth_model, SimConfig};
 
+use crate::common::record::record;
+
+/// `payload` -> `payload`, `link_length:a3` -> `link_length_a3`: a key for `record`.
+fn key_of(id: &str) -> String {
+    id.chars()
+        .map(|c| if c.is_ascii_alphanumeric() { c } else { '_' })
+        .collect()
+}
+
 /// N = 12: the planned poses' expected sigmas are well below those of 12 random poses, the plan
 /// is within 2 % of the best design possible on its (extended) candidates, and the held-out error
 /// after calibration is closer to the noise floor. Default plan (weighted A, structured
@@ -227,6 +236,8 @@ fn from_diagnose_separates_an_aliased_pair() {
         let (planned, random) = (p.planned.sigma[k], p.random.sigma[k]);
         eprintln!("{name}: sigma planned {planned} random {random}");
         assert!(planned < 0.8 * random, "{name}: {planned} vs {random}");
+        record(&format!("aliased_{}_planned_sigma", key_of(name)), planned);
+        record(&format!("aliased_{}_random_sigma", key_of(name)), random);
     }
 }
 
@@ -299,6 +310,13 @@ fn diagnose_names_both_effects_after_the_planned_poses() {
                 (v - want).abs() <= 3.0 * s,
                 "{extra:?}: {id}: {v} +- {s}, truth {want}"
             );
+            let case = format!(
+                "payload_case_{}_{}",
+                key_of(&format!("{extra:?}")),
+                key_of(id)
+            );
+            record(&format!("{case}_value"), v);
+            record(&format!("{case}_sigma"), s);
         }
     }
 }
@@ -330,6 +348,10 @@ fn six_seeds_of_the_payload_case() {
             }
         }
         println!("{extra:?}: both named within 3 sigma on {named} of 6; payload sigma {sigmas:?}");
+        // recorded only by this slow run (docs/results.md: compared when present)
+        let tag = key_of(&format!("{extra:?}"));
+        record(&format!("six_seeds_{tag}_named"), named);
+        record(&format!("six_seeds_{tag}_payload_sigma"), sigmas);
     }
 }
 
@@ -351,6 +373,8 @@ fn diagnose_still_names_an_encoder_harmonic_and_a_length_after_its_own_aliased_p
             (v - want).abs() <= 3.0 * s,
             "{id}: {v} +- {s}, truth {want}"
         );
+        record(&format!("harmonic_case_{}_value", key_of(id)), v);
+        record(&format!("harmonic_case_{}_sigma", key_of(id)), s);
     }
 }
 

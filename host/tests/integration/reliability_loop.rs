@@ -8,6 +8,7 @@ use std::path::{Path, PathBuf};
 use rigctl::diagnose::candidates::library_for;
 use rigctl::diagnose::extended::ExtModel;
 
+use super::common::record::record;
 use super::common::spawn::rig;
 
 /// The effect ids of FORMATS.md's table (`### Effect ids`), as written there (`<i>` unexpanded).
@@ -102,6 +103,10 @@ fn the_diagnose_plan_loop_closes_for_every_effect_id() {
     );
     let katana = every_id().into_iter().map(|id| (id, "katana450"));
     let ur5 = ur5_only_ids().into_iter().map(|id| (id, "ur5"));
+    // the Katana's library without `thermal`, which every_id() adds
+    record("katana_ids", every_id().len() - 1);
+    record("ur5_only_ids", ur5_only_ids().len());
+    let mut path_dependent_ids = 0;
     for (id, robot) in katana.chain(ur5) {
         let mut doc = doc.clone();
         let partner = if id.contains("j2") { "dth3" } else { "dth2" };
@@ -138,6 +143,7 @@ fn the_diagnose_plan_loop_closes_for_every_effect_id() {
                 "{id}: {fd}"
             );
             assert!(r.stdout.contains("path-dependent: "), "{id}: {}", r.stdout);
+            path_dependent_ids += 1;
         } else {
             let after = pair["correlation_after"]
                 .as_f64()
@@ -150,4 +156,5 @@ fn the_diagnose_plan_loop_closes_for_every_effect_id() {
             );
         }
     }
+    record("path_dependent_ids", path_dependent_ids);
 }

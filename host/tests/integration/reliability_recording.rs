@@ -8,6 +8,8 @@ use rigctl::daq::recording::{header_bytes, RecordingMeta, RecordingWriter};
 use rigctl::daq::salvage::salvage;
 use rigctl::daq::tally::Tally;
 
+use super::common::record::record;
+
 fn rigctl() -> Command {
     Command::new(env!("CARGO_BIN_EXE_rigctl"))
 }
@@ -87,6 +89,11 @@ fn defect3_one_flipped_byte_costs_one_record_and_is_reported() {
         assert_eq!(s.damaged[0].bytes, end - start, "byte {at}");
         assert_eq!(s.damaged[0].pot_samples_lost, 32, "byte {at}");
         assert!(salvage(&rec, &bytes, true).is_err(), "strict, byte {at}");
+        if at == start {
+            record("records_written", offsets.len());
+            record("records_read", s.frames.len());
+            record("pot_samples_lost", s.damaged[0].pot_samples_lost);
+        }
     }
 
     // The CLI: export/potcal go on, report on stderr; --strict refuses with exit 2.

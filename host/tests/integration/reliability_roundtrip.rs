@@ -8,6 +8,7 @@ use rand::{Rng, SeedableRng};
 use rigctl::model::{Model, Tilt};
 use rigctl::urdf::model_to_urdf;
 
+use super::common::record::record;
 use super::common::spawn::rig;
 
 /// A random name: markup characters, quotes, entity-like text, Unicode, blanks inside.
@@ -60,7 +61,8 @@ fn same_fk(a: &Model, b: &Model, what: &str) {
 #[test]
 fn urdf_joint_names_round_trip() {
     let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(33);
-    for case in 0..200 {
+    let cases = 200;
+    for case in 0..cases {
         let names: Vec<String> = (0..5)
             .map(|k| format!("{}{k}", random_name(&mut rng)))
             .collect();
@@ -71,6 +73,7 @@ fn urdf_joint_names_round_trip() {
         assert_eq!(back.joint_names, names, "case {case}");
         same_fk(&model, &back.model, &format!("case {case}"));
     }
+    record("joint_name_sets", cases);
 }
 
 /// A model name with a newline, quotes, markup and a control character: the URDF written by

@@ -20,6 +20,8 @@ use rigctl::joints::{header, predicted_tilt_deg, row, TiltReading};
 use rigctl::model::katana450;
 use rigctl::sim::session::{simulate_session, write_session, SessionConfig};
 
+use super::common::record::record;
+
 fn rigctl() -> Command {
     Command::new(env!("CARGO_BIN_EXE_rigctl"))
 }
@@ -362,8 +364,15 @@ fn defect2_no_subcommand_exits_101_on_closed_or_full_streams() {
             "subcommand {n} is not tried"
         );
     }
+    record(
+        "subcommands",
+        names.iter().filter(|n| **n != "help").count(),
+    );
+    record("runs", cases.len());
+    let mut printing = 0;
     for (name, args) in &cases {
         let normal = run_normal(name, args);
+        printing += usize::from(!normal.stdout.is_empty());
         for how in HOSTILE {
             let mut cmd = rigctl();
             cmd.args(args);
@@ -375,6 +384,7 @@ fn defect2_no_subcommand_exits_101_on_closed_or_full_streams() {
         }
         assert_no_temp_files(dir.path());
     }
+    record("runs_printing_on_stdout", printing);
 }
 
 fn assert_no_temp_files(dir: &Path) {

@@ -7,6 +7,7 @@ use std::path::{Path, PathBuf};
 
 use rand::{Rng, SeedableRng};
 
+use super::common::record::record;
 use super::common::spawn::{rig, Run};
 use super::hostile_inputs::{model_text, with, JOINTS_CSV, MODEL_DEFAULTS, N_FIELDS, URDF};
 
@@ -161,6 +162,7 @@ fn item2_property_random_finite_values_in_every_model_field() {
     let sim = default_model_poses(dir.path());
     let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(seed_or_env(26));
     // every field once on its own, then random combinations
+    record("model_numbers", N_FIELDS);
     for k in 0..N_FIELDS {
         let v = random_finite(&mut rng);
         let what = format!("field {k} = {v:e}");
@@ -213,6 +215,7 @@ fn item2_property_random_finite_values_in_every_urdf_number() {
     let full = urdf_inertial();
     let numbers = urdf_numbers(&full);
     assert!(numbers.len() > 30, "{}", numbers.len());
+    record("urdf_numbers", numbers.len());
     let out = dir.path().join("out.toml");
     let q = dir.path().join("q.csv");
     std::fs::write(&q, "j1,j2\n10,20\n-30,45\n").unwrap();

@@ -1,9 +1,11 @@
 //! The report's first screen and the newer run-directory files, from hand-written documents:
 //! a diagnose JSON with the newer keys (floor, aliased, unexplained.depends_on /
 //! explainable_share, effects[].sigma, parameters_at_entry), one without them (older runs),
-//! plan.csv + plan.json, and a trace overlay PNG.
+//! plan.csv + plan.json, and a trace overlay PNG; and the first screen of the demo's run.
 
 use rigctl::report::{build_report, render_html, ReportOptions};
+
+use crate::common::record::record;
 
 fn stats(n: usize, mean: f64, rms: f64) -> serde_json::Value {
     serde_json::json!({"n": n, "mean_mm": mean, "rms_mm": rms, "max_mm": 3.0 * mean,
@@ -193,4 +195,103 @@ fn plan_and_overlay_get_their_sections() {
         "{:?}",
         r.notes
     );
+}
+
+/// The demo's first screen (`bash scripts/demo.sh`, steps 2-4 and 6: simulate with an undeclared
+/// encoder harmonic, seed 7, calibrate standard and tilting, diagnose, report): the held-out
+/// error at each stage and the effect found with its values, as the page shows them.
+#[test]
+fn demo_first_screen_names_the_harmonic() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    let p = |n: &str| d.join(n).to_string_lossy().into_owned();
+    let run = |args: &[String]| {
+        let o = std::process::Command::new(env!("CARGO_BIN_EXE_rigctl"))
+            .args(args)
+            .output()
+            .unwrap();
+        assert!(
+            o.status.success(),
+            "{args:?}: {}",
+            String::from_utf8_lossy(&o.stderr)
+        );
+    };
+    let args = |v: &[&str]| v.iter().map(|s| s.to_string()).collect::<Vec<_>>();
+    let (cal, val) = (p("cal.csv"), p("val.csv"));
+    run(&args(&[
+        "simulate",
+        "--out",
+        &p(""),
+        "--seed",
+        "7",
+        "--noise-mm",
+        "0.01",
+        "--effect",
+        "encoder_harmonic:j2:h1=0.03,40",
+    ]));
+    run(&args(&[
+        "calibrate",
+        "--poses",
+        &cal,
+        "--validate",
+        &val,
+        "--method",
+        "standard",
+        "--json",
+        &p("calibrate_standard.json"),
+    ]));
+    run(&args(&[
+        "calibrate",
+        "--poses",
+        &cal,
+        "--validate",
+        &val,
+        "--json",
+        &p("calibrate.json"),
+        "--out",
+        &p("calibrated.toml"),
+    ]));
+    run(&args(&[
+        "diagnose",
+        "--poses",
+        &cal,
+        "--validate",
+        &val,
+        "--json",
+        &p("diagnose.json"),
+        "--out",
+        &p("extended.toml"),
+    ]));
+    let r = build_report(d, &ReportOptions::default()).unwrap_or_else(|e| panic!("{e}"));
+    let h = &r.summary.headlines[0];
+    assert!(h.held_out, "{h:?}");
+    let (first, last) = (&h.stages[0], h.stages.last().unwrap());
+    assert_eq!(first.label, "nominal model");
+    assert_eq!(last.label, "with the 1 effect found");
+    let e = &r.summary.diagnoses[0].effects[0];
+    assert_eq!(e.id, "encoder_harmonic:j2:h1");
+    let value = |k: &str| {
+        e.values
+            .iter()
+            .find(|v| v.0 == k)
+            .map(|v| (v.1, v.2.unwrap()))
+            .unwrap()
+    };
+    let ((a, sa), (phi, sphi)) = (value("A"), value("phi"));
+    assert!((a - 0.03).abs() < 3.0 * sa && (phi - 40.0).abs() < 3.0 * sphi);
+    let html = render_html(&r);
+    let screen = &html[..html.find("<table").expect("detail tables")];
+    let fmt = rigctl::plot::summary::fmt_mm;
+    for v in [first.mean_mm, first.rms_mm, last.mean_mm, last.rms_mm] {
+        assert!(screen.contains(&fmt(v)), "first screen lacks {}", fmt(v));
+    }
+    record("demo_held_out", h.n);
+    record("demo_nominal_mean_mm", first.mean_mm);
+    record("demo_nominal_rms_mm", first.rms_mm);
+    record("demo_final_mean_mm", last.mean_mm);
+    record("demo_final_rms_mm", last.rms_mm);
+    record("demo_a_deg", a);
+    record("demo_a_sigma_deg", sa);
+    record("demo_phi_deg", phi);
+    record("demo_phi_sigma_deg", sphi);
 }

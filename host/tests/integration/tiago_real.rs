@@ -152,6 +152,14 @@ fn figaroh_levels_and_the_press_compliance_model_from_the_cli() {
         rms(&comp, "validation")
     );
     assert!(comp["terms"].as_object().is_some_and(|t| !t.is_empty()));
+    for j in [7, 5] {
+        let key = format!("compliance_j{j}_deg_per_kgfm");
+        record(&format!("compliance_j{j}"), comp["terms"][&key].clone());
+        record(
+            &format!("compliance_j{j}_sigma"),
+            comp["sigma"][&key].clone(),
+        );
+    }
     let _ = std::fs::remove_dir_all(&tmp);
 }
 

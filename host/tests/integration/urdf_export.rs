@@ -5,6 +5,7 @@
 //! `model2urdf --urdf`, whose other elements Python's ElementTree finds unchanged.
 
 use crate::common;
+use crate::common::record::record;
 
 use std::path::{Path, PathBuf};
 use std::process::{Command, Output};
@@ -107,9 +108,11 @@ fn pinocchio_fk(
 }
 
 /// Compares pinocchio with `rigctl fk` (its CSV, 9 decimals) and with the library's FK at full
-/// precision; returns the largest difference to the latter (mm).
+/// precision; returns the largest difference to the latter (mm). Records the largest difference
+/// to `rigctl fk` as `<key>_vs_fk_mm`.
 fn compare(
     case: &str,
+    key: &str,
     pin: &[[f64; 3]],
     fk_csv: &[[f64; 3]],
     model: &Model,
@@ -136,6 +139,7 @@ fn compare(
         "{case}: pinocchio vs rigctl fk {worst_cli} mm"
     );
     assert!(worst <= 1e-6, "{case}: pinocchio vs model FK {worst} mm");
+    record(&format!("{key}_vs_fk_mm"), worst_cli);
     worst
 }
 
@@ -197,6 +201,7 @@ fn ur5_tracker_after_calibrate_base_in_pinocchio() {
     let pin = pinocchio_fk(&py, d, &urdf, &model, &names, &q);
     compare(
         "UR5 after calibrate --base",
+        "ur5",
         &pin,
         &xyz_rows(&fk_csv),
         &model,
@@ -250,6 +255,7 @@ fn calibrated_katana_in_pinocchio_names_the_tilting() {
     let pin = pinocchio_fk(&py, d, &urdf, &model, &names, &q);
     compare(
         "calibrated Katana (tilting off)",
+        "katana",
         &pin,
         &xyz_rows(&fk_csv),
         &model,
@@ -399,6 +405,7 @@ fn tiago_round_trip_keeps_the_urdf_and_matches_pinocchio() {
     let pin = pinocchio_fk(&py, d, &urdf, &model, &names, &q);
     compare(
         "TIAGo urdf2model -> calibrate -> model2urdf --urdf",
+        "tiago",
         &pin,
         &xyz_rows(&fk_csv),
         &model,

@@ -18,6 +18,8 @@ use rigctl::model::motion::moments_in_motion;
 use rigctl::model::{katana450, Model, Tilt, KATANA_PENCIL_TOOL_MM};
 use rigctl::sim::session::{simulate_session, SessionConfig, SessionPath};
 
+use crate::record::{record, record_push};
+
 fn run_ok(args: &[&str]) -> String {
     let out = rigctl().args(args).output().expect("run rigctl");
     let stdout = String::from_utf8_lossy(&out.stdout).into_owned();
@@ -114,6 +116,10 @@ fn session(
         (off - cfg.clock_offset_s).abs() < 1e-3,
         "offset {off} vs {}",
         cfg.clock_offset_s
+    );
+    record_push(
+        "clock_offset_error_ms",
+        1e3 * (off - cfg.clock_offset_s).abs(),
     );
     fused
 }
@@ -283,6 +289,8 @@ fn simulated_sessions_calibrate_through_the_cli() {
             rms(&b),
             rms(&a)
         );
+        record(&format!("{name}_path_rms_before_mm"), rms(&b));
+        record(&format!("{name}_path_rms_after_mm"), rms(&a));
     }
     std::fs::write(tmp.path().join("true_path_errors.csv"), &csv).unwrap();
     if let Some(dir) = std::env::var_os("RIG_SESSION_OUT") {
@@ -333,6 +341,14 @@ fn an_undeclared_effect_is_diagnosed_from_the_sheets() {
     let vb = rep["declared"]["validation"]["mean_mm"].as_f64().unwrap();
     let va = rep["final"]["validation"]["mean_mm"].as_f64().unwrap();
     assert!(va < 0.5 * vb, "held-out mean {vb} -> {va} mm");
+    record("diagnose_a_deg", a);
+    record("diagnose_phi_deg", phi);
+    record("diagnose_declared_mm", vb);
+    record("diagnose_final_mm", va);
+    record(
+        "diagnose_floor_mm",
+        rep["noise"]["expected_mean_mm"].clone(),
+    );
     assert!(
         std::fs::read_dir(&plots).unwrap().count() > 0,
         "a residual plot per effect"
