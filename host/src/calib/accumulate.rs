@@ -10,7 +10,7 @@ use nalgebra::{DMatrix, DMatrixView, DVector, Vector3};
 
 use super::helper::{Helper, Work};
 use super::normal::{Normal, NormalProblem};
-use super::problem::{tilt_mode, Poses, Unknowns};
+use super::problem::{tilt_mode, Poses, SetUnknowns, Unknowns};
 use crate::model::{Data, Model, ModelError, Tilt, Wrt};
 
 /// Poses per chunk of the accumulation (the unit of work and of summation order).

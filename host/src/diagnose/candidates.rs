@@ -23,7 +23,7 @@
 //! link lengths and tool point are declared parameters), and a candidate with nothing left is not
 //! offered.
 
-use super::extended::{ExtFit, ExtModel, Unknown};
+use super::extended::{ExtFit, ExtModel, Unknown, Values};
 use crate::calib::MeasuredSet;
 use crate::model::{harmonic_amplitude_phase, ParamKind};
 
