@@ -7,7 +7,12 @@ use super::lm::Problem;
 use crate::model::{Data, Model, ModelError, Tilt, Wrt};
 
 /// Measured poses: joint readings (deg, one vector per pose) and the measured tool point
-/// (mm, frame R).
+/// (mm, frame R). The core of the one measurement set ([`super::MeasuredSet::poses`], which adds
+/// the further points, measured directions, times, ids, lines, approach directions and inertial
+/// moments): what the identification on full positions reads pose by pose (the accumulation of
+/// [`super::accumulate`] and its helper thread, which copies its half), and the one-pose-per-point
+/// view of a set ([`super::MeasuredSet::as_poses`]) for error statistics. Readers of data build a
+/// [`super::MeasuredSet`] ([`super::MeasuredSet::from_poses`] wraps a `Poses`).
 #[derive(Debug, Clone, Default, PartialEq)]
 pub struct Poses {
     /// Joint readings `q1..qN` of every pose (deg).
