@@ -21,7 +21,7 @@
 
 use std::path::Path;
 
-use nalgebra::{DMatrix, DVector, Vector3};
+use nalgebra::{DMatrix, Vector3};
 
 use super::problem::Poses;
 use super::samples::FusedSample;
@@ -524,20 +524,6 @@ impl MeasuredSet {
             }
             _ => j.clone(),
         }
-    }
-
-    /// Writes the residual rows of pose `k` ([`MeasuredSet::residual`]) from row `row` of `r`;
-    /// returns the row after them.
-    pub fn put_residual(
-        &self,
-        k: usize,
-        predicted_mm: &Vector3<f64>,
-        row: usize,
-        r: &mut DVector<f64>,
-    ) -> usize {
-        let e = self.residual(k, predicted_mm);
-        r.rows_mut(row, e.len()).copy_from_slice(&e);
-        row + e.len()
     }
 
     /// Writes the measured rows ([`MeasuredSet::jacobian_rows`]) of pose `k`'s 3 x c Jacobian `j`

@@ -304,7 +304,9 @@ impl ExtModel {
             None => {
                 let mut row = 0;
                 for k in 0..data.len() {
-                    row = data.put_residual(k, &self.predict_pose(data, k)?, row, r);
+                    let e = data.residual(k, &self.predict_pose(data, k)?);
+                    r.rows_mut(row, e.len()).copy_from_slice(&e);
+                    row += e.len();
                 }
             }
         }
