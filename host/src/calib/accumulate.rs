@@ -393,7 +393,7 @@ pub fn normal_equations_with(
     Ok(eq)
 }
 
-/// The geometric identification ([`super::problem::PositionProblem`]) as a [`NormalProblem`],
+/// The geometric identification ([`super::problem::position_problem`]) as a [`NormalProblem`],
 /// on two cores when there are several chunks (a [`Helper`] thread for the problem's lifetime).
 pub struct PositionNormalProblem<'a> {
     unknowns: Unknowns,
