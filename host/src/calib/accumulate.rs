@@ -10,7 +10,7 @@ use nalgebra::{DMatrix, DMatrixView, DVector, Vector3};
 
 use super::helper::{Helper, Work};
 use super::normal::{Normal, NormalProblem};
-use super::problem::{tilt_mode, Poses, Unknowns};
+use super::problem::{tilt_mode, Poses, SetUnknowns, Unknowns};
 use crate::model::{Data, Model, ModelError, Tilt, Wrt};
 
 /// Poses per chunk of the accumulation (the unit of work and of summation order).
@@ -133,68 +133,78 @@ impl Worker {
     }
 }
 
-/// Normal equations of the poses `range` (at most [`CHUNK_POSES`]) into `eq`.
-#[allow(clippy::too_many_arguments)]
-fn chunk_normal(
-    model: &Model,
-    poses: &Poses,
-    trig: Option<&JointTrig>,
-    range: Range<usize>,
-    tilt: Tilt<'_>,
-    wrt: &[Wrt],
-    w: &mut Worker,
-    eq: &mut Normal,
-) -> Result<(), ModelError> {
-    let (n, k) = (wrt.len(), 3 * range.len());
-    let width = n + 1;
-    let rows = w
-        .rows
-        .get_mut(..width * k)
-        .ok_or_else(|| ModelError::Invalid("accumulation chunk larger than its buffer".into()))?;
-    w.data.sync(model);
-    // `r^T r` summed pose by pose as in `chunk_sum_sq` (bitwise the same cost both ways).
-    let mut rtr = 0.0;
-    for (p, i) in range.enumerate() {
-        JointTrig::give(trig, i, &mut w.data);
-        model.jacobian_synced(&mut w.data, &poses.q_deg[i], tilt, wrt)?;
-        let r = w.data.position_mm() - poses.xyz_mm[i];
-        rtr += r.norm_squared();
-        for (row, &res) in r.iter().enumerate() {
-            let dst = &mut rows[(3 * p + row) * width..(3 * p + row + 1) * width];
-            for (slot, c) in dst.iter_mut().zip(w.data.jacobian()) {
-                *slot = c[row];
-            }
-            dst[n] = res;
-        }
-    }
-    let rows: &[f64] = rows;
-    let r = DMatrixView::from_slice(rows, width, k);
-    let rt = DMatrixView::from_slice_with_strides(rows, k, width, width, 1);
-    w.aug.gemm(1.0, &r, &rt, 0.0);
-    eq.jtj.copy_from(&w.aug.view((0, 0), (n, n)));
-    eq.jtr.copy_from(&w.aug.view((0, n), (n, 1)));
-    eq.rtr = rtr;
-    eq.m = k;
-    Ok(())
+/// One evaluation over the poses: the model, the poses, their [`JointTrig`] and the tilting;
+/// what every chunk of it needs.
+#[derive(Clone, Copy)]
+struct Pass<'a> {
+    model: &'a Model,
+    poses: &'a Poses,
+    trig: Option<&'a JointTrig>,
+    tilt: Tilt<'a>,
 }
 
-/// Sum of squared residuals of the poses `range`.
-fn chunk_sum_sq(
-    model: &Model,
-    poses: &Poses,
-    trig: Option<&JointTrig>,
-    range: Range<usize>,
-    tilt: Tilt<'_>,
-    d: &mut Data,
-) -> Result<f64, ModelError> {
-    let mut s = 0.0;
-    d.sync(model);
-    for i in range {
-        JointTrig::give(trig, i, d);
-        model.fk_synced(d, &poses.q_deg[i], tilt)?;
-        s += (d.position_mm() - poses.xyz_mm[i]).norm_squared();
+impl<'a> Pass<'a> {
+    fn new(model: &'a Model, poses: &'a Poses, trig: Option<&'a JointTrig>, tilt: bool) -> Self {
+        Self {
+            model,
+            poses,
+            trig,
+            tilt: tilt_mode(tilt),
+        }
     }
-    Ok(s)
+
+    /// Normal equations of the poses `range` (at most [`CHUNK_POSES`]) wrt `wrt` into `eq`.
+    fn normal(
+        &self,
+        range: Range<usize>,
+        wrt: &[Wrt],
+        w: &mut Worker,
+        eq: &mut Normal,
+    ) -> Result<(), ModelError> {
+        let (model, poses) = (self.model, self.poses);
+        let (n, k) = (wrt.len(), 3 * range.len());
+        let width = n + 1;
+        let rows = w.rows.get_mut(..width * k).ok_or_else(|| {
+            ModelError::Invalid("accumulation chunk larger than its buffer".into())
+        })?;
+        w.data.sync(model);
+        // `r^T r` summed pose by pose as in `Pass::sum_sq` (bitwise the same cost both ways).
+        let mut rtr = 0.0;
+        for (p, i) in range.enumerate() {
+            JointTrig::give(self.trig, i, &mut w.data);
+            model.jacobian_synced(&mut w.data, &poses.q_deg[i], self.tilt, wrt)?;
+            let r = w.data.position_mm() - poses.xyz_mm[i];
+            rtr += r.norm_squared();
+            for (row, &res) in r.iter().enumerate() {
+                let dst = &mut rows[(3 * p + row) * width..(3 * p + row + 1) * width];
+                for (slot, c) in dst.iter_mut().zip(w.data.jacobian()) {
+                    *slot = c[row];
+                }
+                dst[n] = res;
+            }
+        }
+        let rows: &[f64] = rows;
+        let r = DMatrixView::from_slice(rows, width, k);
+        let rt = DMatrixView::from_slice_with_strides(rows, k, width, width, 1);
+        w.aug.gemm(1.0, &r, &rt, 0.0);
+        eq.jtj.copy_from(&w.aug.view((0, 0), (n, n)));
+        eq.jtr.copy_from(&w.aug.view((0, n), (n, 1)));
+        eq.rtr = rtr;
+        eq.m = k;
+        Ok(())
+    }
+
+    /// Sum of squared residuals of the poses `range`.
+    fn sum_sq(&self, range: Range<usize>, d: &mut Data) -> Result<f64, ModelError> {
+        let mut s = 0.0;
+        d.sync(self.model);
+        for i in range {
+            JointTrig::give(self.trig, i, d);
+            self.model.fk_synced(d, &self.poses.q_deg[i], self.tilt)?;
+            s += (d.position_mm() - self.poses.xyz_mm[i]).norm_squared();
+        }
+        Ok(s)
+    }
 }
 
 /// Workspaces and per-chunk partial sums for one model and pose set, allocated once.
@@ -261,9 +271,10 @@ impl Accumulator {
         trig: Option<&JointTrig>,
         tilt: bool,
     ) -> Result<(), ModelError> {
-        let (len, wrt, t) = (poses.len(), &self.wrt[..], tilt_mode(tilt));
+        let (len, wrt) = (poses.len(), &self.wrt[..]);
+        let pass = Pass::new(model, poses, trig, tilt);
         run_chunks(&mut self.workers, &mut self.partial, |c, d, out| {
-            chunk_normal(model, poses, trig, chunk(c, len), t, wrt, d, out)
+            pass.normal(chunk(c, len), wrt, d, out)
         })
     }
 
@@ -278,7 +289,8 @@ impl Accumulator {
         work: Work,
         chunks: Range<usize>,
     ) -> Result<(), ModelError> {
-        let (len, wrt, t) = (poses.len(), &self.wrt[..], tilt_mode(tilt));
+        let (len, wrt) = (poses.len(), &self.wrt[..]);
+        let pass = Pass::new(model, poses, trig, tilt);
         let w = self
             .workers
             .first_mut()
@@ -288,10 +300,8 @@ impl Accumulator {
                 return Err(ModelError::Invalid(format!("no chunk {c}")));
             };
             match work {
-                Work::Normal => chunk_normal(model, poses, trig, chunk(c, len), t, wrt, w, normal)?,
-                Work::SumSq => {
-                    *sum = chunk_sum_sq(model, poses, trig, chunk(c, len), t, &mut w.data)?;
-                }
+                Work::Normal => pass.normal(chunk(c, len), wrt, w, normal)?,
+                Work::SumSq => *sum = pass.sum_sq(chunk(c, len), &mut w.data)?,
             }
         }
         Ok(())
@@ -324,9 +334,9 @@ impl Accumulator {
         trig: Option<&JointTrig>,
         tilt: bool,
     ) -> Result<f64, ModelError> {
-        let (len, t) = (poses.len(), tilt_mode(tilt));
+        let (len, pass) = (poses.len(), Pass::new(model, poses, trig, tilt));
         run_chunks(&mut self.workers, &mut self.sums, |c, d, out| {
-            *out = chunk_sum_sq(model, poses, trig, chunk(c, len), t, &mut d.data)?;
+            *out = pass.sum_sq(chunk(c, len), &mut d.data)?;
             Ok(())
         })?;
         Ok(self.sums.iter().sum())
@@ -383,7 +393,7 @@ pub fn normal_equations_with(
     Ok(eq)
 }
 
-/// The geometric identification ([`super::problem::PositionProblem`]) as a [`NormalProblem`],
+/// The geometric identification ([`super::problem::position_problem`]) as a [`NormalProblem`],
 /// on two cores when there are several chunks (a [`Helper`] thread for the problem's lifetime).
 pub struct PositionNormalProblem<'a> {
     unknowns: Unknowns,

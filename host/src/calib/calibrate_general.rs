@@ -19,7 +19,9 @@ use super::calibrate::{
 };
 use super::error::CalibError;
 use super::fit::Fit;
-use super::general::{fit_general, stacked, GeneralFit, GeneralModel, PoseTorques, Unknown};
+use super::general::{
+    fit_general, stacked, GeneralFit, GeneralModel, PoseTorques, Unknown, Values,
+};
 use super::measured::MeasuredSet;
 use super::press::forward_select;
 use super::projected::{calibrate_projected, SampleTilt};
@@ -132,7 +134,7 @@ fn identify(
     }
     let mut cols = first.fitted.clone();
     cols.extend(candidates.iter().filter(|c| !first.fitted.contains(c)));
-    let (jac, r) = stacked(&first.state, data, tau, &cols)?;
+    let (jac, r) = stacked(&first.model, data, tau, &cols)?;
     let fixed: Vec<usize> = (0..first.fitted.len()).collect();
     let cand: Vec<usize> = (first.fitted.len()..cols.len()).collect();
     let added: Vec<Unknown> = forward_select(&jac, &r, &data.row_blocks(), &fixed, &cand)
@@ -144,7 +146,7 @@ fn identify(
     }
     let mut sel = first.fitted.clone();
     sel.extend(&added);
-    let fit = fit_general(&first.state, data, tau, &sel, &opts.lm, opts.rtol)?;
+    let fit = fit_general(&first.model, data, tau, &sel, &opts.lm, opts.rtol)?;
     Ok((fit, added))
 }
 
@@ -166,7 +168,7 @@ fn model_fit(f: &GeneralFit) -> Fit {
             .collect()
     };
     Fit {
-        model: f.state.model.clone(),
+        model: f.model.model.clone(),
         fitted: params(&f.fitted),
         fixed: params(&f.fixed),
         unidentifiable: f.unidentifiable.clone(),
@@ -286,7 +288,7 @@ impl Run<'_> {
         for (b, c) in before
             .offsets_mm
             .iter_mut()
-            .zip(&chosen.state.offsets_mm)
+            .zip(&chosen.model.offsets_mm)
             .skip(1)
         {
             *b = *c;
@@ -294,14 +296,14 @@ impl Run<'_> {
         let errs = |m: &GeneralModel, d: &MeasuredSet, t: &PoseTorques| m.errors(d, t);
         let cal_errors = [
             errs(&before, cal, &tau_cal)?,
-            errs(&standard.state, cal, &tau_cal)?,
-            errs(&chosen.state, cal, &tau_cal)?,
+            errs(&standard.model, cal, &tau_cal)?,
+            errs(&chosen.model, cal, &tau_cal)?,
         ];
         let val_errors = match val {
             Some(v) => [
                 errs(&before, v, &tau_val)?,
-                errs(&standard.state, v, &tau_val)?,
-                errs(&chosen.state, v, &tau_val)?,
+                errs(&standard.model, v, &tau_val)?,
+                errs(&chosen.model, v, &tau_val)?,
             ],
             None => [Vec::new(), Vec::new(), Vec::new()],
         };
@@ -325,8 +327,8 @@ impl Run<'_> {
         );
         for (u, s) in chosen.fitted.iter().zip(&chosen.sigma) {
             if !matches!(u, Unknown::Param(_)) {
-                let name = chosen.state.name(*u, cal);
-                let value = chosen.state.value(*u);
+                let name = chosen.model.name(*u, cal);
+                let value = chosen.model.value(*u);
                 if matches!(u, Unknown::Compliance(_)) && value < 0.0 {
                     report.unphysical.push(format!(
                     "{name} = {value:.4} +- {s:.4}: a negative compliance, which no joint has (the term \
@@ -343,9 +345,9 @@ impl Run<'_> {
             }
         }
         Ok(GeneralOutcome {
-            added: added.iter().map(|&u| chosen.state.name(u, cal)).collect(),
+            added: added.iter().map(|&u| chosen.model.name(u, cal)).collect(),
             outcome: Outcome {
-                model: chosen.state.model.clone(),
+                model: chosen.model.model.clone(),
                 tilt,
                 report,
                 calibration_errors: cal_errors,

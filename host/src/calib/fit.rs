@@ -1,38 +1,60 @@
 //! Least-squares identification of a parameter subset: identifiability analysis at the start
 //! point, Levenberg-Marquardt on the identifiable parameters, covariance at the solution.
 
-use nalgebra::DMatrix;
+use nalgebra::{DMatrix, DVector};
 
 use super::accumulate::{normal_equations_with, JointTrig, PositionNormalProblem};
 use super::error::CalibError;
-use super::identifiability::{analyse, scaled_svd};
+use super::identifiability::{analyse, scaled_svd, Identifiability};
 use super::lm::{solve, LmConfig};
 use super::normal::{solve_normal, solve_normal_from, use_normal_equations};
-use super::problem::{param_vector, stacked_jacobian, ModelProblem, Poses, PositionProblem};
+use super::problem::{
+    param_vector, position_problem, stacked_jacobian, ModelProblem, Poses, Rows, SetUnknowns,
+    Unknowns,
+};
 use crate::model::Model;
 
-/// Result of [`fit_parameters`] and [`fit_problem`].
+/// Result of an identification: [`fit_parameters`] and [`fit_problem`] (a [`Model`] and its
+/// parameters by model index), [`super::general::fit_general`] (a model with point offsets and
+/// [`super::unknown::Unknown`]s).
 #[derive(Debug, Clone)]
-pub struct Fit {
+pub struct Fit<M = Model, U = usize> {
     /// The model with the fitted values.
-    pub model: Model,
-    /// Fitted parameters (model indices).
-    pub fitted: Vec<usize>,
-    /// Selected parameters kept at their start value because they are not identifiable.
-    pub fixed: Vec<usize>,
-    /// Names of the unidentifiable parameters or combinations (`"be5"`, `"dth5+be4"`).
+    pub model: M,
+    /// Fitted unknowns.
+    pub fitted: Vec<U>,
+    /// Selected unknowns kept at their start value because they are not identifiable.
+    pub fixed: Vec<U>,
+    /// Names of the unidentifiable unknowns or combinations (`"be5"`, `"dth5+be4"`).
     pub unidentifiable: Vec<String>,
-    /// One standard deviation of each fitted parameter (parameter units), same order as
-    /// `fitted`: `sqrt(diag(s^2 (J^T J)^-1))`, `s^2 = |r|^2 / (m - n)`.
+    /// One standard deviation of each fitted unknown (its unit), same order as `fitted`:
+    /// `sqrt(diag(s^2 (J^T J)^-1))`, `s^2 = |r|^2 / (m - n)`.
     pub sigma: Vec<f64>,
-    /// Condition number of the column-scaled Jacobian of the fitted parameters at the solution.
+    /// Condition number of the column-scaled Jacobian of the fitted unknowns at the solution.
     pub condition_number: f64,
-    /// Rank of the Jacobian over all selected parameters.
+    /// Rank of the Jacobian over all selected unknowns.
     pub rank: usize,
     /// Solver iterations.
     pub iterations: usize,
     /// Whether the solver converged (not stopped by the iteration cap).
     pub converged: bool,
+}
+
+impl<M, U> Fit<M, U> {
+    /// The same fit with the model `f(model)`.
+    pub fn map_model<N>(self, f: impl FnOnce(M) -> N) -> Fit<N, U> {
+        Fit {
+            model: f(self.model),
+            fitted: self.fitted,
+            fixed: self.fixed,
+            unidentifiable: self.unidentifiable,
+            sigma: self.sigma,
+            condition_number: self.condition_number,
+            rank: self.rank,
+            iterations: self.iterations,
+            converged: self.converged,
+        }
+    }
 }
 
 /// Standard deviations `sqrt(diag(s^2 (J^T J)^-1))` with `s^2 = |r|^2 / (m - n)`, through the
@@ -93,18 +115,22 @@ pub fn fit_parameters(
     lm: &LmConfig,
     rtol: f64,
 ) -> Result<Fit, CalibError> {
-    let mut fit = fit_parameters_once(start, poses, selection, tilt, lm, rtol)?;
+    let on = PositionFit {
+        poses,
+        selection,
+        tilt,
+        lm,
+        rtol,
+    };
+    if poses.is_empty() {
+        return Err(CalibError::NoPoses);
+    }
+    let mut fit = on.once(start)?;
     for _ in 0..MAX_RANK_REFITS {
-        let rank = if use_normal_equations(rtol) {
-            let eq = normal_equations_with(&fit.model, poses, None, selection, tilt)?;
-            analyse(&eq.jacobian_root(), rtol).rank
-        } else {
-            analyse(&stacked_jacobian(&fit.model, poses, selection, tilt)?, rtol).rank
-        };
-        if rank <= fit.rank {
+        if on.rank_at(&fit.model)? <= fit.rank {
             break;
         }
-        let next = fit_parameters_once(&fit.model, poses, selection, tilt, lm, rtol)?;
+        let next = on.once(&fit.model)?;
         fit = Fit {
             iterations: fit.iterations + next.iterations,
             converged: fit.converged && next.converged,
@@ -114,43 +140,48 @@ pub fn fit_parameters(
     Ok(fit)
 }
 
-/// One identification of [`fit_parameters`]: the analysis at `start`, then the solve.
-fn fit_parameters_once(
-    start: &Model,
-    poses: &Poses,
-    selection: &[usize],
-    tilt: bool,
-    lm: &LmConfig,
-    rtol: f64,
-) -> Result<Fit, CalibError> {
-    if poses.is_empty() {
-        return Err(CalibError::NoPoses);
+/// An identification of model parameters on full positions: the poses, the selected parameters
+/// (model indices, preference order), the declared tilting on or off, the solver's settings and
+/// the identifiability threshold `rtol` (which also picks the normal equations,
+/// [`use_normal_equations`]).
+#[derive(Debug, Clone, Copy)]
+pub struct PositionFit<'a> {
+    pub poses: &'a Poses,
+    pub selection: &'a [usize],
+    pub tilt: bool,
+    pub lm: &'a LmConfig,
+    pub rtol: f64,
+}
+
+impl PositionFit<'_> {
+    /// One identification from `start`: the analysis there, then the solve.
+    fn once(&self, start: &Model) -> Result<Fit, CalibError> {
+        if use_normal_equations(self.rtol) {
+            return fit_parameters_normal(start, self);
+        }
+        let (poses, tilt) = (self.poses, self.tilt);
+        let jac0 = stacked_jacobian(start, poses, self.selection, tilt)?;
+        let make = |cols| position_problem(start, poses, cols, tilt);
+        fit_problem(start, self.selection, &jac0, make, self.lm, self.rtol)
     }
-    if use_normal_equations(rtol) {
-        return fit_parameters_normal(start, poses, selection, tilt, lm, rtol);
+
+    /// The rank of the selection's Jacobian at `model`.
+    fn rank_at(&self, model: &Model) -> Result<usize, CalibError> {
+        let (poses, selection, tilt, rtol) = (self.poses, self.selection, self.tilt, self.rtol);
+        Ok(if use_normal_equations(rtol) {
+            let eq = normal_equations_with(model, poses, None, selection, tilt)?;
+            analyse(&eq.jacobian_root(), rtol).rank
+        } else {
+            analyse(&stacked_jacobian(model, poses, selection, tilt)?, rtol).rank
+        })
     }
-    let jac0 = stacked_jacobian(start, poses, selection, tilt)?;
-    fit_problem(
-        start,
-        selection,
-        &jac0,
-        |cols| PositionProblem::new(start, poses, cols, tilt),
-        lm,
-        rtol,
-    )
 }
 
 /// [`fit_parameters`] on normal equations accumulated per pose (bounded memory, see
-/// [`super::normal`]): the identifiability analysis and the sigmas work on the square root of
-/// `J^T J`, which has the tall Jacobian's column norms and singular values.
-pub fn fit_parameters_normal(
-    start: &Model,
-    poses: &Poses,
-    selection: &[usize],
-    tilt: bool,
-    lm: &LmConfig,
-    rtol: f64,
-) -> Result<Fit, CalibError> {
+/// [`super::normal`]), whatever `on.rtol`: the identifiability analysis and the sigmas work on
+/// the square root of `J^T J`, which has the tall Jacobian's column norms and singular values.
+pub fn fit_parameters_normal(start: &Model, on: &PositionFit<'_>) -> Result<Fit, CalibError> {
+    let (poses, selection, tilt, lm, rtol) = (on.poses, on.selection, on.tilt, on.lm, on.rtol);
     if poses.is_empty() {
         return Err(CalibError::NoPoses);
     }
@@ -190,12 +221,37 @@ pub fn fit_parameters_normal(
     })
 }
 
-/// The selection split by the identifiability analysis of its start Jacobian.
-struct Split {
-    fitted: Vec<usize>,
-    fixed: Vec<usize>,
-    unidentifiable: Vec<String>,
-    rank: usize,
+/// A selection split by the identifiability analysis of its start Jacobian.
+#[derive(Debug, Clone)]
+pub struct Split<U> {
+    /// The unknowns to fit, in selection order.
+    pub fitted: Vec<U>,
+    /// The unknowns kept at their start value.
+    pub fixed: Vec<U>,
+    /// Names of the unidentifiable unknowns or combinations.
+    pub unidentifiable: Vec<String>,
+    /// Rank of the start Jacobian.
+    pub rank: usize,
+}
+
+impl<U: Copy> Split<U> {
+    /// `selection` split by the analysis `id` of its columns (`names`: one per selected unknown).
+    pub fn of(selection: &[U], names: &[&str], id: &Identifiability) -> Self {
+        Self {
+            fitted: id.kept.iter().map(|&k| selection[k]).collect(),
+            fixed: id.fixed.iter().map(|&k| selection[k]).collect(),
+            unidentifiable: id.combinations.iter().map(|c| c.name(names)).collect(),
+            rank: id.rank,
+        }
+    }
+
+    /// The split, or [`CalibError::NothingToFit`] when nothing is left to fit.
+    pub fn nonempty(self) -> Result<Self, CalibError> {
+        if self.fitted.is_empty() {
+            return Err(CalibError::NothingToFit);
+        }
+        Ok(self)
+    }
 }
 
 /// Splits `selection` into fitted and fixed parameters by the identifiability analysis of
@@ -205,7 +261,7 @@ fn split_selection(
     selection: &[usize],
     jac0: &DMatrix<f64>,
     rtol: f64,
-) -> Result<Split, CalibError> {
+) -> Result<Split<usize>, CalibError> {
     if jac0.ncols() != selection.len() {
         return Err(CalibError::Solver(format!(
             "start Jacobian has {} columns for {} selected parameters",
@@ -214,22 +270,36 @@ fn split_selection(
         )));
     }
     let names: Vec<&str> = start.param_names().collect();
-    let id = analyse(jac0, rtol);
     let sel_names: Vec<&str> = selection
         .iter()
         .map(|&c| names.get(c).copied().unwrap_or("?"))
         .collect();
-    let unidentifiable = id.combinations.iter().map(|c| c.name(&sel_names)).collect();
-    let fitted: Vec<usize> = id.kept.iter().map(|&k| selection[k]).collect();
-    let fixed: Vec<usize> = id.fixed.iter().map(|&k| selection[k]).collect();
-    if fitted.is_empty() {
-        return Err(CalibError::NothingToFit);
-    }
-    Ok(Split {
-        fitted,
-        fixed,
-        unidentifiable,
-        rank: id.rank,
+    Split::of(selection, &sel_names, &analyse(jac0, rtol)).nonempty()
+}
+
+/// The solve of an identification split by [`Split`]: Levenberg-Marquardt on `problem` from the
+/// fitted unknowns' start values `x0`; the state at the solution, with the sigmas and the
+/// condition number of the Jacobian there.
+pub fn solve_split<U, S: SetUnknowns, F: Rows<S>>(
+    split: Split<U>,
+    mut problem: ModelProblem<S, F>,
+    x0: DVector<f64>,
+    lm: &LmConfig,
+    rtol: f64,
+) -> Result<Fit<S, U>, CalibError> {
+    let rep = solve(&mut problem, x0, lm).map_err(CalibError::from_lm)?;
+    let mut state = problem.into_state();
+    state.set(&rep.x)?;
+    Ok(Fit {
+        model: state,
+        fitted: split.fitted,
+        fixed: split.fixed,
+        unidentifiable: split.unidentifiable,
+        sigma: parameter_sigmas(&rep.jacobian, rep.residuals.norm_squared(), rtol),
+        condition_number: analyse(&rep.jacobian, rtol).condition_number,
+        rank: split.rank,
+        iterations: rep.iterations,
+        converged: rep.termination.converged(),
     })
 }
 
@@ -237,41 +307,19 @@ fn split_selection(
 /// `jac0` (the Jacobian of the residuals wrt `selection` at `start`, one column per selected
 /// parameter) splits the selection into fitted and fixed parameters; `make_problem` builds the
 /// least-squares problem on a copy of `start` with the fitted ones (model indices) as unknowns,
-/// which Levenberg-Marquardt solves from their values in `start`; the sigmas and the condition
-/// number are those of the Jacobian at the solution.
-pub fn fit_problem<P: ModelProblem>(
+/// which Levenberg-Marquardt solves from their values in `start` ([`solve_split`]).
+pub fn fit_problem<F: Rows<Unknowns>>(
     start: &Model,
     selection: &[usize],
     jac0: &DMatrix<f64>,
-    make_problem: impl FnOnce(Vec<usize>) -> P,
+    make_problem: impl FnOnce(Vec<usize>) -> ModelProblem<Unknowns, F>,
     lm: &LmConfig,
     rtol: f64,
 ) -> Result<Fit, CalibError> {
-    let Split {
-        fitted,
-        fixed,
-        unidentifiable,
-        rank,
-    } = split_selection(start, selection, jac0, rtol)?;
-    let x0 = param_vector(start, &fitted);
-    let mut problem = make_problem(fitted.clone());
-    let rep = solve(&mut problem, x0, lm).map_err(CalibError::from_lm)?;
-    let mut unknowns = problem.into_unknowns();
-    unknowns.set(&rep.x)?;
-    let model = unknowns.into_model();
-    let sigma = parameter_sigmas(&rep.jacobian, rep.residuals.norm_squared(), rtol);
-    let condition_number = analyse(&rep.jacobian, rtol).condition_number;
-    Ok(Fit {
-        model,
-        fitted,
-        fixed,
-        unidentifiable,
-        sigma,
-        condition_number,
-        rank,
-        iterations: rep.iterations,
-        converged: rep.termination.converged(),
-    })
+    let split = split_selection(start, selection, jac0, rtol)?;
+    let x0 = param_vector(start, &split.fitted);
+    let problem = make_problem(split.fitted.clone());
+    Ok(solve_split(split, problem, x0, lm, rtol)?.map_model(Unknowns::into_model))
 }
 
 #[cfg(test)]
@@ -309,7 +357,7 @@ mod tests {
         assert!((fit.model.param("dth4").unwrap() + 0.02).abs() < 1e-9);
         assert!(fit.converged && fit.rank == 2);
         let wrong = DMatrix::zeros(3 * poses.len(), 1);
-        let make = |c| PositionProblem::new(&nominal, &poses, c, false);
+        let make = |c| position_problem(&nominal, &poses, c, false);
         let res = fit_problem(&nominal, &cols, &wrong, make, &lm, 1e-4);
         assert!(matches!(res, Err(CalibError::Solver(_))), "{res:?}");
     }

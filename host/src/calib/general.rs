@@ -16,12 +16,13 @@
 use nalgebra::{DMatrix, DVector, Vector3};
 
 use super::error::CalibError;
-use super::fit::parameter_sigmas;
+use super::fit::{solve_split, Fit, Split};
 use super::identifiability::analyse;
-use super::lm::{solve, LmConfig, Problem};
+use super::lm::LmConfig;
 use super::measured::MeasuredSet;
-use super::problem::tilt_mode;
-pub use super::unknown::Unknown;
+use super::problem::{put_position_rows, tilt_mode, ModelProblem};
+use super::unknown::Freed;
+pub use super::unknown::{Unknown, Values};
 use crate::model::gravity::GravityModel;
 use crate::model::transmission::{compliance_deflected, compliance_regressor};
 use crate::model::{Model, ModelError, Wrt};
@@ -65,6 +66,43 @@ pub struct GeneralModel {
     pub tilt: bool,
 }
 
+impl Values for GeneralModel {
+    fn value(&self, u: Unknown) -> f64 {
+        match u {
+            Unknown::Param(i) => self.model.params().get(i).map_or(f64::NAN, |p| p.value),
+            Unknown::Offset { slot, axis } => self
+                .offsets_mm
+                .get(slot)
+                .map_or(f64::NAN, |o| o[axis.min(2)]),
+            Unknown::Compliance(j) => self
+                .compliance_deg_per_kgfm()
+                .get(j)
+                .copied()
+                .unwrap_or(f64::NAN),
+            _ => f64::NAN,
+        }
+    }
+
+    fn set_value(&mut self, u: Unknown, v: f64) -> Result<(), ModelError> {
+        match u {
+            Unknown::Param(i) => self.model.set_param_at(i, v)?,
+            Unknown::Offset { slot, axis } => {
+                if let Some(o) = self.offsets_mm.get_mut(slot) {
+                    o[axis.min(2)] = v;
+                }
+            }
+            Unknown::Compliance(j) => {
+                let c = &mut self.model.transmission_mut().compliance_deg_per_kgfm;
+                if let Some(c) = c.get_mut(j) {
+                    *c = v;
+                }
+            }
+            other => return Err(not_here(other, &self.model)),
+        }
+        Ok(())
+    }
+}
+
 /// An unknown this identification does not evaluate.
 fn not_here(u: Unknown, model: &Model) -> ModelError {
     ModelError::Invalid(format!(
@@ -100,43 +138,6 @@ impl GeneralModel {
     /// Compliance per joint, deg per kgf.m (the model's joint terms).
     pub fn compliance_deg_per_kgfm(&self) -> &[f64] {
         &self.model.transmission().compliance_deg_per_kgfm
-    }
-
-    /// Current value of an unknown.
-    pub fn value(&self, u: Unknown) -> f64 {
-        match u {
-            Unknown::Param(i) => self.model.params().get(i).map_or(f64::NAN, |p| p.value),
-            Unknown::Offset { slot, axis } => self
-                .offsets_mm
-                .get(slot)
-                .map_or(f64::NAN, |o| o[axis.min(2)]),
-            Unknown::Compliance(j) => self
-                .compliance_deg_per_kgfm()
-                .get(j)
-                .copied()
-                .unwrap_or(f64::NAN),
-            _ => f64::NAN,
-        }
-    }
-
-    /// Sets an unknown.
-    pub fn set_value(&mut self, u: Unknown, v: f64) -> Result<(), ModelError> {
-        match u {
-            Unknown::Param(i) => self.model.set_param_at(i, v)?,
-            Unknown::Offset { slot, axis } => {
-                if let Some(o) = self.offsets_mm.get_mut(slot) {
-                    o[axis.min(2)] = v;
-                }
-            }
-            Unknown::Compliance(j) => {
-                let c = &mut self.model.transmission_mut().compliance_deg_per_kgfm;
-                if let Some(c) = c.get_mut(j) {
-                    *c = v;
-                }
-            }
-            other => return Err(not_here(other, &self.model)),
-        }
-        Ok(())
     }
 
     /// The name of an unknown: the parameter's, `marker<k>_x_mm`, `compliance_j<i>_deg_per_kgfm`.
@@ -218,7 +219,7 @@ impl GeneralModel {
                 );
                 let model = models.get(m.slot).unwrap_or(&self.model);
                 let p = model.position_mm(&q, tilt)?;
-                r.fixed_rows_mut::<3>(3 * i).copy_from(&(p - m.xyz_mm));
+                put_position_rows(3 * i, &p, &m.xyz_mm, r, None);
             }
             return Ok(());
         };
@@ -231,9 +232,7 @@ impl GeneralModel {
             );
             let model = models.get(m.slot).unwrap_or(&self.model);
             let (fk, j) = model.position_jacobian(&q, tilt, &wrt)?;
-            r.fixed_rows_mut::<3>(3 * i)
-                .copy_from(&(fk.position_mm - m.xyz_mm));
-            for (c, u) in unknowns.iter().enumerate() {
+            let mut columns = unknowns.iter().enumerate().map(|(c, u)| {
                 let scale = match *u {
                     // The tool point of slot 0 is not the point of the other slots.
                     Unknown::Param(p) if m.slot != 0 && t.contains(&p) => 0.0,
@@ -241,73 +240,21 @@ impl GeneralModel {
                     Unknown::Compliance(jt) => compliance_regressor(tau_i, jt),
                     _ => 1.0,
                 };
-                jac.view_mut((3 * i, c), (3, 1))
-                    .copy_from(&(j.column(c) * scale));
-            }
+                j.fixed_view::<3, 1>(0, c) * scale
+            });
+            let jac = Some((
+                &mut *jac,
+                &mut columns as &mut dyn Iterator<Item = Vector3<f64>>,
+            ));
+            put_position_rows(3 * i, &fk.position_mm, &m.xyz_mm, r, jac);
         }
         Ok(())
     }
 }
 
-/// The general identification as a least-squares problem.
-struct GeneralProblem<'a> {
-    state: GeneralModel,
-    data: &'a MeasuredSet,
-    tau: &'a PoseTorques,
-    unknowns: Vec<Unknown>,
-}
-
-impl GeneralProblem<'_> {
-    fn set(&mut self, x: &DVector<f64>) -> Result<(), ModelError> {
-        for (&u, &v) in self.unknowns.iter().zip(x.iter()) {
-            self.state.set_value(u, v)?;
-        }
-        Ok(())
-    }
-}
-
-impl Problem for GeneralProblem<'_> {
-    type Error = ModelError;
-
-    fn n_params(&self) -> usize {
-        self.unknowns.len()
-    }
-
-    fn n_residuals(&self) -> usize {
-        3 * self.data.n_points()
-    }
-
-    fn evaluate(
-        &mut self,
-        x: &DVector<f64>,
-        r: &mut DVector<f64>,
-        jac: Option<&mut DMatrix<f64>>,
-    ) -> Result<(), ModelError> {
-        self.set(x)?;
-        self.state.rows(self.data, self.tau, &self.unknowns, r, jac)
-    }
-}
-
-/// Result of [`fit_general`].
-#[derive(Debug, Clone)]
-pub struct GeneralFit {
-    /// The fitted model, offsets and compliances.
-    pub state: GeneralModel,
-    /// Fitted unknowns.
-    pub fitted: Vec<Unknown>,
-    /// Selected unknowns kept at their start value (not identifiable).
-    pub fixed: Vec<Unknown>,
-    /// Names of the unidentifiable unknowns or combinations.
-    pub unidentifiable: Vec<String>,
-    /// One sigma of every fitted unknown (same order).
-    pub sigma: Vec<f64>,
-    /// Condition number of the column-scaled Jacobian of the fitted unknowns at the solution.
-    pub condition_number: f64,
-    /// Rank of the start Jacobian over all selected unknowns.
-    pub rank: usize,
-    pub iterations: usize,
-    pub converged: bool,
-}
+/// Result of [`fit_general`]: the fitted model, offsets and compliances, and the fitted and
+/// fixed unknowns.
+pub type GeneralFit = Fit<GeneralModel, Unknown>;
 
 /// Stacked Jacobian (rows `predicted - measured`) and residuals of `state` wrt `unknowns`.
 pub fn stacked(
@@ -336,42 +283,23 @@ pub fn fit_general(
         return Err(CalibError::NoPoses);
     }
     let (jac0, _) = stacked(start, data, tau, selection)?;
-    let id = analyse(&jac0, rtol);
     let names: Vec<String> = selection.iter().map(|&u| start.name(u, data)).collect();
     let name_refs: Vec<&str> = names.iter().map(String::as_str).collect();
-    let unidentifiable = id.combinations.iter().map(|c| c.name(&name_refs)).collect();
-    let fitted: Vec<Unknown> = id.kept.iter().map(|&k| selection[k]).collect();
-    let fixed: Vec<Unknown> = id.fixed.iter().map(|&k| selection[k]).collect();
-    if fitted.is_empty() {
-        return Err(CalibError::NothingToFit);
-    }
-    let x0 = DVector::from_iterator(fitted.len(), fitted.iter().map(|&u| start.value(u)));
-    let mut problem = GeneralProblem {
-        state: start.clone(),
-        data,
-        tau,
-        unknowns: fitted.clone(),
+    let split = Split::of(selection, &name_refs, &analyse(&jac0, rtol)).nonempty()?;
+    let freed = Freed::new(start.clone(), split.fitted.clone());
+    let x0 = freed.values();
+    let rows = |f: &Freed<GeneralModel>, r: &mut DVector<f64>, jac: Option<&mut DMatrix<f64>>| {
+        f.state.rows(data, tau, &f.unknowns, r, jac)
     };
-    let rep = solve(&mut problem, x0, lm).map_err(CalibError::from_lm)?;
-    problem.set(&rep.x)?;
-    let mut state = problem.state;
+    let problem = ModelProblem::new(freed, 3 * data.n_points(), rows);
+    let mut fit = solve_split(split, problem, x0, lm, rtol)?.map_model(|f| f.state);
     // Slot 0's offset mirrors the tool point.
-    let v = state.model.param_values();
-    let t = tool_of(&state.model)?;
-    if let Some(o) = state.offsets_mm.first_mut() {
+    let v = fit.model.model.param_values();
+    let t = tool_of(&fit.model.model)?;
+    if let Some(o) = fit.model.offsets_mm.first_mut() {
         *o = Vector3::new(v[t[0]], v[t[1]], v[t[2]]);
     }
-    Ok(GeneralFit {
-        state,
-        sigma: parameter_sigmas(&rep.jacobian, rep.residuals.norm_squared(), rtol),
-        condition_number: analyse(&rep.jacobian, rtol).condition_number,
-        fitted,
-        fixed,
-        unidentifiable,
-        rank: id.rank,
-        iterations: rep.iterations,
-        converged: rep.termination.converged(),
-    })
+    Ok(fit)
 }
 
 #[cfg(test)]
@@ -446,11 +374,11 @@ mod tests {
             );
         }
         let fit = fit_general(&start, &data, &tau, &sel, &LmConfig::default(), 1e-6).unwrap();
-        for (f, c) in fit.state.compliance_deg_per_kgfm().iter().zip(coef) {
+        for (f, c) in fit.model.compliance_deg_per_kgfm().iter().zip(coef) {
             assert!((f - c).abs() < 1e-6, "{f} vs {c}");
         }
         let worst = fit
-            .state
+            .model
             .errors(&data, &tau)
             .unwrap()
             .iter()

@@ -18,7 +18,7 @@ use nalgebra::DVector;
 
 use super::accumulate::{Accumulator, JointTrig, CHUNK_POSES};
 use super::normal::Normal;
-use super::problem::{Poses, Unknowns};
+use super::problem::{Poses, SetUnknowns, Unknowns};
 use crate::model::ModelError;
 
 /// What an evaluation computes.

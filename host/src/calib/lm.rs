@@ -291,16 +291,38 @@ pub(super) fn negligible(step_norm: f64, xs_norm: f64, xtol: f64) -> bool {
     step_norm <= xtol * (xs_norm + xtol)
 }
 
-/// Updates the column scaling `diag` (running max of the column norms, 1 for a zero column)
-/// with `jac`, and returns the scaled Jacobian `J D^-1`.
-fn scale_columns(jac: &DMatrix<f64>, diag: &mut DVector<f64>) -> DMatrix<f64> {
+/// Raises the column scaling `diag` to the column norms `norm(j)` (running max, 1 for a column
+/// that has always been zero): the scaling of both linearisations.
+pub(super) fn raise_scaling(diag: &mut DVector<f64>, norm: impl Fn(usize) -> f64) {
     for (j, d) in diag.iter_mut().enumerate() {
-        let c = jac.column(j).norm();
-        *d = d.max(c);
+        *d = d.max(norm(j));
         if *d == 0.0 {
             *d = 1.0;
         }
     }
+}
+
+/// Checks the start vector's length (`x0_len`) against a problem of `n` unknowns and `m`
+/// residuals.
+pub(super) fn check_dimensions<E>(n: usize, m: usize, x0_len: usize) -> Result<(), LmError<E>> {
+    if x0_len != n {
+        return Err(LmError::Dimensions(format!(
+            "start vector has {x0_len} entries, problem has {n} unknowns"
+        )));
+    }
+    if m < n {
+        return Err(LmError::Underdetermined {
+            residuals: m,
+            params: n,
+        });
+    }
+    Ok(())
+}
+
+/// Updates the column scaling `diag` ([`raise_scaling`]) with `jac`, and returns the scaled
+/// Jacobian `J D^-1`.
+fn scale_columns(jac: &DMatrix<f64>, diag: &mut DVector<f64>) -> DMatrix<f64> {
+    raise_scaling(diag, |j| jac.column(j).norm());
     let mut js = jac.clone();
     for (j, d) in diag.iter().enumerate() {
         js.column_mut(j).unscale_mut(*d);
@@ -369,18 +391,7 @@ pub fn solve<P: Problem>(
     cfg: &LmConfig,
 ) -> Result<LmReport, LmError<P::Error>> {
     let (n, m) = (problem.n_params(), problem.n_residuals());
-    if x0.len() != n {
-        return Err(LmError::Dimensions(format!(
-            "start vector has {} entries, problem has {n} unknowns",
-            x0.len()
-        )));
-    }
-    if m < n {
-        return Err(LmError::Underdetermined {
-            residuals: m,
-            params: n,
-        });
-    }
+    check_dimensions(n, m, x0.len())?;
     let mut r = DVector::zeros(m);
     let mut jac = DMatrix::zeros(m, n);
     problem
@@ -414,15 +425,24 @@ pub fn solve<P: Problem>(
 mod tests {
     use super::*;
 
-    /// Rosenbrock as least squares: r = (10 (x2 - x1^2), 1 - x1); minimum (1, 1).
-    struct Rosenbrock;
-    impl Problem for Rosenbrock {
+    /// A test problem of `n` unknowns and `m` residuals whose closure writes `r` and, when asked,
+    /// the Jacobian.
+    struct Fns<F> {
+        n: usize,
+        m: usize,
+        f: F,
+    }
+
+    impl<F> Problem for Fns<F>
+    where
+        F: FnMut(&DVector<f64>, &mut DVector<f64>, Option<&mut DMatrix<f64>>),
+    {
         type Error = std::convert::Infallible;
         fn n_params(&self) -> usize {
-            2
+            self.n
         }
         fn n_residuals(&self) -> usize {
-            2
+            self.m
         }
         fn evaluate(
             &mut self,
@@ -430,6 +450,22 @@ mod tests {
             r: &mut DVector<f64>,
             jac: Option<&mut DMatrix<f64>>,
         ) -> Result<(), Self::Error> {
+            (self.f)(x, r, jac);
+            Ok(())
+        }
+    }
+
+    fn problem<F>(n: usize, m: usize, f: F) -> Fns<F>
+    where
+        F: FnMut(&DVector<f64>, &mut DVector<f64>, Option<&mut DMatrix<f64>>),
+    {
+        Fns { n, m, f }
+    }
+
+    /// Rosenbrock as least squares: r = (10 (x2 - x1^2), 1 - x1); minimum (1, 1).
+    #[test]
+    fn rosenbrock_reaches_the_minimum() {
+        let mut rosenbrock = problem(2, 2, |x, r, jac| {
             r[0] = 10.0 * (x[1] - x[0] * x[0]);
             r[1] = 1.0 - x[0];
             if let Some(j) = jac {
@@ -438,14 +474,9 @@ mod tests {
                 j[(1, 0)] = -1.0;
                 j[(1, 1)] = 0.0;
             }
-            Ok(())
-        }
-    }
-
-    #[test]
-    fn rosenbrock_reaches_the_minimum() {
+        });
         let rep = solve(
-            &mut Rosenbrock,
+            &mut rosenbrock,
             DVector::from_vec(vec![-1.2, 1.0]),
             &LmConfig::default(),
         )
@@ -460,26 +491,12 @@ mod tests {
 
     /// Exponential fit y = a exp(b t) on exact data with badly scaled unknowns
     /// (a ~ 1e3, b ~ 1e-3): column scaling must make it converge from far away.
-    struct ExpFit {
-        t: Vec<f64>,
-        y: Vec<f64>,
-    }
-    impl Problem for ExpFit {
-        type Error = std::convert::Infallible;
-        fn n_params(&self) -> usize {
-            2
-        }
-        fn n_residuals(&self) -> usize {
-            self.t.len()
-        }
-        fn evaluate(
-            &mut self,
-            x: &DVector<f64>,
-            r: &mut DVector<f64>,
-            jac: Option<&mut DMatrix<f64>>,
-        ) -> Result<(), Self::Error> {
-            let mut jac = jac;
-            for (i, (&t, &y)) in self.t.iter().zip(&self.y).enumerate() {
+    #[test]
+    fn badly_scaled_exponential_fit() {
+        let t: Vec<f64> = (0..50).map(|i| f64::from(i) * 20.0).collect();
+        let y: Vec<f64> = t.iter().map(|t| 2500.0 * (1.5e-3 * t).exp()).collect();
+        let mut p = problem(2, t.len(), |x, r, mut jac| {
+            for (i, (&t, &y)) in t.iter().zip(&y).enumerate() {
                 let e = (x[1] * t).exp();
                 r[i] = x[0] * e - y;
                 if let Some(j) = jac.as_deref_mut() {
@@ -487,15 +504,7 @@ mod tests {
                     j[(i, 1)] = x[0] * t * e;
                 }
             }
-            Ok(())
-        }
-    }
-
-    #[test]
-    fn badly_scaled_exponential_fit() {
-        let t: Vec<f64> = (0..50).map(|i| f64::from(i) * 20.0).collect();
-        let y = t.iter().map(|t| 2500.0 * (1.5e-3 * t).exp()).collect();
-        let mut p = ExpFit { t, y };
+        });
         for cfg in [LmConfig::default(), LmConfig::gauss_newton()] {
             let rep = solve(&mut p, DVector::from_vec(vec![1000.0, 1e-4]), &cfg).unwrap();
             assert!(
@@ -513,38 +522,21 @@ mod tests {
 
     /// A linear problem with two identical columns: the rank-deficient step must stay finite and
     /// reach the least-squares residual (the minimum-norm split between the twins).
-    struct Twins;
-    impl Problem for Twins {
-        type Error = std::convert::Infallible;
-        fn n_params(&self) -> usize {
-            3
-        }
-        fn n_residuals(&self) -> usize {
-            4
-        }
-        fn evaluate(
-            &mut self,
-            x: &DVector<f64>,
-            r: &mut DVector<f64>,
-            jac: Option<&mut DMatrix<f64>>,
-        ) -> Result<(), Self::Error> {
-            let a = DMatrix::from_row_slice(
-                4,
-                3,
-                &[1.0, 1.0, 0.0, 2.0, 2.0, 1.0, 0.0, 0.0, 1.0, 1.0, 1.0, 3.0],
-            );
-            let b = DVector::from_vec(vec![2.0, 5.0, 1.0, 5.0]);
-            r.copy_from(&(&a * x - b));
+    #[test]
+    fn rank_deficient_problem_stays_finite() {
+        let a = DMatrix::from_row_slice(
+            4,
+            3,
+            &[1.0, 1.0, 0.0, 2.0, 2.0, 1.0, 0.0, 0.0, 1.0, 1.0, 1.0, 3.0],
+        );
+        let b = DVector::from_vec(vec![2.0, 5.0, 1.0, 5.0]);
+        let mut twins = problem(3, 4, |x, r, jac| {
+            r.copy_from(&(&a * x - &b));
             if let Some(j) = jac {
                 j.copy_from(&a);
             }
-            Ok(())
-        }
-    }
-
-    #[test]
-    fn rank_deficient_problem_stays_finite() {
-        let rep = solve(&mut Twins, DVector::zeros(3), &LmConfig::default()).unwrap();
+        });
+        let rep = solve(&mut twins, DVector::zeros(3), &LmConfig::default()).unwrap();
         assert!(rep.x.iter().all(|v| v.is_finite()));
         // Exact solution exists: x0 + x1 = 2, x2 = 1.
         assert!((rep.x[0] + rep.x[1] - 2.0).abs() < 1e-8, "{:?}", rep.x);
@@ -559,26 +551,9 @@ mod tests {
 
     #[test]
     fn underdetermined_is_an_error() {
-        struct One;
-        impl Problem for One {
-            type Error = std::convert::Infallible;
-            fn n_params(&self) -> usize {
-                2
-            }
-            fn n_residuals(&self) -> usize {
-                1
-            }
-            fn evaluate(
-                &mut self,
-                _: &DVector<f64>,
-                _: &mut DVector<f64>,
-                _: Option<&mut DMatrix<f64>>,
-            ) -> Result<(), Self::Error> {
-                Ok(())
-            }
-        }
+        let mut one = problem(2, 1, |_, _, _| {});
         assert!(matches!(
-            solve(&mut One, DVector::zeros(2), &LmConfig::default()),
+            solve(&mut one, DVector::zeros(2), &LmConfig::default()),
             Err(LmError::Underdetermined {
                 residuals: 1,
                 params: 2

@@ -117,13 +117,7 @@ impl MeasuredSet {
     /// has no positions), times (when every row has one), ids (when every row has one), lines,
     /// and the approach directions of the file order.
     pub fn from_pose_file(file: &PoseFile) -> Self {
-        let poses = match file.positions_mm() {
-            Some(xyz) => Poses {
-                q_deg: file.joints(),
-                xyz_mm: xyz.into_iter().map(Vector3::from).collect(),
-            },
-            None => Poses::default(),
-        };
+        let poses = Poses::from_pose_file(file).unwrap_or_default();
         Self::labelled(file, poses, Vec::new(), Vec::new())
     }
 
@@ -532,6 +526,20 @@ impl MeasuredSet {
         }
     }
 
+    /// Writes the measured rows ([`MeasuredSet::jacobian_rows`]) of pose `k`'s 3 x c Jacobian `j`
+    /// from row `row` of `jac`; returns the row after them.
+    pub fn put_jacobian_rows(
+        &self,
+        k: usize,
+        j: &DMatrix<f64>,
+        row: usize,
+        jac: &mut DMatrix<f64>,
+    ) -> usize {
+        let rows = self.jacobian_rows(k, j);
+        jac.rows_mut(row, rows.nrows()).copy_from(&rows);
+        row + rows.nrows()
+    }
+
     /// The inertial joint moments at pose `k`, when the dataset carries them.
     pub fn moments(&self, k: usize) -> Option<&[Vector3<f64>]> {
         self.moments_kgfm
@@ -565,13 +573,7 @@ impl MeasuredSet {
     pub fn subset(&self, indices: &[usize]) -> Self {
         let pick = |v: &Vec<Vec<Vector3<f64>>>| indices.iter().map(|&k| v[k].clone()).collect();
         Self {
-            poses: Poses {
-                q_deg: indices
-                    .iter()
-                    .map(|&k| self.poses.q_deg[k].clone())
-                    .collect(),
-                xyz_mm: indices.iter().map(|&k| self.poses.xyz_mm[k]).collect(),
-            },
+            poses: self.poses.subset(indices),
             further_mm: if self.further_mm.is_empty() {
                 Vec::new()
             } else {

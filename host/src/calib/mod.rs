@@ -10,13 +10,15 @@
 //! | [`report`] | the `calibrate --json` document |
 //! | [`accumulate`] | the geometric identification on normal equations: per-pose accumulation in reusable model workspaces, chunked on two threads |
 //! | `helper` | the second core of an identification: a thread for the problem's lifetime that accumulates half of the chunks |
-//! | [`problem`] | joint readings with one full point each (`Poses`, the set's core), position errors, the identification as a least-squares problem |
-//! | [`projected`] | identification from partial measurements (projections on known directions, `calibrate --samples`), reached through `calibrate_poses` |
-//! | [`fit`] | identifiability + LM + covariance on a parameter subset |
+//! | [`problem`] | joint readings with one full point each (`Poses`, the core of [`MeasuredSet`]), position errors, [`problem::ModelProblem`]: every identification on the tall Jacobian as one least-squares problem (the unknowns of a state and the residual rows of its measurements), the rows of a full position (`put_position_rows`) |
+//! | [`projected`] | identification from partial measurements (projections on known directions, `calibrate --samples`), reached through `calibrate_poses`; the outlier rule around any fit |
+//! | [`fit`] | identifiability + LM + covariance: the one result [`fit::Fit`], the split of a selection ([`fit::Split`]) and its solve ([`fit::solve_split`]) shared by every identification, the rank re-analysed at the solution |
 //! | [`influence`] | influence-based identification (thesis eq. 3.7-3.8) |
 //! | [`calibrate`] | the whole `calibrate` command: selection, methods, report |
 //! | [`measured`] | the one measurement set: joint readings, one or several points per pose, partial projections, times, ids, file lines, approach directions, inertial moments |
 //! | [`general`] | identification with point offsets and joint compliance |
+//! | [`unknown`] | the one `Unknown`, the `Values` of a state named by them, and `Freed` (the unknowns a solver writes) |
+//! | [`error`] | the identification's errors |
 //! | [`outliers`] | gross errors in measured poses: the robust fit-and-flag rule shared by `calibrate` and `diagnose` |
 //! | [`press`] | block-PRESS (leave-one-pose-out) forward selection |
 //! | [`calibrate_general`] | `calibrate_poses`, the one library entry of `calibrate` on a [`MeasuredSet`]: the model's terms applied, then partial measurements, one point per pose, or several points, `--compliance`, `--select press` |

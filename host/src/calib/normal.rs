@@ -15,7 +15,7 @@ use nalgebra::{DMatrix, DVector};
 
 use super::identifiability::ZERO_COLUMN_RTOL;
 use super::iterate::{iterate, Linearisation};
-use super::lm::{LmConfig, LmError, ScaledSvd, Termination};
+use super::lm::{check_dimensions, raise_scaling, LmConfig, LmError, ScaledSvd, Termination};
 
 /// Eigenvalues of the scaled normal matrix below this fraction of the largest are round-off
 /// (about 100 machine epsilons); their directions are not stepped along.
@@ -197,17 +197,6 @@ impl ScaledSvd {
     }
 }
 
-/// Updates the column scaling `diag` (running max of the column norms `sqrt((J^T J)_jj)`, 1 for a
-/// zero column).
-fn update_scaling(eq: &Normal, diag: &mut DVector<f64>) {
-    for (j, d) in diag.iter_mut().enumerate() {
-        *d = d.max(eq.jtj[(j, j)].max(0.0).sqrt());
-        if *d == 0.0 {
-            *d = 1.0;
-        }
-    }
-}
-
 /// The linearisation by normal equations: those at the current point and at the last trial
 /// (each trial evaluates them at once: near a solution nearly every trial is accepted, and its
 /// linearisation is then the next iteration's).
@@ -225,7 +214,8 @@ impl<P: NormalProblem> Linearisation for Equations<'_, P> {
     }
 
     fn rescale(&mut self, diag: &mut DVector<f64>) -> f64 {
-        update_scaling(&self.eq, diag);
+        // the column norms are `sqrt((J^T J)_jj)`
+        raise_scaling(diag, |j| self.eq.jtj[(j, j)].max(0.0).sqrt());
         self.eq.jtr.component_div(diag).amax() / self.eq.rtr.sqrt()
     }
 
@@ -261,20 +251,7 @@ pub fn solve_normal<P: NormalProblem>(
 }
 
 fn check_sizes<P: NormalProblem>(problem: &P, x0: &DVector<f64>) -> Result<(), LmError<P::Error>> {
-    let (n, m) = (problem.n_params(), problem.n_residuals());
-    if x0.len() != n {
-        return Err(LmError::Dimensions(format!(
-            "start vector has {} entries, problem has {n} unknowns",
-            x0.len()
-        )));
-    }
-    if m < n {
-        return Err(LmError::Underdetermined {
-            residuals: m,
-            params: n,
-        });
-    }
-    Ok(())
+    check_dimensions(problem.n_params(), problem.n_residuals(), x0.len())
 }
 
 /// [`solve_normal`] given the problem's normal equations at `x0` (symmetric, e.g. selected from

@@ -7,7 +7,12 @@ use super::lm::Problem;
 use crate::model::{Data, Model, ModelError, Tilt, Wrt};
 
 /// Measured poses: joint readings (deg, one vector per pose) and the measured tool point
-/// (mm, frame R).
+/// (mm, frame R). The core of the one measurement set ([`super::MeasuredSet::poses`], which adds
+/// the further points, measured directions, times, ids, lines, approach directions and inertial
+/// moments): what the identification on full positions reads pose by pose (the accumulation of
+/// [`super::accumulate`] and its helper thread, which copies its half), and the one-pose-per-point
+/// view of a set ([`super::MeasuredSet::as_poses`]) for error statistics. Readers of data build a
+/// [`super::MeasuredSet`] ([`super::MeasuredSet::from_poses`] wraps a `Poses`).
 #[derive(Debug, Clone, Default, PartialEq)]
 pub struct Poses {
     /// Joint readings `q1..qN` of every pose (deg).
@@ -47,7 +52,6 @@ impl Poses {
         Ok(Self::from_pose_file(&file).unwrap_or_default())
     }
 
-    /// The first `n` poses and the rest (for hold-out splits).
     /// The poses `keep` (indices, in that order).
     pub fn subset(&self, keep: &[usize]) -> Poses {
         Poses {
@@ -56,6 +60,7 @@ impl Poses {
         }
     }
 
+    /// The first `n` poses and the rest (for hold-out splits).
     pub fn split_at(&self, n: usize) -> (Poses, Poses) {
         let n = n.min(self.len());
         (
@@ -145,58 +150,85 @@ impl Unknowns {
         &self.cols
     }
 
-    /// Writes `x` into the model.
-    pub fn set(&mut self, x: &DVector<f64>) -> Result<(), ModelError> {
-        set_params(&mut self.model, &self.cols, x)
-    }
-
     /// The model with the unknowns last set.
     pub fn into_model(self) -> Model {
         self.model
     }
 }
 
-/// A least-squares [`Problem`] whose unknowns are parameters of a model ([`Unknowns`]), as
-/// solved by [`super::fit::fit_problem`].
-pub trait ModelProblem: Problem<Error = ModelError> {
-    /// Gives the model and its unknowns back.
-    fn into_unknowns(self) -> Unknowns;
+impl SetUnknowns for Unknowns {
+    fn n_unknowns(&self) -> usize {
+        self.cols.len()
+    }
+
+    fn set(&mut self, x: &DVector<f64>) -> Result<(), ModelError> {
+        set_params(&mut self.model, &self.cols, x)
+    }
 }
 
-/// Geometric identification: unknowns are the values of the parameters `cols` (model indices,
-/// parameter units); residuals are `model - measured` (x, y, z of every pose, mm).
-pub struct PositionProblem<'a> {
-    unknowns: Unknowns,
-    poses: &'a Poses,
-    tilt: bool,
+/// What a solver's vector is written into: the unknowns of a model state, in order
+/// ([`Unknowns`], [`super::unknown::Freed`]).
+pub trait SetUnknowns {
+    /// Number of unknowns.
+    fn n_unknowns(&self) -> usize;
+    /// Writes `x` into the state.
+    fn set(&mut self, x: &DVector<f64>) -> Result<(), ModelError>;
 }
 
-impl<'a> PositionProblem<'a> {
-    /// A problem on a copy of `model` (all other parameters stay at their values in `model`).
-    pub fn new(model: &Model, poses: &'a Poses, cols: Vec<usize>, tilt: bool) -> Self {
+/// The residual rows of a set of measurements as a function of a state `S`: writes
+/// `predicted - measured` at the state's current values into `r` and, when `jac` is given, their
+/// Jacobian wrt the state's unknowns.
+pub trait Rows<S>:
+    FnMut(&S, &mut DVector<f64>, Option<&mut DMatrix<f64>>) -> Result<(), ModelError>
+{
+}
+
+impl<S, F> Rows<S> for F where
+    F: FnMut(&S, &mut DVector<f64>, Option<&mut DMatrix<f64>>) -> Result<(), ModelError>
+{
+}
+
+/// An identification as a least-squares [`Problem`]: the unknowns of a state `S`
+/// ([`SetUnknowns`]) and the residual rows of the measurements at its values ([`Rows`]). Every
+/// identification of `calibrate` and `diagnose` on the tall Jacobian is one (full positions,
+/// projected measurements, point offsets and compliance, the extended model).
+pub struct ModelProblem<S, F> {
+    state: S,
+    n_residuals: usize,
+    rows: F,
+}
+
+impl<S, F> ModelProblem<S, F>
+where
+    S: SetUnknowns,
+    F: FnMut(&S, &mut DVector<f64>, Option<&mut DMatrix<f64>>) -> Result<(), ModelError>,
+{
+    /// The problem of `n_residuals` rows `rows` on the unknowns of `state`.
+    pub fn new(state: S, n_residuals: usize, rows: F) -> Self {
         Self {
-            unknowns: Unknowns::new(model, cols),
-            poses,
-            tilt,
+            state,
+            n_residuals,
+            rows,
         }
     }
 }
 
-impl ModelProblem for PositionProblem<'_> {
-    fn into_unknowns(self) -> Unknowns {
-        self.unknowns
+impl<S, F> ModelProblem<S, F> {
+    /// The state with the unknowns last set.
+    pub fn into_state(self) -> S {
+        self.state
     }
 }
 
-impl Problem for PositionProblem<'_> {
+impl<S: SetUnknowns, F: Rows<S>> Problem for ModelProblem<S, F> {
     type Error = ModelError;
 
     fn n_params(&self) -> usize {
-        self.unknowns.cols.len()
+        self.state.n_unknowns()
     }
 
     fn n_residuals(&self) -> usize {
-        3 * self.poses.len()
+        self.n_residuals
     }
 
     fn evaluate(
@@ -205,15 +237,42 @@ impl Problem for PositionProblem<'_> {
         r: &mut DVector<f64>,
         jac: Option<&mut DMatrix<f64>>,
     ) -> Result<(), ModelError> {
-        self.unknowns.set(x)?;
-        position_rows(
-            &self.unknowns.model,
-            self.poses,
-            &self.unknowns.cols,
-            self.tilt,
-            r,
-            jac,
-        )
+        self.state.set(x)?;
+        (self.rows)(&self.state, r, jac)
+    }
+}
+
+/// Geometric identification: unknowns are the values of the parameters `cols` of a copy of
+/// `model` (model indices, parameter units; all others stay at their values); residuals are
+/// `model - measured` (x, y, z of every pose, mm).
+pub fn position_problem<'a>(
+    model: &Model,
+    poses: &'a Poses,
+    cols: Vec<usize>,
+    tilt: bool,
+) -> ModelProblem<Unknowns, impl Rows<Unknowns> + 'a> {
+    let rows = move |u: &Unknowns, r: &mut DVector<f64>, jac: Option<&mut DMatrix<f64>>| {
+        position_rows(u.model(), poses, u.cols(), tilt, r, jac)
+    };
+    ModelProblem::new(Unknowns::new(model, cols), 3 * poses.len(), rows)
+}
+
+/// Writes the residual `predicted - measured` of one full position into rows `row..row + 3` of
+/// `r` and, with `jac`, its Jacobian `columns` (one 3-vector per unknown) into the same rows: the
+/// rows of a full position in every identification.
+pub fn put_position_rows(
+    row: usize,
+    predicted_mm: &Vector3<f64>,
+    measured_mm: &Vector3<f64>,
+    r: &mut DVector<f64>,
+    jac: Option<(&mut DMatrix<f64>, &mut dyn Iterator<Item = Vector3<f64>>)>,
+) {
+    r.fixed_rows_mut::<3>(row)
+        .copy_from(&(predicted_mm - measured_mm));
+    if let Some((jac, columns)) = jac {
+        for (c, col) in columns.enumerate() {
+            jac.fixed_view_mut::<3, 1>(row, c).copy_from(&col);
+        }
     }
 }
 
@@ -235,18 +294,18 @@ fn position_rows(
             let wrt: Vec<Wrt> = cols.iter().map(|&c| Wrt::Param(c)).collect();
             for (i, (q, m)) in rows {
                 model.jacobian_with(&mut d, q, tilt, &wrt)?;
-                r.fixed_rows_mut::<3>(3 * i)
-                    .copy_from(&(d.position_mm() - m));
-                for (k, col) in d.jacobian().iter().enumerate() {
-                    jac.fixed_view_mut::<3, 1>(3 * i, k).copy_from(col);
-                }
+                let mut columns = d.jacobian().iter().copied();
+                let jac = Some((
+                    &mut *jac,
+                    &mut columns as &mut dyn Iterator<Item = Vector3<f64>>,
+                ));
+                put_position_rows(3 * i, &d.position_mm(), m, r, jac);
             }
         }
         None => {
             for (i, (q, m)) in rows {
                 model.fk_with(&mut d, q, tilt)?;
-                r.fixed_rows_mut::<3>(3 * i)
-                    .copy_from(&(d.position_mm() - m));
+                put_position_rows(3 * i, &d.position_mm(), m, r, None);
             }
         }
     }

@@ -22,9 +22,9 @@ use nalgebra::{DMatrix, DVector, Vector3};
 use super::calibrate::{fit_report, resolve_selection, CalibrateOptions};
 use super::error::CalibError;
 use super::fit::{fit_problem, Fit};
-use super::lm::{LmConfig, Problem};
+use super::lm::LmConfig;
 use super::measured::MeasuredSet;
-use super::problem::{ModelProblem, Unknowns};
+use super::problem::{ModelProblem, Rows, Unknowns};
 use super::report::CalibrateReport;
 use super::samples::FusedSample;
 use super::stats;
@@ -92,70 +92,34 @@ pub fn projected_jacobian(
     for (k, q) in data.poses.q_deg.iter().enumerate() {
         let (_, j) = model.param_jacobian(q, tilt.at(data, k), cols)?;
         let j = DMatrix::from_column_slice(3, cols.len(), j.as_slice());
-        let rows = data.jacobian_rows(k, &j);
-        jac.rows_mut(row, rows.nrows()).copy_from(&rows);
-        row += rows.nrows();
+        row = data.put_jacobian_rows(k, &j, row, &mut jac);
     }
     Ok(jac)
 }
 
-/// The identification on projected measurements as a least-squares [`Problem`]: unknowns are
-/// the parameters `cols`, residuals `d . (p_model - measured)` (mm, [`MeasuredSet::residual`]).
-pub struct ProjectedProblem<'a> {
-    unknowns: Unknowns,
+/// The identification on projected measurements as a least-squares problem: unknowns are the
+/// parameters `cols` of a copy of `model`, residuals `d . (p_model - measured)` (mm,
+/// [`MeasuredSet::residual`]).
+pub fn projected_problem<'a>(
+    model: &Model,
     data: &'a MeasuredSet,
+    cols: Vec<usize>,
     tilt: SampleTilt,
-}
-
-impl<'a> ProjectedProblem<'a> {
-    /// A problem on a copy of `model`.
-    pub fn new(model: &Model, data: &'a MeasuredSet, cols: Vec<usize>, tilt: SampleTilt) -> Self {
-        Self {
-            unknowns: Unknowns::new(model, cols),
-            data,
-            tilt,
-        }
-    }
-}
-
-impl ModelProblem for ProjectedProblem<'_> {
-    fn into_unknowns(self) -> Unknowns {
-        self.unknowns
-    }
-}
-
-impl Problem for ProjectedProblem<'_> {
-    type Error = ModelError;
-
-    fn n_params(&self) -> usize {
-        self.unknowns.cols().len()
-    }
-
-    fn n_residuals(&self) -> usize {
-        self.data.n_residuals()
-    }
-
-    fn evaluate(
-        &mut self,
-        x: &DVector<f64>,
-        r: &mut DVector<f64>,
-        jac: Option<&mut DMatrix<f64>>,
-    ) -> Result<(), ModelError> {
-        self.unknowns.set(x)?;
-        let model = self.unknowns.model();
-        for (ri, v) in r.iter_mut().zip(residuals(model, self.data, self.tilt)?) {
+) -> ModelProblem<Unknowns, impl Rows<Unknowns> + 'a> {
+    let rows = move |u: &Unknowns, r: &mut DVector<f64>, jac: Option<&mut DMatrix<f64>>| {
+        for (ri, v) in r.iter_mut().zip(residuals(u.model(), data, tilt)?) {
             *ri = v;
         }
         if let Some(jac) = jac {
-            let cols = self.unknowns.cols();
-            jac.copy_from(&projected_jacobian(model, self.data, cols, self.tilt)?);
+            jac.copy_from(&projected_jacobian(u.model(), data, u.cols(), tilt)?);
         }
         Ok(())
-    }
+    };
+    ModelProblem::new(Unknowns::new(model, cols), data.n_residuals(), rows)
 }
 
 /// Identifies the parameters `selection` of `start` from projected measurements
-/// ([`super::fit::fit_problem`] on [`ProjectedProblem`]: identifiability at the start, LM on
+/// ([`super::fit::fit_problem`] on [`projected_problem`]: identifiability at the start, LM on
 /// the identifiable parameters, sigmas and condition number at the solution).
 pub fn fit_projected(
     start: &Model,
@@ -173,7 +137,7 @@ pub fn fit_projected(
         start,
         selection,
         &jac0,
-        |cols| ProjectedProblem::new(start, data, cols, tilt),
+        |cols| projected_problem(start, data, cols, tilt),
         lm,
         rtol,
     )
@@ -215,25 +179,25 @@ pub fn autocorrelation_time(data: &MeasuredSet, r: &[f64]) -> f64 {
 /// Default outlier threshold of [`fit_projected_robust`], in robust standard deviations.
 pub const OUTLIER_SIGMAS: f64 = 5.0;
 
-/// [`fit_projected`] with outlier rejection: after a fit, measurements whose residual exceeds
-/// `k` robust standard deviations (`1.4826 * median |r|`) are left out and the fit is repeated
-/// from `start`, until no further measurement is rejected (at most 3 passes). Such outliers are
-/// expected with the declared tilting law: where a joint torque is near zero its sign, hence the
-/// backlash side, can differ between the arm and the model for a sample or two. The sigmas of
-/// the returned fit are inflated by `sqrt` of the residuals' [`autocorrelation_time`]. Returns
-/// the fit and the number of measurements left out.
+/// A fit with outlier rejection: after a fit (`fit_on`, e.g. [`fit_projected`] from a start
+/// model), measurements of `data` whose residual (evaluated with `tilt`) exceeds `k` robust
+/// standard deviations (`1.4826 * median |r|`) are left out and the fit is repeated from the
+/// start, until no further measurement is rejected (at most 3 passes) or fewer than `min_kept`
+/// would be left (the number of selected unknowns). Such outliers are expected with the declared
+/// tilting law: where a joint torque is near zero its sign, hence the backlash side, can differ
+/// between the arm and the model for a sample or two. The sigmas of the returned fit are inflated
+/// by `sqrt` of the residuals' [`autocorrelation_time`]. Returns the fit and the number of
+/// measurements left out.
 pub fn fit_projected_robust(
-    start: &Model,
     data: &MeasuredSet,
-    selection: &[usize],
     tilt: SampleTilt,
-    lm: &LmConfig,
-    rtol: f64,
     k: f64,
+    min_kept: usize,
+    fit_on: impl Fn(&MeasuredSet) -> Result<Fit, CalibError>,
 ) -> Result<(Fit, usize), CalibError> {
     let mut kept = data.clone();
     let mut n_kept = data.n_residuals();
-    let mut fit = fit_projected(start, &kept, selection, tilt, lm, rtol)?;
+    let mut fit = fit_on(&kept)?;
     for _ in 0..3 {
         let r = residuals(&fit.model, data, tilt)?;
         let mut abs: Vec<f64> = r.iter().map(|x| x.abs()).collect();
@@ -241,12 +205,12 @@ pub fn fit_projected_robust(
         let sigma = 1.4826 * abs.get(abs.len() / 2).copied().unwrap_or(0.0);
         let keep: Vec<bool> = r.iter().map(|ri| ri.abs() <= k * sigma).collect();
         let n = keep.iter().filter(|&&x| x).count();
-        if n == n_kept || n < selection.len() {
+        if n == n_kept || n < min_kept {
             break;
         }
         kept = data.keep_components(&keep);
         n_kept = n;
-        fit = fit_projected(start, &kept, selection, tilt, lm, rtol)?;
+        fit = fit_on(&kept)?;
     }
     let tau = autocorrelation_time(&kept, &residuals(&fit.model, &kept, tilt)?);
     for s in &mut fit.sigma {
@@ -289,15 +253,9 @@ pub(super) fn calibrate_projected(
 ) -> Result<ProjectedOutcome, CalibError> {
     let selection = resolve_selection(nominal, opts)?;
     let robust = |d: &MeasuredSet, t: SampleTilt| {
-        fit_projected_robust(
-            nominal,
-            d,
-            &selection,
-            t,
-            &opts.lm,
-            opts.rtol,
-            OUTLIER_SIGMAS,
-        )
+        let fit_on =
+            |kept: &MeasuredSet| fit_projected(nominal, kept, &selection, t, &opts.lm, opts.rtol);
+        fit_projected_robust(d, t, OUTLIER_SIGMAS, selection.len(), fit_on)
     };
     let standard = robust(data, SampleTilt::Off)?;
     let tilt = if nominal.has_tilt() {

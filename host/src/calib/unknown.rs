@@ -4,11 +4,14 @@
 //! frees the unknowns its problem evaluates (`calibrate` its selection, `diagnose` the
 //! candidates of [`crate::diagnose::candidates`]); the values live in the [`Model`].
 //!
-//! To add an effect: a variant here (with its name, joint and bounds), its value in
-//! [`crate::diagnose::extended::ExtModel::value`] / `set_value`, its column in
+//! To add an effect: a variant here (with its name, joint and bounds), its value in the
+//! [`Values`] of [`crate::diagnose::extended::ExtModel`] (`value` / `set_value`), its column in
 //! `ExtModel::predict_with_jacobian`, and one entry in the candidate library.
 
-use crate::model::Model;
+use nalgebra::DVector;
+
+use super::problem::SetUnknowns;
+use crate::model::{Model, ModelError};
 
 /// One unknown of an extended fit.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
@@ -98,5 +101,52 @@ impl Unknown {
             Unknown::ThermalTauMin => Some((1e-3, 1e6)),
             _ => None,
         }
+    }
+}
+
+/// A model state whose values are named by [`Unknown`]s: the extended model of `diagnose`
+/// ([`crate::diagnose::extended::ExtModel`]) and the model with point offsets of `calibrate`
+/// ([`super::general::GeneralModel`]).
+pub trait Values {
+    /// Current value of an unknown.
+    fn value(&self, u: Unknown) -> f64;
+    /// Sets an unknown.
+    fn set_value(&mut self, u: Unknown, v: f64) -> Result<(), ModelError>;
+}
+
+/// The unknowns `unknowns` of a state: what a solver's vector is written into, in order.
+#[derive(Debug, Clone)]
+pub struct Freed<S> {
+    /// The state with the unknowns last set.
+    pub state: S,
+    /// The unknowns, in the solver's order.
+    pub unknowns: Vec<Unknown>,
+}
+
+impl<S: Values> Freed<S> {
+    /// The unknowns `unknowns` of `state`.
+    pub fn new(state: S, unknowns: Vec<Unknown>) -> Self {
+        Self { state, unknowns }
+    }
+
+    /// The unknowns' current values (a solver's start).
+    pub fn values(&self) -> DVector<f64> {
+        DVector::from_iterator(
+            self.unknowns.len(),
+            self.unknowns.iter().map(|&u| self.state.value(u)),
+        )
+    }
+}
+
+impl<S: Values> SetUnknowns for Freed<S> {
+    fn n_unknowns(&self) -> usize {
+        self.unknowns.len()
+    }
+
+    fn set(&mut self, x: &DVector<f64>) -> Result<(), ModelError> {
+        for (&u, &v) in self.unknowns.iter().zip(x.iter()) {
+            self.state.set_value(u, v)?;
+        }
+        Ok(())
     }
 }

@@ -9,7 +9,7 @@
 use serde::Serialize;
 
 use super::decide::{DecideConfig, Selection};
-use super::extended::{self, Unknown};
+use super::extended::{self, Unknown, Values};
 use crate::calib::MeasuredSet;
 use crate::model::Model;
 

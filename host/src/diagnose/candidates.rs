@@ -23,7 +23,7 @@
 //! link lengths and tool point are declared parameters), and a candidate with nothing left is not
 //! offered.
 
-use super::extended::{ExtFit, ExtModel, Unknown};
+use super::extended::{ExtFit, ExtModel, Unknown, Values};
 use crate::calib::MeasuredSet;
 use crate::model::{harmonic_amplitude_phase, ParamKind};
 
@@ -46,6 +46,42 @@ fn is_link_length_name(name: &str) -> bool {
     }
 }
 
+/// The candidates being listed: each one with its unknowns that are not in `current`; one with
+/// none left is not offered.
+struct Listing<'a> {
+    current: &'a [Unknown],
+    out: Vec<Candidate>,
+}
+
+impl Listing<'_> {
+    /// The candidate `id` freeing `unknowns` (`None`: a parameter the model lacks).
+    fn push(&mut self, id: String, unknowns: Vec<Option<Unknown>>, joint: Option<usize>) {
+        let unknowns: Vec<Unknown> = unknowns
+            .into_iter()
+            .flatten()
+            .filter(|u| !self.current.contains(u))
+            .collect();
+        if !unknowns.is_empty() {
+            self.out.push(Candidate {
+                id,
+                unknowns,
+                joint,
+            });
+        }
+    }
+
+    /// One candidate `family:j<i>` per joint (`joints` of them), freeing `unknown(j)`.
+    fn per_joint(&mut self, family: &str, joints: usize, unknown: fn(usize) -> Unknown) {
+        for j in 0..joints {
+            self.push(
+                format!("{family}:j{}", j + 1),
+                vec![Some(unknown(j))],
+                Some(j),
+            );
+        }
+    }
+}
+
 /// All candidates for `ext` and `data`, minus the unknowns in `current`.
 pub fn library(ext: &ExtModel, current: &[Unknown], data: &MeasuredSet) -> Vec<Candidate> {
     library_for(ext, current, data.has_approach(), data.has_time())
@@ -63,24 +99,13 @@ pub fn library_for(
 ) -> Vec<Candidate> {
     let model = &ext.model;
     let idx = |name: &str| model.param_index(name).map(Unknown::Param);
-    let mut out: Vec<Candidate> = Vec::new();
-    let mut push = |id: String, unknowns: Vec<Option<Unknown>>, joint: Option<usize>| {
-        let unknowns: Vec<Unknown> = unknowns
-            .into_iter()
-            .flatten()
-            .filter(|u| !current.contains(u))
-            .collect();
-        if !unknowns.is_empty() {
-            out.push(Candidate {
-                id,
-                unknowns,
-                joint,
-            });
-        }
+    let mut list = Listing {
+        current,
+        out: Vec::new(),
     };
     for (i, p) in model.params().iter().enumerate() {
         if p.kind == ParamKind::Length && is_link_length_name(&p.name) {
-            push(
+            list.push(
                 format!("link_length:{}", p.name),
                 vec![Some(Unknown::Param(i))],
                 None,
@@ -89,7 +114,7 @@ pub fn library_for(
     }
     for (j, joint) in model.joints().iter().enumerate() {
         for h in &joint.harmonics {
-            push(
+            list.push(
                 format!("encoder_harmonic:j{}:h{}", j + 1, h.order),
                 vec![
                     Some(Unknown::Param(h.sin_param)),
@@ -99,69 +124,57 @@ pub fn library_for(
             );
         }
     }
-    push(
+    list.push(
         "tool_offset".into(),
         vec![idx("tool_dx"), idx("tool_dy"), idx("tool_dz")],
         None,
     );
-    push(
+    list.push(
         "base_offset".into(),
         vec![idx("base_x"), idx("base_y"), idx("base_z")],
         None,
     );
-    push(
+    list.push(
         "base_tilt".into(),
         vec![idx("base_rx"), idx("base_ry")],
         None,
     );
     if let Some(tp) = model.tilt_params() {
-        push(
+        list.push(
             "payload".into(),
             vec![Some(Unknown::Param(model.payload_param()))],
             None,
         );
         for (j, t) in tp.iter().enumerate() {
-            push(
+            list.push(
                 format!("stiffness:j{}", j + 1),
                 vec![Some(Unknown::Param(t.stiffness))],
                 Some(j),
             );
-            push(
+            list.push(
                 format!("backlash:j{}", j + 1),
                 vec![Some(Unknown::Param(t.backlash))],
                 Some(j),
             );
-            push(
+            list.push(
                 format!("clearance:j{}", j + 1),
                 vec![Some(Unknown::Param(t.clearance))],
                 Some(j),
             );
         }
     } else if ext.gravity.is_some() {
-        for j in 0..model.n_joints() {
-            push(
-                format!("compliance:j{}", j + 1),
-                vec![Some(Unknown::Compliance(j))],
-                Some(j),
-            );
-        }
+        list.per_joint("compliance", model.n_joints(), Unknown::Compliance);
     }
-    push(
+    list.push(
         "scale".into(),
         vec![Some(Unknown::Param(model.scale_param()))],
         None,
     );
     let n = model.n_joints();
-    for j in 0..n {
-        push(
-            format!("joint_scale:j{}", j + 1),
-            vec![Some(Unknown::JointScale(j))],
-            Some(j),
-        );
-    }
+    list.per_joint("joint_scale", n, Unknown::JointScale);
     for i in 0..n {
         for k in (0..n).filter(|&k| k != i) {
-            push(
+            list.push(
                 format!("joint_coupling:j{}:j{}", i + 1, k + 1),
                 vec![Some(Unknown::Coupling(i, k))],
                 Some(k),
@@ -169,34 +182,22 @@ pub fn library_for(
         }
     }
     if approach {
-        for j in 0..n {
-            push(
-                format!("hysteresis:j{}", j + 1),
-                vec![Some(Unknown::Hysteresis(j))],
-                Some(j),
-            );
-        }
+        list.per_joint("hysteresis", n, Unknown::Hysteresis);
     }
     if time {
-        push(
+        list.push(
             "time_drift".into(),
             (0..3).map(|a| Some(Unknown::PositionDrift(a))).collect(),
             None,
         );
-        for j in 0..model.n_joints() {
-            push(
-                format!("time_drift:j{}", j + 1),
-                vec![Some(Unknown::JointDrift(j))],
-                Some(j),
-            );
-        }
-        push(
+        list.per_joint("time_drift", model.n_joints(), Unknown::JointDrift);
+        list.push(
             "thermal".into(),
             vec![Some(Unknown::ThermalPpm), Some(Unknown::ThermalTauMin)],
             None,
         );
     }
-    out
+    list.out
 }
 
 /// An effect's parameters in its own units (see the module table), with one standard deviation

@@ -146,7 +146,7 @@ mod tests {
 
     #[test]
     fn the_normal_equation_fit_of_many_poses_matches_the_tall_one() {
-        use super::super::extended::{fit, uses_normal};
+        use super::super::extended::{fit, uses_normal, Values};
         use crate::calib::lm::LmConfig;
         let d = data(2500);
         // without the tilting law the problem is smooth: both solvers reach the same minimum

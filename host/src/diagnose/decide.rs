@@ -39,7 +39,7 @@ use rand_chacha::ChaCha8Rng;
 
 use super::candidates::Candidate;
 use super::compress::stacked_or_compressed;
-use super::extended::{fit, ExtFit, ExtModel, Unknown};
+use super::extended::{fit, ExtFit, ExtModel, Unknown, Values};
 use super::parallel::map_ordered;
 use crate::calib::lm::LmConfig;
 use crate::calib::stats::autocorrelation_time;

@@ -17,13 +17,15 @@
 
 use nalgebra::{DMatrix, DVector, Vector3};
 
-use crate::calib::fit::parameter_sigmas_m;
+use crate::calib::fit::{parameter_sigmas_m, Split};
 use crate::calib::identifiability::{analyse, Identifiability};
-use crate::calib::lm::{solve, LmConfig, Problem};
+use crate::calib::lm::{solve, LmConfig};
 use crate::calib::normal::{
     solve_normal, solve_normal_from, use_normal_equations, Normal, NormalProblem,
 };
-pub use crate::calib::unknown::Unknown;
+use crate::calib::problem::{ModelProblem, SetUnknowns};
+use crate::calib::unknown::Freed;
+pub use crate::calib::unknown::{Unknown, Values};
 use crate::calib::CalibError;
 use crate::calib::MeasuredSet;
 use crate::model::gravity::GravityModel;
@@ -100,71 +102,6 @@ impl ExtModel {
             (true, Some(m)) => Tilt::StaticPlus(m),
             (true, None) => Tilt::Static,
         }
-    }
-
-    /// Current value of an unknown.
-    pub fn value(&self, u: Unknown) -> f64 {
-        let (t, time) = (self.model.transmission(), self.model.time_terms());
-        let at = |v: &[f64], j: usize| v.get(j).copied().unwrap_or(0.0);
-        match u {
-            Unknown::Param(i) => self.model.params().get(i).map_or(0.0, |p| p.value),
-            Unknown::PositionDrift(a) => time.drift_mm_per_h[a.min(2)],
-            Unknown::JointDrift(j) => at(&time.joint_drift_deg_per_h, j),
-            Unknown::Compliance(j) => at(&t.compliance_deg_per_kgfm, j),
-            Unknown::JointScale(j) => at(&t.scale, j),
-            Unknown::Coupling(i, k) => t.coupling_at(i, k),
-            Unknown::Hysteresis(j) => at(&t.hysteresis_deg, j),
-            Unknown::ThermalPpm => time.thermal_ppm,
-            Unknown::ThermalTauMin => time.thermal_tau_min,
-            Unknown::Offset { .. } => f64::NAN,
-        }
-    }
-
-    /// Sets an unknown.
-    pub fn set_value(&mut self, u: Unknown, v: f64) -> Result<(), ModelError> {
-        if !v.is_finite() {
-            return Err(ModelError::NonFinite {
-                name: u.name(&self.model),
-                value: v,
-            });
-        }
-        let set = |slot: Option<&mut f64>| {
-            if let Some(x) = slot {
-                *x = v;
-            }
-        };
-        match u {
-            Unknown::Param(i) => self.model.set_param_at(i, v)?,
-            Unknown::PositionDrift(a) => self.model.time_terms_mut().drift_mm_per_h[a.min(2)] = v,
-            Unknown::JointDrift(j) => {
-                set(self.model.time_terms_mut().joint_drift_deg_per_h.get_mut(j));
-            }
-            Unknown::Compliance(j) => {
-                set(self
-                    .model
-                    .transmission_mut()
-                    .compliance_deg_per_kgfm
-                    .get_mut(j));
-            }
-            Unknown::JointScale(j) => set(self.model.transmission_mut().scale.get_mut(j)),
-            Unknown::Coupling(i, k) => set(self
-                .model
-                .transmission_mut()
-                .coupling
-                .get_mut(i)
-                .and_then(|r| r.get_mut(k))),
-            Unknown::Hysteresis(j) => {
-                set(self.model.transmission_mut().hysteresis_deg.get_mut(j));
-            }
-            Unknown::ThermalPpm => self.model.time_terms_mut().thermal_ppm = v,
-            Unknown::ThermalTauMin => {
-                // a time constant is positive: the fit's step is kept within the bound
-                let (lo, hi) = u.bounds().unwrap_or((f64::MIN_POSITIVE, f64::MAX));
-                self.model.time_terms_mut().thermal_tau_min = v.clamp(lo, hi);
-            }
-            Unknown::Offset { .. } => return Err(offsets_elsewhere(u, &self.model)),
-        }
-        Ok(())
     }
 
     /// Gravity torques about the joint axes (kgf.m), zeros without a gravity model.
@@ -342,19 +279,38 @@ impl ExtModel {
         let mut row = 0;
         for k in 0..data.len() {
             let (p, j) = self.predict_with_jacobian(data, k, unknowns)?;
-            let rows = data.rows(k);
-            jac.view_mut((row, 0), (rows, unknowns.len()))
-                .copy_from(&data.jacobian_rows(k, &j));
-            for (i, c) in data
-                .components(k, &(data.poses.xyz_mm[k] - p))
-                .into_iter()
-                .enumerate()
-            {
-                err[row + i] = c;
-            }
-            row += rows;
+            let e = data.components(k, &(data.poses.xyz_mm[k] - p));
+            err.rows_mut(row, e.len()).copy_from_slice(&e);
+            row = data.put_jacobian_rows(k, &j, row, &mut jac);
         }
         Ok((jac, err))
+    }
+
+    /// Residuals `predicted - measured` (one row per measured component) into `r` and, with
+    /// `jac`, their Jacobian wrt `unknowns` ([`ExtModel::stacked`]).
+    pub fn rows(
+        &self,
+        data: &MeasuredSet,
+        unknowns: &[Unknown],
+        r: &mut DVector<f64>,
+        jac: Option<&mut DMatrix<f64>>,
+    ) -> Result<(), ModelError> {
+        match jac {
+            Some(jac) => {
+                let (j, e) = self.stacked(data, unknowns)?;
+                jac.copy_from(&j);
+                r.copy_from(&(-e));
+            }
+            None => {
+                let mut row = 0;
+                for k in 0..data.len() {
+                    let e = data.residual(k, &self.predict_pose(data, k)?);
+                    r.rows_mut(row, e.len()).copy_from_slice(&e);
+                    row += e.len();
+                }
+            }
+        }
+        Ok(())
     }
 
     /// Normal equations of the residual `predicted - measured` over `data` wrt `unknowns`
@@ -377,7 +333,7 @@ impl ExtModel {
         let n = unknowns.len();
         for k in 0..data.len() {
             let (p, j) = self.predict_with_jacobian(data, k, unknowns)?;
-            let r = data.components(k, &(p - data.poses.xyz_mm[k]));
+            let r = data.residual(k, &p);
             let partial;
             let rows = if !data.has_directions(k) {
                 &j
@@ -409,13 +365,74 @@ impl ExtModel {
         let mut s = 0.0;
         for k in 0..data.len() {
             let p = self.predict_pose(data, k)?;
-            s += data
-                .components(k, &(p - data.poses.xyz_mm[k]))
-                .iter()
-                .map(|c| c * c)
-                .sum::<f64>();
+            s += data.residual(k, &p).iter().map(|c| c * c).sum::<f64>();
         }
         Ok(s)
+    }
+}
+
+impl Values for ExtModel {
+    fn value(&self, u: Unknown) -> f64 {
+        let (t, time) = (self.model.transmission(), self.model.time_terms());
+        let at = |v: &[f64], j: usize| v.get(j).copied().unwrap_or(0.0);
+        match u {
+            Unknown::Param(i) => self.model.params().get(i).map_or(0.0, |p| p.value),
+            Unknown::PositionDrift(a) => time.drift_mm_per_h[a.min(2)],
+            Unknown::JointDrift(j) => at(&time.joint_drift_deg_per_h, j),
+            Unknown::Compliance(j) => at(&t.compliance_deg_per_kgfm, j),
+            Unknown::JointScale(j) => at(&t.scale, j),
+            Unknown::Coupling(i, k) => t.coupling_at(i, k),
+            Unknown::Hysteresis(j) => at(&t.hysteresis_deg, j),
+            Unknown::ThermalPpm => time.thermal_ppm,
+            Unknown::ThermalTauMin => time.thermal_tau_min,
+            Unknown::Offset { .. } => f64::NAN,
+        }
+    }
+
+    fn set_value(&mut self, u: Unknown, v: f64) -> Result<(), ModelError> {
+        if !v.is_finite() {
+            return Err(ModelError::NonFinite {
+                name: u.name(&self.model),
+                value: v,
+            });
+        }
+        let set = |slot: Option<&mut f64>| {
+            if let Some(x) = slot {
+                *x = v;
+            }
+        };
+        match u {
+            Unknown::Param(i) => self.model.set_param_at(i, v)?,
+            Unknown::PositionDrift(a) => self.model.time_terms_mut().drift_mm_per_h[a.min(2)] = v,
+            Unknown::JointDrift(j) => {
+                set(self.model.time_terms_mut().joint_drift_deg_per_h.get_mut(j));
+            }
+            Unknown::Compliance(j) => {
+                set(self
+                    .model
+                    .transmission_mut()
+                    .compliance_deg_per_kgfm
+                    .get_mut(j));
+            }
+            Unknown::JointScale(j) => set(self.model.transmission_mut().scale.get_mut(j)),
+            Unknown::Coupling(i, k) => set(self
+                .model
+                .transmission_mut()
+                .coupling
+                .get_mut(i)
+                .and_then(|r| r.get_mut(k))),
+            Unknown::Hysteresis(j) => {
+                set(self.model.transmission_mut().hysteresis_deg.get_mut(j));
+            }
+            Unknown::ThermalPpm => self.model.time_terms_mut().thermal_ppm = v,
+            Unknown::ThermalTauMin => {
+                // a time constant is positive: the fit's step is kept within the bound
+                let (lo, hi) = u.bounds().unwrap_or((f64::MIN_POSITIVE, f64::MAX));
+                self.model.time_terms_mut().thermal_tau_min = v.clamp(lo, hi);
+            }
+            Unknown::Offset { .. } => return Err(offsets_elsewhere(u, &self.model)),
+        }
+        Ok(())
     }
 }
 
@@ -427,27 +444,17 @@ pub fn uses_normal(data: &MeasuredSet, rtol: f64) -> bool {
     use_normal_equations(rtol) && data.n_residuals() >= super::compress::COMPRESS_MIN_RESIDUALS
 }
 
-/// The extended fit as a least-squares problem (residual `predicted - measured`).
-struct ExtProblem<'a> {
-    ext: ExtModel,
+/// The extended fit on normal equations (residual `predicted - measured`).
+struct ExtNormal<'a> {
+    freed: Freed<ExtModel>,
     data: &'a MeasuredSet,
-    unknowns: Vec<Unknown>,
 }
 
-impl ExtProblem<'_> {
-    fn set(&mut self, x: &DVector<f64>) -> Result<(), ModelError> {
-        for (&u, &v) in self.unknowns.iter().zip(x.iter()) {
-            self.ext.set_value(u, v)?;
-        }
-        Ok(())
-    }
-}
-
-impl NormalProblem for ExtProblem<'_> {
+impl NormalProblem for ExtNormal<'_> {
     type Error = ModelError;
 
     fn n_params(&self) -> usize {
-        self.unknowns.len()
+        self.freed.n_unknowns()
     }
 
     fn n_residuals(&self) -> usize {
@@ -455,53 +462,14 @@ impl NormalProblem for ExtProblem<'_> {
     }
 
     fn sum_sq(&mut self, x: &DVector<f64>) -> Result<f64, ModelError> {
-        self.set(x)?;
-        self.ext.sum_sq(self.data)
+        self.freed.set(x)?;
+        self.freed.state.sum_sq(self.data)
     }
 
     fn normal(&mut self, x: &DVector<f64>, eq: &mut Normal) -> Result<(), ModelError> {
-        self.set(x)?;
-        self.ext.normal_into(self.data, &self.unknowns, eq)
-    }
-}
-
-impl Problem for ExtProblem<'_> {
-    type Error = ModelError;
-
-    fn n_params(&self) -> usize {
-        self.unknowns.len()
-    }
-
-    fn n_residuals(&self) -> usize {
-        self.data.n_residuals()
-    }
-
-    fn evaluate(
-        &mut self,
-        x: &DVector<f64>,
-        r: &mut DVector<f64>,
-        jac: Option<&mut DMatrix<f64>>,
-    ) -> Result<(), ModelError> {
-        self.set(x)?;
-        match jac {
-            Some(jac) => {
-                let (j, e) = self.ext.stacked(self.data, &self.unknowns)?;
-                jac.copy_from(&j);
-                r.copy_from(&(-e));
-            }
-            None => {
-                let mut row = 0;
-                for k in 0..self.data.len() {
-                    let p = self.ext.predict_pose(self.data, k)?;
-                    let e = self.data.residual(k, &p);
-                    for (i, c) in e.into_iter().enumerate() {
-                        r[row + i] = c;
-                    }
-                    row += self.data.rows(k);
-                }
-            }
-        }
-        Ok(())
+        self.freed.set(x)?;
+        let f = &self.freed;
+        f.state.normal_into(self.data, &f.unknowns, eq)
     }
 }
 
@@ -565,20 +533,22 @@ pub fn fit(
             fitted: unknowns.to_vec(),
             fixed: Vec::new(),
             unidentifiable: Vec::new(),
+            rank: unknowns.len(),
         }
     } else if normal {
         let full = start.normal(data, unknowns)?;
         let id = analyse(&full.jacobian_root(), rtol);
         eq0 = Some(full.select(&id.kept));
-        Split::of(start, unknowns, &id)
+        split_of(start, unknowns, &id)
     } else {
         let (jac0, _) = start.stacked(data, unknowns)?;
-        Split::of(start, unknowns, &analyse(&jac0, rtol))
+        split_of(start, unknowns, &analyse(&jac0, rtol))
     };
     let Split {
         fitted,
         fixed,
         unidentifiable,
+        ..
     } = split;
     let n_res = data.n_residuals();
     if fitted.is_empty() {
@@ -594,13 +564,10 @@ pub fn fit(
             converged: true,
         });
     }
-    let mut problem = ExtProblem {
-        ext: start.clone(),
-        data,
-        unknowns: fitted.clone(),
-    };
-    let x0 = DVector::from_iterator(fitted.len(), fitted.iter().map(|&u| start.value(u)));
-    let (x, rss, sigma, converged) = if normal {
+    let freed = Freed::new(start.clone(), fitted.clone());
+    let x0 = freed.values();
+    let (freed, rss, sigma, converged) = if normal {
+        let mut problem = ExtNormal { freed, data };
         let rep = match eq0 {
             Some(eq) => solve_normal_from(&mut problem, x0, eq, lm),
             None => solve_normal(&mut problem, x0, lm),
@@ -608,16 +575,23 @@ pub fn fit(
         .map_err(CalibError::from_lm)?;
         let root = rep.normal.jacobian_root();
         let sigma = parameter_sigmas_m(&root, rep.normal.m, rep.normal.rtr, rtol);
-        (rep.x, rep.normal.rtr, sigma, rep.termination.converged())
+        let mut freed = problem.freed;
+        freed.set(&rep.x)?;
+        (freed, rep.normal.rtr, sigma, rep.termination.converged())
     } else {
+        let rows = |f: &Freed<ExtModel>, r: &mut DVector<f64>, jac: Option<&mut DMatrix<f64>>| {
+            f.state.rows(data, &f.unknowns, r, jac)
+        };
+        let mut problem = ModelProblem::new(freed, data.n_residuals(), rows);
         let rep = solve(&mut problem, x0, lm).map_err(CalibError::from_lm)?;
         let rss = rep.residuals.norm_squared();
         let sigma = crate::calib::fit::parameter_sigmas(&rep.jacobian, rss, rtol);
-        (rep.x, rss, sigma, rep.termination.converged())
+        let mut freed = problem.into_state();
+        freed.set(&rep.x)?;
+        (freed, rss, sigma, rep.termination.converged())
     };
-    problem.set(&x)?;
     Ok(ExtFit {
-        ext: problem.ext,
+        ext: freed.state,
         fitted,
         fixed,
         unidentifiable,
@@ -628,24 +602,11 @@ pub fn fit(
     })
 }
 
-/// The requested unknowns split by an identifiability analysis.
-struct Split {
-    fitted: Vec<Unknown>,
-    fixed: Vec<Unknown>,
-    unidentifiable: Vec<String>,
-}
-
-impl Split {
-    /// `unknowns` split by the analysis `id` of their columns.
-    fn of(start: &ExtModel, unknowns: &[Unknown], id: &Identifiability) -> Self {
-        let names: Vec<String> = unknowns.iter().map(|u| u.name(&start.model)).collect();
-        let name_refs: Vec<&str> = names.iter().map(String::as_str).collect();
-        Self {
-            fitted: id.kept.iter().map(|&k| unknowns[k]).collect(),
-            fixed: id.fixed.iter().map(|&k| unknowns[k]).collect(),
-            unidentifiable: id.combinations.iter().map(|c| c.name(&name_refs)).collect(),
-        }
-    }
+/// `unknowns` split by the analysis `id` of their columns.
+fn split_of(start: &ExtModel, unknowns: &[Unknown], id: &Identifiability) -> Split<Unknown> {
+    let names: Vec<String> = unknowns.iter().map(|u| u.name(&start.model)).collect();
+    let name_refs: Vec<&str> = names.iter().map(String::as_str).collect();
+    Split::of(unknowns, &name_refs, id)
 }
 
 #[cfg(test)]

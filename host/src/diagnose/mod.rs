@@ -62,7 +62,7 @@ use crate::error::{Classify, ErrorKind};
 use crate::model::{Model, ModelError};
 use candidates::effect_values;
 use decide::{contribution, forward_selection, DecideConfig, Selection};
-use extended::{ExtFit, ExtModel, Unknown};
+use extended::{ExtFit, ExtModel, Unknown, Values};
 use report::{DiagnoseReport, EffectReport, NoiseReport, SetStats, TrialReport, Unexplained};
 use residual::{best_regressor, explain, explain_with, regressors};
 

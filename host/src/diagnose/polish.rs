@@ -21,7 +21,7 @@
 
 use super::compress::stacked_or_compressed;
 use super::decide::DecideConfig;
-use super::extended::{fit, ExtFit, ExtModel, Unknown};
+use super::extended::{fit, ExtFit, ExtModel, Unknown, Values};
 use crate::calib::CalibError;
 use crate::calib::MeasuredSet;
 use crate::model::ModelError;

@@ -25,7 +25,7 @@ use super::setup::Setup;
 use super::PlanError;
 use crate::calib::default_selection;
 use crate::diagnose::candidates::library_for;
-use crate::diagnose::extended::{ExtModel, Unknown};
+use crate::diagnose::extended::{ExtModel, Unknown, Values};
 use crate::model::Model;
 
 /// An accepted effect is pinned down by the plan too when a parameter's sigma exceeds this

@@ -39,7 +39,7 @@ use nalgebra::{DVector, Vector3};
 use super::candidates::CandidatePose;
 use super::setup::joints_dataset;
 use super::PlanError;
-use crate::diagnose::extended::{ExtModel, Unknown};
+use crate::diagnose::extended::{ExtModel, Unknown, Values};
 use crate::model::ParamKind;
 
 /// The values of the unknowns of interest, as fractions of their magnitudes, at which the

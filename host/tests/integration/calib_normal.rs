@@ -11,11 +11,11 @@ use nalgebra::Vector3;
 use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
 use rigctl::calib::accumulate::Accumulator;
-use rigctl::calib::fit::{fit_parameters_normal, fit_problem, Fit};
+use rigctl::calib::fit::{fit_parameters_normal, fit_problem, Fit, PositionFit};
 use rigctl::calib::identifiability::DEFAULT_RTOL;
 use rigctl::calib::lm::LmConfig;
 use rigctl::calib::normal::Normal;
-use rigctl::calib::problem::{stacked_jacobian, PositionProblem};
+use rigctl::calib::problem::{position_problem, stacked_jacobian};
 use rigctl::calib::{default_selection, Poses};
 use rigctl::model::{katana450, Model, Tilt};
 
@@ -23,7 +23,7 @@ use rigctl::model::{katana450, Model, Tilt};
 fn tall_fit(start: &Model, poses: &Poses, sel: &[usize], tilt: bool) -> Fit {
     let jac0 = stacked_jacobian(start, poses, sel, tilt).unwrap();
     let lm = LmConfig::default();
-    let make = |cols| PositionProblem::new(start, poses, cols, tilt);
+    let make = |cols| position_problem(start, poses, cols, tilt);
     fit_problem(start, sel, &jac0, make, &lm, DEFAULT_RTOL).unwrap()
 }
 
@@ -31,6 +31,19 @@ fn tall_fit(start: &Model, poses: &Poses, sel: &[usize], tilt: bool) -> Fit {
 const SIGMA_REL_TOL: f64 = 1e-6;
 /// Largest Gauss-Newton step allowed from the UR5 solution (deg / mm).
 const FIXED_POINT_TOL: f64 = 1e-10;
+
+/// The path on normal equations.
+fn normal_fit(start: &Model, poses: &Poses, sel: &[usize], tilt: bool) -> Fit {
+    let lm = LmConfig::default();
+    let on = PositionFit {
+        poses,
+        selection: sel,
+        tilt,
+        lm: &lm,
+        rtol: DEFAULT_RTOL,
+    };
+    fit_parameters_normal(start, &on).unwrap()
+}
 
 /// Asserts `a` and `b` are the same fit; returns the largest parameter difference (deg / mm).
 fn assert_same(a: &Fit, b: &Fit, what: &str) -> f64 {
@@ -96,12 +109,10 @@ fn katana_poses(n: usize, seed: u64) -> (Model, Poses) {
 fn katana_normal_equations_match_the_tall_solver() {
     let (nominal, poses) = katana_poses(118, 118);
     let sel = default_selection(&nominal, false);
-    let lm = LmConfig::default();
     let mut worst: f64 = 0.0;
     for tilt in [false, true] {
         let tall = tall_fit(&nominal, &poses, &sel, tilt);
-        let normal =
-            fit_parameters_normal(&nominal, &poses, &sel, tilt, &lm, DEFAULT_RTOL).unwrap();
+        let normal = normal_fit(&nominal, &poses, &sel, tilt);
         worst = worst.max(assert_same(&tall, &normal, &format!("katana tilt={tilt}")));
         assert!(normal.converged);
     }
@@ -116,8 +127,7 @@ fn ur5_normal_equations_match_the_tall_solver() {
     };
     let sel = default_selection(&model, true);
     let tall = tall_fit(&model, &grid, &sel, false);
-    let lm = LmConfig::default();
-    let normal = fit_parameters_normal(&model, &grid, &sel, false, &lm, DEFAULT_RTOL).unwrap();
+    let normal = normal_fit(&model, &grid, &sel, false);
     let worst = assert_same(&tall, &normal, "ur5 grid");
     record("ur5_worst_difference", worst);
     record("ur5_parameters", normal.fitted.len());
@@ -165,8 +175,7 @@ fn ur5_fit_is_a_gauss_newton_fixed_point() {
         return;
     };
     let sel = default_selection(&model, true);
-    let lm = LmConfig::default();
-    let fit = fit_parameters_normal(&model, &grid, &sel, false, &lm, DEFAULT_RTOL).unwrap();
+    let fit = normal_fit(&model, &grid, &sel, false);
     let jac = stacked_jacobian(&fit.model, &grid, &fit.fitted, false).unwrap();
     let mut r = nalgebra::DVector::zeros(3 * grid.len());
     for (i, (q, xyz)) in grid.q_deg.iter().zip(&grid.xyz_mm).enumerate() {

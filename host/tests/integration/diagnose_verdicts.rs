@@ -240,7 +240,7 @@ fn a_negative_compliance_is_held_at_its_bound() {
     use rigctl::calib::default_selection;
     use rigctl::diagnose::bounds;
     use rigctl::diagnose::decide::{DecideConfig, Selection};
-    use rigctl::diagnose::extended::{fit, ExtModel, Unknown};
+    use rigctl::diagnose::extended::{fit, ExtModel, Unknown, Values};
     let cfg = DecideConfig::default();
     for (truth, negative) in [(-0.01, true), (0.01, false)] {
         let effect = format!("compliance:j3={truth}");
