@@ -11,9 +11,10 @@
 //! its ends): its extent is the union of its passes there, a stretch no pass covers is a gap
 //! (bridged when at most `--max-gap-mm`, else missing). A line of one path is that path. A line
 //! is **whole** when no gap is missing and nothing may continue it: a mark that may continue
-//! one of its passes (or a gap too long to bridge to it) counts unless the mark is a pass of
-//! the same line, lies off the line's axis, or runs across it (more than [`ACROSS_DEG`] to it)
-//! within `--max-gap-mm` of the pass's end: a line ending on another one.
+//! one of its passes at one of the line's ends (or a gap too long to bridge to it) counts
+//! unless the mark is a pass of the same line, lies off the line's axis, or runs across it
+//! (more than [`ACROSS_DEG`] to it) within `--max-gap-mm` of the pass's end: a line ending on
+//! another one.
 
 use super::chain::Stroke;
 use super::link::{Gap, LeftOut};
@@ -405,17 +406,19 @@ pub(crate) fn lines(paths: &[DrawnPath], loose: &[Vec<Loose>], max_gap_mm: f64) 
     // Lines that continue each other end to end (one drawn line where, over a stretch, no
     // pass runs alongside another): joined, the stretch between them a gap of the line.
     let mut out: Vec<DrawnLine>;
+    let mut members_of: Vec<Vec<usize>>;
     loop {
         let g = groups_of(&mut parent);
         let mut roots: Vec<usize> = g.clone();
         roots.sort_unstable();
         roots.dedup();
-        out = roots
+        members_of = roots
             .iter()
-            .map(|&r| {
-                let members: Vec<usize> = (0..st.len()).filter(|&k| g[k] == r).collect();
-                line_of(&st, &members, paths, max_gap_mm)
-            })
+            .map(|&r| (0..st.len()).filter(|&k| g[k] == r).collect())
+            .collect();
+        out = members_of
+            .iter()
+            .map(|members| line_of(&st, members, paths, max_gap_mm))
             .collect();
         let mut joined = false;
         for i in 0..out.len() {
@@ -432,16 +435,43 @@ pub(crate) fn lines(paths: &[DrawnPath], loose: &[Vec<Loose>], max_gap_mm: f64) 
             break;
         }
     }
-    // What lies beyond the passes' free ends, judged per line.
-    for li in 0..out.len() {
-        let passes = out[li].passes.clone();
-        let axis = (passes.len() > 1 && !out[li].closed)
-            .then(|| unit(sub(out[li].to_mm, out[li].from_mm)));
+    // Each path's first and last stretch (where its free ends are).
+    let end_stretches: Vec<[usize; 2]> = (0..paths.len())
+        .map(|p| {
+            let first = st.iter().position(|x| x.path == p).unwrap_or(usize::MAX);
+            let last = st.iter().rposition(|x| x.path == p).unwrap_or(usize::MAX);
+            [first, last]
+        })
+        .collect();
+    // What lies beyond the passes' free ends, judged per line: the ends of the stretches of the
+    // line (a pass that turns into another line has its other end there).
+    for (line, members) in out.iter_mut().zip(&members_of) {
+        let passes = line.passes.clone();
+        let axis = (passes.len() > 1 && !line.closed).then(|| unit(sub(line.to_mm, line.from_mm)));
+        // A pass's end inside a line of several passes (farther than --max-gap-mm from the
+        // line's ends) is continued by the other passes: what lies beyond it is the line's own
+        // coverage (its gaps judged above) or a line across it.
+        let at_line_end = |end: [f64; 2]| {
+            passes.len() == 1
+                || dist(end, line.from_mm).min(dist(end, line.to_mm))
+                    <= max_gap_mm.max(ALONGSIDE_MM)
+        };
+        let own_end = |p: usize, end: [f64; 2]| {
+            let pts = &paths[p].stroke.points_mm;
+            let (Some(a), Some(b)) = (pts.first(), pts.last()) else {
+                return false;
+            };
+            let k = end_stretches[p][usize::from(dist(end, *b) < dist(end, *a))];
+            members.contains(&k)
+        };
         let mut counted: Vec<LeftOut> = Vec::new();
         let mut missing: Vec<Gap> = Vec::new();
         for &p in &passes {
             for l in &loose[p] {
-                if !counts(l, &passes, axis, max_gap_mm) {
+                if !own_end(p, l.end_mm)
+                    || !at_line_end(l.end_mm)
+                    || !counts(l, &passes, axis, max_gap_mm)
+                {
                     continue;
                 }
                 match l.what {
@@ -460,8 +490,8 @@ pub(crate) fn lines(paths: &[DrawnPath], loose: &[Vec<Loose>], max_gap_mm: f64) 
                 }
             }
         }
-        out[li].gaps.extend(missing);
-        out[li].continued_by = counted;
+        line.gaps.extend(missing);
+        line.continued_by = counted;
     }
     out.sort_by(|a, b| b.length_mm.total_cmp(&a.length_mm));
     out
