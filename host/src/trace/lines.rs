@@ -7,8 +7,8 @@
 //! two groups only while their mean directions agree within [`ALONGSIDE_DEG`]); a path whose
 //! stretches all stay in groups of their own is one line (a box drawn round in one go).
 //!
-//! A line of several passes is measured along its longest stretch (carried on straight past
-//! its ends): its extent is the union of its passes there, a stretch no pass covers is a gap
+//! A line of several passes is measured along its longest stretch (smoothed over
+//! [`DIR_HALF_MM`] either side, carried on straight past its ends): its extent is the union of its passes there, a stretch no pass covers is a gap
 //! (bridged when at most `--max-gap-mm`, else missing). A line of one path is that path. A line
 //! is **whole** when no gap is missing and nothing may continue it: a mark that may continue
 //! one of its passes at one of the line's ends (or a gap too long to bridge to it) counts
@@ -565,7 +565,8 @@ fn line_of(st: &[Stretch], members: &[usize], paths: &[DrawnPath], max_gap_mm: f
         .iter()
         .max_by(|&&a, &&b| st[a].len.total_cmp(&st[b].len))
         .unwrap_or(&members[0]);
-    let rp = &st[r].pts;
+    // Smoothed over DIR_HALF_MM either side (a zigzag pass is longer than its line).
+    let rp = &smoothed(&st[r].pts);
     let rs = arc(rp);
     let total = rs[rs.len() - 1];
     let head_t = unit(sub(point_at(rp, &rs, END_CHORD_MM.min(total)), rp[0]));
@@ -682,6 +683,25 @@ fn continue_each_other(a: &DrawnLine, b: &DrawnLine, max_gap_mm: f64) -> bool {
         }
     }
     false
+}
+
+/// `pts` with each point the mean of those within [`DIR_HALF_MM`] of arc length either side
+/// (the window shrunk near the ends, which stay in place).
+fn smoothed(pts: &[[f64; 2]]) -> Vec<[f64; 2]> {
+    let s = arc(pts);
+    let total = s.last().copied().unwrap_or(0.0);
+    (0..pts.len())
+        .map(|i| {
+            let half = DIR_HALF_MM.min(s[i]).min(total - s[i]);
+            let a = s.partition_point(|&v| v < s[i] - half);
+            let b = s.partition_point(|&v| v <= s[i] + half);
+            let n = (b - a).max(1) as f64;
+            let (sx, sy) = pts[a..b.max(a + 1).min(pts.len())]
+                .iter()
+                .fold((0.0, 0.0), |acc, p| (acc.0 + p[0], acc.1 + p[1]));
+            [sx / n, sy / n]
+        })
+        .collect()
 }
 
 /// The point at arc length `v` along `pts` (cumulative arc `s`).
