@@ -780,7 +780,8 @@ mod tests {
         assert_eq!(along.passes.len(), 3, "{along:#?}");
         assert!((along.length_mm - 103.0).abs() < 1.5, "{}", along.length_mm);
         assert!(along.is_whole() && along.gaps.is_empty());
-        assert_eq!(across.passes, vec![3, 4]);
+        // Longest first: the pass round the corner (89.5 mm), then the straight one.
+        assert_eq!(across.passes, vec![4, 3]);
         assert!(across.is_whole());
     }
 
