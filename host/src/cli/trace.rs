@@ -1,14 +1,15 @@
 //! `rigctl trace`: the pencil centreline of a scanned or photographed sheet as CSV `x,y`
 //! (sheet mm). Exit 0 only when the written trace is the whole drawn path; 1 when part of it is
 //! missing (nothing is written then but the overlay); 2 for unusable input. With `--paths DIR`
-//! every drawn line is written as a path of its own with a JSON summary; exit 0 only when every
-//! path is whole.
+//! every path of graphite is written as a file of its own with a JSON summary that groups the
+//! paths running alongside each other as the passes of one drawn line; exit 0 only when every
+//! drawn line is whole.
 
 use super::out::errln;
 use super::CliError;
 use indicatif::{ProgressBar, ProgressDrawTarget, ProgressStyle};
 use rigctl::sheet::ReferencePath;
-use rigctl::trace::overlay::{render_overlay, write_overlay};
+use rigctl::trace::overlay::{render_drawing_overlay, render_overlay, write_overlay};
 use rigctl::trace::{
     load_prepared, trace_paths, trace_prepared, write_csv, LeftOut, LeftOutKind, Mapping,
     PathChoice, Trace, TraceOptions,
@@ -26,8 +27,9 @@ pub struct Args {
     #[arg(long, required_unless_present = "paths", conflicts_with = "paths")]
     pub out: Option<PathBuf>,
     /// Write every drawn line as a path of its own into this directory: `path-001.csv`, ...
-    /// (CSV `x,y`, mm, longest first) and `paths.json` (each path's length, ends, gaps and
-    /// whether it is whole; the strays).
+    /// (CSV `x,y`, mm, longest first) and `paths.json` (the drawn lines, each with the paths
+    /// drawn along it as its passes, its ends and whether it is drawn end to end; each path's
+    /// length, ends, gaps and whether it is whole; the strays).
     #[arg(long, value_name = "DIR")]
     pub paths: Option<PathBuf>,
     /// The image has no fiducials: map pixels by --mm-per-px about the image centre.
@@ -110,6 +112,12 @@ pub fn run(args: Args) -> Result<(), CliError> {
         drop(prepared);
         progress.finish_and_clear();
         let drawing = drawing.map_err(|e| CliError::from(e).in_file(&args.scan))?;
+        if let Some(path) = &args.overlay {
+            write_overlay(
+                path,
+                &render_drawing_overlay(&img, &drawing, args.fiducial_spacing_mm),
+            )?;
+        }
         return super::trace_paths::finish(dir, &drawing);
     }
     let trace = trace_prepared(&img, &prepared, &opts, &progress);

@@ -1,5 +1,6 @@
-//! `rigctl trace --paths DIR`: every drawn line written as a path of its own, reported on
-//! stderr; a failure (exit 1) naming each path that is not whole.
+//! `rigctl trace --paths DIR`: every path written to a file of its own, the drawn lines (the
+//! paths running alongside each other as passes of one line) reported on stderr; a failure
+//! (exit 1) naming each drawn line that is not whole.
 
 use super::out::errln;
 use super::trace::{describe, warn_resolution};
@@ -36,16 +37,39 @@ pub fn finish(dir: &Path, drawing: &Drawing) -> Result<(), CliError> {
             summary.display()
         );
     }
+    for (i, l) in drawing.lines.iter().enumerate() {
+        if l.passes.len() > 1 || !l.is_whole() {
+            errln!(
+                "rigctl trace: line {}: {:.1} mm{}, from ({:.1}, {:.1}) to ({:.1}, {:.1}) mm, {} pass(es): {}{}",
+                i + 1,
+                l.length_mm,
+                if l.closed { ", closed" } else { "" },
+                l.from_mm[0],
+                l.from_mm[1],
+                l.to_mm[0],
+                l.to_mm[1],
+                l.passes.len(),
+                pass_list(&l.passes),
+                if l.is_whole() { "" } else { ", NOT whole" },
+            );
+        }
+    }
+    errln!(
+        "rigctl trace: {} drawn line(s) ({} whole) from {} path(s)",
+        drawing.lines.len(),
+        drawing.lines.iter().filter(|l| l.is_whole()).count(),
+        drawing.paths.len()
+    );
     if drawing.is_whole() {
         return Ok(());
     }
     let parts: Vec<String> = drawing
-        .paths
+        .lines
         .iter()
         .enumerate()
-        .filter(|(_, p)| !p.is_whole())
-        .map(|(i, p)| {
-            let mut why: Vec<String> = p
+        .filter(|(_, l)| !l.is_whole())
+        .map(|(i, l)| {
+            let mut why: Vec<String> = l
                 .gaps
                 .iter()
                 .filter(|g| !g.bridged)
@@ -57,19 +81,28 @@ pub fn finish(dir: &Path, drawing: &Drawing) -> Result<(), CliError> {
                 })
                 .collect();
             why.extend(
-                p.continued_by
+                l.continued_by
                     .iter()
                     .map(|o| format!("a mark that may continue it, {}", describe(o))),
             );
-            format!("{} ({})", path_file_name(i), why.join("; "))
+            format!("line {} [{}] ({})", i + 1, pass_list(&l.passes), why.join("; "))
         })
         .collect();
     Err(CliError::failure(format!(
-        "{} of {} drawn paths are not whole: {}; all paths written to {}, see {}",
+        "{} of {} drawn lines are not whole: {}; all paths written to {}, see {}",
         parts.len(),
-        drawing.paths.len(),
+        drawing.lines.len(),
         parts.join(" | "),
         dir.display(),
         summary.display()
     )))
+}
+
+/// The file names of the paths `passes`, comma-separated.
+fn pass_list(passes: &[usize]) -> String {
+    passes
+        .iter()
+        .map(|&p| path_file_name(p))
+        .collect::<Vec<_>>()
+        .join(", ")
 }

@@ -419,6 +419,16 @@ pub(super) struct Judged {
     pub(super) gaps: Vec<Gap>,
     free: Vec<End>,
     continues: Vec<bool>,
+    /// For each missing gap in `gaps` (in order), the chain it leads to (`None`: the path's
+    /// own other end).
+    pub(super) missing_to: Vec<Option<usize>>,
+}
+
+impl Judged {
+    /// The free ends of the path: position and outward unit tangent.
+    pub(super) fn free_ends(&self) -> Vec<([f64; 2], [f64; 2])> {
+        self.free.iter().map(|e| (e.p, e.t)).collect()
+    }
 }
 
 impl Network {
@@ -530,6 +540,7 @@ impl Network {
         }
         let far = (5.0 * max_gap_mm).max(50.0);
         let mut continues: Vec<bool> = vec![false; self.chains.len()];
+        let mut missing_to: Vec<Option<usize>> = Vec::new();
         if free.len() == 2 {
             // The path's ends continuing into each other across a gap too long to bridge.
             if dist(free[0].p, free[1].p) > max_gap_mm {
@@ -543,6 +554,7 @@ impl Network {
                         length_mm: len,
                         bridged: false,
                     });
+                    missing_to.push(None);
                 }
             }
         }
@@ -583,6 +595,7 @@ impl Network {
                     length_mm: len,
                     bridged: false,
                 });
+                missing_to.push(Some(ci));
                 continues[ci] = true;
             }
         }
@@ -591,14 +604,23 @@ impl Network {
             gaps,
             free,
             continues,
+            missing_to,
         }
     }
 
     /// What the judged chain `main` leaves out: every other chain, longest first, with why.
     pub(super) fn left_out(&self, main: usize, judged: &Judged) -> Vec<LeftOut> {
+        self.left_out_indexed(main, judged)
+            .into_iter()
+            .map(|(_, o)| o)
+            .collect()
+    }
+
+    /// [`Self::left_out`] with each mark's chain index.
+    pub(super) fn left_out_indexed(&self, main: usize, judged: &Judged) -> Vec<(usize, LeftOut)> {
         let reach_ahead = (2.0 * self.max_gap_mm).max(15.0);
         let main_len = self.lengths[main];
-        let mut left_out: Vec<LeftOut> = Vec::new();
+        let mut left_out: Vec<(usize, LeftOut)> = Vec::new();
         for (ci, (s, ..)) in self.built.iter().enumerate() {
             if ci == main {
                 continue;
@@ -623,14 +645,17 @@ impl Network {
             } else {
                 LeftOutKind::Mark
             };
-            left_out.push(LeftOut {
-                from_mm: pts[0],
-                to_mm: pts[pts.len() - 1],
-                length_mm: len,
-                kind,
-            });
+            left_out.push((
+                ci,
+                LeftOut {
+                    from_mm: pts[0],
+                    to_mm: pts[pts.len() - 1],
+                    length_mm: len,
+                    kind,
+                },
+            ));
         }
-        left_out.sort_by(|a, b| b.length_mm.total_cmp(&a.length_mm));
+        left_out.sort_by(|a, b| b.1.length_mm.total_cmp(&a.1.length_mm));
         left_out
     }
 

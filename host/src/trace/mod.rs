@@ -22,7 +22,8 @@
 //!
 //! [`render`] (with `render_draw`, `render_extras`) draws synthetic scans with known truth for
 //! tests, benches and simulation, [`render_photo`] phone photos. [`trace_paths`] writes every
-//! drawn line of a drawing as a path of its own ([`paths`]). Errors: [`error`]; settings:
+//! drawn line of a drawing as a path of its own ([`paths`]), the paths that run alongside each other
+//! grouped as the passes of one drawn line ([`lines`]). Errors: [`error`]; settings:
 //! [`options`].
 
 mod area;
@@ -35,6 +36,7 @@ pub mod fiducials;
 mod files;
 pub mod homography;
 mod ink;
+mod lines;
 pub mod link;
 mod mapping;
 mod options;
@@ -54,6 +56,7 @@ pub use error::TraceError;
 pub use fiducials::{Disc, Fiducials};
 pub use files::{load_prepared, load_scan, write_csv};
 pub use homography::Homography;
+pub use lines::DrawnLine;
 pub use link::{Gap, LeftOut, LeftOutKind, Linking};
 pub use options::{Mapping, PathChoice, TraceOptions};
 pub use paths::{path_file_name, write_drawing, Drawing, DrawnPath, SUMMARY_FILE};
@@ -173,10 +176,12 @@ pub fn trace_paths(
     let no_trace = || TraceError::NoTrace {
         min_length_mm: opts.min_stroke_mm,
     };
-    let drawing = paths::drawing(&pieces_mm, opts, meta.px_per_mm).ok_or_else(no_trace)?;
+    let mut drawing = paths::drawing(&pieces_mm, opts, meta.px_per_mm).ok_or_else(no_trace)?;
     if drawing.paths.is_empty() {
         return Err(no_trace());
     }
+    drawing.camera = meta.camera;
+    drawing.fiducials = meta.fiducials;
     Ok(drawing)
 }
 

@@ -1,9 +1,12 @@
 //! The overlay image: the input (reduced to at most 2400 px on its long side) with the fitted
 //! printed marks (blue rings where the camera model puts them, magenta crosses where they were
 //! measured), the written trace (green) and the missing stretches of the drawn path (red), so
-//! that a person can check a trace at a glance.
+//! that a person can check a trace at a glance. Without fiducials (a plain scale) there are no
+//! marks; the trace is drawn through the same scale. For every drawn line of a drawing
+//! ([`render_drawing_overlay`]): the passes of whole lines green, of lines not whole orange,
+//! the missing stretches red.
 
-use super::{Trace, TraceError};
+use super::{CameraModel, Drawing, Fiducials, Trace, TraceError};
 use crate::io::atomic::{write_atomic, AtomicWriteError};
 use crate::sheet::{
     fiducial_centres_mm, orientation_dot_mm, ring_dots_mm, FIDUCIAL_DIAMETER_MM,
@@ -13,19 +16,61 @@ use image::{Rgb, RgbImage};
 use std::path::Path;
 
 const GREEN: Rgb<u8> = Rgb([0, 170, 0]);
+const ORANGE: Rgb<u8> = Rgb([255, 140, 0]);
 const BLUE: Rgb<u8> = Rgb([20, 60, 255]);
 const MAGENTA: Rgb<u8> = Rgb([220, 0, 220]);
 const RED: Rgb<u8> = Rgb([255, 0, 0]);
 
-/// Draws the overlay of `trace` on `img` (the traced image). `spacing_mm` is the fiducial
-/// spacing used.
-pub fn render_overlay(img: &RgbImage, trace: &Trace, spacing_mm: f64) -> RgbImage {
+/// Sheet mm to overlay pixels: through the camera model, or (a plain scale, no fiducials)
+/// `px_per_mm` about the image centre, y up; then reduced by `step`.
+struct ToPx<'a> {
+    camera: Option<&'a CameraModel>,
+    px_per_mm: f64,
+    size: [f64; 2],
+    scale: f64,
+}
+
+impl ToPx<'_> {
+    fn px(&self, p: [f64; 2]) -> [f64; 2] {
+        let q = match self.camera {
+            Some(cam) => cam.to_px(p),
+            None => [
+                p[0] * self.px_per_mm + 0.5 * self.size[0],
+                0.5 * self.size[1] - p[1] * self.px_per_mm,
+            ],
+        };
+        [q[0] * self.scale, q[1] * self.scale]
+    }
+
+    fn polyline(&self, pts: &[[f64; 2]], closed: bool) -> Vec<[f64; 2]> {
+        let mut out: Vec<[f64; 2]> = pts.iter().map(|p| self.px(*p)).collect();
+        if closed {
+            if let Some(&first) = out.first() {
+                out.push(first);
+            }
+        }
+        out
+    }
+}
+
+/// The reduced image and its mapping; the printed marks drawn (fiducial mapping only).
+fn base<'a>(
+    img: &RgbImage,
+    camera: Option<&'a CameraModel>,
+    fiducials: Option<&Fiducials>,
+    px_per_mm: f64,
+    spacing_mm: f64,
+) -> (RgbImage, ToPx<'a>) {
     let long = img.width().max(img.height()) as usize;
     let step = long.div_ceil(2400).max(1);
     let mut out = downsample(img, step);
-    let scale = 1.0 / step as f64;
-    let px = |p: [f64; 2]| [p[0] * scale, p[1] * scale];
-    if let Some(cam) = &trace.camera {
+    let to = ToPx {
+        camera,
+        px_per_mm,
+        size: [img.width() as f64, img.height() as f64],
+        scale: 1.0 / step as f64,
+    };
+    if camera.is_some() {
         let mut marks: Vec<([f64; 2], f64)> = fiducial_centres_mm(spacing_mm)
             .iter()
             .map(|c| (*c, FIDUCIAL_DIAMETER_MM))
@@ -41,45 +86,84 @@ pub fn render_overlay(img: &RgbImage, trace: &Trace, spacing_mm: f64) -> RgbImag
             let ring: Vec<[f64; 2]> = (0..=48)
                 .map(|i| {
                     let a = std::f64::consts::TAU * i as f64 / 48.0;
-                    px(cam.to_px([c[0] + r_mm * a.cos(), c[1] + r_mm * a.sin()]))
+                    to.px([c[0] + r_mm * a.cos(), c[1] + r_mm * a.sin()])
                 })
                 .collect();
             polyline(&mut out, &ring, BLUE, 1);
         }
-        if let Some(f) = &trace.fiducials {
-            let measured = f
-                .corners
-                .iter()
-                .chain(std::iter::once(&f.dot))
-                .chain(f.ring.iter().map(|(d, _)| d));
-            for d in measured {
-                let c = px(d.centre_px);
-                polyline(
-                    &mut out,
-                    &[[c[0] - 4.0, c[1]], [c[0] + 4.0, c[1]]],
-                    MAGENTA,
-                    0,
-                );
-                polyline(
-                    &mut out,
-                    &[[c[0], c[1] - 4.0], [c[0], c[1] + 4.0]],
-                    MAGENTA,
-                    0,
-                );
-            }
+    }
+    if let Some(f) = fiducials {
+        let measured = f
+            .corners
+            .iter()
+            .chain(std::iter::once(&f.dot))
+            .chain(f.ring.iter().map(|(d, _)| d));
+        for d in measured {
+            let c = [d.centre_px[0] * to.scale, d.centre_px[1] * to.scale];
+            polyline(
+                &mut out,
+                &[[c[0] - 4.0, c[1]], [c[0] + 4.0, c[1]]],
+                MAGENTA,
+                0,
+            );
+            polyline(
+                &mut out,
+                &[[c[0], c[1] - 4.0], [c[0], c[1] + 4.0]],
+                MAGENTA,
+                0,
+            );
         }
-        for s in &trace.strokes {
-            let mut pts: Vec<[f64; 2]> = s.points_mm.iter().map(|p| px(cam.to_px(*p))).collect();
-            if s.closed {
-                if let Some(&first) = pts.first() {
-                    pts.push(first);
-                }
-            }
-            polyline(&mut out, &pts, GREEN, 1);
+    }
+    (out, to)
+}
+
+/// Draws the overlay of `trace` on `img` (the traced image). `spacing_mm` is the fiducial
+/// spacing used.
+pub fn render_overlay(img: &RgbImage, trace: &Trace, spacing_mm: f64) -> RgbImage {
+    let (mut out, to) = base(
+        img,
+        trace.camera.as_ref(),
+        trace.fiducials.as_ref(),
+        trace.px_per_mm,
+        spacing_mm,
+    );
+    for s in &trace.strokes {
+        polyline(&mut out, &to.polyline(&s.points_mm, s.closed), GREEN, 1);
+    }
+    for g in trace.linking.missing() {
+        polyline(&mut out, &[to.px(g.from_mm), to.px(g.to_mm)], RED, 3);
+    }
+    out
+}
+
+/// Draws the overlay of every drawn line of `drawing` on `img`: each path green when every line
+/// it runs along is whole, orange otherwise; each missing stretch red.
+pub fn render_drawing_overlay(img: &RgbImage, drawing: &Drawing, spacing_mm: f64) -> RgbImage {
+    let (mut out, to) = base(
+        img,
+        drawing.camera.as_ref(),
+        drawing.fiducials.as_ref(),
+        drawing.px_per_mm,
+        spacing_mm,
+    );
+    let mut whole = vec![true; drawing.paths.len()];
+    for l in &drawing.lines {
+        for &p in &l.passes {
+            whole[p] &= l.is_whole();
         }
-        for g in trace.linking.missing() {
-            let seg = [px(cam.to_px(g.from_mm)), px(cam.to_px(g.to_mm))];
-            polyline(&mut out, &seg, RED, 3);
+    }
+    for (p, ok) in drawing.paths.iter().zip(&whole) {
+        let colour = if *ok { GREEN } else { ORANGE };
+        polyline(
+            &mut out,
+            &to.polyline(&p.stroke.points_mm, p.stroke.closed),
+            colour,
+            1,
+        );
+    }
+    for l in &drawing.lines {
+        for g in l.gaps.iter().filter(|g| !g.bridged) {
+            polyline(&mut out, &[to.px(g.from_mm), to.px(g.to_mm)], RED, 3);
         }
     }
     out

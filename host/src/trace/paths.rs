@@ -6,8 +6,9 @@
 //! summary.
 
 use super::chain::{resample, PieceMm, Stroke};
+use super::lines::{self, DrawnLine, Loose, LooseWhat};
 use super::link::{orient, Gap, LeftOut, LeftOutKind, Network, MIN_MARK_MM};
-use super::{write_csv, TraceError, TraceOptions};
+use super::{write_csv, CameraModel, Fiducials, TraceError, TraceOptions};
 use crate::io::atomic::write_bytes_atomic;
 use serde_json::{json, Value};
 use std::path::{Path, PathBuf};
@@ -25,6 +26,21 @@ pub struct DrawnPath {
     /// Length of the end left out where an open line ends on itself and was closed there (a
     /// corner drawn past), mm.
     pub overshoot_mm: f64,
+    /// The chain of linked pieces it was made of.
+    pub(crate) chain: usize,
+    /// What lies beyond its free ends: each missing gap and each mark that may continue it.
+    pub(crate) beyond: Vec<Beyond>,
+}
+
+/// A missing gap or a mark that may continue a path, beyond one of its free ends.
+#[derive(Debug, Clone)]
+pub(crate) struct Beyond {
+    /// The chain it leads to (`None`: the path's own other end).
+    pub chain: Option<usize>,
+    /// The free end and its outward direction.
+    pub end_mm: [f64; 2],
+    pub dir: [f64; 2],
+    pub what: LooseWhat,
 }
 
 impl DrawnPath {
@@ -40,16 +56,22 @@ impl DrawnPath {
 pub struct Drawing {
     /// The paths, longest first.
     pub paths: Vec<DrawnPath>,
+    /// The drawn lines: the paths that run alongside each other grouped as the passes of one
+    /// line ([`super::lines`]), longest first.
+    pub lines: Vec<DrawnLine>,
     /// Marks shorter than a path (dust, fibres, flicks), longest first.
     pub strays: Vec<LeftOut>,
     /// Image scale, pixels per mm.
     pub px_per_mm: f64,
+    /// The camera model and the fiducials (fiducial mapping only).
+    pub camera: Option<CameraModel>,
+    pub fiducials: Option<Fiducials>,
 }
 
 impl Drawing {
-    /// Whether every path is whole (FORMATS.md: exit 0 only then).
+    /// Whether every drawn line is whole (FORMATS.md: exit 0 only then).
     pub fn is_whole(&self) -> bool {
-        self.paths.iter().all(DrawnPath::is_whole)
+        self.lines.iter().all(DrawnLine::is_whole)
     }
 }
 
@@ -84,31 +106,94 @@ pub(super) fn drawing(pieces: &[PieceMm], opts: &TraceOptions, px_per_mm: f64) -
     }
     paths.sort_by(|a, b| b.stroke.length_mm().total_cmp(&a.stroke.length_mm()));
     strays.sort_by(|a, b| b.length_mm.total_cmp(&a.length_mm));
+    let mut path_of_chain: Vec<Option<usize>> = vec![None; net.lengths.len()];
+    for (i, p) in paths.iter().enumerate() {
+        path_of_chain[p.chain] = Some(i);
+    }
+    let loose: Vec<Vec<Loose>> = paths
+        .iter()
+        .map(|p| {
+            p.beyond
+                .iter()
+                .map(|b| Loose {
+                    path: b.chain.and_then(|c| path_of_chain[c]),
+                    mark: b
+                        .chain
+                        .map(|c| net.chain_stroke(c).points_mm.clone())
+                        .unwrap_or_default(),
+                    end_mm: b.end_mm,
+                    dir: b.dir,
+                    what: b.what,
+                })
+                .collect()
+        })
+        .collect();
+    let lines = lines::lines(&paths, &loose, opts.max_gap_mm);
     Some(Drawing {
         paths,
+        lines,
         strays,
         px_per_mm,
+        camera: None,
+        fiducials: None,
     })
 }
 
 /// Chain `ci` judged as a drawn line, closed where it ends on itself, resampled.
 fn judged_path(net: &Network, ci: usize, opts: &TraceOptions) -> DrawnPath {
     let judged = net.judge(ci);
-    let continued_by = net
-        .left_out(ci, &judged)
+    let free = judged.free_ends();
+    let marks: Vec<(usize, LeftOut)> = net
+        .left_out_indexed(ci, &judged)
         .into_iter()
-        .filter(|o| o.kind == LeftOutKind::Continues)
+        .filter(|(_, o)| o.kind == LeftOutKind::Continues)
         .collect();
+    let mut beyond = Vec::new();
+    let n_bridged = judged.gaps.iter().filter(|g| g.bridged).count();
+    for (k, g) in judged.gaps.iter().enumerate().filter(|(_, g)| !g.bridged) {
+        let chain = judged.missing_to.get(k - n_bridged).copied().flatten();
+        let (end_mm, dir) = nearest_end(&free, &[g.from_mm]);
+        beyond.push(Beyond {
+            chain,
+            end_mm,
+            dir,
+            what: LooseWhat::Gap(k),
+        });
+    }
+    for (k, (c, _)) in marks.iter().enumerate() {
+        let (end_mm, dir) = nearest_end(&free, &net.chain_stroke(*c).points_mm);
+        beyond.push(Beyond {
+            chain: Some(*c),
+            end_mm,
+            dir,
+            what: LooseWhat::Mark(k),
+        });
+    }
     let mut path = DrawnPath {
         stroke: judged.path,
         gaps: judged.gaps,
-        continued_by,
+        continued_by: marks.into_iter().map(|(_, o)| o).collect(),
         overshoot_mm: 0.0,
+        chain: ci,
+        beyond,
     };
     close_on_itself(&mut path, opts.max_gap_mm);
     let s = &path.stroke;
     path.stroke.points_mm = resample(&s.points_mm, s.closed, opts.spacing_mm);
     path
+}
+
+/// The free end (position, outward direction) nearest to any of `pts`.
+fn nearest_end(free: &[([f64; 2], [f64; 2])], pts: &[[f64; 2]]) -> ([f64; 2], [f64; 2]) {
+    let d = |e: &([f64; 2], [f64; 2])| {
+        pts.iter()
+            .map(|q| (q[0] - e.0[0]).hypot(q[1] - e.0[1]))
+            .fold(f64::INFINITY, f64::min)
+    };
+    free.iter()
+        .min_by(|a, b| d(a).total_cmp(&d(b)))
+        .copied()
+        .unwrap_or((pts.first().copied().unwrap_or([0.0; 2]), [1.0, 0.0]))
 }
 
 /// An end of an open line this close to the line near its other end closes it there, mm.
@@ -160,6 +245,7 @@ fn close_on_itself(path: &mut DrawnPath, max_gap_mm: f64) {
     path.overshoot_mm = overshoot_mm;
     path.gaps.retain(|g| g.bridged);
     path.continued_by.clear();
+    path.beyond.clear();
 }
 
 /// The file name of path `i` (0-based) in the output directory.
@@ -225,9 +311,33 @@ fn gap_json(g: &Gap) -> Value {
     })
 }
 
-/// The summary: every path (file, length, ends, gaps bridged and missing, the marks that may
-/// continue it, whether it is whole) and the strays.
+/// The file names of the paths `idx`.
+fn files(idx: &[usize]) -> Vec<String> {
+    idx.iter().map(|&i| path_file_name(i)).collect()
+}
+
+/// The summary: every drawn line (its passes, ends, length, what no pass covers, what may
+/// continue it, whether it is whole), every path (file, length, ends, gaps bridged and
+/// missing, the marks that may continue it, whether it is whole) and the strays.
 fn summary_json(d: &Drawing) -> Value {
+    let lines: Vec<Value> = d
+        .lines
+        .iter()
+        .map(|l| {
+            json!({
+                "passes": files(&l.passes),
+                "closed": l.closed,
+                "from_mm": point(l.from_mm),
+                "to_mm": point(l.to_mm),
+                "length_mm": round4(l.length_mm),
+                "covered_mm": round4(l.covered_mm),
+                "gaps_bridged": l.gaps.iter().filter(|g| g.bridged).map(gap_json).collect::<Vec<_>>(),
+                "gaps_missing": l.gaps.iter().filter(|g| !g.bridged).map(gap_json).collect::<Vec<_>>(),
+                "continued_by": l.continued_by.iter().map(mark_json).collect::<Vec<_>>(),
+                "whole": l.is_whole(),
+            })
+        })
+        .collect();
     let paths: Vec<Value> = d
         .paths
         .iter()
@@ -255,6 +365,7 @@ fn summary_json(d: &Drawing) -> Value {
     json!({
         "whole": d.is_whole(),
         "px_per_mm": round4(d.px_per_mm),
+        "lines": lines,
         "paths": paths,
         "strays": d.strays.iter().map(mark_json).collect::<Vec<_>>(),
     })
@@ -274,6 +385,8 @@ mod tests {
             gaps: Vec::new(),
             continued_by: Vec::new(),
             overshoot_mm: 0.0,
+            chain: 0,
+            beyond: Vec::new(),
         }
     }
 

@@ -12,6 +12,8 @@ mod cases;
 mod drawing;
 #[path = "trace_independent/render2.rs"]
 mod render2;
+#[path = "trace_independent/reported.rs"]
+mod reported;
 
 use cases::{case, measure, Case};
 use indicatif::ProgressBar;
@@ -73,7 +75,11 @@ fn shot(kind: Kind, seed: u64) -> Shot {
 }
 
 fn render_independent(c: &Case, kind: Kind, seed: u64) -> image::RgbImage {
-    let s = shot(kind, seed);
+    render_independent_shot(c, kind, &shot(kind, seed), seed)
+}
+
+/// [`render_independent`] with the camera and light of `s`.
+fn render_independent_shot(c: &Case, kind: Kind, s: &Shot, seed: u64) -> image::RgbImage {
     let mut marks = vec![render2::Mark {
         pts: c.truth.clone(),
         width_mm: c.width_mm,

@@ -27,7 +27,7 @@ pub struct Case {
     pub fibres: Vec<[f64; 4]>,
 }
 
-fn densify(f: impl Fn(f64) -> [f64; 2], closed: bool) -> Vec<[f64; 2]> {
+pub fn densify(f: impl Fn(f64) -> [f64; 2], closed: bool) -> Vec<[f64; 2]> {
     // Sample finely, then keep points 0.025 mm apart.
     let n = 200_000;
     let m = if closed { n } else { n + 1 };
@@ -182,7 +182,7 @@ fn at_arc(pts: &[[f64; 2]], s: f64) -> ([f64; 2], [f64; 2]) {
     (pts[pts.len() - 1], [1.0, 0.0])
 }
 
-fn segment(a: [f64; 2], b: [f64; 2]) -> Vec<[f64; 2]> {
+pub fn segment(a: [f64; 2], b: [f64; 2]) -> Vec<[f64; 2]> {
     let n = ((b[0] - a[0]).hypot(b[1] - a[1]) / 0.025).ceil().max(1.0) as usize;
     (0..=n)
         .map(|i| {
