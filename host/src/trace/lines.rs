@@ -740,18 +740,7 @@ mod tests {
             }
         }
         pts.extend(corners.last());
-        DrawnPath {
-            stroke: Stroke {
-                points_mm: pts,
-                closed: false,
-                bridged_mm: 0.0,
-            },
-            gaps: Vec::new(),
-            continued_by: Vec::new(),
-            overshoot_mm: 0.0,
-            chain: 0,
-            beyond: Vec::new(),
-        }
+        crate::trace::paths::open_path(pts)
     }
 
     fn lines_of(paths: &[DrawnPath]) -> Vec<DrawnLine> {

@@ -371,24 +371,26 @@ fn summary_json(d: &Drawing) -> Value {
     })
 }
 
+/// An open path through `pts` with nothing bridged, missing or beyond it (unit tests).
+#[cfg(test)]
+pub(crate) fn open_path(pts: Vec<[f64; 2]>) -> DrawnPath {
+    DrawnPath {
+        stroke: Stroke {
+            points_mm: pts,
+            closed: false,
+            bridged_mm: 0.0,
+        },
+        gaps: Vec::new(),
+        continued_by: Vec::new(),
+        overshoot_mm: 0.0,
+        chain: 0,
+        beyond: Vec::new(),
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
-
-    fn open_path(pts: Vec<[f64; 2]>) -> DrawnPath {
-        DrawnPath {
-            stroke: Stroke {
-                points_mm: pts,
-                closed: false,
-                bridged_mm: 0.0,
-            },
-            gaps: Vec::new(),
-            continued_by: Vec::new(),
-            overshoot_mm: 0.0,
-            chain: 0,
-            beyond: Vec::new(),
-        }
-    }
 
     /// A polyline through `corners`, a point every 0.25 mm.
     fn through(corners: &[[f64; 2]]) -> Vec<[f64; 2]> {
