@@ -1,11 +1,11 @@
-//! `rigctl trace --paths DIR`: every path written to a file of its own, the drawn lines (the
-//! paths running alongside each other as passes of one line) reported on stderr; a failure
-//! (exit 1) naming each drawn line that is not whole.
+//! `rigctl trace --paths DIR`: every drawn line (its centreline) and every path written to a
+//! file of its own, the drawn lines (the band of ink a line's passes leave) reported on
+//! stderr; a failure (exit 1) naming each drawn line that is not whole.
 
 use super::out::errln;
 use super::trace::{describe, warn_resolution};
 use super::CliError;
-use rigctl::trace::{path_file_name, write_drawing, Drawing};
+use rigctl::trace::{line_file_name, path_file_name, write_drawing, Drawing};
 use std::path::Path;
 
 /// Writes `drawing` into `dir` and reports it; `Err` (a run failure) when a path is not whole.
@@ -40,8 +40,9 @@ pub fn finish(dir: &Path, drawing: &Drawing) -> Result<(), CliError> {
     for (i, l) in drawing.lines.iter().enumerate() {
         if l.passes.len() > 1 || !l.is_whole() {
             errln!(
-                "rigctl trace: line {}: {:.1} mm{}, from ({:.1}, {:.1}) to ({:.1}, {:.1}) mm, {} pass(es): {}{}",
+                "rigctl trace: line {} ({}): {:.1} mm{}, from ({:.1}, {:.1}) to ({:.1}, {:.1}) mm, {} pass(es): {}{}",
                 i + 1,
+                line_file_name(i),
                 l.length_mm,
                 if l.closed { ", closed" } else { "" },
                 l.from_mm[0],
@@ -85,7 +86,13 @@ pub fn finish(dir: &Path, drawing: &Drawing) -> Result<(), CliError> {
                     .iter()
                     .map(|o| format!("a mark that may continue it, {}", describe(o))),
             );
-            format!("line {} [{}] ({})", i + 1, pass_list(&l.passes), why.join("; "))
+            format!(
+                "line {} ({}) [{}] ({})",
+                i + 1,
+                line_file_name(i),
+                pass_list(&l.passes),
+                why.join("; ")
+            )
         })
         .collect();
     Err(CliError::failure(format!(

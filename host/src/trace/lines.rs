@@ -1,42 +1,60 @@
-//! Drawn lines of a drawing (`rigctl trace --paths DIR`): the paths that run alongside each
-//! other are the passes of one drawn line (a plotter drawing a line several times, each pass
-//! beside the last and crossing it). A path is first cut where it turns a corner (so a pass
-//! that goes round from one line into the next counts for both); its stretches are grouped by
-//! running alongside each other (within [`ALONGSIDE_MM`], in directions within
-//! [`ALONGSIDE_DEG`], for [`SHARED_MM`] or half the shorter; the longest shared runs first, and
-//! two groups only while their mean directions agree within [`ALONGSIDE_DEG`]); a path whose
-//! stretches all stay in groups of their own is one line (a box drawn round in one go).
+//! Drawn lines of a drawing (`rigctl trace --paths DIR`): a plotter may draw a line several
+//! times, each pass beside the last and crossing it, and the tracker breaks each pass where it
+//! loses it. A drawn line is followed through the band of ink all its passes leave
+//! ([`super::band`]): from the longest path not yet in a line, through every written point
+//! running its way, bridging gaps up to `--max-gap-mm` (a longer one, up to
+//! [`band::reach_mm`], is missing). The paths with [`PASS_MM`] (or half their length) in its
+//! band are its passes; its centreline is the band's (written as a file of its own). A path
+//! that is the only pass of every line it is in is one line (a box drawn round in one go,
+//! turning its corners).
 //!
-//! A line of several passes is measured along its longest stretch (smoothed over
-//! [`DIR_HALF_MM`] either side, carried on straight past its ends): its extent is the union of its passes there, a stretch no pass covers is a gap
-//! (bridged when at most `--max-gap-mm`, else missing). A line of one path is that path. A line
-//! is **whole** when no gap is missing and nothing may continue it: a mark that may continue
-//! one of its passes at one of the line's ends (or a gap too long to bridge to it) counts
-//! unless the mark is a pass of the same line, lies off the line's axis, or runs across it
-//! (more than [`ACROSS_DEG`] to it) within `--max-gap-mm` of the pass's end: a line ending on
-//! another one.
+//! A line is **whole** when no gap is missing and nothing may continue it: a path running its
+//! way within `max(2 x --max-gap-mm, 15 mm)` ahead of one of its ends (within 45 degrees of
+//! its direction), or a mark that may continue one of its passes at one of the line's ends
+//! (or a gap too long to bridge to it), unless that mark is a pass of the same line, lies off
+//! the line's axis, or runs across it (more than [`ACROSS_DEG`] to it) within `--max-gap-mm`
+//! of the pass's end: a line ending on another one.
 
-use super::chain::Stroke;
-use super::link::{Gap, LeftOut};
+use super::band::{self, Cloud, Dot, Source, Walk, BAND_DEG, BAND_HALF_MM};
+use super::chain::resample;
+use super::link::{Gap, LeftOut, LeftOutKind, MIN_MARK_MM};
 use super::paths::DrawnPath;
+use std::collections::HashSet;
 
-/// Passes of one line lie within this of each other, mm.
-pub const ALONGSIDE_MM: f64 = 3.0;
-/// ... running within this angle of each other, degrees.
-pub const ALONGSIDE_DEG: f64 = 30.0;
-/// ... for this long, or half the shorter stretch, mm.
-pub const SHARED_MM: f64 = 10.0;
+/// Passes of one line lie within this of its centre, mm.
+pub const ALONGSIDE_MM: f64 = BAND_HALF_MM;
+/// A path is a pass of a line with this much of it in the line's band (or half of it), mm.
+pub const PASS_MM: f64 = 5.0;
 /// Direction of a path at a point: the chord over this arc length either side of it, mm.
 const DIR_HALF_MM: f64 = 4.0;
-/// A path turning by more than this between the chords of [`CORNER_CHORD_MM`] before and
-/// after a point turns a corner there, degrees.
-const CORNER_DEG: f64 = 50.0;
-const CORNER_CHORD_MM: f64 = 4.0;
 /// A mark meeting a pass's end at more than this to it runs across the line, degrees.
 pub const ACROSS_DEG: f64 = 45.0;
 /// Direction of a line's end (to carry it on past the end, and to tell whether another line
 /// continues it): the chord over this length, mm (a zigzag pass turns often within a few mm).
 const END_CHORD_MM: f64 = 12.0;
+/// A walk whose centres lie within this of another line's (running its way) for half its
+/// length is that line, mm.
+const DUPLICATE_MM: f64 = 1.5 * BAND_HALF_MM;
+/// A walk starts the way its seed path runs over this either side of the seed, mm.
+const SEED_HALF_MM: f64 = 8.0;
+/// A walk whose end lies within this of another's centres may be continued by it, mm (the
+/// band's width: passes drawn apart).
+const JOIN_MM: f64 = 2.0 * BAND_HALF_MM;
+/// Walks continue each other only where their directions (over [`END_CHORD_MM`]) agree within
+/// this, degrees.
+const JOIN_DEG: f64 = 40.0;
+/// A line ends on a line across it whose centreline lies within this ahead of its end, mm.
+const MEET_MM: f64 = BAND_HALF_MM + 1.5;
+/// ... or within this, where the stretch beyond the other's band is drawn (no stretch longer
+/// than [`INKLESS_OK_MM`] without a written point within 1 mm) or else a skip (bridged), mm.
+const MEET_INKED_MM: f64 = 2.0 * BAND_HALF_MM;
+const INKLESS_OK_MM: f64 = 1.0;
+/// ... within this of the end's direction, mm.
+const STEP_OFF_MM: f64 = 1.0;
+/// Marks shorter than this are not followed (dust), mm.
+const MIN_DOT_MARK_MM: f64 = 1.0;
+/// Spacing of a line's centreline, mm.
+const LINE_SPACING_MM: f64 = 0.25;
 
 /// Why a path may not be the whole of its drawn line: a mark beyond one of its free ends.
 #[derive(Debug, Clone)]
@@ -60,11 +78,13 @@ pub(crate) enum LooseWhat {
     Mark(usize),
 }
 
-/// One drawn line: the passes along it, its extent, what no pass covers.
+/// One drawn line: the passes along it, its centreline, what no pass covers.
 #[derive(Debug, Clone)]
 pub struct DrawnLine {
     /// The paths running along it (indices into the drawing's paths, longest first).
     pub passes: Vec<usize>,
+    /// Its centreline (of its band; a line of one path: that path), sheet mm.
+    pub points_mm: Vec<[f64; 2]>,
     pub closed: bool,
     /// Its ends (an open line), sheet mm, and its length along it, mm.
     pub from_mm: [f64; 2],
@@ -119,14 +139,6 @@ fn arc(pts: &[[f64; 2]]) -> Vec<f64> {
     s
 }
 
-/// A stretch of a path between its corners: its points and their directions.
-struct Stretch {
-    path: usize,
-    pts: Vec<[f64; 2]>,
-    dirs: Vec<[f64; 2]>,
-    len: f64,
-}
-
 /// Unit directions along `pts` (an open polyline): the chord over [`DIR_HALF_MM`] either side.
 fn directions(pts: &[[f64; 2]], s: &[f64]) -> Vec<[f64; 2]> {
     let n = pts.len();
@@ -139,362 +151,627 @@ fn directions(pts: &[[f64; 2]], s: &[f64]) -> Vec<[f64; 2]> {
         .collect()
 }
 
-/// The path's points as stretches between the corners it turns.
-fn stretches(pi: usize, stroke: &Stroke) -> Vec<Stretch> {
-    let mut pts = stroke.points_mm.clone();
-    let closed = stroke.closed;
-    if closed {
-        if let Some(&p0) = pts.first() {
-            pts.push(p0);
-        }
-    }
+/// A path turning by more than this between the chords of [`DIR_HALF_MM`] before and after a
+/// point turns a corner there, degrees.
+const CORNER_DEG: f64 = 50.0;
+/// Direction of a path's point for following a band: the chord over this either side, mm.
+const BAND_DIR_HALF_MM: f64 = 4.0;
+
+/// Directions along `pts` for following a band: the chord over [`BAND_DIR_HALF_MM`] either
+/// side (over a zigzag pass's teeth), none (zero) where the path turns a corner (by more than
+/// [`CORNER_DEG`] between the chords before and after a point): a band is not followed round
+/// a pass's corner into the line it turns into.
+fn band_directions(pts: &[[f64; 2]], s: &[f64]) -> Vec<[f64; 2]> {
     let n = pts.len();
-    let make = |v: Vec<[f64; 2]>| {
-        let s = arc(&v);
-        let dirs = directions(&v, &s);
-        Stretch {
-            path: pi,
-            len: s.last().copied().unwrap_or(0.0),
-            pts: v,
-            dirs,
-        }
-    };
-    if n < 4 {
-        return vec![make(pts)];
-    }
-    // The turn at each point between the chords before and after it (around a closed path).
-    let s = arc(&pts);
-    let total = s[n - 1];
-    let at = |v: f64| -> [f64; 2] {
-        let v = if closed {
-            v.rem_euclid(total)
-        } else {
-            v.clamp(0.0, total)
-        };
-        let k = s.partition_point(|&x| x < v).clamp(1, n - 1);
-        let f = ((v - s[k - 1]) / (s[k] - s[k - 1]).max(1e-12)).clamp(0.0, 1.0);
-        [
-            pts[k - 1][0] + f * (pts[k][0] - pts[k - 1][0]),
-            pts[k - 1][1] + f * (pts[k][1] - pts[k - 1][1]),
-        ]
-    };
-    let turn: Vec<f64> = (0..n)
+    let cos_corner = CORNER_DEG.to_radians().cos();
+    let h = BAND_DIR_HALF_MM;
+    (0..n)
         .map(|i| {
-            if !closed && (s[i] < CORNER_CHORD_MM || s[i] > total - CORNER_CHORD_MM) {
-                return 0.0;
+            let a = s[..i].partition_point(|&v| v < s[i] - h).min(n - 1);
+            let b = (i + s[i..].partition_point(|&v| v <= s[i] + h)).min(n - 1);
+            let (back, ahead) = (sub(pts[i], pts[a]), sub(pts[b], pts[i]));
+            let (lb, la) = (back[0].hypot(back[1]), ahead[0].hypot(ahead[1]));
+            if lb > 0.5 * h
+                && la > 0.5 * h
+                && (back[0] * ahead[0] + back[1] * ahead[1]) / (lb * la) < cos_corner
+            {
+                [0.0, 0.0]
+            } else {
+                unit(sub(pts[b], pts[a]))
             }
-            let (u, v) = (
-                unit(sub(pts[i], at(s[i] - CORNER_CHORD_MM))),
-                unit(sub(at(s[i] + CORNER_CHORD_MM), pts[i])),
-            );
-            (u[0] * v[0] + u[1] * v[1]).clamp(-1.0, 1.0).acos()
         })
-        .collect();
-    let limit = CORNER_DEG.to_radians();
-    let mut cuts = Vec::new();
+        .collect()
+}
+
+/// The written points of the paths and of the strays (`strays`: their points, mm), with
+/// their directions; `first[i]..first[i + 1]` are path `i`'s.
+fn cloud(paths: &[DrawnPath], strays: &[Vec<[f64; 2]>]) -> (Cloud, Vec<usize>) {
+    let mut dots = Vec::new();
+    let mut first = Vec::with_capacity(paths.len() + 1);
+    let add = |pts: &[[f64; 2]], src: Source, dots: &mut Vec<Dot>| {
+        if pts.len() < 2 {
+            return;
+        }
+        let s = arc(pts);
+        for (p, dir) in pts.iter().zip(band_directions(pts, &s)) {
+            dots.push(Dot { p: *p, dir, src });
+        }
+    };
+    for (i, p) in paths.iter().enumerate() {
+        first.push(dots.len());
+        add(&p.stroke.points_mm, Source::Path(i), &mut dots);
+    }
+    first.push(dots.len());
+    for s in strays {
+        if arc(s).last().copied().unwrap_or(0.0) >= MIN_DOT_MARK_MM {
+            add(s, Source::Stray, &mut dots);
+        }
+    }
+    (Cloud::new(dots), first)
+}
+
+/// The unit chord of `pts` from `half` mm of arc before point `i` to `half` after it (as far
+/// as the polyline goes).
+fn chord_dir(pts: &[[f64; 2]], i: usize, half: f64) -> [f64; 2] {
+    let s = arc(pts);
+    let n = pts.len();
+    if n < 2 {
+        return [1.0, 0.0];
+    }
+    let i = i.min(n - 1);
+    let a = s.partition_point(|&v| v < s[i] - half).min(n - 1);
+    let b = s.partition_point(|&v| v <= s[i] + half).clamp(1, n) - 1;
+    if a == b {
+        return unit(sub(pts[n - 1], pts[0]));
+    }
+    unit(sub(pts[b], pts[a]))
+}
+
+/// The longest run `(a, b)` (`a..b`) of `free` dots of a path; its length, mm.
+fn longest_free_run(free: &[bool], pts: &[[f64; 2]]) -> Option<(usize, usize, f64)> {
+    let mut best: Option<(usize, usize, f64)> = None;
     let mut i = 0;
-    while i < n {
-        if turn[i] > limit {
-            let mut j = i;
-            while j + 1 < n && turn[j + 1] > limit {
-                j += 1;
-            }
-            cuts.push(
-                (i..=j)
-                    .max_by(|&a, &b| turn[a].total_cmp(&turn[b]))
-                    .unwrap_or(i),
-            );
-            i = j + 1;
-        } else {
+    while i < free.len() {
+        if !free[i] {
             i += 1;
+            continue;
         }
+        let mut j = i;
+        let mut len = 0.0;
+        while j + 1 < free.len() && free[j + 1] {
+            len += dist(pts[j], pts[j + 1]);
+            j += 1;
+        }
+        if best.is_none_or(|b| len > b.2) {
+            best = Some((i, j + 1, len));
+        }
+        i = j + 1;
     }
-    if cuts.is_empty() {
-        return vec![make(stroke.points_mm.clone())];
+    best
+}
+
+/// The walk among `walks` that `w` runs along for half its length or more (its centres within
+/// [`BAND_HALF_MM`] of that walk's).
+fn duplicate_of(w: &Walk, walks: &[Walk]) -> Option<usize> {
+    let probe: Vec<[f64; 2]> = w.centres.iter().step_by(4).copied().collect();
+    if probe.is_empty() {
+        return None;
     }
-    let mut out = Vec::new();
-    if closed {
-        // From corner to corner around the loop (the last point repeats the first).
-        let ring = &pts[..n - 1];
-        let m = ring.len();
-        for (k, &c) in cuts.iter().enumerate() {
-            let next = cuts[(k + 1) % cuts.len()];
-            let mut v = Vec::new();
-            let mut j = c % m;
-            loop {
-                v.push(ring[j]);
-                if j == next % m && v.len() > 1 {
-                    break;
+    let dirs = |c: &[[f64; 2]]| directions(c, &arc(c));
+    let wd: Vec<[f64; 2]> = dirs(&w.centres).into_iter().step_by(4).collect();
+    let cos_along = BAND_DEG.to_radians().cos();
+    walks.iter().position(|o| {
+        let od = dirs(&o.centres);
+        let near = probe
+            .iter()
+            .zip(&wd)
+            .filter(|(p, d)| {
+                o.centres
+                    .iter()
+                    .zip(&od)
+                    .any(|(c, e)| dist(*c, **p) <= DUPLICATE_MM && abs_cos(*e, **d) >= cos_along)
+            })
+            .count();
+        2 * near >= probe.len()
+    })
+}
+
+/// Joins walks that continue each other: an end of one lies within [`JOIN_MM`] of the
+/// other's centres (running its way) and the other goes on past it (a line whose band was
+/// walked from two seeds that met where it splits or thins).
+fn join_continuing(
+    mut walks: Vec<Walk>,
+    mut taken: Vec<HashSet<usize>>,
+) -> (Vec<Walk>, Vec<HashSet<usize>>) {
+    let cos_along = BAND_DEG.to_radians().cos();
+    'again: loop {
+        for i in 0..walks.len() {
+            for j in 0..walks.len() {
+                if i == j || walks[i].closed || walks[j].closed {
+                    continue;
                 }
-                j = (j + 1) % m;
-                if v.len() > m {
-                    break;
+                let Some(joined) = continued(&walks[i], &walks[j], cos_along) else {
+                    continue;
+                };
+                let tj = std::mem::take(&mut taken[j]);
+                taken[i].extend(tj);
+                walks[i] = joined;
+                walks.remove(j);
+                taken.remove(j);
+                continue 'again;
+            }
+        }
+        break;
+    }
+    (walks, taken)
+}
+
+/// `a` carried on by `b` past its tail (or head), when that end of `a` lies on `b`.
+fn continued(a: &Walk, b: &Walk, cos_along: f64) -> Option<Walk> {
+    let (ac, bc) = (&a.centres, &b.centres);
+    if ac.len() < 2 || bc.len() < 2 {
+        return None;
+    }
+    let _ = cos_along;
+    let cos_join = JOIN_DEG.to_radians().cos();
+    for tail in [true, false] {
+        let (ei, e) = if tail {
+            (ac.len() - 1, ac[ac.len() - 1])
+        } else {
+            (0, ac[0])
+        };
+        let ta = chord_dir(ac, ei, END_CHORD_MM);
+        let Some((l, _)) = bc
+            .iter()
+            .enumerate()
+            .filter(|(_, c)| dist(**c, e) <= JOIN_MM)
+            .min_by(|x, y| dist(*x.1, e).total_cmp(&dist(*y.1, e)))
+        else {
+            continue;
+        };
+        let tb = chord_dir(bc, l, END_CHORD_MM);
+        if abs_cos(ta, tb) < cos_join {
+            continue;
+        }
+        // b oriented the way a runs at its end; the part of b past a's end.
+        let same = tb[0] * ta[0] + tb[1] * ta[1] > 0.0;
+        let past: Vec<[f64; 2]> = match (tail, same) {
+            (true, true) => bc[l + 1..].to_vec(),
+            (true, false) => bc[..l].iter().rev().copied().collect(),
+            (false, true) => bc[..l].to_vec(),
+            (false, false) => bc[l + 1..].iter().rev().copied().collect(),
+        };
+        let past_len: f64 = past.windows(2).map(|w| dist(w[0], w[1])).sum();
+        if past_len < 2.0 {
+            continue;
+        }
+        // ... and goes on a's way (not round a corner).
+        let on = if tail {
+            past.clone()
+        } else {
+            past.iter().rev().copied().collect()
+        };
+        let k = arc(&on)
+            .partition_point(|&v| v < END_CHORD_MM)
+            .min(on.len() - 1);
+        let way = unit(sub(on[k], e));
+        if (way[0] * ta[0] + way[1] * ta[1]) * if tail { 1.0 } else { -1.0 } < cos_join {
+            continue;
+        }
+        let on_past = |g: &Gap| {
+            past.iter()
+                .any(|c| dist(*c, g.from_mm) < 1e-9 || dist(*c, g.to_mm) < 1e-9)
+        };
+        let mut centres;
+        let mut gaps: Vec<Gap>;
+        if tail {
+            centres = ac.clone();
+            centres.extend(past.iter().copied());
+            gaps = a.gaps.clone();
+            gaps.extend(b.gaps.iter().filter(|g| on_past(g)).cloned());
+        } else {
+            centres = past.clone();
+            centres.extend(ac.iter().copied());
+            gaps = b.gaps.iter().filter(|g| on_past(g)).cloned().collect();
+            gaps.extend(a.gaps.iter().cloned());
+        }
+        let mut taken = a.taken.clone();
+        taken.extend(b.taken.iter().copied());
+        return Some(Walk {
+            centres,
+            gaps,
+            closed: false,
+            taken,
+        });
+    }
+    None
+}
+
+/// A line ending within [`MEET_MM`] of the centreline of a line across it (more than
+/// [`ACROSS_DEG`] to it), ahead of its end (or within [`MEET_INKED_MM`] with ink all the way),
+/// ends on that line: the passes of a line stop at the
+/// edge of the other's band (where the tracker met the other's ink), so the line is carried on
+/// straight through that band to the other's centreline.
+fn meet_lines_across(walks: &mut [Walk], cloud: &Cloud) {
+    let cos_across = ACROSS_DEG.to_radians().cos();
+    let mut ext: Vec<(usize, bool, [f64; 2], bool)> = Vec::new();
+    for (i, w) in walks.iter().enumerate() {
+        let c = &w.centres;
+        if w.closed || c.len() < 2 {
+            continue;
+        }
+        for tail in [false, true] {
+            let ei = if tail { c.len() - 1 } else { 0 };
+            let e = c[ei];
+            let t = chord_dir(c, ei, END_CHORD_MM);
+            let t = if tail { t } else { [-t[0], -t[1]] };
+            let mut best: Option<(f64, [f64; 2], bool)> = None;
+            for (j, o) in walks.iter().enumerate() {
+                if j == i || o.centres.len() < 2 {
+                    continue;
+                }
+                for (k, q) in o.centres.iter().enumerate() {
+                    let v = sub(*q, e);
+                    let along = v[0] * t[0] + v[1] * t[1];
+                    let off = (v[0] * t[1] - v[1] * t[0]).abs();
+                    if along <= 0.0 || along > MEET_INKED_MM || off > STEP_OFF_MM {
+                        continue;
+                    }
+                    let foot = [e[0] + along * t[0], e[1] + along * t[1]];
+                    // Beyond the line's band with no ink: a skip, bridged.
+                    let skip = along > MEET_MM && cloud.inkless_mm(e, foot) > INKLESS_OK_MM;
+                    if abs_cos(chord_dir(&o.centres, k, DIR_HALF_MM), t) >= cos_across {
+                        continue;
+                    }
+                    if best.is_none_or(|b| along < b.0) {
+                        best = Some((along, foot, skip));
+                    }
                 }
             }
-            out.push(make(v));
-        }
-    } else {
-        let mut from = 0;
-        for c in cuts.into_iter().chain(std::iter::once(n - 1)) {
-            if c > from {
-                out.push(make(pts[from..=c].to_vec()));
-            }
-            from = c;
-        }
-    }
-    out
-}
-
-/// Points of all stretches on a grid of [`ALONGSIDE_MM`] cells.
-struct Grid {
-    cells: std::collections::HashMap<(i64, i64), Vec<(u32, u32)>>,
-}
-
-impl Grid {
-    fn key(p: [f64; 2]) -> (i64, i64) {
-        (
-            (p[0] / ALONGSIDE_MM).floor() as i64,
-            (p[1] / ALONGSIDE_MM).floor() as i64,
-        )
-    }
-
-    fn new(st: &[Stretch]) -> Self {
-        let mut cells: std::collections::HashMap<(i64, i64), Vec<(u32, u32)>> = Default::default();
-        for (k, s) in st.iter().enumerate() {
-            for (i, p) in s.pts.iter().enumerate() {
-                cells
-                    .entry(Self::key(*p))
-                    .or_default()
-                    .push((k as u32, i as u32));
+            if let Some((_, foot, skip)) = best {
+                ext.push((i, tail, foot, skip));
             }
         }
-        Self { cells }
     }
-
-    fn near(&self, p: [f64; 2]) -> impl Iterator<Item = (usize, usize)> + '_ {
-        let (kx, ky) = Self::key(p);
-        (-1..=1)
-            .flat_map(move |dx| (-1..=1).map(move |dy| (kx + dx, ky + dy)))
-            .filter_map(|c| self.cells.get(&c))
-            .flatten()
-            .map(|&(k, i)| (k as usize, i as usize))
-    }
-}
-
-fn find(parent: &mut [usize], mut a: usize) -> usize {
-    while parent[a] != a {
-        parent[a] = parent[parent[a]];
-        a = parent[a];
-    }
-    a
-}
-
-fn union(parent: &mut [usize], a: usize, b: usize) {
-    let (ra, rb) = (find(parent, a), find(parent, b));
-    if ra != rb {
-        parent[ra.max(rb)] = ra.min(rb);
-    }
-}
-
-/// The drawn lines of `paths` (with the marks beyond each path's free ends, `loose[i]` for
-/// path `i`), longest first.
-pub(crate) fn lines(paths: &[DrawnPath], loose: &[Vec<Loose>], max_gap_mm: f64) -> Vec<DrawnLine> {
-    let st: Vec<Stretch> = paths
+    // Two lines ending at a corner (their ends' rays meeting within MEET_MM ahead of both,
+    // across each other): both carried on to where they meet.
+    let has = |ext: &[(usize, bool, [f64; 2], bool)], i: usize, tail: bool| {
+        ext.iter().any(|e| e.0 == i && e.1 == tail)
+    };
+    let ends: Vec<(usize, bool, [f64; 2], [f64; 2])> = walks
         .iter()
         .enumerate()
-        .flat_map(|(i, p)| stretches(i, &p.stroke))
-        .filter(|s| s.pts.len() >= 2)
+        .filter(|(_, w)| !w.closed && w.centres.len() >= 2)
+        .flat_map(|(i, w)| {
+            let c = &w.centres;
+            let (h, t) = (
+                chord_dir(c, 0, END_CHORD_MM),
+                chord_dir(c, c.len() - 1, END_CHORD_MM),
+            );
+            [
+                (i, false, c[0], [-h[0], -h[1]]),
+                (i, true, c[c.len() - 1], t),
+            ]
+        })
         .collect();
-    let grid = Grid::new(&st);
-    let cos_along = ALONGSIDE_DEG.to_radians().cos();
-    let mut parent: Vec<usize> = (0..st.len()).collect();
-    // How long each stretch runs alongside each other one (of another path).
-    let mut pairs: Vec<(f64, usize, usize)> = Vec::new();
-    for (a, sa) in st.iter().enumerate() {
-        let mut shared: std::collections::HashMap<usize, usize> = Default::default();
-        let mut hit: Vec<usize> = Vec::new();
-        for (i, p) in sa.pts.iter().enumerate() {
-            hit.clear();
-            for (b, j) in grid.near(*p) {
-                if st[b].path == sa.path || hit.contains(&b) {
-                    continue;
-                }
-                if dist(*p, st[b].pts[j]) <= ALONGSIDE_MM
-                    && abs_cos(sa.dirs[i], st[b].dirs[j]) >= cos_along
-                {
-                    hit.push(b);
-                }
+    let mut corners = Vec::new();
+    for (x, &(i, ti, ei, di)) in ends.iter().enumerate() {
+        for &(j, tj, ej, dj) in &ends[x + 1..] {
+            if i == j
+                || has(&ext, i, ti)
+                || has(&ext, j, tj)
+                || has(&corners, i, ti)
+                || has(&corners, j, tj)
+                || abs_cos(di, dj) >= cos_across
+            {
+                continue;
             }
-            for &b in &hit {
-                *shared.entry(b).or_default() += 1;
+            // ei + a di = ej + b dj
+            let den = di[0] * dj[1] - di[1] * dj[0];
+            let r = sub(ej, ei);
+            let a = (r[0] * dj[1] - r[1] * dj[0]) / den;
+            let bb = (r[0] * di[1] - r[1] * di[0]) / den;
+            let x = [ei[0] + a * di[0], ei[1] + a * di[1]];
+            let reach = |v: f64| (-0.5..=MEET_INKED_MM).contains(&v);
+            let skip = |v: f64, e: [f64; 2]| v > MEET_MM && cloud.inkless_mm(e, x) > INKLESS_OK_MM;
+            if reach(a) && reach(bb) {
+                if a > 0.05 {
+                    corners.push((i, ti, x, skip(a, ei)));
+                }
+                if bb > 0.05 {
+                    corners.push((j, tj, x, skip(bb, ej)));
+                }
             }
         }
-        let step = if sa.pts.len() > 1 {
-            sa.len / (sa.pts.len() - 1) as f64
+    }
+    ext.extend(corners);
+    for (i, tail, foot, skip) in ext {
+        let w = &mut walks[i];
+        let e = if tail {
+            w.centres[w.centres.len() - 1]
         } else {
-            0.0
+            w.centres[0]
         };
-        for (b, count) in shared {
-            let along = count as f64 * step;
-            if along >= SHARED_MM.min(0.5 * sa.len.min(st[b].len)) {
-                pairs.push((along, a, b));
-            }
-        }
-    }
-    // The longest shared runs first; two groups join only while their directions (length
-    // weighted, as doubled angles) agree within ALONGSIDE_DEG, so a stretch that turns from one
-    // line into another cannot join the two.
-    pairs.sort_by(|x, y| y.0.total_cmp(&x.0).then(x.1.cmp(&y.1)).then(x.2.cmp(&y.2)));
-    let mut heading: Vec<[f64; 2]> = st
-        .iter()
-        .map(|x| {
-            let d = sub(x.pts[x.pts.len() - 1], x.pts[0]);
-            let a = 2.0 * d[1].atan2(d[0]);
-            [x.len * a.cos(), x.len * a.sin()]
-        })
-        .collect();
-    for (_, a, b) in pairs {
-        let (ra, rb) = (find(&mut parent, a), find(&mut parent, b));
-        if ra == rb {
-            continue;
-        }
-        let (va, vb) = (heading[ra], heading[rb]);
-        let turn = 0.5 * (va[1].atan2(va[0]) - vb[1].atan2(vb[0]));
-        if turn.cos().abs() < cos_along {
-            continue;
-        }
-        union(&mut parent, ra, rb);
-        let r = find(&mut parent, ra);
-        heading[r] = [va[0] + vb[0], va[1] + vb[1]];
-    }
-    // A path's stretches on either side of a corner: one line when one of the two groups has
-    // no other path's stretch (drawn round the corner in one go).
-    let groups_of = |parent: &mut Vec<usize>| -> Vec<usize> {
-        (0..st.len()).map(|k| find(parent, k)).collect()
-    };
-    let g = groups_of(&mut parent);
-    let alone = |grp: usize, path: usize| {
-        st.iter()
-            .zip(&g)
-            .all(|(s, &gg)| gg != grp || s.path == path)
-    };
-    let mut joins = Vec::new();
-    for k in 1..st.len() {
-        if st[k].path == st[k - 1].path && g[k] != g[k - 1] {
-            let p = st[k].path;
-            if alone(g[k], p) || alone(g[k - 1], p) {
-                joins.push((k - 1, k));
-            }
-        }
-    }
-    // Around a closed path: its last stretch meets its first.
-    for k in 0..st.len() {
-        let first = (0..st.len()).find(|&j| st[j].path == st[k].path);
-        let last = (0..st.len()).rev().find(|&j| st[j].path == st[k].path);
-        if let (Some(f), Some(l)) = (first, last) {
-            if k == f && l != f && paths[st[k].path].stroke.closed && g[f] != g[l] {
-                let p = st[k].path;
-                if alone(g[f], p) || alone(g[l], p) {
-                    joins.push((f, l));
-                }
-            }
-        }
-    }
-    for (a, b) in joins {
-        union(&mut parent, a, b);
-    }
-    // Lines that continue each other end to end (one drawn line where, over a stretch, no
-    // pass runs alongside another): joined, the stretch between them a gap of the line.
-    let mut out: Vec<DrawnLine>;
-    let mut members_of: Vec<Vec<usize>>;
-    loop {
-        let g = groups_of(&mut parent);
-        let mut roots: Vec<usize> = g.clone();
-        roots.sort_unstable();
-        roots.dedup();
-        members_of = roots
-            .iter()
-            .map(|&r| (0..st.len()).filter(|&k| g[k] == r).collect())
-            .collect();
-        out = members_of
-            .iter()
-            .map(|members| line_of(&st, members, paths, max_gap_mm))
-            .collect();
-        let mut joined = false;
-        for i in 0..out.len() {
-            for j in i + 1..out.len() {
-                if continue_each_other(&out[i], &out[j], max_gap_mm)
-                    && find(&mut parent, roots[i]) != find(&mut parent, roots[j])
-                {
-                    union(&mut parent, roots[i], roots[j]);
-                    joined = true;
-                }
-            }
-        }
-        if !joined {
-            break;
-        }
-    }
-    // Each path's first and last stretch (where its free ends are).
-    let end_stretches: Vec<[usize; 2]> = (0..paths.len())
-        .map(|p| {
-            let first = st.iter().position(|x| x.path == p).unwrap_or(usize::MAX);
-            let last = st.iter().rposition(|x| x.path == p).unwrap_or(usize::MAX);
-            [first, last]
-        })
-        .collect();
-    // What lies beyond the passes' free ends, judged per line: the ends of the stretches of the
-    // line (a pass that turns into another line has its other end there).
-    for (line, members) in out.iter_mut().zip(&members_of) {
-        let passes = line.passes.clone();
-        let axis = (passes.len() > 1 && !line.closed).then(|| unit(sub(line.to_mm, line.from_mm)));
-        // A pass's end inside a line of several passes (farther than --max-gap-mm from the
-        // line's ends) is continued by the other passes: what lies beyond it is the line's own
-        // coverage (its gaps judged above) or a line across it.
-        let at_line_end = |end: [f64; 2]| {
-            passes.len() == 1
-                || dist(end, line.from_mm).min(dist(end, line.to_mm))
-                    <= max_gap_mm.max(ALONGSIDE_MM)
-        };
-        let own_end = |p: usize, end: [f64; 2]| {
-            let pts = &paths[p].stroke.points_mm;
-            let (Some(a), Some(b)) = (pts.first(), pts.last()) else {
-                return false;
+        if skip {
+            let (from_mm, to_mm) = if tail { (e, foot) } else { (foot, e) };
+            let g = Gap {
+                from_mm,
+                to_mm,
+                length_mm: dist(e, foot),
+                bridged: true,
             };
-            let k = end_stretches[p][usize::from(dist(end, *b) < dist(end, *a))];
-            members.contains(&k)
-        };
-        let mut counted: Vec<LeftOut> = Vec::new();
-        let mut missing: Vec<Gap> = Vec::new();
-        for &p in &passes {
-            for l in &loose[p] {
-                if !own_end(p, l.end_mm)
-                    || !at_line_end(l.end_mm)
-                    || !counts(l, &passes, axis, max_gap_mm)
-                {
-                    continue;
-                }
-                match l.what {
-                    LooseWhat::Gap(k) => {
-                        if let Some(gap) = paths[p].gaps.get(k) {
-                            missing.push(gap.clone());
-                        }
-                    }
-                    LooseWhat::Mark(k) => {
-                        if let Some(m) = paths[p].continued_by.get(k) {
-                            if !counted.contains(m) {
-                                counted.push(m.clone());
-                            }
-                        }
-                    }
-                }
+            if tail {
+                w.gaps.push(g);
+            } else {
+                w.gaps.insert(0, g);
             }
         }
-        line.gaps.extend(missing);
-        line.continued_by = counted;
+        let c = &mut w.centres;
+        let n = (dist(e, foot) / LINE_SPACING_MM).ceil() as usize;
+        let pts: Vec<[f64; 2]> = (1..=n)
+            .map(|k| {
+                let f = k as f64 / n as f64;
+                [e[0] + f * (foot[0] - e[0]), e[1] + f * (foot[1] - e[1])]
+            })
+            .collect();
+        if tail {
+            c.extend(pts);
+        } else {
+            let mut v: Vec<[f64; 2]> = pts.into_iter().rev().collect();
+            v.extend(c.iter().copied());
+            *c = v;
+        }
+    }
+}
+
+/// The drawn lines of `paths` (with the points of the strays, and the marks beyond each
+/// path's free ends, `loose[i]` for path `i`), longest first.
+pub(crate) fn lines(
+    paths: &[DrawnPath],
+    strays: &[Vec<[f64; 2]>],
+    loose: &[Vec<Loose>],
+    max_gap_mm: f64,
+) -> Vec<DrawnLine> {
+    let (cloud, first) = cloud(paths, strays);
+    // Walk from the middle of the longest stretch of each path not yet in a line, longest
+    // path first.
+    let mut free = vec![true; cloud.dots.len()];
+    let mut walks: Vec<Walk> = Vec::new();
+    for (pi, p) in paths.iter().enumerate() {
+        let (a, b) = (first[pi], first[pi + 1]);
+        while let Some((r0, r1, len)) = longest_free_run(&free[a..b], &p.stroke.points_mm) {
+            if len < PASS_MM {
+                break;
+            }
+            let mid = a + (r0 + r1) / 2;
+            if cloud.dots[mid].dir == [0.0, 0.0] {
+                free[mid] = false;
+                continue;
+            }
+            let seed_dir = chord_dir(&p.stroke.points_mm, mid - a, SEED_HALF_MM);
+            let w = band::walk(&cloud, cloud.dots[mid].p, seed_dir, max_gap_mm);
+            if w.length_mm() < MIN_MARK_MM || !w.taken.contains(&mid) {
+                // Not a line: its dots are not seeds again.
+                free[a + r0..a + r1].iter_mut().for_each(|f| *f = false);
+                continue;
+            }
+            for &k in &w.taken {
+                free[k] = false;
+            }
+            walks.push(w);
+        }
+    }
+    // A walk along a longer one for half its length is part of it (its dots the longer's).
+    walks.sort_by(|x, y| y.length_mm().total_cmp(&x.length_mm()));
+    let mut kept: Vec<Walk> = Vec::new();
+    let mut taken: Vec<HashSet<usize>> = Vec::new();
+    for w in walks {
+        match duplicate_of(&w, &kept) {
+            Some(d) => taken[d].extend(w.taken.iter().copied()),
+            None => {
+                taken.push(w.taken.iter().copied().collect());
+                kept.push(w);
+            }
+        }
+    }
+    let (mut walks, taken) = join_continuing(kept, taken);
+    meet_lines_across(&mut walks, &cloud);
+    // The passes of each line: the paths with PASS_MM (or half their length) in its band.
+    let spacing =
+        |p: &DrawnPath| p.stroke.length_mm() / (p.stroke.points_mm.len().max(2) - 1) as f64;
+    let passes: Vec<Vec<usize>> = taken
+        .iter()
+        .map(|set| {
+            let mut count = vec![0usize; paths.len()];
+            for &k in set {
+                if let Source::Path(p) = cloud.dots[k].src {
+                    count[p] += 1;
+                }
+            }
+            let mut v: Vec<usize> = (0..paths.len())
+                .filter(|&p| {
+                    let len = count[p] as f64 * spacing(&paths[p]);
+                    count[p] > 0 && len >= PASS_MM.min(0.5 * paths[p].stroke.length_mm())
+                })
+                .collect();
+            v.sort_by(|&x, &y| {
+                paths[y]
+                    .stroke
+                    .length_mm()
+                    .total_cmp(&paths[x].stroke.length_mm())
+            });
+            v
+        })
+        .collect();
+    // A path that is the only pass of every line it is in: one line, the path.
+    let mut lines_of_path: Vec<Vec<usize>> = vec![Vec::new(); paths.len()];
+    for (l, ps) in passes.iter().enumerate() {
+        for &p in ps {
+            lines_of_path[p].push(l);
+        }
+    }
+    let alone = |p: usize| {
+        !lines_of_path[p].is_empty() && lines_of_path[p].iter().all(|&l| passes[l] == [p])
+    };
+    let mut out: Vec<DrawnLine> = Vec::new();
+    for p in (0..paths.len()).filter(|&p| alone(p)) {
+        out.push(path_line(paths, p, loose, max_gap_mm));
+    }
+    for (l, w) in walks.iter().enumerate() {
+        if passes[l].is_empty() || (passes[l].len() == 1 && alone(passes[l][0])) {
+            continue;
+        }
+        let mut line = band_line(w, passes[l].clone());
+        // A pass of another line running across this one there is that line's.
+        let across_here = |p: usize, q: [f64; 2], t: [f64; 2]| {
+            lines_of_path[p].iter().any(|&o| {
+                o != l && {
+                    let c = &walks[o].centres;
+                    c.iter()
+                        .enumerate()
+                        .filter(|(_, x)| dist(**x, q) <= BAND_HALF_MM)
+                        .min_by(|x, y| dist(*x.1, q).total_cmp(&dist(*y.1, q)))
+                        .is_some_and(|(k, _)| {
+                            abs_cos(chord_dir(c, k, DIR_HALF_MM), t) < ACROSS_DEG.to_radians().cos()
+                        })
+                }
+            })
+        };
+        judge_ends(
+            &mut line,
+            &taken[l],
+            &cloud,
+            paths,
+            max_gap_mm,
+            &across_here,
+        );
+        out.push(line);
     }
     out.sort_by(|a, b| b.length_mm.total_cmp(&a.length_mm));
     out
+}
+
+/// The line that is path `p`, judged by what lies beyond its free ends.
+fn path_line(paths: &[DrawnPath], p: usize, loose: &[Vec<Loose>], max_gap_mm: f64) -> DrawnLine {
+    let path = &paths[p];
+    let pts = &path.stroke.points_mm;
+    let len = path.stroke.length_mm();
+    let s = arc(pts);
+    let head = point_at(pts, &s, END_CHORD_MM.min(len));
+    let tail = point_at(pts, &s, (len - END_CHORD_MM).max(0.0));
+    let mut line = DrawnLine {
+        out_dir: [unit(sub(pts[0], head)), unit(sub(pts[pts.len() - 1], tail))],
+        passes: vec![p],
+        points_mm: pts.clone(),
+        closed: path.stroke.closed,
+        from_mm: pts[0],
+        to_mm: pts[pts.len() - 1],
+        length_mm: len,
+        covered_mm: len,
+        gaps: path.gaps.iter().filter(|g| g.bridged).cloned().collect(),
+        continued_by: Vec::new(),
+    };
+    for l in &loose[p] {
+        if !counts(l, &line.passes, None, max_gap_mm) {
+            continue;
+        }
+        match l.what {
+            LooseWhat::Gap(k) => line.gaps.extend(path.gaps.get(k).cloned()),
+            LooseWhat::Mark(k) => {
+                if let Some(m) = path.continued_by.get(k) {
+                    if !line.continued_by.contains(m) {
+                        line.continued_by.push(m.clone());
+                    }
+                }
+            }
+        }
+    }
+    line
+}
+
+/// The line of walk `w` (passes `passes`): its centreline smoothed over [`DIR_HALF_MM`].
+fn band_line(w: &Walk, passes: Vec<usize>) -> DrawnLine {
+    let pts = resample(&smoothed(&w.centres), w.closed, LINE_SPACING_MM);
+    let pts = if pts.len() >= 2 {
+        pts
+    } else {
+        w.centres.clone()
+    };
+    let s = arc(&pts);
+    let total = s.last().copied().unwrap_or(0.0);
+    let head = point_at(&pts, &s, END_CHORD_MM.min(total));
+    let tail = point_at(&pts, &s, (total - END_CHORD_MM).max(0.0));
+    let length_mm = w.length_mm();
+    let gaps_mm: f64 = w.gaps.iter().map(|g| g.length_mm).sum();
+    DrawnLine {
+        out_dir: [unit(sub(pts[0], head)), unit(sub(pts[pts.len() - 1], tail))],
+        passes,
+        closed: w.closed,
+        from_mm: pts[0],
+        to_mm: if w.closed { pts[0] } else { pts[pts.len() - 1] },
+        length_mm,
+        covered_mm: (length_mm - gaps_mm).max(0.0),
+        gaps: w.gaps.clone(),
+        continued_by: Vec::new(),
+        points_mm: pts,
+    }
+}
+
+/// What may continue an open band line at its ends: a path (its points not in the line's band,
+/// nor where it is a pass of a line running across, `across_here(path, point, direction)`)
+/// running its way ahead of an end, within `max(2 x max_gap_mm, 15 mm)` and [`ACROSS_DEG`] of the
+/// end's direction (anything running its way nearer, within `--max-gap-mm` and the band, the
+/// walk has taken; farther, to a path, it is a missing gap).
+fn judge_ends(
+    line: &mut DrawnLine,
+    taken: &HashSet<usize>,
+    cloud: &Cloud,
+    paths: &[DrawnPath],
+    max_gap_mm: f64,
+    across_here: &dyn Fn(usize, [f64; 2], [f64; 2]) -> bool,
+) {
+    if line.closed {
+        return;
+    }
+    let reach = (2.0 * max_gap_mm).max(15.0);
+    let cos_along = BAND_DEG.to_radians().cos();
+    let cos_cone = ACROSS_DEG.to_radians().cos();
+    let ends = [
+        (line.from_mm, line.out_dir[0]),
+        (line.to_mm, line.out_dir[1]),
+    ];
+    let mut ahead: Vec<usize> = Vec::new();
+    for (e, t) in ends {
+        for (k, d) in cloud.dots.iter().enumerate() {
+            let Source::Path(p) = d.src else {
+                continue;
+            };
+            if taken.contains(&k) || ahead.contains(&p) {
+                continue;
+            }
+            let v = sub(d.p, e);
+            let r = v[0].hypot(v[1]);
+            if r > reach || r < 1e-9 {
+                continue;
+            }
+            let along = (v[0] * t[0] + v[1] * t[1]) / r;
+            if along >= cos_cone && abs_cos(d.dir, t) >= cos_along && !across_here(p, d.p, t) {
+                ahead.push(p);
+            }
+        }
+    }
+    for p in ahead {
+        let pts = &paths[p].stroke.points_mm;
+        let m = LeftOut {
+            from_mm: pts[0],
+            to_mm: pts[pts.len() - 1],
+            length_mm: paths[p].stroke.length_mm(),
+            kind: LeftOutKind::Continues,
+        };
+        if !line.continued_by.contains(&m) {
+            line.continued_by.push(m);
+        }
+    }
 }
 
 /// Whether a mark beyond a free end of one of a line's `passes` counts against the line
@@ -507,11 +784,9 @@ fn counts(l: &Loose, passes: &[usize], axis: Option<[f64; 2]>, max_gap_mm: f64) 
     if l.path.is_some_and(|p| passes.contains(&p)) {
         return false;
     }
-    if l.path.is_none() || l.mark.len() < 2 {
+    if l.mark.is_empty() {
         return true;
     }
-    let s = arc(&l.mark);
-    let dirs = directions(&l.mark, &s);
     let (k, d) = l
         .mark
         .iter()
@@ -525,164 +800,12 @@ fn counts(l: &Loose, passes: &[usize], axis: Option<[f64; 2]>, max_gap_mm: f64) 
     if off_axis > ALONGSIDE_MM + 0.1 * d {
         return false;
     }
+    if l.path.is_none() || l.mark.len() < 2 {
+        return true;
+    }
+    let dirs = directions(&l.mark, &arc(&l.mark));
     let across = abs_cos(dirs[k], u) < ACROSS_DEG.to_radians().cos();
     !(across && d <= max_gap_mm.max(ALONGSIDE_MM))
-}
-
-/// The line of the stretches `members`.
-fn line_of(st: &[Stretch], members: &[usize], paths: &[DrawnPath], max_gap_mm: f64) -> DrawnLine {
-    let mut passes: Vec<usize> = members.iter().map(|&k| st[k].path).collect();
-    passes.sort_unstable();
-    passes.dedup();
-    passes.sort_by(|&a, &b| {
-        paths[b]
-            .stroke
-            .length_mm()
-            .total_cmp(&paths[a].stroke.length_mm())
-    });
-    if passes.len() == 1 {
-        // One path: the line is that path.
-        let p = &paths[passes[0]];
-        let pts = &p.stroke.points_mm;
-        let len = p.stroke.length_mm();
-        let s = arc(pts);
-        let head = point_at(pts, &s, END_CHORD_MM.min(len));
-        let tail = point_at(pts, &s, (len - END_CHORD_MM).max(0.0));
-        return DrawnLine {
-            out_dir: [unit(sub(pts[0], head)), unit(sub(pts[pts.len() - 1], tail))],
-            passes,
-            closed: p.stroke.closed,
-            from_mm: pts[0],
-            to_mm: pts[pts.len() - 1],
-            length_mm: len,
-            covered_mm: len,
-            gaps: p.gaps.iter().filter(|g| g.bridged).cloned().collect(),
-            continued_by: Vec::new(),
-        };
-    }
-    // Along the longest stretch, carried on straight past its ends.
-    let r = *members
-        .iter()
-        .max_by(|&&a, &&b| st[a].len.total_cmp(&st[b].len))
-        .unwrap_or(&members[0]);
-    // Smoothed over DIR_HALF_MM either side (a zigzag pass is longer than its line).
-    let rp = &smoothed(&st[r].pts);
-    let rs = arc(rp);
-    let total = rs[rs.len() - 1];
-    let head_t = unit(sub(point_at(rp, &rs, END_CHORD_MM.min(total)), rp[0]));
-    let tail_t = unit(sub(
-        rp[rp.len() - 1],
-        point_at(rp, &rs, (total - END_CHORD_MM).max(0.0)),
-    ));
-    let project = |q: [f64; 2]| -> f64 {
-        let (j, _) = rp
-            .iter()
-            .enumerate()
-            .map(|(j, p)| (j, dist(*p, q)))
-            .min_by(|a, b| a.1.total_cmp(&b.1))
-            .unwrap_or((0, 0.0));
-        let d0 = sub(q, rp[0]);
-        let d1 = sub(q, rp[rp.len() - 1]);
-        let along0 = d0[0] * head_t[0] + d0[1] * head_t[1];
-        let along1 = d1[0] * tail_t[0] + d1[1] * tail_t[1];
-        if j == 0 && along0 < 0.0 {
-            along0
-        } else if j == rp.len() - 1 && along1 > 0.0 {
-            total + along1
-        } else {
-            rs[j]
-        }
-    };
-    let place = |s: f64| -> [f64; 2] {
-        if s < 0.0 {
-            [rp[0][0] + s * head_t[0], rp[0][1] + s * head_t[1]]
-        } else if s > total {
-            let e = rp[rp.len() - 1];
-            [
-                e[0] + (s - total) * tail_t[0],
-                e[1] + (s - total) * tail_t[1],
-            ]
-        } else {
-            point_at(rp, &rs, s)
-        }
-    };
-    // Each stretch covers the span of its projections.
-    let mut spans: Vec<[f64; 2]> = members
-        .iter()
-        .map(|&k| {
-            let step = (st[k].pts.len() / 100).max(1);
-            let v: Vec<f64> = st[k]
-                .pts
-                .iter()
-                .step_by(step)
-                .chain(st[k].pts.last())
-                .map(|q| project(*q))
-                .collect();
-            [
-                v.iter().copied().fold(f64::INFINITY, f64::min),
-                v.iter().copied().fold(f64::NEG_INFINITY, f64::max),
-            ]
-        })
-        .collect();
-    spans.sort_by(|a, b| a[0].total_cmp(&b[0]));
-    let mut gaps = Vec::new();
-    let (lo, mut reach) = (spans[0][0], spans[0][1]);
-    let mut covered = 0.0;
-    let mut start = lo;
-    for sp in &spans[1..] {
-        if sp[0] > reach {
-            covered += reach - start;
-            let (a, b) = (place(reach), place(sp[0]));
-            gaps.push(Gap {
-                from_mm: a,
-                to_mm: b,
-                length_mm: sp[0] - reach,
-                bridged: sp[0] - reach <= max_gap_mm,
-            });
-            start = sp[0];
-        }
-        reach = reach.max(sp[1]);
-    }
-    covered += reach - start;
-    DrawnLine {
-        out_dir: [[-head_t[0], -head_t[1]], tail_t],
-        passes,
-        closed: false,
-        from_mm: place(lo),
-        to_mm: place(reach),
-        length_mm: reach - lo,
-        covered_mm: covered,
-        gaps,
-        continued_by: Vec::new(),
-    }
-}
-
-/// A line turning by at most this where it continues another, degrees.
-const CONTINUE_DEG: f64 = 20.0;
-
-/// Whether open lines `a` and `b` continue each other: an end of one lies ahead of an end of
-/// the other within `max_gap_mm`, off its direction by at most [`ALONGSIDE_MM`] + 10 % of the
-/// gap, and the two ends face each other within [`CONTINUE_DEG`].
-fn continue_each_other(a: &DrawnLine, b: &DrawnLine, max_gap_mm: f64) -> bool {
-    if a.closed || b.closed {
-        return false;
-    }
-    let cos_turn = CONTINUE_DEG.to_radians().cos();
-    for (pa, ta) in [(a.from_mm, a.out_dir[0]), (a.to_mm, a.out_dir[1])] {
-        for (pb, tb) in [(b.from_mm, b.out_dir[0]), (b.to_mm, b.out_dir[1])] {
-            if -(ta[0] * tb[0] + ta[1] * tb[1]) < cos_turn {
-                continue;
-            }
-            let d = sub(pb, pa);
-            let gap = d[0].hypot(d[1]);
-            let along = d[0] * ta[0] + d[1] * ta[1];
-            let across = (d[0] * ta[1] - d[1] * ta[0]).abs();
-            if gap <= max_gap_mm && along >= -ALONGSIDE_MM && across <= ALONGSIDE_MM + 0.1 * gap {
-                return true;
-            }
-        }
-    }
-    false
 }
 
 /// `pts` with each point the mean of those within [`DIR_HALF_MM`] of arc length either side
@@ -745,7 +868,7 @@ mod tests {
 
     fn lines_of(paths: &[DrawnPath]) -> Vec<DrawnLine> {
         let loose = vec![Vec::new(); paths.len()];
-        lines(paths, &loose, 10.0)
+        lines(paths, &[], &loose, 10.0)
     }
 
     #[test]
@@ -760,18 +883,41 @@ mod tests {
             pass(&[[30.0, 40.5], [49.0, 40.5], [49.0, -30.0]], 0.6),
         ];
         let l = lines_of(&paths);
-        assert_eq!(l.len(), 2, "{l:#?}");
-        let (along, across) = if l[0].passes.len() == 3 {
-            (&l[0], &l[1])
-        } else {
-            (&l[1], &l[0])
-        };
-        assert_eq!(along.passes.len(), 3, "{along:#?}");
+        let along = l
+            .iter()
+            .find(|x| x.passes.len() == 3)
+            .expect("the line of three");
+        assert_eq!(along.passes, vec![0, 1, 2]);
         assert!((along.length_mm - 103.0).abs() < 1.5, "{}", along.length_mm);
-        assert!(along.is_whole() && along.gaps.is_empty());
-        // Longest first: the pass round the corner (89.5 mm), then the straight one.
+        assert!(along.is_whole() && along.gaps.is_empty(), "{along:#?}");
+        // Its centreline runs in the middle of the band.
+        assert!(along.points_mm.iter().all(|p| p[1].abs() < 1.5));
+        assert!(along
+            .points_mm
+            .iter()
+            .filter(|p| p[0] > 5.0 && p[0] < 95.0)
+            .all(|p| p[1].abs() < 0.8));
+        // The line across: the straight pass and the one round the corner (longest first).
+        let across = l
+            .iter()
+            .find(|x| x.passes.contains(&3))
+            .expect("the line across");
         assert_eq!(across.passes, vec![4, 3]);
-        assert!(across.is_whole());
+        assert!(across.is_whole(), "{across:#?}");
+        assert!(
+            (across.length_mm - 80.5).abs() < 1.5,
+            "{}",
+            across.length_mm
+        );
+        // The stretch before the corner is a line of its own, ending on the line across.
+        let top = l
+            .iter()
+            .find(|x| x.passes == [4] && x.points_mm.iter().all(|p| (p[1] - 40.5).abs() < 1.0))
+            .expect("the stretch before the corner");
+        assert!(top.is_whole());
+        let right = top.from_mm[0].max(top.to_mm[0]);
+        assert!((right - 49.5).abs() < 1.0, "{top:#?}");
+        assert_eq!(l.len(), 3, "{l:#?}");
     }
 
     #[test]
@@ -801,8 +947,29 @@ mod tests {
             pass(&[[66.0, -0.5], [109.0, -0.5]], 0.5),
         ];
         let l = lines_of(&far);
-        // Farther apart than --max-gap-mm: two lines (each whole on its own: nothing marks
-        // them as continuing each other here, that is the paths' own judgement).
-        assert_eq!(l.len(), 2, "{l:#?}");
+        // Farther apart than --max-gap-mm: one line with the stretch between missing.
+        assert_eq!(l.len(), 1, "{l:#?}");
+        assert!(!l[0].is_whole());
+        let missing: Vec<&Gap> = l[0].gaps.iter().filter(|g| !g.bridged).collect();
+        assert_eq!(missing.len(), 1, "{:?}", l[0].gaps);
+        assert!((missing[0].length_mm - 25.0).abs() < 1.5, "{missing:?}");
+    }
+
+    #[test]
+    fn a_box_drawn_round_in_one_go_is_one_line() {
+        let boxed = vec![pass(
+            &[
+                [0.0, 0.0],
+                [40.0, 0.0],
+                [40.0, 30.0],
+                [0.0, 30.0],
+                [0.0, 2.0],
+            ],
+            0.0,
+        )];
+        let l = lines_of(&boxed);
+        assert_eq!(l.len(), 1, "{l:#?}");
+        assert_eq!(l[0].passes, vec![0]);
+        assert!((l[0].length_mm - 138.0).abs() < 0.5, "{}", l[0].length_mm);
     }
 }

@@ -22,11 +22,13 @@
 //!
 //! [`render`] (with `render_draw`, `render_extras`) draws synthetic scans with known truth for
 //! tests, benches and simulation, [`render_photo`] phone photos. [`trace_paths`] writes every
-//! drawn line of a drawing as a path of its own ([`paths`]), the paths that run alongside each other
-//! grouped as the passes of one drawn line ([`lines`]). Errors: [`error`]; settings:
+//! path of a drawing ([`paths`]) and its drawn lines, each followed through the band of ink its
+//! passes leave ([`band`], [`lines`]), the image read past each line's ends for ink nothing
+//! written covers ([`probe`]). Errors: [`error`]; settings:
 //! [`options`].
 
 mod area;
+mod band;
 mod bridge_fit;
 pub mod camera;
 mod centreline;
@@ -44,6 +46,7 @@ pub mod overlay;
 mod paper;
 mod paths;
 mod prepare;
+mod probe;
 mod raster;
 pub mod render;
 mod render_draw;
@@ -59,7 +62,7 @@ pub use homography::Homography;
 pub use lines::DrawnLine;
 pub use link::{Gap, LeftOut, LeftOutKind, Linking};
 pub use options::{Mapping, PathChoice, TraceOptions};
-pub use paths::{path_file_name, write_drawing, Drawing, DrawnPath, SUMMARY_FILE};
+pub use paths::{line_file_name, path_file_name, write_drawing, Drawing, DrawnPath, SUMMARY_FILE};
 pub use prepare::Prepared;
 pub use render::{render_scan, RenderSpec};
 pub use render_photo::{render_photo, Camera, PhotoSpec};
@@ -182,6 +185,14 @@ pub fn trace_paths(
     }
     drawing.camera = meta.camera;
     drawing.fiducials = meta.fiducials;
+    // Ink past a line's end that nothing written covers: the line may go on.
+    let size = [f64::from(img.width()), f64::from(img.height())];
+    let (camera, ppm) = (drawing.camera.clone(), drawing.px_per_mm);
+    let to_px = move |p: [f64; 2]| match &camera {
+        Some(cam) => cam.to_px(p),
+        None => [p[0] * ppm + 0.5 * size[0], 0.5 * size[1] - p[1] * ppm],
+    };
+    probe::mark_untraced_ink(&mut drawing, img, &prepared.paper, &to_px, opts.max_gap_mm);
     Ok(drawing)
 }
 

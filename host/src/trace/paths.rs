@@ -61,6 +61,8 @@ pub struct Drawing {
     pub lines: Vec<DrawnLine>,
     /// Marks shorter than a path (dust, fibres, flicks), longest first.
     pub strays: Vec<LeftOut>,
+    /// Their points, sheet mm.
+    pub(crate) stray_points: Vec<Vec<[f64; 2]>>,
     /// Image scale, pixels per mm.
     pub px_per_mm: f64,
     /// The camera model and the fiducials (fiducial mapping only).
@@ -81,6 +83,7 @@ pub(super) fn drawing(pieces: &[PieceMm], opts: &TraceOptions, px_per_mm: f64) -
     let min_len_mm = MIN_MARK_MM.max(opts.min_stroke_mm);
     let mut paths = Vec::new();
     let mut strays = Vec::new();
+    let mut stray_pts = Vec::new();
     for (ci, &len) in net.lengths.iter().enumerate() {
         let path = (len >= min_len_mm).then(|| judged_path(&net, ci, opts));
         // A chain is a stray when shorter than a path, also once cut across what touches it.
@@ -89,6 +92,7 @@ pub(super) fn drawing(pieces: &[PieceMm], opts: &TraceOptions, px_per_mm: f64) -
             Some(p) if length_mm >= min_len_mm => paths.push(p),
             _ => {
                 let pts = &net.chain_stroke(ci).points_mm;
+                stray_pts.push(resample(pts, false, opts.spacing_mm));
                 if let (Some(&from_mm), Some(&to_mm)) = (pts.first(), pts.last()) {
                     strays.push(LeftOut {
                         from_mm,
@@ -128,11 +132,12 @@ pub(super) fn drawing(pieces: &[PieceMm], opts: &TraceOptions, px_per_mm: f64) -
                 .collect()
         })
         .collect();
-    let lines = lines::lines(&paths, &loose, opts.max_gap_mm);
+    let lines = lines::lines(&paths, &stray_pts, &loose, opts.max_gap_mm);
     Some(Drawing {
         paths,
         lines,
         strays,
+        stray_points: stray_pts,
         px_per_mm,
         camera: None,
         fiducials: None,
@@ -253,6 +258,11 @@ pub fn path_file_name(i: usize) -> String {
     format!("path-{:03}.csv", i + 1)
 }
 
+/// The file name of drawn line `i` (0-based) in the output directory.
+pub fn line_file_name(i: usize) -> String {
+    format!("line-{:03}.csv", i + 1)
+}
+
 /// Name of the summary in the output directory.
 pub const SUMMARY_FILE: &str = "paths.json";
 
@@ -269,10 +279,13 @@ pub fn write_drawing(dir: &Path, drawing: &Drawing) -> Result<PathBuf, TraceErro
         let entry = entry.map_err(|e| io_err(dir, e))?;
         let name = entry.file_name();
         let stale = name.to_str().is_some_and(|n| {
-            n.strip_prefix("path-")
-                .and_then(|r| r.strip_suffix(".csv"))
-                .and_then(|d| d.parse::<usize>().ok())
-                .is_some_and(|k| k == 0 || k > drawing.paths.len())
+            let numbered = |prefix: &str, count: usize| {
+                n.strip_prefix(prefix)
+                    .and_then(|r| r.strip_suffix(".csv"))
+                    .and_then(|d| d.parse::<usize>().ok())
+                    .is_some_and(|k| k == 0 || k > count)
+            };
+            numbered("path-", drawing.paths.len()) || numbered("line-", drawing.lines.len())
         });
         if stale {
             std::fs::remove_file(entry.path()).map_err(|e| io_err(&entry.path(), e))?;
@@ -280,6 +293,9 @@ pub fn write_drawing(dir: &Path, drawing: &Drawing) -> Result<PathBuf, TraceErro
     }
     for (i, p) in drawing.paths.iter().enumerate() {
         write_csv(&dir.join(path_file_name(i)), &p.stroke.points_mm)?;
+    }
+    for (i, l) in drawing.lines.iter().enumerate() {
+        write_csv(&dir.join(line_file_name(i)), &l.points_mm)?;
     }
     let summary = dir.join(SUMMARY_FILE);
     let text = serde_json::to_string_pretty(&summary_json(drawing)).unwrap_or_default() + "\n";
@@ -323,8 +339,10 @@ fn summary_json(d: &Drawing) -> Value {
     let lines: Vec<Value> = d
         .lines
         .iter()
-        .map(|l| {
+        .enumerate()
+        .map(|(i, l)| {
             json!({
+                "file": line_file_name(i),
                 "passes": files(&l.passes),
                 "closed": l.closed,
                 "from_mm": point(l.from_mm),

@@ -147,3 +147,174 @@ fn a_sheet_of_several_lines_gives_one_path_per_line() {
     }
     assert!(d.is_whole());
 }
+
+/// The distance from `p` to the polyline `pts`.
+fn to_polyline(p: [f64; 2], pts: &[[f64; 2]]) -> f64 {
+    pts.windows(2)
+        .map(|w| {
+            let d = [w[1][0] - w[0][0], w[1][1] - w[0][1]];
+            let l2 = (d[0] * d[0] + d[1] * d[1]).max(1e-12);
+            let t = (((p[0] - w[0][0]) * d[0] + (p[1] - w[0][1]) * d[1]) / l2).clamp(0.0, 1.0);
+            (p[0] - w[0][0] - t * d[0]).hypot(p[1] - w[0][1] - t * d[1])
+        })
+        .fold(f64::INFINITY, f64::min)
+}
+
+/// A grid (3 lines across, 3 down: a box with a cross) whose every line a plotter with backlash
+/// drew three times: each pass offset across by up to 1.2 mm, with a sawtooth of 0.5-1.1 mm
+/// and a period of 2.5-4.5 mm, starting and stopping up to 1 mm off the line's ends, some
+/// passes with skips. Another stroke model than the tracer's tests: a line is a band of passes,
+/// crossing each other and the lines across.
+#[test]
+fn a_grid_drawn_several_times_gives_one_line_per_grid_line() {
+    let grid: Vec<[[f64; 2]; 2]> = vec![
+        [[-60.0, -30.0], [60.0, -30.0]],
+        [[-60.0, 0.0], [60.0, 0.0]],
+        [[-60.0, 30.0], [60.0, 30.0]],
+        [[-60.0, -30.0], [-60.0, 30.0]],
+        [[0.0, -30.0], [0.0, 30.0]],
+        [[60.0, -30.0], [60.0, 30.0]],
+    ];
+    // A small deterministic generator (not the renderer's).
+    let mut state: u64 = 0x9e37_79b9_7f4a_7c15;
+    let mut uniform = move || {
+        state = state
+            .wrapping_mul(6_364_136_223_846_793_005)
+            .wrapping_add(1_442_695_040_888_963_407);
+        (state >> 11) as f64 / (1u64 << 53) as f64
+    };
+    let mut marks = Vec::new();
+    for g in &grid {
+        let d = [g[1][0] - g[0][0], g[1][1] - g[0][1]];
+        let len = d[0].hypot(d[1]);
+        let (t, n) = ([d[0] / len, d[1] / len], [-d[1] / len, d[0] / len]);
+        for pass in 0..3 {
+            let off = 1.2 * (2.0 * uniform() - 1.0);
+            let amp = 0.5 + 0.6 * uniform();
+            let period = 2.5 + 2.0 * uniform();
+            let (s0, s1) = (-1.0 + 2.0 * uniform(), len + 1.0 - 2.0 * uniform());
+            let tooth = |s: f64| amp * ((s / period).fract() - 0.5);
+            let pts = dense(
+                |u| {
+                    let s = s0 + u * (s1 - s0);
+                    let a = off + tooth(s);
+                    [g[0][0] + s * t[0] + a * n[0], g[0][1] + s * t[1] + a * n[1]]
+                },
+                false,
+            );
+            let skips = if pass == 1 {
+                let at = 20.0 + 60.0 * uniform();
+                vec![[at, at + 1.5 + 2.0 * uniform()]]
+            } else {
+                Vec::new()
+            };
+            marks.push(Mark {
+                pts,
+                width_mm: 0.4,
+                darkness: 0.35 + 0.1 * uniform(),
+                skips,
+            });
+        }
+    }
+    let img = render2::render(&Scene {
+        printed: Printed::Circle,
+        marks,
+        dust: vec![[25.0, -15.0, 0.1, 0.8]],
+        fibres: Vec::new(),
+        view: scan_view(300.0, 0.7),
+        light: [0.95, 0.02, -0.02, 0.0],
+        noise: 2.0,
+        jpeg: None,
+        seed: 31,
+    });
+    let opts = TraceOptions {
+        path: PathChoice::Free,
+        ..TraceOptions::default()
+    };
+    let d =
+        trace_paths(&img, &Prepared::build(&img), &opts, &ProgressBar::hidden()).expect("paths");
+    eprintln!(
+        "{} paths, {} drawn lines ({} whole): {:?}",
+        d.paths.len(),
+        d.lines.len(),
+        d.lines.iter().filter(|l| l.is_whole()).count(),
+        d.lines
+            .iter()
+            .map(|l| (l.length_mm.round(), l.passes.len(), l.is_whole()))
+            .collect::<Vec<_>>()
+    );
+    let mut traced = 0;
+    for (k, g) in grid.iter().enumerate() {
+        // The drawn line along it: its centreline within 1 mm of the grid line along 98 % of
+        // the grid line, its ends within 2 mm of the grid line's.
+        let truth = dense(
+            |u| {
+                [
+                    g[0][0] + u * (g[1][0] - g[0][0]),
+                    g[0][1] + u * (g[1][1] - g[0][1]),
+                ]
+            },
+            false,
+        );
+        let share = |l: &rigctl::trace::DrawnLine| {
+            let near = truth
+                .iter()
+                .step_by(25)
+                .filter(|p| to_polyline(**p, &l.points_mm) <= 1.0)
+                .count();
+            near as f64 / truth.iter().step_by(25).count() as f64
+        };
+        let along: Vec<(usize, f64)> = d
+            .lines
+            .iter()
+            .enumerate()
+            .map(|(i, l)| (i, share(l)))
+            .filter(|x| x.1 > 0.2)
+            .collect();
+        assert_eq!(along.len(), 1, "grid line {k}: lines along it {along:?}");
+        let l = &d.lines[along[0].0];
+        let end_err = [l.from_mm, l.to_mm]
+            .iter()
+            .map(|e| {
+                let (a, b) = (
+                    (e[0] - g[0][0]).hypot(e[1] - g[0][1]),
+                    (e[0] - g[1][0]).hypot(e[1] - g[1][1]),
+                );
+                a.min(b)
+            })
+            .fold(0.0, f64::max);
+        let worst = l
+            .points_mm
+            .iter()
+            .map(|p| to_polyline(*p, &truth))
+            .fold(0.0, f64::max);
+        eprintln!(
+            "grid line {k}: {:.1} mm, {} passes, share {:.3}, ends off by {end_err:.2} mm, centreline at most {worst:.2} mm off, whole {}",
+            l.length_mm,
+            l.passes.len(),
+            along[0].1,
+            l.is_whole()
+        );
+        assert!(worst <= 1.5, "grid line {k}: centreline {worst:.2} mm off");
+        let end_to_end = along[0].1 >= 0.98 && end_err <= 2.0;
+        if end_to_end {
+            assert!(
+                l.is_whole(),
+                "grid line {k}: {:?} {:?}",
+                l.gaps,
+                l.continued_by
+            );
+            traced += 1;
+        } else {
+            // Never whole on a part: here the tracker leaves the top 15 mm of the middle
+            // line (its passes broken into short dashes) untraced, and the ink past the
+            // line's end says so.
+            assert!(!l.is_whole(), "grid line {k}: a part reported whole");
+        }
+    }
+    // Measured: 5 of the 6 end to end and whole, the sixth named as not whole (exit 1).
+    assert!(traced >= 5, "{traced} grid lines end to end");
+    assert_eq!(d.is_whole(), traced == grid.len());
+    // Nothing else but the grid lines.
+    assert_eq!(d.lines.len(), grid.len());
+}
