@@ -187,7 +187,7 @@ pub fn trace_paths(
     drawing.fiducials = meta.fiducials;
     // Ink past a line's end that nothing written covers: the line may go on.
     let size = [f64::from(img.width()), f64::from(img.height())];
-    let (camera, ppm) = (drawing.camera.clone(), drawing.px_per_mm);
+    let (camera, ppm) = (drawing.camera, drawing.px_per_mm);
     let to_px = move |p: [f64; 2]| match &camera {
         Some(cam) => cam.to_px(p),
         None => [p[0] * ppm + 0.5 * size[0], 0.5 * size[1] - p[1] * ppm],

@@ -25,9 +25,12 @@ const RUN_MM: f64 = 2.0;
 const ACROSS_BAND_MM: f64 = 4.0;
 const STEP_MM: f64 = 0.25;
 
-/// Points on a grid of 1 mm cells, each with a direction (zero: none).
+/// A point and a direction (zero: none), sheet mm.
+type Directed = ([f64; 2], [f64; 2]);
+
+/// Points on a grid of 1 mm cells, each with a direction.
 struct Points {
-    cells: HashMap<(i64, i64), Vec<([f64; 2], [f64; 2])>>,
+    cells: HashMap<(i64, i64), Vec<Directed>>,
 }
 
 impl Points {
