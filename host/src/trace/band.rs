@@ -10,7 +10,7 @@
 //! The points in every window are the line's: the paths they belong to are its passes.
 
 use super::link::Gap;
-use std::collections::HashMap;
+use super::plane::{dist, sub, unit, Grid};
 
 /// A line's band reaches this far either side of its centre, mm.
 pub const BAND_HALF_MM: f64 = 3.0;
@@ -63,47 +63,21 @@ pub(crate) struct Dot {
 /// Every written point, on a grid.
 pub(crate) struct Cloud {
     pub dots: Vec<Dot>,
-    cells: HashMap<(i64, i64), Vec<u32>>,
-}
-
-fn key(p: [f64; 2]) -> (i64, i64) {
-    (
-        (p[0] / CELL_MM).floor() as i64,
-        (p[1] / CELL_MM).floor() as i64,
-    )
-}
-
-fn sub(a: [f64; 2], b: [f64; 2]) -> [f64; 2] {
-    [a[0] - b[0], a[1] - b[1]]
-}
-
-fn dist(a: [f64; 2], b: [f64; 2]) -> f64 {
-    (a[0] - b[0]).hypot(a[1] - b[1])
-}
-
-fn unit(d: [f64; 2]) -> Option<[f64; 2]> {
-    let n = d[0].hypot(d[1]);
-    (n > 1e-9).then(|| [d[0] / n, d[1] / n])
+    grid: Grid<u32>,
 }
 
 impl Cloud {
     pub fn new(dots: Vec<Dot>) -> Self {
-        let mut cells: HashMap<(i64, i64), Vec<u32>> = HashMap::new();
+        let mut grid = Grid::new(CELL_MM);
         for (i, d) in dots.iter().enumerate() {
-            cells.entry(key(d.p)).or_default().push(i as u32);
+            grid.insert(d.p, i as u32);
         }
-        Self { dots, cells }
+        Self { dots, grid }
     }
 
-    /// The dots within `r` (mm) of `c`, and maybe a few more.
-    fn around(&self, c: [f64; 2], r: f64) -> impl Iterator<Item = usize> + '_ {
-        let (x0, y0) = key([c[0] - r, c[1] - r]);
-        let (x1, y1) = key([c[0] + r, c[1] + r]);
-        (x0..=x1)
-            .flat_map(move |x| (y0..=y1).map(move |y| (x, y)))
-            .filter_map(|k| self.cells.get(&k))
-            .flatten()
-            .map(|&i| i as usize)
+    /// The dots within `r` (mm) of `c`, and maybe a few more, in no particular order.
+    pub fn around(&self, c: [f64; 2], r: f64) -> impl Iterator<Item = usize> + '_ {
+        self.grid.around(c, r).map(|(_, i)| *i as usize)
     }
 
     /// The longest stretch of the segment `a`-`b` with no written point (of any direction:

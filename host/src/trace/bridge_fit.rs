@@ -5,6 +5,8 @@
 //! the fitted stretch, so its shape comes from both ends at once, not from two tangents
 //! extrapolated over the gap.
 
+use super::plane::dist;
+
 /// Spacing of bridge points, mm.
 const STEP_MM: f64 = 0.2;
 /// Data collected on each side of a gap, mm of written path (candidates, smallest first).
@@ -56,10 +58,6 @@ impl Fit {
 
 fn horner(c: &[f64], t: f64) -> f64 {
     c.iter().rev().fold(0.0, |acc, v| acc * t + v)
-}
-
-fn dist(a: [f64; 2], b: [f64; 2]) -> f64 {
-    (a[0] - b[0]).hypot(a[1] - b[1])
 }
 
 /// Refits every run of bridge points of `pts` (`bridge[i]` marks them) from the written points
@@ -313,8 +311,9 @@ fn robust_fit(data: &[Node], deg: usize) -> Option<Fit> {
             .map(|(v, t)| (v.p[0] - horner(&cx, *t)).hypot(v.p[1] - horner(&cy, *t)))
             .collect();
         let mut sorted = r.clone();
-        sorted.sort_by(f64::total_cmp);
-        let scale = (1.4826 * sorted[sorted.len() / 2]).max(MIN_SCALE_MM);
+        let mid = sorted.len() / 2;
+        let (_, median, _) = sorted.select_nth_unstable_by(mid, f64::total_cmp);
+        let scale = (1.4826 * *median).max(MIN_SCALE_MM);
         for (wi, ri) in w.iter_mut().zip(&r) {
             let u = ri / (TUKEY_C * scale);
             *wi = if u < 1.0 { (1.0 - u * u).powi(2) } else { 0.0 };
@@ -330,6 +329,9 @@ fn robust_fit(data: &[Node], deg: usize) -> Option<Fit> {
     fit
 }
 
+/// Room for the coefficients of the highest degree.
+const M: usize = MAX_DEGREE + 1;
+
 /// Weighted least squares of x and y on powers of `ts` up to `deg`: coefficients and the mean
 /// squared leave-one-out residual.
 fn weighted_fit(
@@ -339,14 +341,17 @@ fn weighted_fit(
     deg: usize,
 ) -> Option<(Vec<f64>, Vec<f64>, f64)> {
     let m = deg + 1;
-    let mut a = vec![0.0; m * m];
-    let (mut bx, mut by) = (vec![0.0; m], vec![0.0; m]);
-    let mut pw = vec![0.0; m];
+    if m > M {
+        return None;
+    }
+    let mut a = [0.0; M * M];
+    let (mut bx, mut by) = ([0.0; M], [0.0; M]);
+    let mut pw = [0.0; M];
     for ((v, t), wi) in data.iter().zip(ts).zip(w) {
         if *wi <= 0.0 {
             continue;
         }
-        powers(*t, &mut pw);
+        powers(*t, &mut pw[..m]);
         for r in 0..m {
             for c in 0..m {
                 a[r * m + c] += wi * pw[r] * pw[c];
@@ -356,17 +361,17 @@ fn weighted_fit(
         }
     }
     let l = cholesky(&a, m)?;
-    let cx = solve(&l, m, &bx);
-    let cy = solve(&l, m, &by);
-    // Leave-one-out residuals r / (1 - h), h the leverage w p^T A^-1 p.
+    let cx = solve(&l, m, &bx)[..m].to_vec();
+    let cy = solve(&l, m, &by)[..m].to_vec();
+    // Leave-one-out residuals r / (1 - h), h the leverage w p^T A^-1 p = w |L^-1 p|^2.
     let (mut press, mut wsum) = (0.0, 0.0);
     for ((v, t), wi) in data.iter().zip(ts).zip(w) {
         if *wi <= 0.0 {
             continue;
         }
-        powers(*t, &mut pw);
-        let z = solve(&l, m, &pw);
-        let h = wi * pw.iter().zip(&z).map(|(p, q)| p * q).sum::<f64>();
+        powers(*t, &mut pw[..m]);
+        let y = forward(&l, m, &pw);
+        let h = wi * y[..m].iter().map(|q| q * q).sum::<f64>();
         if h >= 1.0 - 1e-9 {
             return None;
         }
@@ -386,10 +391,10 @@ fn powers(t: f64, out: &mut [f64]) {
     }
 }
 
-/// Lower Cholesky factor of the `m` x `m` row-major matrix `a`, or `None` when not positive
-/// definite.
-fn cholesky(a: &[f64], m: usize) -> Option<Vec<f64>> {
-    let mut l = vec![0.0; m * m];
+/// Lower Cholesky factor of the `m` x `m` row-major matrix `a` (`m` <= [`M`]), or `None` when
+/// not positive definite.
+fn cholesky(a: &[f64; M * M], m: usize) -> Option<[f64; M * M]> {
+    let mut l = [0.0; M * M];
     for r in 0..m {
         for c in 0..=r {
             let mut sum = a[r * m + c];
@@ -409,9 +414,9 @@ fn cholesky(a: &[f64], m: usize) -> Option<Vec<f64>> {
     Some(l)
 }
 
-/// Solves `L L^T x = b`.
-fn solve(l: &[f64], m: usize, b: &[f64]) -> Vec<f64> {
-    let mut y = vec![0.0; m];
+/// Solves `L y = b`.
+fn forward(l: &[f64; M * M], m: usize, b: &[f64; M]) -> [f64; M] {
+    let mut y = [0.0; M];
     for r in 0..m {
         let mut sum = b[r];
         for k in 0..r {
@@ -419,7 +424,13 @@ fn solve(l: &[f64], m: usize, b: &[f64]) -> Vec<f64> {
         }
         y[r] = sum / l[r * m + r];
     }
-    let mut x = vec![0.0; m];
+    y
+}
+
+/// Solves `L L^T x = b`.
+fn solve(l: &[f64; M * M], m: usize, b: &[f64; M]) -> [f64; M] {
+    let y = forward(l, m, b);
+    let mut x = [0.0; M];
     for r in (0..m).rev() {
         let mut sum = y[r];
         for k in r + 1..m {

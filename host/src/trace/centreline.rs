@@ -6,6 +6,7 @@
 
 use super::ink::InkModel;
 use super::paper::PaperMap;
+use super::plane::dist;
 use super::raster::CoarseMap;
 use image::RgbImage;
 use indicatif::ProgressBar;
@@ -299,10 +300,6 @@ fn trim_end(pts: &mut Vec<[f64; 2]>, trim: f64) {
             left = 0.0;
         }
     }
-}
-
-fn dist(a: [f64; 2], b: [f64; 2]) -> f64 {
-    (a[0] - b[0]).hypot(a[1] - b[1])
 }
 
 #[cfg(test)]

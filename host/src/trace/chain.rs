@@ -1,6 +1,8 @@
 //! Strokes in sheet mm: tracked pieces, their lengths, and resampling at a fixed arc-length
 //! spacing.
 
+use super::plane::dist;
+
 /// A polyline in sheet mm, ordered along the pencil's path.
 #[derive(Debug, Clone, PartialEq)]
 pub struct Stroke {
@@ -70,10 +72,6 @@ pub fn resample(pts: &[[f64; 2]], closed: bool, spacing_mm: f64) -> Vec<[f64; 2]
         out.push([a[0] + f * (b[0] - a[0]), a[1] + f * (b[1] - a[1])]);
     }
     out
-}
-
-fn dist(a: [f64; 2], b: [f64; 2]) -> f64 {
-    (a[0] - b[0]).hypot(a[1] - b[1])
 }
 
 #[cfg(test)]

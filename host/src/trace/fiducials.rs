@@ -5,6 +5,7 @@
 mod identify;
 
 use super::paper::PaperMap;
+use super::plane::dist;
 use super::raster::{components, CoarseMap};
 use super::TraceError;
 use image::RgbImage;
@@ -124,8 +125,4 @@ fn refine(img: &RgbImage, guess: [f64; 2], half_px: f64, paper: &PaperMap) -> Op
         // Equal-area diameter of the thresholded dot (about one pixel short of the print).
         diameter_px: 2.0 * (sw / std::f64::consts::PI).sqrt() + 1.0,
     })
-}
-
-pub(super) fn dist(a: [f64; 2], b: [f64; 2]) -> f64 {
-    (a[0] - b[0]).hypot(a[1] - b[1])
 }

@@ -19,6 +19,7 @@ use super::band::{self, Cloud, Dot, Source, Walk, BAND_DEG, BAND_HALF_MM};
 use super::chain::resample;
 use super::link::{Gap, LeftOut, LeftOutKind, MIN_MARK_MM};
 use super::paths::DrawnPath;
+use super::plane::{self, dist, sub};
 use std::collections::HashSet;
 
 /// Passes of one line lie within this of its centre, mm.
@@ -108,21 +109,9 @@ impl DrawnLine {
     }
 }
 
-fn sub(a: [f64; 2], b: [f64; 2]) -> [f64; 2] {
-    [a[0] - b[0], a[1] - b[1]]
-}
-
-fn dist(a: [f64; 2], b: [f64; 2]) -> f64 {
-    (a[0] - b[0]).hypot(a[1] - b[1])
-}
-
+/// `d` scaled to unit length; x for a zero vector.
 fn unit(d: [f64; 2]) -> [f64; 2] {
-    let n = d[0].hypot(d[1]);
-    if n > 1e-12 {
-        [d[0] / n, d[1] / n]
-    } else {
-        [1.0, 0.0]
-    }
+    plane::unit(d).unwrap_or([1.0, 0.0])
 }
 
 /// |cos| of the angle between two unit directions (1: parallel either way).
@@ -213,7 +202,11 @@ fn cloud(paths: &[DrawnPath], strays: &[Vec<[f64; 2]>]) -> (Cloud, Vec<usize>) {
 /// The unit chord of `pts` from `half` mm of arc before point `i` to `half` after it (as far
 /// as the polyline goes).
 fn chord_dir(pts: &[[f64; 2]], i: usize, half: f64) -> [f64; 2] {
-    let s = arc(pts);
+    chord_dir_on(pts, &arc(pts), i, half)
+}
+
+/// [`chord_dir`] with the polyline's cumulative arc length `s` ([`arc`]) given.
+fn chord_dir_on(pts: &[[f64; 2]], s: &[f64], i: usize, half: f64) -> [f64; 2] {
     let n = pts.len();
     if n < 2 {
         return [1.0, 0.0];
@@ -283,14 +276,13 @@ fn join_continuing(
     mut walks: Vec<Walk>,
     mut taken: Vec<HashSet<usize>>,
 ) -> (Vec<Walk>, Vec<HashSet<usize>>) {
-    let cos_along = BAND_DEG.to_radians().cos();
     'again: loop {
         for i in 0..walks.len() {
             for j in 0..walks.len() {
                 if i == j || walks[i].closed || walks[j].closed {
                     continue;
                 }
-                let Some(joined) = continued(&walks[i], &walks[j], cos_along) else {
+                let Some(joined) = continued(&walks[i], &walks[j]) else {
                     continue;
                 };
                 let tj = std::mem::take(&mut taken[j]);
@@ -307,12 +299,11 @@ fn join_continuing(
 }
 
 /// `a` carried on by `b` past its tail (or head), when that end of `a` lies on `b`.
-fn continued(a: &Walk, b: &Walk, cos_along: f64) -> Option<Walk> {
+fn continued(a: &Walk, b: &Walk) -> Option<Walk> {
     let (ac, bc) = (&a.centres, &b.centres);
     if ac.len() < 2 || bc.len() < 2 {
         return None;
     }
-    let _ = cos_along;
     let cos_join = JOIN_DEG.to_radians().cos();
     for tail in [true, false] {
         let (ei, e) = if tail {
@@ -394,6 +385,7 @@ fn continued(a: &Walk, b: &Walk, cos_along: f64) -> Option<Walk> {
 /// straight through that band to the other's centreline.
 fn meet_lines_across(walks: &mut [Walk], cloud: &Cloud) {
     let cos_across = ACROSS_DEG.to_radians().cos();
+    let arcs: Vec<Vec<f64>> = walks.iter().map(|w| arc(&w.centres)).collect();
     let mut ext: Vec<(usize, bool, [f64; 2], bool)> = Vec::new();
     for (i, w) in walks.iter().enumerate() {
         let c = &w.centres;
@@ -420,7 +412,8 @@ fn meet_lines_across(walks: &mut [Walk], cloud: &Cloud) {
                     let foot = [e[0] + along * t[0], e[1] + along * t[1]];
                     // Beyond the line's band with no ink: a skip, bridged.
                     let skip = along > MEET_MM && cloud.inkless_mm(e, foot) > INKLESS_OK_MM;
-                    if abs_cos(chord_dir(&o.centres, k, DIR_HALF_MM), t) >= cos_across {
+                    if abs_cos(chord_dir_on(&o.centres, &arcs[j], k, DIR_HALF_MM), t) >= cos_across
+                    {
                         continue;
                     }
                     if best.is_none_or(|b| along < b.0) {
@@ -613,6 +606,7 @@ pub(crate) fn lines(
     let alone = |p: usize| {
         !lines_of_path[p].is_empty() && lines_of_path[p].iter().all(|&l| passes[l] == [p])
     };
+    let arcs: Vec<Vec<f64>> = walks.iter().map(|w| arc(&w.centres)).collect();
     let mut out: Vec<DrawnLine> = Vec::new();
     for p in (0..paths.len()).filter(|&p| alone(p)) {
         out.push(path_line(paths, p, loose, max_gap_mm));
@@ -632,7 +626,8 @@ pub(crate) fn lines(
                         .filter(|(_, x)| dist(**x, q) <= BAND_HALF_MM)
                         .min_by(|x, y| dist(*x.1, q).total_cmp(&dist(*y.1, q)))
                         .is_some_and(|(k, _)| {
-                            abs_cos(chord_dir(c, k, DIR_HALF_MM), t) < ACROSS_DEG.to_radians().cos()
+                            abs_cos(chord_dir_on(c, &arcs[o], k, DIR_HALF_MM), t)
+                                < ACROSS_DEG.to_radians().cos()
                         })
                 }
             })
@@ -742,7 +737,11 @@ fn judge_ends(
     ];
     let mut ahead: Vec<usize> = Vec::new();
     for (e, t) in ends {
-        for (k, d) in cloud.dots.iter().enumerate() {
+        // In the order of the dots, so the paths found come in a fixed order.
+        let mut near: Vec<usize> = cloud.around(e, reach).collect();
+        near.sort_unstable();
+        for k in near {
+            let d = &cloud.dots[k];
             let Source::Path(p) = d.src else {
                 continue;
             };

@@ -24,6 +24,7 @@
 
 use super::bridge_fit;
 use super::chain::{polyline_length, PieceMm, Stroke};
+use super::plane::{dist, norm, sub, Grid};
 use crate::sheet::{ReferencePath, CIRCLE_RADIUS_MM, LINE_HALF_LENGTH_MM};
 
 /// Marks shorter than this are specks (dust, grain), mm.
@@ -139,18 +140,6 @@ struct Cand {
     b: usize,
     gap: f64,
     cost: f64,
-}
-
-fn sub(a: [f64; 2], b: [f64; 2]) -> [f64; 2] {
-    [a[0] - b[0], a[1] - b[1]]
-}
-
-fn norm(a: [f64; 2]) -> f64 {
-    a[0].hypot(a[1])
-}
-
-fn dist(a: [f64; 2], b: [f64; 2]) -> f64 {
-    norm(sub(a, b))
 }
 
 fn rot(t: [f64; 2], a: f64) -> [f64; 2] {
@@ -409,6 +398,8 @@ pub(super) struct Network {
     built: Vec<(Stroke, Vec<Gap>, Vec<bool>)>,
     /// Each chain's length, mm.
     pub(super) lengths: Vec<f64>,
+    /// Every point of every chain of two points or more: (chain, index).
+    points: Grid<(usize, usize)>,
     max_gap_mm: f64,
 }
 
@@ -474,12 +465,21 @@ impl Network {
             .map(|c| build(c, &pieces, &piece_ends))
             .collect();
         let lengths: Vec<f64> = built.iter().map(|(s, ..)| s.length_mm()).collect();
+        let mut points = Grid::new(CROSS_TOUCH_MM);
+        for (ci, (s, ..)) in built.iter().enumerate() {
+            if s.points_mm.len() >= 2 {
+                for (k, p) in s.points_mm.iter().enumerate() {
+                    points.insert(*p, (ci, k));
+                }
+            }
+        }
         Some(Self {
             pieces,
             piece_ends,
             chains,
             built,
             lengths,
+            points,
             max_gap_mm,
         })
     }
@@ -508,14 +508,21 @@ impl Network {
     pub(super) fn judge(&self, main: usize) -> Judged {
         let max_gap_mm = self.max_gap_mm;
         let (path, mut gaps, mask) = self.built[main].clone();
-        let others_pts: Vec<&[[f64; 2]]> = self
-            .built
+        // The points of other chains that touch this one (the rest cannot cut it).
+        let mut touching: Vec<(usize, usize)> = path
+            .points_mm
             .iter()
-            .enumerate()
-            .filter(|(i, (s, ..))| *i != main && s.points_mm.len() >= 2)
-            .map(|(_, (s, ..))| s.points_mm.as_slice())
+            .flat_map(|p| self.points.within(*p, CROSS_TOUCH_MM))
+            .map(|(_, ck)| *ck)
+            .filter(|(ci, _)| *ci != main)
             .collect();
-        let (path, mask) = cut_crossings(path, mask, &others_pts, &mut gaps);
+        touching.sort_unstable();
+        touching.dedup();
+        let touching: Vec<[f64; 2]> = touching
+            .into_iter()
+            .map(|(ci, k)| self.built[ci].0.points_mm[k])
+            .collect();
+        let (path, mask) = cut_crossings(path, mask, &[touching.as_slice()], &mut gaps);
         let (points_mm, _, bridged_mm) = bridge_fit::refine(&path.points_mm, &mask, path.closed);
         let path = Stroke {
             points_mm,

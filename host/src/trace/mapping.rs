@@ -59,6 +59,28 @@ pub(crate) fn fit_camera(
 /// A pixel -> sheet mm map.
 pub(crate) type ToMm = Box<dyn Fn([f64; 2]) -> [f64; 2]>;
 
+/// Sheet mm -> image pixels: through the camera model (fiducial mapping), or the plain scale
+/// `px_per_mm` about the image centre, y up (the inverse of [`map_pixels`]'s map).
+#[derive(Clone, Copy)]
+pub(crate) struct SheetToPx {
+    pub camera: Option<CameraModel>,
+    pub px_per_mm: f64,
+    /// Image width and height, px.
+    pub size_px: [f64; 2],
+}
+
+impl SheetToPx {
+    pub fn px(&self, p: [f64; 2]) -> [f64; 2] {
+        match &self.camera {
+            Some(cam) => cam.to_px(p),
+            None => [
+                p[0] * self.px_per_mm + 0.5 * self.size_px[0],
+                0.5 * self.size_px[1] - p[1] * self.px_per_mm,
+            ],
+        }
+    }
+}
+
 /// The mapping of one image and what was measured to find it.
 pub(crate) struct Mapped {
     pub to_mm: ToMm,

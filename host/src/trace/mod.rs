@@ -45,6 +45,7 @@ mod options;
 pub mod overlay;
 mod paper;
 mod paths;
+mod plane;
 mod prepare;
 mod probe;
 mod raster;
@@ -186,11 +187,10 @@ pub fn trace_paths(
     drawing.camera = meta.camera;
     drawing.fiducials = meta.fiducials;
     // Ink past a line's end that nothing written covers: the line may go on.
-    let size = [f64::from(img.width()), f64::from(img.height())];
-    let (camera, ppm) = (drawing.camera, drawing.px_per_mm);
-    let to_px = move |p: [f64; 2]| match &camera {
-        Some(cam) => cam.to_px(p),
-        None => [p[0] * ppm + 0.5 * size[0], 0.5 * size[1] - p[1] * ppm],
+    let to_px = mapping::SheetToPx {
+        camera: drawing.camera,
+        px_per_mm: drawing.px_per_mm,
+        size_px: [f64::from(img.width()), f64::from(img.height())],
     };
     probe::mark_untraced_ink(&mut drawing, img, &prepared.paper, &to_px, opts.max_gap_mm);
     Ok(drawing)

@@ -6,6 +6,7 @@
 //! ([`render_drawing_overlay`]): the passes of whole lines green, of lines not whole orange,
 //! the missing stretches red.
 
+use super::mapping::SheetToPx;
 use super::{CameraModel, Drawing, Fiducials, Trace, TraceError};
 use crate::io::atomic::{write_atomic, AtomicWriteError};
 use crate::sheet::{
@@ -21,24 +22,15 @@ const BLUE: Rgb<u8> = Rgb([20, 60, 255]);
 const MAGENTA: Rgb<u8> = Rgb([220, 0, 220]);
 const RED: Rgb<u8> = Rgb([255, 0, 0]);
 
-/// Sheet mm to overlay pixels: through the camera model, or (a plain scale, no fiducials)
-/// `px_per_mm` about the image centre, y up; then reduced by `step`.
-struct ToPx<'a> {
-    camera: Option<&'a CameraModel>,
-    px_per_mm: f64,
-    size: [f64; 2],
+/// Sheet mm to overlay pixels: to image pixels, then reduced by `step`.
+struct ToPx {
+    image: SheetToPx,
     scale: f64,
 }
 
-impl ToPx<'_> {
+impl ToPx {
     fn px(&self, p: [f64; 2]) -> [f64; 2] {
-        let q = match self.camera {
-            Some(cam) => cam.to_px(p),
-            None => [
-                p[0] * self.px_per_mm + 0.5 * self.size[0],
-                0.5 * self.size[1] - p[1] * self.px_per_mm,
-            ],
-        };
+        let q = self.image.px(p);
         [q[0] * self.scale, q[1] * self.scale]
     }
 
@@ -54,20 +46,22 @@ impl ToPx<'_> {
 }
 
 /// The reduced image and its mapping; the printed marks drawn (fiducial mapping only).
-fn base<'a>(
+fn base(
     img: &RgbImage,
-    camera: Option<&'a CameraModel>,
+    camera: Option<&CameraModel>,
     fiducials: Option<&Fiducials>,
     px_per_mm: f64,
     spacing_mm: f64,
-) -> (RgbImage, ToPx<'a>) {
+) -> (RgbImage, ToPx) {
     let long = img.width().max(img.height()) as usize;
     let step = long.div_ceil(2400).max(1);
     let mut out = downsample(img, step);
     let to = ToPx {
-        camera,
-        px_per_mm,
-        size: [img.width() as f64, img.height() as f64],
+        image: SheetToPx {
+            camera: camera.copied(),
+            px_per_mm,
+            size_px: [img.width() as f64, img.height() as f64],
+        },
         scale: 1.0 / step as f64,
     };
     if camera.is_some() {

@@ -61,7 +61,8 @@ pub struct Drawing {
     pub lines: Vec<DrawnLine>,
     /// Marks shorter than a path (dust, fibres, flicks), longest first.
     pub strays: Vec<LeftOut>,
-    /// Their points, sheet mm.
+    /// The strays' points, sheet mm, resampled (in the order they were found, not that of
+    /// `strays`).
     pub(crate) stray_points: Vec<Vec<[f64; 2]>>,
     /// Image scale, pixels per mm.
     pub px_per_mm: f64,

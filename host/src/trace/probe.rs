@@ -8,10 +8,11 @@
 //! starts within `--max-gap-mm` of the end means the line may go on: it is not whole.
 
 use super::link::{LeftOut, LeftOutKind};
+use super::mapping::SheetToPx;
 use super::paper::PaperMap;
 use super::paths::Drawing;
+use super::plane::{unit, Grid};
 use image::RgbImage;
-use std::collections::HashMap;
 
 /// Darkness (1 - the lightest of the channels relative to the paper's) of a pixel that is ink.
 const INK_DARKNESS: f32 = 0.15;
@@ -25,41 +26,8 @@ const RUN_MM: f64 = 2.0;
 const ACROSS_BAND_MM: f64 = 4.0;
 const STEP_MM: f64 = 0.25;
 
-/// A point and a direction (zero: none), sheet mm.
-type Directed = ([f64; 2], [f64; 2]);
-
-/// Points on a grid of 1 mm cells, each with a direction.
-struct Points {
-    cells: HashMap<(i64, i64), Vec<Directed>>,
-}
-
-impl Points {
-    fn new() -> Self {
-        Self {
-            cells: HashMap::new(),
-        }
-    }
-
-    fn add(&mut self, p: [f64; 2], dir: [f64; 2]) {
-        self.cells
-            .entry((p[0].floor() as i64, p[1].floor() as i64))
-            .or_default()
-            .push((p, dir));
-    }
-
-    fn any_within(&self, q: [f64; 2], r: f64, keep: impl Fn([f64; 2]) -> bool) -> bool {
-        let k = r.ceil() as i64;
-        let (cx, cy) = (q[0].floor() as i64, q[1].floor() as i64);
-        (-k..=k).any(|dx| {
-            (-k..=k).any(|dy| {
-                self.cells.get(&(cx + dx, cy + dy)).is_some_and(|v| {
-                    v.iter()
-                        .any(|(p, d)| (p[0] - q[0]).hypot(p[1] - q[1]) <= r && keep(*d))
-                })
-            })
-        })
-    }
-}
+/// Grid cell for the written points and the lines' centrelines, mm.
+const CELL_MM: f64 = 1.0;
 
 /// Marks every open line of `drawing` with untraced ink past one of its ends as not whole
 /// (the ink listed as a mark that may continue it). `to_px` maps sheet mm to image pixels.
@@ -67,38 +35,36 @@ pub(super) fn mark_untraced_ink(
     drawing: &mut Drawing,
     img: &RgbImage,
     paper: &PaperMap,
-    to_px: &dyn Fn([f64; 2]) -> [f64; 2],
+    to_px: &SheetToPx,
     max_gap_mm: f64,
 ) {
-    let mut written = Points::new();
+    let mut written = Grid::new(CELL_MM);
     for p in &drawing.paths {
         for q in &p.stroke.points_mm {
-            written.add(*q, [0.0, 0.0]);
+            written.insert(*q, ());
         }
     }
     for s in &drawing.stray_points {
         for q in s {
-            written.add(*q, [0.0, 0.0]);
+            written.insert(*q, ());
         }
     }
     // The lines' centrelines with their directions, to tell a line across.
-    let mut centres: Vec<Points> = Vec::new();
+    let mut centres: Vec<Grid<[f64; 2]>> = Vec::new();
     for l in &drawing.lines {
-        let mut pts = Points::new();
+        let mut pts = Grid::new(CELL_MM);
         let c = &l.points_mm;
         for i in 0..c.len() {
             let (a, b) = (c[i.saturating_sub(8)], c[(i + 8).min(c.len() - 1)]);
-            let d = [b[0] - a[0], b[1] - a[1]];
-            let n = d[0].hypot(d[1]);
-            if n > 1e-9 {
-                pts.add(c[i], [d[0] / n, d[1] / n]);
+            if let Some(d) = unit([b[0] - a[0], b[1] - a[1]]) {
+                pts.insert(c[i], d);
             }
         }
         centres.push(pts);
     }
     let (w, h) = (img.width() as f64, img.height() as f64);
     let dark = |q: [f64; 2]| -> bool {
-        let p = to_px(q);
+        let p = to_px.px(q);
         if !(p[0] >= 0.0 && p[1] >= 0.0 && p[0] < w && p[1] < h) {
             return false;
         }
@@ -122,9 +88,8 @@ pub(super) fn mark_untraced_ink(
             let across_line = |q: [f64; 2]| {
                 centres.iter().enumerate().any(|(k, c)| {
                     k != li
-                        && c.any_within(q, ACROSS_BAND_MM, |d| {
-                            (d[0] * t[0] + d[1] * t[1]).abs() < cos_across
-                        })
+                        && c.within(q, ACROSS_BAND_MM)
+                            .any(|(_, d)| (d[0] * t[0] + d[1] * t[1]).abs() < cos_across)
                 })
             };
             // The steps ahead with untraced ink somewhere across, then their first run of
@@ -139,7 +104,7 @@ pub(super) fn mark_untraced_ink(
                         .map(|c| [e[0] + s * t[0] + c * n[0], e[1] + s * t[1] + c * n[1]])
                         .find(|q| {
                             dark(*q)
-                                && !written.any_within(*q, TRACED_MM, |_| true)
+                                && written.within(*q, TRACED_MM).next().is_none()
                                 && !across_line(*q)
                         })
                         .map(|q| (s, q))

@@ -2,7 +2,8 @@
 //! spread of the pixels across the stroke, and the windows that cannot be read (print, dust,
 //! printed ring dots).
 
-use super::{dist, Tracker};
+use super::Tracker;
+use crate::trace::plane::dist;
 
 /// Darkness above which a pixel on a sheet with printed marks is print or dust, never
 /// graphite: a window holding one is occluded.

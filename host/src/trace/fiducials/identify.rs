@@ -5,11 +5,12 @@
 //! printed. Among those, the one that also explains the most sheet-v2 ring dots wins; a mirrored
 //! winner is refused.
 
-use super::{dist, Disc, Fiducials};
+use super::{Disc, Fiducials};
 use crate::sheet::{
     fiducial_centres_mm, orientation_dot_mm, ring_dots_mm, FIDUCIAL_DIAMETER_MM,
     FIDUCIAL_SPACING_MM, ORIENTATION_DOT_DIAMETER_MM, RING_DOT_DIAMETER_MM,
 };
+use crate::trace::plane::dist;
 use crate::trace::{Homography, TraceError};
 
 /// How many of the largest discs are tried as corners.
