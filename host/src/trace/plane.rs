@@ -21,11 +21,14 @@ pub(crate) fn unit(d: [f64; 2]) -> Option<[f64; 2]> {
     (n > 1e-12).then(|| [d[0] / n, d[1] / n])
 }
 
+/// A grid cell's points, each with its value.
+type Cell<T> = Vec<([f64; 2], T)>;
+
 /// Points with a value each, on a square grid of cell `cell_mm`, for "what lies within r of
 /// here" queries.
 pub(crate) struct Grid<T> {
     cell_mm: f64,
-    cells: HashMap<(i64, i64), Vec<([f64; 2], T)>>,
+    cells: HashMap<(i64, i64), Cell<T>>,
 }
 
 impl<T> Grid<T> {
