@@ -22,6 +22,8 @@ use super::paths::DrawnPath;
 use super::plane::{self, dist, sub};
 use std::collections::HashSet;
 
+mod overrun;
+
 /// Passes of one line lie within this of its centre, mm.
 pub const ALONGSIDE_MM: f64 = BAND_HALF_MM;
 /// A path is a pass of a line with this much of it in the line's band (or half of it), mm.
@@ -499,21 +501,29 @@ fn meet_lines_across(walks: &mut [Walk], cloud: &Cloud) {
                 w.gaps.insert(0, g);
             }
         }
-        let c = &mut w.centres;
-        let n = (dist(e, foot) / LINE_SPACING_MM).ceil() as usize;
-        let pts: Vec<[f64; 2]> = (1..=n)
-            .map(|k| {
-                let f = k as f64 / n as f64;
-                [e[0] + f * (foot[0] - e[0]), e[1] + f * (foot[1] - e[1])]
-            })
-            .collect();
-        if tail {
-            c.extend(pts);
-        } else {
-            let mut v: Vec<[f64; 2]> = pts.into_iter().rev().collect();
-            v.extend(c.iter().copied());
-            *c = v;
-        }
+        extend_to(w, tail, foot);
+    }
+}
+
+/// `w` carried straight on from its tail (or head) to `foot`, in steps of [`LINE_SPACING_MM`].
+fn extend_to(w: &mut Walk, tail: bool, foot: [f64; 2]) {
+    let c = &mut w.centres;
+    let Some(&e) = (if tail { c.last() } else { c.first() }) else {
+        return;
+    };
+    let n = (dist(e, foot) / LINE_SPACING_MM).ceil() as usize;
+    let pts: Vec<[f64; 2]> = (1..=n)
+        .map(|k| {
+            let f = k as f64 / n as f64;
+            [e[0] + f * (foot[0] - e[0]), e[1] + f * (foot[1] - e[1])]
+        })
+        .collect();
+    if tail {
+        c.extend(pts);
+    } else {
+        let mut v: Vec<[f64; 2]> = pts.into_iter().rev().collect();
+        v.extend(c.iter().copied());
+        *c = v;
     }
 }
 
@@ -568,6 +578,7 @@ pub(crate) fn lines(
         }
     }
     let (mut walks, taken) = join_continuing(kept, taken);
+    overrun::cut_overruns(&mut walks);
     meet_lines_across(&mut walks, &cloud);
     // The passes of each line: the paths with PASS_MM (or half their length) in its band.
     let spacing =
