@@ -16,7 +16,8 @@
 //! recent slot that has passed, so every reading is within one slot interval (1 / (rate x 3))
 //! after its slot, and a wake-up later than that skips a slot, which the board counts in
 //! `Status.overruns`. The test allows [`TILT_SKIPPED_MAX`] of the slots to be skipped and
-//! requires each skipped slot to be counted by the board; none may be lost on the link.
+//! requires each skipped slot to be counted by the board; none may be lost on the link. It
+//! runs apart from the binary's other real-time and CPU-heavy tests (`one_at_a_time`).
 //!
 //! Without `qemu-system-arm` the test is skipped with a message, except with `CI=true`, where
 //! it fails (`.ci/run` installs QEMU).
@@ -539,6 +540,8 @@ fn emulated_board_records_known_signals_and_reports_panics() {
     if !qemu_or_skip() {
         return;
     }
+    // Real time: nothing else real-time or CPU-heavy in this binary runs beside it.
+    let _alone = crate::one_at_a_time();
     let started = Instant::now();
     let dir = tempfile::tempdir().expect("temp dir");
     // run.sh builds the firmware first; the QEMU session covers both recordings.

@@ -5,6 +5,17 @@
 #[path = "../../../host/tests/integration/common/record.rs"]
 mod record;
 
+/// Tests that run in real time (a virtual board, the emulated board in QEMU) or load both
+/// cores (a headless browser) take this lock, one at a time: a board starved of CPU by
+/// another such test wakes late and overflows its queues or skips its slots, which is not
+/// what the tests check.
+static ONE_AT_A_TIME: std::sync::Mutex<()> = std::sync::Mutex::new(());
+
+/// Takes [`ONE_AT_A_TIME`] (a test that panicked while holding it leaves it usable).
+pub(crate) fn one_at_a_time() -> std::sync::MutexGuard<'static, ()> {
+    ONE_AT_A_TIME.lock().unwrap_or_else(|e| e.into_inner())
+}
+
 mod diagnose_cli;
 mod emulated_board;
 mod record_pty;

@@ -12,13 +12,6 @@ use std::time::{Duration, Instant};
 
 use rig_tests::rigctl;
 
-/// The board-sim tests run one at a time: two virtual boards at ten times real time on a
-/// loaded 2-core machine overflow their queues for lack of CPU, which is not what they test.
-static SERIAL: std::sync::Mutex<()> = std::sync::Mutex::new(());
-
-fn serial() -> std::sync::MutexGuard<'static, ()> {
-    SERIAL.lock().unwrap_or_else(|e| e.into_inner())
-}
 use rigctl::daq::signals::{pot_raw, tilt_raw};
 
 /// Starts `rigctl board-sim --link DIR/board ARGS` and waits for the link.
@@ -228,7 +221,8 @@ fn tilt_grid_missing(tilt_csv: &Path, period_us: i64) -> u64 {
 
 #[test]
 fn sixty_seconds_real_time_lose_nothing() {
-    let _serial = serial();
+    // Two virtual boards at ten times real time on 2 cores overflow their queues.
+    let _serial = crate::one_at_a_time();
     let dir = tempfile::tempdir().unwrap();
     let seed = 20_240_601;
     // The board's own limit is a safety net if record never stops it.
@@ -279,7 +273,8 @@ fn sixty_seconds_real_time_lose_nothing() {
 
 #[test]
 fn corrupted_link_loses_exactly_the_corrupted_frames() {
-    let _serial = serial();
+    // Two virtual boards at ten times real time on 2 cores overflow their queues.
+    let _serial = crate::one_at_a_time();
     let dir = tempfile::tempdir().unwrap();
     let seed = 77;
     let (sim, link) = board_sim(
@@ -334,7 +329,8 @@ fn corrupted_link_loses_exactly_the_corrupted_frames() {
 
 #[test]
 fn killed_board_leaves_a_readable_file_and_exit_1() {
-    let _serial = serial();
+    // Two virtual boards at ten times real time on 2 cores overflow their queues.
+    let _serial = crate::one_at_a_time();
     let dir = tempfile::tempdir().unwrap();
     let seed = 5;
     let (mut sim, link) = board_sim(dir.path(), &["--seed", "5", "--speed", "10"]);
@@ -383,7 +379,8 @@ fn killed_board_leaves_a_readable_file_and_exit_1() {
 
 #[test]
 fn record_refuses_a_start_the_board_cannot_run() {
-    let _serial = serial();
+    // Two virtual boards at ten times real time on 2 cores overflow their queues.
+    let _serial = crate::one_at_a_time();
     let dir = tempfile::tempdir().unwrap();
     let (sim, link) = board_sim(dir.path(), &["--pot-hz", "500"]);
     let rec = dir.path().join("run.rigrec");

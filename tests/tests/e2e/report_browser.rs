@@ -75,6 +75,8 @@ fn report_renders_in_headless_chromium() {
     if !have_chromium("report_renders_in_headless_chromium") {
         return;
     }
+    // Chromium loads both cores: not beside a real-time test.
+    let _alone = crate::one_at_a_time();
     let dir = tempfile::tempdir().unwrap();
     let run = dir.path().join("run");
     run_ok(
@@ -153,6 +155,8 @@ fn first_screen_states_the_answer_in_headless_chromium() {
     if !have_chromium("first_screen_states_the_answer_in_headless_chromium") {
         return;
     }
+    // Chromium loads both cores: not beside a real-time test.
+    let _alone = crate::one_at_a_time();
     let dir = tempfile::tempdir().unwrap();
     let run = dir.path().join("run");
     run_ok(
