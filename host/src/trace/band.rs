@@ -346,7 +346,7 @@ fn walk_half(
 }
 
 /// Whether `q` is one of `centres`.
-fn arc_of(centres: &[[f64; 2]], q: [f64; 2]) -> bool {
+pub(crate) fn arc_of(centres: &[[f64; 2]], q: [f64; 2]) -> bool {
     centres.iter().any(|c| dist(*c, q) < 1e-9)
 }
 

@@ -4,7 +4,7 @@
 //! line's: it is cut off, and the end is then carried to the other line's centreline like any
 //! end that stops at a line across ([`super::meet_lines_across`]).
 
-use super::super::band::{Walk, BAND_HALF_MM};
+use super::super::band::{arc_of, Walk, BAND_HALF_MM};
 use super::super::plane::{dist, sub, unit, Grid};
 use super::{abs_cos, arc, chord_dir_on, extend_to, ACROSS_DEG, DIR_HALF_MM, STEP_OFF_MM};
 
@@ -74,12 +74,14 @@ pub(super) fn cut_overruns(walks: &mut [Walk]) {
             let Some(own) = unit(sub(c[idx(a)], c[idx(b)])) else {
                 continue;
             };
+            // A centre of another walk, running across this one.
+            let across = |x: &&([f64; 2], (usize, usize))| {
+                let (j, m) = x.1;
+                j != i && abs_cos(dirs[j][m], own) < cos_across
+            };
             let on_across = |k: usize| {
                 let (p, t) = (c[idx(k)], dirs[i][idx(k)]);
-                abs_cos(t, own) < cos_turned
-                    && centres
-                        .within(p, BAND_HALF_MM)
-                        .any(|(_, (j, m))| *j != i && abs_cos(dirs[*j][*m], own) < cos_across)
+                abs_cos(t, own) < cos_turned && centres.within(p, BAND_HALF_MM).any(|x| across(&x))
             };
             let mut k = 0;
             while k < a && on_across(k) {
@@ -89,7 +91,7 @@ pub(super) fn cut_overruns(walks: &mut [Walk]) {
             let end = c[idx(0)];
             let other = centres
                 .within(end, BAND_HALF_MM)
-                .filter(|(_, (j, m))| *j != i && abs_cos(dirs[*j][*m], own) < cos_across)
+                .filter(across)
                 .min_by(|x, y| dist(x.0, end).total_cmp(&dist(y.0, end)))
                 .map(|(_, (j, m))| dirs[*j][*m]);
             let ran = match (k, other) {
@@ -116,7 +118,7 @@ pub(super) fn cut_overruns(walks: &mut [Walk]) {
             let e = c[idx(k)];
             let foot = centres
                 .within(e, OVERRUN_MAX_MM + BAND_HALF_MM)
-                .filter(|(_, (j, m))| *j != i && abs_cos(dirs[*j][*m], own) < cos_across)
+                .filter(across)
                 .filter_map(|(q, _)| {
                     let v = sub(*q, e);
                     let along = v[0] * own[0] + v[1] * own[1];
@@ -153,10 +155,8 @@ pub(super) fn cut_overruns(walks: &mut [Walk]) {
         let w = &mut walks[walk];
         w.centres = w.centres[first..last].to_vec();
         let kept = &w.centres;
-        w.gaps.retain(|g| {
-            kept.iter().any(|c| dist(*c, g.from_mm) < 1e-9)
-                && kept.iter().any(|c| dist(*c, g.to_mm) < 1e-9)
-        });
+        w.gaps
+            .retain(|g| arc_of(kept, g.from_mm) && arc_of(kept, g.to_mm));
         for (tail, foot) in [(false, feet[0]), (true, feet[1])] {
             if let Some(foot) = foot {
                 extend_to(w, tail, foot);
