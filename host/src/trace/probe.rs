@@ -2,10 +2,12 @@
 //! tracker left a stretch of a line untraced (passes broken into dashes, a zigzag too fine for
 //! the resolution), the written points end early and the line would look whole. So the image
 //! itself is read ahead of every open line end: pixels darker than the paper by
-//! [`INK_DARKNESS`] in every channel (grey, as graphite and pen ink are), within [`PROBE_HALF_MM`] across the end's direction and `max(2 x
-//! --max-gap-mm, 15 mm)` ahead, farther than [`TRACED_MM`] from every written point and outside
-//! the band of a line running across (the line it ends on); a run of them [`RUN_MM`] long that
-//! starts within `--max-gap-mm` of the end means the line may go on: it is not whole.
+//! [`INK_DARKNESS`] in every channel (grey, as graphite and pen ink are), within
+//! [`PROBE_HALF_MM`] across the end's direction and `max(2 x --max-gap-mm, 15 mm)` ahead,
+//! farther than [`TRACED_MM`] from every written point and outside the band of a line running
+//! across (the line it ends on); [`RUN_MM`] of them along the way, with no hole longer than
+//! [`HOLE_MM`] between them (a line drawn in loops crosses the probe again and again), the
+//! first within `--max-gap-mm` of the end, mean the line may go on: it is not whole.
 
 use super::link::{LeftOut, LeftOutKind};
 use super::mapping::SheetToPx;
@@ -20,8 +22,10 @@ const INK_DARKNESS: f32 = 0.15;
 const PROBE_HALF_MM: f64 = 2.0;
 /// A written point within this covers the ink, mm.
 const TRACED_MM: f64 = 1.2;
-/// Untraced ink this long along the end's direction may continue the line, mm.
+/// Untraced ink this long along the end's direction may continue the line, mm ...
 const RUN_MM: f64 = 2.0;
+/// ... counted over holes up to this long, mm.
+const HOLE_MM: f64 = 3.0;
 /// The band of a line across reaches this far from its centreline, mm.
 const ACROSS_BAND_MM: f64 = 4.0;
 const STEP_MM: f64 = 0.25;
@@ -92,8 +96,7 @@ pub(super) fn mark_untraced_ink(
                             .any(|(_, d)| (d[0] * t[0] + d[1] * t[1]).abs() < cos_across)
                 })
             };
-            // The steps ahead with untraced ink somewhere across, then their first run of
-            // RUN_MM that starts within max_gap_mm.
+            // The steps ahead with untraced ink somewhere across.
             let steps = (reach / STEP_MM) as usize;
             let half = (PROBE_HALF_MM / STEP_MM) as i64;
             let hits: Vec<(f64, [f64; 2])> = (2..=steps)
@@ -110,14 +113,17 @@ pub(super) fn mark_untraced_ink(
                         .map(|q| (s, q))
                 })
                 .collect();
+            // Runs of hits with holes up to HOLE_MM (a line drawn in loops or a zigzag crosses
+            // the probe again and again) holding RUN_MM of hits, the first within max_gap_mm.
             let mut hit = None;
             let mut i = 0;
             while i < hits.len() && hits[i].0 <= max_gap_mm + STEP_MM {
-                let mut j = i;
-                while j + 1 < hits.len() && hits[j + 1].0 - hits[j].0 <= 2.0 * STEP_MM {
+                let (mut j, mut inked) = (i, STEP_MM);
+                while j + 1 < hits.len() && hits[j + 1].0 - hits[j].0 <= HOLE_MM + STEP_MM {
                     j += 1;
+                    inked += STEP_MM;
                 }
-                if hits[j].0 - hits[i].0 >= RUN_MM {
+                if inked > RUN_MM {
                     hit = Some((hits[i].0, hits[j].0, hits[i].1, hits[j].1));
                     break;
                 }
@@ -138,5 +144,83 @@ pub(super) fn mark_untraced_ink(
     }
     for (li, m) in found {
         drawing.lines[li].continued_by.push(m);
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::trace::lines::DrawnLine;
+    use crate::trace::paths::open_path;
+    use image::Rgb;
+
+    /// A line written from (-20, 0) to (0, 0) mm and inked there, with `ahead(x, y)` inked
+    /// too, on a 60 x 40 mm image at 5 px/mm; whether the probe says the line goes on.
+    fn goes_on(ahead: impl Fn(f64, f64) -> bool) -> bool {
+        let to_px = SheetToPx {
+            camera: None,
+            px_per_mm: 5.0,
+            size_px: [300.0, 200.0],
+        };
+        let img = RgbImage::from_fn(300, 200, |x, y| {
+            let (xm, ym) = (
+                (f64::from(x) + 0.5 - 150.0) / 5.0,
+                (100.0 - f64::from(y) - 0.5) / 5.0,
+            );
+            let line = (-20.0..=0.0).contains(&xm) && ym.abs() <= 0.3;
+            if line || ahead(xm, ym) {
+                Rgb([40, 40, 40])
+            } else {
+                Rgb([235, 232, 228])
+            }
+        });
+        let paper = PaperMap::build(&img, PaperMap::block_size_for(&img));
+        let pts: Vec<[f64; 2]> = (0..=80)
+            .map(|k| [-20.0 + 0.25 * f64::from(k), 0.0])
+            .collect();
+        let line = DrawnLine {
+            passes: vec![0],
+            points_mm: pts.clone(),
+            closed: false,
+            from_mm: [-20.0, 0.0],
+            to_mm: [0.0, 0.0],
+            length_mm: 20.0,
+            covered_mm: 20.0,
+            gaps: Vec::new(),
+            continued_by: Vec::new(),
+            out_dir: [[-1.0, 0.0], [1.0, 0.0]],
+        };
+        let mut drawing = Drawing {
+            paths: vec![open_path(pts)],
+            lines: vec![line],
+            strays: Vec::new(),
+            stray_points: Vec::new(),
+            px_per_mm: 5.0,
+            camera: None,
+            fiducials: None,
+        };
+        mark_untraced_ink(&mut drawing, &img, &paper, &to_px, 10.0);
+        !drawing.lines[0].continued_by.is_empty()
+    }
+
+    /// Bars 0.6 mm wide across the line's way, the first 1 mm past its end, `pitch` mm apart.
+    fn bars(pitch: f64, count: usize) -> impl Fn(f64, f64) -> bool {
+        move |x, y| {
+            let u = x - 1.0;
+            u >= 0.0 && u < pitch * count as f64 && u % pitch <= 0.6 && y.abs() <= 2.5
+        }
+    }
+
+    #[test]
+    fn ink_crossing_the_probe_again_and_again_means_the_line_goes_on() {
+        // Nothing ahead, or one mark across (the line it ends on): whole.
+        assert!(!goes_on(|_, _| false));
+        assert!(!goes_on(bars(2.5, 1)));
+        // A line drawn on in loops: bars 2.5 mm apart, none 2 mm long along the way.
+        assert!(goes_on(bars(2.5, 4)));
+        // ... but not marks farther apart than a hole (dust).
+        assert!(!goes_on(bars(5.0, 3)));
+        // Ink running on straight: goes on.
+        assert!(goes_on(|x, y| (1.0..4.0).contains(&x) && y.abs() <= 0.3));
     }
 }

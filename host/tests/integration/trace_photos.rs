@@ -477,6 +477,7 @@ fn the_hysteresis_grids_give_their_grid_lines() {
         // A drawn line of 40 mm or more lies along the grid line whose axis both its ends are
         // within 5 mm of.
         let mut along: Vec<Vec<[f64; 2]>> = vec![Vec::new(); hand.len()];
+        let mut line_along: Vec<Vec<usize>> = vec![Vec::new(); hand.len()];
         let mut apart = Vec::new();
         let mut long = 0;
         for (i, l) in d.lines.iter().enumerate() {
@@ -496,6 +497,7 @@ fn the_hysteresis_grids_give_their_grid_lines() {
                 .expect("grid lines");
             if fit.1 <= 5.0 {
                 along[fit.0].push(fit.2);
+                line_along[fit.0].push(i);
             } else {
                 apart.push((i + 1, l.length_mm, l.from_mm, l.to_mm));
             }
@@ -539,9 +541,22 @@ fn the_hysteresis_grids_give_their_grid_lines() {
                 (g[1][0] - g[0][0]).hypot(g[1][1] - g[0][1])
             );
         }
-        // Never exit 0 on a part: a grid line not spanned end to end means a line not whole.
+        // Never exit 0 on a part: a grid line not spanned end to end means a line not whole,
+        // and the one drawn line along a grid line that spans less than 95 % of it is not
+        // whole.
         if spans.iter().any(|s| *s < 0.97) {
             assert!(!d.is_whole(), "{}: reported whole", grid.name);
+        }
+        for k in 0..hand.len() {
+            if let [only] = line_along[k][..] {
+                assert!(
+                    spans[k] >= 0.95 || !d.lines[only].is_whole(),
+                    "{}: grid line {} spanned {:.2} by a line reported whole",
+                    grid.name,
+                    k + 1,
+                    spans[k]
+                );
+            }
         }
         // The grid lines drawn as one line end to end (one drawn line spans 95 % of it):
         // measured 10 of 10 on the corrected grid (each 99-100 %, each whole; the run exits 1
