@@ -476,8 +476,8 @@ fn the_hysteresis_grids_give_their_grid_lines() {
         let d = paths_of(&img);
         // A drawn line of 40 mm or more lies along the grid line whose axis both its ends are
         // within 5 mm of.
-        let mut along: Vec<Vec<[f64; 2]>> = vec![Vec::new(); hand.len()];
-        let mut line_along: Vec<Vec<usize>> = vec![Vec::new(); hand.len()];
+        // Per grid line: each drawn line along it (its index) and the stretch it spans.
+        let mut along: Vec<Vec<(usize, [f64; 2])>> = vec![Vec::new(); hand.len()];
         let mut apart = Vec::new();
         let mut long = 0;
         for (i, l) in d.lines.iter().enumerate() {
@@ -496,8 +496,7 @@ fn the_hysteresis_grids_give_their_grid_lines() {
                 .min_by(|a, b| a.1.total_cmp(&b.1))
                 .expect("grid lines");
             if fit.1 <= 5.0 {
-                along[fit.0].push(fit.2);
-                line_along[fit.0].push(i);
+                along[fit.0].push((i, fit.2));
             } else {
                 apart.push((i + 1, l.length_mm, l.from_mm, l.to_mm));
             }
@@ -508,7 +507,7 @@ fn the_hysteresis_grids_give_their_grid_lines() {
             .map(|v| {
                 let mut v: Vec<[f64; 2]> = v
                     .iter()
-                    .map(|s| [s[0].clamp(0.0, 1.0), s[1].clamp(0.0, 1.0)])
+                    .map(|(_, s)| [s[0].clamp(0.0, 1.0), s[1].clamp(0.0, 1.0)])
                     .collect();
                 v.sort_by(|a, b| a[0].total_cmp(&b[0]));
                 let (mut total, mut reach) = (0.0, 0.0f64);
@@ -548,7 +547,7 @@ fn the_hysteresis_grids_give_their_grid_lines() {
             assert!(!d.is_whole(), "{}: reported whole", grid.name);
         }
         for k in 0..hand.len() {
-            if let [only] = line_along[k][..] {
+            if let [(only, _)] = along[k][..] {
                 assert!(
                     spans[k] >= 0.95 || !d.lines[only].is_whole(),
                     "{}: grid line {} spanned {:.2} by a line reported whole",

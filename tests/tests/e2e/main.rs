@@ -5,10 +5,10 @@
 #[path = "../../../host/tests/integration/common/record.rs"]
 mod record;
 
-/// Tests that run in real time (a virtual board, the emulated board in QEMU) or load both
-/// cores (a headless browser) take this lock, one at a time: a board starved of CPU by
-/// another such test wakes late and overflows its queues or skips its slots, which is not
-/// what the tests check.
+/// Tests that run in real time (the virtual boards of `record_pty`, at up to ten times real
+/// time; the emulated board in QEMU) or load both cores (a headless browser) take this lock,
+/// one at a time: a board starved of CPU by another such test wakes late and overflows its
+/// queues or skips its slots, which is not what the tests check.
 static ONE_AT_A_TIME: std::sync::Mutex<()> = std::sync::Mutex::new(());
 
 /// Takes [`ONE_AT_A_TIME`] (a test that panicked while holding it leaves it usable).

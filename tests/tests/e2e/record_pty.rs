@@ -221,7 +221,6 @@ fn tilt_grid_missing(tilt_csv: &Path, period_us: i64) -> u64 {
 
 #[test]
 fn sixty_seconds_real_time_lose_nothing() {
-    // Two virtual boards at ten times real time on 2 cores overflow their queues.
     let _serial = crate::one_at_a_time();
     let dir = tempfile::tempdir().unwrap();
     let seed = 20_240_601;
@@ -273,7 +272,6 @@ fn sixty_seconds_real_time_lose_nothing() {
 
 #[test]
 fn corrupted_link_loses_exactly_the_corrupted_frames() {
-    // Two virtual boards at ten times real time on 2 cores overflow their queues.
     let _serial = crate::one_at_a_time();
     let dir = tempfile::tempdir().unwrap();
     let seed = 77;
@@ -329,7 +327,6 @@ fn corrupted_link_loses_exactly_the_corrupted_frames() {
 
 #[test]
 fn killed_board_leaves_a_readable_file_and_exit_1() {
-    // Two virtual boards at ten times real time on 2 cores overflow their queues.
     let _serial = crate::one_at_a_time();
     let dir = tempfile::tempdir().unwrap();
     let seed = 5;
@@ -379,7 +376,6 @@ fn killed_board_leaves_a_readable_file_and_exit_1() {
 
 #[test]
 fn record_refuses_a_start_the_board_cannot_run() {
-    // Two virtual boards at ten times real time on 2 cores overflow their queues.
     let _serial = crate::one_at_a_time();
     let dir = tempfile::tempdir().unwrap();
     let (sim, link) = board_sim(dir.path(), &["--pot-hz", "500"]);
