@@ -1,7 +1,8 @@
 //! `trace` on an A4 scan at 600 dpi (4961 x 7016 px, a 100 mm-radius pencil circle, rotated
 //! 2 degrees) and on a 12 MP phone photo (JPEG, 30 degrees tilt, k1 = -0.08, shading): decoding
 //! and tracing measured separately, and the whole read-and-trace as the CLI does it
-//! (`load_prepared` + `trace_prepared`: a PNG's maps are built while it is decoded).
+//! (`load_prepared` + `trace_prepared`: a PNG is inflated on one thread while its rows are
+//! unfiltered and its maps built on another).
 //!
 //! The bench also leaves the scan and its truth in `target/tmp/trace_bench/` (`scan600.png`,
 //! `truth.csv` = the pencil centreline, closed, x,y mm in sheet coordinates) for the OpenCV
@@ -72,6 +73,10 @@ fn trace_a4_600dpi(c: &mut Criterion) {
     g.sample_size(10).measurement_time(Duration::from_secs(8));
     g.bench_function("decode_png_a4_600dpi", |b| {
         b.iter(|| load_scan(&png).map(|i| i.width()))
+    });
+    // The CLI's reader: inflating on one thread, unfiltering and the maps on another.
+    g.bench_function("read_png_with_maps_a4_600dpi", |b| {
+        b.iter(|| load_prepared(&png).map(|(i, _)| i.width()))
     });
     let opts = TraceOptions::default();
     g.bench_function("trace_a4_600dpi", |b| {

@@ -1,22 +1,20 @@
-//! Reading a scan or photo. A (non-interlaced) PNG is decoded row by row straight into the RGB
-//! image while a second thread reduces each finished band of rows to the whole-image maps
-//! ([`super::prepare`]): decoding a large scan is sequential (inflate), so the maps cost no
-//! extra time on a machine with two cores, and nothing is copied after decoding. Other images
-//! (JPEG, interlaced PNG) are decoded by the `image` crate and their maps built on all cores.
-//! The trace is written as CSV.
+//! Reading a scan or photo. A PNG of 8- or 16-bit grey or RGB samples is inflated on one
+//! thread while a second unfilters its rows into the RGB image and reduces each finished band
+//! of rows to the whole-image maps ([`super::png_read`]). Other images (JPEG, palette or
+//! interlaced PNG) are decoded by the `image` crate and their maps built on all cores. The
+//! trace is written as CSV.
 
-use super::prepare::{Bands, Prepared};
+use super::prepare::Prepared;
 use super::TraceError;
 use crate::io::atomic::write_text_atomic;
 use crate::io::finite::TextFormat;
-use image::error::{DecodingError, ImageFormatHint, LimitError, LimitErrorKind};
-use image::{ImageError, ImageFormat, RgbImage};
+use image::{ImageError, RgbImage};
 use std::fmt::Write as _;
-use std::io::{BufRead, BufReader, Read};
+use std::io::{BufRead, BufReader};
 use std::path::Path;
 
 /// Largest decoded image accepted, bytes of RGB (the `image` crate's default allocation limit).
-const MAX_RGB_BYTES: usize = 512 << 20;
+pub const MAX_RGB_BYTES: usize = 512 << 20;
 
 /// Reads a scan (PNG or JPEG) as RGB.
 pub fn load_scan(path: &Path) -> Result<RgbImage, TraceError> {
@@ -48,7 +46,7 @@ pub fn load_prepared(path: &Path) -> Result<(RgbImage, Prepared), TraceError> {
         .map_err(|e| read(ImageError::IoError(e)))?
         .starts_with(b"\x89PNG\r\n\x1a\n");
     if is_png {
-        if let Some(done) = png_streamed(reader).map_err(read)? {
+        if let Some(done) = super::png_read::read_png(reader, MAX_RGB_BYTES).map_err(read)? {
             return Ok(done);
         }
     }
@@ -65,114 +63,6 @@ pub fn write_csv(path: &Path, points_mm: &[[f64; 2]]) -> Result<(), TraceError> 
     }
     write_text_atomic(path, TextFormat::Csv, &text)?;
     Ok(())
-}
-
-fn png_error(e: png::DecodingError) -> ImageError {
-    match e {
-        png::DecodingError::IoError(io) => ImageError::IoError(io),
-        other => ImageError::Decoding(DecodingError::new(
-            ImageFormatHint::Exact(ImageFormat::Png),
-            other,
-        )),
-    }
-}
-
-/// Decodes a non-interlaced PNG into RGB while building its maps; `None` when the file is of a
-/// kind left to the `image` crate (interlaced, empty).
-fn png_streamed<R: BufRead + std::io::Seek + Read>(
-    input: R,
-) -> Result<Option<(RgbImage, Prepared)>, ImageError> {
-    let mut decoder = png::Decoder::new(input);
-    decoder.set_transformations(png::Transformations::normalize_to_color8());
-    let mut reader = decoder.read_info().map_err(png_error)?;
-    let (w, h) = (reader.info().width, reader.info().height);
-    if reader.info().interlaced || w == 0 || h == 0 {
-        return Ok(None);
-    }
-    let channels = match reader.output_color_type().0 {
-        png::ColorType::Grayscale => 1,
-        png::ColorType::GrayscaleAlpha => 2,
-        png::ColorType::Rgb => 3,
-        png::ColorType::Rgba => 4,
-        png::ColorType::Indexed => return Ok(None),
-    };
-    let (wu, hu) = (w as usize, h as usize);
-    let bytes = wu
-        .checked_mul(hu)
-        .and_then(|n| n.checked_mul(3))
-        .filter(|&n| n <= MAX_RGB_BYTES)
-        .ok_or_else(|| {
-            ImageError::Limits(LimitError::from_kind(LimitErrorKind::InsufficientMemory))
-        })?;
-    let mut scratch = vec![0u8; wu * channels];
-    let mut buf = vec![0u8; bytes];
-    let mut bands = Bands::new(wu, hu);
-    let geometry = bands.geometry();
-    let band_rows = bands.band_rows;
-    let chunks = buf.chunks_mut(3 * wu * band_rows);
-    let (tx, rx) = std::sync::mpsc::sync_channel::<(usize, &[u8])>(4);
-    let (status, maps) = std::thread::scope(|s| {
-        let worker = s.spawn(move || {
-            rx.into_iter()
-                .map(|(y0, band)| geometry.band(y0, band))
-                .collect::<Vec<_>>()
-        });
-        let mut status = Ok(());
-        'bands: for (i, chunk) in chunks.enumerate() {
-            for row in chunk.chunks_exact_mut(3 * wu) {
-                let got = if channels == 3 {
-                    reader.read_row(row)
-                } else {
-                    reader.read_row(&mut scratch)
-                };
-                match got {
-                    Ok(Some(_)) => {}
-                    Ok(None) => {
-                        status = Err(ImageError::Decoding(DecodingError::new(
-                            ImageFormatHint::Exact(ImageFormat::Png),
-                            "the image data ends before the last row",
-                        )));
-                        break 'bands;
-                    }
-                    Err(e) => {
-                        status = Err(png_error(e));
-                        break 'bands;
-                    }
-                }
-                if channels != 3 {
-                    to_rgb(&scratch, channels, row);
-                }
-            }
-            let band: &[u8] = chunk;
-            if tx.send((i * band_rows, band)).is_err() {
-                break;
-            }
-        }
-        drop(tx);
-        let maps = worker
-            .join()
-            .unwrap_or_else(|payload| std::panic::resume_unwind(payload));
-        (status, maps)
-    });
-    status?;
-    for m in maps {
-        bands.push(m);
-    }
-    let prepared = bands.finish();
-    let img = RgbImage::from_raw(w, h, buf)
-        .ok_or_else(|| ImageError::Limits(LimitError::from_kind(LimitErrorKind::DimensionError)))?;
-    Ok(Some((img, prepared)))
-}
-
-/// One row of grey, grey + alpha or RGBA samples as RGB (alpha dropped, as `into_rgb8` does).
-fn to_rgb(src: &[u8], channels: usize, dst: &mut [u8]) {
-    for (s, d) in src.chunks_exact(channels).zip(dst.chunks_exact_mut(3)) {
-        if channels <= 2 {
-            d.fill(s[0]);
-        } else {
-            d.copy_from_slice(&s[..3]);
-        }
-    }
 }
 
 #[cfg(test)]

@@ -2,10 +2,22 @@
 
 use rigctl::sheet::ReferencePath;
 use rigctl::trace::{render_scan, RenderSpec};
-use std::process::Command;
+use std::path::Path;
+use std::process::{Command, Output};
 
 fn rigctl() -> Command {
     Command::new(env!("CARGO_BIN_EXE_rigctl"))
+}
+
+/// `rigctl trace SCAN --out OUT`.
+fn trace_to(scan: &Path, out: &Path) -> Output {
+    rigctl()
+        .arg("trace")
+        .arg(scan)
+        .arg("--out")
+        .arg(out)
+        .output()
+        .expect("run")
 }
 
 fn circle_scan(dir: &std::path::Path, mirrored: bool) -> std::path::PathBuf {
@@ -54,13 +66,7 @@ fn trace_writes_csv_along_the_circle() {
     let dir = tempfile::tempdir().expect("tempdir");
     let scan = circle_scan(dir.path(), false);
     let out = dir.path().join("trace.csv");
-    let o = rigctl()
-        .arg("trace")
-        .arg(&scan)
-        .arg("--out")
-        .arg(&out)
-        .output()
-        .expect("run");
+    let o = trace_to(&scan, &out);
     assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
     let csv = std::fs::read_to_string(&out).expect("csv");
     let mut lines = csv.lines();
@@ -85,23 +91,11 @@ fn trace_exit_codes() {
     let dir = tempfile::tempdir().expect("tempdir");
     let mirrored = circle_scan(dir.path(), true);
     let out = dir.path().join("t.csv");
-    let o = rigctl()
-        .arg("trace")
-        .arg(&mirrored)
-        .arg("--out")
-        .arg(&out)
-        .output()
-        .expect("run");
+    let o = trace_to(&mirrored, &out);
     assert_eq!(o.status.code(), Some(2));
     assert!(String::from_utf8_lossy(&o.stderr).contains("mirrored"));
     assert!(!out.exists());
-    let o = rigctl()
-        .arg("trace")
-        .arg(dir.path().join("missing.png"))
-        .arg("--out")
-        .arg(&out)
-        .output()
-        .expect("run");
+    let o = trace_to(&dir.path().join("missing.png"), &out);
     assert_eq!(o.status.code(), Some(2));
     let o = rigctl()
         .arg("trace")
@@ -116,4 +110,32 @@ fn trace_exit_codes() {
         Some(2),
         "--no-fiducials without --mm-per-px is a usage error"
     );
+}
+
+#[test]
+fn a_damaged_scan_png_is_exit_2_naming_the_file_and_nothing_is_written() {
+    let dir = tempfile::tempdir().expect("tempdir");
+    let good = dir.path().join("good.png");
+    image::RgbImage::from_fn(640, 480, |x, y| {
+        image::Rgb([(x % 251) as u8, (y % 241) as u8, ((x ^ y) % 256) as u8])
+    })
+    .save(&good)
+    .expect("save");
+    let bytes = std::fs::read(&good).expect("read");
+    let mut flipped = bytes.clone();
+    flipped[bytes.len() / 2] ^= 0x40; // inside the image data: its chunk's CRC no longer holds
+    let cases = [
+        ("cut.png", bytes[..bytes.len() / 2].to_vec(), "ends inside"),
+        ("flipped.png", flipped, "Png"),
+    ];
+    for (name, data, says) in cases {
+        let scan = dir.path().join(name);
+        std::fs::write(&scan, data).expect("write");
+        let out = dir.path().join(format!("{name}.csv"));
+        let o = trace_to(&scan, &out);
+        let err = String::from_utf8_lossy(&o.stderr);
+        assert_eq!(o.status.code(), Some(2), "{name}: {err}");
+        assert!(err.contains(name) && err.contains(says), "{name}: {err}");
+        assert!(!out.exists(), "{name}: nothing written");
+    }
 }
