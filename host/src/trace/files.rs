@@ -10,7 +10,7 @@ use crate::io::atomic::write_text_atomic;
 use crate::io::finite::TextFormat;
 use image::{ImageError, RgbImage};
 use std::fmt::Write as _;
-use std::io::{BufRead, BufReader};
+use std::io::BufReader;
 use std::path::Path;
 
 /// Largest decoded image accepted, bytes of RGB (the `image` crate's default allocation limit).
@@ -40,15 +40,10 @@ pub fn load_prepared(path: &Path) -> Result<(RgbImage, Prepared), TraceError> {
         source,
     };
     let file = std::fs::File::open(path).map_err(|e| read(ImageError::IoError(e)))?;
-    let mut reader = BufReader::with_capacity(1 << 16, file);
-    let is_png = reader
-        .fill_buf()
-        .map_err(|e| read(ImageError::IoError(e)))?
-        .starts_with(b"\x89PNG\r\n\x1a\n");
-    if is_png {
-        if let Some(done) = super::png_read::read_png(reader, MAX_RGB_BYTES).map_err(read)? {
-            return Ok(done);
-        }
+    // Not a PNG (a JPEG), or a kind of PNG left to the `image` crate: `None`.
+    let reader = BufReader::with_capacity(1 << 16, file);
+    if let Some(done) = super::png_read::read_png(reader, MAX_RGB_BYTES).map_err(read)? {
+        return Ok(done);
     }
     let img = load_scan(path)?;
     let prepared = Prepared::build(&img);

@@ -211,13 +211,6 @@ impl<R: Read> Chunks<R> {
         }
     }
 
-    fn exact(&mut self, buf: &mut [u8], what: &str) -> Result<(), ImageError> {
-        self.input.read_exact(buf).map_err(|e| match e.kind() {
-            std::io::ErrorKind::UnexpectedEof => bad(format!("the file ends inside the {what}")),
-            _ => ImageError::IoError(e),
-        })
-    }
-
     /// The next chunk's length and type; `None` where the file ends between chunks.
     fn next(&mut self) -> Result<Option<(usize, [u8; 4])>, ImageError> {
         let mut head = [0u8; 8];
@@ -250,33 +243,42 @@ impl<R: Read> Chunks<R> {
         ty: [u8; 4],
         mut each: impl FnMut(&[u8]) -> Result<(), ImageError>,
     ) -> Result<(), ImageError> {
-        let name = String::from_utf8_lossy(&ty).into_owned();
+        let name = || String::from_utf8_lossy(&ty).into_owned();
         let mut crc = crc32fast::Hasher::new();
         crc.update(&ty);
+        let Self { input, piece } = self;
         let mut left = len;
-        let mut piece = std::mem::take(&mut self.piece);
-        let mut result = Ok(());
-        while left > 0 && result.is_ok() {
+        while left > 0 {
             let n = left.min(piece.len());
-            result = self
-                .exact(&mut piece[..n], &format!("{name} chunk"))
-                .and_then(|()| {
-                    crc.update(&piece[..n]);
-                    each(&piece[..n])
-                });
+            read_exact(input, &mut piece[..n], || format!("the {} chunk", name()))?;
+            crc.update(&piece[..n]);
+            each(&piece[..n])?;
             left -= n;
         }
-        self.piece = piece;
-        result?;
         let mut stored = [0u8; 4];
-        self.exact(&mut stored, &format!("CRC of the {name} chunk"))?;
+        read_exact(input, &mut stored, || {
+            format!("the CRC of the {} chunk", name())
+        })?;
         if u32::from_be_bytes(stored) != crc.finalize() {
             return Err(bad(format!(
-                "the CRC of a {name} chunk does not match its data"
+                "the CRC of a {} chunk does not match its data",
+                name()
             )));
         }
         Ok(())
     }
+}
+
+/// `read_exact`, with a file that ends early worded as ending inside `what()`.
+fn read_exact<R: Read>(
+    input: &mut R,
+    buf: &mut [u8],
+    what: impl FnOnce() -> String,
+) -> Result<(), ImageError> {
+    input.read_exact(buf).map_err(|e| match e.kind() {
+        std::io::ErrorKind::UnexpectedEof => bad(format!("the file ends inside {}", what())),
+        _ => ImageError::IoError(e),
+    })
 }
 
 /// Rows of filtered image data (each a filter byte and the row), `rows` of them from `from`.
