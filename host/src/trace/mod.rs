@@ -228,9 +228,24 @@ fn track(
         &rebuilt
     };
     let (paper, map) = (&prepared.paper, &prepared.map);
-    let ink = ink::InkModel::estimate(img, paper, ink::DEFAULT_FLOOR, map.k);
     let (w_px, h_px) = (img.width() as f64, img.height() as f64);
-    let mapped = mapping::map_pixels(img, map, paper, opts)?;
+    // The red ink's colour (a pass over the whole image) on a second thread, beside the
+    // mapping and the seeds.
+    let (ink, mapped) = std::thread::scope(|s| {
+        let ink = s.spawn(|| ink::InkModel::estimate(img, paper, ink::DEFAULT_FLOOR, map.k));
+        let mapped = mapping::map_pixels(img, map, paper, opts).map(|m| {
+            let seeds = {
+                let roi = area::roi_predicate(opts.mapping, &m.to_mm, w_px, h_px);
+                area::seed_mask(map, paper, opts, m.fiducials.is_some(), &roi, m.px_per_mm)
+            };
+            (m, seeds)
+        });
+        let ink = ink
+            .join()
+            .unwrap_or_else(|payload| std::panic::resume_unwind(payload));
+        (ink, mapped)
+    });
+    let (mapped, seeds) = mapped?;
     let mapping::Mapped {
         to_mm,
         fiducials: fids,
@@ -242,7 +257,6 @@ fn track(
     } = mapped;
 
     let roi = area::roi_predicate(opts.mapping, &to_mm, w_px, h_px);
-    let seeds = area::seed_mask(map, paper, opts, fids.is_some(), &roi, px_per_mm);
     let params = centreline::TrackParams {
         px_per_mm,
         step_px: 0.25 * px_per_mm,
