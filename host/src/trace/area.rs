@@ -83,21 +83,18 @@ pub(crate) fn roi_predicate<'a>(
     }
 }
 
-/// Coarse blocks that may seed a stroke: dark enough, not black print (fiducial mapping), in the
-/// trace area, in a component larger than a speck.
+/// Coarse blocks that may seed a stroke: dark enough (black too: a soft pencil), in the trace
+/// area, in a component larger than a speck.
 pub(crate) fn seed_mask(
     map: &raster::CoarseMap,
     paper: &PaperMap,
     opts: &TraceOptions,
-    exclude_black: bool,
     roi: &dyn Fn([f64; 2]) -> bool,
     px_per_mm: f64,
 ) -> Vec<bool> {
     let dark = map.classify(paper, |v, level| {
         let dark_max = (level * (1.0 - opts.min_darkness)).max(0.0);
-        let black = if exclude_black { level * 0.22 } else { -1.0 };
-        let v = v as f32;
-        v <= dark_max && v >= black
+        (v as f32) <= dark_max
     });
     let mut mask = dark;
     for (i, m) in mask.iter_mut().enumerate() {

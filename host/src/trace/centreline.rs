@@ -13,7 +13,7 @@ use indicatif::ProgressBar;
 
 mod section;
 
-pub(crate) use section::{Occluders, BLACK_DARKNESS};
+pub(crate) use section::Occluders;
 
 /// One tracked piece of stroke, pixel coordinates.
 #[derive(Debug, Clone)]
@@ -31,9 +31,6 @@ pub(crate) struct TrackParams {
     pub max_width_px: f64,
     /// Smallest accepted mass per unit length (weight x pixels).
     pub min_mass: f64,
-    /// A window holding a pixel darker than this is occluded (print, dust); without printed
-    /// marks (a plain scale) a black pen line is a stroke, and nothing is occluded.
-    pub black_darkness: f32,
 }
 
 /// Window geometry and reference mass of one piece.

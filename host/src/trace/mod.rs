@@ -11,10 +11,11 @@
 //! 3. the camera: with the sheet-v2 ring, homography + radial lens distortion fitted on all 48
 //!    marks, its residual checked ([`camera`]); without it (sheet v1) the homography of the four
 //!    corners (normalised DLT), checked at the orientation dot ([`homography`], [`mapping`]);
-//! 4. graphite: blocks inside the sheet's trace area that are grey but not black (red ink is
-//!    almost invisible in the red channel and is divided out of the centroid weights);
-//! 5. centreline: tracking with darkness-weighted centroids across the stroke, stopping at
-//!    print and dust ([`centreline`], its window statistics in `centreline/section.rs`);
+//! 4. graphite: blocks inside the sheet's trace area darker than the paper, light or black
+//!    (red ink is almost invisible in the red channel and is divided out of the centroid
+//!    weights);
+//! 5. centreline: tracking with darkness-weighted centroids across the stroke, bridging the
+//!    printed ring dots ([`centreline`], its window statistics in `centreline/section.rs`);
 //! 6. the drawn path from the graphite itself: pieces linked end to end by continuity of
 //!    position, direction and curvature, skips bridged, what is left out listed and judged
 //!    ([`link`]; the printed path only a hint between chains of similar length); resampled
@@ -236,7 +237,7 @@ fn track(
         let mapped = mapping::map_pixels(img, map, paper, opts).map(|m| {
             let seeds = {
                 let roi = area::roi_predicate(opts.mapping, &m.to_mm, w_px, h_px);
-                area::seed_mask(map, paper, opts, m.fiducials.is_some(), &roi, m.px_per_mm)
+                area::seed_mask(map, paper, opts, &roi, m.px_per_mm)
             };
             (m, seeds)
         });
@@ -262,11 +263,6 @@ fn track(
         step_px: 0.25 * px_per_mm,
         max_width_px: opts.max_width_mm * px_per_mm,
         min_mass: 0.03 * px_per_mm,
-        black_darkness: if fids.is_some() {
-            centreline::BLACK_DARKNESS
-        } else {
-            f32::INFINITY
-        },
     };
     let pieces = centreline::track_all(
         img, &ink, paper, &occluders, map, &seeds, &roi, &params, progress,

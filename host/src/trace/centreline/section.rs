@@ -1,13 +1,11 @@
 //! The cross-section of a stroke in a short window: the darkness-weighted centroid, mass and
-//! spread of the pixels across the stroke, and the windows that cannot be read (print, dust,
-//! printed ring dots).
+//! spread of the pixels across the stroke, and the windows that cannot be read (the printed
+//! ring dots). However dark, graphite is graphite: inside the trace area the only black print
+//! is the ring dots (occluders) and the corner discs and orientation dot (outside the area
+//! read), so a soft pencil or one pressed hard is followed like a light one.
 
 use super::Tracker;
 use crate::trace::plane::dist;
-
-/// Darkness above which a pixel on a sheet with printed marks is print or dust, never
-/// graphite: a window holding one is occluded.
-pub(crate) const BLACK_DARKNESS: f32 = 0.82;
 
 /// Printed marks (ring dots) in pixel coordinates that the pencil may cross: windows touching
 /// them are occluded, the stroke is bridged across them.
@@ -83,9 +81,6 @@ impl Tracker<'_> {
                 }
                 let i = 3 * x as usize;
                 let dark = self.ink.darkness_on(&row[i..i + 3], paper);
-                if dark > self.p.black_darkness {
-                    return None;
-                }
                 let wgt = (dark - self.ink.floor).max(0.0) as f64;
                 sw += wgt;
                 sb += wgt * across;
