@@ -130,6 +130,10 @@ struct End {
     skip: f64,
     /// Uncertainty of the tangent, rad (short pieces give poor directions).
     sigma: f64,
+    /// The span the tangent was read over, mm; whether the curvature was read from it (a span
+    /// of at least 5 mm).
+    span: f64,
+    k_read: bool,
 }
 
 /// A candidate link between end `a` and end `b` (end index = 2 * piece + side; side 0 head,
@@ -222,7 +226,20 @@ fn end_with(pts: &[[f64; 2]], skip: f64) -> Option<End> {
         ta,
         skip,
         sigma: 0.15 / span.max(0.5),
+        span,
+        k_read: span >= 5.0,
     })
+}
+
+/// `e` bent by the curvature `k` it could not read itself (a short piece): the chord's
+/// direction is the tangent at its middle, turned on to the end.
+fn with_curvature(e: &End, k: f64) -> End {
+    let k = k.clamp(-0.1, 0.1);
+    End {
+        t: rot(e.ta, k * 0.5 * (e.span + e.skip)),
+        k,
+        ..*e
+    }
 }
 
 /// Piece ends; `None` for closed pieces.
@@ -307,6 +324,20 @@ fn continuity(a: &End, b: &End, reach: f64) -> Option<f64> {
     if g > reach {
         return None;
     }
+    // An end too short to read its curvature bends as the other end does: across a short gap
+    // the curve turns the same way on both sides (a wiggle's crest with a skip on it).
+    let (bent_a, bent_b);
+    let (a, b) = match (a.k_read, b.k_read) {
+        (false, true) => {
+            bent_a = with_curvature(a, -b.k);
+            (&bent_a, b)
+        }
+        (true, false) => {
+            bent_b = with_curvature(b, -a.k);
+            (a, &bent_b)
+        }
+        _ => (a, b),
+    };
     // Ends that nearly touch continue each other unless they double back (a corner the
     // tracker did not turn); straighter is cheaper.
     let turn_ab = {
@@ -350,6 +381,8 @@ fn hermite(pa: [f64; 2], ta: [f64; 2], pb: [f64; 2], tb: [f64; 2]) -> (Vec<[f64;
         ta,
         skip: 0.0,
         sigma: 0.0,
+        span: 0.0,
+        k_read: false,
     };
     let b = End { p: pb, ..a };
     // Tangent length: exact for a circular arc turning by theta (4 R tan(theta / 4) =
