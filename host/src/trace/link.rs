@@ -35,6 +35,10 @@ const SEPARATE_SHARE: f64 = 0.3;
 /// left out.
 const END_SPAN_MM: f64 = 8.0;
 const END_SKIP_MM: f64 = 1.5;
+/// An end's curvature is read only from a span of at least this (shorter ones cannot tell it
+/// from the centreline's noise), mm, and is at most this, 1/mm.
+const K_SPAN_MM: f64 = 5.0;
+const MAX_K: f64 = 0.1;
 /// A piece turning by more than this between its chords of [`KINK_CHORD_MM`] is cut there.
 const KINK_DEG: f64 = 25.0;
 const KINK_CHORD_MM: f64 = 1.0;
@@ -130,10 +134,14 @@ struct End {
     skip: f64,
     /// Uncertainty of the tangent, rad (short pieces give poor directions).
     sigma: f64,
-    /// The span the tangent was read over, mm; whether the curvature was read from it (a span
-    /// of at least 5 mm).
+    /// The span the tangent was read over, mm (the curvature too when [`End::k_read`]).
     span: f64,
-    k_read: bool,
+}
+
+impl End {
+    fn k_read(&self) -> bool {
+        self.span >= K_SPAN_MM
+    }
 }
 
 /// A candidate link between end `a` and end `b` (end index = 2 * piece + side; side 0 head,
@@ -210,8 +218,8 @@ fn end_with(pts: &[[f64; 2]], skip: f64) -> Option<End> {
     let (a, b) = (sub(q2, q3), sub(q1, q2));
     let cross = a[0] * b[1] - a[1] * b[0];
     // Curvature only from a span long enough to tell it from the centreline's noise.
-    let k = if span >= 5.0 {
-        (2.0 * cross / (norm(a) * norm(b) * n).max(1e-12)).clamp(-0.1, 0.1)
+    let k = if span >= K_SPAN_MM {
+        (2.0 * cross / (norm(a) * norm(b) * n).max(1e-12)).clamp(-MAX_K, MAX_K)
     } else {
         0.0
     };
@@ -227,14 +235,13 @@ fn end_with(pts: &[[f64; 2]], skip: f64) -> Option<End> {
         skip,
         sigma: 0.15 / span.max(0.5),
         span,
-        k_read: span >= 5.0,
     })
 }
 
 /// `e` bent by the curvature `k` it could not read itself (a short piece): the chord's
 /// direction is the tangent at its middle, turned on to the end.
 fn with_curvature(e: &End, k: f64) -> End {
-    let k = k.clamp(-0.1, 0.1);
+    let k = k.clamp(-MAX_K, MAX_K);
     End {
         t: rot(e.ta, k * 0.5 * (e.span + e.skip)),
         k,
@@ -327,7 +334,7 @@ fn continuity(a: &End, b: &End, reach: f64) -> Option<f64> {
     // An end too short to read its curvature bends as the other end does: across a short gap
     // the curve turns the same way on both sides (a wiggle's crest with a skip on it).
     let (bent_a, bent_b);
-    let (a, b) = match (a.k_read, b.k_read) {
+    let (a, b) = match (a.k_read(), b.k_read()) {
         (false, true) => {
             bent_a = with_curvature(a, -b.k);
             (&bent_a, b)
@@ -382,7 +389,6 @@ fn hermite(pa: [f64; 2], ta: [f64; 2], pb: [f64; 2], tb: [f64; 2]) -> (Vec<[f64;
         skip: 0.0,
         sigma: 0.0,
         span: 0.0,
-        k_read: false,
     };
     let b = End { p: pb, ..a };
     // Tangent length: exact for a circular arc turning by theta (4 R tan(theta / 4) =
