@@ -1,7 +1,8 @@
 #!/usr/bin/env python3
 """A third sheet renderer for `rigctl trace`, written from FORMATS.md alone (numpy + OpenCV +
 scipy), sharing nothing with the project's two Rust renderers: the sheet's primitives are
-mapped point by point through a pinhole camera (principal point at the image centre, radial
+mapped point by point through a pinhole camera (principal point at the image centre, or off it
+with --centre-off-px as in a cropped photo; radial
 distortion k1 on normalised coordinates) or a scanner's similarity, then rasterised by
 sub-pixel sampling (4 x 4 per pixel: a pencil sub-sample is inked within half the local width
 of the centreline's nearest point, a disc's inside its mapped outline). Pencil: a circle of
@@ -73,7 +74,7 @@ def arclen(p):
 
 
 class Cam:
-    def __init__(self, rng, photo, ppmm):
+    def __init__(self, rng, photo, ppmm, centre_off_px=0.0):
         self.photo = photo
         if photo:
             tilt = math.radians(rng.uniform(0, 40))
@@ -99,9 +100,14 @@ class Cam:
         self.c = np.zeros(2)
         q = self.project(corners)
         if self.photo:
-            # the principal point at the image centre
-            half = np.abs(q).max(0) + 40
-            self.c = half
+            # the principal point at the image centre, or (--centre-off-px, a photo cropped off
+            # its centre) 0.5-1 times that far from it in a random direction
+            off = np.zeros(2)
+            if centre_off_px > 0:
+                a = rng.uniform(0, 2 * np.pi)
+                off = rng.uniform(0.5, 1.0) * centre_off_px * np.array([math.cos(a), math.sin(a)])
+            half = np.abs(q).max(0) + 40 + np.abs(off)
+            self.c = half + off
             self.size = (int(2 * half[0]), int(2 * half[1]))
         else:
             lo, hi = q.min(0), q.max(0)
@@ -189,12 +195,12 @@ def poly(layer, cam, pts, width_mm, val):
     cv2.polylines(layer, [np.round(q * 16 - 8).astype(np.int32)], False, val, th, cv2.LINE_AA, 4)
 
 
-def render(seed, kind, medium, out):
+def render(seed, kind, medium, out, centre_off_px=0.0):
     rng = np.random.default_rng(seed)
     truth, closed = path_truth(rng, kind)
     if medium == "photo":
         ppmm = rng.uniform(200, 300) / 25.4
-        cam = Cam(rng, True, ppmm)
+        cam = Cam(rng, True, ppmm, centre_off_px)
     else:
         ppmm = (600 if medium == "scan600" else 300) / 25.4
         cam = Cam(rng, False, ppmm)
@@ -303,13 +309,15 @@ def main():
     ap.add_argument("count", type=int)
     ap.add_argument("--rig", default="target/release/rigctl")
     ap.add_argument("--out", default="target/tmp/trace_render3")
+    ap.add_argument("--centre-off-px", type=float, default=0.0,
+                    help="photos: the lens's optical centre this far (0.5-1x, random direction) from the image centre, as in a photo cropped off its centre")
     args = ap.parse_args()
     os.makedirs(args.out, exist_ok=True)
     met = exit1 = low0 = 0
     for seed in range(args.first_seed, args.first_seed + args.count):
         ext = "jpg" if args.medium == "photo" else "png"
         image = os.path.join(args.out, f"{args.kind}_{args.medium}_{seed}.{ext}")
-        truth, _, _ = render(seed, args.kind, args.medium, image)
+        truth, _, _ = render(seed, args.kind, args.medium, image, args.centre_off_px)
         csv_path = image[:-4] + ".csv"
         if os.path.exists(csv_path):
             os.remove(csv_path)

@@ -356,6 +356,40 @@ impl View {
     }
 }
 
+/// `view` as cropped off its centre: the principal point `off_px` from the image centre (the
+/// image grown so the sheet still fits). A photo trimmed from one side, or a camera whose lens
+/// axis is not at the sensor's centre.
+pub fn off_centre(view: View, off_px: [f64; 2]) -> View {
+    match view {
+        View::Photo {
+            c,
+            r,
+            f,
+            pp,
+            k1,
+            size,
+        } => {
+            let grow = [
+                (2.0 * off_px[0].abs()).ceil(),
+                (2.0 * off_px[1].abs()).ceil(),
+            ];
+            let size = [size[0] + grow[0] as u32, size[1] + grow[1] as u32];
+            View::Photo {
+                c,
+                r,
+                f,
+                pp: [
+                    pp[0] + 0.5 * grow[0] + off_px[0],
+                    pp[1] + 0.5 * grow[1] + off_px[1],
+                ],
+                k1,
+                size,
+            }
+        }
+        scan => scan,
+    }
+}
+
 /// A camera at `tilt` (rad) from the sheet normal towards `azimuth`, `dist` mm from `target`,
 /// rolled by `roll`; image sized to hold the fiducial square with a margin.
 pub fn photo_view(

@@ -48,6 +48,7 @@ fn photo(ppi: f64, tilt_deg: f64, k1: f64, seed: u64) -> Shot {
         k1,
         rot_deg: 0.0,
         jpeg: 90,
+        centre_off_px: 0.0,
     }
 }
 
@@ -60,6 +61,7 @@ fn scan(dpi: f64, rot_deg: f64) -> Shot {
         k1: 0.0,
         rot_deg,
         jpeg: 95,
+        centre_off_px: 0.0,
     }
 }
 
