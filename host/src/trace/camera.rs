@@ -433,9 +433,7 @@ mod tests {
     #[test]
     fn fit_recovers_distortion_and_inverts() {
         let m = truth();
-        let mut marks = crate::sheet::ring_dots_mm(180.0);
-        marks.extend(crate::sheet::fiducial_centres_mm(180.0));
-        let px: Vec<[f64; 2]> = marks.iter().map(|s| m.to_px(*s)).collect();
+        let (marks, px) = marks_seen_by(&m, |_| 0.0);
         let (fit, q) = CameraModel::fit(&marks, &px, [4000.0, 3000.0]).expect("fit");
         // Exact marks: what is left is the prior's pull on the centre (475 px off the image
         // centre here), a thousandth of a pixel at the marks.
@@ -456,6 +454,26 @@ mod tests {
             .iter()
             .zip(s)
             .all(|(a, b)| (a - b).abs() < 1e-9));
+    }
+
+    /// The sheet-v2 marks (ring dots, corner fiducials, orientation dot) and their pixels through
+    /// `m`, mark `i` moved by `scatter_px(i)` in a direction that turns by 2.399 rad per mark.
+    fn marks_seen_by(
+        m: &CameraModel,
+        scatter_px: impl Fn(usize) -> f64,
+    ) -> (Vec<[f64; 2]>, Vec<[f64; 2]>) {
+        let mut marks = crate::sheet::ring_dots_mm(180.0);
+        marks.extend(crate::sheet::fiducial_centres_mm(180.0));
+        let px = marks
+            .iter()
+            .enumerate()
+            .map(|(i, s)| {
+                let p = m.to_px(*s);
+                let (a, r) = (2.399 * i as f64, scatter_px(i));
+                [p[0] + r * a.cos(), p[1] + r * a.sin()]
+            })
+            .collect();
+        (marks, px)
     }
 
     /// The worst sheet error (mm) of `fit` over a 5 mm grid inside the ring of marks, for pixels
@@ -479,17 +497,7 @@ mod tests {
         let h = Matrix3::new(9.5, 2.1, 2000.0, -1.8, 10.2, 1500.0, 0.0011, -0.0007, 1.0);
         for (k1, c) in [(-0.08, [2450.0, 1100.0]), (0.06, [1480.0, 1750.0])] {
             let m = CameraModel::new(h, k1, 0.0, c, 2500.0).expect("invertible");
-            let mut marks = crate::sheet::ring_dots_mm(180.0);
-            marks.extend(crate::sheet::fiducial_centres_mm(180.0));
-            let px: Vec<[f64; 2]> = marks
-                .iter()
-                .enumerate()
-                .map(|(i, s)| {
-                    let p = m.to_px(*s);
-                    let a = 2.399 * i as f64; // a deterministic 0.2 px scatter
-                    [p[0] + 0.2 * a.cos(), p[1] + 0.2 * a.sin()]
-                })
-                .collect();
+            let (marks, px) = marks_seen_by(&m, |_| 0.2);
             let (fit, _) = CameraModel::fit(&marks, &px, [4000.0, 3000.0]).expect("fit");
             let worst = worst_inside_mm(&fit, &m);
             assert!(worst < 0.02, "k1 {k1}: {worst} mm inside the ring, {fit:?}");
@@ -513,18 +521,7 @@ mod tests {
     fn centre_is_held_when_the_marks_do_not_ask_for_it() {
         let h = Matrix3::new(9.5, 2.1, 2000.0, -1.8, 10.2, 1500.0, 0.0011, -0.0007, 1.0);
         let m = CameraModel::new(h, -0.06, 0.0, [2000.0, 1500.0], 2500.0).expect("invertible");
-        let mut marks = crate::sheet::ring_dots_mm(180.0);
-        marks.extend(crate::sheet::fiducial_centres_mm(180.0));
-        let px: Vec<[f64; 2]> = marks
-            .iter()
-            .enumerate()
-            .map(|(i, s)| {
-                let p = m.to_px(*s);
-                let a = 2.399 * i as f64;
-                let r = 0.2 * (0.5 + (0.618 * i as f64).fract());
-                [p[0] + r * a.cos(), p[1] + r * a.sin()]
-            })
-            .collect();
+        let (marks, px) = marks_seen_by(&m, |i| 0.2 * (0.5 + (0.618 * i as f64).fract()));
         let (fit, _) = CameraModel::fit(&marks, &px, [4000.0, 3000.0]).expect("fit");
         assert_eq!(fit.centre_px, [2000.0, 1500.0], "{fit:?}");
         assert!(worst_inside_mm(&fit, &m) < 0.02);
@@ -536,9 +533,7 @@ mod tests {
     fn scan_keeps_the_centre_at_the_image_centre() {
         let h = Matrix3::new(23.6, 0.4, 2480.0, 0.4, -23.6, 3500.0, 0.0, 0.0, 1.0);
         let m = CameraModel::new(h, 0.0, 0.0, [2480.0, 3508.0], 4300.0).expect("invertible");
-        let mut marks = crate::sheet::ring_dots_mm(180.0);
-        marks.extend(crate::sheet::fiducial_centres_mm(180.0));
-        let px: Vec<[f64; 2]> = marks.iter().map(|s| m.to_px(*s)).collect();
+        let (marks, px) = marks_seen_by(&m, |_| 0.0);
         let (fit, q) = CameraModel::fit(&marks, &px, [4960.0, 7016.0]).expect("fit");
         assert!(q.rms_mm < 1e-6, "{q:?}");
         assert!(fit.k1.abs() < 1e-9 && fit.k2.abs() < 1e-9, "{fit:?}");
