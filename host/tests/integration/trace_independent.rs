@@ -2,7 +2,7 @@
 //! printed reference, other radii and free curves (open and closed), 3-8 skips of 1-6 mm, dust,
 //! fibres, stray flicks and a second pencil stroke across the path; rendered by the project's
 //! renderer and by an independent one (`trace_independent/render2.rs`: another stroke, skip,
-//! dust, shading and camera model). Measured by coverage (share of the true centreline within
+//! dust, shading and camera model; also photos cropped off their centre). Measured by coverage (share of the true centreline within
 //! 0.1 mm of the trace) and RMS; the exit rule: exit 0 only with the whole drawn path written,
 //! so never exit 0 below 0.95 coverage, and an incomplete path exits 1 naming where.
 
