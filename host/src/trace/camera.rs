@@ -20,6 +20,9 @@ use nalgebra::{Matrix3, SMatrix, SVector};
 /// Number of parameters: eight of the homography (h22 = 1), k1, k2, the distortion centre.
 const NP: usize = 12;
 
+/// Index of the distortion centre's first parameter (x, then y).
+const CENTRE_AT: usize = 10;
+
 /// How well a printed mark is located, pixels: the scale of the residuals the prior on the
 /// distortion centre is weighed against.
 const MARK_SIGMA_PX: f64 = 0.3;
@@ -190,7 +193,8 @@ impl CameraModel {
 
     fn with_params(&self, p: &SVector<f64, NP>) -> Option<Self> {
         let h = Matrix3::new(p[0], p[1], p[2], p[3], p[4], p[5], p[6], p[7], 1.0);
-        Self::new(h, p[8], p[9], [p[10], p[11]], self.radius_px)
+        let c = [p[CENTRE_AT], p[CENTRE_AT + 1]];
+        Self::new(h, p[8], p[9], c, self.radius_px)
     }
 
     /// The pixel of sheet point `s` and its Jacobian with respect to the parameters.
@@ -230,7 +234,7 @@ impl CameraModel {
         j[(1, 9)] = d[1] * rho * rho;
         // p = c + g(d) d with d = u - c: dp/dc = I - dp/du's distortion part `a`.
         let dc = SMatrix::<f64, 2, 2>::identity() - a;
-        j.fixed_view_mut::<2, 2>(0, 10).copy_from(&dc);
+        j.fixed_view_mut::<2, 2>(0, CENTRE_AT).copy_from(&dc);
         (
             [self.centre_px[0] + d[0] * g, self.centre_px[1] + d[1] * g],
             j,
@@ -349,13 +353,13 @@ fn lm(
             Some(prior) => {
                 let r = prior.residual(&m);
                 for k in 0..2 {
-                    jtj[(10 + k, 10 + k)] += prior.weight * prior.weight;
-                    jtr[10 + k] += prior.weight * r[k];
+                    jtj[(CENTRE_AT + k, CENTRE_AT + k)] += prior.weight * prior.weight;
+                    jtr[CENTRE_AT + k] += prior.weight * r[k];
                 }
             }
             // Held: the centre's rows and columns are taken out of the step.
             None => {
-                for k in 10..NP {
+                for k in CENTRE_AT..CENTRE_AT + 2 {
                     jtj.row_mut(k).fill(0.0);
                     jtj.column_mut(k).fill(0.0);
                     jtj[(k, k)] = 1.0;

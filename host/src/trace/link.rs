@@ -238,10 +238,10 @@ fn end_with(pts: &[[f64; 2]], skip: f64) -> Option<End> {
     })
 }
 
-/// `e` bent by the curvature `k` it could not read itself (a short piece): the chord's
-/// direction is the tangent at its middle, turned on to the end.
+/// `e` bent by the curvature `k` it could not read itself (a short piece), `k` read by the other
+/// end (so within [`MAX_K`]): the chord's direction is the tangent at its middle, turned on to
+/// the end.
 fn with_curvature(e: &End, k: f64) -> End {
-    let k = k.clamp(-MAX_K, MAX_K);
     End {
         t: rot(e.ta, k * 0.5 * (e.span + e.skip)),
         k,
