@@ -7,7 +7,10 @@ use super::raster::CoarseMap;
 use super::{
     fiducials, CameraModel, Fiducials, FitQuality, Homography, Mapping, TraceError, TraceOptions,
 };
-use crate::sheet::{fiducial_centres_mm, orientation_dot_mm, FIDUCIAL_SPACING_MM};
+use crate::sheet::{
+    fiducial_centres_mm, orientation_dot_mm, ring_dots_mm, FIDUCIAL_SPACING_MM,
+    RING_DOT_DIAMETER_MM,
+};
 use image::RgbImage;
 
 /// The camera of a fiducial mapping: fitted on all marks with the ring, else the corners'
@@ -94,6 +97,36 @@ pub(crate) struct Mapped {
     pub occluders: Occluders,
 }
 
+/// Margin around a printed ring dot inside which the pencil is not read (its blurred edge), mm.
+const OCCLUDER_MARGIN_MM: f64 = 0.3;
+
+/// The sheet-v2 ring dots the mark search did not find, placed by the fitted camera: a dot the
+/// pencil runs over merges with the graphite and is no disc any more, yet its ink is there and
+/// would pull the centreline into it. `(centre, radius)` in pixels, the radius the printed
+/// one's largest extent in the image plus the margin.
+fn dots_not_found(fid: &Fiducials, cam: &CameraModel, spacing_mm: f64) -> Vec<([f64; 2], f64)> {
+    let radius_mm = 0.5 * RING_DOT_DIAMETER_MM * spacing_mm / FIDUCIAL_SPACING_MM;
+    ring_dots_mm(spacing_mm)
+        .into_iter()
+        .filter(|m| {
+            !fid.ring
+                .iter()
+                .any(|(_, n)| (n[0] - m[0]).hypot(n[1] - m[1]) < 1e-6)
+        })
+        .map(|m| {
+            let c = cam.to_px(m);
+            let reach_px = [[1.0, 0.0], [-1.0, 0.0], [0.0, 1.0], [0.0, -1.0]]
+                .iter()
+                .map(|u| {
+                    let q = cam.to_px([m[0] + radius_mm * u[0], m[1] + radius_mm * u[1]]);
+                    (q[0] - c[0]).hypot(q[1] - c[1]) * (radius_mm + OCCLUDER_MARGIN_MM) / radius_mm
+                })
+                .fold(0.0, f64::max);
+            (c, reach_px)
+        })
+        .collect()
+}
+
 /// Finds the marks and fits the camera (fiducial mapping), or sets up the plain scale.
 pub(crate) fn map_pixels(
     img: &RgbImage,
@@ -111,7 +144,12 @@ pub(crate) fn map_pixels(
             for (d, _) in &fid.ring {
                 occluders
                     .discs
-                    .push((d.centre_px, 0.5 * d.diameter_px + 0.3 * ppmm));
+                    .push((d.centre_px, 0.5 * d.diameter_px + OCCLUDER_MARGIN_MM * ppmm));
+            }
+            if fit.is_some() {
+                occluders
+                    .discs
+                    .extend(dots_not_found(&fid, &cam, spacing_mm));
             }
             Ok(Mapped {
                 to_mm: Box::new(move |p| cam.to_mm(p)),

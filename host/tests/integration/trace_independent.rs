@@ -418,6 +418,67 @@ fn project_renderer_scans_300dpi() {
     check("render scan 300", &outs, 0.02);
 }
 
+/// A pencil circle of 90.4 mm about the sheet's centre runs over four ring dots, (+-90, 0) and
+/// (0, +-90), 0.4 mm off their centres: where the graphite merges with a dot the mark search
+/// finds no disc, yet the dot's ink must not pull the centreline into it (render2's scans and
+/// photo).
+#[test]
+fn pencil_across_ring_dots() {
+    let dots = [[90.0, 0.0], [0.0, 90.0], [-90.0, 0.0], [0.0, -90.0]];
+    let truth = cases::densify(
+        |u| {
+            let a = std::f64::consts::TAU * u;
+            [90.4 * a.cos(), 90.4 * a.sin()]
+        },
+        true,
+    );
+    let c = Case {
+        shape: "circle across ring dots",
+        printed: Printed::Circle,
+        truth,
+        closed: true,
+        skips: Vec::new(),
+        width_mm: 0.5,
+        darkness: 0.8,
+        crossing: None,
+        strays: Vec::new(),
+        dust: Vec::new(),
+        fibres: Vec::new(),
+    };
+    for (kind, seed, rms_bar) in [
+        (Kind::Scan600, 71, 0.015),
+        (Kind::Scan300, 72, 0.02),
+        (Kind::Photo, 73, 0.03),
+    ] {
+        let img = render_independent(&c, kind, seed);
+        let t =
+            trace_image(&img, &TraceOptions::default(), &ProgressBar::hidden()).expect("traced");
+        let main = t.main_stroke().expect("a stroke");
+        let (coverage, rms) = measure(&c.truth, c.closed, &main.points_mm, main.closed);
+        let tr = cases::SegIndex::new(&c.truth, true);
+        let at_dots = dots.map(|d| {
+            main.points_mm
+                .iter()
+                .filter(|p| (p[0] - d[0]).hypot(p[1] - d[1]) < 2.0)
+                .map(|p| tr.dist(*p, 5.0))
+                .fold(0.0, f64::max)
+        });
+        let found = t.camera_fit.map_or(0, |f| f.found);
+        eprintln!(
+            "{kind:?}: coverage {coverage:.4}, rms {rms:.4} mm, worst beside the dots {at_dots:.3?} mm, {found} of 48 marks found"
+        );
+        assert!(
+            t.is_whole() && coverage >= 0.95,
+            "{kind:?}: {:?}",
+            t.linking.missing().collect::<Vec<_>>()
+        );
+        assert!(rms <= rms_bar, "{kind:?}: rms {rms} mm");
+        for d in at_dots {
+            assert!(d < 0.1, "{kind:?}: {d} mm off the pencil beside a ring dot");
+        }
+    }
+}
+
 /// The arc-length position `s` on the truth.
 fn truth_at(c: &Case, s: f64) -> [f64; 2] {
     let mut acc = 0.0;
