@@ -7,7 +7,8 @@
 //! stroke that crosses the path). Every end of an open piece gets its outward tangent and
 //! curvature from the 6.5 mm before its last 1.5 mm. A link
 //! between two ends is admissible when each end's arc, extrapolated over the gap, lands on the
-//! other end and the directions agree (tolerances grow with the gap); ends that nearly touch
+//! other end and the directions agree, turned by the mean of the two ends' curvatures over the
+//! gap (tolerances grow with the gap); ends that nearly touch
 //! (< 1 mm) need only not double back (a corner). Links are taken cheapest first, each end once, a cycle only as
 //! the closing link of a chain, so a second pencil stroke crossing the path is passed over: its
 //! ends meet the path's ends at the wrong angle, and where the crossing cut the path in two the
@@ -345,10 +346,13 @@ fn continuity(a: &End, b: &End, reach: f64) -> Option<f64> {
         }
         _ => (a, b),
     };
+    // The turn across the gap is the mean of the two ends' curvatures times the gap (the
+    // curvature may change along it, as on the flank of a crest: one end nearly straight, the
+    // other bending hard); `b`'s curvature is read outwards, so it counts with its sign turned.
     // Ends that nearly touch continue each other unless they double back (a corner the
     // tracker did not turn); straighter is cheaper.
     let turn_ab = {
-        let expect = rot(a.t, a.k * g);
+        let expect = rot(a.t, 0.5 * (a.k - b.k) * g);
         let into_b = [-b.t[0], -b.t[1]];
         (expect[0] * into_b[0] + expect[1] * into_b[1])
             .clamp(-1.0, 1.0)
@@ -1152,3 +1156,6 @@ pub(super) fn orient(mut s: Stroke) -> Stroke {
     }
     s
 }
+
+#[cfg(test)]
+mod tests;
