@@ -3,7 +3,8 @@
 use super::link;
 use crate::trace::chain::PieceMm;
 
-/// A curve whose heading is the integral of `k(s)` (mm, 0.05 mm steps) from `s0` to `s1`.
+/// The points from arc length `s0` to `s1` (mm, 0.05 mm apart) of the curve whose heading is the
+/// integral of `k(s)` from `s = -60`.
 fn curve(k: impl Fn(f64) -> f64, s0: f64, s1: f64) -> Vec<[f64; 2]> {
     let ds = 0.05;
     let (mut p, mut h, mut s) = ([0.0f64, 0.0f64], 0.0f64, -60.0f64);
