@@ -9,7 +9,10 @@
 //! between two ends is admissible when each end's arc, extrapolated over the gap, lands on the
 //! other end and the directions agree, turned by the mean of the two ends' curvatures over the
 //! gap (tolerances grow with the gap); ends that nearly touch
-//! (< 1 mm) need only not double back (a corner). Links are taken cheapest first, each end once, a cycle only as
+//! (< 1 mm) need only not double back (a corner). Where an end is too short to read its
+//! curvature, a link those arcs miss is admissible when the path bends one way through the gap
+//! and each end bends along itself with it ([`bends_through`]: a tight crest, not a corner).
+//! Links are taken cheapest first, each end once, a cycle only as
 //! the closing link of a chain, so a second pencil stroke crossing the path is passed over: its
 //! ends meet the path's ends at the wrong angle, and where the crossing cut the path in two the
 //! two halves continue each other across it. Gaps up to `max_gap_mm` are bridged: a cubic
@@ -40,6 +43,13 @@ const END_SKIP_MM: f64 = 1.5;
 /// from the centreline's noise), mm, and is at most this, 1/mm.
 const K_SPAN_MM: f64 = 5.0;
 const MAX_K: f64 = 0.1;
+/// Where an end cannot read its curvature, the mean curvature a link may bend by from the
+/// middle of one end's span to the other's (a pencil crest of 3 mm radius), 1/mm, and the
+/// least share of the turn each end takes from the chord between them.
+const MAX_JOINT_K: f64 = 0.35;
+const JOINT_SHARE: f64 = 0.25;
+/// Scatter of a centre about the stroke's true centreline, mm, read into a short span's sag.
+const SAG_NOISE_MM: f64 = 0.03;
 /// A piece turning by more than this between its chords of [`KINK_CHORD_MM`] is cut there.
 const KINK_DEG: f64 = 25.0;
 const KINK_CHORD_MM: f64 = 1.0;
@@ -137,6 +147,8 @@ struct End {
     sigma: f64,
     /// The span the tangent was read over, mm (the curvature too when [`End::k_read`]).
     span: f64,
+    /// The curvature through the span's ends and middle however short the span, 1/mm.
+    k_raw: f64,
 }
 
 impl End {
@@ -218,9 +230,10 @@ fn end_with(pts: &[[f64; 2]], skip: f64) -> Option<End> {
     }
     let (a, b) = (sub(q2, q3), sub(q1, q2));
     let cross = a[0] * b[1] - a[1] * b[0];
+    let k_raw = 2.0 * cross / (norm(a) * norm(b) * n).max(1e-12);
     // Curvature only from a span long enough to tell it from the centreline's noise.
     let k = if span >= K_SPAN_MM {
-        (2.0 * cross / (norm(a) * norm(b) * n).max(1e-12)).clamp(-MAX_K, MAX_K)
+        k_raw.clamp(-MAX_K, MAX_K)
     } else {
         0.0
     };
@@ -236,6 +249,7 @@ fn end_with(pts: &[[f64; 2]], skip: f64) -> Option<End> {
         skip,
         sigma: 0.15 / span.max(0.5),
         span,
+        k_raw,
     })
 }
 
@@ -370,10 +384,58 @@ fn continuity(a: &End, b: &End, reach: f64) -> Option<f64> {
     let chord = [(b.p[0] - a.p[0]) / g, (b.p[1] - a.p[1]) / g];
     let fwd_a = chord[0] * a.t[0] + chord[1] * a.t[1];
     let fwd_b = -(chord[0] * b.t[0] + chord[1] * b.t[1]);
-    if lat > lat_tol || turn_ab > ang_tol || fwd_a < 0.5 || fwd_b < 0.5 {
+    if fwd_a < 0.5 || fwd_b < 0.5 {
         return None;
     }
+    if lat > lat_tol || turn_ab > ang_tol {
+        // Ends too short to read their curvature (the other end's may not hold across a
+        // crest either) continue each other when the path can bend one way through the gap.
+        if a.k_read() && b.k_read() {
+            return None;
+        }
+        return bends_through(a, b, g).map(|odd| g + 2.0 * lat + 10.0 * turn_ab + 10.0 * odd);
+    }
     Some(g + 2.0 * lat + 10.0 * turn_ab)
+}
+
+/// Ends that read their curvature poorly (short pieces, or a crest tighter than an end's span
+/// averages to) continue each other across a gap of `g` mm when the path can bend one way
+/// through it, as at a crest: the chord between the ends splits the turn from `a`'s direction
+/// into `b`'s, each side taking at least [`JOINT_SHARE`] of it in the same sense, and the turn is
+/// at most [`MAX_JOINT_K`] times the length from the middle of one end's span to the other's.
+/// A stroke crossing the path meets it with the turn on one side only. `None` when not; else
+/// how far the chord's split is from even, rad.
+fn bends_through(a: &End, b: &End, g: f64) -> Option<f64> {
+    let chord = [(b.p[0] - a.p[0]) / g, (b.p[1] - a.p[1]) / g];
+    let into_b = [-b.t[0], -b.t[1]];
+    let angle =
+        |u: [f64; 2], v: [f64; 2]| (u[0] * v[1] - u[1] * v[0]).atan2(u[0] * v[0] + u[1] * v[1]);
+    let (alpha, beta) = (angle(a.t, chord), angle(chord, into_b));
+    let turn = alpha + beta;
+    let len = 0.5 * (a.skip + a.span) + g + 0.5 * (b.skip + b.span);
+    // Each side's share is read through its own end's tangent.
+    let share = JOINT_SHARE * turn.abs();
+    let ok = turn.abs() <= MAX_JOINT_K * len
+        && alpha * turn > 0.0
+        && beta * turn > 0.0
+        && alpha.abs() >= share - a.sigma
+        && beta.abs() >= share - b.sigma;
+    // Each end bends with the crest: its own curvature (a short end's read from its three
+    // points, a long end's within the clamp) takes at least half the mean, on a span long
+    // enough to tell that from straight. A corner between straight strokes,
+    // or a plotter's sawtooth, turns across the gap but not along its ends.
+    let bends_too = |e: &End, k_out: f64| {
+        let noise = 2.0 * 8.0 * SAG_NOISE_MM / (e.span * e.span);
+        let (own, need) = if e.k_read() {
+            (e.k, k_out.abs().min(MAX_K))
+        } else {
+            (e.k_raw, k_out.abs())
+        };
+        // The span must be long enough to tell a bend of half the mean from a straight one.
+        noise <= 0.5 * need && own * k_out.signum() >= 0.5 * need - noise
+    };
+    let k_mean = turn / len;
+    (ok && bends_too(a, k_mean) && bends_too(b, -k_mean)).then_some((alpha - beta).abs())
 }
 
 /// Cubic Hermite bridge from end `a` to end `b` (inner points only), and its length.
@@ -393,6 +455,7 @@ fn hermite(pa: [f64; 2], ta: [f64; 2], pb: [f64; 2], tb: [f64; 2]) -> (Vec<[f64;
         skip: 0.0,
         sigma: 0.0,
         span: 0.0,
+        k_raw: 0.0,
     };
     let b = End { p: pb, ..a };
     // Tangent length: exact for a circular arc turning by theta (4 R tan(theta / 4) =

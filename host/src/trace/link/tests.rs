@@ -1,6 +1,6 @@
 //! Linking across a skip on a crest whose curvature changes along it.
 
-use super::link;
+use super::{continuity, end_of, link};
 use crate::trace::chain::PieceMm;
 
 /// The points from arc length `s0` to `s1` (mm, 0.05 mm apart) of the curve whose heading is the
@@ -45,4 +45,73 @@ fn a_skip_where_the_curvature_grows_is_bridged() {
     assert!(l.is_whole(), "{:?}", l.left_out);
     assert_eq!(l.gaps.len(), 1);
     assert!((l.gaps[0].length_mm - 5.0).abs() < 0.3, "{:?}", l.gaps);
+}
+
+/// A crest of radius 4 mm (curvature 0.25/mm, 2.5 mm wide) drawn at low resolution: the tracker
+/// left it in short pieces (3.5 mm, too short to read a curvature), the one before the crest and
+/// the one after it 3 mm apart across a skip on the crest itself, each meeting a long piece
+/// 0.7 mm away. Neither short end bends, so each points along its own chord and the curve turns
+/// across the gap by more than the tolerance of a straight continuation; it bends one way
+/// through the gap, though (the chord between the ends splits the turn evenly), and is linked.
+#[test]
+fn a_skip_on_a_tight_crest_between_short_pieces_is_bridged() {
+    let k = |s: f64| 0.25 * (-(s - 2.3).powi(2) / (2.0 * 2.5f64.powi(2))).exp();
+    let piece = |s0: f64, s1: f64| PieceMm {
+        pts: curve(k, s0, s1),
+        closed: false,
+    };
+    let pieces = vec![
+        piece(-40.0, -4.2),
+        piece(-3.5, 0.8),
+        piece(3.8, 8.1),
+        piece(8.8, 40.0),
+    ];
+    let l = link(&pieces, 10.0, None).expect("linked");
+    assert_eq!(l.pieces, 4, "{:?}", l.left_out);
+    assert!(l.is_whole(), "{:?}", l.left_out);
+    let skip: Vec<_> = l.gaps.iter().filter(|g| g.length_mm > 2.0).collect();
+    assert_eq!(skip.len(), 1, "{:?}", l.gaps);
+    assert!((skip[0].length_mm - 3.0).abs() < 0.3, "{:?}", l.gaps);
+}
+
+/// The bend-through rule does not take a short stroke crossing the path for its continuation
+/// (the path runs straight into the gap, the stroke leaves it at 50 deg: the turn lies on one
+/// side of the chord only), nor the corner between two straight short strokes (they turn
+/// across the gap but not along themselves); two short pieces of one crest continue.
+#[test]
+fn a_short_stroke_leaving_at_an_angle_does_not_bend_through() {
+    let line = |from: [f64; 2], dir_deg: f64, len: f64| -> Vec<[f64; 2]> {
+        let (s, c) = dir_deg.to_radians().sin_cos();
+        (0..=(len / 0.05) as usize)
+            .map(|i| {
+                let l = i as f64 * 0.05;
+                [from[0] + l * c, from[1] + l * s]
+            })
+            .collect()
+    };
+    let head = |mut v: Vec<[f64; 2]>| {
+        v.reverse();
+        end_of(&v).expect("end")
+    };
+    // The path's short last piece ends at the origin heading +x; the stroke starts 2.5 mm ahead
+    // and leaves at 50 deg.
+    let path_end = end_of(&line([-3.5, 0.0], 0.0, 3.5)).expect("end");
+    let stroke_head = head(line([2.5, 0.0], 50.0, 3.5));
+    assert!(!path_end.k_read() && !stroke_head.k_read());
+    assert!(continuity(&path_end, &stroke_head, 10.0).is_none());
+    // A corner: straight short strokes at +25 and -25 deg either side of a 2.5 mm gap.
+    let (c, s) = (25f64.to_radians().cos(), 25f64.to_radians().sin());
+    let up = end_of(&line([-3.5 * c, -3.5 * s], 25.0, 3.5)).expect("end");
+    let down = head(line([2.5, 0.0], -25.0, 3.5));
+    assert!(continuity(&up, &down, 10.0).is_none());
+    // A crest of radius 4 mm: 3.5 mm pieces either side of a 2.5 mm skip on its top.
+    let k = |_: f64| -0.25;
+    let crest = curve(k, -60.0 + 0.0, 200.0);
+    let at = |s_mm: f64| (s_mm / 0.05).round() as usize;
+    let (s0, gap) = (60.0, 2.5);
+    let before = crest[at(s0 - 3.5)..=at(s0)].to_vec();
+    let after = crest[at(s0 + gap)..=at(s0 + gap + 3.5)].to_vec();
+    let (a, b) = (end_of(&before).expect("end"), head(after));
+    assert!(!a.k_read() && !b.k_read());
+    assert!(continuity(&a, &b, 10.0).is_some());
 }
