@@ -398,9 +398,8 @@ fn continuity(a: &End, b: &End, reach: f64) -> Option<f64> {
     Some(g + 2.0 * lat + 10.0 * turn_ab)
 }
 
-/// Ends that read their curvature poorly (short pieces, or a crest tighter than an end's span
-/// averages to) continue each other across a gap of `g` mm when the path can bend one way
-/// through it, as at a crest: the chord between the ends splits the turn from `a`'s direction
+/// Two ends of which at least one is too short to read its curvature continue each other
+/// across a gap of `g` mm when the path can bend one way through it, as at a crest: the chord between the ends splits the turn from `a`'s direction
 /// into `b`'s, each side taking at least [`JOINT_SHARE`] of it in the same sense, and the turn is
 /// at most [`MAX_JOINT_K`] times the length from the middle of one end's span to the other's.
 /// A stroke crossing the path meets it with the turn on one side only. `None` when not; else
