@@ -26,9 +26,9 @@
 //! [`MIN_MARK_MM`] ahead of a free end within reach, or a separate line nearly as long as the
 //! path. Those make the trace incomplete.
 
-use super::bridge_fit;
 use super::chain::{polyline_length, PieceMm, Stroke};
 use super::plane::{dist, norm, sub, Grid};
+use super::bridge_fit;
 use crate::sheet::{ReferencePath, CIRCLE_RADIUS_MM, LINE_HALF_LENGTH_MM};
 
 /// Marks shorter than this are specks (dust, grain), mm.
@@ -155,6 +155,11 @@ impl End {
     fn k_read(&self) -> bool {
         self.span >= K_SPAN_MM
     }
+
+    /// How far back from the end the middle of its span lies, mm.
+    fn mid_span(&self) -> f64 {
+        0.5 * (self.skip + self.span)
+    }
 }
 
 /// A candidate link between end `a` and end `b` (end index = 2 * piece + side; side 0 head,
@@ -258,7 +263,7 @@ fn end_with(pts: &[[f64; 2]], skip: f64) -> Option<End> {
 /// the end.
 fn with_curvature(e: &End, k: f64) -> End {
     End {
-        t: rot(e.ta, k * 0.5 * (e.span + e.skip)),
+        t: rot(e.ta, k * e.mid_span()),
         k,
         ..*e
     }
@@ -388,30 +393,29 @@ fn continuity(a: &End, b: &End, reach: f64) -> Option<f64> {
         return None;
     }
     if lat > lat_tol || turn_ab > ang_tol {
-        // Ends too short to read their curvature (the other end's may not hold across a
-        // crest either) continue each other when the path can bend one way through the gap.
-        if a.k_read() && b.k_read() {
-            return None;
-        }
-        return bends_through(a, b, g).map(|odd| g + 2.0 * lat + 10.0 * turn_ab + 10.0 * odd);
+        // The arcs miss where the path bends harder in the gap than its ends read (a crest: a
+        // short end reads no curvature, a long one its span's mean, clamped); the ends continue
+        // each other when the path can bend one way through the gap.
+        return bends_through(a, b, chord, g)
+            .map(|odd| g + 2.0 * lat + 10.0 * turn_ab + 10.0 * odd);
     }
     Some(g + 2.0 * lat + 10.0 * turn_ab)
 }
 
-/// Two ends of which at least one is too short to read its curvature continue each other
-/// across a gap of `g` mm when the path can bend one way through it, as at a crest: the chord between the ends splits the turn from `a`'s direction
-/// into `b`'s, each side taking at least [`JOINT_SHARE`] of it in the same sense, and the turn is
-/// at most [`MAX_JOINT_K`] times the length from the middle of one end's span to the other's.
-/// A stroke crossing the path meets it with the turn on one side only. `None` when not; else
-/// how far the chord's split is from even, rad.
-fn bends_through(a: &End, b: &End, g: f64) -> Option<f64> {
-    let chord = [(b.p[0] - a.p[0]) / g, (b.p[1] - a.p[1]) / g];
+/// Two ends whose arcs miss each other across a gap of `g` mm (unit `chord` from `a` to `b`)
+/// continue each other when the path can bend one way through it, as at a crest: the chord
+/// splits the turn from `a`'s direction into `b`'s, each side taking at least [`JOINT_SHARE`] of
+/// it in the same sense, the turn is at most [`MAX_JOINT_K`] times the length from the middle of
+/// one end's span to the other's, and each end bends with it. A stroke crossing the path meets
+/// it with the turn on one side only. `None` when not; else how far the chord's split is from
+/// even, rad.
+fn bends_through(a: &End, b: &End, chord: [f64; 2], g: f64) -> Option<f64> {
     let into_b = [-b.t[0], -b.t[1]];
     let angle =
         |u: [f64; 2], v: [f64; 2]| (u[0] * v[1] - u[1] * v[0]).atan2(u[0] * v[0] + u[1] * v[1]);
     let (alpha, beta) = (angle(a.t, chord), angle(chord, into_b));
     let turn = alpha + beta;
-    let len = 0.5 * (a.skip + a.span) + g + 0.5 * (b.skip + b.span);
+    let len = a.mid_span() + g + b.mid_span();
     // Each side's share is read through its own end's tangent.
     let share = JOINT_SHARE * turn.abs();
     let ok = turn.abs() <= MAX_JOINT_K * len

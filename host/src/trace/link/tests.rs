@@ -1,6 +1,6 @@
 //! Linking across a skip on a crest whose curvature changes along it.
 
-use super::{continuity, end_of, link};
+use super::{continuity, end_of, link, Linking};
 use crate::trace::chain::PieceMm;
 
 /// The points from arc length `s0` to `s1` (mm, 0.05 mm apart) of the curve whose heading is the
@@ -22,6 +22,28 @@ fn curve(k: impl Fn(f64) -> f64, s0: f64, s1: f64) -> Vec<[f64; 2]> {
     out
 }
 
+/// The open pieces of the curve of curvature `k` between the arc lengths of `spans`, mm.
+fn pieces(k: impl Fn(f64) -> f64 + Copy, spans: &[(f64, f64)]) -> Vec<PieceMm> {
+    spans
+        .iter()
+        .map(|&(s0, s1)| PieceMm {
+            pts: curve(k, s0, s1),
+            closed: false,
+        })
+        .collect()
+}
+
+/// `pieces` linked into one whole path with one skip (a gap over 1.5 mm) of about `skip_mm`.
+fn linked_with_one_skip(pieces: &[PieceMm], skip_mm: f64) -> Linking {
+    let l = link(pieces, 10.0, None).expect("linked");
+    assert_eq!(l.pieces, pieces.len(), "{:?}", l.left_out);
+    assert!(l.is_whole(), "{:?}", l.left_out);
+    let skip: Vec<_> = l.gaps.iter().filter(|g| g.length_mm > 1.5).collect();
+    assert_eq!(skip.len(), 1, "{:?}", l.gaps);
+    assert!((skip[0].length_mm - skip_mm).abs() < 0.3, "{:?}", l.gaps);
+    l
+}
+
 /// A crest of radius 7.7 mm (curvature 0.13/mm, 4 mm wide) with a 5 mm skip on its flank: one
 /// end reads a nearly straight curve, the other one bending hard. The curve turns across the gap
 /// by the mean of the two curvatures (a curvature changing along the gap), not by either end's
@@ -30,21 +52,8 @@ fn curve(k: impl Fn(f64) -> f64, s0: f64, s1: f64) -> Vec<[f64; 2]> {
 #[test]
 fn a_skip_where_the_curvature_grows_is_bridged() {
     let k = |s: f64| 0.13 * (-(s - 8.0).powi(2) / (2.0 * 4.0f64.powi(2))).exp();
-    let pieces = vec![
-        PieceMm {
-            pts: curve(k, -40.0, 2.5),
-            closed: false,
-        },
-        PieceMm {
-            pts: curve(k, 7.5, 40.0),
-            closed: false,
-        },
-    ];
-    let l = link(&pieces, 10.0, None).expect("linked");
-    assert_eq!(l.pieces, 2, "{:?}", l.left_out);
-    assert!(l.is_whole(), "{:?}", l.left_out);
+    let l = linked_with_one_skip(&pieces(k, &[(-40.0, 2.5), (7.5, 40.0)]), 5.0);
     assert_eq!(l.gaps.len(), 1);
-    assert!((l.gaps[0].length_mm - 5.0).abs() < 0.3, "{:?}", l.gaps);
 }
 
 /// A crest of radius 4 mm (curvature 0.25/mm, 2.5 mm wide) drawn at low resolution: the tracker
@@ -56,22 +65,8 @@ fn a_skip_where_the_curvature_grows_is_bridged() {
 #[test]
 fn a_skip_on_a_tight_crest_between_short_pieces_is_bridged() {
     let k = |s: f64| 0.25 * (-(s - 2.3).powi(2) / (2.0 * 2.5f64.powi(2))).exp();
-    let piece = |s0: f64, s1: f64| PieceMm {
-        pts: curve(k, s0, s1),
-        closed: false,
-    };
-    let pieces = vec![
-        piece(-40.0, -4.2),
-        piece(-3.5, 0.8),
-        piece(3.8, 8.1),
-        piece(8.8, 40.0),
-    ];
-    let l = link(&pieces, 10.0, None).expect("linked");
-    assert_eq!(l.pieces, 4, "{:?}", l.left_out);
-    assert!(l.is_whole(), "{:?}", l.left_out);
-    let skip: Vec<_> = l.gaps.iter().filter(|g| g.length_mm > 2.0).collect();
-    assert_eq!(skip.len(), 1, "{:?}", l.gaps);
-    assert!((skip[0].length_mm - 3.0).abs() < 0.3, "{:?}", l.gaps);
+    let spans = [(-40.0, -4.2), (-3.5, 0.8), (3.8, 8.1), (8.8, 40.0)];
+    linked_with_one_skip(&pieces(k, &spans), 3.0);
 }
 
 /// The bend-through rule does not take a short stroke crossing the path for its continuation
@@ -114,4 +109,30 @@ fn a_short_stroke_leaving_at_an_angle_does_not_bend_through() {
     let (a, b) = (end_of(&before).expect("end"), head(after));
     assert!(!a.k_read() && !b.k_read());
     assert!(continuity(&a, &b, 10.0).is_some());
+}
+
+/// A crest of radius 5 mm (curvature 0.2/mm) with a 2 mm skip on its top, between long pieces:
+/// each end reads its curvature only up to the clamp, so its tangent at the skip is off by
+/// about 20 deg and the arcs miss. The path bends one way through the gap and both ends bend
+/// with it: linked. Two long straight pieces meeting at a corner across the same gap turn as
+/// much, but not along themselves: not linked.
+#[test]
+fn a_skip_on_a_crest_between_long_pieces_is_bridged() {
+    let k = |s: f64| 0.2 / (1.0 + (s / 4.0).powi(2));
+    let l = linked_with_one_skip(&pieces(k, &[(-40.0, -1.0), (1.0, 40.0)]), 2.0);
+    assert_eq!(l.gaps.len(), 1, "{:?}", l.gaps);
+    // The corner: 20 mm straight pieces at +30 and -30 deg either side of a 2 mm gap.
+    let straight = |from: [f64; 2], dir_deg: f64| -> Vec<[f64; 2]> {
+        let (s, c) = dir_deg.to_radians().sin_cos();
+        (0..=400)
+            .map(|i| [from[0] + 0.05 * i as f64 * c, from[1] + 0.05 * i as f64 * s])
+            .collect()
+    };
+    let (c, s) = (30f64.to_radians().cos(), 30f64.to_radians().sin());
+    let up = end_of(&straight([-20.0 * c - 1.0, -20.0 * s], 30.0)).expect("end");
+    let mut down = straight([1.0, 0.0], -30.0);
+    down.reverse();
+    let down = end_of(&down).expect("end");
+    assert!(up.k_read() && down.k_read());
+    assert!(continuity(&up, &down, 10.0).is_none());
 }
