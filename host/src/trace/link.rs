@@ -28,7 +28,7 @@
 
 use super::chain::{polyline_length, PieceMm, Stroke};
 use super::plane::{dist, norm, sub, Grid};
-use super::bridge_fit;
+use super::{bridge_fit, smooth};
 use crate::sheet::{ReferencePath, CIRCLE_RADIUS_MM, LINE_HALF_LENGTH_MM};
 
 /// Marks shorter than this are specks (dust, grain), mm.
@@ -613,8 +613,10 @@ impl Network {
     }
 
     /// Chain `main` as a drawn line: bridged across the marks that touch it, its bridges
-    /// refitted, its free ends and the gaps beyond them that are too long to bridge.
-    pub(super) fn judge(&self, main: usize) -> Judged {
+    /// refitted, its written centres smoothed along it when `smooth` (the single path; the
+    /// lines of `--paths` are smoothed across the band of their passes instead), its free ends
+    /// and the gaps beyond them that are too long to bridge.
+    pub(super) fn judge(&self, main: usize, smooth: bool) -> Judged {
         let max_gap_mm = self.max_gap_mm;
         let (path, mut gaps, mask) = self.built[main].clone();
         // The points of other chains that touch this one (the rest cannot cut it).
@@ -632,7 +634,12 @@ impl Network {
             .map(|(ci, k)| self.built[ci].0.points_mm[k])
             .collect();
         let (path, mask) = cut_crossings(path, mask, &[touching.as_slice()], &mut gaps);
-        let (points_mm, _, bridged_mm) = bridge_fit::refine(&path.points_mm, &mask, path.closed);
+        let (points_mm, mask, bridged_mm) = bridge_fit::refine(&path.points_mm, &mask, path.closed);
+        let points_mm = if smooth {
+            smooth::smooth_written(&points_mm, &mask, path.closed)
+        } else {
+            points_mm
+        };
         let path = Stroke {
             points_mm,
             bridged_mm,
@@ -790,7 +797,7 @@ pub(crate) fn link(
 ) -> Option<Linking> {
     let net = Network::build(pieces, max_gap_mm)?;
     let main = net.choose_main(hint)?;
-    let judged = net.judge(main);
+    let judged = net.judge(main, true);
     let left_out = net.left_out(main, &judged);
     let mut others: Vec<Stroke> = (0..net.built.len())
         .filter(|&ci| ci != main)

@@ -18,8 +18,8 @@
 //!    printed ring dots ([`centreline`], its window statistics in `centreline/section.rs`);
 //! 6. the drawn path from the graphite itself: pieces linked end to end by continuity of
 //!    position, direction and curvature, skips bridged, what is left out listed and judged
-//!    ([`link`]; the printed path only a hint between chains of similar length); resampled
-//!    ([`chain`]).
+//!    ([`link`]; the printed path only a hint between chains of similar length); the written
+//!    centres smoothed along the path between bridges (`smooth.rs`); resampled ([`chain`]).
 //!
 //! [`render`] (with `render_draw`, `render_extras`) draws synthetic scans with known truth for
 //! tests, benches and simulation, [`render_photo`] phone photos. [`trace_paths`] writes every
@@ -55,6 +55,7 @@ pub mod render;
 mod render_draw;
 mod render_extras;
 pub mod render_photo;
+mod smooth;
 
 pub use camera::{CameraModel, FitQuality};
 pub use chain::{polyline_length, resample, Stroke};

@@ -147,7 +147,7 @@ pub(super) fn drawing(pieces: &[PieceMm], opts: &TraceOptions, px_per_mm: f64) -
 
 /// Chain `ci` judged as a drawn line, closed where it ends on itself, resampled.
 fn judged_path(net: &Network, ci: usize, opts: &TraceOptions) -> DrawnPath {
-    let judged = net.judge(ci);
+    let judged = net.judge(ci, false);
     let free = judged.free_ends();
     let marks: Vec<(usize, LeftOut)> = net
         .left_out_indexed(ci, &judged)
