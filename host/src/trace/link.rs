@@ -9,9 +9,10 @@
 //! between two ends is admissible when each end's arc, extrapolated over the gap, lands on the
 //! other end and the directions agree, turned by the mean of the two ends' curvatures over the
 //! gap (tolerances grow with the gap); ends that nearly touch
-//! (< 1 mm) need only not double back (a corner). Where an end is too short to read its
-//! curvature, a link those arcs miss is admissible when the path bends one way through the gap
-//! and each end bends along itself with it ([`bends_through`]: a tight crest, not a corner).
+//! (< 1 mm) need only not double back (a corner). A link those arcs miss (a short end reads no
+//! curvature, a long one its span's mean, clamped) is admissible when the path bends one way
+//! through the gap and each end bends along itself with it ([`bends_through`]: a tight crest,
+//! not a corner).
 //! Links are taken cheapest first, each end once, a cycle only as
 //! the closing link of a chain, so a second pencil stroke crossing the path is passed over: its
 //! ends meet the path's ends at the wrong angle, and where the crossing cut the path in two the
@@ -43,9 +44,9 @@ const END_SKIP_MM: f64 = 1.5;
 /// from the centreline's noise), mm, and is at most this, 1/mm.
 const K_SPAN_MM: f64 = 5.0;
 const MAX_K: f64 = 0.1;
-/// Where an end cannot read its curvature, the mean curvature a link may bend by from the
-/// middle of one end's span to the other's (a pencil crest of 3 mm radius), 1/mm, and the
-/// least share of the turn each end takes from the chord between them.
+/// Where the ends' arcs miss each other, the mean curvature a link may bend by from the middle
+/// of one end's span to the other's (a pencil crest of 3 mm radius), 1/mm, and the least share
+/// of the turn each end takes from the chord between them ([`bends_through`]).
 const MAX_JOINT_K: f64 = 0.35;
 const JOINT_SHARE: f64 = 0.25;
 /// Scatter of a centre about the stroke's true centreline, mm, read into a short span's sag.

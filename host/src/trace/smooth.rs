@@ -7,6 +7,7 @@
 //! evenly near them so no end is pulled.
 
 use super::plane::dist;
+use nalgebra::{Matrix3, Matrix3x2, RowVector2, Vector3};
 
 /// Half the length of the window, mm.
 pub(crate) const HALF_MM: f64 = 0.8;
@@ -66,36 +67,19 @@ pub(crate) fn smooth_written(pts: &[[f64; 2]], bridge: &[bool], closed: bool) ->
 /// The value at `s = 0` of the least-squares quadratics `x(s)`, `y(s)` through the points
 /// `(index into pts, s)`; `None` when the arc lengths do not determine them.
 fn quadratic_at_zero(pts: &[[f64; 2]], window: &[(usize, f64)]) -> Option<[f64; 2]> {
-    // Normal equations of [1, s, s^2], solved by Cramer's rule (3 x 3, well scaled: |s| <= 1).
-    let mut m = [[0.0f64; 3]; 3];
-    let (mut bx, mut by) = ([0.0f64; 3], [0.0f64; 3]);
+    // Normal equations of [1, s, s^2] (well scaled: |s| <= 1), x and y as two right-hand sides.
+    let mut m = Matrix3::zeros();
+    let mut rhs = Matrix3x2::zeros();
     for &(k, s) in window {
-        let row = [1.0, s, s * s];
-        for r in 0..3 {
-            for c in 0..3 {
-                m[r][c] += row[r] * row[c];
-            }
-            bx[r] += row[r] * pts[k][0];
-            by[r] += row[r] * pts[k][1];
-        }
+        let row = Vector3::new(1.0, s, s * s);
+        m += row * row.transpose();
+        rhs += row * RowVector2::new(pts[k][0], pts[k][1]);
     }
-    let det3 = |a: [[f64; 3]; 3]| {
-        a[0][0] * (a[1][1] * a[2][2] - a[1][2] * a[2][1])
-            - a[0][1] * (a[1][0] * a[2][2] - a[1][2] * a[2][0])
-            + a[0][2] * (a[1][0] * a[2][1] - a[1][1] * a[2][0])
-    };
-    let det = det3(m);
-    if det.abs() <= 1e-12 {
+    if m.determinant().abs() <= 1e-12 {
         return None;
     }
-    let first = |b: [f64; 3]| {
-        let mut a = m;
-        for r in 0..3 {
-            a[r][0] = b[r];
-        }
-        det3(a) / det
-    };
-    let p = [first(bx), first(by)];
+    let c = m.lu().solve(&rhs)?;
+    let p = [c[(0, 0)], c[(0, 1)]];
     (p[0].is_finite() && p[1].is_finite()).then_some(p)
 }
 

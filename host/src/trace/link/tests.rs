@@ -1,6 +1,6 @@
 //! Linking across a skip on a crest whose curvature changes along it.
 
-use super::{continuity, end_of, link, Linking};
+use super::{continuity, end_of, link, End, Linking};
 use crate::trace::chain::PieceMm;
 
 /// The points from arc length `s0` to `s1` (mm, 0.05 mm apart) of the curve whose heading is the
@@ -31,6 +31,23 @@ fn pieces(k: impl Fn(f64) -> f64 + Copy, spans: &[(f64, f64)]) -> Vec<PieceMm> {
             closed: false,
         })
         .collect()
+}
+
+/// The straight line from `from` heading `dir_deg` for `len` mm, a point every 0.05 mm.
+fn line(from: [f64; 2], dir_deg: f64, len: f64) -> Vec<[f64; 2]> {
+    let (s, c) = dir_deg.to_radians().sin_cos();
+    (0..=(len / 0.05) as usize)
+        .map(|i| {
+            let l = i as f64 * 0.05;
+            [from[0] + l * c, from[1] + l * s]
+        })
+        .collect()
+}
+
+/// The end at the first point of `v`.
+fn head(mut v: Vec<[f64; 2]>) -> End {
+    v.reverse();
+    end_of(&v).expect("end")
 }
 
 /// `pieces` linked into one whole path with one skip (a gap over 1.5 mm) of about `skip_mm`.
@@ -75,19 +92,6 @@ fn a_skip_on_a_tight_crest_between_short_pieces_is_bridged() {
 /// across the gap but not along themselves); two short pieces of one crest continue.
 #[test]
 fn a_short_stroke_leaving_at_an_angle_does_not_bend_through() {
-    let line = |from: [f64; 2], dir_deg: f64, len: f64| -> Vec<[f64; 2]> {
-        let (s, c) = dir_deg.to_radians().sin_cos();
-        (0..=(len / 0.05) as usize)
-            .map(|i| {
-                let l = i as f64 * 0.05;
-                [from[0] + l * c, from[1] + l * s]
-            })
-            .collect()
-    };
-    let head = |mut v: Vec<[f64; 2]>| {
-        v.reverse();
-        end_of(&v).expect("end")
-    };
     // The path's short last piece ends at the origin heading +x; the stroke starts 2.5 mm ahead
     // and leaves at 50 deg.
     let path_end = end_of(&line([-3.5, 0.0], 0.0, 3.5)).expect("end");
@@ -101,7 +105,7 @@ fn a_short_stroke_leaving_at_an_angle_does_not_bend_through() {
     assert!(continuity(&up, &down, 10.0).is_none());
     // A crest of radius 4 mm: 3.5 mm pieces either side of a 2.5 mm skip on its top.
     let k = |_: f64| -0.25;
-    let crest = curve(k, -60.0 + 0.0, 200.0);
+    let crest = curve(k, -60.0, 200.0);
     let at = |s_mm: f64| (s_mm / 0.05).round() as usize;
     let (s0, gap) = (60.0, 2.5);
     let before = crest[at(s0 - 3.5)..=at(s0)].to_vec();
@@ -122,17 +126,9 @@ fn a_skip_on_a_crest_between_long_pieces_is_bridged() {
     let l = linked_with_one_skip(&pieces(k, &[(-40.0, -1.0), (1.0, 40.0)]), 2.0);
     assert_eq!(l.gaps.len(), 1, "{:?}", l.gaps);
     // The corner: 20 mm straight pieces at +30 and -30 deg either side of a 2 mm gap.
-    let straight = |from: [f64; 2], dir_deg: f64| -> Vec<[f64; 2]> {
-        let (s, c) = dir_deg.to_radians().sin_cos();
-        (0..=400)
-            .map(|i| [from[0] + 0.05 * i as f64 * c, from[1] + 0.05 * i as f64 * s])
-            .collect()
-    };
     let (c, s) = (30f64.to_radians().cos(), 30f64.to_radians().sin());
-    let up = end_of(&straight([-20.0 * c - 1.0, -20.0 * s], 30.0)).expect("end");
-    let mut down = straight([1.0, 0.0], -30.0);
-    down.reverse();
-    let down = end_of(&down).expect("end");
+    let up = end_of(&line([-20.0 * c - 1.0, -20.0 * s], 30.0, 20.0)).expect("end");
+    let down = head(line([1.0, 0.0], -30.0, 20.0));
     assert!(up.k_read() && down.k_read());
     assert!(continuity(&up, &down, 10.0).is_none());
 }
