@@ -5,7 +5,8 @@
 //!
 //! Open pieces are first cut where they turn sharply (a corner, or the tracker turning onto a
 //! stroke that crosses the path). Every end of an open piece gets its outward tangent and
-//! curvature from the 6.5 mm before its last 1.5 mm. A link
+//! curvature from its last 8 mm (on a plotter's passes, [`Strokes::Passes`], from the 6.5 mm
+//! before its last 1.5 mm). A link
 //! between two ends is admissible when each end's arc, extrapolated over the gap, lands on the
 //! other end and the directions agree, turned by the mean of the two ends' curvatures over the
 //! gap (tolerances grow with the gap); ends that nearly touch
@@ -36,9 +37,10 @@ use crate::sheet::{ReferencePath, CIRCLE_RADIUS_MM, LINE_HALF_LENGTH_MM};
 pub const MIN_MARK_MM: f64 = 5.0;
 /// A left-out line at least this share of the path's length is a drawn line of its own.
 const SEPARATE_SHARE: f64 = 0.3;
-/// Length of an end used for its tangent and curvature, mm, and the part of it next to the end
-/// left out.
+/// Length of an end used for its tangent and curvature, mm.
 const END_SPAN_MM: f64 = 8.0;
+/// The part of an end left out of its reading and bridged over where it may be pulled aside:
+/// next to a crossing the path is cut at, and on a plotter's passes ([`Strokes::Passes`]), mm.
 const END_SKIP_MM: f64 = 1.5;
 /// An end's curvature is read only from a span of at least this (shorter ones cannot tell it
 /// from the centreline's noise), mm, and is at most this, 1/mm.
@@ -211,13 +213,8 @@ fn point_back(pts: &[[f64; 2]], l: f64) -> [f64; 2] {
 }
 
 /// The end at the last point of `pts`: tangent and curvature from the circle through the points
-/// [`END_SKIP_MM`], halfway and [`END_SPAN_MM`] back (the last millimetre may be pulled aside
-/// by a stroke that crosses there), carried to the end point.
-fn end_of(pts: &[[f64; 2]]) -> Option<End> {
-    end_with(pts, END_SKIP_MM)
-}
-
-/// [`end_of`] with the anchor `skip` mm back (0: the last point).
+/// `skip` mm, halfway and [`END_SPAN_MM`] back, carried to the end point; the bridge anchor
+/// `skip` mm back (0: the last point).
 fn end_with(pts: &[[f64; 2]], skip: f64) -> Option<End> {
     let len = polyline_length(pts, false);
     if len <= 0.0 {
@@ -271,13 +268,13 @@ fn with_curvature(e: &End, k: f64) -> End {
 }
 
 /// Piece ends; `None` for closed pieces.
-fn ends(piece: &PieceMm) -> Option<[End; 2]> {
+fn ends(piece: &PieceMm, skip: f64) -> Option<[End; 2]> {
     if piece.closed || piece.pts.len() < 2 {
         return None;
     }
-    let tail = end_of(&piece.pts)?;
+    let tail = end_with(&piece.pts, skip)?;
     let rev: Vec<[f64; 2]> = piece.pts.iter().rev().copied().collect();
-    let head = end_of(&rev)?;
+    let head = end_with(&rev, skip)?;
     Some([head, tail])
 }
 
@@ -511,6 +508,19 @@ pub(super) struct Network {
     /// Every point of every chain of two points or more: (chain, index).
     points: Grid<(usize, usize)>,
     max_gap_mm: f64,
+    strokes: Strokes,
+}
+
+/// What drew the strokes a [`Network`] links.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub(super) enum Strokes {
+    /// The rig's pencil, one path: an end is read to its last point and a bridge starts there
+    /// (the bridge refit gets the graphite next to the skip); the written centres are smoothed.
+    OnePath,
+    /// A plotter's passes (`--paths`): backlash saws and passes cross near the ends, so the last
+    /// [`END_SKIP_MM`] of an end are left out of its reading and bridged over; centres as
+    /// tracked.
+    Passes,
 }
 
 /// One chain judged as a drawn line: its refined polyline, its gaps (bridged in order along
@@ -534,7 +544,7 @@ impl Judged {
 
 impl Network {
     /// Links `pieces` end to end by continuity. `None` without pieces.
-    pub(super) fn build(pieces: &[PieceMm], max_gap_mm: f64) -> Option<Self> {
+    pub(super) fn build(pieces: &[PieceMm], max_gap_mm: f64, strokes: Strokes) -> Option<Self> {
         let pieces: Vec<PieceMm> = split_kinks(pieces)
             .into_iter()
             .filter(|p| p.pts.len() >= 2)
@@ -542,7 +552,11 @@ impl Network {
         if pieces.is_empty() {
             return None;
         }
-        let piece_ends: Vec<Option<[End; 2]>> = pieces.iter().map(ends).collect();
+        let skip = match strokes {
+            Strokes::OnePath => 0.0,
+            Strokes::Passes => END_SKIP_MM,
+        };
+        let piece_ends: Vec<Option<[End; 2]>> = pieces.iter().map(|p| ends(p, skip)).collect();
         let n_ends = 2 * pieces.len();
         // Candidate links within the bridging reach, over a coarse grid of end positions.
         let reach = max_gap_mm.max(1.0);
@@ -591,6 +605,7 @@ impl Network {
             lengths,
             points,
             max_gap_mm,
+            strokes,
         })
     }
 
@@ -614,10 +629,10 @@ impl Network {
     }
 
     /// Chain `main` as a drawn line: bridged across the marks that touch it, its bridges
-    /// refitted, its written centres smoothed along it when `smooth` (the single path; the
+    /// refitted, its written centres smoothed along it on one path ([`Strokes::OnePath`]; the
     /// lines of `--paths` are smoothed across the band of their passes instead), its free ends
     /// and the gaps beyond them that are too long to bridge.
-    pub(super) fn judge(&self, main: usize, smooth: bool) -> Judged {
+    pub(super) fn judge(&self, main: usize) -> Judged {
         let max_gap_mm = self.max_gap_mm;
         let (path, mut gaps, mask) = self.built[main].clone();
         // The points of other chains that touch this one (the rest cannot cut it).
@@ -636,7 +651,7 @@ impl Network {
             .collect();
         let (path, mask) = cut_crossings(path, mask, &[touching.as_slice()], &mut gaps);
         let (points_mm, mask, bridged_mm) = bridge_fit::refine(&path.points_mm, &mask, path.closed);
-        let points_mm = if smooth {
+        let points_mm = if matches!(self.strokes, Strokes::OnePath) {
             smooth::smooth_written(&points_mm, &mask, path.closed)
         } else {
             points_mm
@@ -796,9 +811,9 @@ pub(crate) fn link(
     max_gap_mm: f64,
     hint: Option<ReferencePath>,
 ) -> Option<Linking> {
-    let net = Network::build(pieces, max_gap_mm)?;
+    let net = Network::build(pieces, max_gap_mm, Strokes::OnePath)?;
     let main = net.choose_main(hint)?;
-    let judged = net.judge(main, true);
+    let judged = net.judge(main);
     let left_out = net.left_out(main, &judged);
     let mut others: Vec<Stroke> = (0..net.built.len())
         .filter(|&ci| ci != main)
@@ -978,7 +993,11 @@ fn cut_crossings(
         } else {
             pts[j + 1..].iter().rev().copied().collect()
         };
-        if let (Some(a), Some(b), false) = (end_of(&out), end_of(&after), after.is_empty()) {
+        if let (Some(a), Some(b), false) = (
+            end_with(&out, END_SKIP_MM),
+            end_with(&after, END_SKIP_MM),
+            after.is_empty(),
+        ) {
             let (inner, len) = bridge(&a, &b);
             gaps.push(Gap {
                 from_mm: a.p,

@@ -7,7 +7,7 @@
 
 use super::chain::{resample, PieceMm, Stroke};
 use super::lines::{self, DrawnLine, Loose, LooseWhat};
-use super::link::{orient, Gap, LeftOut, LeftOutKind, Network, MIN_MARK_MM};
+use super::link::{orient, Gap, LeftOut, LeftOutKind, Network, Strokes, MIN_MARK_MM};
 use super::{write_csv, CameraModel, Fiducials, TraceError, TraceOptions};
 use crate::io::atomic::write_bytes_atomic;
 use serde_json::{json, Value};
@@ -80,7 +80,7 @@ impl Drawing {
 
 /// Links `pieces` and judges every chain of path size. `None` without pieces.
 pub(super) fn drawing(pieces: &[PieceMm], opts: &TraceOptions, px_per_mm: f64) -> Option<Drawing> {
-    let net = Network::build(pieces, opts.max_gap_mm)?;
+    let net = Network::build(pieces, opts.max_gap_mm, Strokes::Passes)?;
     let min_len_mm = MIN_MARK_MM.max(opts.min_stroke_mm);
     let mut paths = Vec::new();
     let mut strays = Vec::new();
@@ -147,7 +147,7 @@ pub(super) fn drawing(pieces: &[PieceMm], opts: &TraceOptions, px_per_mm: f64) -
 
 /// Chain `ci` judged as a drawn line, closed where it ends on itself, resampled.
 fn judged_path(net: &Network, ci: usize, opts: &TraceOptions) -> DrawnPath {
-    let judged = net.judge(ci, false);
+    let judged = net.judge(ci);
     let free = judged.free_ends();
     let marks: Vec<(usize, LeftOut)> = net
         .left_out_indexed(ci, &judged)
