@@ -86,6 +86,8 @@ fn quadratic_at_zero(pts: &[[f64; 2]], window: &[(usize, f64)]) -> Option<[f64; 
 #[cfg(test)]
 mod tests {
     use super::*;
+    use rand::{Rng, SeedableRng};
+    use rand_chacha::ChaCha8Rng;
 
     /// A circle of radius 3 mm (a tight crest) sampled every 0.25 mm, each point pushed in or
     /// out by up to 0.035 mm (independent, uniform): smoothed, the scatter about the circle
@@ -98,16 +100,12 @@ mod tests {
             let a = k as f64 * 2.0 * std::f64::consts::PI / n as f64;
             [rr * a.cos(), rr * a.sin()]
         };
-        // A linear congruential sequence: the same scatter on every run.
-        let mut state = 12345u64;
-        let mut uniform = || {
-            state = state
-                .wrapping_mul(6364136223846793005)
-                .wrapping_add(1442695040888963407);
-            (state >> 11) as f64 / (1u64 << 53) as f64 - 0.5
-        };
+        // A seeded generator: the same scatter on every run.
+        let mut rng = ChaCha8Rng::seed_from_u64(12345);
         let clean: Vec<[f64; 2]> = (0..n).map(|k| at(k, r)).collect();
-        let noisy: Vec<[f64; 2]> = (0..n).map(|k| at(k, r + 0.07 * uniform())).collect();
+        let noisy: Vec<[f64; 2]> = (0..n)
+            .map(|k| at(k, r + rng.gen_range(-0.035..0.035)))
+            .collect();
         let rms = |pts: &[[f64; 2]]| {
             (pts.iter()
                 .map(|p| (p[0].hypot(p[1]) - r).powi(2))

@@ -2,6 +2,10 @@
 
 use super::{continuity, end_with, link, End, Linking, Network, Strokes};
 use crate::trace::chain::PieceMm;
+use crate::trace::plane::dist;
+use rand::SeedableRng;
+use rand_chacha::ChaCha8Rng;
+use rand_distr::{Distribution, Normal};
 
 /// The points from arc length `s0` to `s1` (mm, 0.05 mm apart) of the curve whose heading is the
 /// integral of `k(s)` from `s = -60`.
@@ -141,10 +145,14 @@ fn a_skip_on_a_crest_between_long_pieces_is_bridged() {
 /// The farthest any point of `pts` within `reach` mm of `centre` lies from the dense polyline
 /// `truth`, mm.
 fn worst_near(pts: &[[f64; 2]], truth: &[[f64; 2]], centre: [f64; 2], reach: f64) -> f64 {
-    let d = |p: &[f64; 2], q: &[f64; 2]| (p[0] - q[0]).hypot(p[1] - q[1]);
     pts.iter()
-        .filter(|p| d(p, &centre) <= reach)
-        .map(|p| truth.iter().map(|q| d(p, q)).fold(f64::INFINITY, f64::min))
+        .filter(|p| dist(**p, centre) <= reach)
+        .map(|p| {
+            truth
+                .iter()
+                .map(|q| dist(*p, *q))
+                .fold(f64::INFINITY, f64::min)
+        })
         .fold(0.0, f64::max)
 }
 
@@ -159,21 +167,15 @@ fn a_skip_on_a_wave_is_bridged_from_the_ends_themselves() {
     let k = |s: f64| 0.15 * (s / 8.0).cos();
     let truth = curve(k, -40.0, 40.0);
     let centre = curve(k, 0.0, 0.1)[0];
-    let mut state: u64 = 0x2545_f491_4f6c_dd1d;
-    let mut uniform = move || {
-        state = state
-            .wrapping_mul(6_364_136_223_846_793_005)
-            .wrapping_add(1_442_695_040_888_963_407);
-        (state >> 11) as f64 / (1u64 << 53) as f64 - 0.5
-    };
+    let mut rng = ChaCha8Rng::seed_from_u64(24);
+    let scatter = Normal::new(0.0, 0.01).expect("a normal scatter");
     let (mut one_mm, mut passes_mm) = (0.0, 0.0);
     let rounds = 8;
     for _ in 0..rounds {
         let mut parts = pieces(k, &[(-40.0, -2.75), (2.75, 40.0)]);
         for p in parts.iter_mut().flat_map(|piece| piece.pts.iter_mut()) {
-            // Sum of three uniforms: about normal, 0.01 mm RMS per axis.
-            p[0] += 0.02 * (uniform() + uniform() + uniform());
-            p[1] += 0.02 * (uniform() + uniform() + uniform());
+            p[0] += scatter.sample(&mut rng);
+            p[1] += scatter.sample(&mut rng);
         }
         let one = linked_with_one_skip(&parts, 5.5);
         one_mm += worst_near(&one.path.points_mm, &truth, centre, 5.0) / rounds as f64;
