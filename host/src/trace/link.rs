@@ -6,7 +6,8 @@
 //! Open pieces are first cut where they turn sharply (a corner, or the tracker turning onto a
 //! stroke that crosses the path). Every end of an open piece gets its outward tangent and
 //! curvature from its last 8 mm (on a plotter's passes, [`Strokes::Passes`], from the 6.5 mm
-//! before its last 1.5 mm). A link
+//! before its last 1.5 mm); on the rig's one path, where a crest within them bends it harder
+//! than the curvature is clamped to, its tangent from its last 3 mm. A link
 //! between two ends is admissible when each end's arc, extrapolated over the gap, lands on the
 //! other end and the directions agree, turned by the mean of the two ends' curvatures over the
 //! gap (tolerances grow with the gap); ends that nearly touch
@@ -46,6 +47,9 @@ const END_SKIP_MM: f64 = 1.5;
 /// from the centreline's noise), mm, and is at most this, 1/mm.
 const K_SPAN_MM: f64 = 5.0;
 const MAX_K: f64 = 0.1;
+/// Length of an end a crest's tangent is read over, mm: short against a crest of 3 mm radius,
+/// long enough that the centres' scatter turns it by a few degrees at most.
+const TANGENT_SPAN_MM: f64 = 3.0;
 /// Where the ends' arcs miss each other, the mean curvature a link may bend by from the middle
 /// of one end's span to the other's (a pencil crest of 3 mm radius), 1/mm, and the least share
 /// of the turn each end takes from the chord between them ([`bends_through`]).
@@ -212,10 +216,31 @@ fn point_back(pts: &[[f64; 2]], l: f64) -> [f64; 2] {
     pts[0]
 }
 
+/// The circle through the points `from`, halfway and `to` mm back from the end of `pts`: the
+/// chord between the first and last (unit direction, length) and the signed curvature.
+fn three_point(pts: &[[f64; 2]], from: f64, to: f64) -> Option<([f64; 2], f64, f64)> {
+    let q1 = point_back(pts, from);
+    let q2 = point_back(pts, 0.5 * (from + to));
+    let q3 = point_back(pts, to);
+    let d = sub(q1, q3);
+    let n = norm(d);
+    if n <= 1e-9 {
+        return None;
+    }
+    let (a, b) = (sub(q2, q3), sub(q1, q2));
+    let cross = a[0] * b[1] - a[1] * b[0];
+    let k = 2.0 * cross / (norm(a) * norm(b) * n).max(1e-12);
+    Some(([d[0] / n, d[1] / n], n, k))
+}
+
 /// The end at the last point of `pts`: tangent and curvature from the circle through the points
 /// `skip` mm, halfway and [`END_SPAN_MM`] back, carried to the end point; the bridge anchor
-/// `skip` mm back (0: the last point).
-fn end_with(pts: &[[f64; 2]], skip: f64) -> Option<End> {
+/// `skip` mm back (0: the last point). On the rig's one path, where that curvature is over
+/// [`MAX_K`] (a crest within the span), the tangent is read again from the circle through the
+/// last [`TANGENT_SPAN_MM`] before the anchor, unclamped: the span's chord, turned by the
+/// clamped curvature, would point the end tens of degrees off across the crest. (A plotter's
+/// passes, [`Strokes::Passes`], saw at their ends: the last millimetres would turn it.)
+fn end_with(pts: &[[f64; 2]], skip: f64, strokes: Strokes) -> Option<End> {
     let len = polyline_length(pts, false);
     if len <= 0.0 {
         return None;
@@ -224,16 +249,7 @@ fn end_with(pts: &[[f64; 2]], skip: f64) -> Option<End> {
     let skip = skip.min(0.2 * span);
     let p0 = pts[pts.len() - 1];
     let q1 = point_back(pts, skip);
-    let q2 = point_back(pts, 0.5 * (skip + span));
-    let q3 = point_back(pts, span);
-    let d = sub(q1, q3);
-    let n = norm(d);
-    if n <= 1e-9 {
-        return None;
-    }
-    let (a, b) = (sub(q2, q3), sub(q1, q2));
-    let cross = a[0] * b[1] - a[1] * b[0];
-    let k_raw = 2.0 * cross / (norm(a) * norm(b) * n).max(1e-12);
+    let (chord, n, k_raw) = three_point(pts, skip, span)?;
     // Curvature only from a span long enough to tell it from the centreline's noise.
     let k = if span >= K_SPAN_MM {
         k_raw.clamp(-MAX_K, MAX_K)
@@ -241,7 +257,13 @@ fn end_with(pts: &[[f64; 2]], skip: f64) -> Option<End> {
         0.0
     };
     // The chord's direction is the tangent at its middle; turn it on to the anchor and the end.
-    let ta = rot([d[0] / n, d[1] / n], k * 0.5 * n);
+    let near = (strokes == Strokes::OnePath && span >= K_SPAN_MM && k_raw.abs() > MAX_K)
+        .then(|| three_point(pts, skip, skip + TANGENT_SPAN_MM))
+        .flatten();
+    let ta = match near {
+        Some((c, m, k_near)) => rot(c, k_near * 0.5 * m),
+        None => rot(chord, k * 0.5 * n),
+    };
     let t = rot(ta, k * dist(q1, p0));
     Some(End {
         p: p0,
@@ -267,14 +289,19 @@ fn with_curvature(e: &End, k: f64) -> End {
     }
 }
 
-/// Piece ends; `None` for closed pieces.
-fn ends(piece: &PieceMm, skip: f64) -> Option<[End; 2]> {
+/// Piece ends, read as `strokes` are (on a plotter's passes from [`END_SKIP_MM`] back); `None`
+/// for closed pieces.
+fn ends(piece: &PieceMm, strokes: Strokes) -> Option<[End; 2]> {
     if piece.closed || piece.pts.len() < 2 {
         return None;
     }
-    let tail = end_with(&piece.pts, skip)?;
+    let skip = match strokes {
+        Strokes::OnePath => 0.0,
+        Strokes::Passes => END_SKIP_MM,
+    };
+    let tail = end_with(&piece.pts, skip, strokes)?;
     let rev: Vec<[f64; 2]> = piece.pts.iter().rev().copied().collect();
-    let head = end_with(&rev, skip)?;
+    let head = end_with(&rev, skip, strokes)?;
     Some([head, tail])
 }
 
@@ -552,11 +579,7 @@ impl Network {
         if pieces.is_empty() {
             return None;
         }
-        let skip = match strokes {
-            Strokes::OnePath => 0.0,
-            Strokes::Passes => END_SKIP_MM,
-        };
-        let piece_ends: Vec<Option<[End; 2]>> = pieces.iter().map(|p| ends(p, skip)).collect();
+        let piece_ends: Vec<Option<[End; 2]>> = pieces.iter().map(|p| ends(p, strokes)).collect();
         let n_ends = 2 * pieces.len();
         // Candidate links within the bridging reach, over a coarse grid of end positions.
         let reach = max_gap_mm.max(1.0);
@@ -586,7 +609,7 @@ impl Network {
         let chains = walk_chains(&pieces, &piece_ends, &partner);
         let built: Vec<(Stroke, Vec<Gap>, Vec<bool>)> = chains
             .iter()
-            .map(|c| build(c, &pieces, &piece_ends))
+            .map(|c| build(c, &pieces, &piece_ends, strokes))
             .collect();
         let lengths: Vec<f64> = built.iter().map(|(s, ..)| s.length_mm()).collect();
         let mut points = Grid::new(CROSS_TOUCH_MM);
@@ -649,7 +672,8 @@ impl Network {
             .into_iter()
             .map(|(ci, k)| self.built[ci].0.points_mm[k])
             .collect();
-        let (path, mask) = cut_crossings(path, mask, &[touching.as_slice()], &mut gaps);
+        let (path, mask) =
+            cut_crossings(path, mask, &[touching.as_slice()], &mut gaps, self.strokes);
         let (points_mm, mask, bridged_mm) = bridge_fit::refine(&path.points_mm, &mask, path.closed);
         let points_mm = if matches!(self.strokes, Strokes::OnePath) {
             smooth::smooth_written(&points_mm, &mask, path.closed)
@@ -896,6 +920,7 @@ fn cut_crossings(
     mask: Vec<bool>,
     marks: &[&[[f64; 2]]],
     gaps: &mut Vec<Gap>,
+    strokes: Strokes,
 ) -> (Stroke, Vec<bool>) {
     let pts = &path.points_mm;
     let n = pts.len();
@@ -994,8 +1019,8 @@ fn cut_crossings(
             pts[j + 1..].iter().rev().copied().collect()
         };
         if let (Some(a), Some(b), false) = (
-            end_with(&out, END_SKIP_MM),
-            end_with(&after, END_SKIP_MM),
+            end_with(&out, END_SKIP_MM, strokes),
+            end_with(&after, END_SKIP_MM, strokes),
             after.is_empty(),
         ) {
             let (inner, len) = bridge(&a, &b);
@@ -1094,6 +1119,7 @@ fn build(
     chain: &Chain,
     pieces: &[PieceMm],
     piece_ends: &[Option<[End; 2]>],
+    strokes: Strokes,
 ) -> (Stroke, Vec<Gap>, Vec<bool>) {
     let mut pts: Vec<[f64; 2]> = Vec::new();
     let mut mask: Vec<bool> = Vec::new();
@@ -1130,7 +1156,7 @@ fn build(
     // The side already written gives its direction from the chain so far (a short piece alone
     // gives a poor one).
     let mut link = |a: End, b: End, pts: &mut Vec<[f64; 2]>, mask: &mut Vec<bool>| {
-        let (from, ta) = match end_with(pts, 0.0) {
+        let (from, ta) = match end_with(pts, 0.0, strokes) {
             Some(e) if pts.len() >= 2 => (e.p, e.t),
             _ => (a.anchor, a.ta),
         };

@@ -50,7 +50,7 @@ fn line(from: [f64; 2], dir_deg: f64, len: f64) -> Vec<[f64; 2]> {
 
 /// The end at the last point of `v`, read as on the rig's one path (to the last point).
 fn end_of(v: &[[f64; 2]]) -> Option<End> {
-    end_with(v, 0.0)
+    end_with(v, 0.0, Strokes::OnePath)
 }
 
 /// The end at the first point of `v`.
@@ -187,4 +187,26 @@ fn a_skip_on_a_wave_is_bridged_from_the_ends_themselves() {
     eprintln!("one path {one_mm:.4} mm, passes {passes_mm:.4} mm");
     assert!(one_mm < 0.05, "{one_mm}");
     assert!(passes_mm > 1.5 * one_mm, "{passes_mm} vs {one_mm}");
+}
+
+/// A crest of radius 2.8 mm (curvature 0.36/mm, 2.3 mm wide) 3.6 mm before the end of a long
+/// piece, then a 5 mm skip where the curve has nearly straightened (0.1/mm at the end, 0.02/mm
+/// beyond the skip). The end's 8 mm span reads the crest (0.26/mm, over the clamp); turned by
+/// the clamped curvature its chord points the end about 35 deg off, and the piece beyond the
+/// skip was left out as one that "may continue" the path. Read over the last 3 mm, the tangent
+/// is within a few degrees, and the skip is bridged.
+#[test]
+fn a_crest_just_before_an_end_does_not_turn_its_tangent() {
+    let k = |s: f64| 0.36 / (1.0 + ((s + 3.6) / 2.3).powi(2));
+    let parts = pieces(k, &[(-40.0, 0.0), (5.0, 40.0)]);
+    let end = end_of(&parts[0].pts).expect("end");
+    assert!(end.k_raw.abs() > 0.2, "{}", end.k_raw);
+    // The true heading at the end is the integral of k from s = -60.
+    let heading: f64 = (0..12_000)
+        .map(|i| k(-60.0 + (i as f64 + 0.5) * 0.005) * 0.005)
+        .sum();
+    let off_deg = (end.t[1].atan2(end.t[0]) - heading).to_degrees().abs();
+    assert!(off_deg < 3.0, "tangent {off_deg:.1} deg off");
+    let l = linked_with_one_skip(&parts, 5.0);
+    assert_eq!(l.gaps.len(), 1, "{:?}", l.gaps);
 }
