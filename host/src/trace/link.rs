@@ -50,6 +50,10 @@ const MAX_K: f64 = 0.1;
 /// Length of an end a crest's tangent is read over, mm: short against a crest of 3 mm radius,
 /// long enough that the centres' scatter turns it by a few degrees at most.
 const TANGENT_SPAN_MM: f64 = 3.0;
+/// A short end's last chord, mm, and how far it may turn off its span's circle, deg, for the
+/// span's own tangent to hold (a hook turns it).
+const HOOK_CHORD_MM: f64 = 1.0;
+const HOOK_DEG: f64 = 8.0;
 /// Where the ends' arcs miss each other, the mean curvature a link may bend by from the middle
 /// of one end's span to the other's (a pencil crest of 3 mm radius), 1/mm, and the least share
 /// of the turn each end takes from the chord between them ([`bends_through`]).
@@ -156,6 +160,9 @@ struct End {
     span: f64,
     /// The curvature through the span's ends and middle however short the span, 1/mm.
     k_raw: f64,
+    /// A short span's own tangent at the end, where its three points bend beyond their noise
+    /// and its last millimetre follows their circle (no hook): see [`own_tangent`].
+    t_own: Option<[f64; 2]>,
 }
 
 impl End {
@@ -265,6 +272,9 @@ fn end_with(pts: &[[f64; 2]], skip: f64, strokes: Strokes) -> Option<End> {
         None => rot(chord, k * 0.5 * n),
     };
     let t = rot(ta, k * dist(q1, p0));
+    let t_own = (strokes == Strokes::OnePath && span < K_SPAN_MM)
+        .then(|| own_tangent(pts, skip, span, ta, k_raw))
+        .flatten();
     Some(End {
         p: p0,
         t,
@@ -275,15 +285,42 @@ fn end_with(pts: &[[f64; 2]], skip: f64, strokes: Strokes) -> Option<End> {
         sigma: 0.15 / span.max(0.5),
         span,
         k_raw,
+        t_own,
     })
+}
+
+/// The tangent at the end of a span too short to read a curvature to carry across a gap,
+/// from its own circle (`ta`, the chord's direction at the span's middle, turned by `k_raw`),
+/// where it bends beyond its noise and the last [`HOOK_CHORD_MM`] follow it within
+/// [`HOOK_DEG`]; `None` otherwise (the chord then stands for the tangent).
+fn own_tangent(
+    pts: &[[f64; 2]],
+    skip: f64,
+    span: f64,
+    ta: [f64; 2],
+    k_raw: f64,
+) -> Option<[f64; 2]> {
+    let noise = 2.0 * 8.0 * SAG_NOISE_MM / (span * span);
+    if k_raw.abs() <= 2.0 * noise || span < 2.0 * HOOK_CHORD_MM {
+        return None;
+    }
+    let mid = 0.5 * (skip + span);
+    let last = sub(point_back(pts, skip), point_back(pts, skip + HOOK_CHORD_MM));
+    let n = norm(last);
+    if n <= 1e-9 {
+        return None;
+    }
+    let along = rot(ta, k_raw * (mid - skip - 0.5 * HOOK_CHORD_MM));
+    let c = (last[0] * along[0] + last[1] * along[1]) / n;
+    (c >= HOOK_DEG.to_radians().cos()).then(|| rot(ta, k_raw * (mid - skip)))
 }
 
 /// `e` bent by the curvature `k` it could not read itself (a short piece), `k` read by the other
 /// end (so within [`MAX_K`]): the chord's direction is the tangent at its middle, turned on to
-/// the end.
+/// the end, unless the piece reads its own tangent ([`own_tangent`]).
 fn with_curvature(e: &End, k: f64) -> End {
     End {
-        t: rot(e.ta, k * e.mid_span()),
+        t: e.t_own.unwrap_or_else(|| rot(e.ta, k * e.mid_span())),
         k,
         ..*e
     }
@@ -388,6 +425,22 @@ fn continuity(a: &End, b: &End, reach: f64) -> Option<f64> {
             bent_b = with_curvature(b, -a.k);
             (a, &bent_b)
         }
+        // Both short: they bend alike by what those that read their own bend read (a crest
+        // between skips), else not at all.
+        (false, false) => {
+            let own: Vec<f64> = [a.t_own.map(|_| a.k_raw), b.t_own.map(|_| -b.k_raw)]
+                .into_iter()
+                .flatten()
+                .collect();
+            let k = if own.is_empty() {
+                0.0
+            } else {
+                (own.iter().sum::<f64>() / own.len() as f64).clamp(-MAX_K, MAX_K)
+            };
+            bent_a = with_curvature(a, k);
+            bent_b = with_curvature(b, -k);
+            (&bent_a, &bent_b)
+        }
         _ => (a, b),
     };
     // The turn across the gap is the mean of the two ends' curvatures times the gap (the
@@ -484,6 +537,7 @@ fn hermite(pa: [f64; 2], ta: [f64; 2], pb: [f64; 2], tb: [f64; 2]) -> (Vec<[f64;
         sigma: 0.0,
         span: 0.0,
         k_raw: 0.0,
+        t_own: None,
     };
     let b = End { p: pb, ..a };
     // Tangent length: exact for a circular arc turning by theta (4 R tan(theta / 4) =

@@ -210,3 +210,54 @@ fn a_crest_just_before_an_end_does_not_turn_its_tangent() {
     let l = linked_with_one_skip(&parts, 5.0);
     assert_eq!(l.gaps.len(), 1, "{:?}", l.gaps);
 }
+
+/// A short piece (6 mm, its span 4.2 mm: too short to read a curvature to carry over a gap) on a
+/// crest of radius 5 mm (0.2/mm), between skips of 5 and 4 mm to long, nearly straight pieces.
+/// Its chord points about 12 deg off at each end, and bent by the other end's curvature (about
+/// none) it stays so: the arcs miss and the pieces beyond were left out as ones that "may
+/// continue" the path. Its own three points bend far beyond their noise, and its last
+/// millimetre follows their circle: its tangent comes from that circle, and both skips are
+/// bridged.
+#[test]
+fn a_short_piece_on_a_crest_takes_its_own_tangent() {
+    let k = |s: f64| 0.2 * (-(s - 8.0).powi(2) / (2.0 * 3.0f64.powi(2))).exp();
+    let parts = pieces(k, &[(-40.0, 0.0), (5.0, 11.0), (15.0, 50.0)]);
+    let short = end_of(&parts[1].pts).expect("end");
+    assert!(!short.k_read(), "span {}", short.span);
+    let heading: f64 = (0..14_200)
+        .map(|i| k(-60.0 + (i as f64 + 0.5) * 0.005) * 0.005)
+        .sum();
+    let own = short.t_own.expect("the short piece's own tangent");
+    let off_deg = (own[1].atan2(own[0]) - heading).to_degrees().abs();
+    assert!(off_deg < 3.0, "own tangent {off_deg:.1} deg off");
+    let l = link(&parts, 10.0, None).expect("linked");
+    assert_eq!(l.pieces, 3, "{:?}", l.left_out);
+    assert!(l.is_whole(), "{:?}", l.left_out);
+    assert_eq!(l.gaps.len(), 2, "{:?}", l.gaps);
+}
+
+/// A short straight piece, scattered by 0.03 mm, reads no own tangent (its three points do not
+/// bend beyond twice their noise), nor does a short bent piece whose last millimetre hooks off
+/// its circle by 20 deg (the pencil's flick at a skip).
+#[test]
+fn a_straight_or_hooked_short_piece_keeps_its_chord() {
+    let mut rng = ChaCha8Rng::seed_from_u64(7);
+    let scatter = Normal::new(0.0, 0.03).expect("a normal scatter");
+    for _ in 0..20 {
+        let mut v = line([0.0, 0.0], 10.0, 5.0);
+        for p in v.iter_mut() {
+            p[1] += scatter.sample(&mut rng);
+        }
+        assert!(end_of(&v).expect("end").t_own.is_none());
+    }
+    let k = |_: f64| 0.2;
+    let mut bent = curve(k, 0.0, 5.0);
+    let last = *bent.last().expect("a point");
+    let hook = line(last, 0.2 * 65.0 * 180.0 / std::f64::consts::PI - 20.0, 1.0);
+    bent.extend(hook.into_iter().skip(1));
+    let e = end_of(&bent).expect("end");
+    assert!(!e.k_read(), "span {}", e.span);
+    assert!(e.t_own.is_none());
+    let e = end_of(&curve(k, 0.0, 6.0)).expect("end");
+    assert!(e.t_own.is_some());
+}
