@@ -15,6 +15,18 @@ mod section;
 
 pub(crate) use section::Occluders;
 
+/// The owner of blocks around a seed too faint to begin a piece: not seeded again, but free
+/// to walk.
+const TRIED: u32 = u32::MAX;
+
+/// Why a seed began no piece.
+enum Unbegun {
+    /// Less darkness-weighted width than [`TrackParams::min_mass`].
+    TooFaint,
+    /// Wider than pencil, no direction, or nothing to walk.
+    Other,
+}
+
 /// One tracked piece of stroke, pixel coordinates.
 #[derive(Debug, Clone)]
 pub(crate) struct Piece {
@@ -84,9 +96,15 @@ pub(crate) fn track_all(
         let id = pieces.len() as u32 + 1;
         let seed = map.block_centre_px(i % map.w, i / map.w);
         let piece = tracker.track_from(seed, id, seeds);
-        // Whatever happened, the seed's surroundings are done.
-        tracker.mark(seed, 2.0 * map.k as f64, id);
-        pieces.push(piece);
+        // Whatever happened, the seed's surroundings are done as seeds. Where the graphite was
+        // too faint to begin a piece, a walk from a darker stretch may still pass; anything
+        // else that began nothing (a blob wider than pencil) stays fenced off.
+        let owner = match piece {
+            Err(Unbegun::TooFaint) => TRIED,
+            _ => id,
+        };
+        tracker.mark(seed, 2.0 * map.k as f64, owner);
+        pieces.push(piece.ok());
     }
     progress.set_position(seeds.len() as u64);
     pieces.into_iter().flatten().collect()
@@ -104,18 +122,25 @@ pub(super) struct Tracker<'a> {
 }
 
 impl Tracker<'_> {
-    fn track_from(&mut self, seed: [f64; 2], id: u32, seeds: &[bool]) -> Option<Piece> {
-        let t0 = self.seed_tangent(seed, seeds)?;
+    fn track_from(&mut self, seed: [f64; 2], id: u32, seeds: &[bool]) -> Result<Piece, Unbegun> {
+        let t0 = self.seed_tangent(seed, seeds).ok_or(Unbegun::Other)?;
         let wide = 1.0 * self.p.px_per_mm;
         let half_len = 0.5 * self.p.step_px;
-        let (start, s0) = self.centre_at(seed, t0, half_len, wide)?;
+        let (start, s0) = self
+            .centre_at(seed, t0, half_len, wide)
+            .ok_or(Unbegun::Other)?;
         let width_px = (12.0 * s0.var).sqrt();
-        if s0.mass < self.p.min_mass || width_px > self.p.max_width_px {
-            return None;
+        if width_px > self.p.max_width_px {
+            return Err(Unbegun::Other);
+        }
+        if s0.mass < self.p.min_mass {
+            return Err(Unbegun::TooFaint);
         }
         let half_w = (0.9 * width_px + 2.0).max(0.25 * self.p.px_per_mm);
         // Re-centre with the narrow window.
-        let (start, s0) = self.centre_at(start, t0, half_len, half_w)?;
+        let (start, s0) = self
+            .centre_at(start, t0, half_len, half_w)
+            .ok_or(Unbegun::Other)?;
         let geom = Geom {
             half_w,
             width_px,
@@ -145,7 +170,10 @@ impl Tracker<'_> {
             back
         };
         pts.dedup();
-        (pts.len() >= 2).then_some(Piece {
+        if pts.len() < 2 {
+            return Err(Unbegun::Other);
+        }
+        Ok(Piece {
             pts_px: pts,
             closed,
         })
@@ -246,6 +274,8 @@ impl Tracker<'_> {
         End::Stopped
     }
 
+    /// The piece owning the block at `p`; 0 where none does (a seed too faint to begin a piece
+    /// owns nothing).
     fn visited_at(&self, p: [f64; 2]) -> u32 {
         let k = self.map.k as f64;
         if p[0] < 0.0 || p[1] < 0.0 {
@@ -255,7 +285,10 @@ impl Tracker<'_> {
         if bx >= self.map.w || by >= self.map.h {
             return 0;
         }
-        self.visited[by * self.map.w + bx]
+        match self.visited[by * self.map.w + bx] {
+            TRIED => 0,
+            owner => owner,
+        }
     }
 
     /// Marks the blocks within `radius_px` of `p` as belonging to piece `id`.
@@ -272,7 +305,7 @@ impl Tracker<'_> {
                 let c = self.map.block_centre_px(bx, by);
                 if dist(c, p) <= radius_px + 0.71 * k {
                     let v = &mut self.visited[by * self.map.w + bx];
-                    if *v == 0 {
+                    if *v == 0 || *v == TRIED {
                         *v = id;
                     }
                 }

@@ -304,3 +304,37 @@ fn jpeg_photo_through_the_cli() {
     assert!(o.status.success(), "{err}");
     assert!(err.contains("camera check"), "{err}");
 }
+
+/// Graphite fading over 24 mm at the circle's top to a darkness (0.105) too faint to begin a
+/// piece, and back: the faint stretch's seed blocks come first in the image's row order and
+/// begin no piece; the walks from the darker stretches either side must still follow it (the
+/// blocks of a seed that began nothing belong to no piece). Before, they stopped where those
+/// blocks began: at 300 dpi a gap of 11.2 mm across the top was left (exit 1).
+#[test]
+fn a_stretch_too_faint_to_begin_a_piece_is_followed_from_its_darker_ends() {
+    // The circle starts at its right (x = 100, y = 0) and turns left: its top at s = 157 mm.
+    let ramp = [0.4, 0.3, 0.22, 0.16, 0.12];
+    let mut faint_mm: Vec<[f64; 3]> = Vec::new();
+    for (i, d) in ramp.iter().enumerate() {
+        let (a, b) = (133.0 + 4.0 * i as f64, 137.0 + 4.0 * i as f64);
+        faint_mm.push([a, b, *d]);
+        faint_mm.push([314.0 - b, 314.0 - a, *d]);
+    }
+    faint_mm.push([153.0, 161.0, 0.105]);
+    for dpi in [300.0, 600.0] {
+        let s = RenderSpec {
+            dpi,
+            faint_mm: faint_mm.clone(),
+            ..sheet(41)
+        };
+        let trace = run(&render_scan(&s), &TraceOptions::default()).expect("traced");
+        let limit = if dpi < 400.0 { 0.02 } else { 0.015 };
+        check_whole(
+            &format!("faint_top_{dpi}dpi"),
+            &format!("faint top {dpi} dpi"),
+            &trace,
+            &s.pencil_mm,
+            limit,
+        );
+    }
+}
