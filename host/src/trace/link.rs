@@ -223,6 +223,12 @@ fn point_back(pts: &[[f64; 2]], l: f64) -> [f64; 2] {
     pts[0]
 }
 
+/// The curvature the centres' scatter ([`SAG_NOISE_MM`], twice over) reads through three
+/// points spanning `span` mm, 1/mm: a span's sag is `k span^2 / 8`.
+fn k_noise(span: f64) -> f64 {
+    2.0 * 8.0 * SAG_NOISE_MM / (span * span)
+}
+
 /// The circle through the points `from`, halfway and `to` mm back from the end of `pts`: the
 /// chord between the first and last (unit direction, length) and the signed curvature.
 fn three_point(pts: &[[f64; 2]], from: f64, to: f64) -> Option<([f64; 2], f64, f64)> {
@@ -300,8 +306,7 @@ fn own_tangent(
     ta: [f64; 2],
     k_raw: f64,
 ) -> Option<[f64; 2]> {
-    let noise = 2.0 * 8.0 * SAG_NOISE_MM / (span * span);
-    if k_raw.abs() <= 2.0 * noise || span < 2.0 * HOOK_CHORD_MM {
+    if k_raw.abs() <= 2.0 * k_noise(span) || span < 2.0 * HOOK_CHORD_MM {
         return None;
     }
     let mid = 0.5 * (skip + span);
@@ -506,7 +511,7 @@ fn bends_through(a: &End, b: &End, chord: [f64; 2], g: f64) -> Option<f64> {
     // enough to tell that from straight. A corner between straight strokes,
     // or a plotter's sawtooth, turns across the gap but not along its ends.
     let bends_too = |e: &End, k_out: f64| {
-        let noise = 2.0 * 8.0 * SAG_NOISE_MM / (e.span * e.span);
+        let noise = k_noise(e.span);
         let (own, need) = if e.k_read() {
             (e.k, k_out.abs().min(MAX_K))
         } else {

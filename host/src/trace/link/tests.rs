@@ -213,7 +213,7 @@ fn a_crest_just_before_an_end_does_not_turn_its_tangent() {
 
 /// A short piece (6 mm, its span 4.2 mm: too short to read a curvature to carry over a gap) on a
 /// crest of radius 5 mm (0.2/mm), between skips of 5 and 4 mm to long, nearly straight pieces.
-/// Its chord points about 12 deg off at each end, and bent by the other end's curvature (about
+/// Its chord points about 19 deg off at each end, and bent by the other end's curvature (about
 /// none) it stays so: the arcs miss and the pieces beyond were left out as ones that "may
 /// continue" the path. Its own three points bend far beyond their noise, and its last
 /// millimetre follows their circle: its tangent comes from that circle, and both skips are
