@@ -160,8 +160,8 @@ struct End {
     span: f64,
     /// The curvature through the span's ends and middle however short the span, 1/mm.
     k_raw: f64,
-    /// A short span's own tangent at the end, where its three points bend beyond their noise
-    /// and its last millimetre follows their circle (no hook): see [`own_tangent`].
+    /// A short span's own tangent at the end, from the circle through its three points, where
+    /// its last millimetre follows that circle (no hook): see [`own_tangent`].
     t_own: Option<[f64; 2]>,
 }
 
@@ -297,8 +297,9 @@ fn end_with(pts: &[[f64; 2]], skip: f64, strokes: Strokes) -> Option<End> {
 
 /// The tangent at the end of a span too short to read a curvature to carry across a gap,
 /// from its own circle (`ta`, the chord's direction at the span's middle, turned by `k_raw`),
-/// where it bends beyond its noise and the last [`HOOK_CHORD_MM`] follow it within
-/// [`HOOK_DEG`]; `None` otherwise (the chord then stands for the tangent).
+/// where the last [`HOOK_CHORD_MM`] follow that circle within [`HOOK_DEG`]; `None` otherwise
+/// (a hook: the chord then stands for the tangent). Whether it is taken is
+/// [`with_curvature`]'s choice.
 fn own_tangent(
     pts: &[[f64; 2]],
     skip: f64,
@@ -306,7 +307,7 @@ fn own_tangent(
     ta: [f64; 2],
     k_raw: f64,
 ) -> Option<[f64; 2]> {
-    if k_raw.abs() <= 2.0 * k_noise(span) || span < 2.0 * HOOK_CHORD_MM {
+    if span < 2.0 * HOOK_CHORD_MM {
         return None;
     }
     let mid = 0.5 * (skip + span);
@@ -320,12 +321,24 @@ fn own_tangent(
     (c >= HOOK_DEG.to_radians().cos()).then(|| rot(ta, k_raw * (mid - skip)))
 }
 
+/// Whether a short end's own three points bend beyond twice the scatter's curvature, with no
+/// hook at its end: it shows its own bend.
+fn reads_own_bend(e: &End) -> bool {
+    e.t_own.is_some() && e.k_raw.abs() > 2.0 * k_noise(e.span)
+}
+
 /// `e` bent by the curvature `k` it could not read itself (a short piece), `k` read by the other
 /// end (so within [`MAX_K`]): the chord's direction is the tangent at its middle, turned on to
-/// the end, unless the piece reads its own tangent ([`own_tangent`]).
+/// the end. Where its own points tell a bend ([`reads_own_bend`]), or tell that it does not
+/// bend as much as `k` (they differ from `k` by more than twice the scatter's curvature: a
+/// nearly straight piece past a crest the other end reads), it takes its own tangent
+/// ([`own_tangent`]) instead.
 fn with_curvature(e: &End, k: f64) -> End {
+    let own = e
+        .t_own
+        .filter(|_| reads_own_bend(e) || (e.k_raw - k).abs() > 2.0 * k_noise(e.span));
     End {
-        t: e.t_own.unwrap_or_else(|| rot(e.ta, k * e.mid_span())),
+        t: own.unwrap_or_else(|| rot(e.ta, k * e.mid_span())),
         k,
         ..*e
     }
@@ -433,10 +446,13 @@ fn continuity(a: &End, b: &End, reach: f64) -> Option<f64> {
         // Both short: they bend alike by what those that read their own bend read (a crest
         // between skips), else not at all.
         (false, false) => {
-            let own: Vec<f64> = [a.t_own.map(|_| a.k_raw), b.t_own.map(|_| -b.k_raw)]
-                .into_iter()
-                .flatten()
-                .collect();
+            let own: Vec<f64> = [
+                reads_own_bend(a).then_some(a.k_raw),
+                reads_own_bend(b).then_some(-b.k_raw),
+            ]
+            .into_iter()
+            .flatten()
+            .collect();
             let k = if own.is_empty() {
                 0.0
             } else {
