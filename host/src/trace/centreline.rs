@@ -19,6 +19,14 @@ pub(crate) use section::Occluders;
 /// to walk.
 const TRIED: u32 = u32::MAX;
 
+/// In faint graphite (a running mass under [`FAINT_MASS`] times [`TrackParams::min_mass`]), a
+/// window under half the running mass but holding at least [`FAINT_SHARE`] of it ends the piece
+/// only if the stroke is not back within [`LOOK_AHEAD`] more steps: the paper's tooth breaks
+/// faint graphite up, a skip leaves none.
+const FAINT_MASS: f64 = 2.0;
+const FAINT_SHARE: f64 = 0.2;
+const LOOK_AHEAD: usize = 2;
+
 /// Why a seed began no piece.
 enum Unbegun {
     /// Less darkness-weighted width than [`TrackParams::min_mass`].
@@ -244,8 +252,17 @@ impl Tracker<'_> {
             if owner != 0 && owner != id {
                 return End::Stopped;
             }
-            let found = self.centre_at(pred, t, half_len, half_w);
-            let mass = found.as_ref().map_or(0.0, |(_, s)| s.mass);
+            let mut found = self.centre_at(pred, t, half_len, half_w);
+            let mut mass = found.as_ref().map_or(0.0, |(_, s)| s.mass);
+            if mass < 0.5 * ema && mass >= FAINT_SHARE * ema && ema < FAINT_MASS * self.p.min_mass {
+                // Faint graphite broken up by the paper's tooth, not a skip: where the stroke is
+                // back within LOOK_AHEAD steps, every window on the way holding graphite, walk on
+                // from there.
+                if let Some((f, m)) = self.ahead(c, t, geom, id, ema) {
+                    found = Some(f);
+                    mass = m;
+                }
+            }
             if mass < 0.5 * ema {
                 // Half-mass crossing between the last centre and this step, then back by
                 // half the stroke width.
@@ -272,6 +289,39 @@ impl Tracker<'_> {
             pts.push(p);
         }
         End::Stopped
+    }
+
+    /// The first centre 2..=[`LOOK_AHEAD`] + 1 steps on from `c` along `t` whose window holds at
+    /// least half of `ema`, every window before it at least [`FAINT_SHARE`] of it, inside the
+    /// area and not on another piece; with its mass.
+    fn ahead(
+        &self,
+        c: [f64; 2],
+        t: [f64; 2],
+        geom: Geom,
+        id: u32,
+        ema: f64,
+    ) -> Option<(([f64; 2], section::Section), f64)> {
+        let step = self.p.step_px;
+        for j in 2..=LOOK_AHEAD + 1 {
+            let pred = [c[0] + j as f64 * step * t[0], c[1] + j as f64 * step * t[1]];
+            if !(self.roi)(pred) {
+                return None;
+            }
+            let owner = self.visited_at(pred);
+            if owner != 0 && owner != id {
+                return None;
+            }
+            let f = self.centre_at(pred, t, 0.5 * step, geom.half_w)?;
+            let m = f.1.mass;
+            if m >= 0.5 * ema {
+                return Some((f, m));
+            }
+            if m < FAINT_SHARE * ema {
+                return None;
+            }
+        }
+        None
     }
 
     /// The piece owning the block at `p`; 0 where none does (a seed too faint to begin a piece

@@ -338,3 +338,35 @@ fn a_stretch_too_faint_to_begin_a_piece_is_followed_from_its_darker_ends() {
         );
     }
 }
+
+/// The same circle fading at its top to faint graphite (darkness 0.14) broken up by a coarse
+/// grain (0.35 of its darkness per pixel, as a paper's tooth does), with a 3 mm skip in it, at
+/// 300 dpi. The grain leaves windows under half the running mass here and there; where one
+/// holds graphite and the stroke is back within two more steps, the walk goes on (in faint
+/// graphite only). Before, the walk ended at such a window, nothing began again before the
+/// skip, and the gap was 12.3 mm (over `--max-gap-mm`, exit 1).
+#[test]
+fn faint_graphite_broken_up_by_grain_is_followed_to_its_skip() {
+    let mut faint_mm: Vec<[f64; 3]> = Vec::new();
+    for (i, d) in [0.4, 0.3, 0.22].iter().enumerate() {
+        let (a, b) = (133.0 + 4.0 * i as f64, 137.0 + 4.0 * i as f64);
+        faint_mm.push([a, b, *d]);
+        faint_mm.push([314.0 - b, 314.0 - a, *d]);
+    }
+    faint_mm.push([145.0, 169.0, 0.14]);
+    let s = RenderSpec {
+        dpi: 300.0,
+        pencil_grain: 0.35,
+        faint_mm,
+        skips_mm: vec![[155.0, 158.0]],
+        ..sheet(43)
+    };
+    let trace = run(&render_scan(&s), &TraceOptions::default()).expect("traced");
+    check_whole(
+        "faint_grain_300dpi",
+        "faint grain 300 dpi",
+        &trace,
+        &s.pencil_mm,
+        0.02,
+    );
+}
