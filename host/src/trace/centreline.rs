@@ -245,11 +245,7 @@ impl Tracker<'_> {
                 return End::Stopped;
             };
             let pred = [c[0] + step * t[0], c[1] + step * t[1]];
-            if !(self.roi)(pred) {
-                return End::Stopped;
-            }
-            let owner = self.visited_at(pred);
-            if owner != 0 && owner != id {
+            if !self.free_at(pred, id) {
                 return End::Stopped;
             }
             let mut found = self.centre_at(pred, t, half_len, half_w);
@@ -258,9 +254,9 @@ impl Tracker<'_> {
                 // Faint graphite broken up by the paper's tooth, not a skip: where the stroke is
                 // back within LOOK_AHEAD steps, every window on the way holding graphite, walk on
                 // from there.
-                if let Some((f, m)) = self.ahead(c, t, geom, id, ema) {
+                if let Some(f) = self.ahead(c, t, geom, id, ema) {
+                    mass = f.1.mass;
                     found = Some(f);
-                    mass = m;
                 }
             }
             if mass < 0.5 * ema {
@@ -293,7 +289,7 @@ impl Tracker<'_> {
 
     /// The first centre 2..=[`LOOK_AHEAD`] + 1 steps on from `c` along `t` whose window holds at
     /// least half of `ema`, every window before it at least [`FAINT_SHARE`] of it, inside the
-    /// area and not on another piece; with its mass.
+    /// area and not on another piece.
     fn ahead(
         &self,
         c: [f64; 2],
@@ -301,27 +297,29 @@ impl Tracker<'_> {
         geom: Geom,
         id: u32,
         ema: f64,
-    ) -> Option<(([f64; 2], section::Section), f64)> {
+    ) -> Option<([f64; 2], section::Section)> {
         let step = self.p.step_px;
         for j in 2..=LOOK_AHEAD + 1 {
             let pred = [c[0] + j as f64 * step * t[0], c[1] + j as f64 * step * t[1]];
-            if !(self.roi)(pred) {
-                return None;
-            }
-            let owner = self.visited_at(pred);
-            if owner != 0 && owner != id {
+            if !self.free_at(pred, id) {
                 return None;
             }
             let f = self.centre_at(pred, t, 0.5 * step, geom.half_w)?;
             let m = f.1.mass;
             if m >= 0.5 * ema {
-                return Some((f, m));
+                return Some(f);
             }
             if m < FAINT_SHARE * ema {
                 return None;
             }
         }
         None
+    }
+
+    /// Whether piece `id` may walk onto `p`: inside the area and not on another piece.
+    fn free_at(&self, p: [f64; 2], id: u32) -> bool {
+        let owner = self.visited_at(p);
+        (self.roi)(p) && (owner == 0 || owner == id)
     }
 
     /// The piece owning the block at `p`; 0 where none does (a seed too faint to begin a piece
