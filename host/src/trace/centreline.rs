@@ -20,12 +20,17 @@ pub(crate) use section::Occluders;
 const TRIED: u32 = u32::MAX;
 
 /// In faint graphite (a running mass under [`FAINT_MASS`] times [`TrackParams::min_mass`]), a
-/// window under half the running mass but holding at least [`FAINT_SHARE`] of it ends the piece
-/// only if the stroke is not back within [`LOOK_AHEAD`] more steps: the paper's tooth breaks
-/// faint graphite up, a skip leaves none.
+/// window under half the running mass ends the piece only if the stroke does not go on: back at
+/// half the stroke's level within [`BACK_WITHIN`] more steps, or the next [`FAINT_RUN`] steps
+/// (2 mm) holding half of it on average, with at most one window under [`FAINT_SHARE`] of it on
+/// the way. The pencil's pressure drops, the paper's tooth breaks faint graphite up, a skip
+/// leaves none. The level is the running mass, but at most what begins a piece and at least
+/// [`FAINT_FLOOR`] of that (the paper's noise).
 const FAINT_MASS: f64 = 2.0;
 const FAINT_SHARE: f64 = 0.2;
-const LOOK_AHEAD: usize = 2;
+const BACK_WITHIN: usize = 2;
+const FAINT_RUN: usize = 8;
+const FAINT_FLOOR: f64 = 0.25;
 
 /// Why a seed began no piece.
 enum Unbegun {
@@ -248,15 +253,25 @@ impl Tracker<'_> {
             if !self.free_at(pred, id) {
                 return End::Stopped;
             }
-            let mut found = self.centre_at(pred, t, half_len, half_w);
-            let mut mass = found.as_ref().map_or(0.0, |(_, s)| s.mass);
-            if mass < 0.5 * ema && mass >= FAINT_SHARE * ema && ema < FAINT_MASS * self.p.min_mass {
-                // Faint graphite broken up by the paper's tooth, not a skip: where the stroke is
-                // back within LOOK_AHEAD steps, every window on the way holding graphite, walk on
-                // from there.
-                if let Some(f) = self.ahead(c, t, geom, id, ema) {
-                    mass = f.1.mass;
-                    found = Some(f);
+            let found = self.centre_at(pred, t, half_len, half_w);
+            let mass = found.as_ref().map_or(0.0, |(_, s)| s.mass);
+            if mass < 0.5 * ema && ema < FAINT_MASS * self.p.min_mass {
+                // Graphite gone fainter, or broken up by the paper's tooth, not a skip: where
+                // the next FAINT_RUN steps hold half the stroke's level on average, walk
+                // through them.
+                let level = ema.clamp(FAINT_FLOOR * self.p.min_mass, self.p.min_mass);
+                if let Some(run) = self.faint_run(pts, t, half_w, id, level) {
+                    for (p, m) in run {
+                        if may_close && pts.len() > 12 && dist(p, start) < 1.5 * step {
+                            return End::Closed;
+                        }
+                        t = heading(pts, p, t);
+                        ema = 0.9 * ema + 0.1 * m;
+                        last_mass = m;
+                        self.mark(p, half_w + self.map.k as f64, id);
+                        pts.push(p);
+                    }
+                    continue;
                 }
             }
             if mass < 0.5 * ema {
@@ -274,11 +289,7 @@ impl Tracker<'_> {
             if may_close && pts.len() > 12 && dist(p, start) < 1.5 * step {
                 return End::Closed;
             }
-            let back = pts[pts.len().saturating_sub(4)];
-            let d = dist(p, back);
-            if d > 1e-9 {
-                t = [(p[0] - back[0]) / d, (p[1] - back[1]) / d];
-            }
+            t = heading(pts, p, t);
             ema = 0.9 * ema + 0.1 * mass;
             last_mass = mass;
             self.mark(p, half_w + self.map.k as f64, id);
@@ -287,33 +298,54 @@ impl Tracker<'_> {
         End::Stopped
     }
 
-    /// The first centre 2..=[`LOOK_AHEAD`] + 1 steps on from `c` along `t` whose window holds at
-    /// least half of `ema`, every window before it at least [`FAINT_SHARE`] of it, inside the
-    /// area and not on another piece.
-    fn ahead(
+    /// The centres on from the last of `pts` (heading `t`), each with its window's mass, up to
+    /// where the stroke goes on: back at half of `level` within [`BACK_WITHIN`] more steps
+    /// (after a hole, for two steps running), or [`FAINT_RUN`] steps holding half of `level` on
+    /// average. At most one window holds under [`FAINT_SHARE`] of `level` (a grain hole: its
+    /// centre is the step's prediction); every step is inside the area and not on another
+    /// piece.
+    fn faint_run(
         &self,
-        c: [f64; 2],
+        pts: &[[f64; 2]],
         t: [f64; 2],
-        geom: Geom,
+        half_w: f64,
         id: u32,
-        ema: f64,
-    ) -> Option<([f64; 2], section::Section)> {
+        level: f64,
+    ) -> Option<Vec<([f64; 2], f64)>> {
         let step = self.p.step_px;
-        for j in 2..=LOOK_AHEAD + 1 {
-            let pred = [c[0] + j as f64 * step * t[0], c[1] + j as f64 * step * t[1]];
+        let mut trail = pts[pts.len().saturating_sub(4)..].to_vec();
+        let (mut t, mut holes, mut sum) = (t, 0, 0.0);
+        let mut run: Vec<([f64; 2], f64)> = Vec::with_capacity(FAINT_RUN);
+        for j in 1..=FAINT_RUN {
+            let c = *trail.last()?;
+            let pred = [c[0] + step * t[0], c[1] + step * t[1]];
             if !self.free_at(pred, id) {
                 return None;
             }
-            let f = self.centre_at(pred, t, 0.5 * step, geom.half_w)?;
-            let m = f.1.mass;
-            if m >= 0.5 * ema {
-                return Some(f);
-            }
-            if m < FAINT_SHARE * ema {
-                return None;
+            let found = self.centre_at(pred, t, 0.5 * step, half_w);
+            let m = found.as_ref().map_or(0.0, |(_, s)| s.mass);
+            let p = match found {
+                Some((p, _)) if m >= FAINT_SHARE * level => p,
+                _ => {
+                    holes += 1;
+                    if holes > 1 {
+                        return None;
+                    }
+                    pred
+                }
+            };
+            sum += m;
+            t = heading(&trail, p, t);
+            trail.push(p);
+            let back = m >= 0.5 * level
+                && (2..=BACK_WITHIN + 1).contains(&j)
+                && (holes == 0 || run.last().is_some_and(|r| r.1 >= 0.5 * level));
+            run.push((p, m));
+            if back {
+                return Some(run);
             }
         }
-        None
+        (sum >= 0.5 * level * FAINT_RUN as f64).then_some(run)
     }
 
     /// Whether piece `id` may walk onto `p`: inside the area and not on another piece.
@@ -359,6 +391,20 @@ impl Tracker<'_> {
                 }
             }
         }
+    }
+}
+
+/// The heading on to `p` from the last points of `pts`: the chord from four steps back (`t`
+/// where that is no chord).
+fn heading(pts: &[[f64; 2]], p: [f64; 2], t: [f64; 2]) -> [f64; 2] {
+    let Some(&back) = pts.get(pts.len().saturating_sub(4)) else {
+        return t;
+    };
+    let d = dist(p, back);
+    if d > 1e-9 {
+        [(p[0] - back[0]) / d, (p[1] - back[1]) / d]
+    } else {
+        t
     }
 }
 

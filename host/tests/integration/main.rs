@@ -56,6 +56,7 @@ mod sim_plan;
 mod sim_simulate;
 mod tiago_real;
 mod trace_cli;
+mod trace_faint;
 mod trace_hard;
 mod trace_independent;
 mod trace_photos;
