@@ -255,45 +255,42 @@ impl Tracker<'_> {
             }
             let found = self.centre_at(pred, t, half_len, half_w);
             let mass = found.as_ref().map_or(0.0, |(_, s)| s.mass);
-            if mass < 0.5 * ema && ema < FAINT_MASS * self.p.min_mass {
+            let (run, single);
+            let steps: &[([f64; 2], f64)] = if mass < 0.5 * ema {
                 // Graphite gone fainter, or broken up by the paper's tooth, not a skip: where
                 // the next FAINT_RUN steps hold half the stroke's level on average, walk
                 // through them.
                 let level = ema.clamp(FAINT_FLOOR * self.p.min_mass, self.p.min_mass);
-                if let Some(run) = self.faint_run(pts, t, half_w, id, level) {
-                    for (p, m) in run {
-                        if may_close && pts.len() > 12 && dist(p, start) < 1.5 * step {
-                            return End::Closed;
-                        }
-                        t = heading(pts, p, t);
-                        ema = 0.9 * ema + 0.1 * m;
-                        last_mass = m;
-                        self.mark(p, half_w + self.map.k as f64, id);
-                        pts.push(p);
-                    }
-                    continue;
-                }
-            }
-            if mass < 0.5 * ema {
-                // Half-mass crossing between the last centre and this step, then back by
-                // half the stroke width.
-                let frac =
-                    ((last_mass - 0.5 * ema) / (last_mass - mass).max(1e-12)).clamp(0.0, 1.0);
-                return End::Faded {
-                    trim_px: 0.5 * width_px - frac * step,
+                run = (ema < FAINT_MASS * self.p.min_mass)
+                    .then(|| self.faint_run(pts, t, half_w, id, level))
+                    .flatten();
+                let Some(run) = &run else {
+                    // Half-mass crossing between the last centre and this step, then back by
+                    // half the stroke width.
+                    let frac =
+                        ((last_mass - 0.5 * ema) / (last_mass - mass).max(1e-12)).clamp(0.0, 1.0);
+                    return End::Faded {
+                        trim_px: 0.5 * width_px - frac * step,
+                    };
                 };
-            }
-            let Some((p, _)) = found else {
-                return End::Stopped;
+                run
+            } else {
+                let Some((p, _)) = found else {
+                    return End::Stopped;
+                };
+                single = [(p, mass)];
+                &single
             };
-            if may_close && pts.len() > 12 && dist(p, start) < 1.5 * step {
-                return End::Closed;
+            for &(p, m) in steps {
+                if may_close && pts.len() > 12 && dist(p, start) < 1.5 * step {
+                    return End::Closed;
+                }
+                t = heading(pts, p, t);
+                ema = 0.9 * ema + 0.1 * m;
+                last_mass = m;
+                self.mark(p, half_w + self.map.k as f64, id);
+                pts.push(p);
             }
-            t = heading(pts, p, t);
-            ema = 0.9 * ema + 0.1 * mass;
-            last_mass = mass;
-            self.mark(p, half_w + self.map.k as f64, id);
-            pts.push(p);
         }
         End::Stopped
     }
