@@ -257,12 +257,14 @@ impl Tracker<'_> {
             let mass = found.as_ref().map_or(0.0, |(_, s)| s.mass);
             let (run, single);
             let steps: &[([f64; 2], f64)] = if mass < 0.5 * ema {
-                // Graphite gone fainter, or broken up by the paper's tooth, not a skip: where
-                // the next FAINT_RUN steps hold half the stroke's level on average, walk
-                // through them.
-                let level = ema.clamp(FAINT_FLOOR * self.p.min_mass, self.p.min_mass);
+                // In faint graphite, gone fainter or broken up by the paper's tooth, not a
+                // skip: where the stroke goes on (back within BACK_WITHIN steps, or FAINT_RUN
+                // steps holding half its level on average), walk through to there.
                 run = (ema < FAINT_MASS * self.p.min_mass)
-                    .then(|| self.faint_run(pts, t, half_w, id, level))
+                    .then(|| {
+                        let level = ema.clamp(FAINT_FLOOR * self.p.min_mass, self.p.min_mass);
+                        self.faint_run(pts, t, half_w, id, level)
+                    })
                     .flatten();
                 let Some(run) = &run else {
                     // Half-mass crossing between the last centre and this step, then back by
