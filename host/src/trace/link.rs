@@ -18,7 +18,10 @@
 //! Links are taken cheapest first, each end once, a cycle only as
 //! the closing link of a chain, so a second pencil stroke crossing the path is passed over: its
 //! ends meet the path's ends at the wrong angle, and where the crossing cut the path in two the
-//! two halves continue each other across it. Gaps up to `max_gap_mm` are bridged: a cubic
+//! two halves continue each other across it. On the rig's one path a second round reads the
+//! free ends of the chains again through the chains themselves ([`relink`]: a short stroke
+//! between two skips gets the bend of the stroke it is linked to) and links what it then
+//! admits. Gaps up to `max_gap_mm` are bridged: a cubic
 //! Hermite curve through both ends' positions and tangents as a first guess, then refitted
 //! from the written points on both sides ([`bridge_fit`]).
 //!
@@ -160,6 +163,9 @@ struct End {
     span: f64,
     /// The curvature through the span's ends and middle however short the span, 1/mm.
     k_raw: f64,
+    /// The curvature over the span's last [`K_SPAN_MM`] (the whole span when shorter),
+    /// unclamped, 1/mm: where the path bends harder towards the end than over the span.
+    k_near: f64,
     /// A short span's own tangent at the end, from the circle through its three points, where
     /// its last millimetre follows that circle (no hook): see [`own_tangent`].
     t_own: Option<[f64; 2]>,
@@ -263,6 +269,7 @@ fn end_with(pts: &[[f64; 2]], skip: f64, strokes: Strokes) -> Option<End> {
     let p0 = pts[pts.len() - 1];
     let q1 = point_back(pts, skip);
     let (chord, n, k_raw) = three_point(pts, skip, span)?;
+    let k_near = three_point(pts, skip, skip + K_SPAN_MM.min(span - skip)).map_or(k_raw, |v| v.2);
     // Curvature only from a span long enough to tell it from the centreline's noise.
     let k = if span >= K_SPAN_MM {
         k_raw.clamp(-MAX_K, MAX_K)
@@ -291,6 +298,7 @@ fn end_with(pts: &[[f64; 2]], skip: f64, strokes: Strokes) -> Option<End> {
         sigma: 0.15 / span.max(0.5),
         span,
         k_raw,
+        k_near,
         t_own,
     })
 }
@@ -527,14 +535,21 @@ fn bends_through(a: &End, b: &End, chord: [f64; 2], g: f64) -> Option<f64> {
     // enough to tell that from straight. A corner between straight strokes,
     // or a plotter's sawtooth, turns across the gap but not along its ends.
     let bends_too = |e: &End, k_out: f64| {
-        let noise = k_noise(e.span);
-        let (own, need) = if e.k_read() {
-            (e.k, k_out.abs().min(MAX_K))
+        // (curvature, span it was read over, what it must reach)
+        let reads = if e.k_read() {
+            let need = k_out.abs().min(MAX_K);
+            [
+                (e.k, e.span, need),
+                (e.k_near.clamp(-MAX_K, MAX_K), K_SPAN_MM, need),
+            ]
         } else {
-            (e.k_raw, k_out.abs())
+            [(e.k_raw, e.span, k_out.abs()); 2]
         };
         // The span must be long enough to tell a bend of half the mean from a straight one.
-        noise <= 0.5 * need && own * k_out.signum() >= 0.5 * need - noise
+        reads.iter().any(|&(own, span, need)| {
+            let noise = k_noise(span);
+            noise <= 0.5 * need && own * k_out.signum() >= 0.5 * need - noise
+        })
     };
     let k_mean = turn / len;
     (ok && bends_too(a, k_mean) && bends_too(b, -k_mean)).then_some((alpha - beta).abs())
@@ -558,6 +573,7 @@ fn hermite(pa: [f64; 2], ta: [f64; 2], pb: [f64; 2], tb: [f64; 2]) -> (Vec<[f64;
         sigma: 0.0,
         span: 0.0,
         k_raw: 0.0,
+        k_near: 0.0,
         t_own: None,
     };
     let b = End { p: pb, ..a };
@@ -680,6 +696,12 @@ impl Network {
             }
             partner[c.a] = Some(c.b);
             partner[c.b] = Some(c.a);
+        }
+        let first = walk_chains(&pieces, &piece_ends, &partner);
+        // The rig's one path only: a plotter's lines meet at corners and crossings, where a
+        // chain's end read through its bridges would turn onto the crossing line.
+        if strokes == Strokes::OnePath {
+            relink::relink(&first, &pieces, &piece_ends, &mut partner, max_gap_mm);
         }
         let chains = walk_chains(&pieces, &piece_ends, &partner);
         let built: Vec<(Stroke, Vec<Gap>, Vec<bool>)> = chains
@@ -1351,5 +1373,6 @@ pub(super) fn orient(mut s: Stroke) -> Stroke {
     s
 }
 
+mod relink;
 #[cfg(test)]
 mod tests;

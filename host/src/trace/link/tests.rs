@@ -280,3 +280,30 @@ fn a_short_piece_past_a_crest_is_not_bent_by_it() {
     assert!(l.is_whole(), "{:?}", l.left_out);
     assert_eq!(l.gaps.len(), 2, "{:?}", l.gaps);
 }
+
+/// A crest of radius 3.6 mm (curvature 0.28/mm) with a 5.5 mm skip just past its top, and the
+/// stroke before the skip only 2.9 mm long (a 1.2 mm skip before it): too short to read its own
+/// bend, so the first round cannot tell the crest from a corner and leaves the two apart. Read
+/// from the chain it is already linked to (its stroke and the one before, bridged), the end bends
+/// with the crest: linked, one path.
+#[test]
+fn a_short_stroke_between_skips_on_a_crest_is_read_through_its_chain() {
+    let k = |s: f64| -0.28 * (-(s * s) / (2.0 * 3.5f64.powi(2))).exp();
+    let spans = [(-60.0, -7.5), (-6.3, -3.4), (2.1, 60.0)];
+    let l = link(&pieces(k, &spans), 10.0, None).expect("linked");
+    assert_eq!(l.pieces, 3, "{:?}", l.left_out);
+    assert!(l.is_whole(), "{:?}", l.left_out);
+    let skips: Vec<f64> = l.gaps.iter().map(|g| g.length_mm).collect();
+    assert_eq!(skips.len(), 2, "{skips:?}");
+}
+
+/// The same crest with a 5.5 mm skip just past its top, between long strokes: beyond the skip
+/// the curve straightens within a few millimetres, so its end's 8 mm read a mean curvature under
+/// half the turn across the gap, as a corner's straight stroke would. Its last 5 mm bend with
+/// the crest: linked.
+#[test]
+fn a_crest_that_straightens_past_its_skip_bends_through() {
+    let k = |s: f64| -0.28 * (-(s * s) / (2.0 * 3.5f64.powi(2))).exp();
+    let l = linked_with_one_skip(&pieces(k, &[(-60.0, -1.0), (4.5, 60.0)]), 5.5);
+    assert_eq!(l.gaps.len(), 1, "{:?}", l.gaps);
+}
