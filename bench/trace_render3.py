@@ -311,6 +311,8 @@ def main():
     ap.add_argument("--out", default="target/tmp/trace_render3")
     ap.add_argument("--centre-off-px", type=float, default=0.0,
                     help="photos: the lens's optical centre this far (0.5-1x, random direction) from the image centre, as in a photo cropped off its centre")
+    ap.add_argument("--grey", action="store_true",
+                    help="turn each image to grey (luminance) before tracing, as a greyscale scanner or camera mode would: the red print as dark as the pencil")
     args = ap.parse_args()
     os.makedirs(args.out, exist_ok=True)
     met = exit1 = low0 = 0
@@ -318,6 +320,9 @@ def main():
         ext = "jpg" if args.medium == "photo" else "png"
         image = os.path.join(args.out, f"{args.kind}_{args.medium}_{seed}.{ext}")
         truth, _, _ = render(seed, args.kind, args.medium, image, args.centre_off_px)
+        if args.grey:
+            grey = cv2.cvtColor(cv2.imread(image), cv2.COLOR_BGR2GRAY)
+            cv2.imwrite(image, grey)
         csv_path = image[:-4] + ".csv"
         if os.path.exists(csv_path):
             os.remove(csv_path)

@@ -191,6 +191,15 @@ fn report(trace: &Trace) {
             g.to_mm[1]
         );
     }
+    if let Some(g) = trace.grey_print {
+        errln!(
+            "rigctl trace: the printed {} is as dark as the pencil (no red ink: a greyscale scan, or the path printed in grey or black): {:.0} of its {:.0} mm seen and left out, with any pencil within {} mm of it (a crossing is bridged; pencil running along it is missing); scan in colour with the path printed in red to trace pencil on it",
+            if g.path == ReferencePath::Circle { "circle" } else { "line" },
+            g.seen_mm,
+            g.printed_mm,
+            rigctl::trace::grey_print::STRIP_MM,
+        );
+    }
     if let Some((path, mean)) = l.hint {
         errln!(
             "rigctl trace: {} piece(s) linked; the path lies {mean:.1} mm from the printed {} on average",
@@ -250,6 +259,12 @@ fn missing_message(trace: &Trace) -> String {
                 "another drawn line,"
             },
             describe(o)
+        ));
+    }
+    for p in &trace.ends_at_print_mm {
+        parts.push(format!(
+            "whatever goes on from its end at ({:.1}, {:.1}) mm under the printed path (as dark as the pencil)",
+            p[0], p[1]
         ));
     }
     format!(

@@ -37,6 +37,7 @@ pub mod chain;
 mod error;
 pub mod fiducials;
 mod files;
+pub mod grey_print;
 pub mod homography;
 mod ink;
 mod lines;
@@ -62,6 +63,7 @@ pub use chain::{polyline_length, resample, Stroke};
 pub use error::TraceError;
 pub use fiducials::{Disc, Fiducials};
 pub use files::{load_prepared, load_scan, write_csv, MAX_RGB_BYTES};
+pub use grey_print::GreyPrint;
 pub use homography::Homography;
 pub use lines::DrawnLine;
 pub use link::{Gap, LeftOut, LeftOutKind, Linking};
@@ -84,6 +86,11 @@ pub struct Trace {
     pub strokes: Vec<Stroke>,
     /// How the path was linked: its gaps (bridged or missing) and what was left out.
     pub linking: Linking,
+    /// The printed path found as dark as the pencil (no red ink), left out with the pencil
+    /// near it.
+    pub grey_print: Option<GreyPrint>,
+    /// The path's free ends that meet the grey print: it may go on under the print, unseen.
+    pub ends_at_print_mm: Vec<[f64; 2]>,
     /// The fiducials (fiducial mapping only).
     pub fiducials: Option<Fiducials>,
     /// Distance between the orientation dot's measured and predicted positions, mm.
@@ -104,7 +111,7 @@ impl Trace {
     /// Whether the written stroke is the whole drawn path: no gap longer than `max_gap_mm`,
     /// nothing left out that could be part of it (FORMATS.md: exit 0 only then).
     pub fn is_whole(&self) -> bool {
-        self.linking.is_whole()
+        self.linking.is_whole() && self.ends_at_print_mm.is_empty()
     }
 }
 
@@ -128,10 +135,21 @@ pub fn trace_prepared(
     progress: &ProgressBar,
 ) -> Result<Trace, TraceError> {
     let Tracked { pieces_mm, meta } = track(img, prepared, opts, progress)?;
-    let hint = match (opts.path, opts.mapping) {
-        (_, Mapping::Scale { .. }) | (PathChoice::Free, _) => None,
-        (PathChoice::Known(p), _) => Some(p),
-        (PathChoice::Auto, _) => {
+    // Without red ink the printed path, if printed, is graphite to the tracker.
+    let grey_print = match opts.mapping {
+        Mapping::Scale { .. } => None,
+        _ if meta.red_ink => None,
+        _ => grey_print::find(&pieces_mm),
+    };
+    let pieces_mm = match &grey_print {
+        Some(g) => grey_print::strip(pieces_mm, g),
+        None => pieces_mm,
+    };
+    let hint = match (opts.path, opts.mapping, grey_print) {
+        (_, Mapping::Scale { .. }, _) | (PathChoice::Free, ..) => None,
+        (PathChoice::Known(p), ..) => Some(p),
+        (PathChoice::Auto, _, Some(g)) => Some(g.path),
+        (PathChoice::Auto, _, None) => {
             let c = link::length_near(&pieces_mm, ReferencePath::Circle, opts.band_mm);
             let l = link::length_near(&pieces_mm, ReferencePath::Line, opts.band_mm);
             let (best, len) = if c >= l {
@@ -161,9 +179,23 @@ pub fn trace_prepared(
             ..s.clone()
         })
         .collect();
+    let path = &linking.path;
+    let ends_at_print_mm = match (
+        grey_print,
+        path.closed,
+        path.points_mm.first(),
+        path.points_mm.last(),
+    ) {
+        (Some(g), false, Some(a), Some(b)) => {
+            [*a, *b].into_iter().filter(|p| g.meets(*p)).collect()
+        }
+        _ => Vec::new(),
+    };
     Ok(Trace {
         strokes,
         linking,
+        grey_print,
+        ends_at_print_mm,
         fiducials: meta.fiducials,
         dot_residual_mm: meta.dot_residual_mm,
         camera: meta.camera,
@@ -202,6 +234,8 @@ pub fn trace_paths(
 
 /// How the image was mapped to sheet mm.
 struct Meta {
+    /// Whether red ink was found (the printed path told from the pencil by colour).
+    red_ink: bool,
     fiducials: Option<Fiducials>,
     dot_residual_mm: Option<f64>,
     camera: Option<CameraModel>,
@@ -279,6 +313,7 @@ fn track(
     Ok(Tracked {
         pieces_mm,
         meta: Meta {
+            red_ink: ink.red_ink.is_some(),
             fiducials: fids,
             dot_residual_mm,
             camera,

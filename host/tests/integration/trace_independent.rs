@@ -234,6 +234,11 @@ fn trace_outcome(img: &image::RgbImage, c: &Case) -> Outcome {
                                     )
                                 },
                             ))
+                            .chain(
+                                t.ends_at_print_mm
+                                    .iter()
+                                    .map(|p| format!("end at the grey print {p:.1?}")),
+                            )
                             .collect();
                         format!("; {}", why.join("; "))
                     }
@@ -251,6 +256,9 @@ enum Renderer {
     /// `render2`; its photos' principal point 0.5-1 times `centre_off_px` from the image centre
     /// (a photo cropped off its centre), in a direction and at a distance set by the seed.
     Independent { centre_off_px: f64 },
+    /// `render2`'s image turned to grey (luminance): a greyscale scan, the red print as dark as
+    /// the pencil.
+    IndependentGrey,
 }
 
 const INDEPENDENT: Renderer = Renderer::Independent { centre_off_px: 0.0 };
@@ -278,6 +286,7 @@ fn run_set(
                 };
                 render_independent_shot(&c, kind, &s, seed)
             }
+            Renderer::IndependentGrey => grey(render_independent(&c, kind, seed)),
             Renderer::Project => render_project(&c, kind, seed),
         };
         if let Some(dir) = std::env::var_os("TRACE_INDEPENDENT_DUMP") {
@@ -318,6 +327,18 @@ fn run_set(
         out.iter().filter(|o| o.exit0 && o.coverage < 0.95).count()
     );
     out
+}
+
+/// `img` in grey: each pixel's luminance (ITU-R BT.601) in all three channels.
+fn grey(mut img: image::RgbImage) -> image::RgbImage {
+    for p in img.pixels_mut() {
+        let [r, g, b] = p.0.map(f64::from);
+        let l = (0.299 * r + 0.587 * g + 0.114 * b)
+            .round()
+            .clamp(0.0, 255.0) as u8;
+        p.0 = [l; 3];
+    }
+    img
 }
 
 /// The bars, on every seed: never exit 0 below 0.95 coverage; exit 0 with coverage >= 0.95 and
@@ -386,6 +407,35 @@ fn independent_scans_600dpi() {
 fn independent_scans_300dpi() {
     let outs = run_set("render2 scan 300", Kind::Scan300, INDEPENDENT, seeds(), 3);
     check("render2 scan 300", &outs, 0.02);
+}
+
+/// A greyscale scan: render2's 300 dpi scans in grey, the printed path as dark as the pencil.
+/// The print is found by its geometry and left out with the pencil near it; before, every one
+/// exited 1 naming the pencil as "another drawn line" (the print was the longest). Where the
+/// pencil runs along the print, or ends within 3 mm of it, it cannot be told from the print:
+/// exit 1 is right there. Never exit 0 below 0.95 coverage; every whole trace within the bars.
+#[test]
+fn independent_scans_300dpi_greyscale() {
+    let outs = run_set(
+        "render2 scan 300 grey",
+        Kind::Scan300,
+        Renderer::IndependentGrey,
+        seeds(),
+        3,
+    );
+    let partial_exit0 = outs.iter().filter(|o| o.exit0 && o.coverage < 0.95).count();
+    assert_eq!(partial_exit0, 0, "exit 0 below 0.95 coverage");
+    for (i, o) in outs.iter().filter(|o| o.exit0).enumerate() {
+        assert!(
+            o.rms <= 0.02,
+            "whole #{i}: coverage {:.4}, rms {:.4} ({})",
+            o.coverage,
+            o.rms,
+            o.note
+        );
+    }
+    let whole = outs.iter().filter(|o| o.exit0).count();
+    assert!(2 * whole >= outs.len(), "{whole} of {} whole", outs.len());
 }
 
 #[test]
@@ -608,4 +658,37 @@ fn cli_exit_codes_and_messages() {
         "{err}"
     );
     assert!(!out.exists());
+}
+
+/// A greyscale scan through the CLI: whole (seed 5, a line crossing the print) is exit 0 with
+/// the grey print named; a line running along the print (seed 17) is exit 1 naming the end at
+/// the print, nothing written.
+#[test]
+fn cli_greyscale_scans_name_the_grey_print() {
+    let dir = tempfile::tempdir().expect("tempdir");
+    for (seed, code) in [(5, 0), (17, 1)] {
+        let c = case(seed, true, false);
+        let scan = dir.path().join(format!("grey{seed}.png"));
+        grey(render_independent(&c, Kind::Scan300, seed))
+            .save(&scan)
+            .expect("png");
+        let out = dir.path().join(format!("grey{seed}.csv"));
+        let o = Command::new(env!("CARGO_BIN_EXE_rigctl"))
+            .arg("trace")
+            .arg(&scan)
+            .arg("--out")
+            .arg(&out)
+            .output()
+            .expect("run");
+        let err = String::from_utf8_lossy(&o.stderr);
+        assert_eq!(o.status.code(), Some(code), "seed {seed}: {err}");
+        assert!(
+            err.contains("the printed line is as dark as the pencil"),
+            "seed {seed}: {err}"
+        );
+        assert_eq!(out.exists(), code == 0, "seed {seed}");
+        if code == 1 {
+            assert!(err.contains("under the printed path"), "{err}");
+        }
+    }
 }
