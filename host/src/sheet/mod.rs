@@ -101,6 +101,14 @@ impl ReferencePath {
         }
     }
 
+    /// Distance from the sheet point `p` (mm) to the printed path, mm.
+    pub fn distance_mm(self, p: [f64; 2]) -> f64 {
+        match self {
+            ReferencePath::Circle => (p[0].hypot(p[1]) - CIRCLE_RADIUS_MM).abs(),
+            ReferencePath::Line => (p[0].abs() - LINE_HALF_LENGTH_MM).max(0.0).hypot(p[1]),
+        }
+    }
+
     /// Whether the path is closed.
     pub fn is_closed(self) -> bool {
         matches!(self, Self::Circle)

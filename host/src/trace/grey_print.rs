@@ -8,7 +8,7 @@
 //! run says so.
 
 use super::chain::{polyline_length, PieceMm};
-use super::plane::dist;
+use super::link::length_near;
 use crate::sheet::{ReferencePath, CIRCLE_RADIUS_MM, LINE_HALF_LENGTH_MM};
 
 /// Centres within this of a printed path are seen on it, mm (the mapping's error and the
@@ -35,18 +35,10 @@ pub struct GreyPrint {
     pub printed_mm: f64,
 }
 
-/// Distance from `p` to the printed `path`, mm.
-fn from_path(path: ReferencePath, p: [f64; 2]) -> f64 {
-    match path {
-        ReferencePath::Circle => (p[0].hypot(p[1]) - CIRCLE_RADIUS_MM).abs(),
-        ReferencePath::Line => (p[0].abs() - LINE_HALF_LENGTH_MM).max(0.0).hypot(p[1]),
-    }
-}
-
 impl GreyPrint {
     /// Whether a free end at `p` meets the print (the path may go on under it, unseen).
     pub fn meets(&self, p: [f64; 2]) -> bool {
-        from_path(self.path, p) <= END_NEAR_MM
+        self.path.distance_mm(p) <= END_NEAR_MM
     }
 }
 
@@ -57,23 +49,13 @@ fn printed_length(path: ReferencePath) -> f64 {
     }
 }
 
-/// Length of the segments of `pieces` with both ends within `band` of `path`, mm.
-fn length_on(pieces: &[PieceMm], path: ReferencePath, band: f64) -> f64 {
-    pieces
-        .iter()
-        .flat_map(|p| p.pts.windows(2))
-        .filter(|w| from_path(path, w[0]) <= band && from_path(path, w[1]) <= band)
-        .map(|w| dist(w[0], w[1]))
-        .sum()
-}
-
 /// The grey print among `pieces`, if most of a printed path is seen on them.
 pub(crate) fn find(pieces: &[PieceMm]) -> Option<GreyPrint> {
     [ReferencePath::Circle, ReferencePath::Line]
         .into_iter()
         .map(|path| GreyPrint {
             path,
-            seen_mm: length_on(pieces, path, ON_PRINT_MM),
+            seen_mm: length_near(pieces, path, ON_PRINT_MM),
             printed_mm: printed_length(path),
         })
         .filter(|g| g.seen_mm >= SEEN_SHARE * g.printed_mm)
@@ -88,7 +70,7 @@ pub(crate) fn strip(pieces: Vec<PieceMm>, print: &GreyPrint) -> Vec<PieceMm> {
         let near: Vec<bool> = piece
             .pts
             .iter()
-            .map(|p| from_path(print.path, *p) <= STRIP_MM)
+            .map(|p| print.path.distance_mm(*p) <= STRIP_MM)
             .collect();
         if !near.iter().any(|n| *n) {
             out.push(piece);
@@ -173,7 +155,7 @@ mod tests {
             assert!(p
                 .pts
                 .iter()
-                .all(|q| from_path(ReferencePath::Circle, *q) > STRIP_MM));
+                .all(|q| ReferencePath::Circle.distance_mm(*q) > STRIP_MM));
         }
     }
 

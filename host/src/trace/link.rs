@@ -35,7 +35,7 @@
 use super::chain::{polyline_length, PieceMm, Stroke};
 use super::plane::{dist, norm, sub, Grid};
 use super::{bridge_fit, smooth};
-use crate::sheet::{ReferencePath, CIRCLE_RADIUS_MM, LINE_HALF_LENGTH_MM};
+use crate::sheet::ReferencePath;
 
 /// Marks shorter than this are specks (dust, grain), mm.
 pub const MIN_MARK_MM: f64 = 5.0;
@@ -599,14 +599,6 @@ fn hermite(pa: [f64; 2], ta: [f64; 2], pb: [f64; 2], tb: [f64; 2]) -> (Vec<[f64;
     (inner, len)
 }
 
-/// Distance from `p` to the printed path.
-fn from_printed(path: ReferencePath, p: [f64; 2]) -> f64 {
-    match path {
-        ReferencePath::Circle => (p[0].hypot(p[1]) - CIRCLE_RADIUS_MM).abs(),
-        ReferencePath::Line => (p[0].abs() - LINE_HALF_LENGTH_MM).max(0.0).hypot(p[1]),
-    }
-}
-
 /// A chain of pieces: piece indices in order, each reversed or not, and whether it closes.
 #[derive(Debug, Clone)]
 struct Chain {
@@ -1148,7 +1140,7 @@ pub(crate) fn length_near(pieces: &[PieceMm], path: ReferencePath, band_mm: f64)
     pieces
         .iter()
         .flat_map(|p| p.pts.windows(2))
-        .filter(|w| from_printed(path, w[0]) <= band_mm && from_printed(path, w[1]) <= band_mm)
+        .filter(|w| path.distance_mm(w[0]) <= band_mm && path.distance_mm(w[1]) <= band_mm)
         .map(|w| dist(w[0], w[1]))
         .sum()
 }
@@ -1158,7 +1150,7 @@ fn mean_from(pts: &[[f64; 2]], h: ReferencePath) -> f64 {
     if pts.is_empty() {
         return f64::INFINITY;
     }
-    pts.iter().map(|p| from_printed(h, *p)).sum::<f64>() / pts.len() as f64
+    pts.iter().map(|p| h.distance_mm(*p)).sum::<f64>() / pts.len() as f64
 }
 
 /// Candidate links between ends of different pieces or the two ends of one piece, with the

@@ -10,7 +10,7 @@ fn rigctl() -> Command {
 }
 
 /// `rigctl trace SCAN --out OUT`.
-fn trace_to(scan: &Path, out: &Path) -> Output {
+pub(crate) fn trace_to(scan: &Path, out: &Path) -> Output {
     rigctl()
         .arg("trace")
         .arg(scan)

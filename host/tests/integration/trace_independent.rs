@@ -15,6 +15,7 @@ mod render2;
 #[path = "trace_independent/reported.rs"]
 mod reported;
 
+use crate::trace_cli::trace_to;
 use cases::{case, measure, Case};
 use indicatif::ProgressBar;
 use rand::{Rng, SeedableRng};
@@ -22,7 +23,6 @@ use rand_chacha::ChaCha8Rng;
 use render2::{photo_view, scan_view, Printed, Scene};
 use rigctl::sheet::ReferencePath;
 use rigctl::trace::{render_photo, render_scan, trace_image, PhotoSpec, RenderSpec, TraceOptions};
-use std::process::Command;
 
 #[derive(Clone, Copy, Debug, PartialEq)]
 enum Kind {
@@ -622,13 +622,7 @@ fn cli_exit_codes_and_messages() {
         .save(&scan)
         .expect("png");
     let out = dir.path().join("whole.csv");
-    let o = Command::new(env!("CARGO_BIN_EXE_rigctl"))
-        .arg("trace")
-        .arg(&scan)
-        .arg("--out")
-        .arg(&out)
-        .output()
-        .expect("run");
+    let o = trace_to(&scan, &out);
     let err = String::from_utf8_lossy(&o.stderr);
     assert_eq!(o.status.code(), Some(0), "{err}");
     // Every skip is listed (besides any ring dot or speck of dust the pencil crossed).
@@ -644,13 +638,7 @@ fn cli_exit_codes_and_messages() {
         .save(&scan)
         .expect("png");
     let out = dir.path().join("gap.csv");
-    let o = Command::new(env!("CARGO_BIN_EXE_rigctl"))
-        .arg("trace")
-        .arg(&scan)
-        .arg("--out")
-        .arg(&out)
-        .output()
-        .expect("run");
+    let o = trace_to(&scan, &out);
     let err = String::from_utf8_lossy(&o.stderr);
     assert_eq!(o.status.code(), Some(1), "{err}");
     assert!(
@@ -673,13 +661,7 @@ fn cli_greyscale_scans_name_the_grey_print() {
             .save(&scan)
             .expect("png");
         let out = dir.path().join(format!("grey{seed}.csv"));
-        let o = Command::new(env!("CARGO_BIN_EXE_rigctl"))
-            .arg("trace")
-            .arg(&scan)
-            .arg("--out")
-            .arg(&out)
-            .output()
-            .expect("run");
+        let o = trace_to(&scan, &out);
         let err = String::from_utf8_lossy(&o.stderr);
         assert_eq!(o.status.code(), Some(code), "seed {seed}: {err}");
         assert!(
