@@ -127,6 +127,13 @@ pub fn render_overlay(img: &RgbImage, trace: &Trace, spacing_mm: f64) -> RgbImag
     for g in trace.linking.missing() {
         polyline(&mut out, &[to.px(g.from_mm), to.px(g.to_mm)], RED, 3);
     }
+    // A red cross, 3 mm across, on each end of the path that meets a grey print.
+    for p in &trace.ends_at_print_mm {
+        for d in [[1.5, 1.5], [1.5, -1.5]] {
+            let (a, b) = ([p[0] - d[0], p[1] - d[1]], [p[0] + d[0], p[1] + d[1]]);
+            polyline(&mut out, &[to.px(a), to.px(b)], RED, 3);
+        }
+    }
     out
 }
 

@@ -674,3 +674,26 @@ fn cli_greyscale_scans_name_the_grey_print() {
         }
     }
 }
+
+/// The overlay of a greyscale scan whose path ends at the print (render2 seed 17) marks that end
+/// with a red cross, 3 mm across: more red than the same trace without the end listed.
+#[test]
+fn overlay_marks_an_end_at_the_grey_print() {
+    let c = case(17, true, false);
+    let img = grey(render_independent(&c, Kind::Scan300, 17));
+    let t = trace_image(&img, &TraceOptions::default(), &ProgressBar::hidden()).expect("trace");
+    assert_eq!(t.ends_at_print_mm.len(), 1, "{:?}", t.ends_at_print_mm);
+    let red = |t: &rigctl::trace::Trace| {
+        rigctl::trace::overlay::render_overlay(&img, t, 180.0)
+            .pixels()
+            .filter(|p| p.0[0] > 200 && p.0[1] < 60 && p.0[2] < 60)
+            .count()
+    };
+    let without = rigctl::trace::Trace {
+        ends_at_print_mm: Vec::new(),
+        ..t.clone()
+    };
+    // Two strokes of 4.2 mm at 11.8 px/mm, 3 px wide: about 300 pixels.
+    let more = red(&t) as f64 - red(&without) as f64;
+    assert!(more > 150.0, "{more} more red pixels");
+}
