@@ -109,6 +109,14 @@ impl ReferencePath {
         }
     }
 
+    /// Length of the printed path, mm.
+    pub fn length_mm(self) -> f64 {
+        match self {
+            ReferencePath::Circle => std::f64::consts::TAU * CIRCLE_RADIUS_MM,
+            ReferencePath::Line => 2.0 * LINE_HALF_LENGTH_MM,
+        }
+    }
+
     /// Whether the path is closed.
     pub fn is_closed(self) -> bool {
         matches!(self, Self::Circle)
@@ -124,8 +132,7 @@ impl ReferencePath {
         };
         match self {
             Self::Circle => {
-                let n = ((std::f64::consts::TAU * CIRCLE_RADIUS_MM / spacing_mm).ceil() as usize)
-                    .max(8);
+                let n = ((self.length_mm() / spacing_mm).ceil() as usize).max(8);
                 (0..n)
                     .map(|i| {
                         let a = std::f64::consts::TAU * i as f64 / n as f64;
@@ -134,7 +141,7 @@ impl ReferencePath {
                     .collect()
             }
             Self::Line => {
-                let n = ((2.0 * LINE_HALF_LENGTH_MM / spacing_mm).ceil() as usize).max(1);
+                let n = ((self.length_mm() / spacing_mm).ceil() as usize).max(1);
                 (0..=n)
                     .map(|i| {
                         let x =

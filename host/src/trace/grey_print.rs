@@ -7,9 +7,9 @@
 //! gap, bridged and listed; the pencil running along it a longer one, missing: exit 1), and the
 //! run says so.
 
-use super::chain::{polyline_length, PieceMm};
+use super::chain::{polyline_length, PieceMm, Stroke};
 use super::link::length_near;
-use crate::sheet::{ReferencePath, CIRCLE_RADIUS_MM, LINE_HALF_LENGTH_MM};
+use crate::sheet::ReferencePath;
 
 /// Centres within this of a printed path are seen on it, mm (the mapping's error and the
 /// centres' scatter on a crisp printed line).
@@ -36,16 +36,16 @@ pub struct GreyPrint {
 }
 
 impl GreyPrint {
-    /// Whether a free end at `p` meets the print (the path may go on under it, unseen).
-    pub fn meets(&self, p: [f64; 2]) -> bool {
-        self.path.distance_mm(p) <= END_NEAR_MM
-    }
-}
-
-fn printed_length(path: ReferencePath) -> f64 {
-    match path {
-        ReferencePath::Circle => 2.0 * std::f64::consts::PI * CIRCLE_RADIUS_MM,
-        ReferencePath::Line => 2.0 * LINE_HALF_LENGTH_MM,
+    /// The free ends of `path` that meet the print (it may go on under the print, unseen); none
+    /// for a closed path.
+    pub(crate) fn ends_meeting(&self, path: &Stroke) -> Vec<[f64; 2]> {
+        match (path.closed, path.points_mm.first(), path.points_mm.last()) {
+            (false, Some(a), Some(b)) => [*a, *b]
+                .into_iter()
+                .filter(|p| self.path.distance_mm(*p) <= END_NEAR_MM)
+                .collect(),
+            _ => Vec::new(),
+        }
     }
 }
 
@@ -56,7 +56,7 @@ pub(crate) fn find(pieces: &[PieceMm]) -> Option<GreyPrint> {
         .map(|path| GreyPrint {
             path,
             seen_mm: length_near(pieces, path, ON_PRINT_MM),
-            printed_mm: printed_length(path),
+            printed_mm: path.length_mm(),
         })
         .filter(|g| g.seen_mm >= SEEN_SHARE * g.printed_mm)
         .max_by(|a, b| (a.seen_mm / a.printed_mm).total_cmp(&(b.seen_mm / b.printed_mm)))

@@ -179,18 +179,7 @@ pub fn trace_prepared(
             ..s.clone()
         })
         .collect();
-    let path = &linking.path;
-    let ends_at_print_mm = match (
-        grey_print,
-        path.closed,
-        path.points_mm.first(),
-        path.points_mm.last(),
-    ) {
-        (Some(g), false, Some(a), Some(b)) => {
-            [*a, *b].into_iter().filter(|p| g.meets(*p)).collect()
-        }
-        _ => Vec::new(),
-    };
+    let ends_at_print_mm = grey_print.map_or_else(Vec::new, |g| g.ends_meeting(&linking.path));
     Ok(Trace {
         strokes,
         linking,

@@ -40,7 +40,8 @@ pub(super) fn relink(
         let [head, tail] = free_ends(c);
         chain_of[head] = ci;
         chain_of[tail] = ci;
-        let mut own = [piece_ends[head / 2], piece_ends[tail / 2]];
+        let piece_end = |k: usize| piece_ends[k / 2].map(|e| e[k % 2]);
+        let mut read = [piece_end(head), piece_end(tail)];
         if c.order.len() >= 2 {
             let (stroke, ..) = build(c, pieces, piece_ends, Strokes::OnePath);
             chain_len[ci] = stroke.length_mm();
@@ -49,26 +50,16 @@ pub(super) fn relink(
                 closed: false,
             };
             if let Some([h, t]) = ends(&whole, Strokes::OnePath) {
-                own = [
-                    own[0].map(|mut e| {
-                        e[head % 2] = h;
-                        e
-                    }),
-                    own[1].map(|mut e| {
-                        e[tail % 2] = t;
-                        e
-                    }),
-                ];
+                read = [Some(h), Some(t)];
                 any = true;
             }
         } else {
             chain_len[ci] = super::polyline_length(&pieces[head / 2].pts, false);
         }
         // Only the free ends are read; the pieces' linked ends stay out of the candidates.
-        for (k, e) in [(head, own[0]), (tail, own[1])] {
-            if let Some(e) = e {
-                let slot = reread[k / 2].get_or_insert(e);
-                slot[k % 2] = e[k % 2];
+        for (k, e) in [(head, read[0]), (tail, read[1])] {
+            if let (Some(e), Some(pe)) = (e, piece_ends[k / 2]) {
+                reread[k / 2].get_or_insert(pe)[k % 2] = e;
             }
         }
     }
@@ -78,7 +69,8 @@ pub(super) fn relink(
     let reach = max_gap_mm.max(1.0);
     let mut cands = candidates(&reread, reach, |ea, eb, a, b| {
         let (ca, cb) = (chain_of[ea], chain_of[eb]);
-        if ca == usize::MAX || cb == usize::MAX || partner[ea].is_some() || partner[eb].is_some() {
+        // Free chain ends only (their partners are unset by construction).
+        if ca == usize::MAX || cb == usize::MAX {
             return None;
         }
         // Something new to try: one of the two chains has read its end again.
