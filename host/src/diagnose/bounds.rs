@@ -1,29 +1,18 @@
-//! Physical bounds on the fitted values (JSON key `bounds`): a compliance, a stiffness, a
-//! backlash, a clearance and a payload mass cannot be negative. A final value below its bound is
+//! Physical bounds on the fitted values (JSON key `bounds`; the bounds are the effect table's,
+//! [`crate::model::effect::bound`]): a compliance, a stiffness, a backlash, a clearance and a
+//! payload mass cannot be negative. A final value below its bound is
 //! never silently kept: it is held at the bound and the other unknowns are refitted (the
 //! constrained least-squares optimum when one bound is active), repeated while another value
 //! crosses its bound; when that refit fails the value is kept and reported `unphysical`. A
 //! stiffness enters the model as its inverse (deflection = moment / stiffness), so its bound is
-//! held as a rigid joint ([`RIGID_STIFFNESS_KGFM_PER_DEG`]).
+//! held as a rigid joint ([`crate::model::effect::RIGID_STIFFNESS_KGFM_PER_DEG`]).
 
 use serde::Serialize;
 
 use super::decide::{DecideConfig, Selection};
 use super::extended::{self, Unknown, Values};
 use crate::calib::MeasuredSet;
-use crate::model::Model;
-
-/// The stiffness (kgf.m per deg) that holds a joint rigid: its deflection at 1 kgf.m is 1e-6 deg.
-pub const RIGID_STIFFNESS_KGFM_PER_DEG: f64 = 1e6;
-
-/// A physical bound: values below `min` are not physical; such a value is held at `hold`.
-#[derive(Debug, Clone, Copy, PartialEq)]
-pub struct Bound {
-    /// Smallest physical value (a value below it is unphysical; a stiffness must be above it).
-    pub min: f64,
-    /// The value it is held at.
-    pub hold: f64,
-}
+use crate::model::effect::{bound, Bound};
 
 /// One value that fell outside its physical bound.
 #[derive(Debug, Clone, PartialEq, Serialize)]
@@ -39,33 +28,6 @@ pub struct BoundReport {
     /// `held_at_bound` (the value set to the bound, the others refitted) or `unphysical` (the
     /// refit failed: the value is kept and is not physical).
     pub action: String,
-}
-
-/// The physical bound of `u`, when it has one.
-pub fn lower_bound(u: Unknown, model: &Model) -> Option<Bound> {
-    let zero = Bound {
-        min: 0.0,
-        hold: 0.0,
-    };
-    match u {
-        Unknown::Compliance(_) => Some(zero),
-        Unknown::Param(i) => {
-            let tp = model.tilt_params()?;
-            if tp.iter().any(|t| i == t.stiffness) {
-                Some(Bound {
-                    min: 0.0,
-                    hold: RIGID_STIFFNESS_KGFM_PER_DEG,
-                })
-            } else if i == model.payload_param()
-                || tp.iter().any(|t| i == t.backlash || i == t.clearance)
-            {
-                Some(zero)
-            } else {
-                None
-            }
-        }
-        _ => None,
-    }
 }
 
 /// Holds every final value of `selection` below its bound at the bound and refits the others
@@ -84,14 +46,9 @@ pub fn enforce(
             .fitted
             .iter()
             .filter_map(|&u| {
-                let b = lower_bound(u, model)?;
+                let b = bound(u, model)?;
                 let v = selection.last.ext.value(u);
-                let out = if b.hold > b.min {
-                    v <= b.min
-                } else {
-                    v < b.min
-                };
-                out.then_some((u, v, b))
+                b.below(v).then_some((u, v, b))
             })
             .collect();
         if below.is_empty() {

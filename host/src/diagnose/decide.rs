@@ -45,6 +45,7 @@ use crate::calib::lm::LmConfig;
 use crate::calib::stats::autocorrelation_time;
 use crate::calib::CalibError;
 use crate::calib::MeasuredSet;
+use crate::model::effect::Tie;
 
 /// Settings of the selection.
 #[derive(Debug, Clone, PartialEq)]
@@ -313,22 +314,13 @@ pub(super) fn rank_contenders<'a>(
 }
 
 /// Occam's order of a candidate: its number of unknowns, then its harmonic order (a first
-/// harmonic is smoother than a second one; 0 for effects that are not harmonics). The
-/// transmission terms (`joint_scale`, `joint_coupling`, `hysteresis`) come after the others in a
-/// tie: they are n + n(n-1) + n more hypotheses of one unknown each, so one of them fits a given
-/// residual by chance far more often than a single named effect does.
+/// harmonic is smoother than a second one; 0 for effects that are not harmonics); the kinds the
+/// effect table ranks [`Tie::Transmission`] after every other.
 fn simplicity(c: &Candidate) -> (usize, u32) {
-    let family = c.id.split(':').next().unwrap_or("");
-    if matches!(family, "joint_scale" | "joint_coupling" | "hysteresis") {
-        return (usize::MAX, 0);
+    match c.effect.row().tie {
+        Tie::Transmission => (usize::MAX, 0),
+        Tie::Named => (c.unknowns.len(), c.effect.harmonic_order()),
     }
-    let order =
-        c.id.rsplit(':')
-            .next()
-            .and_then(|h| h.strip_prefix('h'))
-            .and_then(|n| n.parse().ok())
-            .unwrap_or(0);
-    (c.unknowns.len(), order)
 }
 
 pub use super::select::forward_selection;

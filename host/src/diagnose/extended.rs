@@ -427,8 +427,8 @@ impl Values for ExtModel {
             Unknown::ThermalPpm => self.model.time_terms_mut().thermal_ppm = v,
             Unknown::ThermalTauMin => {
                 // a time constant is positive: the fit's step is kept within the bound
-                let (lo, hi) = u.bounds().unwrap_or((f64::MIN_POSITIVE, f64::MAX));
-                self.model.time_terms_mut().thermal_tau_min = v.clamp(lo, hi);
+                let v = crate::model::effect::bound(u, &self.model).map_or(v, |b| b.clamp(v));
+                self.model.time_terms_mut().thermal_tau_min = v;
             }
             Unknown::Offset { .. } => return Err(offsets_elsewhere(u, &self.model)),
         }

@@ -67,6 +67,7 @@
 mod chain;
 mod data;
 pub mod dynamics;
+pub mod effect;
 mod error;
 pub mod gravity;
 pub mod ik;
@@ -82,6 +83,7 @@ mod tilt;
 pub mod time_terms;
 pub mod toml_file;
 pub mod transmission;
+pub mod unknown;
 
 pub use chain::*;
 pub use data::Data;

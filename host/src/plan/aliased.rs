@@ -26,6 +26,7 @@ use super::PlanError;
 use crate::calib::default_selection;
 use crate::diagnose::candidates::library_for;
 use crate::diagnose::extended::{ExtModel, Unknown, Values};
+use crate::model::effect::{self, EffectId};
 use crate::model::Model;
 
 /// An accepted effect is pinned down by the plan too when a parameter's sigma exceeds this
@@ -103,30 +104,23 @@ pub struct FromDiagnoseReport {
 /// (`hysteresis:j<i>`, `time_drift`, `time_drift:j<i>`, `thermal`): the measuring order that
 /// separates it from every effect of the pose alone. `None` for any other id.
 pub fn path_protocol(id: &str) -> Option<String> {
-    let joint = |j: &str| {
-        j.strip_prefix('j')
-            .filter(|n| !n.is_empty() && n.bytes().all(|b| b.is_ascii_digit()))
-            .map(str::to_string)
-    };
-    let timed = || {
-        format!(
-            "{id} grows with the time of a reading, not with the pose: give the pose file a time \
-             column `t`, spread the planned poses over the session and measure the first of them \
-             again at its end; the repeated readings separate it from every effect of the pose alone"
-        )
-    };
-    match id.split_once(':') {
-        Some(("hysteresis", j)) => joint(j).map(|i| {
-            format!(
+    let parsed: EffectId = id.parse().ok()?;
+    match parsed.row().path {
+        effect::Path::Pose => None,
+        effect::Path::Approach => {
+            let i = parsed.joint()? + 1;
+            Some(format!(
                 "{id} depends on the direction joint {i} last moved, not on the pose: measure every \
                  planned pose twice, reached once with joint {i} moving up and once moving down \
                  (diagnose reads the direction from the order of the rows); the difference of the \
                  two readings separates it from every effect of the pose alone"
-            )
-        }),
-        Some(("time_drift", j)) => joint(j).map(|_| timed()),
-        None if id == "time_drift" || id == "thermal" => Some(timed()),
-        _ => None,
+            ))
+        }
+        effect::Path::Time => Some(format!(
+            "{id} grows with the time of a reading, not with the pose: give the pose file a time \
+             column `t`, spread the planned poses over the session and measure the first of them \
+             again at its end; the repeated readings separate it from every effect of the pose alone"
+        )),
     }
 }
 

@@ -40,7 +40,7 @@ use super::candidates::CandidatePose;
 use super::setup::joints_dataset;
 use super::PlanError;
 use crate::diagnose::extended::{ExtModel, Unknown, Values};
-use crate::model::ParamKind;
+use crate::model::effect::bound;
 
 /// The values of the unknowns of interest, as fractions of their magnitudes, at which the
 /// linearity of a pose is checked.
@@ -99,27 +99,18 @@ pub struct Linearity {
     pub threshold: f64,
 }
 
-/// Whether `v` is a physical value of `u`: a payload mass and the joint-tilting values
-/// (clearance, backlash, stiffness) are not negative.
+/// Whether `v` is a physical value of `u` (the effect table's bounds: a negative payload,
+/// stiffness, clearance, backlash or compliance is not).
 fn physical(ext: &ExtModel, u: Unknown, v: f64) -> bool {
-    match u {
-        Unknown::Param(i) => match ext.model.params().get(i).map(|p| p.kind) {
-            Some(ParamKind::Payload | ParamKind::Tilt) => v >= 0.0,
-            _ => true,
-        },
-        _ => true,
-    }
+    bound(u, &ext.model).is_none_or(|b| b.admits(v))
 }
 
 /// The largest change of `u` considered: its own value for a quantity that cannot be negative
 /// (a change of more than 100 %), none otherwise.
 fn magnitude_cap(ext: &ExtModel, u: Unknown) -> f64 {
     let v = ext.value(u);
-    match u {
-        Unknown::Param(i) => match ext.model.params().get(i).map(|p| p.kind) {
-            Some(ParamKind::Payload | ParamKind::Tilt) if v > 0.0 => v,
-            _ => f64::INFINITY,
-        },
+    match bound(u, &ext.model) {
+        Some(b) if b.min == 0.0 && v > 0.0 => v,
         _ => f64::INFINITY,
     }
 }

@@ -17,7 +17,7 @@ use std::path::Path;
 
 use serde_json::{json, Map, Value};
 
-use super::effects::{EffectKind, JointTerm};
+use super::effects::{Change, JointTerm};
 use super::simulate::{SimConfig, SimError, SimOutput, SimPose};
 use crate::io::atomic::{check_text_for, write_bytes_atomic};
 use crate::io::finite::TextFormat;
@@ -54,11 +54,9 @@ pub fn truth_json(out: &SimOutput, cfg: &SimConfig) -> Value {
         .effects
         .iter()
         .map(|e| {
-            let params: Map<String, Value> = match &e.kind {
-                EffectKind::Params(list) => {
-                    list.iter().map(|(n, d)| (n.clone(), json!(d))).collect()
-                }
-                EffectKind::Joint(term) => {
+            let params: Map<String, Value> = match &e.change {
+                Change::Params(list) => list.iter().map(|(n, d)| (n.clone(), json!(d))).collect(),
+                Change::Joint(term) => {
                     let (name, v) = match *term {
                         JointTerm::Scale(j, v) => (format!("joint_scale_j{}", j + 1), v),
                         JointTerm::Coupling(i, k, v) => {

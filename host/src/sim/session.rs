@@ -52,7 +52,7 @@ use rand_chacha::ChaCha8Rng;
 use rand_distr::{Distribution, Normal};
 use rig_protocol::{encode_device, DeviceMsg, PotBatch, DEVICE_FRAME_MAX};
 
-use super::effects::{Effect, EffectKind};
+use super::effects::{Change, Effect};
 use super::paths::quintic_profile;
 use super::simulate::{truth_model, SimConfig, SimError};
 use crate::daq::recording::{RecordingError, RecordingMeta, RecordingWriter};
@@ -379,7 +379,7 @@ fn check(cfg: &SessionConfig) -> Result<(), SessionError> {
     if let Some(e) = cfg
         .effects
         .iter()
-        .find(|e| !matches!(e.kind, EffectKind::Params(_)))
+        .find(|e| !matches!(e.change, Change::Params(_)))
     {
         return bad(format!(
             "effect {}: time drifts and joint-angle terms are not simulated in a session; use `rigctl simulate` poses",

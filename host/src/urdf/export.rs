@@ -34,6 +34,7 @@ use nalgebra::{Matrix3, Rotation3, Vector3};
 use super::error::UrdfError;
 use super::import::rpy_of;
 use super::parse::{JointType, Urdf};
+use crate::model::effect::Kind;
 use crate::model::{axis_rotation, Model, Motion, ParamKind};
 
 /// A joint origin in URDF units.
@@ -125,16 +126,16 @@ fn not_representable(model: &Model, scale_written: bool) -> Vec<String> {
     if tr.is_active() {
         let mut terms = Vec::new();
         if tr.scale.iter().any(|v| *v != 0.0) {
-            terms.push("joint_scale");
+            terms.push(Kind::JointScale.family().to_string());
         }
         if tr.coupling.iter().flatten().any(|v| *v != 0.0) {
-            terms.push("joint_coupling");
+            terms.push(Kind::JointCoupling.family().to_string());
         }
         if tr.hysteresis_deg.iter().any(|v| *v != 0.0) {
-            terms.push("hysteresis");
+            terms.push(Kind::Hysteresis.family().to_string());
         }
         if tr.has_compliance() {
-            terms.push("compliance (gravity)");
+            terms.push(format!("{} (gravity)", Kind::Compliance.family()));
         }
         out.push(format!(
             "transmission terms ({}): they act on the joint readings, which a URDF takes as they \

@@ -165,6 +165,36 @@ fn tool_offset() {
     assert!(!r.diag.report.effects[0].unidentifiable.is_empty());
 }
 
+/// `tool_length` (the effect table's `tool_dz` alone) moves the Katana's tool point along the
+/// last frame's z, exactly as its declared tool length `d5` does: the simulated length change is
+/// found, named as one of the two, with the other reported `equivalent` (never as two effects).
+#[test]
+fn tool_length_is_named_with_its_equivalent_link_length() {
+    let r = run(&["tool_length=0.1"], 1);
+    let got = ids(&r);
+    assert_eq!(got.len(), 1, "{got:?}\n{}", r.diag.report.table());
+    let e = &r.diag.report.effects[0];
+    let pair = ["link_length:d5", "tool_length"];
+    assert!(pair.contains(&e.id.as_str()), "{got:?}");
+    let other = pair.iter().find(|i| **i != e.id).unwrap();
+    assert!(
+        e.equivalent.iter().any(|i| i == other),
+        "{}: equivalent {:?}",
+        e.id,
+        e.equivalent
+    );
+    let (v, s) = (
+        param(&r, "delta_mm"),
+        e.sigma.get("delta_mm").flatten().unwrap(),
+    );
+    assert!((v - 0.1).abs() < 3.0 * s + 0.005, "delta {v} +- {s}");
+    assert!(
+        final_val(&r) <= 1.5 * r.floor_mm,
+        "{}",
+        r.diag.report.table()
+    );
+}
+
 #[test]
 fn base_offset() {
     let r = assert_found("base_offset=0.1,-0.1,0.1", "base_offset", 1.5);

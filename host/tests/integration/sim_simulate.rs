@@ -188,7 +188,7 @@ fn link_payload_tilt_and_joint_values_change_the_truth() {
 fn bad_effects_are_rejected() {
     for bad in [
         "nope=1",
-        "link_length:a9=1",
+        "link_length:mount_x=1",
         "encoder_harmonic:j2:h4=1",
         "tool_offset=1,2",
         "payload=abc",
@@ -198,11 +198,65 @@ fn bad_effects_are_rejected() {
         assert!(parse_effect(bad).is_err(), "{bad} accepted");
     }
     let model = katana450(200.0).unwrap();
-    for bad in ["stiffness:j9=1", "stiffness:j2=-200", "time_drift:j7=1"] {
+    // well-formed ids the model has no value for
+    for bad in [
+        "link_length:a9=1",
+        "stiffness:j9=1",
+        "stiffness:j2=-200",
+        "time_drift:j7=1",
+    ] {
         let c = SimConfig {
             effects: vec![parse_effect(bad).unwrap()],
             ..SimConfig::default()
         };
         assert!(simulate(&model, &c).is_err(), "{bad} accepted");
     }
+}
+
+/// Every effect the candidate library offers (the effect table) can be simulated: its id reads
+/// back, takes the row's value count, and changes the truth model.
+#[test]
+fn every_offered_effect_can_be_simulated() {
+    use rigctl::model::effect::{library, Offers};
+    let offers = Offers {
+        approach: true,
+        time: true,
+    };
+    for model in [katana450(200.0).unwrap(), rigctl::model::ur5().unwrap()] {
+        let ids = library(&model, offers);
+        for id in &ids {
+            let (counts, _) = id.row().sim_values;
+            let mut values = vec!["0.01".to_string(); counts[0]];
+            if id.to_string() == "thermal" {
+                values[1] = "20".into();
+            }
+            let arg = format!("{id}={}", values.join(","));
+            let effect = parse_effect(&arg).unwrap_or_else(|e| panic!("{arg}: {e}"));
+            let mut truth = model.clone();
+            effect
+                .apply(&mut truth)
+                .unwrap_or_else(|e| panic!("{arg}: {e}"));
+            assert_ne!(
+                format!("{truth:?}"),
+                format!("{model:?}"),
+                "{arg} changed nothing"
+            );
+        }
+    }
+}
+
+#[test]
+fn a_tool_length_change_lengthens_tool_dz() {
+    let model = katana450(200.0).unwrap();
+    let mut truth = model.clone();
+    parse_effect("tool_length=0.5")
+        .unwrap()
+        .apply(&mut truth)
+        .unwrap();
+    let dz = |m: &rigctl::model::Model| m.param("tool_dz").unwrap();
+    assert!((dz(&truth) - dz(&model) - 0.5).abs() < 1e-12);
+    let q = [10.0, 100.0, -60.0, 30.0, 20.0];
+    let at = |m: &rigctl::model::Model| m.position_mm(&q, rigctl::model::Tilt::Off).unwrap();
+    let (a, b) = (at(&model), at(&truth));
+    assert!(((b - a).norm() - 0.5).abs() < 1e-9, "{}", (b - a).norm());
 }
