@@ -155,6 +155,31 @@ fn not_representable(model: &Model, scale_written: bool) -> Vec<String> {
             harmonics.join(", ")
         ));
     }
+    if model.time_terms().is_active() {
+        out.push(format!(
+            "time terms ({}): they depend on the time of a reading, which a URDF has not",
+            [
+                (model.time_terms().thermal_ppm != 0.0, Kind::Thermal),
+                (
+                    model.time_terms().drift_mm_per_h != Vector3::zeros(),
+                    Kind::TimeDrift,
+                ),
+                (
+                    model
+                        .time_terms()
+                        .joint_drift_deg_per_h
+                        .iter()
+                        .any(|r| *r != 0.0),
+                    Kind::JointDrift,
+                ),
+            ]
+            .iter()
+            .filter(|(on, _)| *on)
+            .map(|(_, k)| k.row().grammar)
+            .collect::<Vec<_>>()
+            .join(", ")
+        ));
+    }
     let payload = model.params()[model.payload_param()].value;
     if payload != 0.0 {
         out.push(format!(

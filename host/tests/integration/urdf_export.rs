@@ -473,3 +473,37 @@ fn exported_urdf_reads_back_as_the_same_model() {
         assert!((a - b).norm() < 1e-9, "{q:?}: {a} vs {b}");
     }
 }
+
+/// The effect table's `urdf_holds` is what `model2urdf` does: an effect a URDF cannot hold is
+/// named in `not_representable`, one it holds is not, on the UR5 (no tilting, link masses: every
+/// row but the tilting's is offered).
+#[test]
+fn the_effect_tables_urdf_column_is_what_the_export_says() {
+    use rigctl::model::effect::{library, Offers};
+    let model = rigctl::model::ur5().unwrap();
+    assert!(rigctl::urdf::model_to_urdf(&model)
+        .not_representable
+        .is_empty());
+    let offers = Offers {
+        approach: true,
+        time: true,
+    };
+    for id in library(&model, offers) {
+        let (counts, _) = id.row().sim_values;
+        let mut values = vec!["0.01".to_string(); counts[0]];
+        if id.to_string() == "thermal" {
+            values[1] = "20".into();
+        }
+        let effect =
+            rigctl::sim::effects::parse_effect(&format!("{id}={}", values.join(","))).unwrap();
+        let mut changed = model.clone();
+        effect.apply(&mut changed).unwrap();
+        let notes = rigctl::urdf::model_to_urdf(&changed).not_representable;
+        assert_eq!(
+            notes.is_empty(),
+            id.row().urdf_holds,
+            "{id}: urdf_holds {} but the export says {notes:?}",
+            id.row().urdf_holds
+        );
+    }
+}
