@@ -330,7 +330,12 @@ pub fn calibrate(
         Method::Influence => {
             // Same identifiable set as the standard fit; the influence iteration on it.
             let inf = fit_influence(nominal, cal, &standard.fitted, &opts.influence)?;
+            let rss_mm2 = position_errors(&inf.model, cal, tilt)?
+                .iter()
+                .map(|e| e.norm_squared())
+                .sum();
             Fit {
+                rss_mm2,
                 model: inf.model,
                 iterations: inf.iterations,
                 converged: inf.poses_converged == cal.len(),

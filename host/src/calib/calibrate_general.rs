@@ -183,6 +183,8 @@ fn model_fit(f: &GeneralFit) -> Fit {
         rank: f.rank,
         iterations: f.iterations,
         converged: f.converged,
+        rss_mm2: f.rss_mm2,
+        n_residuals: f.n_residuals,
     }
 }
 

@@ -7,16 +7,17 @@ use super::accumulate::{normal_equations_with, JointTrig, PositionNormalProblem}
 use super::error::CalibError;
 use super::identifiability::{analyse, scaled_svd, Identifiability};
 use super::lm::{solve, LmConfig};
-use super::normal::{solve_normal, solve_normal_from, use_normal_equations};
+use super::normal::{solve_normal, solve_normal_from, use_normal_equations, NormalReport};
 use super::problem::{
     param_vector, position_problem, stacked_jacobian, ModelProblem, Poses, Rows, SetUnknowns,
     Unknowns,
 };
 use crate::model::Model;
 
-/// Result of an identification: [`fit_parameters`] and [`fit_problem`] (a [`Model`] and its
+/// Result of every identification: [`fit_parameters`] and [`fit_problem`] (a [`Model`] and its
 /// parameters by model index), [`super::general::fit_general`] (a model with point offsets and
-/// [`super::unknown::Unknown`]s).
+/// [`super::unknown::Unknown`]s), `diagnose`'s extended fit
+/// ([`crate::diagnose::extended::fit`]: the extended model and its `Unknown`s).
 #[derive(Debug, Clone)]
 pub struct Fit<M = Model, U = usize> {
     /// The model with the fitted values.
@@ -38,21 +39,65 @@ pub struct Fit<M = Model, U = usize> {
     pub iterations: usize,
     /// Whether the solver converged (not stopped by the iteration cap).
     pub converged: bool,
+    /// Residual sum of squares at the solution, over every measured component (mm^2).
+    pub rss_mm2: f64,
+    /// Number of residuals (measured components: 3 per full position).
+    pub n_residuals: usize,
+}
+
+impl<M, U: PartialEq> Fit<M, U> {
+    /// One standard deviation of `u` (infinite when it was not fitted).
+    pub fn sigma_of(&self, u: U) -> f64 {
+        self.fitted
+            .iter()
+            .position(|f| *f == u)
+            .map_or(f64::INFINITY, |i| self.sigma[i])
+    }
 }
 
 impl<M, U> Fit<M, U> {
+    /// A fit that frees nothing: `model` as it is, with the residual sum of squares `rss_mm2`
+    /// of its `n_residuals` residuals; the split's unknowns all kept.
+    pub fn unfitted(model: M, split: Split<U>, rss_mm2: f64, n_residuals: usize) -> Self {
+        Fit {
+            model,
+            fitted: split.fitted,
+            fixed: split.fixed,
+            unidentifiable: split.unidentifiable,
+            sigma: Vec::new(),
+            condition_number: 1.0,
+            rank: split.rank,
+            iterations: 0,
+            converged: true,
+            rss_mm2,
+            n_residuals,
+        }
+    }
+
     /// The same fit with the model `f(model)`.
     pub fn map_model<N>(self, f: impl FnOnce(M) -> N) -> Fit<N, U> {
+        self.map(f, |u| u)
+    }
+
+    /// The same fit with every unknown `f(u)`.
+    pub fn map_unknowns<V>(self, f: impl Fn(U) -> V) -> Fit<M, V> {
+        self.map(|m| m, f)
+    }
+
+    /// The same fit with the model `model(m)` and every unknown `unknown(u)`.
+    pub fn map<N, V>(self, model: impl FnOnce(M) -> N, unknown: impl Fn(U) -> V) -> Fit<N, V> {
         Fit {
-            model: f(self.model),
-            fitted: self.fitted,
-            fixed: self.fixed,
+            model: model(self.model),
+            fitted: self.fitted.into_iter().map(&unknown).collect(),
+            fixed: self.fixed.into_iter().map(&unknown).collect(),
             unidentifiable: self.unidentifiable,
             sigma: self.sigma,
             condition_number: self.condition_number,
             rank: self.rank,
             iterations: self.iterations,
             converged: self.converged,
+            rss_mm2: self.rss_mm2,
+            n_residuals: self.n_residuals,
         }
     }
 }
@@ -203,21 +248,32 @@ pub fn fit_parameters_normal(start: &Model, on: &PositionFit<'_>) -> Result<Fit,
         solve_normal(&mut problem, x0, lm)
     }
     .map_err(CalibError::from_lm)?;
-    let mut unknowns = problem.into_unknowns();
-    unknowns.set(&rep.x)?;
+    Ok(fit_at_normal(split, problem.into_unknowns(), &rep, rtol)?.map_model(Unknowns::into_model))
+}
+
+/// The fit at the solution `rep` of normal equations: `state` set to it, the sigmas and the
+/// condition number from the square root of `J^T J` there (the tall Jacobian's column norms and
+/// singular values).
+pub fn fit_at_normal<U, S: SetUnknowns>(
+    split: Split<U>,
+    mut state: S,
+    rep: &NormalReport,
+    rtol: f64,
+) -> Result<Fit<S, U>, CalibError> {
+    state.set(&rep.x)?;
     let root = rep.normal.jacobian_root();
-    let sigma = parameter_sigmas_m(&root, rep.normal.m, rep.normal.rtr, rtol);
-    let condition_number = analyse(&root, rtol).condition_number;
     Ok(Fit {
-        model: unknowns.into_model(),
+        model: state,
         fitted: split.fitted,
         fixed: split.fixed,
         unidentifiable: split.unidentifiable,
-        sigma,
-        condition_number,
+        sigma: parameter_sigmas_m(&root, rep.normal.m, rep.normal.rtr, rtol),
+        condition_number: analyse(&root, rtol).condition_number,
         rank: split.rank,
         iterations: rep.iterations,
         converged: rep.termination.converged(),
+        rss_mm2: rep.normal.rtr,
+        n_residuals: rep.normal.m,
     })
 }
 
@@ -232,6 +288,18 @@ pub struct Split<U> {
     pub unidentifiable: Vec<String>,
     /// Rank of the start Jacobian.
     pub rank: usize,
+}
+
+impl<U> Split<U> {
+    /// No unknown.
+    pub fn none() -> Self {
+        Self {
+            fitted: Vec::new(),
+            fixed: Vec::new(),
+            unidentifiable: Vec::new(),
+            rank: 0,
+        }
+    }
 }
 
 impl<U: Copy> Split<U> {
@@ -300,6 +368,8 @@ pub fn solve_split<U, S: SetUnknowns, F: Rows<S>>(
         rank: split.rank,
         iterations: rep.iterations,
         converged: rep.termination.converged(),
+        rss_mm2: rep.residuals.norm_squared(),
+        n_residuals: rep.residuals.len(),
     })
 }
 

@@ -15,11 +15,12 @@
 //! Candidates that the declared parameters alone reproduce are not listed: they could never be
 //! found on these poses and are already reported as adding no identifiable direction.
 
+use crate::calib::fit::Fit;
 use nalgebra::{DMatrix, DVector};
 
 use super::candidates::Candidate;
 use super::compress::stacked_or_compressed;
-use super::extended::{ExtFit, Unknown};
+use super::extended::{ExtModel, Unknown};
 use crate::calib::CalibError;
 use crate::calib::MeasuredSet;
 
@@ -82,13 +83,13 @@ struct Group {
 /// The aliased pairs at the final fit `last` (declared unknowns `declared`, accepted effects
 /// `accepted`, other candidates `others`) on `data`.
 pub fn aliased(
-    last: &ExtFit,
+    last: &Fit<ExtModel, Unknown>,
     declared: &[Unknown],
     accepted: &[Candidate],
     others: &[Candidate],
     data: &MeasuredSet,
 ) -> Result<Vec<AliasReport>, CalibError> {
-    let model = &last.ext.model;
+    let model = &last.model.model;
     let mut groups: Vec<Group> = Vec::new();
     for u in declared.iter().filter(|u| last.fitted.contains(u)) {
         groups.push(Group {
@@ -120,7 +121,7 @@ pub fn aliased(
             }
         }
     }
-    let (mut jac, _) = stacked_or_compressed(&last.ext, data, &all)?;
+    let (mut jac, _) = stacked_or_compressed(&last.model, data, &all)?;
     let norms: Vec<f64> = (0..jac.ncols()).map(|k| jac.column(k).norm()).collect();
     let top = norms.iter().copied().fold(0.0, f64::max);
     for (k, n) in norms.iter().enumerate() {

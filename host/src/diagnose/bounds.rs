@@ -40,21 +40,21 @@ pub fn enforce(
     let mut reports = Vec::new();
     // each pass fixes at least one more unknown: at most as many passes as unknowns
     for _ in 0..selection.last.fitted.len() {
-        let model = &selection.last.ext.model;
+        let model = &selection.last.model.model;
         let below: Vec<(Unknown, f64, Bound)> = selection
             .last
             .fitted
             .iter()
             .filter_map(|&u| {
                 let b = bound(u, model)?;
-                let v = selection.last.ext.value(u);
+                let v = selection.last.model.value(u);
                 b.below(v).then_some((u, v, b))
             })
             .collect();
         if below.is_empty() {
             break;
         }
-        let mut start = selection.last.ext.clone();
+        let mut start = selection.last.model.clone();
         let mut ok = true;
         for &(u, _, b) in &below {
             ok &= start.set_value(u, b.hold).is_ok();
@@ -77,7 +77,7 @@ pub fn enforce(
         };
         for &(u, v, b) in &below {
             reports.push(BoundReport {
-                parameter: u.name(&selection.last.ext.model),
+                parameter: u.name(&selection.last.model.model),
                 fitted_value: v,
                 bound: b.min,
                 held_value: b.hold,

@@ -6,7 +6,8 @@
 //! link lengths and tool point are declared parameters), and a candidate with nothing left is not
 //! offered.
 
-use super::extended::{ExtFit, ExtModel, Unknown, Values};
+use super::extended::{ExtModel, Unknown, Values};
+use crate::calib::fit::Fit;
 use crate::calib::MeasuredSet;
 use crate::model::effect::{self, EffectId, Offers, Report};
 use crate::model::harmonic_amplitude_phase;
@@ -78,8 +79,12 @@ pub struct EffectValues {
 
 /// The parameters of candidate `cand` after `fit`, relative to `before` (the model before the
 /// effect was added).
-pub fn effect_values(cand: &Candidate, before: &ExtModel, fit: &ExtFit) -> EffectValues {
-    let after = &fit.ext;
+pub fn effect_values(
+    cand: &Candidate,
+    before: &ExtModel,
+    fit: &Fit<ExtModel, Unknown>,
+) -> EffectValues {
+    let after = &fit.model;
     let delta = |u: Unknown| after.value(u) - before.value(u);
     let sig = |u: Unknown| fit.sigma_of(u);
     let mut values = Vec::new();

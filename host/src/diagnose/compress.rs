@@ -165,7 +165,7 @@ mod tests {
         assert_eq!(normal.fitted, tall.fitted);
         assert!((normal.rss_mm2 - tall.rss_mm2).abs() <= 1e-9 * tall.rss_mm2);
         for (k, &u) in tall.fitted.iter().enumerate() {
-            let (a, b) = (normal.ext.value(u), tall.ext.value(u));
+            let (a, b) = (normal.model.value(u), tall.model.value(u));
             assert!((a - b).abs() <= 1e-3 * tall.sigma[k], "{u:?}: {a} vs {b}");
             assert!((normal.sigma[k] - tall.sigma[k]).abs() <= 1e-6 * tall.sigma[k]);
         }

@@ -32,6 +32,7 @@
 //!      of `e0 - e1` must exceed [`DecideConfig::cv_t_min`] (default 2.326, p < 0.01).
 //! 4. Repeat until no candidate passes (or [`DecideConfig::max_effects`]).
 
+use crate::calib::fit::Fit;
 use nalgebra::Vector3;
 use rand::seq::SliceRandom;
 use rand::SeedableRng;
@@ -39,7 +40,7 @@ use rand_chacha::ChaCha8Rng;
 
 use super::candidates::Candidate;
 use super::compress::stacked_or_compressed;
-use super::extended::{fit, ExtFit, ExtModel, Unknown, Values};
+use super::extended::{fit, ExtModel, Unknown, Values};
 use super::parallel::map_ordered;
 use crate::calib::lm::LmConfig;
 use crate::calib::stats::autocorrelation_time;
@@ -146,9 +147,9 @@ pub struct Accepted {
     /// Its tests.
     pub trial: Trial,
     /// The fit before it was added.
-    pub before: ExtFit,
+    pub before: Fit<ExtModel, Unknown>,
     /// The fit with it.
-    pub after: ExtFit,
+    pub after: Fit<ExtModel, Unknown>,
     /// Candidates equivalent to it on these poses (near ties within noise).
     pub equivalent: Vec<String>,
 }
@@ -161,7 +162,7 @@ pub struct Selection {
     /// The candidates tested (refitted) at the last step, none accepted.
     pub last_trials: Vec<Trial>,
     /// The final fit.
-    pub last: ExtFit,
+    pub last: Fit<ExtModel, Unknown>,
     /// All unknowns requested in the final fit.
     pub requested: Vec<Unknown>,
 }
@@ -212,7 +213,7 @@ pub fn serial_tau(ext: &ExtModel, data: &MeasuredSet) -> Result<f64, CalibError>
 /// Held-out error (mm, the measured part) of every pose under k-fold cross-validation of
 /// `fit`'s unknowns (contiguous folds for serial data, [`block_fold_assignment`]).
 pub fn cv_errors(
-    f: &ExtFit,
+    f: &Fit<ExtModel, Unknown>,
     data: &MeasuredSet,
     cfg: &DecideConfig,
 ) -> Result<Vec<f64>, CalibError> {
@@ -232,10 +233,10 @@ pub fn cv_errors(
             return Ok(Vec::new());
         }
         let sub = data.subset(&train);
-        let refit = fit(&f.ext, &sub, &f.fitted, &cfg.lm_cv, cfg.rtol, true)?;
+        let refit = fit(&f.model, &sub, &f.fitted, &cfg.lm_cv, cfg.rtol, true)?;
         test.iter()
             .map(|&i| {
-                let p = refit.ext.predict_pose(data, i)?;
+                let p = refit.model.predict_pose(data, i)?;
                 Ok((i, data.error_mm(i, &p).norm()))
             })
             .collect()
@@ -330,18 +331,18 @@ pub use super::select::forward_selection;
 /// sit exactly at zero in the current fit, the linear screen cannot see what the candidate would
 /// switch on, so these are always refitted.
 pub fn onset_candidates(
-    cur: &ExtFit,
+    cur: &Fit<ExtModel, Unknown>,
     cands: &[Candidate],
     data: &MeasuredSet,
     cfg: &DecideConfig,
 ) -> Result<Vec<usize>, CalibError> {
-    let base = cur.ext.moment_signs(data).map_err(CalibError::Model)?;
+    let base = cur.model.moment_signs(data).map_err(CalibError::Model)?;
     if base.is_empty() || cfg.onset_probe <= 0.0 {
         return Ok(Vec::new());
     }
     let mut out = Vec::new();
     for (ci, cand) in cands.iter().enumerate() {
-        let mut probe = cur.ext.clone();
+        let mut probe = cur.model.clone();
         let mut ok = true;
         for &u in &cand.unknowns {
             if probe
@@ -367,7 +368,11 @@ pub fn onset_candidates(
 
 /// The current model moved by the Gauss-Newton step of its fitted unknowns plus `cand`'s
 /// (minimum-norm least squares on column-scaled Jacobians), or `None` if it cannot be computed.
-pub(super) fn linear_start(cur: &ExtFit, data: &MeasuredSet, cand: &Candidate) -> Option<ExtModel> {
+pub(super) fn linear_start(
+    cur: &Fit<ExtModel, Unknown>,
+    data: &MeasuredSet,
+    cand: &Candidate,
+) -> Option<ExtModel> {
     let mut unknowns = cur.fitted.clone();
     unknowns.extend(
         cand.unknowns
@@ -375,7 +380,7 @@ pub(super) fn linear_start(cur: &ExtFit, data: &MeasuredSet, cand: &Candidate) -
             .copied()
             .filter(|u| !cur.fitted.contains(u)),
     );
-    let (mut jac, err) = stacked_or_compressed(&cur.ext, data, &unknowns).ok()?;
+    let (mut jac, err) = stacked_or_compressed(&cur.model, data, &unknowns).ok()?;
     let norms: Vec<f64> = (0..jac.ncols()).map(|k| jac.column(k).norm()).collect();
     for (k, n) in norms.iter().enumerate() {
         if *n > 0.0 {
@@ -385,7 +390,7 @@ pub(super) fn linear_start(cur: &ExtFit, data: &MeasuredSet, cand: &Candidate) -
     let svd = jac.svd(true, true);
     let top = svd.singular_values.iter().copied().fold(0.0, f64::max);
     let step = svd.solve(&err, 1e-6 * top).ok()?;
-    let mut ext = cur.ext.clone();
+    let mut ext = cur.model.clone();
     for (k, u) in unknowns.iter().enumerate() {
         if norms[k] > 0.0 {
             let v = ext.value(*u) + step[k] / norms[k];
@@ -400,7 +405,7 @@ pub(super) fn linear_start(cur: &ExtFit, data: &MeasuredSet, cand: &Candidate) -
 /// zero): for each start value, that value set and the [`linear_start`] step of the others; the
 /// start of least squared error. `None` when the candidate has no such unknown.
 pub(super) fn nonlinear_start(
-    cur: &ExtFit,
+    cur: &Fit<ExtModel, Unknown>,
     data: &MeasuredSet,
     cand: &Candidate,
 ) -> Option<ExtModel> {
@@ -412,7 +417,7 @@ pub(super) fn nonlinear_start(
         .iter()
         .filter_map(|&v| {
             let mut from = cur.clone();
-            from.ext.set_value(u, v).ok()?;
+            from.model.set_value(u, v).ok()?;
             let start = linear_start(&from, data, cand)?;
             let cost: f64 = start
                 .errors(data)
@@ -428,12 +433,12 @@ pub(super) fn nonlinear_start(
 
 /// Per-pose contribution of an effect: predictions after minus before (mm) on `data`.
 pub fn contribution(
-    before: &ExtFit,
-    after: &ExtFit,
+    before: &Fit<ExtModel, Unknown>,
+    after: &Fit<ExtModel, Unknown>,
     data: &MeasuredSet,
 ) -> Result<Vec<Vector3<f64>>, CalibError> {
-    let e0 = before.ext.errors(data)?;
-    let e1 = after.ext.errors(data)?;
+    let e0 = before.model.errors(data)?;
+    let e1 = after.model.errors(data)?;
     Ok(e0.iter().zip(&e1).map(|(a, b)| a - b).collect())
 }
 

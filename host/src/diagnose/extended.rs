@@ -17,9 +17,9 @@
 
 use nalgebra::{DMatrix, DVector, Vector3};
 
-use crate::calib::fit::{parameter_sigmas_m, Split};
+use crate::calib::fit::{fit_at_normal, solve_split, Fit, Split};
 use crate::calib::identifiability::{analyse, Identifiability};
-use crate::calib::lm::{solve, LmConfig};
+use crate::calib::lm::LmConfig;
 use crate::calib::normal::{
     solve_normal, solve_normal_from, use_normal_equations, Normal, NormalProblem,
 };
@@ -473,37 +473,8 @@ impl NormalProblem for ExtNormal<'_> {
     }
 }
 
-/// Result of [`fit`].
-#[derive(Debug, Clone)]
-pub struct ExtFit {
-    /// The fitted extended model.
-    pub ext: ExtModel,
-    /// Unknowns that were fitted (identifiable), in request order.
-    pub fitted: Vec<Unknown>,
-    /// Requested unknowns kept at their start value (unidentifiable).
-    pub fixed: Vec<Unknown>,
-    /// Names of the unidentifiable combinations (e.g. `"dth5+tool_dx"`).
-    pub unidentifiable: Vec<String>,
-    /// One standard deviation per fitted unknown (same order as `fitted`).
-    pub sigma: Vec<f64>,
-    /// Residual sum of squares over all coordinates (mm^2).
-    pub rss_mm2: f64,
-    /// Number of residuals (measured components: 3 per full position).
-    pub n_residuals: usize,
-    /// Whether the solver converged (false: its iteration budget was spent while it still made
-    /// progress, so the values are not at the optimum).
-    pub converged: bool,
-}
-
-impl ExtFit {
-    /// Standard deviation of `u` (infinite if it was not fitted).
-    pub fn sigma_of(&self, u: Unknown) -> f64 {
-        self.fitted
-            .iter()
-            .position(|&f| f == u)
-            .map_or(f64::INFINITY, |i| self.sigma[i])
-    }
-}
+/// The one identification result ([`Fit`]) on the extended model: what [`fit`] returns.
+pub type ExtendedFit = Fit<ExtModel, Unknown>;
 
 /// Fits `unknowns` of `start` to `data`: identifiability analysis of the Jacobian at the start
 /// (unknowns listed first are preferred; see [`analyse`]), then Levenberg-Marquardt on the
@@ -521,7 +492,7 @@ pub fn fit(
     lm: &LmConfig,
     rtol: f64,
     skip_analysis: bool,
-) -> Result<ExtFit, CalibError> {
+) -> Result<Fit<ExtModel, Unknown>, CalibError> {
     if data.is_empty() {
         return Err(CalibError::NoPoses);
     }
@@ -544,62 +515,28 @@ pub fn fit(
         let (jac0, _) = start.stacked(data, unknowns)?;
         split_of(start, unknowns, &analyse(&jac0, rtol))
     };
-    let Split {
-        fitted,
-        fixed,
-        unidentifiable,
-        ..
-    } = split;
-    let n_res = data.n_residuals();
-    if fitted.is_empty() {
+    if split.fitted.is_empty() {
         let rss = start.errors(data)?.iter().map(|e| e.norm_squared()).sum();
-        return Ok(ExtFit {
-            ext: start.clone(),
-            fitted,
-            fixed,
-            unidentifiable,
-            sigma: Vec::new(),
-            rss_mm2: rss,
-            n_residuals: n_res,
-            converged: true,
-        });
+        return Ok(Fit::unfitted(start.clone(), split, rss, data.n_residuals()));
     }
-    let freed = Freed::new(start.clone(), fitted.clone());
+    let freed = Freed::new(start.clone(), split.fitted.clone());
     let x0 = freed.values();
-    let (freed, rss, sigma, converged) = if normal {
+    let fit = if normal {
         let mut problem = ExtNormal { freed, data };
         let rep = match eq0 {
             Some(eq) => solve_normal_from(&mut problem, x0, eq, lm),
             None => solve_normal(&mut problem, x0, lm),
         }
         .map_err(CalibError::from_lm)?;
-        let root = rep.normal.jacobian_root();
-        let sigma = parameter_sigmas_m(&root, rep.normal.m, rep.normal.rtr, rtol);
-        let mut freed = problem.freed;
-        freed.set(&rep.x)?;
-        (freed, rep.normal.rtr, sigma, rep.termination.converged())
+        fit_at_normal(split, problem.freed, &rep, rtol)?
     } else {
         let rows = |f: &Freed<ExtModel>, r: &mut DVector<f64>, jac: Option<&mut DMatrix<f64>>| {
             f.state.rows(data, &f.unknowns, r, jac)
         };
-        let mut problem = ModelProblem::new(freed, data.n_residuals(), rows);
-        let rep = solve(&mut problem, x0, lm).map_err(CalibError::from_lm)?;
-        let rss = rep.residuals.norm_squared();
-        let sigma = crate::calib::fit::parameter_sigmas(&rep.jacobian, rss, rtol);
-        let mut freed = problem.into_state();
-        freed.set(&rep.x)?;
-        (freed, rss, sigma, rep.termination.converged())
+        let problem = ModelProblem::new(freed, data.n_residuals(), rows);
+        solve_split(split, problem, x0, lm, rtol)?
     };
-    Ok(ExtFit {
-        ext: freed.state,
-        fitted,
-        fixed,
-        unidentifiable,
-        sigma,
-        rss_mm2: rss,
-        n_residuals: n_res,
-        converged,
-    })
+    Ok(fit.map_model(|f| f.state))
 }
 
 /// `unknowns` split by the analysis `id` of their columns.

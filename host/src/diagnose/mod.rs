@@ -51,6 +51,7 @@ pub mod select;
 pub mod stat;
 pub mod verdict;
 
+use crate::calib::fit::Fit;
 use crate::calib::outliers::{self, OutlierReport};
 use crate::calib::problem::norms_mm;
 use nalgebra::Vector3;
@@ -62,7 +63,7 @@ use crate::error::{Classify, ErrorKind};
 use crate::model::{Model, ModelError};
 use candidates::effect_values;
 use decide::{contribution, forward_selection, DecideConfig, Selection};
-use extended::{ExtFit, ExtModel, Unknown, Values};
+use extended::{ExtModel, ExtendedFit, Unknown, Values};
 use report::{DiagnoseReport, EffectReport, NoiseReport, SetStats, TrialReport, Unexplained};
 use residual::{best_regressor, explain, explain_with, regressors};
 
@@ -151,7 +152,7 @@ pub fn declared_fit(
     model: &Model,
     cal: &MeasuredSet,
     cfg: &DecideConfig,
-) -> Result<(ExtFit, Vec<Unknown>), DiagnoseError> {
+) -> Result<(Fit<ExtModel, Unknown>, Vec<Unknown>), DiagnoseError> {
     let selection = default_selection(model, false);
     let tilt = model.has_tilt();
     let requested: Vec<Unknown> = selection.iter().copied().map(Unknown::Param).collect();
@@ -171,16 +172,12 @@ pub fn declared_fit(
     let f = fit_parameters(model, &cal.poses, &selection, tilt, &cfg.lm, cfg.rtol)?;
     let mut ext = ExtModel::new(f.model.clone());
     ext.tilt = tilt;
-    let rss = ext.errors(cal)?.iter().map(|e| e.norm_squared()).sum();
-    let fit = ExtFit {
-        ext,
-        fitted: f.fitted.iter().map(|&i| Unknown::Param(i)).collect(),
-        fixed: f.fixed.iter().map(|&i| Unknown::Param(i)).collect(),
-        unidentifiable: f.unidentifiable.clone(),
-        sigma: f.sigma.clone(),
-        rss_mm2: rss,
+    // the residual of the extended model (its own evaluation of every pose)
+    let rss_mm2 = ext.errors(cal)?.iter().map(|e| e.norm_squared()).sum();
+    let fit = Fit {
+        rss_mm2,
         n_residuals: cal.n_residuals(),
-        converged: f.converged,
+        ..f.map(|_| ext, Unknown::Param)
     };
     Ok((fit, requested))
 }
@@ -217,7 +214,7 @@ pub fn trim_outliers(
     model: &Model,
     cal: &MeasuredSet,
     cfg: &DecideConfig,
-) -> Result<(MeasuredSet, usize, ExtFit, Vec<Unknown>), DiagnoseError> {
+) -> Result<(MeasuredSet, usize, ExtendedFit, Vec<Unknown>), DiagnoseError> {
     if !cal.is_serial() {
         let (fit, requested) = declared_fit(model, cal, cfg)?;
         return Ok((cal.clone(), 0, fit, requested));
@@ -229,7 +226,7 @@ pub fn trim_outliers(
         let mut spikes = vec![false; kept.len()];
         let comps: Vec<Vec<f64>> = (0..sub.len())
             .map(|k| {
-                let p = fit.ext.predict_pose(&sub, k)?;
+                let p = fit.model.predict_pose(&sub, k)?;
                 Ok(sub.components(k, &(sub.poses.xyz_mm[k] - p)))
             })
             .collect::<Result<_, ModelError>>()?;
@@ -299,14 +296,14 @@ fn effect_reports(
     let mut traces = Vec::new();
     for step in &selection.steps {
         let t = &step.trial;
-        let vb = step.before.ext.errors(val)?;
-        let va = step.after.ext.errors(val)?;
-        let cb = step.before.ext.errors(cal)?;
-        let ca = step.after.ext.errors(cal)?;
+        let vb = step.before.model.errors(val)?;
+        let va = step.after.model.errors(val)?;
+        let cb = step.before.model.errors(cal)?;
+        let ca = step.after.model.errors(cal)?;
         let contrib = contribution(&step.before, &step.after, cal)?;
         let (ri, ex) = best_regressor(&contrib, regs).unwrap_or((0, explain(&contrib, &regs[0])));
-        let values = effect_values(&t.candidate, &step.before.ext, &step.after);
-        let final_values = effect_values(&t.candidate, &step.before.ext, &selection.last);
+        let values = effect_values(&t.candidate, &step.before.model, &step.after);
+        let final_values = effect_values(&t.candidate, &step.before.model, &selection.last);
         let share = if t.rss_before_mm2 > 0.0 {
             1.0 - t.rss_after_mm2 / t.rss_before_mm2
         } else {
@@ -380,7 +377,7 @@ fn effect_reports(
                 .candidate
                 .unknowns
                 .iter()
-                .map(|u| (u.name(&step.after.ext.model), step.after.ext.value(*u)))
+                .map(|u| (u.name(&step.after.model.model), step.after.model.value(*u)))
                 .collect(),
         });
         traces.push(EffectTrace {
@@ -426,11 +423,11 @@ pub fn diagnose(
     let mut flagged: Vec<usize> = Vec::new();
     let mut outlier_note = None;
     // the declared fit of trim's last round (on the poses it keeps), reused by the selection
-    let mut last_declared: Option<(Vec<usize>, ExtFit, Vec<Unknown>)> = None;
+    let mut last_declared: Option<(Vec<usize>, ExtendedFit, Vec<Unknown>)> = None;
     if gross {
         let t = outliers::trim(cal_all.len(), 3, cfg.floor_mm, |keep| {
             let (fit, requested) = declared_fit(model, &cal_all.subset(keep), cfg)?;
-            let norms = norms_mm(&fit.ext.errors(&cal_all)?);
+            let norms = norms_mm(&fit.model.errors(&cal_all)?);
             last_declared = Some((keep.to_vec(), fit, requested));
             Ok::<_, DiagnoseError>(norms)
         })?;
@@ -439,7 +436,10 @@ pub fn diagnose(
     }
     // the selection on the poses not in `flagged` (gross errors only on unordered poses, so the
     // spike rule of `trim_outliers` leaves them as they are and trim's declared fit serves)
-    let run = |flagged: &[usize]| -> Result<(MeasuredSet, usize, ExtFit, Vec<Unknown>, Selection), DiagnoseError> {
+    let run = |flagged: &[usize]| -> Result<
+        (MeasuredSet, usize, ExtendedFit, Vec<Unknown>, Selection),
+        DiagnoseError,
+    > {
         let keep = outliers::kept(cal_all.len(), flagged);
         let kept_cal = cal_all.subset(&keep);
         let reused = last_declared
@@ -456,7 +456,7 @@ pub fn diagnose(
     let flags_under = |selection: &Selection,
                        flagged: &[usize]|
      -> Result<Vec<usize>, DiagnoseError> {
-        let all = norms_mm(&selection.last.ext.errors(&cal_all)?);
+        let all = norms_mm(&selection.last.model.errors(&cal_all)?);
         let kept_norms: Vec<f64> = outliers::kept(all.len(), flagged)
             .iter()
             .map(|&k| all[k])
@@ -494,15 +494,15 @@ pub fn diagnose(
     let val_kept;
     let val = if gross {
         let thr = outliers::threshold_mm(
-            outliers::robust_sigma_mm(&norms_mm(&selection.last.ext.errors(cal)?), 3),
+            outliers::robust_sigma_mm(&norms_mm(&selection.last.model.errors(cal)?), 3),
             cfg.floor_mm,
         );
-        let all = norms_mm(&selection.last.ext.errors(&cal_all)?);
+        let all = norms_mm(&selection.last.model.errors(&cal_all)?);
         outlier_reports.extend(labelled(
             outliers::reports("cal", &flagged, &all, &all, thr),
             &cal_all,
         ));
-        let vn = norms_mm(&selection.last.ext.errors(&val_all)?);
+        let vn = norms_mm(&selection.last.model.errors(&val_all)?);
         let (vflag, vthr) = outliers::flag_set_against(&vn, thr);
         outlier_reports.extend(labelled(
             outliers::reports("val", &vflag, &vn, &vn, vthr),
@@ -513,15 +513,15 @@ pub fn diagnose(
     } else {
         &val_all
     };
-    let declared_cal = declared.ext.errors(cal)?;
-    let declared_val = declared.ext.errors(val)?;
-    let regs = regressors(&selection.last.ext, cal)?;
+    let declared_cal = declared.model.errors(cal)?;
+    let declared_val = declared.model.errors(val)?;
+    let regs = regressors(&selection.last.model, cal)?;
 
     let (mut effects, traces) = effect_reports(&selection, &regs, cal, val, cfg)?;
 
     let last = &selection.last;
-    let final_cal = last.ext.errors(cal)?;
-    let final_val = last.ext.errors(val)?;
+    let final_cal = last.model.errors(cal)?;
+    let final_val = last.model.errors(val)?;
     let (noise, tau, floor) = judge_floor(last, cal, val, &final_val, opts.instrument_mm, repeat)?;
     let mut unexplained = unexplained(
         &final_cal,
@@ -535,8 +535,8 @@ pub fn diagnose(
     let (probe, probe_cfg, cal_jac) = probe_residual(model, last, cal, &final_cal, &floor, opts)?;
     // the held-out Jacobians of the fitted unknowns are the first columns of those of the
     // unknowns a change between the sets may move (`change_unknowns` starts with them)
-    let change = verdict::change_unknowns(&last.ext.model, &last.fitted);
-    let val_jac_change = probe::jacobians(&last.ext, val, &change)?;
+    let change = verdict::change_unknowns(&last.model.model, &last.fitted);
+    let val_jac_change = probe::jacobians(&last.model, val, &change)?;
     let val_jac: Vec<nalgebra::DMatrix<f64>> = val_jac_change
         .iter()
         .map(|j| j.columns(0, last.fitted.len()).into_owned())
@@ -591,7 +591,7 @@ pub fn diagnose(
         aliased,
         noise,
         robot: model.name().to_string(),
-        tilting: last.ext.tilt,
+        tilting: last.model.tilt,
         declared_unidentifiable: declared.unidentifiable.clone(),
         rejected: selection
             .last_trials
@@ -616,7 +616,7 @@ pub fn diagnose(
     };
     Ok(Diagnosis {
         report,
-        model: selection.last.ext.clone(),
+        model: selection.last.model.clone(),
         selection,
         regressors: regs,
         traces,
@@ -650,7 +650,7 @@ fn check_sizes(
 
 /// The residual's noise level, its serial correlation and the verdict against the floor.
 fn judge_floor(
-    last: &ExtFit,
+    last: &Fit<ExtModel, Unknown>,
     cal: &MeasuredSet,
     val: &MeasuredSet,
     final_val: &[Vector3<f64>],
@@ -663,7 +663,7 @@ fn judge_floor(
         sigma_mm: sigma,
         expected_mean_mm: stat::expected_mean_norm_dims(sigma, cal.measured_dims()),
     };
-    let tau = decide::serial_tau(&last.ext, cal)?;
+    let tau = decide::serial_tau(&last.model, cal)?;
     let val_dims: usize = (0..val.len()).map(|k| val.rows(k)).sum();
     let floor = floor::judge(
         &floor::FinalResidual {
@@ -695,7 +695,7 @@ fn aliased_pairs(
         .iter()
         .map(|s| s.trial.candidate.clone())
         .collect();
-    let others = candidates::library(&last.ext, &selection.requested, cal);
+    let others = candidates::library(&last.model, &selection.requested, cal);
     let mut aliased = alias::aliased(last, requested, &accepted, &others, cal)?;
     let tested: Vec<String> = selection
         .last_trials
@@ -729,7 +729,7 @@ fn aliased_pairs(
 /// cross-validation and the number of parameters the poses support.
 fn probe_residual(
     model: &Model,
-    last: &ExtFit,
+    last: &Fit<ExtModel, Unknown>,
     cal: &MeasuredSet,
     final_cal: &[Vector3<f64>],
     floor: &floor::FloorReport,
@@ -755,12 +755,12 @@ fn probe_residual(
         floor_mm: opts.probe.floor_mm.or(known_floor_mm),
         ..opts.probe.clone()
     };
-    let jac = probe::jacobians(&last.ext, cal, &last.fitted)?;
+    let jac = probe::jacobians(&last.model, cal, &last.fitted)?;
     let start = ExtModel::new(model.clone());
     let departure: Vec<f64> = last
         .fitted
         .iter()
-        .map(|&u| last.ext.value(u) - start.value(u))
+        .map(|&u| last.model.value(u) - start.value(u))
         .collect();
     let probe = probe::probe_dataset_with(cal, final_cal, &jac, &departure, &probe_cfg);
     Ok((probe, probe_cfg, jac))

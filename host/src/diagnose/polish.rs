@@ -21,7 +21,8 @@
 
 use super::compress::stacked_or_compressed;
 use super::decide::DecideConfig;
-use super::extended::{fit, ExtFit, ExtModel, Unknown, Values};
+use super::extended::{fit, ExtModel, Unknown, Values};
+use crate::calib::fit::{Fit, Split};
 use crate::calib::CalibError;
 use crate::calib::MeasuredSet;
 use crate::model::ModelError;
@@ -55,7 +56,7 @@ pub fn crossed_steps(
 /// objective still sloping (a change of 1 moves one parameter's confidence region by one
 /// standard deviation).
 pub fn predicted_decrease(
-    f: &ExtFit,
+    f: &Fit<ExtModel, Unknown>,
     data: &MeasuredSet,
     rank_rtol: f64,
 ) -> Result<f64, ModelError> {
@@ -64,7 +65,7 @@ pub fn predicted_decrease(
     if f.fitted.is_empty() || dof == 0 || f.rss_mm2 <= 0.0 {
         return Ok(0.0);
     }
-    let (mut jac, err) = stacked_or_compressed(&f.ext, data, &f.fitted)?;
+    let (mut jac, err) = stacked_or_compressed(&f.model, data, &f.fitted)?;
     for mut c in jac.column_iter_mut() {
         let n = c.norm();
         if n > 0.0 {
@@ -91,11 +92,11 @@ pub fn predicted_decrease(
 /// decrease of more than [`STALL_MIN_DECREASE`] noise variances ([`predicted_decrease`]).
 pub fn needs_polish(
     before: &ExtModel,
-    after: &ExtFit,
+    after: &Fit<ExtModel, Unknown>,
     data: &MeasuredSet,
     rank_rtol: f64,
 ) -> Result<bool, ModelError> {
-    Ok(crossed_steps(before, &after.ext, data)? > 0
+    Ok(crossed_steps(before, &after.model, data)? > 0
         && predicted_decrease(after, data, rank_rtol)? > STALL_MIN_DECREASE)
 }
 
@@ -105,13 +106,13 @@ struct Profile<'a> {
     cfg: &'a DecideConfig,
     over: Vec<Unknown>,
     others: Vec<Unknown>,
-    best: ExtFit,
+    best: Fit<ExtModel, Unknown>,
 }
 
 impl Profile<'_> {
     /// RSS of the profile fit at `x` (infinite when the point cannot be evaluated).
     fn rss(&mut self, x: &[f64]) -> f64 {
-        let mut start = self.best.ext.clone();
+        let mut start = self.best.model.clone();
         for (u, v) in self.over.iter().zip(x) {
             if start.set_value(*u, *v).is_err() {
                 return f64::INFINITY;
@@ -120,16 +121,8 @@ impl Profile<'_> {
         let f = if self.others.is_empty() {
             start.errors(self.data).ok().map(|e| {
                 let rss = e.iter().map(|v| v.norm_squared()).sum();
-                ExtFit {
-                    ext: start,
-                    fitted: Vec::new(),
-                    fixed: Vec::new(),
-                    unidentifiable: Vec::new(),
-                    sigma: Vec::new(),
-                    rss_mm2: rss,
-                    n_residuals: self.data.n_residuals(),
-                    converged: true,
-                }
+                let n = self.data.n_residuals();
+                Fit::unfitted(start, Split::none(), rss, n)
             })
         } else {
             fit(
@@ -241,12 +234,12 @@ fn nelder_mead(
 /// across the sign steps of the tilting law; see the module documentation. Returns the refit
 /// unchanged when none of `over` was fitted; never a fit with a higher RSS.
 pub fn polish(
-    refit: ExtFit,
+    refit: Fit<ExtModel, Unknown>,
     start: &ExtModel,
     over: &[Unknown],
     data: &MeasuredSet,
     cfg: &DecideConfig,
-) -> Result<ExtFit, CalibError> {
+) -> Result<Fit<ExtModel, Unknown>, CalibError> {
     let over: Vec<Unknown> = over
         .iter()
         .copied()
@@ -261,7 +254,7 @@ pub fn polish(
         .copied()
         .filter(|u| !over.contains(u))
         .collect();
-    let x0: Vec<f64> = over.iter().map(|u| refit.ext.value(*u)).collect();
+    let x0: Vec<f64> = over.iter().map(|u| refit.model.value(*u)).collect();
     let step: Vec<f64> = over
         .iter()
         .zip(&x0)
@@ -294,7 +287,7 @@ pub fn polish(
         return Ok(refit);
     }
     let last = fit(
-        &profile.best.ext,
+        &profile.best.model,
         data,
         &refit.fitted,
         &cfg.lm,
@@ -304,7 +297,7 @@ pub fn polish(
     if last.rss_mm2 > refit.rss_mm2 {
         return Ok(refit);
     }
-    Ok(ExtFit {
+    Ok(Fit {
         fixed: refit.fixed,
         unidentifiable: refit.unidentifiable,
         ..last
@@ -338,9 +331,11 @@ mod tests {
         assert!(at_min < 1e-6, "{at_min}");
         let mut off = f.clone();
         let u = f.fitted[0];
-        off.ext.set_value(u, f.ext.value(u) + 0.01).expect("finite");
+        off.model
+            .set_value(u, f.model.value(u) + 0.01)
+            .expect("finite");
         off.rss_mm2 = off
-            .ext
+            .model
             .errors(&data)
             .expect("errors")
             .iter()
@@ -348,7 +343,7 @@ mod tests {
             .sum();
         let moved = predicted_decrease(&off, &data, cfg.rtol).expect("decrease");
         assert!(moved > 10.0, "{moved}");
-        assert_eq!(crossed_steps(&f.ext, &f.ext, &data).expect("signs"), 0);
+        assert_eq!(crossed_steps(&f.model, &f.model, &data).expect("signs"), 0);
     }
 
     /// A function with steps (a staircase on a bowl): Nelder-Mead still reaches the bowl's

@@ -8,11 +8,12 @@ use super::decide::{
     cv_errors, linear_start, nonlinear_start, onset_candidates, paired_gain, rank_contenders,
     serial_tau, Accepted, DecideConfig, Selection, Trial,
 };
-use super::extended::{fit, ExtFit, Unknown};
+use super::extended::{fit, ExtModel, ExtendedFit, Unknown};
 use super::parallel::map_ordered;
 use super::polish::{needs_polish, polish};
 use super::residual::screen;
 use super::stat::{delta_bic, nested_f_test};
+use crate::calib::fit::Fit;
 use crate::calib::CalibError;
 use crate::calib::MeasuredSet;
 
@@ -24,7 +25,7 @@ fn m_eff(data: &MeasuredSet, tau: f64) -> usize {
 /// Greedy forward selection from the declared fit `declared` (its requested unknowns
 /// `declared_unknowns`) on `data`. See the [`super::decide`] module documentation.
 pub fn forward_selection(
-    declared: ExtFit,
+    declared: Fit<ExtModel, Unknown>,
     declared_unknowns: &[Unknown],
     data: &MeasuredSet,
     cfg: &DecideConfig,
@@ -37,17 +38,19 @@ pub fn forward_selection(
     // (the same unknowns from the same values on the same folds), computed once.
     let mut cv_cur: Option<Vec<f64>> = None;
     while steps.len() < cfg.max_effects {
-        let cands = library(&cur.ext, &requested, data);
+        let cands = library(&cur.model, &requested, data);
         if cands.is_empty() {
             break;
         }
         let shortlisted = shortlist(&cur, &cands, data, cfg)?;
-        let refitted: Vec<Option<(Trial, ExtFit)>> = map_ordered(&shortlisted, |&ci| {
-            refit_candidate(&cur, &requested, &cands[ci], data, cfg)
-        })
-        .into_iter()
-        .collect::<Result<_, _>>()?;
-        let mut refits: Vec<(Trial, ExtFit)> = refitted.into_iter().flatten().collect();
+        let refitted: Vec<Option<(Trial, Fit<ExtModel, Unknown>)>> =
+            map_ordered(&shortlisted, |&ci| {
+                refit_candidate(&cur, &requested, &cands[ci], data, cfg)
+            })
+            .into_iter()
+            .collect::<Result<_, _>>()?;
+        let mut refits: Vec<(Trial, Fit<ExtModel, Unknown>)> =
+            refitted.into_iter().flatten().collect();
         refits.sort_by(|a, b| a.0.delta_bic.total_cmp(&b.0.delta_bic));
         let (refits, cv_cache, equivalent_ids) = order_contenders(refits, data, cfg)?;
         let round = test_in_order(refits, cv_cache, &cur, cv_cur.take(), data, cfg)?;
@@ -90,14 +93,14 @@ pub fn forward_selection(
 /// by the linearised change of BIC (only those that lower it), then every candidate whose small
 /// move flips a sign of the joint moments ([`onset_candidates`]).
 pub fn shortlist(
-    cur: &ExtFit,
+    cur: &Fit<ExtModel, Unknown>,
     cands: &[Candidate],
     data: &MeasuredSet,
     cfg: &DecideConfig,
 ) -> Result<Vec<usize>, CalibError> {
-    let screens = screen(&cur.ext, data, &cur.fitted, cands, cfg.rtol)?;
+    let screens = screen(&cur.model, data, &cur.fitted, cands, cfg.rtol)?;
     let rss0 = cur.rss_mm2;
-    let m = m_eff(data, serial_tau(&cur.ext, data)?);
+    let m = m_eff(data, serial_tau(&cur.model, data)?);
     let mut ranked: Vec<(usize, f64)> = screens
         .iter()
         .filter(|s| s.added > 0)
@@ -131,15 +134,16 @@ pub fn shortlist(
 /// smooth in every unknown and the solver from the current values reaches the same minimum, so
 /// there is no restart. The lower RSS wins; a refit stopped at a sign step is polished.
 pub fn refit_candidate(
-    cur: &ExtFit,
+    cur: &Fit<ExtModel, Unknown>,
     requested: &[Unknown],
     cand: &Candidate,
     data: &MeasuredSet,
     cfg: &DecideConfig,
-) -> Result<Option<(Trial, ExtFit)>, CalibError> {
+) -> Result<Option<(Trial, ExtendedFit)>, CalibError> {
     let mut req = requested.to_vec();
     req.extend(cand.unknowns.iter().copied());
-    let mut best: Option<ExtFit> = fit(&cur.ext, data, &req, &cfg.lm, cfg.rtol, false).ok();
+    let mut best: Option<Fit<ExtModel, Unknown>> =
+        fit(&cur.model, data, &req, &cfg.lm, cfg.rtol, false).ok();
     // a non-linear unknown (a time constant): the fit also from the best of its start values
     if let Some(start) = nonlinear_start(cur, data, cand) {
         if let Ok(f) = fit(&start, data, &req, &cfg.lm, cfg.rtol, false) {
@@ -149,7 +153,7 @@ pub fn refit_candidate(
         }
     }
     let mut from = cur.clone();
-    let restarts = if cur.ext.tilt { 4 } else { 0 };
+    let restarts = if cur.model.tilt { 4 } else { 0 };
     for _ in 0..restarts {
         let Some(start) = linear_start(&from, data, cand) else {
             break;
@@ -166,14 +170,14 @@ pub fn refit_candidate(
     let Some(mut after) = best else {
         return Ok(None);
     };
-    if needs_polish(&cur.ext, &after, data, cfg.rtol)? {
-        after = polish(after, &cur.ext, &cand.unknowns, data, cfg)?;
+    if needs_polish(&cur.model, &after, data, cfg.rtol)? {
+        after = polish(after, &cur.model, &cand.unknowns, data, cfg)?;
     }
     let rss0 = cur.rss_mm2;
     let added = after.fitted.len().saturating_sub(cur.fitted.len());
     // the tests count the independent residuals of the refit: under the null hypothesis its
     // residual is the noise, whose serial correlation sets the count
-    let m = m_eff(data, serial_tau(&after.ext, data)?);
+    let m = m_eff(data, serial_tau(&after.model, data)?);
     let dof = m.saturating_sub(after.fitted.len());
     let (f, p) = nested_f_test(rss0, after.rss_mm2, added, dof);
     let dbic = if added > 0 {
@@ -204,7 +208,11 @@ fn passes(t: &Trial, cfg: &DecideConfig) -> bool {
 
 /// The refits, in exact-BIC order, with their cross-validated errors when computed, and the ids
 /// of the near ties that are equivalent on these poses.
-type Ordered = (Vec<(Trial, ExtFit)>, Vec<Option<Vec<f64>>>, Vec<String>);
+type Ordered = (
+    Vec<(Trial, Fit<ExtModel, Unknown>)>,
+    Vec<Option<Vec<f64>>>,
+    Vec<String>,
+);
 
 /// Step 3: near ties first. The refits that pass and lie within [`DecideConfig::bic_tie`] of the
 /// best exact BIC are ranked by their cross-validated errors ([`rank_contenders`]: the simplest
@@ -212,7 +220,7 @@ type Ordered = (Vec<(Trial, ExtFit)>, Vec<Option<Vec<f64>>>, Vec<String>);
 /// not relax the rule: on the UR5 tracker data, accepting every significant cross-validated
 /// gain above the floor added effects that made the held-out error worse (0.0886 -> 0.0951 mm).
 pub fn order_contenders(
-    refits: Vec<(Trial, ExtFit)>,
+    refits: Vec<(Trial, Fit<ExtModel, Unknown>)>,
     data: &MeasuredSet,
     cfg: &DecideConfig,
 ) -> Result<Ordered, CalibError> {
@@ -254,7 +262,8 @@ pub fn order_contenders(
         .into_iter()
         .chain((0..n).filter(|i| !contenders.contains(i)))
         .collect();
-    let mut slots: Vec<Option<(Trial, ExtFit)>> = refits.into_iter().map(Some).collect();
+    let mut slots: Vec<Option<(Trial, Fit<ExtModel, Unknown>)>> =
+        refits.into_iter().map(Some).collect();
     let (mut out, mut cv) = (Vec::with_capacity(n), Vec::with_capacity(n));
     for i in order {
         if let Some(r) = slots[i].take() {
@@ -269,7 +278,7 @@ pub fn order_contenders(
 /// errors), and every trial with its reason.
 pub struct Round {
     /// The accepted candidate, if any.
-    pub chosen: Option<(Trial, ExtFit, Vec<f64>)>,
+    pub chosen: Option<(Trial, Fit<ExtModel, Unknown>, Vec<f64>)>,
     /// The trials of the round (the accepted one excluded).
     pub trials: Vec<Trial>,
 }
@@ -278,14 +287,14 @@ pub struct Round {
 /// cross-validated gain is accepted, the rest are "not tested". `cv_cur` are the current fit's
 /// cross-validated errors when known.
 pub fn test_in_order(
-    refits: Vec<(Trial, ExtFit)>,
+    refits: Vec<(Trial, Fit<ExtModel, Unknown>)>,
     cv_cache: Vec<Option<Vec<f64>>>,
-    cur: &ExtFit,
+    cur: &Fit<ExtModel, Unknown>,
     mut cv_cur: Option<Vec<f64>>,
     data: &MeasuredSet,
     cfg: &DecideConfig,
 ) -> Result<Round, CalibError> {
-    let mut chosen: Option<(Trial, ExtFit, Vec<f64>)> = None;
+    let mut chosen: Option<(Trial, Fit<ExtModel, Unknown>, Vec<f64>)> = None;
     let mut trials = Vec::new();
     for ((mut trial, after), cached) in refits.into_iter().zip(cv_cache) {
         if chosen.is_some() {

@@ -259,7 +259,7 @@ fn a_negative_compliance_is_held_at_its_bound() {
             false,
         )
         .unwrap();
-        let fitted = f.ext.value(Unknown::Compliance(2));
+        let fitted = f.model.value(Unknown::Compliance(2));
         assert_eq!(fitted < 0.0, negative, "{effect}: fitted {fitted}");
         let rss = f.rss_mm2;
         let mut sel = Selection {
@@ -269,7 +269,7 @@ fn a_negative_compliance_is_held_at_its_bound() {
             requested,
         };
         let reports = bounds::enforce(&mut sel, &cal, &cfg);
-        let held = sel.last.ext.value(Unknown::Compliance(2));
+        let held = sel.last.model.value(Unknown::Compliance(2));
         if negative {
             assert_eq!(reports.len(), 1, "{reports:?}");
             assert_eq!(reports[0].parameter, "compliance_j3_deg_per_kgfm");
