@@ -3,13 +3,20 @@
 use std::path::PathBuf;
 use std::process::Command;
 
-/// The `rigctl` binary built by this workspace (cargo builds it before running the tests of the
-/// workspace; if it is missing it is built here).
+/// `rigctl`, the binary under test ([`rigctl_path`]), as a `Command`: every end-to-end test runs
+/// the CLI through this (`every_spawn_of_the_cli_goes_through_the_helper` keeps it so).
 pub fn rigctl() -> Command {
     Command::new(rigctl_path())
 }
 
+/// The binary under test: `RIGCTL_UNDER_TEST` when set (the tests run against another build,
+/// e.g. an older one, to see which of them it fails), else the `rigctl` this workspace builds
+/// (cargo builds it before running the tests of the workspace; if it is missing it is built
+/// here).
 pub fn rigctl_path() -> PathBuf {
+    if let Some(under_test) = std::env::var_os("RIGCTL_UNDER_TEST") {
+        return PathBuf::from(under_test);
+    }
     let exe = std::env::current_exe().expect("test executable path");
     // target/<profile>/deps/<test> -> target/<profile>/rigctl
     let profile_dir = exe.parent().and_then(|d| d.parent()).expect("target dir");

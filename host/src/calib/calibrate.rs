@@ -17,7 +17,7 @@ use super::stats::Stats;
 use crate::model::{Model, ParamKind, KATANA_GEOMETRIC_PARAMS};
 
 /// Identification method (FORMATS.md `--method`).
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, clap::ValueEnum)]
 pub enum Method {
     /// Conventional least squares on the geometric parameters, no tilting (thesis 3.6).
     Standard,

@@ -28,7 +28,7 @@ use super::projected::{calibrate_projected, SampleTilt};
 use crate::model::{Model, ParamKind};
 
 /// How the identified set is chosen (`--select`).
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, clap::ValueEnum)]
 pub enum Select {
     /// Every selected unknown.
     #[default]

@@ -50,7 +50,7 @@ pub struct Args {
     #[arg(long, value_name = "VAL.csv")]
     pub validate: Option<PathBuf>,
     /// standard (no tilting), influence (thesis eq. 3.7-3.8) or tilting (tilting first, fig. 4.9).
-    #[arg(long, default_value = "tilting", value_parser = parse_method)]
+    #[arg(long, value_enum, default_value = "tilting")]
     pub method: Method,
     /// Write the result as JSON (FORMATS.md "calibrate --json").
     #[arg(long, value_name = "OUT.json")]
@@ -89,7 +89,7 @@ pub struct Args {
     /// all (fit every selected parameter) or press: fit the selection without the chain
     /// constants, then add the chain constants (and with --compliance the joint compliances)
     /// that lower the leave-one-pose-out prediction error (block PRESS) on the calibration poses.
-    #[arg(long, default_value = "all", value_parser = parse_select, conflicts_with = "samples")]
+    #[arg(long, value_enum, default_value = "all", conflicts_with = "samples")]
     pub select: Select,
     /// Identify a compliance of every revolute joint (deg per kgf.m of gravity torque about its
     /// axis, from the model's link masses; with --select press, only those chosen).
@@ -101,20 +101,12 @@ pub struct Args {
     pub keep_outliers: bool,
 }
 
-fn parse_select(s: &str) -> Result<Select, String> {
-    s.parse()
-}
-
 /// A relative threshold strictly between 0 and 1 (NaN and infinities refused).
 fn parse_rtol(s: &str) -> Result<f64, String> {
     match s.parse::<f64>() {
         Ok(v) if v.is_finite() && v > 0.0 && v < 1.0 => Ok(v),
         _ => Err(format!("`{s}` is not a relative tolerance in (0, 1)")),
     }
-}
-
-fn parse_method(s: &str) -> Result<Method, String> {
-    s.parse()
 }
 
 pub fn run(args: Args) -> Result<(), CliError> {

@@ -62,7 +62,13 @@ pub struct Args {
     /// Optimality criterion: a (sum of the squared sigmas relative to random designs, the
     /// default), g (geometric mean of the sigmas), i (mean prediction variance over the
     /// candidates) or d (determinant); with --from-diagnose restricted to the effects to separate.
-    #[arg(long, value_name = "a|g|i|d", default_value = "a", value_parser = parse_criterion)]
+    #[arg(
+        long,
+        value_name = "a|g|i|d",
+        value_enum,
+        ignore_case = true,
+        default_value = "a"
+    )]
     pub criterion: Criterion,
     /// Exchange runs from random starts besides the greedy one (more: slower, slightly better).
     #[arg(long, value_name = "COUNT", default_value_t = 1)]
@@ -118,20 +124,18 @@ pub struct Args {
     /// What a sheet sample measures for --sheets: fused (across the path + out of the sheet,
     /// what `rigctl fuse` gives), trace (across the path only) or plane (both in-plane
     /// directions).
-    #[arg(long, value_name = "fused|trace|plane", default_value = "fused", value_parser = parse_sheet_rows, requires = "sheets")]
+    #[arg(
+        long,
+        value_name = "fused|trace|plane",
+        value_enum,
+        default_value = "fused",
+        requires = "sheets"
+    )]
     pub sheet_rows: SheetRows,
     /// A diagnose JSON: choose poses that separate its `aliased` pairs (and pin down its
     /// effects with large sigmas), given --poses.
     #[arg(long, value_name = "D.json")]
     pub from_diagnose: Option<PathBuf>,
-}
-
-fn parse_sheet_rows(s: &str) -> Result<SheetRows, String> {
-    SheetRows::parse(s).ok_or_else(|| format!("unknown --sheet-rows `{s}` (fused, trace, plane)"))
-}
-
-fn parse_criterion(s: &str) -> Result<Criterion, String> {
-    Criterion::parse(s).ok_or_else(|| format!("unknown criterion `{s}` (g, a, i, d)"))
 }
 
 pub fn run(args: Args) -> Result<(), CliError> {

@@ -50,15 +50,11 @@ pub struct Args {
     /// --seed gives the same robot for both paths. Without --model the Katana's tool length
     /// defaults to 330 mm (the pencil holder). `--effect`s with model parameters apply to the
     /// session's truth robot (time drifts are refused: a session lasts seconds).
-    #[arg(long, value_name = "circle|line", value_parser = parse_session)]
+    #[arg(long, value_name = "circle|line", value_enum)]
     pub session: Option<SessionPath>,
     /// With --session: the board clock's reading at robot time 0, s.
     #[arg(long, value_name = "S", requires = "session")]
     pub clock_offset_s: Option<f64>,
-}
-
-fn parse_session(s: &str) -> Result<SessionPath, String> {
-    s.parse()
 }
 
 /// `simulate --session`.

@@ -30,8 +30,8 @@ pub const RIDGE: f64 = 1e-6;
 /// determines that parameter.
 pub const DEFICIENT_VARIANCE: f64 = 1e-2 / RIDGE;
 
-/// What a design maximises (see the module docs).
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+/// What a design maximises (see the module docs; `plan --criterion`).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, clap::ValueEnum)]
 pub enum Criterion {
     /// `log det M` (or of the Schur complement of the columns of interest: Ds).
     D,

@@ -84,8 +84,8 @@ impl SheetPath {
     }
 }
 
-/// What a sheet sample measures.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+/// What a sheet sample measures (`plan --sheet-rows`).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, clap::ValueEnum)]
 pub enum SheetRows {
     /// What `rigctl fuse` gives: across the path in the plane (`u`, the trace) and out of the
     /// plane (`n`, the pencil's potentiometer).

@@ -24,8 +24,8 @@ pub fn default_pencil_axis(n: &Vector3<f64>) -> Vector3<f64> {
 /// Half length of the drawn line, mm (the printed reference line is +-100 mm).
 pub const LINE_HALF_LENGTH_DRAWN_MM: f64 = 90.0;
 
-/// The drawn path.
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+/// The drawn path (`simulate --session`).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, clap::ValueEnum)]
 pub enum SessionPath {
     /// The thesis circle, radius 100 mm about the sheet origin, counter-clockwise on the sheet
     /// from (-100, 0).

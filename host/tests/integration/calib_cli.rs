@@ -1,14 +1,10 @@
 //! `rigctl calibrate` end to end: JSON keys, the written model, bad input.
 
-use std::process::Command;
-
 use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
 use rigctl::model::{katana450, Tilt};
 
-fn rigctl() -> Command {
-    Command::new(env!("CARGO_BIN_EXE_rigctl"))
-}
+use super::common::spawn::rigctl;
 
 /// A Katana pose file from the declared model with `dth2 = 0.05`, `al3 = 0.03` (exact data).
 fn write_poses(path: &std::path::Path, n: usize, seed: u64) {

@@ -4,13 +4,10 @@
 //! refused with exit 2 naming the file, line and column.
 
 use std::path::{Path, PathBuf};
-use std::process::Command;
 
 use rigctl::model::{Model, ModelBuilder, Tilt};
 
-fn rigctl() -> Command {
-    Command::new(env!("CARGO_BIN_EXE_rigctl"))
-}
+use super::common::spawn::rigctl;
 
 fn scratch(name: &str) -> PathBuf {
     let d = std::env::temp_dir().join(format!("rigctl_markers_{name}_{}", std::process::id()));

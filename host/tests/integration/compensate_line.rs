@@ -4,8 +4,7 @@
 
 use crate::common;
 use crate::common::record::record;
-
-use std::process::{Command, Output};
+use crate::common::spawn::output;
 
 use nalgebra::Vector3;
 use rigctl::compensate::{compensate, parse_path, PathPoint};
@@ -112,13 +111,6 @@ fn compensated_joints_put_the_calibrated_tilting_arm_on_the_line() {
     assert!(rigid[5].q_nominal_deg.is_none());
 }
 
-fn rigctl(args: &[&str]) -> Output {
-    Command::new(env!("CARGO_BIN_EXE_rigctl"))
-        .args(args)
-        .output()
-        .expect("run rigctl")
-}
-
 fn path_csv(path: &Line) -> String {
     let mut s = String::from("t,x,y,z,ax,ay,az\n");
     for p in points(path) {
@@ -138,7 +130,7 @@ fn cli_writes_compensated_and_nominal_joints() {
     let csv = dir.path().join("path.csv");
     std::fs::write(&csv, &text).unwrap();
     let out = dir.path().join("joints.csv");
-    let o = rigctl(&[
+    let o = output(&[
         "compensate",
         "--path",
         csv.to_str().unwrap(),
@@ -182,7 +174,7 @@ fn cli_bad_input_names_line_and_column() {
         let csv = dir.path().join("path.csv");
         std::fs::write(&csv, text).unwrap();
         let out = dir.path().join("j.csv");
-        let o = rigctl(&[
+        let o = output(&[
             "compensate",
             "--path",
             csv.to_str().unwrap(),

@@ -7,22 +7,15 @@
 
 use crate::common;
 use crate::common::record::record;
+use crate::common::spawn::output;
 
 use std::path::Path;
-use std::process::{Command, Output};
 
 use nalgebra::Vector3;
 use rigctl::compensate::transmission::commands_for;
 use rigctl::model::ik::{tool_target, IkTilt};
 use rigctl::model::transmission::JointTerms;
 use rigctl::model::{katana450, Model};
-
-fn rigctl(args: &[&std::ffi::OsStr]) -> Output {
-    Command::new(env!("CARGO_BIN_EXE_rigctl"))
-        .args(args)
-        .output()
-        .expect("run rigctl")
-}
 
 /// The Katana with a payload (tilting), geometric errors and transmission terms.
 fn model_with_terms() -> Model {
@@ -64,7 +57,7 @@ fn rows(csv: &str) -> Vec<Vec<f64>> {
 }
 
 fn fk(model: &Path, joints: &Path) -> Vec<Vec<f64>> {
-    let o = rigctl(&[
+    let o = output(&[
         "fk".as_ref(),
         "--tilt".as_ref(),
         "--model".as_ref(),
@@ -88,7 +81,7 @@ fn compensated_joints_through_fk_recover_the_path() {
     let text = path_csv();
     let (path, out) = (dir.path().join("path.csv"), dir.path().join("joints.csv"));
     std::fs::write(&path, &text).unwrap();
-    let o = rigctl(&[
+    let o = output(&[
         "compensate".as_ref(),
         "--path".as_ref(),
         path.as_os_str(),

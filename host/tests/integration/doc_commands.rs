@@ -97,10 +97,7 @@ fn every_sh_block_of_the_docs_runs_as_written() {
     else {
         return;
     };
-    let bin_dir = Path::new(env!("CARGO_BIN_EXE_rigctl"))
-        .parent()
-        .expect("binary directory")
-        .to_path_buf();
+    let bin_dir = crate::common::spawn::bin_dir();
     let path = format!(
         "{}:{}",
         bin_dir.display(),

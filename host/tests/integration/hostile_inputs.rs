@@ -3,13 +3,13 @@
 //! be refused. Every test spawns the CLI with a time bound and never accepts exit 101.
 
 use std::path::{Path, PathBuf};
-use std::process::{Command, Stdio};
+use std::process::Stdio;
 use std::time::{Duration, Instant};
 
 use rand::{Rng, SeedableRng};
 
 use super::common::long_urdf::long_urdf;
-use super::common::spawn::{bin, os, rig, run_for, Run};
+use super::common::spawn::{os, rig, rigctl, run_for, Run};
 
 fn simulated(dir: &Path) -> PathBuf {
     let out = dir.join("sim");
@@ -515,7 +515,7 @@ fn item7_concurrent_simulate_runs_leave_one_consistent_set() {
         let out = dir.path().join(format!("shared{round}"));
         let children: Vec<_> = (1..=16)
             .map(|seed| {
-                Command::new(bin())
+                rigctl()
                     .args(["simulate", "--seed", &seed.to_string(), "--out"])
                     .arg(&out)
                     .stdout(Stdio::null())

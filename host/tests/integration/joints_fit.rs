@@ -2,8 +2,6 @@
 //! readings of a truth model with known values (different from table 5.2), inclinometer noise
 //! 0.001 deg (the thesis's resolution) and unknown zero offsets; plus the CLI and bad input.
 
-use std::process::{Command, Output};
-
 use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
 use rand_distr::{Distribution, Normal};
@@ -14,6 +12,7 @@ use rigctl::joints::{
 use rigctl::model::{katana450, Model};
 
 use crate::common::record::record_push;
+use crate::common::spawn::output;
 
 /// Truth values (deg, deg, kgf.m/deg); joint 1's b and k equal table 5.2 because inclinometers
 /// cannot identify them (eta_z = 0 under gravity).
@@ -181,13 +180,6 @@ fn one_sided_moments_identify_nothing() {
     );
 }
 
-fn rigctl(args: &[&str]) -> Output {
-    Command::new(env!("CARGO_BIN_EXE_rigctl"))
-        .args(args)
-        .output()
-        .expect("run rigctl")
-}
-
 #[test]
 fn cli_writes_the_model_and_json_and_rejects_bad_input() {
     let dir = tempfile::tempdir().unwrap();
@@ -205,7 +197,7 @@ fn cli_writes_the_model_and_json_and_rejects_bad_input() {
     std::fs::write(&csv, &text).unwrap();
     let out_model = dir.path().join("tilt.toml");
     let out_json = dir.path().join("tilt.json");
-    let o = rigctl(&[
+    let o = output(&[
         "joints",
         "--readings",
         csv.to_str().unwrap(),
@@ -235,7 +227,7 @@ fn cli_writes_the_model_and_json_and_rejects_bad_input() {
     );
     let bad_csv = dir.path().join("bad.csv");
     std::fs::write(&bad_csv, bad).unwrap();
-    let o = rigctl(&[
+    let o = output(&[
         "joints",
         "--readings",
         bad_csv.to_str().unwrap(),
@@ -252,7 +244,7 @@ fn cli_writes_the_model_and_json_and_rejects_bad_input() {
     // a joint number out of range
     let bad = text.replacen("\n1,j1_0a", "\n7,j1_0a", 1);
     std::fs::write(&bad_csv, bad).unwrap();
-    let o = rigctl(&[
+    let o = output(&[
         "joints",
         "--readings",
         bad_csv.to_str().unwrap(),

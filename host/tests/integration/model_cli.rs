@@ -3,18 +3,12 @@
 //! the line or listing the valid names).
 
 use crate::common;
+use crate::common::spawn::output;
 
 use std::collections::BTreeMap;
-use std::process::{Command, Output};
+use std::process::Output;
 
 use rigctl::model::{choose_model, ModelChoice, Tilt};
-
-fn rigctl(args: &[&str]) -> Output {
-    Command::new(env!("CARGO_BIN_EXE_rigctl"))
-        .args(args)
-        .output()
-        .expect("run rigctl")
-}
 
 fn parse_output(out: &Output) -> Vec<[f64; 6]> {
     assert!(
@@ -85,7 +79,7 @@ fn fk_prints_the_reference_rows() {
         if tilt == "1" {
             args.push("--tilt".into());
         }
-        let out = parse_output(&rigctl(
+        let out = parse_output(&output(
             &args.iter().map(String::as_str).collect::<Vec<_>>(),
         ));
         assert_eq!(out.len(), rows.len());
@@ -149,14 +143,14 @@ fn fk_model_file_and_ur5() {
     std::fs::write(&katana, "q1,q2,q3,q4,q5\n10,20,30,40,50\n").unwrap();
     let model_file = concat!(env!("CARGO_MANIFEST_DIR"), "/models/katana450.toml");
     let k = katana.to_str().unwrap();
-    let preset = parse_output(&rigctl(&["fk", "--joints", k, "--tilt"]));
-    let from_file = parse_output(&rigctl(&[
+    let preset = parse_output(&output(&["fk", "--joints", k, "--tilt"]));
+    let from_file = parse_output(&output(&[
         "fk", "--joints", k, "--tilt", "--model", model_file,
     ]));
     assert_eq!(preset, from_file);
     let ur = dir.path().join("u.csv");
     std::fs::write(&ur, "q1,q2,q3,q4,q5,q6\n0,0,0,0,0,0\n").unwrap();
-    let out = parse_output(&rigctl(&[
+    let out = parse_output(&output(&[
         "fk",
         "--joints",
         ur.to_str().unwrap(),
@@ -191,29 +185,29 @@ fn fk_bad_input_exits_2() {
     std::fs::write(&bad, "# poses\nq1,q2,q3,q4,q5\n0,0,0,0,0\n1,2,3,4,oops\n").unwrap();
     let b = bad.to_str().unwrap();
     assert_bad_input(
-        &rigctl(&["fk", "--joints", b]),
+        &output(&["fk", "--joints", b]),
         &["bad.csv:4", "q5", "not a number"],
     );
     let good = dir.path().join("good.csv");
     std::fs::write(&good, "q1,q2,q3,q4,q5\n0,0,0,0,0\n").unwrap();
     let g = good.to_str().unwrap();
     assert_bad_input(
-        &rigctl(&["fk", "--joints", g, "--set", "dth9=1"]),
+        &output(&["fk", "--joints", g, "--set", "dth9=1"]),
         &["dth9", "valid names", "dth1", "al4", "clearance_j1"],
     );
     assert_bad_input(
-        &rigctl(&["fk", "--joints", g, "--set", "dth2"]),
+        &output(&["fk", "--joints", g, "--set", "dth2"]),
         &["NAME=VALUE"],
     );
     assert_bad_input(
-        &rigctl(&["fk", "--joints", g, "--robot", "puma"]),
+        &output(&["fk", "--joints", g, "--robot", "puma"]),
         &["puma"],
     );
-    assert_bad_input(&rigctl(&["fk", "--joints", g, "--robot", "ur5"]), &["q6"]);
+    assert_bad_input(&output(&["fk", "--joints", g, "--robot", "ur5"]), &["q6"]);
     let ur = dir.path().join("u.csv");
     std::fs::write(&ur, "q1,q2,q3,q4,q5,q6\n0,0,0,0,0,0\n").unwrap();
     assert_bad_input(
-        &rigctl(&[
+        &output(&[
             "fk",
             "--joints",
             ur.to_str().unwrap(),
@@ -224,7 +218,7 @@ fn fk_bad_input_exits_2() {
         &["tilting"],
     );
     assert_bad_input(
-        &rigctl(&["fk", "--joints", "/nonexistent.csv"]),
+        &output(&["fk", "--joints", "/nonexistent.csv"]),
         &["/nonexistent.csv"],
     );
 }

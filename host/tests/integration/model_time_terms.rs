@@ -5,20 +5,14 @@
 //! path; a model file reads back identical; absurd values are refused with the file's line.
 
 use std::path::Path;
-use std::process::{Command, Output};
 
 use rigctl::model::time_terms::TimeTerms;
 use rigctl::model::{katana450, Model};
 
-fn rigctl(args: &[&str]) -> Output {
-    Command::new(env!("CARGO_BIN_EXE_rigctl"))
-        .args(args)
-        .output()
-        .expect("run rigctl")
-}
+use super::common::spawn::output;
 
 fn ok(args: &[&str]) -> String {
-    let out = rigctl(args);
+    let out = output(args);
     assert!(
         out.status.success(),
         "rigctl {args:?}: {}",
@@ -243,6 +237,6 @@ fn time_terms_read_back_identical_and_absurd_values_are_refused() {
     .unwrap();
     let q = dir.path().join("q.csv");
     std::fs::write(&q, "q1,q2,q3,q4,q5\n0,90,-90,0,0\n").unwrap();
-    let out = rigctl(&["fk", "--model", path(&file), "--joints", path(&q)]);
+    let out = output(&["fk", "--model", path(&file), "--joints", path(&q)]);
     assert_eq!(out.status.code(), Some(2));
 }

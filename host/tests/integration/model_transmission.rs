@@ -4,19 +4,17 @@
 //! file's pose order), and `calibrate --model model.toml --out` keeps the terms.
 
 use std::path::Path;
-use std::process::{Command, Output};
+use std::process::Output;
 
 use crate::common::record::record;
+use crate::common::spawn::output;
 
 use rigctl::model::{katana450, Model};
 
 const NOISE_MM: f64 = 0.01;
 
 fn rigctl(args: &[&str]) -> Output {
-    let out = Command::new(env!("CARGO_BIN_EXE_rigctl"))
-        .args(args)
-        .output()
-        .expect("run rigctl");
+    let out = output(args);
     assert!(
         out.status.success(),
         "rigctl {args:?} failed: {}",

@@ -3,20 +3,12 @@
 //! laser-tracker grid too; and bad input.
 
 use crate::common;
-
-use std::process::Command;
+use crate::common::spawn::output;
 
 use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
 use rigctl::model::katana450;
 use rigctl::plan::{plan, PlanConfig};
-
-fn rigctl(args: &[&str]) -> std::process::Output {
-    Command::new(env!("CARGO_BIN_EXE_rigctl"))
-        .args(args)
-        .output()
-        .expect("rigctl runs")
-}
 
 /// `rigctl plan --robot katana450 --n 12 --candidates-from POOL --out OUT` and `extra`.
 fn plan_from(
@@ -37,7 +29,7 @@ fn plan_from(
         out,
     ];
     args.extend_from_slice(extra);
-    rigctl(&args)
+    output(&args)
 }
 
 fn joints(csv: &str) -> Vec<Vec<f64>> {

@@ -1,7 +1,5 @@
 //! `rigctl plan --sheets`: what candidate pencil sheets identify on the Katana.
 
-use std::process::Command;
-
 use nalgebra::Vector3;
 use rigctl::model::{katana450, KATANA_PENCIL_TOOL_MM};
 use rigctl::plan::sheets::{candidate_specs, rank_sheets, SheetPath, SheetRows, SheetScore};
@@ -9,6 +7,7 @@ use rigctl::plan::{plan, PlanConfig, Workspace};
 use rigctl::sim::session::SESSION_SHEET_ORIGIN_MM;
 
 use crate::common::record::record;
+use crate::common::spawn::rigctl;
 
 /// On the pencil rig (Katana with the 330 mm holder): the thesis's circle is reachable; a
 /// single sheet can leave parameters blind (named null-space combinations: lines, in-plane
@@ -93,7 +92,7 @@ fn blind_parameters_of_single_sheets_and_pairs() {
 fn cli_writes_the_sheets_ranking() {
     let dir = tempfile::tempdir().unwrap();
     let p = |n: &str| dir.path().join(n).to_string_lossy().into_owned();
-    let out = Command::new(env!("CARGO_BIN_EXE_rigctl"))
+    let out = rigctl()
         .args([
             "plan",
             "--tool-mm",
@@ -133,7 +132,7 @@ fn cli_writes_the_sheets_ranking() {
     assert!(sheets["pairs"][0]["sheets"].as_array().unwrap().len() == 2);
     // the report shows the ranking
     let html = p("r.html");
-    let out = Command::new(env!("CARGO_BIN_EXE_rigctl"))
+    let out = rigctl()
         .args(["report", &dir.path().to_string_lossy(), "--html", &html])
         .output()
         .unwrap();
@@ -148,7 +147,7 @@ fn cli_writes_the_sheets_ranking() {
         "report lacks the sheets"
     );
     // the UR5 has no pencil rig IK: a clear refusal, exit 2
-    let out = Command::new(env!("CARGO_BIN_EXE_rigctl"))
+    let out = rigctl()
         .args([
             "plan",
             "--robot",

@@ -1,8 +1,6 @@
 //! `rigctl plan`: planned poses against random ones on simulated Katana truths, the UR5 and a
 //! 7-joint model file through the CLI, `--from-diagnose`, and bad input.
 
-use std::process::Command;
-
 use rigctl::model::{katana450, KATANA_TOOL_MM};
 use rigctl::plan::evaluate::planned_vs_random;
 use rigctl::plan::metrics::median;
@@ -10,6 +8,7 @@ use rigctl::plan::{plan, FromDiagnose, PlanConfig};
 use rigctl::sim::simulate::{truth_model, SimConfig};
 
 use crate::common::record::record;
+use crate::common::spawn::output;
 
 /// `payload` -> `payload`, `link_length:a3` -> `link_length_a3`: a key for `record`.
 fn key_of(id: &str) -> String {
@@ -80,13 +79,6 @@ fn twelve_planned_poses_beat_twelve_random_ones() {
         median(&planned) < median(&random),
         "planned {planned:?} random {random:?}"
     );
-}
-
-fn rigctl(args: &[&str]) -> std::process::Output {
-    Command::new(env!("CARGO_BIN_EXE_rigctl"))
-        .args(args)
-        .output()
-        .expect("rigctl runs")
 }
 
 const SEVEN_JOINTS: &str = r#"name = "seven"
@@ -168,7 +160,7 @@ fn ur5_and_a_seven_joint_model_file() {
         args.extend(model_args.iter().copied());
         let (csv, json, svg) = (p("plan.csv"), p("plan.json"), p("plan.svg"));
         args.extend(["--n", "30", "--out", &csv, "--json", &json, "--plot", &svg]);
-        let out = rigctl(&args);
+        let out = output(&args);
         assert!(
             out.status.success(),
             "{}",
@@ -245,14 +237,14 @@ fn from_diagnose_separates_an_aliased_pair() {
 fn bad_input_is_exit_2_naming_the_field() {
     let dir = tempfile::tempdir().unwrap();
     let p = |n: &str| dir.path().join(n).to_string_lossy().into_owned();
-    let out = rigctl(&["plan", "--n", "0", "--out", &p("a.csv")]);
+    let out = output(&["plan", "--n", "0", "--out", &p("a.csv")]);
     assert_eq!(out.status.code(), Some(2));
     std::fs::write(
         p("d.json"),
         r#"{"aliased": [{"a": "payload", "b": "no_such_effect"}]}"#,
     )
     .unwrap();
-    let out = rigctl(&[
+    let out = output(&[
         "plan",
         "--n",
         "10",

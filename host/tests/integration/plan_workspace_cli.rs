@@ -2,11 +2,11 @@
 //! README documents (negative coordinates included): every planned tool point inside the box;
 //! a wrong count is exit 2 naming the option, nothing written.
 
-use std::process::Command;
+use super::common::spawn::rigctl;
 
 fn plan(dir: &std::path::Path, extra: &[&str]) -> (std::process::Output, std::path::PathBuf) {
     let out = dir.join("p.csv");
-    let o = Command::new(env!("CARGO_BIN_EXE_rigctl"))
+    let o = rigctl()
         .args([
             "plan",
             "--robot",

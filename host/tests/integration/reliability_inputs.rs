@@ -2,17 +2,10 @@
 //! loops, --rtol nan).
 
 use std::path::Path;
-use std::process::Command;
 
 use rigctl::io::table::Table;
 
-fn rigctl() -> Command {
-    Command::new(env!("CARGO_BIN_EXE_rigctl"))
-}
-
-fn text(b: &[u8]) -> String {
-    String::from_utf8_lossy(b).into_owned()
-}
+use super::common::spawn::{rigctl, text};
 
 const FUSED_HEADER: &str = "t,q1,q2,q3,q4,q5,nom_x,nom_y,nom_z,dev_u,u_x,u_y,u_z,dev_n,n_x,n_y,n_z";
 const FUSED_ROW: &str = "1.5,10,100,-80,20,5,300,-100,200,0.01,1,0,0,0.02,0,0,1";

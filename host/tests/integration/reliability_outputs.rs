@@ -6,13 +6,7 @@ use std::os::unix::fs::FileTypeExt;
 use std::path::{Path, PathBuf};
 use std::process::{Command, Output, Stdio};
 
-fn rigctl() -> Command {
-    Command::new(env!("CARGO_BIN_EXE_rigctl"))
-}
-
-fn text(b: &[u8]) -> String {
-    String::from_utf8_lossy(b).into_owned()
-}
+use super::common::spawn::{rigctl, text};
 
 /// A simulated run directory (cal.csv, val.csv, truth.*), made once per test.
 fn simulated(dir: &Path) -> PathBuf {

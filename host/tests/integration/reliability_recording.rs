@@ -1,7 +1,6 @@
 //! Issue 15, defects 3, 5 (the .rec header) and 7 (tilt losses counted): damaged recordings.
 
 use std::path::Path;
-use std::process::Command;
 
 use rig_protocol::{encode_device, DeviceMsg, PotBatch, TiltReading, DEVICE_FRAME_MAX};
 use rigctl::daq::recording::{header_bytes, RecordingMeta, RecordingWriter};
@@ -9,10 +8,7 @@ use rigctl::daq::salvage::salvage;
 use rigctl::daq::tally::Tally;
 
 use super::common::record::record;
-
-fn rigctl() -> Command {
-    Command::new(env!("CARGO_BIN_EXE_rigctl"))
-}
+use super::common::spawn::rigctl;
 
 fn meta() -> RecordingMeta {
     RecordingMeta {

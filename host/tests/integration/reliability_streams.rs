@@ -21,14 +21,7 @@ use rigctl::model::katana450;
 use rigctl::sim::session::{simulate_session, write_session, SessionConfig};
 
 use super::common::record::record;
-
-fn rigctl() -> Command {
-    Command::new(env!("CARGO_BIN_EXE_rigctl"))
-}
-
-fn text(b: &[u8]) -> String {
-    String::from_utf8_lossy(b).into_owned()
-}
+use super::common::spawn::{rigctl, text};
 
 /// The hostile streams tried on every command.
 #[derive(Debug, Clone, Copy, PartialEq)]

@@ -6,6 +6,7 @@
 use rigctl::report::{build_report, render_html, ReportOptions};
 
 use crate::common::record::record;
+use crate::common::spawn::output;
 
 fn stats(n: usize, mean: f64, rms: f64) -> serde_json::Value {
     serde_json::json!({"n": n, "mean_mm": mean, "rms_mm": rms, "max_mm": 3.0 * mean,
@@ -206,10 +207,7 @@ fn demo_first_screen_names_the_harmonic() {
     let d = dir.path();
     let p = |n: &str| d.join(n).to_string_lossy().into_owned();
     let run = |args: &[String]| {
-        let o = std::process::Command::new(env!("CARGO_BIN_EXE_rigctl"))
-            .args(args)
-            .output()
-            .unwrap();
+        let o = output(args);
         assert!(
             o.status.success(),
             "{args:?}: {}",

@@ -3,9 +3,8 @@
 //! scale error, the model file that carries the terms explains them down to the noise, the
 //! same model without them does not.
 
-use std::process::Command;
-
 use crate::common::record::record;
+use crate::common::spawn::rigctl;
 
 use rigctl::model::katana450;
 use rigctl::model::transmission::JointTerms;
@@ -14,7 +13,7 @@ use rigctl::report::{build_report, ReportOptions};
 #[test]
 fn report_applies_a_model_files_transmission_terms() {
     let dir = tempfile::tempdir().unwrap();
-    let out = Command::new(env!("CARGO_BIN_EXE_rigctl"))
+    let out = rigctl()
         .args(["simulate", "--seed", "7", "--geometric-sigma-deg", "0"])
         .args(["--noise-mm", "0.001", "--effect", "hysteresis:j2=0.05"])
         .args(["--effect", "joint_scale:j3=0.002", "--out"])

@@ -6,19 +6,13 @@
 
 use crate::common;
 use crate::common::record::record;
+use crate::common::spawn::{self, output};
 
 use std::path::Path;
 use std::process::{Command, Output};
 
-fn rigctl(args: &[&str]) -> Output {
-    Command::new(env!("CARGO_BIN_EXE_rigctl"))
-        .args(args)
-        .output()
-        .expect("rigctl runs")
-}
-
 fn ok(args: &[&str]) -> Output {
-    let out = rigctl(args);
+    let out = output(args);
     assert!(
         out.status.success(),
         "rigctl {}: {}\n{}",
@@ -205,13 +199,13 @@ fn fuse_and_fk_from_a_rosbags_bag_equal_the_csv() {
     assert_eq!(fk_mcap.stdout, fk_bag.stdout);
 
     // Wrong names, topic or options are bad input (exit 2) naming what is wrong.
-    let no_names = rigctl(&["fk", "--joints", s(&bag)]);
+    let no_names = output(&["fk", "--joints", s(&bag)]);
     assert_eq!(no_names.status.code(), Some(2));
     assert!(String::from_utf8_lossy(&no_names.stderr).contains("--joint-names"));
-    let wrong = rigctl(&["fk", "--joints", s(&bag), "--joint-names", "a,b,c,d,e"]);
+    let wrong = output(&["fk", "--joints", s(&bag), "--joint-names", "a,b,c,d,e"]);
     assert_eq!(wrong.status.code(), Some(2));
     assert!(String::from_utf8_lossy(&wrong.stderr).contains("joint `a`"));
-    let topic = rigctl(&[
+    let topic = output(&[
         "fk",
         "--joints",
         s(&bag),
@@ -222,7 +216,7 @@ fn fuse_and_fk_from_a_rosbags_bag_equal_the_csv() {
     ]);
     assert_eq!(topic.status.code(), Some(2));
     assert!(String::from_utf8_lossy(&topic.stderr).contains("std_msgs/msg/String"));
-    let csv_opt = rigctl(&[
+    let csv_opt = output(&[
         "fk",
         "--joints",
         s(&joints_csv),
@@ -259,7 +253,7 @@ fn truncated_bag_reads_what_is_intact_and_says_what_was_lost() {
         ],
     );
     let fk = |joints: &Path| {
-        rigctl(&[
+        output(&[
             "fk",
             "--robot",
             "ur5",
@@ -359,7 +353,8 @@ fn a_million_messages_stream_in_bounded_memory() {
          sys.stderr.write(r.stderr.decode())\n\
          print(r.returncode, resource.getrusage(resource.RUSAGE_CHILDREN).ru_maxrss, wall_s)\n";
     let run = Command::new("python3")
-        .args(["-c", probe, s(&out), env!("CARGO_BIN_EXE_rigctl")])
+        .args(["-c", probe, s(&out)])
+        .arg(spawn::bin())
         .args([
             "fk",
             "--robot",

@@ -11,18 +11,14 @@
 
 use crate::common;
 use crate::common::record::record;
+use crate::common::spawn::rigctl;
 
 use std::path::{Path, PathBuf};
-use std::process::Command;
 
 const DATA_DIR: &str = "data/real/thanhndv212__figaroh-examples/examples/tiago";
 const URDF: &str = "urdf/tiago_48_schunk.urdf";
 const TRAIN: &str = "data/calibration/mocap/qualisys_2021-11-30_static_postures.csv";
 const VALID: &str = "data/calibration/mocap/qualisys_2021-11-26_static_postures.csv";
-
-fn rigctl() -> Command {
-    Command::new(env!("CARGO_BIN_EXE_rigctl"))
-}
 
 fn run(args: &[&str]) -> std::process::Output {
     let out = rigctl().args(args).output().expect("rigctl runs");

@@ -3,11 +3,9 @@
 use rigctl::sheet::ReferencePath;
 use rigctl::trace::{render_scan, RenderSpec};
 use std::path::Path;
-use std::process::{Command, Output};
+use std::process::Output;
 
-fn rigctl() -> Command {
-    Command::new(env!("CARGO_BIN_EXE_rigctl"))
-}
+use super::common::spawn::rigctl;
 
 /// `rigctl trace SCAN --out OUT`.
 pub(crate) fn trace_to(scan: &Path, out: &Path) -> Output {

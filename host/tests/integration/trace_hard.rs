@@ -4,13 +4,13 @@
 //! dots crossing the circle, the page edge and the desk).
 
 use crate::common::record::{record, record_push};
+use crate::common::spawn::rigctl;
 
 use indicatif::ProgressBar;
 use rigctl::sheet::ReferencePath;
 use rigctl::trace::{
     render_photo, render_scan, trace_image, PhotoSpec, RenderSpec, Trace, TraceError, TraceOptions,
 };
-use std::process::Command;
 
 fn wobbly_circle(seed: u64) -> Vec<[f64; 2]> {
     let n = 8000;
@@ -248,7 +248,7 @@ fn missing_stretch_exits_1_naming_it_and_writes_nothing() {
     render_scan(&s).save(&scan).expect("png");
     let out = dir.path().join("trace.csv");
     let overlay = dir.path().join("gap_overlay.png");
-    let o = Command::new(env!("CARGO_BIN_EXE_rigctl"))
+    let o = rigctl()
         .arg("trace")
         .arg(&scan)
         .arg("--out")
@@ -266,7 +266,7 @@ fn missing_stretch_exits_1_naming_it_and_writes_nothing() {
     assert!(!out.exists());
     assert!(overlay.exists());
     // Bridging it on purpose is allowed.
-    let o = Command::new(env!("CARGO_BIN_EXE_rigctl"))
+    let o = rigctl()
         .arg("trace")
         .arg(&scan)
         .arg("--out")
@@ -293,7 +293,7 @@ fn jpeg_photo_through_the_cli() {
     let path = dir.path().join("photo.jpg");
     std::fs::write(&path, bytes).expect("write");
     let out = dir.path().join("trace.csv");
-    let o = Command::new(env!("CARGO_BIN_EXE_rigctl"))
+    let o = rigctl()
         .arg("trace")
         .arg(&path)
         .arg("--out")

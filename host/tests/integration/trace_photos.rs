@@ -5,6 +5,7 @@
 //! measured by hand on the photo.
 
 use crate::common;
+use crate::common::spawn::rigctl;
 
 use indicatif::ProgressBar;
 use rigctl::trace::link::MIN_MARK_MM;
@@ -12,7 +13,6 @@ use rigctl::trace::{
     line_file_name, load_scan, path_file_name, polyline_length, trace_image, trace_paths, Drawing,
     Mapping, Prepared, TraceError, TraceOptions, SUMMARY_FILE,
 };
-use std::process::Command;
 
 fn photos() -> Option<Vec<std::path::PathBuf>> {
     let dir = common::shared_file(
@@ -298,7 +298,7 @@ fn drawings_give_every_line_once_and_never_exit_0_on_a_part() {
         // The command: exit 0 only when every drawn line is whole; otherwise exit 1 naming
         // each line that is not, with every path written and the summary saying which.
         let out = dir.path().join(f.file_stem().expect("stem"));
-        let run = Command::new(env!("CARGO_BIN_EXE_rigctl"))
+        let run = rigctl()
             .arg("trace")
             .arg(&f)
             .args(["--no-fiducials", "--mm-per-px", "0.2", "--paths"])

@@ -6,6 +6,7 @@
 
 use crate::common;
 use crate::common::record::record;
+use crate::common::spawn::{self, output};
 
 use std::path::{Path, PathBuf};
 use std::process::{Command, Output};
@@ -13,10 +14,7 @@ use std::process::{Command, Output};
 use rigctl::model::{Model, Tilt};
 
 fn rigctl(args: &[&str]) -> Output {
-    let out = Command::new(env!("CARGO_BIN_EXE_rigctl"))
-        .args(args)
-        .output()
-        .expect("rigctl runs");
+    let out = output(args);
     assert!(
         out.status.success(),
         "rigctl {}: {}\n{}",
@@ -422,7 +420,7 @@ fn model2urdf_refuses_a_model_that_does_not_fit_the_urdf() {
         return;
     };
     let dir = tmp();
-    let out = Command::new(env!("CARGO_BIN_EXE_rigctl"))
+    let out = spawn::rigctl()
         .args(["model2urdf", "--robot", "ur5", "--urdf"])
         .arg(t.join("urdf/tiago_48_schunk.urdf"))
         .arg("--out")

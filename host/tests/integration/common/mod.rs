@@ -6,6 +6,7 @@ use std::path::PathBuf;
 pub mod long_urdf;
 pub mod record;
 pub mod spawn;
+pub mod spawn_rule;
 
 /// `rel` (a file or folder) under the shared directory (`rigctl::shared_dir()`: `$RIG_SHARED_DIR`
 /// or `../shared`), or `None` after a `SKIPPED` message when it is absent. With `CI=true` its
