@@ -209,6 +209,10 @@ pub fn calibrate_poses(
                 .into(),
         ));
     }
+    super::plausible::check_set(nominal, cal, "calibration poses")?;
+    if let Some(v) = val {
+        super::plausible::check_set(nominal, v, "held-out poses")?;
+    }
     let run = Run {
         nominal,
         cal: cal.through_terms(nominal)?,

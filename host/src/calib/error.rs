@@ -31,6 +31,10 @@ pub enum CalibError {
     /// A combination of options that the identification does not support.
     #[error("{0}")]
     Unsupported(String),
+    /// Measurements that cannot be of this model as given (units, joint order, another robot):
+    /// [`super::plausible`].
+    #[error("{0}")]
+    Implausible(String),
 }
 
 impl CalibError {
@@ -56,7 +60,8 @@ impl Classify for CalibError {
             | CalibError::TooFewPoses { .. }
             | CalibError::EmptySelection
             | CalibError::NoMasses
-            | CalibError::Unsupported(_) => ErrorKind::BadInput,
+            | CalibError::Unsupported(_)
+            | CalibError::Implausible(_) => ErrorKind::BadInput,
         }
     }
 }

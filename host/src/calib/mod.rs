@@ -38,6 +38,7 @@ pub mod lm;
 pub mod measured;
 pub mod normal;
 pub mod outliers;
+pub mod plausible;
 pub mod press;
 pub mod problem;
 pub mod projected;

@@ -143,6 +143,7 @@ pub fn run(args: Args) -> Result<(), CliError> {
     let read = |p: &std::path::Path| -> Result<(MeasuredSet, PoseLabels), CliError> {
         let file = read_poses(p, &args.pose.spec(&model, true, 0))?;
         let m = MeasuredSet::from_pose_points(&file, markers.as_deref())?;
+        super::pose_args::check_plausible(&model, &m, p)?;
         Ok((m, PoseLabels::of(&file)))
     };
     let (cal, cal_labels) = read(poses)?;

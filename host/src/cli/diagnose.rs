@@ -97,7 +97,11 @@ pub fn run(args: Args) -> Result<(), CliError> {
     let mut cal: Option<MeasuredSet> = args
         .poses
         .as_deref()
-        .map(|p| MeasuredSet::read_with(p, &spec))
+        .map(|p| {
+            let set = MeasuredSet::read_with(p, &spec)?;
+            super::pose_args::check_plausible(&model, &set, p)?;
+            Ok::<_, CliError>(set)
+        })
         .transpose()?;
     for path in &args.samples {
         let d = read_samples(path, &model)?;
@@ -112,7 +116,9 @@ pub fn run(args: Args) -> Result<(), CliError> {
         let d = if is_fused(path) {
             read_samples(path, &model)?
         } else {
-            MeasuredSet::read_with(path, &spec)?
+            let set = MeasuredSet::read_with(path, &spec)?;
+            super::pose_args::check_plausible(&model, &set, path)?;
+            set
         };
         val = Some(match val {
             Some(v) => v.concat(d),

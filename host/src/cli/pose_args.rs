@@ -1,6 +1,7 @@
 //! The pose-file arguments shared by the commands that read pose files: `--units LENGTH,ANGLE`
 //! (README "Pose files: extensions"; lengths mm|m, angles deg|rad, converted on reading).
 
+use rigctl::calib::MeasuredSet;
 use rigctl::io::pose_csv::PoseSpec;
 use rigctl::io::units::Units;
 use rigctl::model::Model;
@@ -28,4 +29,14 @@ impl PoseArgs {
             ..PoseSpec::for_model(model, require_xyz)
         }
     }
+}
+
+/// Refuses the pose file `path` (read into `set`) when its points cannot be of `model` as given
+/// (units, joint order, another robot: [`rigctl::calib::plausible`]), naming the file.
+pub fn check_plausible(
+    model: &Model,
+    set: &MeasuredSet,
+    path: &std::path::Path,
+) -> Result<(), rigctl::calib::CalibError> {
+    rigctl::calib::plausible::check_set(model, set, &path.display().to_string()).map(|_| ())
 }

@@ -405,6 +405,8 @@ pub fn diagnose(
 ) -> Result<Diagnosis, DiagnoseError> {
     let cfg = &opts.decide;
     check_sizes(cal, val, cfg)?;
+    crate::calib::plausible::check_set(model, cal, "calibration poses")?;
+    crate::calib::plausible::check_set(model, val, "held-out poses")?;
     // repeats anywhere (calibration and held-out files) are pooled
     let repeat = floor::repeatability_of_files(&[cal, val]);
     let known_floor = floor::choose_floor(opts.instrument_mm, repeat).1;
