@@ -10,11 +10,8 @@
 
 use criterion::{criterion_group, criterion_main, Criterion};
 use indicatif::ProgressBar;
-use rigctl::trace::render_photo::jpeg_bytes;
-use rigctl::trace::{
-    load_prepared, load_scan, render_photo, render_scan, trace_image, trace_prepared, PhotoSpec,
-    RenderSpec, TraceOptions,
-};
+use rigctl::trace::synth::{jpeg_bytes, render_photo, render_scan, PhotoSpec, RenderSpec};
+use rigctl::trace::{load_prepared, load_scan, trace_image, trace_prepared, TraceOptions};
 use std::io::Write;
 use std::path::Path;
 use std::path::PathBuf;
