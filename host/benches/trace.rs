@@ -1,8 +1,9 @@
 //! `trace` on an A4 scan at 600 dpi (4961 x 7016 px, a 100 mm-radius pencil circle, rotated
 //! 2 degrees) and on a 12 MP phone photo (JPEG, 30 degrees tilt, k1 = -0.08, shading): decoding
 //! and tracing measured separately, and the whole read-and-trace as the CLI does it
-//! (`load_prepared` + `trace_prepared`: a PNG is inflated on one thread while its rows are
-//! unfiltered and its maps built on another).
+//! (`load_prepared` + `trace_prepared`: a PNG's rows are decoded by the `png` crate on one
+//! thread while the RGB image and its maps are built on another; against it, the `image`
+//! crate's decoding followed by the maps on all cores).
 //!
 //! The bench also leaves the scan and its truth in `target/tmp/trace_bench/` (`scan600.png`,
 //! `truth.csv` = the pencil centreline, closed, x,y mm in sheet coordinates) for the OpenCV
@@ -10,10 +11,9 @@
 
 use criterion::{criterion_group, criterion_main, Criterion};
 use indicatif::ProgressBar;
-use rigctl::trace::render_photo::jpeg_bytes;
+use rigctl::trace::synth::{jpeg_bytes, render_photo, render_scan, PhotoSpec, RenderSpec};
 use rigctl::trace::{
-    load_prepared, load_scan, render_photo, render_scan, trace_image, trace_prepared, PhotoSpec,
-    RenderSpec, TraceOptions,
+    load_prepared, load_scan, trace_image, trace_prepared, Prepared, TraceOptions,
 };
 use std::io::Write;
 use std::path::Path;
@@ -74,9 +74,13 @@ fn trace_a4_600dpi(c: &mut Criterion) {
     g.bench_function("decode_png_a4_600dpi", |b| {
         b.iter(|| load_scan(&png).map(|i| i.width()))
     });
-    // The CLI's reader: inflating on one thread, unfiltering and the maps on another.
+    // The CLI's reader: the rows decoded on one thread, the RGB image and the maps on another.
     g.bench_function("read_png_with_maps_a4_600dpi", |b| {
         b.iter(|| load_prepared(&png).map(|(i, _)| i.width()))
+    });
+    // The same in turn: the whole image decoded, then its maps.
+    g.bench_function("decode_png_then_maps_a4_600dpi", |b| {
+        b.iter(|| load_scan(&png).map(|i| Prepared::build(&i).fits(&i)))
     });
     let opts = TraceOptions::default();
     g.bench_function("trace_a4_600dpi", |b| {

@@ -1,7 +1,8 @@
-//! Arbitrary bytes as a PNG for the two-thread reader of `rigctl trace` (`trace::read_png`):
-//! never a panic or a hang, and whenever both it and the `image` crate decode the bytes, the
-//! same pixels. Small images only: 64 x 64 pixels at most, refused from the header (so the
-//! `image` crate, given the same header, decodes no more).
+//! Arbitrary bytes as a PNG for the two-thread reader of `rigctl trace` (`trace::read_png`: the
+//! `png` crate's rows turned into RGB, and the maps built, on a second thread): never a panic or
+//! a hang, and whenever both it and the `image` crate decode the bytes, the same pixels. Small
+//! images only: 64 x 64 pixels at most, refused from the header (so the `image` crate, given the
+//! same header, decodes no more).
 #![no_main]
 
 use image::ImageFormat;

@@ -1,5 +1,5 @@
 //! The printable trace sheet: its geometry, shared by the SVG renderer ([`svg`]), the simulated
-//! scan renderer (`trace::render`) and the tracer (`trace`); the paths drawn on it in the
+//! scan renderer (`trace::synth`) and the tracer (`trace`); the paths drawn on it in the
 //! simulated sessions and where their sheet lies ([`drawn`]).
 //!
 //! Sheet coordinates (FORMATS.md "Scanned sheets"): origin at the centre of the fiducial square,

@@ -35,8 +35,8 @@
 //! # The sheet
 //! `placement.toml` ([`crate::fusion::placement`]; by default the 45-degree plane through
 //! [`SESSION_SHEET_ORIGIN_MM`]); the pencil tip's path on the paper, rendered
-//! as a scan ([`crate::trace::render_scan`]) at `dpi`, rotated by `scan_rotation_deg` and shifted
-//! on the glass (`scan.png`), with the printed reference path.
+//! as a scan ([`crate::trace::synth::render_scan`]) at `dpi`, rotated by `scan_rotation_deg` and
+//! shifted on the glass (`scan.png`), with the printed reference path.
 //!
 //! # Files (written into the output directory, each atomically)
 //! `joints.csv`, `pot.rec`, `potjig.csv`, `scan.png`, `placement.toml` (the session's inputs) and
@@ -65,7 +65,7 @@ use crate::model::{Model, ModelError, Tilt};
 pub use crate::sheet::drawn::{
     default_pencil_axis, SessionPath, LINE_HALF_LENGTH_DRAWN_MM, SESSION_SHEET_ORIGIN_MM,
 };
-use crate::trace::{render_scan, RenderSpec};
+use crate::trace::synth::{render_scan, RenderSpec};
 
 /// Format tag of `session.json`.
 pub const SESSION_FORMAT: &str = "rigctl-session-truth/1";

@@ -1,8 +1,7 @@
-//! Reading a scan or photo. A PNG of 8- or 16-bit grey or RGB samples is inflated on one
-//! thread while a second unfilters its rows into the RGB image and reduces each finished band
-//! of rows to the whole-image maps ([`super::png_read`]). Other images (JPEG, palette or
-//! interlaced PNG) are decoded by the `image` crate and their maps built on all cores. The
-//! trace is written as CSV.
+//! Reading a scan or photo. A non-interlaced PNG is decoded by the `png` crate on one thread
+//! while a second turns its rows into the RGB image and reduces each finished band of rows to
+//! the whole-image maps ([`super::png_read`]). Other images (JPEG, interlaced PNG) are decoded
+//! by the `image` crate and their maps built on all cores. The trace is written as CSV.
 
 use super::prepare::Prepared;
 use super::TraceError;

@@ -21,12 +21,11 @@
 //!    ([`link`]; the printed path only a hint between chains of similar length); the written
 //!    centres smoothed along the path between bridges (`smooth.rs`); resampled ([`chain`]).
 //!
-//! [`render`] (with `render_draw`, `render_extras`) draws synthetic scans with known truth for
-//! tests, benches and simulation, [`render_photo`] phone photos. [`trace_paths`] writes every
-//! path of a drawing ([`paths`]) and its drawn lines, each followed through the band of ink its
-//! passes leave ([`band`], [`lines`]), the image read past each line's ends for ink nothing
-//! written covers ([`probe`]). Errors: [`error`]; settings:
-//! [`options`].
+//! [`synth`] draws synthetic scans and phone photos with known truth for tests, benches and
+//! simulation. [`trace_paths`] writes every path of a drawing ([`paths`]) and its drawn lines,
+//! each followed through the band of ink its passes leave ([`band`], [`lines`]), the image read
+//! past each line's ends for ink nothing written covers ([`probe`]). Errors: [`error`];
+//! settings: [`options`].
 
 mod area;
 mod band;
@@ -52,11 +51,8 @@ mod png_read;
 mod prepare;
 mod probe;
 mod raster;
-pub mod render;
-mod render_draw;
-mod render_extras;
-pub mod render_photo;
 mod smooth;
+pub mod synth;
 
 pub use camera::{CameraModel, FitQuality};
 pub use chain::{polyline_length, resample, Stroke};
@@ -71,8 +67,6 @@ pub use options::{Mapping, PathChoice, TraceOptions};
 pub use paths::{line_file_name, path_file_name, write_drawing, Drawing, DrawnPath, SUMMARY_FILE};
 pub use png_read::read_png;
 pub use prepare::Prepared;
-pub use render::{render_scan, RenderSpec};
-pub use render_photo::{render_photo, Camera, PhotoSpec};
 
 use crate::sheet::ReferencePath;
 use image::RgbImage;

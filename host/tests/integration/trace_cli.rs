@@ -1,7 +1,7 @@
 //! `rigctl sheet` and `rigctl trace` end to end: files, CSV contract, exit codes.
 
 use rigctl::sheet::ReferencePath;
-use rigctl::trace::{render_scan, RenderSpec};
+use rigctl::trace::synth::{render_scan, RenderSpec};
 use std::path::Path;
 use std::process::Output;
 

@@ -8,9 +8,8 @@ use crate::common::spawn::rigctl;
 
 use indicatif::ProgressBar;
 use rigctl::sheet::ReferencePath;
-use rigctl::trace::{
-    render_photo, render_scan, trace_image, PhotoSpec, RenderSpec, Trace, TraceError, TraceOptions,
-};
+use rigctl::trace::synth::{render_photo, render_scan, PhotoSpec, RenderSpec};
+use rigctl::trace::{trace_image, Trace, TraceError, TraceOptions};
 
 fn wobbly_circle(seed: u64) -> Vec<[f64; 2]> {
     let n = 8000;
@@ -289,7 +288,7 @@ fn jpeg_photo_through_the_cli() {
             ..photo(25.0, 100.0, -0.04, 51)
         },
     );
-    let bytes = rigctl::trace::render_photo::jpeg_bytes(&img, 90).expect("jpeg");
+    let bytes = rigctl::trace::synth::jpeg_bytes(&img, 90).expect("jpeg");
     let path = dir.path().join("photo.jpg");
     std::fs::write(&path, bytes).expect("write");
     let out = dir.path().join("trace.csv");

@@ -22,7 +22,8 @@ use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
 use render2::{photo_view, scan_view, Printed, Scene};
 use rigctl::sheet::ReferencePath;
-use rigctl::trace::{render_photo, render_scan, trace_image, PhotoSpec, RenderSpec, TraceOptions};
+use rigctl::trace::synth::{render_photo, render_scan, PhotoSpec, RenderSpec};
+use rigctl::trace::{trace_image, TraceOptions};
 
 #[derive(Clone, Copy, Debug, PartialEq)]
 enum Kind {
@@ -251,7 +252,7 @@ fn trace_outcome(img: &image::RgbImage, c: &Case) -> Outcome {
 /// Which renderer draws a set.
 #[derive(Clone, Copy, Debug, PartialEq)]
 enum Renderer {
-    /// The project's own (`rigctl::trace::render_*`).
+    /// The project's own (`rigctl::trace::synth`).
     Project,
     /// `render2`; its photos' principal point 0.5-1 times `centre_off_px` from the image centre
     /// (a photo cropped off its centre), in a direction and at a distance set by the seed.

@@ -5,9 +5,8 @@ use crate::common::record::record;
 
 use indicatif::ProgressBar;
 use rigctl::sheet::ReferencePath;
-use rigctl::trace::{
-    render_scan, trace_image, Mapping, RenderSpec, Trace, TraceError, TraceOptions,
-};
+use rigctl::trace::synth::{render_scan, RenderSpec};
+use rigctl::trace::{trace_image, Mapping, Trace, TraceError, TraceOptions};
 
 /// The pencil as a robot might draw the thesis circle: radius 100 mm with a few tenths of a
 /// millimetre of lobing, sampled every ~0.05 mm. Closed.

@@ -4,7 +4,12 @@
 //! already linked to. Ends the first round could not link across a gap are tried again with
 //! those readings, cheapest first, each end once.
 
-use super::{build, candidates, continuity, ends, Chain, End, PieceMm, Strokes};
+use super::bridge::build;
+use super::continuity::{candidates, continuity};
+use super::end::{ends, End};
+use super::network::{Chain, Strokes};
+use crate::trace::chain::{polyline_length, PieceMm};
+use crate::trace::plane::dist;
 
 /// Ends nearer than this were linked or not in the first round on their turn alone (see
 /// [`continuity`]), mm.
@@ -54,7 +59,7 @@ pub(super) fn relink(
                 any = true;
             }
         } else {
-            chain_len[ci] = super::polyline_length(&pieces[head / 2].pts, false);
+            chain_len[ci] = polyline_length(&pieces[head / 2].pts, false);
         }
         // Only the free ends are read; the pieces' linked ends stay out of the candidates.
         for (k, e) in [(head, read[0]), (tail, read[1])] {
@@ -77,7 +82,7 @@ pub(super) fn relink(
         if chains[ca].order.len() < 2 && chains[cb].order.len() < 2 {
             return None;
         }
-        let g = super::dist(a.p, b.p);
+        let g = dist(a.p, b.p);
         // A chain closes on itself only across a gap short against its length.
         if ca == cb && chain_len[ca] < 3.0 * g + 10.0 {
             return None;

@@ -1,6 +1,8 @@
 //! Linking across a skip on a crest whose curvature changes along it.
 
-use super::{continuity, end_with, link, reads_own_bend, End, Linking, Network, Strokes};
+use super::continuity::continuity;
+use super::end::{end_with, reads_own_bend, End};
+use super::{link, Linking, Network, Strokes};
 use crate::trace::chain::PieceMm;
 use crate::trace::plane::dist;
 use rand::SeedableRng;

@@ -1,4 +1,4 @@
-//! A second sheet renderer, written apart from `rigctl::trace::render*`, so that the tracer is
+//! A second sheet renderer, written apart from `rigctl::trace::synth`, so that the tracer is
 //! measured on images it was not developed with.
 //!
 //! Model: every output pixel is mapped back to sheet mm (a scanner's rotation + shift, or a

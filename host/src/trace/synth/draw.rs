@@ -2,7 +2,7 @@
 //! noisy paper, antialiased strokes, discs and rectangles (coverage from the signed distance to
 //! the outline), and the deterministic noise.
 
-use super::render::RenderSpec;
+use super::scan::RenderSpec;
 use crate::sheet::{PAGE_HEIGHT_MM, PAGE_WIDTH_MM};
 use image::{Rgb, RgbImage};
 

@@ -9,7 +9,7 @@
 //! `c + f * (X_c / Z_c, Y_c / Z_c)`; the lens moves it radially about the image centre `c`:
 //! `p = c + d (1 + k1 r^2 + k2 r^4)`, `d` the ideal offset, `r = |d| / f`.
 
-use super::render::{render_scan, RenderSpec};
+use super::scan::{render_scan, RenderSpec};
 use crate::sheet::{PAGE_HEIGHT_MM, PAGE_WIDTH_MM};
 use image::{Rgb, RgbImage};
 

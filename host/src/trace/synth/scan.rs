@@ -10,8 +10,8 @@
 //! stroke is unbiased. Noise is a hash of (seed, pixel), so a render is deterministic and does
 //! not depend on the order of the work.
 
-use super::render_draw::{disc, hash, mul, paper, rect, stroke_coverage, triangular, Placement};
-use super::render_extras::{cumulative_arc, desk};
+use super::desk::{cumulative_arc, desk};
+use super::draw::{disc, hash, mul, paper, rect, stroke_coverage, triangular, Placement};
 use crate::sheet::{
     fiducial_centres_mm, orientation_dot_mm, ring_dots_mm, scale_bar_rects_mm, ReferencePath,
     FIDUCIAL_DIAMETER_MM, FIDUCIAL_SPACING_MM, ORIENTATION_DOT_DIAMETER_MM, PAGE_HEIGHT_MM,

@@ -1,7 +1,7 @@
 //! Parts of a simulated scan beyond the printed sheet: the desk or lid around the page with the
 //! page edge's shadow, and the arc length along the pencil used for skips and faint graphite.
 
-use super::render_draw::{mul, Placement};
+use super::draw::{mul, Placement};
 use crate::sheet::{PAGE_HEIGHT_MM, PAGE_WIDTH_MM};
 use image::{Rgb, RgbImage};
 

@@ -1,0 +1,240 @@
+//! The ends of open pieces: where each leaves off, its outward tangent and curvature read from
+//! the circle through three points of its last [`END_SPAN_MM`] (on a crest the tangent again from
+//! its last [`TANGENT_SPAN_MM`]; a short end's own tangent where its last millimetre holds no
+//! hook), and the point an end's osculating arc reaches when carried over a gap.
+
+use super::Strokes;
+use crate::trace::chain::{polyline_length, PieceMm};
+use crate::trace::plane::{dist, norm, sub};
+
+/// Length of an end used for its tangent and curvature, mm.
+const END_SPAN_MM: f64 = 8.0;
+/// The part of an end left out of its reading and bridged over where it may be pulled aside:
+/// next to a crossing the path is cut at, and on a plotter's passes ([`Strokes::Passes`]), mm.
+pub(super) const END_SKIP_MM: f64 = 1.5;
+/// An end's curvature is read only from a span of at least this (shorter ones cannot tell it
+/// from the centreline's noise), mm, and is at most this, 1/mm.
+pub(super) const K_SPAN_MM: f64 = 5.0;
+pub(super) const MAX_K: f64 = 0.1;
+/// Length of an end a crest's tangent is read over, mm: short against a crest of 3 mm radius,
+/// long enough that the centres' scatter turns it by a few degrees at most.
+const TANGENT_SPAN_MM: f64 = 3.0;
+/// A short end's last chord, mm, and how far it may turn off its span's circle, deg, for the
+/// span's own tangent to hold (a hook turns it).
+const HOOK_CHORD_MM: f64 = 1.0;
+const HOOK_DEG: f64 = 8.0;
+/// Scatter of a centre about the stroke's true centreline, mm, read into a short span's sag.
+const SAG_NOISE_MM: f64 = 0.03;
+
+/// The end of an open piece: position, outward unit tangent, signed curvature (1/mm, positive
+/// turning left when moving outward).
+#[derive(Debug, Clone, Copy)]
+pub(super) struct End {
+    pub(super) p: [f64; 2],
+    pub(super) t: [f64; 2],
+    pub(super) k: f64,
+    /// The anchor of a bridge, `skip` mm back from the end (the last millimetre may be pulled
+    /// aside), and the tangent there.
+    pub(super) anchor: [f64; 2],
+    pub(super) ta: [f64; 2],
+    pub(super) skip: f64,
+    /// Uncertainty of the tangent, rad (short pieces give poor directions).
+    pub(super) sigma: f64,
+    /// The span the tangent was read over, mm (the curvature too when [`End::k_read`]).
+    pub(super) span: f64,
+    /// The curvature through the span's ends and middle however short the span, 1/mm.
+    pub(super) k_raw: f64,
+    /// The curvature over the span's last [`K_SPAN_MM`] (the whole span when shorter),
+    /// unclamped, 1/mm: where the path bends harder towards the end than over the span.
+    pub(super) k_near: f64,
+    /// A short span's own tangent at the end, from the circle through its three points, where
+    /// its last millimetre follows that circle (no hook): see [`own_tangent`].
+    pub(super) t_own: Option<[f64; 2]>,
+}
+
+impl End {
+    pub(super) fn k_read(&self) -> bool {
+        self.span >= K_SPAN_MM
+    }
+
+    /// How far back from the end the middle of its span lies, mm.
+    pub(super) fn mid_span(&self) -> f64 {
+        0.5 * (self.skip + self.span)
+    }
+}
+
+pub(super) fn rot(t: [f64; 2], a: f64) -> [f64; 2] {
+    let (s, c) = a.sin_cos();
+    [c * t[0] - s * t[1], s * t[0] + c * t[1]]
+}
+
+/// The point at arc length `l` along `p`'s osculating circle (tangent `t`, curvature `k`).
+pub(super) fn arc_point(e: &End, l: f64) -> [f64; 2] {
+    let phi = e.k * l;
+    let (along, across) = if phi.abs() < 1e-6 {
+        (l, 0.5 * e.k * l * l)
+    } else {
+        (phi.sin() / e.k, (1.0 - phi.cos()) / e.k)
+    };
+    let n = [-e.t[1], e.t[0]];
+    [
+        e.p[0] + along * e.t[0] + across * n[0],
+        e.p[1] + along * e.t[1] + across * n[1],
+    ]
+}
+
+/// The point `l` mm back from the end of `pts` (walking from the last point), or the first.
+pub(super) fn point_back(pts: &[[f64; 2]], l: f64) -> [f64; 2] {
+    let mut acc = 0.0;
+    for w in pts.windows(2).rev() {
+        let d = dist(w[0], w[1]);
+        if acc + d >= l && d > 0.0 {
+            let f = (l - acc) / d;
+            return [
+                w[1][0] + f * (w[0][0] - w[1][0]),
+                w[1][1] + f * (w[0][1] - w[1][1]),
+            ];
+        }
+        acc += d;
+    }
+    pts[0]
+}
+
+/// The curvature the centres' scatter ([`SAG_NOISE_MM`], twice over) reads through three
+/// points spanning `span` mm, 1/mm: a span's sag is `k span^2 / 8`.
+pub(super) fn k_noise(span: f64) -> f64 {
+    2.0 * 8.0 * SAG_NOISE_MM / (span * span)
+}
+
+/// The circle through the points `from`, halfway and `to` mm back from the end of `pts`: the
+/// chord between the first and last (unit direction, length) and the signed curvature.
+fn three_point(pts: &[[f64; 2]], from: f64, to: f64) -> Option<([f64; 2], f64, f64)> {
+    let q1 = point_back(pts, from);
+    let q2 = point_back(pts, 0.5 * (from + to));
+    let q3 = point_back(pts, to);
+    let d = sub(q1, q3);
+    let n = norm(d);
+    if n <= 1e-9 {
+        return None;
+    }
+    let (a, b) = (sub(q2, q3), sub(q1, q2));
+    let cross = a[0] * b[1] - a[1] * b[0];
+    let k = 2.0 * cross / (norm(a) * norm(b) * n).max(1e-12);
+    Some(([d[0] / n, d[1] / n], n, k))
+}
+
+/// The end at the last point of `pts`: tangent and curvature from the circle through the points
+/// `skip` mm, halfway and [`END_SPAN_MM`] back, carried to the end point; the bridge anchor
+/// `skip` mm back (0: the last point). On the rig's one path, where that curvature is over
+/// [`MAX_K`] (a crest within the span), the tangent is read again from the circle through the
+/// last [`TANGENT_SPAN_MM`] before the anchor, unclamped: the span's chord, turned by the
+/// clamped curvature, would point the end tens of degrees off across the crest. (A plotter's
+/// passes, [`Strokes::Passes`], saw at their ends: the last millimetres would turn it.)
+pub(super) fn end_with(pts: &[[f64; 2]], skip: f64, strokes: Strokes) -> Option<End> {
+    let len = polyline_length(pts, false);
+    if len <= 0.0 {
+        return None;
+    }
+    let span = END_SPAN_MM.min(0.7 * len);
+    let skip = skip.min(0.2 * span);
+    let p0 = pts[pts.len() - 1];
+    let q1 = point_back(pts, skip);
+    let (chord, n, k_raw) = three_point(pts, skip, span)?;
+    let k_near = three_point(pts, skip, skip + K_SPAN_MM.min(span - skip)).map_or(k_raw, |v| v.2);
+    // Curvature only from a span long enough to tell it from the centreline's noise.
+    let k = if span >= K_SPAN_MM {
+        k_raw.clamp(-MAX_K, MAX_K)
+    } else {
+        0.0
+    };
+    // The chord's direction is the tangent at its middle; turn it on to the anchor and the end.
+    let near = (strokes == Strokes::OnePath && span >= K_SPAN_MM && k_raw.abs() > MAX_K)
+        .then(|| three_point(pts, skip, skip + TANGENT_SPAN_MM))
+        .flatten();
+    let ta = match near {
+        Some((c, m, k_near)) => rot(c, k_near * 0.5 * m),
+        None => rot(chord, k * 0.5 * n),
+    };
+    let t = rot(ta, k * dist(q1, p0));
+    let t_own = (strokes == Strokes::OnePath && span < K_SPAN_MM)
+        .then(|| own_tangent(pts, skip, span, ta, k_raw))
+        .flatten();
+    Some(End {
+        p: p0,
+        t,
+        k,
+        anchor: q1,
+        ta,
+        skip,
+        sigma: 0.15 / span.max(0.5),
+        span,
+        k_raw,
+        k_near,
+        t_own,
+    })
+}
+
+/// The tangent at the end of a span too short to read a curvature to carry across a gap,
+/// from its own circle (`ta`, the chord's direction at the span's middle, turned by `k_raw`),
+/// where the last [`HOOK_CHORD_MM`] follow that circle within [`HOOK_DEG`]; `None` otherwise
+/// (a hook: the chord then stands for the tangent). Whether it is taken is
+/// [`with_curvature`]'s choice.
+fn own_tangent(
+    pts: &[[f64; 2]],
+    skip: f64,
+    span: f64,
+    ta: [f64; 2],
+    k_raw: f64,
+) -> Option<[f64; 2]> {
+    if span < 2.0 * HOOK_CHORD_MM {
+        return None;
+    }
+    let mid = 0.5 * (skip + span);
+    let last = sub(point_back(pts, skip), point_back(pts, skip + HOOK_CHORD_MM));
+    let n = norm(last);
+    if n <= 1e-9 {
+        return None;
+    }
+    let along = rot(ta, k_raw * (mid - skip - 0.5 * HOOK_CHORD_MM));
+    let c = (last[0] * along[0] + last[1] * along[1]) / n;
+    (c >= HOOK_DEG.to_radians().cos()).then(|| rot(ta, k_raw * (mid - skip)))
+}
+
+/// Whether a short end's own three points bend beyond twice the scatter's curvature, with no
+/// hook at its end: it shows its own bend.
+pub(super) fn reads_own_bend(e: &End) -> bool {
+    e.t_own.is_some() && e.k_raw.abs() > 2.0 * k_noise(e.span)
+}
+
+/// `e` bent by the curvature `k` it could not read itself (a short piece), `k` read by the other
+/// end (so within [`MAX_K`]): the chord's direction is the tangent at its middle, turned on to
+/// the end. Where its own points tell a bend ([`reads_own_bend`]), or tell that it does not
+/// bend as much as `k` (they differ from `k` by more than twice the scatter's curvature: a
+/// nearly straight piece past a crest the other end reads), it takes its own tangent
+/// ([`own_tangent`]) instead.
+pub(super) fn with_curvature(e: &End, k: f64) -> End {
+    let own = e
+        .t_own
+        .filter(|_| reads_own_bend(e) || (e.k_raw - k).abs() > 2.0 * k_noise(e.span));
+    End {
+        t: own.unwrap_or_else(|| rot(e.ta, k * e.mid_span())),
+        k,
+        ..*e
+    }
+}
+
+/// Piece ends, read as `strokes` are (on a plotter's passes from [`END_SKIP_MM`] back); `None`
+/// for closed pieces.
+pub(super) fn ends(piece: &PieceMm, strokes: Strokes) -> Option<[End; 2]> {
+    if piece.closed || piece.pts.len() < 2 {
+        return None;
+    }
+    let skip = match strokes {
+        Strokes::OnePath => 0.0,
+        Strokes::Passes => END_SKIP_MM,
+    };
+    let tail = end_with(&piece.pts, skip, strokes)?;
+    let rev: Vec<[f64; 2]> = piece.pts.iter().rev().copied().collect();
+    let head = end_with(&rev, skip, strokes)?;
+    Some([head, tail])
+}

@@ -1,0 +1,16 @@
+//! Synthetic images of a traced sheet with exact truth, for simulation (`rigctl simulate
+//! --session`), tests and benches; nothing here is used to trace.
+//!
+//! - [`render_scan`] ([`scan`]): a flatbed scan of the A4 sheet, the page placed on the glass
+//!   with a small rotation and shift; its drawing primitives and noise are in `draw.rs`, the
+//!   desk around the page and the arc length along the pencil in `desk.rs`;
+//! - [`render_photo`] ([`photo`]): a phone photo of that sheet through a tilted pinhole camera
+//!   with lens distortion, uneven light, blur, noise and JPEG compression ([`jpeg_bytes`]).
+
+mod desk;
+mod draw;
+pub mod photo;
+pub mod scan;
+
+pub use photo::{jpeg_bytes, render_photo, Camera, PhotoSpec};
+pub use scan::{render_scan, RenderSpec};
