@@ -105,11 +105,16 @@ pub fn default_selection(model: &Model, base: bool) -> Vec<usize> {
             .filter_map(|n| model.param_index(n))
             .collect()
     } else {
-        let mut s = model.params_of_kind(ParamKind::JointOffset);
-        s.extend(model.params_of_kind(ParamKind::Tool));
+        // in preference order among confounded parameters: what the robot's software does not
+        // see (the instrument frame, the measured point) before its own joint offsets, so that
+        // an offset is fitted only where the data determine it (the UR5's SMR, 0.07 mm off joint
+        // 6's axis, is a tool point, not a turn of joint 6)
+        let mut s = Vec::new();
         if base {
             s.extend(model.params_of_kind(ParamKind::Base));
         }
+        s.extend(model.params_of_kind(ParamKind::Tool));
+        s.extend(model.params_of_kind(ParamKind::JointOffset));
         let chain: Vec<usize> = (0..model.params().len())
             .filter(|&i| matches!(model.params()[i].kind, ParamKind::Twist | ParamKind::Length))
             .collect();
@@ -236,6 +241,7 @@ pub(super) fn fit_report(
         unphysical: Vec::new(),
         outliers: Vec::new(),
         outlier_note: None,
+        large_changes: Vec::new(),
     }
 }
 

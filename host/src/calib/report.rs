@@ -104,6 +104,11 @@ pub struct CalibrateReport {
     /// Set when the gross-error rule was not applied as such (heavy tails) or did not settle.
     #[serde(skip_serializing_if = "Option::is_none")]
     pub outlier_note: Option<String>,
+    /// Parameters of the robot's geometry moved further than a real arm's errors
+    /// ([`super::plausible::large_changes`]); `calibrate` exits 1 and writes no model unless
+    /// `--allow-large-changes`. Absent when empty.
+    #[serde(skip_serializing_if = "Vec::is_empty")]
+    pub large_changes: Vec<super::plausible::LargeChange>,
 }
 
 #[cfg(test)]
@@ -138,6 +143,7 @@ mod tests {
             unphysical: Vec::new(),
             outliers: Vec::new(),
             outlier_note: None,
+            large_changes: Vec::new(),
         };
         let text = serde_json::to_string(&r).unwrap();
         let v: serde_json::Value = serde_json::from_str(&text).unwrap();

@@ -16,6 +16,7 @@ use std::path::PathBuf;
 
 use nalgebra::Vector3;
 use rigctl::calib::calibrate_general::{calibrate_poses, GeneralOptions, Select};
+use rigctl::calib::plausible::{large_changes, large_changes_line};
 use rigctl::calib::stats::AxisExtremes;
 use rigctl::calib::MeasuredSet;
 use rigctl::calib::{CalibrateOptions, Method};
@@ -25,7 +26,7 @@ use rigctl::io::pose_csv::read_poses;
 use rigctl::model::KATANA_PENCIL_TOOL_MM;
 
 use super::model_args::ModelArgs;
-use super::out::out;
+use super::out::{errln, out};
 use super::pose_args::PoseArgs;
 use super::CliError;
 
@@ -99,6 +100,11 @@ pub struct Args {
     /// are otherwise left out of the fit and listed as `outliers`).
     #[arg(long, conflicts_with = "samples")]
     pub keep_outliers: bool,
+    /// Write the calibrated model even when a joint offset or twist moved by more than 10 deg or
+    /// a link length by more than 20 mm and 5 % (otherwise: exit 1, the JSON lists them, no
+    /// --out); the output says they were allowed.
+    #[arg(long)]
+    pub allow_large_changes: bool,
 }
 
 /// A relative threshold strictly between 0 and 1 (NaN and infinities refused).
@@ -183,13 +189,16 @@ pub fn run(args: Args) -> Result<(), CliError> {
         poses,
         args.validate.as_deref(),
     ));
+    outcome.report.large_changes = large_changes(&model, &outcome.model);
+    let write_model = outcome.report.large_changes.is_empty() || args.allow_large_changes;
     if let Some(path) = &args.json {
         rigctl::io::atomic::write_json_atomic(path, &outcome.report)?;
     }
-    if let Some(path) = &args.out {
+    if let (Some(path), true) = (&args.out, write_model) {
         outcome.model.write_file(path)?;
     }
     out!("{}{notes}", summary(&outcome, val.is_some()))?;
+    plausible_changes(&outcome.report, &args)?;
     not_converged(&outcome.report)
 }
 
@@ -382,12 +391,14 @@ fn run_samples(args: &Args, samples: &std::path::Path) -> Result<(), CliError> {
         ..Default::default()
     };
     let g = calibrate_poses(&model, &data, None, &opts, &GeneralOptions::default())?;
-    let (outcome, rejected) = (g.outcome, g.rejected);
+    let (mut outcome, rejected) = (g.outcome, g.rejected);
     no_redundancy(samples, data.n_residuals(), outcome.report.rank)?;
+    outcome.report.large_changes = large_changes(&model, &outcome.model);
+    let write_model = outcome.report.large_changes.is_empty() || args.allow_large_changes;
     if let Some(path) = &args.json {
         rigctl::io::atomic::write_json_atomic(path, &outcome.report)?;
     }
-    if let Some(path) = &args.out {
+    if let (Some(path), true) = (&args.out, write_model) {
         outcome.model.write_file(path)?;
     }
     let csv = errors_csv(&fused, &outcome.calibration_errors);
@@ -414,7 +425,29 @@ fn run_samples(args: &Args, samples: &std::path::Path) -> Result<(), CliError> {
         rigctl::calib::projected::OUTLIER_SIGMAS
     );
     out!("{s}")?;
+    plausible_changes(&outcome.report, args)?;
     not_converged(&outcome.report)
+}
+
+/// Exit 1 when the calibration moved the robot's geometry further than a real arm's errors
+/// (the model not written), unless `--allow-large-changes` (then said on stderr).
+fn plausible_changes(
+    r: &rigctl::calib::report::CalibrateReport,
+    args: &Args,
+) -> Result<(), CliError> {
+    if r.large_changes.is_empty() {
+        return Ok(());
+    }
+    let line = large_changes_line(&r.large_changes);
+    if args.allow_large_changes {
+        errln!("large changes allowed by --allow-large-changes, the model is written: {line}");
+        return Ok(());
+    }
+    Err(CliError::failure(format!(
+        "the calibration moved the robot's geometry further than a real arm's errors go: {line}; \
+         check the model, the units and the robot the poses came from (the JSON lists them; no \
+         model was written: --allow-large-changes writes it)"
+    )))
 }
 
 /// Refuses a fit with no measured coordinate left over its rank: the residual is then zero

@@ -39,7 +39,7 @@ mod plan_pool;
 mod plan_sheets;
 mod plan_sim;
 mod plan_workspace_cli;
-mod plausible_units;
+mod plausibility;
 mod reliability_inputs;
 mod reliability_loop;
 mod reliability_outputs;
