@@ -6,8 +6,7 @@ use std::fmt::Write as _;
 
 use serde_json::Value;
 
-use super::build::figure;
-use super::html::{escape, figure as render_figure};
+use super::markup::{escape, figure, render_figure};
 use super::run_dir::RunDir;
 use super::summary::{
     aliased, found_effects, headline_sentence, headlines, verdict, Diagnosis, Headline, Stage,
