@@ -238,6 +238,17 @@ pub struct RefineSummary {
     pub sweeps: usize,
 }
 
+impl RefineSummary {
+    fn of(r: &refine::Refined) -> Self {
+        Self {
+            criterion_before: r.criterion_before,
+            criterion_after: r.criterion_after,
+            moves: r.moves,
+            sweeps: r.sweeps,
+        }
+    }
+}
+
 /// Most drawn candidates (`--candidates`) and random baseline draws (`--random-draws`); `--n`
 /// is at most the number of candidates (drawn, or the `--candidates-from` poses that pass).
 pub const MAX_CANDIDATES: usize = 200_000;
@@ -249,6 +260,104 @@ pub fn plan(
     cfg: &PlanConfig,
     from: Option<&FromDiagnose>,
 ) -> Result<Plan, PlanError> {
+    check_config(cfg)?;
+    let mut rng = ChaCha8Rng::seed_from_u64(cfg.seed);
+    let CandidateSet {
+        mut cands,
+        pool_index,
+        n_uniform,
+    } = candidate_set(model, cfg, &mut rng)?;
+    let mut setup = match from {
+        None => Setup::declared_with_base(model, &cands, &cfg.existing_q, cfg.base)?,
+        Some(f) => f.setup(model, &cands, &cfg.existing_q)?,
+    };
+    let p = setup.names.len();
+    let prior_poses = setup.prior_rows.nrows() / 3;
+    check_rows(cfg.n, prior_poses, p)?;
+    let prior = setup.prior_rows.transpose() * &setup.prior_rows;
+    // the baseline draws from the uniform candidates only (not the structured extremes)
+    let b_uniform = setup.b.rows(0, 3 * n_uniform).into_owned();
+    // the baseline first: A weighs each parameter's variance by 1 / its random-design variance
+    let (random, random_draws, weights) = baseline(&b_uniform, &setup, cfg, &mut rng);
+    let prediction = criteria::prediction_weight(&b_uniform);
+    let n_pool = cands.len();
+    let best =
+        continuous::best_possible(model, cfg, &mut setup, &mut cands, &weights, &prediction)?;
+    let problem = design::Problem {
+        b: &setup.b,
+        prior: &prior,
+        interest: &setup.interest,
+        kind: cfg.criterion,
+        weights: &weights,
+        prediction: Some(&prediction),
+        admissible: &setup.admissible,
+    };
+    let rounded = best.as_ref().map(|b| b.optimum.rounded(cfg.n));
+    let design = best_exchange(&problem, cfg, rounded.as_deref(), &mut rng)?;
+    let refiner = refine::Refiner {
+        model,
+        setup: &setup,
+        workspace: &cfg.workspace,
+        kind: cfg.criterion,
+        weights: &weights,
+        prediction: &prediction,
+    };
+    let start: Vec<CandidatePose> = design.chosen.iter().map(|&c| cands[c].clone()).collect();
+    let sweeps = refine_sweeps(cfg, pool_index.is_some(), from.is_some());
+    let refined = refiner.refine(&prior, &start, sweeps)?;
+    let chosen: Vec<usize> = (0..refined.poses.len()).collect();
+    let jac = metrics::stack_rows(&refined.blocks, &setup.scale, &setup.prior_rows, &chosen);
+    let planned = design_stats(&jac, prior_poses + cfg.n, cfg.noise_mm);
+    let median_sigma_ratio = median_ratio(&planned.sigma, &random.sigma);
+    let optimum = best.map(|b| {
+        optimum_report(
+            b,
+            &refined.blocks,
+            &chosen,
+            &setup.scale,
+            cfg,
+            &random.sigma,
+        )
+    });
+    let direct = DirectRatio::new(&planned.sigma, &random_draws);
+    let ratio_per_draw = metrics::ratio_per_draw(
+        &b_uniform,
+        &setup.scale,
+        &setup.prior_rows,
+        &planned.sigma,
+        cfg.n,
+        cfg.random_draws,
+        cfg.noise_mm,
+        &mut rng,
+    );
+    let refinement = RefineSummary::of(&refined);
+    setup.b = refined.blocks;
+    let from_diagnose = from.map(|f| f.report(&setup, &chosen));
+    Ok(Plan {
+        robot: model.name().to_string(),
+        criterion: cfg.criterion.name(!setup.interest.is_empty()).into(),
+        candidates: n_pool,
+        structured_candidates: n_pool - n_uniform,
+        poses: refined.poses,
+        parameters: setup.names.clone(),
+        scale: setup.scale.clone(),
+        unidentifiable: setup.unidentifiable.clone(),
+        planned,
+        random,
+        median_sigma_ratio,
+        from_diagnose,
+        exchanges: design.exchanges,
+        ratio_per_draw,
+        direct,
+        refinement,
+        pool_index: pool_index.map(|index| design.chosen.iter().map(|&c| index[c]).collect()),
+        optimum,
+    })
+}
+
+/// The options `plan` refuses before any work: the noise, the pose count, the candidate and
+/// baseline draw counts.
+fn check_config(cfg: &PlanConfig) -> Result<(), PlanError> {
     if !(cfg.noise_mm > 0.0 && cfg.noise_mm.is_finite()) {
         return Err(PlanError::Config(format!(
             "--noise-mm {}: must be a positive number",
@@ -277,7 +386,27 @@ pub fn plan(
             cfg.random_draws
         )));
     }
-    let mut rng = ChaCha8Rng::seed_from_u64(cfg.seed);
+    Ok(())
+}
+
+/// The candidates of a plan.
+struct CandidateSet {
+    /// The uniform (drawn or `--candidates-from`) candidates, then the structured extremes.
+    cands: Vec<CandidatePose>,
+    /// With `--candidates-from`: each candidate's index among that file's poses.
+    pool_index: Option<Vec<usize>>,
+    /// How many come before the structured extremes.
+    n_uniform: usize,
+}
+
+/// The candidates: the `--candidates-from` poses that pass (with their index in that file),
+/// or `cfg.candidates` drawn, followed by the structured extremes; and how many come before
+/// the structured ones.
+fn candidate_set(
+    model: &Model,
+    cfg: &PlanConfig,
+    rng: &mut ChaCha8Rng,
+) -> Result<CandidateSet, PlanError> {
     let (mut cands, pool_index) = match &cfg.pool_q {
         Some(pool) => {
             let (c, index) = candidates::pool_candidates(model, pool, &cfg.workspace)?;
@@ -290,7 +419,7 @@ pub fn plan(
             (c, Some(index))
         }
         None => (
-            draw_candidates(model, cfg.candidates.max(cfg.n), &cfg.workspace, &mut rng)?,
+            draw_candidates(model, cfg.candidates.max(cfg.n), &cfg.workspace, rng)?,
             None,
         ),
     };
@@ -298,133 +427,97 @@ pub fn plan(
     if pool_index.is_none() && cfg.structured.unwrap_or(true) {
         cands.extend(structured_candidates(model, &cfg.workspace)?);
     }
-    let mut setup = match from {
-        None => Setup::declared_with_base(model, &cands, &cfg.existing_q, cfg.base)?,
-        Some(f) => f.setup(model, &cands, &cfg.existing_q)?,
-    };
-    let p = setup.names.len();
-    let prior_poses = setup.prior_rows.nrows() / 3;
-    let rows = 3 * (cfg.n + prior_poses);
-    if rows < p {
+    Ok(CandidateSet {
+        cands,
+        pool_index,
+        n_uniform,
+    })
+}
+
+/// Enough rows (3 per pose, the prior poses' included) for `params` parameters.
+fn check_rows(n: usize, prior_poses: usize, params: usize) -> Result<(), PlanError> {
+    let rows = 3 * (n + prior_poses);
+    if rows < params {
         return Err(PlanError::TooFewPoses {
-            n: cfg.n,
+            n,
             rows,
-            params: p,
-            min: p.div_ceil(3).saturating_sub(prior_poses).max(1),
+            params,
+            min: params.div_ceil(3).saturating_sub(prior_poses).max(1),
         });
     }
-    let prior = setup.prior_rows.transpose() * &setup.prior_rows;
-    // the baseline draws from the uniform candidates only (not the structured extremes)
-    let b_uniform = setup.b.rows(0, 3 * n_uniform).into_owned();
-    // the baseline first: A weighs each parameter's variance by 1 / its random-design variance
+    Ok(())
+}
+
+/// The random-design baseline of `cfg.n` poses drawn from the candidates of `b_uniform` (its
+/// summary and every draw's sigmas), and criterion A's weights from it.
+fn baseline(
+    b_uniform: &DMatrix<f64>,
+    setup: &Setup,
+    cfg: &PlanConfig,
+    rng: &mut ChaCha8Rng,
+) -> (DesignStats, Vec<Vec<f64>>, Vec<f64>) {
     let (random, random_draws) = metrics::random_baseline_draws(
-        &b_uniform,
+        b_uniform,
         &setup.scale,
         &setup.prior_rows,
         cfg.n,
         cfg.random_draws,
         cfg.noise_mm,
-        &mut rng,
+        rng,
     );
-    let weights: Vec<f64> = random
-        .sigma
+    let weights = baseline_weights(&random.sigma, &setup.scale, cfg.noise_mm);
+    (random, random_draws, weights)
+}
+
+/// Criterion A's weight of each parameter: 1 / its random-design variance (scaled), 1 where
+/// that is not a positive number.
+fn baseline_weights(random_sigma: &[f64], scale: &[f64], noise_mm: f64) -> Vec<f64> {
+    random_sigma
         .iter()
-        .zip(&setup.scale)
+        .zip(scale)
         .map(|(s, k)| {
-            let w = 1.0 / (s * k / cfg.noise_mm).powi(2);
+            let w = 1.0 / (s * k / noise_mm).powi(2);
             if w.is_finite() && w > 0.0 {
                 w
             } else {
                 1.0
             }
         })
-        .collect();
-    let prediction = criteria::prediction_weight(&b_uniform);
-    let n_pool = cands.len();
-    let best =
-        continuous::best_possible(model, cfg, &mut setup, &mut cands, &weights, &prediction)?;
-    let problem = design::Problem {
-        b: &setup.b,
-        prior: &prior,
-        interest: &setup.interest,
-        kind: cfg.criterion,
-        weights: &weights,
-        prediction: Some(&prediction),
-        admissible: &setup.admissible,
-    };
-    let rounded = best.as_ref().map(|b| b.optimum.rounded(cfg.n));
-    let design = best_exchange(&problem, cfg, rounded.as_deref(), &mut rng)?;
-    let refiner = refine::Refiner {
-        model,
-        setup: &setup,
-        workspace: &cfg.workspace,
-        kind: cfg.criterion,
-        weights: &weights,
-        prediction: &prediction,
-    };
-    let start: Vec<CandidatePose> = design.chosen.iter().map(|&c| cands[c].clone()).collect();
-    let sweeps = match pool_index {
-        Some(_) => 0,
-        None => cfg
-            .refine_sweeps
-            .unwrap_or_else(|| default_refine_sweeps(from.is_some())),
-    };
-    let refined = refiner.refine(&prior, &start, sweeps)?;
-    let chosen: Vec<usize> = (0..refined.poses.len()).collect();
-    let jac = metrics::stack_rows(&refined.blocks, &setup.scale, &setup.prior_rows, &chosen);
-    let planned = design_stats(&jac, prior_poses + cfg.n, cfg.noise_mm);
-    let median_sigma_ratio = median_ratio(&planned.sigma, &random.sigma);
-    let optimum = best.map(|b| {
-        let m_plan = criteria::information(&refined.blocks, &DMatrix::zeros(p, p), &chosen);
-        optimum::OptimumReport::new(
-            b.optimum,
-            &b.weight,
-            &m_plan,
-            &setup.scale,
-            cfg.noise_mm,
-            &random.sigma,
-        )
-        .with_extension(b.extension)
-    });
-    let direct = DirectRatio::new(&planned.sigma, &random_draws);
-    let ratio_per_draw = metrics::ratio_per_draw(
-        &b_uniform,
-        &setup.scale,
-        &setup.prior_rows,
-        &planned.sigma,
-        cfg.n,
-        cfg.random_draws,
+        .collect()
+}
+
+/// The refinement sweeps: none for `--candidates-from` poses (they are kept as measured), else
+/// `--refine-sweeps` or the default.
+fn refine_sweeps(cfg: &PlanConfig, pooled: bool, from_diagnose: bool) -> usize {
+    if pooled {
+        0
+    } else {
+        cfg.refine_sweeps
+            .unwrap_or_else(|| default_refine_sweeps(from_diagnose))
+    }
+}
+
+/// The best possible design `b` against the planned poses (`chosen` rows of `blocks`, the
+/// scaled Jacobian blocks).
+fn optimum_report(
+    b: continuous::BestPossible,
+    blocks: &DMatrix<f64>,
+    chosen: &[usize],
+    scale: &[f64],
+    cfg: &PlanConfig,
+    random_sigma: &[f64],
+) -> optimum::OptimumReport {
+    let p = blocks.ncols();
+    let m_plan = criteria::information(blocks, &DMatrix::zeros(p, p), chosen);
+    optimum::OptimumReport::new(
+        b.optimum,
+        &b.weight,
+        &m_plan,
+        scale,
         cfg.noise_mm,
-        &mut rng,
-    );
-    let refinement = RefineSummary {
-        criterion_before: refined.criterion_before,
-        criterion_after: refined.criterion_after,
-        moves: refined.moves,
-        sweeps: refined.sweeps,
-    };
-    setup.b = refined.blocks;
-    let from_diagnose = from.map(|f| f.report(&setup, &chosen));
-    Ok(Plan {
-        robot: model.name().to_string(),
-        criterion: cfg.criterion.name(!setup.interest.is_empty()).into(),
-        candidates: n_pool,
-        structured_candidates: n_pool - n_uniform,
-        poses: refined.poses,
-        parameters: setup.names.clone(),
-        scale: setup.scale.clone(),
-        unidentifiable: setup.unidentifiable.clone(),
-        planned,
-        random,
-        median_sigma_ratio,
-        from_diagnose,
-        exchanges: design.exchanges,
-        ratio_per_draw,
-        direct,
-        refinement,
-        pool_index: pool_index.map(|index| design.chosen.iter().map(|&c| index[c]).collect()),
-        optimum,
-    })
+        random_sigma,
+    )
+    .with_extension(b.extension)
 }
 
 /// The greedy start's exchange, the exchange from `rounded` (the approximate optimum's
