@@ -4,6 +4,7 @@
 //! |---|---|
 //! | [`candidates`] | random reachable configurations within the limits and workspace constraints, and the structured extremes (limits and mid-range) |
 //! | [`setup`] | the identification Jacobian of every candidate (declared tilting on), identifiability, column scaling |
+//! | `steps` | the steps of [`plan`] around the exchange: options refused, the candidate set, the random baseline and criterion A's weights, refinement sweeps, the best possible design's report |
 //! | [`criteria`] | D/Ds, A, G (geometric-mean sigma) and I (prediction variance) criteria and their rank-3 gains |
 //! | [`design`] | greedy start + exchange with rank-3 updates |
 //! | [`refine`] | continuous refinement of the chosen poses' joint values within the constraints |
@@ -41,10 +42,10 @@ pub mod robust;
 pub mod setup;
 pub mod sheets;
 pub mod sheets_output;
+mod steps;
 #[cfg(test)]
 mod test_support;
 
-use nalgebra::DMatrix;
 use rand::SeedableRng;
 use rand_chacha::ChaCha8Rng;
 
@@ -57,6 +58,9 @@ pub use metrics::{
     design_stats, median_ratio, quantile, random_baseline, DesignStats, DirectRatio,
 };
 pub use setup::Setup;
+use steps::{
+    baseline, candidate_set, check_config, check_rows, optimum_report, refine_sweeps, CandidateSet,
+};
 
 /// Everything that can stop a plan.
 #[derive(Debug, thiserror::Error)]
@@ -353,171 +357,6 @@ pub fn plan(
         pool_index: pool_index.map(|index| design.chosen.iter().map(|&c| index[c]).collect()),
         optimum,
     })
-}
-
-/// The options `plan` refuses before any work: the noise, the pose count, the candidate and
-/// baseline draw counts.
-fn check_config(cfg: &PlanConfig) -> Result<(), PlanError> {
-    if !(cfg.noise_mm > 0.0 && cfg.noise_mm.is_finite()) {
-        return Err(PlanError::Config(format!(
-            "--noise-mm {}: must be a positive number",
-            cfg.noise_mm
-        )));
-    }
-    if cfg.n == 0 {
-        return Err(PlanError::Config("--n must be at least 1".into()));
-    }
-    if cfg.candidates > MAX_CANDIDATES {
-        return Err(PlanError::Config(format!(
-            "--candidates {}: at most {MAX_CANDIDATES}",
-            cfg.candidates
-        )));
-    }
-    // the poses are chosen among the candidates: never more than they allow
-    if cfg.pool_q.is_none() && cfg.n > cfg.candidates {
-        return Err(PlanError::TooFewCandidates {
-            n: cfg.n,
-            candidates: cfg.candidates,
-        });
-    }
-    if cfg.random_draws > MAX_CANDIDATES {
-        return Err(PlanError::Config(format!(
-            "--random-draws {}: at most {MAX_CANDIDATES}",
-            cfg.random_draws
-        )));
-    }
-    Ok(())
-}
-
-/// The candidates of a plan.
-struct CandidateSet {
-    /// The uniform (drawn or `--candidates-from`) candidates, then the structured extremes.
-    cands: Vec<CandidatePose>,
-    /// With `--candidates-from`: each candidate's index among that file's poses.
-    pool_index: Option<Vec<usize>>,
-    /// How many come before the structured extremes.
-    n_uniform: usize,
-}
-
-/// The candidates: the `--candidates-from` poses that pass (with their index in that file),
-/// or `cfg.candidates` drawn, followed by the structured extremes; and how many come before
-/// the structured ones.
-fn candidate_set(
-    model: &Model,
-    cfg: &PlanConfig,
-    rng: &mut ChaCha8Rng,
-) -> Result<CandidateSet, PlanError> {
-    let (mut cands, pool_index) = match &cfg.pool_q {
-        Some(pool) => {
-            let (c, index) = candidates::pool_candidates(model, pool, &cfg.workspace)?;
-            if c.len() < cfg.n {
-                return Err(PlanError::TooFewCandidates {
-                    n: cfg.n,
-                    candidates: c.len(),
-                });
-            }
-            (c, Some(index))
-        }
-        None => (
-            draw_candidates(model, cfg.candidates.max(cfg.n), &cfg.workspace, rng)?,
-            None,
-        ),
-    };
-    let n_uniform = cands.len();
-    if pool_index.is_none() && cfg.structured.unwrap_or(true) {
-        cands.extend(structured_candidates(model, &cfg.workspace)?);
-    }
-    Ok(CandidateSet {
-        cands,
-        pool_index,
-        n_uniform,
-    })
-}
-
-/// Enough rows (3 per pose, the prior poses' included) for `params` parameters.
-fn check_rows(n: usize, prior_poses: usize, params: usize) -> Result<(), PlanError> {
-    let rows = 3 * (n + prior_poses);
-    if rows < params {
-        return Err(PlanError::TooFewPoses {
-            n,
-            rows,
-            params,
-            min: params.div_ceil(3).saturating_sub(prior_poses).max(1),
-        });
-    }
-    Ok(())
-}
-
-/// The random-design baseline of `cfg.n` poses drawn from the candidates of `b_uniform` (its
-/// summary and every draw's sigmas), and criterion A's weights from it.
-fn baseline(
-    b_uniform: &DMatrix<f64>,
-    setup: &Setup,
-    cfg: &PlanConfig,
-    rng: &mut ChaCha8Rng,
-) -> (DesignStats, Vec<Vec<f64>>, Vec<f64>) {
-    let (random, random_draws) = metrics::random_baseline_draws(
-        b_uniform,
-        &setup.scale,
-        &setup.prior_rows,
-        cfg.n,
-        cfg.random_draws,
-        cfg.noise_mm,
-        rng,
-    );
-    let weights = baseline_weights(&random.sigma, &setup.scale, cfg.noise_mm);
-    (random, random_draws, weights)
-}
-
-/// Criterion A's weight of each parameter: 1 / its random-design variance (scaled), 1 where
-/// that is not a positive number.
-fn baseline_weights(random_sigma: &[f64], scale: &[f64], noise_mm: f64) -> Vec<f64> {
-    random_sigma
-        .iter()
-        .zip(scale)
-        .map(|(s, k)| {
-            let w = 1.0 / (s * k / noise_mm).powi(2);
-            if w.is_finite() && w > 0.0 {
-                w
-            } else {
-                1.0
-            }
-        })
-        .collect()
-}
-
-/// The refinement sweeps: none for `--candidates-from` poses (they are kept as measured), else
-/// `--refine-sweeps` or the default.
-fn refine_sweeps(cfg: &PlanConfig, pooled: bool, from_diagnose: bool) -> usize {
-    if pooled {
-        0
-    } else {
-        cfg.refine_sweeps
-            .unwrap_or_else(|| default_refine_sweeps(from_diagnose))
-    }
-}
-
-/// The best possible design `b` against the planned poses (`chosen` rows of `blocks`, the
-/// scaled Jacobian blocks).
-fn optimum_report(
-    b: continuous::BestPossible,
-    blocks: &DMatrix<f64>,
-    chosen: &[usize],
-    scale: &[f64],
-    cfg: &PlanConfig,
-    random_sigma: &[f64],
-) -> optimum::OptimumReport {
-    let p = blocks.ncols();
-    let m_plan = criteria::information(blocks, &DMatrix::zeros(p, p), chosen);
-    optimum::OptimumReport::new(
-        b.optimum,
-        &b.weight,
-        &m_plan,
-        scale,
-        cfg.noise_mm,
-        random_sigma,
-    )
-    .with_extension(b.extension)
 }
 
 /// The greedy start's exchange, the exchange from `rounded` (the approximate optimum's
