@@ -209,17 +209,7 @@ pub fn fuse(
     let n = placement.normal();
     // the model's tool point: with its declared tilting in motion when it has tilting data
     // (which also moves the point by backlash steps as the torques change sign)
-    let moments = if model.has_tilt() {
-        Some(moments_in_motion(model, &joints.t_s, &joints.q_deg)?)
-    } else {
-        None
-    };
-    let mut nom = Vec::with_capacity(joints.t_s.len());
-    for (k, q) in joints.q_deg.iter().enumerate() {
-        let tilt = moments.as_ref().map_or(Tilt::Off, |m| Tilt::Moments(&m[k]));
-        let fk = model.fk(q, tilt)?;
-        nom.push((fk.position_mm, fk.rotation.column(2).into_owned()));
-    }
+    let nom = nominal_tool(model, joints)?;
     let h: Vec<f64> = nom.iter().map(|(p, _)| placement.height_mm(p)).collect();
     let stop_mm = pot.stop_mm().ok_or_else(|| {
         FusionError::NoSamples("the recording has no potentiometer sample".into())
@@ -235,22 +225,7 @@ pub fn fuse(
     let mut skipped = Skipped::default();
     let mut samples = Vec::new();
     let last = joints.t_s.len().saturating_sub(1);
-    let speed = |k: usize| {
-        let (a, b) = (k.saturating_sub(1), (k + 1).min(last));
-        let dt = joints.t_s[b] - joints.t_s[a];
-        let d = (proj[b][0] - proj[a][0]).hypot(proj[b][1] - proj[a][1]);
-        if dt > 0.0 {
-            d / dt
-        } else {
-            0.0
-        }
-    };
-    let on_paper = |k: usize| predicted[k] < stop_mm - o.align.contact_margin_mm;
-    let moving: Vec<bool> = (0..joints.t_s.len())
-        .map(|k| speed(k) >= o.min_speed_mm_s && on_paper(k))
-        .collect();
-    // every sample with the pencil predicted on the paper left a mark the trace may hold
-    let marking: Vec<usize> = (0..joints.t_s.len()).filter(|&k| on_paper(k)).collect();
+    let (moving, marking) = drawing(&joints.t_s, &proj, &predicted, stop_mm, o);
     for (k, &t) in joints.t_s.iter().enumerate() {
         if !moving[k] {
             skipped.not_drawing += 1;
@@ -275,31 +250,25 @@ pub fn fuse(
         let (p, a) = nom[k];
         let height_true = -d * n.dot(&a);
         let tip = placement.to_sheet_mm(&(p + a * d));
-        let c = trace.closest(tip);
-        if c.distance_mm > o.max_in_plane_mm {
-            skipped.off_trace += 1;
-            continue;
-        }
-        if c.to_end_mm < o.end_exclusion_mm {
-            skipped.near_trace_end += 1;
-            continue;
-        }
         let motion = [
             proj[(k + 1).min(last)][0] - proj[k.saturating_sub(1)][0],
             proj[(k + 1).min(last)][1] - proj[k.saturating_sub(1)][1],
         ];
-        let mut tan = c.tangent;
-        let m_len = motion[0].hypot(motion[1]);
-        if m_len > 1e-3 && tan[0] * motion[0] + tan[1] * motion[1] < 0.0 {
-            tan = [-tan[0], -tan[1]];
-        }
-        let cross = (tan[0] * motion[1] - tan[1] * motion[0]) / m_len.max(1e-300);
-        if cross.abs() > o.max_kink_rad.sin() || c.roughness_rad > o.max_roughness_rad {
-            skipped.kinked += 1;
-            continue;
-        }
-        let u_sheet = [-tan[1], tan[0]];
-        let dev_u = (c.point[0] - tip[0]) * u_sheet[0] + (c.point[1] - tip[1]) * u_sheet[1];
+        let (dev_u, u_sheet) = match trace_deviation(trace, tip, motion, o) {
+            Ok(d) => d,
+            Err(TraceSkip::OffTrace) => {
+                skipped.off_trace += 1;
+                continue;
+            }
+            Err(TraceSkip::NearEnd) => {
+                skipped.near_trace_end += 1;
+                continue;
+            }
+            Err(TraceSkip::Kinked) => {
+                skipped.kinked += 1;
+                continue;
+            }
+        };
         samples.push(FusedSample {
             t_s: t,
             q_deg: joints.q_deg[k].clone(),
@@ -311,18 +280,7 @@ pub fn fuse(
         });
     }
     if samples.is_empty() {
-        return Err(FusionError::NoSamples(format!(
-            "{} joint samples: {} not drawing, {} ambiguous, {} outside the recording, {} with the \
-             pencil off the paper, {} off the trace, {} near a trace end, {} at a kink",
-            joints.t_s.len(),
-            skipped.not_drawing,
-            skipped.ambiguous,
-            skipped.outside_recording,
-            skipped.off_paper,
-            skipped.off_trace,
-            skipped.near_trace_end,
-            skipped.kinked
-        )));
+        return Err(FusionError::NoSamples(skipped.why_none(joints.t_s.len())));
     }
     Ok(Fused {
         samples,
@@ -330,6 +288,115 @@ pub fn fuse(
         stop_mm,
         skipped,
     })
+}
+
+/// A tool point (mm) and the tool axis, frame R.
+type ToolPose = (Vector3<f64>, Vector3<f64>);
+
+/// The model's tool point and tool axis (frame R) at every joint sample: with its declared
+/// tilting in motion when it has tilting data (which also moves the point by backlash steps as
+/// the torques change sign).
+fn nominal_tool(model: &Model, joints: &JointSamples) -> Result<Vec<ToolPose>, FusionError> {
+    let moments = if model.has_tilt() {
+        Some(moments_in_motion(model, &joints.t_s, &joints.q_deg)?)
+    } else {
+        None
+    };
+    let mut nom = Vec::with_capacity(joints.t_s.len());
+    for (k, q) in joints.q_deg.iter().enumerate() {
+        let tilt = moments.as_ref().map_or(Tilt::Off, |m| Tilt::Moments(&m[k]));
+        let fk = model.fk(q, tilt)?;
+        nom.push((fk.position_mm, fk.rotation.column(2).into_owned()));
+    }
+    Ok(nom)
+}
+
+/// Per joint sample, whether the pencil draws there (moving fast enough on the sheet with the
+/// pencil predicted on the paper); and the samples with the pencil predicted on the paper
+/// (each left a mark the trace may hold).
+fn drawing(
+    t_s: &[f64],
+    proj: &[[f64; 2]],
+    predicted: &[f64],
+    stop_mm: f64,
+    o: &FuseOptions,
+) -> (Vec<bool>, Vec<usize>) {
+    let last = t_s.len().saturating_sub(1);
+    let speed = |k: usize| {
+        let (a, b) = (k.saturating_sub(1), (k + 1).min(last));
+        let dt = t_s[b] - t_s[a];
+        let d = (proj[b][0] - proj[a][0]).hypot(proj[b][1] - proj[a][1]);
+        if dt > 0.0 {
+            d / dt
+        } else {
+            0.0
+        }
+    };
+    let on_paper = |k: usize| predicted[k] < stop_mm - o.align.contact_margin_mm;
+    let moving: Vec<bool> = (0..t_s.len())
+        .map(|k| speed(k) >= o.min_speed_mm_s && on_paper(k))
+        .collect();
+    // every sample with the pencil predicted on the paper left a mark the trace may hold
+    let marking: Vec<usize> = (0..t_s.len()).filter(|&k| on_paper(k)).collect();
+    (moving, marking)
+}
+
+/// Why a sample is left out at the trace.
+enum TraceSkip {
+    /// The tip is farther from the trace than `max_in_plane_mm`.
+    OffTrace,
+    /// The closest trace point is within `end_exclusion_mm` of an end.
+    NearEnd,
+    /// The trace turns away from the motion, or is rough there.
+    Kinked,
+}
+
+/// The in-plane deviation of the trace from the pencil `tip` (sheet mm) along the sheet
+/// direction normal to the trace, and that direction (oriented by the tip's `motion` on the
+/// sheet).
+fn trace_deviation(
+    trace: &TracedCurve,
+    tip: [f64; 2],
+    motion: [f64; 2],
+    o: &FuseOptions,
+) -> Result<(f64, [f64; 2]), TraceSkip> {
+    let c = trace.closest(tip);
+    if c.distance_mm > o.max_in_plane_mm {
+        return Err(TraceSkip::OffTrace);
+    }
+    if c.to_end_mm < o.end_exclusion_mm {
+        return Err(TraceSkip::NearEnd);
+    }
+    let mut tan = c.tangent;
+    let m_len = motion[0].hypot(motion[1]);
+    if m_len > 1e-3 && tan[0] * motion[0] + tan[1] * motion[1] < 0.0 {
+        tan = [-tan[0], -tan[1]];
+    }
+    let cross = (tan[0] * motion[1] - tan[1] * motion[0]) / m_len.max(1e-300);
+    if cross.abs() > o.max_kink_rad.sin() || c.roughness_rad > o.max_roughness_rad {
+        return Err(TraceSkip::Kinked);
+    }
+    let u_sheet = [-tan[1], tan[0]];
+    let dev_u = (c.point[0] - tip[0]) * u_sheet[0] + (c.point[1] - tip[1]) * u_sheet[1];
+    Ok((dev_u, u_sheet))
+}
+
+impl Skipped {
+    /// Why no sample of `total` joint samples was kept.
+    fn why_none(&self, total: usize) -> String {
+        format!(
+            "{} joint samples: {} not drawing, {} ambiguous, {} outside the recording, {} with the \
+             pencil off the paper, {} off the trace, {} near a trace end, {} at a kink",
+            total,
+            self.not_drawing,
+            self.ambiguous,
+            self.outside_recording,
+            self.off_paper,
+            self.off_trace,
+            self.near_trace_end,
+            self.kinked
+        )
+    }
 }
 
 /// The header row of `FUSED.csv` for `n_joints` joints.
@@ -509,61 +576,4 @@ fn fused_from_table(
 }
 
 #[cfg(test)]
-mod tests {
-    use super::*;
-    use crate::error::Classify;
-
-    #[test]
-    fn fused_file_round_trip_and_errors() {
-        let h = std::f64::consts::FRAC_1_SQRT_2;
-        let s = FusedSample {
-            t_s: 1.25,
-            q_deg: vec![1.0, 2.0, 3.0, 4.0, 5.0],
-            nominal_mm: Vector3::new(0.1, -300.0, 139.3),
-            dev_u_mm: -0.123,
-            u: Vector3::new(1.0, 0.0, 0.0),
-            dev_n_mm: 0.456,
-            n: Vector3::new(0.0, h, h),
-        };
-        let text = fused_csv(std::slice::from_ref(&s));
-        assert!(text.starts_with("# rigctl-fused/1"));
-        let back = parse_fused(&text, Path::new("f.csv"), 5).unwrap();
-        assert_eq!(back, vec![s.clone()]);
-        let e = (s.measured_error_mm() - Vector3::new(-0.123, 0.456 * h, 0.456 * h)).norm();
-        assert!(e < 1e-12);
-        let bad = text.replace(",-0.123,", ",nan,");
-        let msg = parse_fused(&bad, Path::new("f.csv"), 5)
-            .unwrap_err()
-            .to_string();
-        assert!(msg.contains("f.csv:3") && msg.contains("dev_u"), "{msg}");
-        // every problem is bad input naming the file, the line and the column
-        let cases = [
-            (
-                text.replace("dev_u,", "dev_v,"),
-                "f.csv:2: dev_u: column missing",
-            ),
-            (
-                text.replace(",-0.123,", ",,"),
-                "f.csv:3: dev_u: missing value",
-            ),
-            (
-                text.replace(",-0.123,", ","),
-                "f.csv:3: row: 16 fields, the header has 17",
-            ),
-            (
-                text.replace(",1,0,0,", ",1,0,0.5,"),
-                "f.csv:3: u_x: direction of length",
-            ),
-            (
-                format!("# c\n{}\n", fused_header(5)),
-                "f.csv:2: rows: no sample rows",
-            ),
-            ("# only\n".into(), "f.csv:1: header: no header row"),
-        ];
-        for (bad, want) in cases {
-            let e = parse_fused(&bad, Path::new("f.csv"), 5).unwrap_err();
-            assert_eq!(e.kind(), crate::error::ErrorKind::BadInput);
-            assert!(e.to_string().starts_with(want), "`{e}` vs `{want}`");
-        }
-    }
-}
+mod tests;

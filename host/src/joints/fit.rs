@@ -188,6 +188,14 @@ pub fn fit_joint(
         rms_z_deg: None,
         notes: Vec::new(),
     };
+    fit_xy(&mut fit, &xy);
+    fit_z(&mut fit, &z);
+    Ok(fit)
+}
+
+/// The x/y part of [`fit_joint`] from `xy` = (axis, regressor, reading): clearance `C` and an
+/// offset per axis that has readings, written into `fit`.
+fn fit_xy(fit: &mut JointTiltFit, xy: &[(usize, f64, f64)]) {
     // x/y: columns C, then an offset per axis that has readings
     let axes: Vec<usize> = (0..2).filter(|a| xy.iter().any(|r| r.0 == *a)).collect();
     if axes.is_empty() {
@@ -221,6 +229,11 @@ pub fn fit_joint(
             ),
         }
     }
+}
+
+/// The z part of [`fit_joint`] from `z` = (sign eta_z, eta_z, reading): backlash, compliance
+/// (and stiffness when positive) and the z offset, written into `fit`.
+fn fit_z(fit: &mut JointTiltFit, z: &[(f64, f64, f64)]) {
     // z: columns b, 1/k, offset
     if z.is_empty() {
         fit.notes
@@ -266,7 +279,6 @@ pub fn fit_joint(
             ),
         }
     }
-    Ok(fit)
 }
 
 /// The result of [`identify`]: one fit per joint that has readings, and the model with every

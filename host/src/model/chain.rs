@@ -564,6 +564,32 @@ impl ModelBuilder {
             return Err(ModelError::Invalid("the chain has no joint".into()));
         }
         let robot_elems = self.robot_start..self.elems.len();
+        self.add_tool_point()?;
+        self.check_masses()?;
+        self.add_harmonics()?;
+        let tilt = self.add_tilt_params()?;
+        let payload_param = self.add_param("payload_kg", 0.0, Unit::Kg, ParamKind::Payload)?;
+        let scale_param = self.add_param("scale_ppm", 0.0, Unit::Ppm, ParamKind::Scale)?;
+        Ok(Model {
+            name: self.name,
+            elems: self.elems,
+            robot_elems,
+            joints: self.joints,
+            params: self.params,
+            masses: self.masses,
+            tilt,
+            gamma_law: self.gamma_law,
+            tilt_direction_frozen: false,
+            payload_param,
+            scale_param,
+            joint_names: Vec::new(),
+            transmission: Default::default(),
+            time_terms: Default::default(),
+        })
+    }
+
+    /// Appends `tool_dx, tool_dy, tool_dz` (mm, `Tx Ty Tz` in the last frame).
+    fn add_tool_point(&mut self) -> Result<(), ModelError> {
         for (axis, name) in [
             (Axis::X, "tool_dx"),
             (Axis::Y, "tool_dy"),
@@ -577,6 +603,11 @@ impl ModelBuilder {
                 joint: None,
             });
         }
+        Ok(())
+    }
+
+    /// Every mass lies within the chain (tool point included).
+    fn check_masses(&self) -> Result<(), ModelError> {
         let last_frame = self.elems.len() - 1;
         for m in &self.masses {
             if self.joints[m.joint].elem + m.after > last_frame {
@@ -587,6 +618,12 @@ impl ModelBuilder {
                 )));
             }
         }
+        Ok(())
+    }
+
+    /// Adds the encoder harmonics `enc_j<i>_h<n>_sin/_cos` (deg, n = 1..3) of every revolute
+    /// joint.
+    fn add_harmonics(&mut self) -> Result<(), ModelError> {
         for j in 0..self.joints.len() {
             if self.joints[j].prismatic {
                 continue;
@@ -611,6 +648,12 @@ impl ModelBuilder {
                 });
             }
         }
+        Ok(())
+    }
+
+    /// Adds `clearance_j<i>, backlash_j<i>, stiffness_j<i>` when every joint has tilting values
+    /// (`None` when none has).
+    fn add_tilt_params(&mut self) -> Result<Option<Vec<TiltParams>>, ModelError> {
         let n_tilt = self.tilt_values.iter().filter(|t| t.is_some()).count();
         let tilt = if n_tilt == 0 {
             None
@@ -652,23 +695,6 @@ impl ModelBuilder {
             }
             Some(out)
         };
-        let payload_param = self.add_param("payload_kg", 0.0, Unit::Kg, ParamKind::Payload)?;
-        let scale_param = self.add_param("scale_ppm", 0.0, Unit::Ppm, ParamKind::Scale)?;
-        Ok(Model {
-            name: self.name,
-            elems: self.elems,
-            robot_elems,
-            joints: self.joints,
-            params: self.params,
-            masses: self.masses,
-            tilt,
-            gamma_law: self.gamma_law,
-            tilt_direction_frozen: false,
-            payload_param,
-            scale_param,
-            joint_names: Vec::new(),
-            transmission: Default::default(),
-            time_terms: Default::default(),
-        })
+        Ok(tilt)
     }
 }

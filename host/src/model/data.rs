@@ -18,8 +18,8 @@ use nalgebra::{Matrix3, Vector3};
 
 use super::chain::{Elem, Model, Motion, TiltValues};
 use super::error::ModelError;
-use super::kinematics::{Tilt, GRAVITY_KGF_PER_KG};
 use super::tilt::tilt_from_moment;
+use super::tilt::{Tilt, GRAVITY_KGF_PER_KG};
 
 /// What a parameter moves directly (the Jacobian's direct effect).
 #[derive(Debug, Clone, Copy, PartialEq)]

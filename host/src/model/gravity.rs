@@ -24,8 +24,3 @@ impl GravityModel {
         Ok(model.moments_kgfm(q_deg)?.iter().map(|m| m.z).collect())
     }
 }
-
-/// The joint readings deflected by compliance; the law lives in
-/// [`super::transmission::compliance_deflected`] (re-exported here for the callers that
-/// found it in this module).
-pub use super::transmission::compliance_deflected;

@@ -82,6 +82,7 @@ pub mod rnea;
 mod tilt;
 pub mod time_terms;
 pub mod toml_file;
+mod toml_write;
 pub mod transmission;
 pub mod unknown;
 

@@ -6,6 +6,27 @@ use std::f64::consts::FRAC_PI_2;
 
 use super::chain::{GammaLaw, TiltValues};
 
+/// Gravity in frame R, per kg, in kgf (MODEL.md: -z of R, 1 kgf per kg).
+pub const GRAVITY_KGF_PER_KG: Vector3<f64> = Vector3::new(0.0, 0.0, -1.0);
+
+/// Which joint tilting to apply when evaluating the chain.
+#[derive(Debug, Clone, Copy, Default)]
+pub enum Tilt<'a> {
+    /// No tilting (the conventional rigid model).
+    #[default]
+    Off,
+    /// Tilting from the static gravity moments of this pose (the declared model).
+    Static,
+    /// Tilting from externally supplied moments (kgf.m in joint frame i, one per joint), e.g.
+    /// from recursive Newton-Euler along a trajectory.
+    Moments(&'a [Vector3<f64>]),
+    /// Tilting from the static gravity moments of this pose **plus** supplied extra moments
+    /// (kgf.m in joint frame i, one per joint; e.g. the inertial part of the moments in motion).
+    /// The static part follows the model's parameters (payload, base tilt) and the joints, and
+    /// is differentiated like `Static`; the extra part is held fixed.
+    StaticPlus(&'a [Vector3<f64>]),
+}
+
 /// `sign(x)` of MODEL.md: 0 for `|x| < 1e-9`, else +-1.
 pub fn sign_1e9(x: f64) -> f64 {
     if x.abs() < 1e-9 {

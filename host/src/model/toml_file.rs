@@ -66,7 +66,7 @@
 //!
 //! Every model also gets the base, tool, encoder-harmonic, tilting, payload and scale
 //! parameters listed in the [`super`] module doc; set them in `[params]`.
-//! [`Model::to_toml_string`] writes the chain as elementary transforms with all current values,
+//! [`Model::to_toml_string`] (`toml_write.rs`) writes the chain as elementary transforms with all current values,
 //! so writing and reading back gives the identical model.
 //!
 //! The transmission keys of a `[[joint]]` entry (all optional, default 0; FORMATS.md effects
@@ -79,14 +79,13 @@
 
 use serde::Deserialize;
 use std::collections::BTreeMap;
-use std::fmt::Write as _;
 use std::path::Path;
 
 use super::chain::{Axis, GammaLaw, Model, ModelBuilder, Motion, TiltValues};
 use super::error::ModelError;
 use super::gravity::GravityModel;
-use super::param::ParamKind;
 use super::time_terms::TimeTerms;
+pub use super::toml_write::toml_string;
 use super::transmission::JointTerms;
 
 #[derive(Debug, Deserialize)]
@@ -171,44 +170,6 @@ fn parse_axis_op(op: &str) -> Option<(Motion, Axis)> {
     Some((motion, axis))
 }
 
-fn op_name(motion: Motion, axis: Axis) -> &'static str {
-    match (motion, axis) {
-        (Motion::Rot, Axis::X) => "rx",
-        (Motion::Rot, Axis::Y) => "ry",
-        (Motion::Rot, Axis::Z) => "rz",
-        (Motion::Trans, Axis::X) => "tx",
-        (Motion::Trans, Axis::Y) => "ty",
-        (Motion::Trans, Axis::Z) => "tz",
-    }
-}
-
-/// `s` as a TOML basic string (quotes included): every character TOML does not take literally
-/// (`"`, `\`, control characters, DEL) escaped, so that any name reads back identically.
-pub fn toml_string(s: &str) -> String {
-    let mut out = String::with_capacity(s.len() + 2);
-    out.push('"');
-    for c in s.chars() {
-        match c {
-            '"' => out.push_str("\\\""),
-            '\\' => out.push_str("\\\\"),
-            '\n' => out.push_str("\\n"),
-            '\t' => out.push_str("\\t"),
-            '\r' => out.push_str("\\r"),
-            c if c.is_control() => {
-                let _ = write!(out, "\\u{:04X}", c as u32);
-            }
-            c => out.push(c),
-        }
-    }
-    out.push('"');
-    out
-}
-
-/// Round-trip-exact decimal form of a finite f64 that TOML reads as a float.
-fn fmt_f64(v: f64) -> String {
-    format!("{v:?}")
-}
-
 fn build(file: ModelFile) -> Result<Model, String> {
     let mut b = ModelBuilder::new(&file.name);
     match file.gamma_law.as_deref() {
@@ -222,97 +183,8 @@ fn build(file: ModelFile) -> Result<Model, String> {
             ))
         }
     }
-    let joint_info = |j: usize| -> Result<([f64; 2], Option<TiltValues>), String> {
-        // `joint = 0` in a file is refused here, not an underflow (found by fuzzing).
-        let e = j
-            .checked_sub(1)
-            .and_then(|i| file.joint.get(i))
-            .ok_or_else(|| format!("joint {j} has no [[joint]] entry (limits)"))?;
-        let tilt = match (e.clearance_deg, e.backlash_deg, e.stiffness_kgfm_per_deg) {
-            (None, None, None) => None,
-            (Some(c), Some(b), Some(k)) => {
-                Some(TiltValues { clearance_deg: c, backlash_deg: b, stiffness_kgfm_per_deg: k })
-            }
-            _ => return Err(format!("joint {j}: give all of clearance_deg, backlash_deg, stiffness_kgfm_per_deg or none")),
-        };
-        Ok(([e.min, e.max], tilt))
-    };
     for (n, c) in file.chain.iter().enumerate() {
-        let at = |msg: String| format!("chain entry {} (op = \"{}\"): {msg}", n + 1, c.op);
-        let need = |v: Option<f64>, field: &str| v.ok_or_else(|| at(format!("missing `{field}`")));
-        let next_joint = b.n_joints() + 1;
-        match (c.op.as_str(), c.joint) {
-            ("dh" | "mdh", None) => return Err(at("missing `joint`".into())),
-            ("dh" | "mdh", Some(j)) => {
-                if c.name.is_some() || c.value.is_some() {
-                    return Err(at(
-                        "a row takes theta, d, a, alpha (beta), not name/value".into()
-                    ));
-                }
-                let (limits, tilt) = joint_info(j).map_err(&at)?;
-                let (theta, d, a, alpha) = (
-                    c.theta.unwrap_or(0.0),
-                    need(c.d, "d")?,
-                    need(c.a, "a")?,
-                    need(c.alpha, "alpha")?,
-                );
-                if c.op == "dh" {
-                    if c.beta.is_some() {
-                        return Err(at("`beta` belongs to an \"mdh\" row".into()));
-                    }
-                    b.dh_row(j, theta, d, a, alpha, limits, tilt)
-                        .map_err(|e| at(e.to_string()))?;
-                } else {
-                    b.mdh_row(j, alpha, a, c.beta, theta, d, limits, tilt)
-                        .map_err(|e| at(e.to_string()))?;
-                }
-            }
-            (op, joint) => {
-                let (motion, axis) = parse_axis_op(op)
-                    .ok_or_else(|| at("op must be rx, ry, rz, tx, ty, tz, dh or mdh".into()))?;
-                if c.theta.is_some()
-                    || c.d.is_some()
-                    || c.a.is_some()
-                    || c.alpha.is_some()
-                    || c.beta.is_some()
-                {
-                    return Err(at(
-                        "an elementary transform takes name/value (and joint), not row fields"
-                            .into(),
-                    ));
-                }
-                let name = c
-                    .name
-                    .as_deref()
-                    .ok_or_else(|| at("missing `name`".into()))?;
-                match joint {
-                    None => {
-                        let value = need(c.value, "value")?;
-                        b.constant(motion, axis, name, value)
-                            .map_err(|e| at(e.to_string()))?;
-                    }
-                    Some(j) => {
-                        if axis != Axis::Z {
-                            return Err(at("a joint is rz (revolute) or tz (prismatic)".into()));
-                        }
-                        if j != next_joint {
-                            return Err(at(format!(
-                                "joint {j}: joints must come in order, expected {next_joint}"
-                            )));
-                        }
-                        let (limits, tilt) = joint_info(j).map_err(&at)?;
-                        b.joint(
-                            motion == Motion::Trans,
-                            name,
-                            c.value.unwrap_or(0.0),
-                            limits,
-                            tilt,
-                        )
-                        .map_err(|e| at(e.to_string()))?;
-                    }
-                }
-            }
-        }
+        chain_entry(&mut b, n, c, &file.joint)?;
     }
     if file.joint.len() != b.n_joints() {
         return Err(format!(
@@ -352,6 +224,135 @@ fn build(file: ModelFile) -> Result<Model, String> {
     }
     model.check_ranges()?;
     Ok(model)
+}
+
+/// The limits and tilting values of joint `j` (1-based) from its `[[joint]]` entry.
+fn joint_info(joints: &[JointEntry], j: usize) -> Result<JointInfo, String> {
+    // `joint = 0` in a file is refused here, not an underflow (found by fuzzing).
+    let e = j
+        .checked_sub(1)
+        .and_then(|i| joints.get(i))
+        .ok_or_else(|| format!("joint {j} has no [[joint]] entry (limits)"))?;
+    let tilt = match (e.clearance_deg, e.backlash_deg, e.stiffness_kgfm_per_deg) {
+        (None, None, None) => None,
+        (Some(c), Some(b), Some(k)) => Some(TiltValues {
+            clearance_deg: c,
+            backlash_deg: b,
+            stiffness_kgfm_per_deg: k,
+        }),
+        _ => {
+            return Err(format!(
+            "joint {j}: give all of clearance_deg, backlash_deg, stiffness_kgfm_per_deg or none"
+        ))
+        }
+    };
+    Ok(([e.min, e.max], tilt))
+}
+
+/// A joint's limits (deg or mm) and tilting values.
+type JointInfo = ([f64; 2], Option<TiltValues>);
+
+/// Chain entry `n` (0-based) added to `b`: a DH / MDH row or an elementary transform.
+fn chain_entry(
+    b: &mut ModelBuilder,
+    n: usize,
+    c: &ChainEntry,
+    joints: &[JointEntry],
+) -> Result<(), String> {
+    let at = |msg: String| format!("chain entry {} (op = \"{}\"): {msg}", n + 1, c.op);
+    match (c.op.as_str(), c.joint) {
+        ("dh" | "mdh", None) => Err(at("missing `joint`".into())),
+        ("dh" | "mdh", Some(j)) => row_entry(b, n, c, j, joints),
+        (op, joint) => transform_entry(b, n, c, op, joint, joints),
+    }
+}
+
+/// A `dh` / `mdh` row of joint `j`.
+fn row_entry(
+    b: &mut ModelBuilder,
+    n: usize,
+    c: &ChainEntry,
+    j: usize,
+    joints: &[JointEntry],
+) -> Result<(), String> {
+    let at = |msg: String| format!("chain entry {} (op = \"{}\"): {msg}", n + 1, c.op);
+    let need = |v: Option<f64>, field: &str| v.ok_or_else(|| at(format!("missing `{field}`")));
+    if c.name.is_some() || c.value.is_some() {
+        return Err(at(
+            "a row takes theta, d, a, alpha (beta), not name/value".into()
+        ));
+    }
+    let (limits, tilt) = joint_info(joints, j).map_err(&at)?;
+    let (theta, d, a, alpha) = (
+        c.theta.unwrap_or(0.0),
+        need(c.d, "d")?,
+        need(c.a, "a")?,
+        need(c.alpha, "alpha")?,
+    );
+    if c.op == "dh" {
+        if c.beta.is_some() {
+            return Err(at("`beta` belongs to an \"mdh\" row".into()));
+        }
+        b.dh_row(j, theta, d, a, alpha, limits, tilt)
+            .map_err(|e| at(e.to_string()))?;
+    } else {
+        b.mdh_row(j, alpha, a, c.beta, theta, d, limits, tilt)
+            .map_err(|e| at(e.to_string()))?;
+    }
+    Ok(())
+}
+
+/// An elementary transform (`rx` .. `tz`): a constant, or joint `joint` (`rz`, `tz`).
+fn transform_entry(
+    b: &mut ModelBuilder,
+    n: usize,
+    c: &ChainEntry,
+    op: &str,
+    joint: Option<usize>,
+    joints: &[JointEntry],
+) -> Result<(), String> {
+    let at = |msg: String| format!("chain entry {} (op = \"{}\"): {msg}", n + 1, c.op);
+    let need = |v: Option<f64>, field: &str| v.ok_or_else(|| at(format!("missing `{field}`")));
+    let next_joint = b.n_joints() + 1;
+    let (motion, axis) = parse_axis_op(op)
+        .ok_or_else(|| at("op must be rx, ry, rz, tx, ty, tz, dh or mdh".into()))?;
+    if c.theta.is_some() || c.d.is_some() || c.a.is_some() || c.alpha.is_some() || c.beta.is_some()
+    {
+        return Err(at(
+            "an elementary transform takes name/value (and joint), not row fields".into(),
+        ));
+    }
+    let name = c
+        .name
+        .as_deref()
+        .ok_or_else(|| at("missing `name`".into()))?;
+    match joint {
+        None => {
+            let value = need(c.value, "value")?;
+            b.constant(motion, axis, name, value)
+                .map_err(|e| at(e.to_string()))?;
+        }
+        Some(j) => {
+            if axis != Axis::Z {
+                return Err(at("a joint is rz (revolute) or tz (prismatic)".into()));
+            }
+            if j != next_joint {
+                return Err(at(format!(
+                    "joint {j}: joints must come in order, expected {next_joint}"
+                )));
+            }
+            let (limits, tilt) = joint_info(joints, j).map_err(&at)?;
+            b.joint(
+                motion == Motion::Trans,
+                name,
+                c.value.unwrap_or(0.0),
+                limits,
+                tilt,
+            )
+            .map_err(|e| at(e.to_string()))?;
+        }
+    }
+    Ok(())
 }
 
 /// The transmission terms of the `[[joint]]` entries (all zero when none is given).
@@ -444,31 +445,6 @@ fn locate(text: &str, message: &str) -> Option<usize> {
 }
 
 /// The `[[joint]]` transmission lines of joint `i` (only the non-zero terms).
-fn write_joint_terms(s: &mut String, t: &JointTerms, i: usize) {
-    let (scale, hyst, comp) = t.joint_values(i);
-    for (key, v) in [
-        ("joint_scale", scale),
-        ("hysteresis_deg", hyst),
-        ("compliance_deg_per_kgfm", comp),
-    ] {
-        if v != 0.0 {
-            let _ = writeln!(s, "{key} = {}", fmt_f64(v));
-        }
-    }
-    let row: Vec<String> = t
-        .coupling
-        .get(i)
-        .into_iter()
-        .flatten()
-        .enumerate()
-        .filter(|(_, c)| **c != 0.0)
-        .map(|(k, c)| format!("j{} = {}", k + 1, fmt_f64(*c)))
-        .collect();
-    if !row.is_empty() {
-        let _ = writeln!(s, "joint_coupling = {{ {} }}", row.join(", "));
-    }
-}
-
 impl Model {
     /// Parses a model file's text; `source` names it in error messages (with the line of the
     /// value a message is about, when it can be found).
@@ -495,118 +471,5 @@ impl Model {
                 source,
             })?;
         Self::from_toml_str(&text, &path.display().to_string())
-    }
-
-    /// The model as a model file: the chain as elementary transforms with the current values,
-    /// joints, masses, and the non-zero base/tool/encoder/payload/scale parameters.
-    pub fn to_toml_string(&self) -> String {
-        let mut s = String::new();
-        let _ = writeln!(
-            s,
-            "# rigctl model file (format: see rigctl::model::toml_file)"
-        );
-        let _ = writeln!(s, "name = {}", toml_string(&self.name));
-        let law = match self.gamma_law {
-            GammaLaw::Linear => "linear",
-            GammaLaw::Atan2 => "atan2",
-        };
-        let _ = writeln!(s, "gamma_law = \"{law}\"");
-        for e in &self.elems[self.robot_elems.clone()] {
-            let p = &self.params[e.param];
-            let _ = writeln!(s, "\n[[chain]]\nop = \"{}\"", op_name(e.motion, e.axis));
-            if let Some(j) = e.joint {
-                let _ = writeln!(s, "joint = {}", j + 1);
-            }
-            let _ = writeln!(
-                s,
-                "name = {}\nvalue = {}",
-                toml_string(&p.name),
-                fmt_f64(p.value)
-            );
-        }
-        let tilt = self.tilt_values();
-        for (j, joint) in self.joints.iter().enumerate() {
-            if let Some(n) = self.joint_names.get(j) {
-                let _ = writeln!(s, "\n[[joint]]\nname = {}", toml_string(n));
-            } else {
-                let _ = writeln!(s, "\n[[joint]]");
-            }
-            let _ = writeln!(
-                s,
-                "min = {}\nmax = {}",
-                fmt_f64(joint.limits[0]),
-                fmt_f64(joint.limits[1])
-            );
-            if let Some(t) = tilt.as_ref().and_then(|t| t.get(j)) {
-                let _ = writeln!(
-                    s,
-                    "clearance_deg = {}\nbacklash_deg = {}\nstiffness_kgfm_per_deg = {}",
-                    fmt_f64(t.clearance_deg),
-                    fmt_f64(t.backlash_deg),
-                    fmt_f64(t.stiffness_kgfm_per_deg)
-                );
-            }
-            write_joint_terms(&mut s, &self.transmission, j);
-        }
-        for m in &self.masses {
-            let c = m.com_mm;
-            let _ = writeln!(
-                s,
-                "\n[[mass]]\njoint = {}\nafter = {}\nkg = {}\ncom_mm = [{}, {}, {}]",
-                m.joint + 1,
-                m.after,
-                fmt_f64(m.mass_kg),
-                fmt_f64(c.x),
-                fmt_f64(c.y),
-                fmt_f64(c.z)
-            );
-        }
-        let time = &self.time_terms;
-        if time.is_active() {
-            let list = |v: &[f64]| v.iter().map(|x| fmt_f64(*x)).collect::<Vec<_>>().join(", ");
-            let _ = writeln!(
-                s,
-                "\n[time]\nthermal_ppm = {}\nthermal_tau_min = {}\ndrift_mm_per_h = [{}]",
-                fmt_f64(time.thermal_ppm),
-                fmt_f64(time.thermal_tau_min),
-                list(time.drift_mm_per_h.as_slice())
-            );
-            if time.joint_drift_deg_per_h.iter().any(|r| *r != 0.0) {
-                let _ = writeln!(
-                    s,
-                    "joint_drift_deg_per_h = [{}]",
-                    list(&time.joint_drift_deg_per_h)
-                );
-            }
-        }
-        let _ = writeln!(s, "\n[params]");
-        let extra = |k: ParamKind| {
-            matches!(
-                k,
-                ParamKind::Base
-                    | ParamKind::Tool
-                    | ParamKind::EncoderHarmonic
-                    | ParamKind::Payload
-                    | ParamKind::Scale
-            )
-        };
-        for p in self
-            .params
-            .iter()
-            .filter(|p| extra(p.kind) && p.value != 0.0)
-        {
-            let _ = writeln!(s, "{} = {}", p.name, fmt_f64(p.value));
-        }
-        s
-    }
-
-    /// Writes [`Model::to_toml_string`] to `path` atomically.
-    pub fn write_file(&self, path: &Path) -> Result<(), ModelError> {
-        crate::io::atomic::write_text_atomic(
-            path,
-            crate::io::finite::TextFormat::Toml,
-            &self.to_toml_string(),
-        )?;
-        Ok(())
     }
 }

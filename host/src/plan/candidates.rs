@@ -6,6 +6,7 @@ use nalgebra::Vector3;
 use rand::Rng;
 
 use super::PlanError;
+use crate::calib::{MeasuredSet, Poses};
 use crate::model::{Model, Tilt};
 
 /// Tool-tip height above the table (z in frame R) that the Katana must keep, mm (FORMATS.md).
@@ -209,6 +210,14 @@ pub fn structured_candidates(
         out.extend(CandidatePose::admitted(model, q, ws)?);
     }
     Ok(out)
+}
+
+/// The poses `q` as a dataset (positions unused).
+pub fn joints_dataset(q: &[Vec<f64>]) -> MeasuredSet {
+    MeasuredSet::from_poses(Poses {
+        q_deg: q.to_vec(),
+        xyz_mm: vec![Vector3::zeros(); q.len()],
+    })
 }
 
 #[cfg(test)]

@@ -4,6 +4,7 @@
 //! |---|---|
 //! | [`candidates`] | random reachable configurations within the limits and workspace constraints, and the structured extremes (limits and mid-range) |
 //! | [`setup`] | the identification Jacobian of every candidate (declared tilting on), identifiability, column scaling |
+//! | `steps` | the steps of [`plan`] around the exchange: options refused, the candidate set, the random baseline and criterion A's weights, refinement sweeps, the best possible design's report |
 //! | [`criteria`] | D/Ds, A, G (geometric-mean sigma) and I (prediction variance) criteria and their rank-3 gains |
 //! | [`design`] | greedy start + exchange with rank-3 updates |
 //! | [`refine`] | continuous refinement of the chosen poses' joint values within the constraints |
@@ -41,10 +42,10 @@ pub mod robust;
 pub mod setup;
 pub mod sheets;
 pub mod sheets_output;
+mod steps;
 #[cfg(test)]
 mod test_support;
 
-use nalgebra::DMatrix;
 use rand::SeedableRng;
 use rand_chacha::ChaCha8Rng;
 
@@ -57,6 +58,9 @@ pub use metrics::{
     design_stats, median_ratio, quantile, random_baseline, DesignStats, DirectRatio,
 };
 pub use setup::Setup;
+use steps::{
+    baseline, candidate_set, check_config, check_rows, optimum_report, refine_sweeps, CandidateSet,
+};
 
 /// Everything that can stop a plan.
 #[derive(Debug, thiserror::Error)]
@@ -238,6 +242,17 @@ pub struct RefineSummary {
     pub sweeps: usize,
 }
 
+impl RefineSummary {
+    fn of(r: &refine::Refined) -> Self {
+        Self {
+            criterion_before: r.criterion_before,
+            criterion_after: r.criterion_after,
+            moves: r.moves,
+            sweeps: r.sweeps,
+        }
+    }
+}
+
 /// Most drawn candidates (`--candidates`) and random baseline draws (`--random-draws`); `--n`
 /// is at most the number of candidates (drawn, or the `--candidates-from` poses that pass).
 pub const MAX_CANDIDATES: usize = 200_000;
@@ -249,96 +264,25 @@ pub fn plan(
     cfg: &PlanConfig,
     from: Option<&FromDiagnose>,
 ) -> Result<Plan, PlanError> {
-    if !(cfg.noise_mm > 0.0 && cfg.noise_mm.is_finite()) {
-        return Err(PlanError::Config(format!(
-            "--noise-mm {}: must be a positive number",
-            cfg.noise_mm
-        )));
-    }
-    if cfg.n == 0 {
-        return Err(PlanError::Config("--n must be at least 1".into()));
-    }
-    if cfg.candidates > MAX_CANDIDATES {
-        return Err(PlanError::Config(format!(
-            "--candidates {}: at most {MAX_CANDIDATES}",
-            cfg.candidates
-        )));
-    }
-    // the poses are chosen among the candidates: never more than they allow
-    if cfg.pool_q.is_none() && cfg.n > cfg.candidates {
-        return Err(PlanError::TooFewCandidates {
-            n: cfg.n,
-            candidates: cfg.candidates,
-        });
-    }
-    if cfg.random_draws > MAX_CANDIDATES {
-        return Err(PlanError::Config(format!(
-            "--random-draws {}: at most {MAX_CANDIDATES}",
-            cfg.random_draws
-        )));
-    }
+    check_config(cfg)?;
     let mut rng = ChaCha8Rng::seed_from_u64(cfg.seed);
-    let (mut cands, pool_index) = match &cfg.pool_q {
-        Some(pool) => {
-            let (c, index) = candidates::pool_candidates(model, pool, &cfg.workspace)?;
-            if c.len() < cfg.n {
-                return Err(PlanError::TooFewCandidates {
-                    n: cfg.n,
-                    candidates: c.len(),
-                });
-            }
-            (c, Some(index))
-        }
-        None => (
-            draw_candidates(model, cfg.candidates.max(cfg.n), &cfg.workspace, &mut rng)?,
-            None,
-        ),
-    };
-    let n_uniform = cands.len();
-    if pool_index.is_none() && cfg.structured.unwrap_or(true) {
-        cands.extend(structured_candidates(model, &cfg.workspace)?);
-    }
+    let CandidateSet {
+        mut cands,
+        pool_index,
+        n_uniform,
+    } = candidate_set(model, cfg, &mut rng)?;
     let mut setup = match from {
         None => Setup::declared_with_base(model, &cands, &cfg.existing_q, cfg.base)?,
         Some(f) => f.setup(model, &cands, &cfg.existing_q)?,
     };
     let p = setup.names.len();
     let prior_poses = setup.prior_rows.nrows() / 3;
-    let rows = 3 * (cfg.n + prior_poses);
-    if rows < p {
-        return Err(PlanError::TooFewPoses {
-            n: cfg.n,
-            rows,
-            params: p,
-            min: p.div_ceil(3).saturating_sub(prior_poses).max(1),
-        });
-    }
+    check_rows(cfg.n, prior_poses, p)?;
     let prior = setup.prior_rows.transpose() * &setup.prior_rows;
     // the baseline draws from the uniform candidates only (not the structured extremes)
     let b_uniform = setup.b.rows(0, 3 * n_uniform).into_owned();
     // the baseline first: A weighs each parameter's variance by 1 / its random-design variance
-    let (random, random_draws) = metrics::random_baseline_draws(
-        &b_uniform,
-        &setup.scale,
-        &setup.prior_rows,
-        cfg.n,
-        cfg.random_draws,
-        cfg.noise_mm,
-        &mut rng,
-    );
-    let weights: Vec<f64> = random
-        .sigma
-        .iter()
-        .zip(&setup.scale)
-        .map(|(s, k)| {
-            let w = 1.0 / (s * k / cfg.noise_mm).powi(2);
-            if w.is_finite() && w > 0.0 {
-                w
-            } else {
-                1.0
-            }
-        })
-        .collect();
+    let (random, random_draws, weights) = baseline(&b_uniform, &setup, cfg, &mut rng);
     let prediction = criteria::prediction_weight(&b_uniform);
     let n_pool = cands.len();
     let best =
@@ -363,28 +307,21 @@ pub fn plan(
         prediction: &prediction,
     };
     let start: Vec<CandidatePose> = design.chosen.iter().map(|&c| cands[c].clone()).collect();
-    let sweeps = match pool_index {
-        Some(_) => 0,
-        None => cfg
-            .refine_sweeps
-            .unwrap_or_else(|| default_refine_sweeps(from.is_some())),
-    };
+    let sweeps = refine_sweeps(cfg, pool_index.is_some(), from.is_some());
     let refined = refiner.refine(&prior, &start, sweeps)?;
     let chosen: Vec<usize> = (0..refined.poses.len()).collect();
     let jac = metrics::stack_rows(&refined.blocks, &setup.scale, &setup.prior_rows, &chosen);
     let planned = design_stats(&jac, prior_poses + cfg.n, cfg.noise_mm);
     let median_sigma_ratio = median_ratio(&planned.sigma, &random.sigma);
     let optimum = best.map(|b| {
-        let m_plan = criteria::information(&refined.blocks, &DMatrix::zeros(p, p), &chosen);
-        optimum::OptimumReport::new(
-            b.optimum,
-            &b.weight,
-            &m_plan,
+        optimum_report(
+            b,
+            &refined.blocks,
+            &chosen,
             &setup.scale,
-            cfg.noise_mm,
+            cfg,
             &random.sigma,
         )
-        .with_extension(b.extension)
     });
     let direct = DirectRatio::new(&planned.sigma, &random_draws);
     let ratio_per_draw = metrics::ratio_per_draw(
@@ -397,12 +334,7 @@ pub fn plan(
         cfg.noise_mm,
         &mut rng,
     );
-    let refinement = RefineSummary {
-        criterion_before: refined.criterion_before,
-        criterion_after: refined.criterion_after,
-        moves: refined.moves,
-        sweeps: refined.sweeps,
-    };
+    let refinement = RefineSummary::of(&refined);
     setup.b = refined.blocks;
     let from_diagnose = from.map(|f| f.report(&setup, &chosen));
     Ok(Plan {

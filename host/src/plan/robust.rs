@@ -36,8 +36,7 @@
 
 use nalgebra::{DVector, Vector3};
 
-use super::candidates::CandidatePose;
-use super::setup::joints_dataset;
+use super::candidates::{joints_dataset, CandidatePose};
 use super::PlanError;
 use crate::diagnose::extended::{ExtModel, Unknown, Values};
 use crate::model::effect::bound;

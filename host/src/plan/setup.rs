@@ -1,15 +1,14 @@
 //! The identification Jacobian of every candidate pose, restricted to what the whole candidate
 //! set can identify, with its columns scaled.
 
-use nalgebra::{DMatrix, Vector3};
+use nalgebra::DMatrix;
 
+pub use super::candidates::joints_dataset;
 use super::candidates::CandidatePose;
 use super::robust::Linearity;
 use super::PlanError;
 use crate::calib::default_selection;
 use crate::calib::identifiability::{analyse, DEFAULT_RTOL};
-use crate::calib::MeasuredSet;
-use crate::calib::Poses;
 use crate::diagnose::extended::{ExtModel, Unknown};
 use crate::model::Model;
 
@@ -39,14 +38,6 @@ pub struct Setup {
     pub linearity: Option<Linearity>,
     /// Per candidate, whether it passes that test (empty: all do).
     pub admissible: Vec<bool>,
-}
-
-/// The poses `q` as a dataset (positions unused).
-pub fn joints_dataset(q: &[Vec<f64>]) -> MeasuredSet {
-    MeasuredSet::from_poses(Poses {
-        q_deg: q.to_vec(),
-        xyz_mm: vec![Vector3::zeros(); q.len()],
-    })
 }
 
 impl Setup {

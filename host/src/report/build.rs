@@ -8,28 +8,14 @@ use super::analysis::{demo_trajectory, moments_and_tilts, path_error};
 use super::docs::{diagnose_section, param_table, simulation_facts};
 use super::extras::{overlay_figures, plan_section};
 use super::first_screen::build_summary;
+use super::markup::figure;
 use super::path_errors::path_errors_section;
 use super::pose_sets::pose_sets;
 use super::run_dir::RunDir;
 use super::table::{merge_tables, tables_from_calibrate_json};
-use super::{Figure, Report, ReportError, ReportOptions};
+use super::{Report, ReportError, ReportOptions};
 use crate::model::{choose_model, Model, ModelChoice};
-use crate::plot::{svg_string, Chart, LineChart, Series};
-
-/// `chart` as a [`Figure`] with `caption`; a chart that cannot be drawn becomes a note.
-pub(crate) fn figure<C: Chart>(
-    caption: String,
-    chart: &C,
-    notes: &mut Vec<String>,
-) -> Option<Figure> {
-    match svg_string(chart) {
-        Ok(svg) => Some(Figure { caption, svg }),
-        Err(e) => {
-            notes.push(format!("figure {:?} skipped: {e}", chart.title()));
-            None
-        }
-    }
-}
+use crate::plot::{LineChart, Series};
 
 /// The declared robot: the option, else `truth.json`'s, else a diagnose document's.
 fn robot_name(run: &RunDir, opts: &ReportOptions) -> Option<String> {

@@ -4,7 +4,7 @@
 
 use serde_json::Value;
 
-use super::build::figure;
+use super::markup::figure;
 use super::run_dir::RunDir;
 use super::Figure;
 use crate::io::table::{Table, TableError};

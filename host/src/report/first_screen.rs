@@ -6,8 +6,7 @@ use std::fmt::Write as _;
 
 use serde_json::Value;
 
-use super::build::figure;
-use super::html::{escape, figure as render_figure};
+use super::markup::{escape, figure, render_figure};
 use super::run_dir::RunDir;
 use super::summary::{
     aliased, found_effects, headline_sentence, headlines, verdict, Diagnosis, Headline, Stage,
@@ -147,6 +146,52 @@ fn path_error_headline(report: &Report) -> Option<Headline> {
     })
 }
 
+/// One pose left out as a gross error: `FILE line N id ID (E mm)`.
+fn outlier_text(o: &serde_json::Value) -> String {
+    format!(
+        "{} line {}{} ({} mm)",
+        o.get("file")
+            .and_then(serde_json::Value::as_str)
+            .unwrap_or("?"),
+        o.get("line")
+            .and_then(serde_json::Value::as_u64)
+            .map_or_else(|| "?".to_string(), |l| l.to_string()),
+        o.get("id")
+            .and_then(serde_json::Value::as_str)
+            .map_or_else(String::new, |i| format!(" id {i}")),
+        o.get("error_mm")
+            .and_then(serde_json::Value::as_f64)
+            .map_or_else(|| "?".to_string(), |e| format!("{e:.3}"))
+    )
+}
+
+/// The next steps a diagnosis `d` calls for (overfitting, a change between the sets, something
+/// left open), appended to `out`.
+fn diagnosis_steps(d: &Diagnosis, robot: &str, out: &mut Vec<String>) {
+    let lacking = d
+        .verdict
+        .as_deref()
+        .is_some_and(|v| v.starts_with("The model still lacks"));
+    let v = d.verdict.as_deref().unwrap_or("");
+    if v.starts_with("Overfitting") {
+        out.push(format!(
+            "{}: the poses are too few for the parameters fitted. Measure more poses (`rigctl plan --robot {robot} --n 60 --out plan.csv`) or fit fewer parameters.",
+            d.source
+        ));
+    } else if v.starts_with("A change between the sets") {
+        out.push(format!(
+            "{}: the held-out poses differ from the calibration poses. Check what changed between the two sets (tool mounting, base, temperature, day) before trusting either.",
+            d.source
+        ));
+    }
+    if !d.aliased.is_empty() || lacking {
+        out.push(format!(
+            "Measure poses that separate what {} leaves open: `rigctl plan --robot {robot} --n 60 --from-diagnose {} --out plan.csv`, then measure them and run diagnose again.",
+            d.source, d.source
+        ));
+    }
+}
+
 fn next_steps(
     run: &RunDir,
     robot: Option<&str>,
@@ -161,27 +206,7 @@ fn next_steps(
         let listed: Vec<String> = doc
             .get("outliers")
             .and_then(serde_json::Value::as_array)
-            .map(|a| {
-                a.iter()
-                    .map(|o| {
-                        format!(
-                            "{} line {}{} ({} mm)",
-                            o.get("file")
-                                .and_then(serde_json::Value::as_str)
-                                .unwrap_or("?"),
-                            o.get("line")
-                                .and_then(serde_json::Value::as_u64)
-                                .map_or_else(|| "?".to_string(), |l| l.to_string()),
-                            o.get("id")
-                                .and_then(serde_json::Value::as_str)
-                                .map_or_else(String::new, |i| format!(" id {i}")),
-                            o.get("error_mm")
-                                .and_then(serde_json::Value::as_f64)
-                                .map_or_else(|| "?".to_string(), |e| format!("{e:.3}"))
-                        )
-                    })
-                    .collect()
-            })
+            .map(|a| a.iter().map(outlier_text).collect())
             .unwrap_or_default();
         if !listed.is_empty() {
             out.push(format!(
@@ -192,28 +217,7 @@ fn next_steps(
         }
     }
     for d in diags {
-        let lacking = d
-            .verdict
-            .as_deref()
-            .is_some_and(|v| v.starts_with("The model still lacks"));
-        let v = d.verdict.as_deref().unwrap_or("");
-        if v.starts_with("Overfitting") {
-            out.push(format!(
-                "{}: the poses are too few for the parameters fitted. Measure more poses (`rigctl plan --robot {robot} --n 60 --out plan.csv`) or fit fewer parameters.",
-                d.source
-            ));
-        } else if v.starts_with("A change between the sets") {
-            out.push(format!(
-                "{}: the held-out poses differ from the calibration poses. Check what changed between the two sets (tool mounting, base, temperature, day) before trusting either.",
-                d.source
-            ));
-        }
-        if !d.aliased.is_empty() || lacking {
-            out.push(format!(
-                "Measure poses that separate what {} leaves open: `rigctl plan --robot {robot} --n 60 --from-diagnose {} --out plan.csv`, then measure them and run diagnose again.",
-                d.source, d.source
-            ));
-        }
+        diagnosis_steps(d, robot, &mut out);
     }
     let extended: Vec<&str> = run
         .models

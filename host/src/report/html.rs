@@ -2,13 +2,10 @@
 
 use std::fmt::Write as _;
 
+pub use super::markup::escape;
+use super::markup::render_figure;
 use super::table::ErrorTable;
-use super::{Figure, Report};
-
-/// `text` with `& < > " '` escaped for HTML text and attribute values.
-pub fn escape(text: &str) -> String {
-    crate::io::markup::escape(text, crate::io::markup::Blanks::Literal)
-}
+use super::Report;
 
 const CSS: &str = "body{font-family:'DejaVu Sans',sans-serif;margin:16px auto;max-width:1180px;padding:0 12px;color:#222;line-height:1.35}\
 h1{font-size:1.45em;margin:0.2em 0}h2{border-bottom:1px solid #ccc;margin-top:1.8em}h3{margin:0.8em 0 0.3em}\
@@ -65,24 +62,6 @@ fn error_table(s: &mut String, t: &ErrorTable, id: &str) {
         s,
         "</table>\n<p class=\"src\">source: <code>{}</code></p>",
         escape(&t.source)
-    );
-}
-
-/// Strips an XML declaration, so the SVG can be inlined in HTML.
-fn inline_svg(svg: &str) -> &str {
-    match svg.find("<svg") {
-        Some(i) => &svg[i..],
-        None => svg,
-    }
-}
-
-/// Appends `f` as a `<figure>` (inline SVG and caption).
-pub(crate) fn figure(s: &mut String, f: &Figure) {
-    let _ = writeln!(
-        s,
-        "<figure>{}<figcaption>{}</figcaption></figure>",
-        inline_svg(&f.svg),
-        escape(&f.caption)
     );
 }
 
@@ -216,7 +195,7 @@ fn plan_details(s: &mut String, p: &super::PlanSection) {
         escape(&p.source)
     );
     if let Some(f) = &p.figure {
-        figure(s, f);
+        render_figure(s, f);
     }
     if !p.facts.is_empty() {
         s.push_str("<table class=\"plan\">");
@@ -346,7 +325,7 @@ pub fn render_html(r: &Report) -> String {
             }
             "figures" => {
                 for f in &r.figures {
-                    figure(&mut s, f);
+                    render_figure(&mut s, f);
                 }
             }
             "provenance" => provenance(&mut s, r),

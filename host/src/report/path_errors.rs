@@ -6,14 +6,13 @@
 use std::fmt::Write as _;
 use std::path::Path;
 
-use super::html::escape;
+use super::markup::{escape, render_figure};
 use super::Figure;
 use crate::plot::path_errors::{
     path_errors_svg, read_path_errors, PathErrorSummary, SetSummary, BEFORE_LABEL, STANDARD_LABEL,
 };
 
-/// File name `rigctl report` reads the per-sample path errors from.
-pub const PATH_ERRORS_FILE: &str = "path_errors.csv";
+pub use super::run_dir::PATH_ERRORS_FILE;
 
 /// Heading of the section.
 pub const HEADING: &str = "Path error along the drawn path (thesis fig. 5.12)";
@@ -108,7 +107,7 @@ pub(crate) fn render(s: &mut String, sec: &PathErrorsSection) {
         escape(&sec.source)
     );
     if let Some(f) = &sec.figure {
-        super::html::figure(s, f);
+        render_figure(s, f);
     }
 }
 

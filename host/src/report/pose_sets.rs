@@ -8,7 +8,7 @@ use super::analysis::{
     evaluate, evaluate_in_order, influence_names, most_correlated_joint, parameter_influence,
     Evaluated,
 };
-use super::build::figure;
+use super::markup::figure;
 use super::run_dir::RunDir;
 use super::table::{Column, ErrorTable};
 use super::Figure;

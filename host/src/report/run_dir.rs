@@ -7,6 +7,9 @@ use sha2::{Digest, Sha256};
 
 use super::ReportError;
 
+/// File name `rigctl report` reads the per-sample path errors from.
+pub const PATH_ERRORS_FILE: &str = "path_errors.csv";
+
 /// Name, size and SHA-256 of one file of the run directory.
 #[derive(Debug, Clone, PartialEq)]
 pub struct FileInfo {
@@ -164,7 +167,7 @@ impl RunDir {
                     }
                     None => "",
                 }
-            } else if lower == super::path_errors::PATH_ERRORS_FILE {
+            } else if lower == PATH_ERRORS_FILE {
                 run.path_errors = Some(path.clone());
                 "path errors along the drawn path"
             } else if lower == "plan.csv" {

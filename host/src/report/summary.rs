@@ -365,29 +365,7 @@ pub fn verdict(doc: &Value) -> Option<String> {
         })
         .unwrap_or_default();
     let share = un.and_then(|u| f(u, "explainable_share"));
-    let floor = doc.get("floor");
-    let ratio = floor.and_then(|fl| f(fl, "final_over_floor"));
-    let used = floor
-        .and_then(|fl| fl.get("used"))
-        .and_then(Value::as_str)
-        .unwrap_or("noise");
-    let floor_mm = floor.and_then(|fl| match used {
-        "instrument" => f(fl, "instrument_mm"),
-        "repeatability" => f(fl, "repeatability_mm"),
-        _ => f(fl, "residual_mm"),
-    });
-    let floor_words = match (ratio, floor_mm) {
-        (Some(r), Some(m)) => format!(
-            " (final residual {r:.2} x the {used} floor of {} mm)",
-            fmt_mm(m)
-        ),
-        (Some(r), None) => format!(" (final residual {r:.2} x the {used} floor)"),
-        _ => doc
-            .get("noise")
-            .and_then(|n| f(n, "sigma_mm"))
-            .map(|s| format!(" (residual sigma {} mm per coordinate)", fmt_mm(s)))
-            .unwrap_or_default(),
-    };
+    let (used, floor_words) = floor_words(doc);
     let structured = structured?;
     if doc.get("converged").and_then(Value::as_bool) == Some(false) {
         return Some(format!(
@@ -399,19 +377,7 @@ pub fn verdict(doc: &Value) -> Option<String> {
     let kind = verdict.and_then(|v| v.get("kind")).and_then(Value::as_str);
     match kind {
         Some("overfitting") => {
-            let fitted = verdict
-                .and_then(|v| v.get("fitted_parameters"))
-                .and_then(Value::as_u64);
-            let supported = verdict
-                .and_then(|v| v.get("supported_parameters"))
-                .and_then(Value::as_u64);
-            let counts = match (fitted, supported) {
-                (Some(p), Some(r)) => {
-                    format!(": {p} parameters fitted, the poses support about {r}")
-                }
-                (Some(p), None) => format!(": {p} parameters fitted"),
-                _ => String::new(),
-            };
+            let counts = parameter_counts(verdict);
             return Some(format!(
                 "Overfitting: the calibration residual is at the floor but the poses left out are not{floor_words}{counts}. Measure more poses or fit fewer parameters."
             ));
@@ -458,6 +424,53 @@ pub fn verdict(doc: &Value) -> Option<String> {
     s.push_str(&floor_words);
     s.push('.');
     Some(s)
+}
+
+/// The floor the diagnosis used (`noise`, `instrument`, `repeatability`) and the words of the
+/// final residual against it (` (final residual ... x the ... floor ...)`, or the residual
+/// sigma when the document has no floor ratio).
+fn floor_words(doc: &Value) -> (&str, String) {
+    let floor = doc.get("floor");
+    let ratio = floor.and_then(|fl| f(fl, "final_over_floor"));
+    let used = floor
+        .and_then(|fl| fl.get("used"))
+        .and_then(Value::as_str)
+        .unwrap_or("noise");
+    let floor_mm = floor.and_then(|fl| match used {
+        "instrument" => f(fl, "instrument_mm"),
+        "repeatability" => f(fl, "repeatability_mm"),
+        _ => f(fl, "residual_mm"),
+    });
+    let floor_words = match (ratio, floor_mm) {
+        (Some(r), Some(m)) => format!(
+            " (final residual {r:.2} x the {used} floor of {} mm)",
+            fmt_mm(m)
+        ),
+        (Some(r), None) => format!(" (final residual {r:.2} x the {used} floor)"),
+        _ => doc
+            .get("noise")
+            .and_then(|n| f(n, "sigma_mm"))
+            .map(|s| format!(" (residual sigma {} mm per coordinate)", fmt_mm(s)))
+            .unwrap_or_default(),
+    };
+    (used, floor_words)
+}
+
+/// `: P parameters fitted, the poses support about R` of an overfitting verdict.
+fn parameter_counts(verdict: Option<&Value>) -> String {
+    let fitted = verdict
+        .and_then(|v| v.get("fitted_parameters"))
+        .and_then(Value::as_u64);
+    let supported = verdict
+        .and_then(|v| v.get("supported_parameters"))
+        .and_then(Value::as_u64);
+    match (fitted, supported) {
+        (Some(p), Some(r)) => {
+            format!(": {p} parameters fitted, the poses support about {r}")
+        }
+        (Some(p), None) => format!(": {p} parameters fitted"),
+        _ => String::new(),
+    }
 }
 
 /// The aliased pairs of a diagnose document.

@@ -43,29 +43,29 @@
 //! `truth.toml` (truth model), `truth_path.csv` (`t,q1..q5,x,y,z`: the true tool point at every
 //! joint reading, a pose file), `session.json` (clock offset, pot scale, geometric errors).
 
-use std::path::Path;
-
-use image::RgbImage;
 use nalgebra::Vector3;
 use rand::SeedableRng;
 use rand_chacha::ChaCha8Rng;
 use rand_distr::{Distribution, Normal};
 use rig_protocol::{encode_device, DeviceMsg, PotBatch, DEVICE_FRAME_MAX};
 
-use super::effects::{Change, Effect};
+use super::effects::Change;
 use super::paths::quintic_profile;
-use super::simulate::{truth_model, SimConfig, SimError};
-use crate::daq::recording::{RecordingError, RecordingMeta, RecordingWriter};
-use crate::fusion::{FusionError, JigPoint, SheetPlacement};
-use crate::io::atomic::{write_bytes_atomic, AtomicWriteError};
-use crate::model::dynamics::{moments_kgfm, Inertia};
+use super::simulate::{truth_model, SimConfig};
+use crate::fusion::{JigPoint, SheetPlacement};
+use crate::model::dynamics::moments_kgfm;
 use crate::model::ik::KATANA_SEED_DEG;
-use crate::model::ik::{solve, IkError, IkTilt, ToolTarget};
-use crate::model::{Model, ModelError, Tilt};
+use crate::model::ik::{solve, IkTilt, ToolTarget};
+use crate::model::{Model, Tilt};
 pub use crate::sheet::drawn::{
     default_pencil_axis, SessionPath, LINE_HALF_LENGTH_DRAWN_MM, SESSION_SHEET_ORIGIN_MM,
 };
-use crate::trace::synth::{render_scan, RenderSpec};
+
+mod config;
+mod files;
+
+pub use config::{SessionConfig, SessionError};
+pub use files::{render_session_scan, write_session};
 
 /// Format tag of `session.json`.
 pub const SESSION_FORMAT: &str = "rigctl-session-truth/1";
@@ -73,148 +73,6 @@ pub const SESSION_FORMAT: &str = "rigctl-session-truth/1";
 const DIFF_STEPS: usize = 10;
 /// Potentiometer samples per frame.
 const BATCH: usize = 50;
-impl SessionPath {
-    /// The default sheet placement of this path: the 45-degree plane of
-    /// [`SheetPlacement::thesis_plane`] through [`SESSION_SHEET_ORIGIN_MM`] (the circle), or 30 mm
-    /// up the slope from it (the line).
-    pub fn default_placement(self) -> SheetPlacement {
-        let c = Vector3::from(SESSION_SHEET_ORIGIN_MM);
-        let base = SheetPlacement::thesis_plane(c);
-        match self {
-            Self::Circle => base,
-            Self::Line => SheetPlacement::thesis_plane(c + base.y_axis * 30.0),
-        }
-    }
-}
-
-/// Settings of a simulated session (see the module documentation).
-#[derive(Debug, Clone, PartialEq)]
-pub struct SessionConfig {
-    pub path: SessionPath,
-    /// Seed of the truth errors and of the noise (the same seed gives the same robot).
-    pub seed: u64,
-    /// Standard deviation of the geometric errors, deg.
-    pub geometric_sigma_deg: f64,
-    /// Drawing time, s.
-    pub draw_duration_s: f64,
-    /// Joint log rate, Hz (divides 1000).
-    pub robot_rate_hz: u32,
-    /// Potentiometer sample rate, Hz (divides 1e6).
-    pub pot_rate_hz: u32,
-    /// Board time at robot time 0, s.
-    pub clock_offset_s: f64,
-    /// Board clock rate error, ppm.
-    pub clock_drift_ppm: f64,
-    /// Counts at zero travel.
-    pub counts_at_zero: f64,
-    /// Counts per mm of travel (negative: counts fall as the pencil extends).
-    pub counts_per_mm: f64,
-    /// Potentiometer noise, counts (standard deviation).
-    pub pot_noise_counts: f64,
-    /// Travel at the pencil's stop (off the paper), mm.
-    pub pencil_stop_mm: f64,
-    /// Height of the tool point above the paper before and after drawing, mm.
-    pub lift_mm: f64,
-    /// Depth of the marker dips, mm.
-    pub dip_mm: f64,
-    /// Scan resolution, dpi.
-    pub dpi: f64,
-    /// Rotation of the sheet on the scanner, deg.
-    pub scan_rotation_deg: f64,
-    /// Link inertia for the moments in motion.
-    pub inertia: Inertia,
-    /// Sheet placement (`None`: the path's default).
-    pub placement: Option<SheetPlacement>,
-    /// Pencil (tool) axis while drawing, unit, frame R (`None`: [`default_pencil_axis`]).
-    pub pencil_axis: Option<Vector3<f64>>,
-    /// Effects the declared model lacks, applied to the truth (model-parameter effects only:
-    /// a session lasts seconds, so time drifts are refused).
-    pub effects: Vec<Effect>,
-}
-
-impl Default for SessionConfig {
-    fn default() -> Self {
-        Self {
-            path: SessionPath::Circle,
-            seed: 1,
-            geometric_sigma_deg: 0.05,
-            draw_duration_s: 8.0,
-            robot_rate_hz: 100,
-            pot_rate_hz: 1000,
-            clock_offset_s: 12.345_678_9,
-            clock_drift_ppm: 0.0,
-            counts_at_zero: 2000.0,
-            counts_per_mm: -380.0,
-            pot_noise_counts: 1.0,
-            pencil_stop_mm: 2.0,
-            lift_mm: 5.0,
-            dip_mm: 1.5,
-            dpi: 600.0,
-            scan_rotation_deg: 1.2,
-            inertia: Inertia::default(),
-            placement: None,
-            pencil_axis: None,
-            effects: Vec::new(),
-        }
-    }
-}
-
-/// Why a session could not be simulated or written.
-#[derive(Debug, thiserror::Error)]
-pub enum SessionError {
-    /// A setting out of range.
-    #[error("{0}")]
-    Config(String),
-    /// A target the nominal arm cannot reach.
-    #[error(transparent)]
-    Ik(#[from] IkError),
-    /// The model failed.
-    #[error(transparent)]
-    Model(#[from] ModelError),
-    /// The truth could not be built.
-    #[error(transparent)]
-    Sim(#[from] SimError),
-    /// The pencil would leave its travel range (the arm is too far off).
-    #[error("the pencil travel {travel_mm:.2} mm at robot time {t_s:.3} s is beyond its range")]
-    PencilRange { travel_mm: f64, t_s: f64 },
-    /// A frame could not be encoded.
-    #[error("cannot encode a potentiometer frame: {0}")]
-    Encode(String),
-    /// The scan could not be encoded.
-    #[error("cannot encode the scan: {0}")]
-    Image(String),
-    /// The recording could not be written.
-    #[error(transparent)]
-    Recording(#[from] RecordingError),
-    /// An output directory or file could not be written.
-    #[error("cannot write {path}: {source}")]
-    Write {
-        path: std::path::PathBuf,
-        #[source]
-        source: std::io::Error,
-    },
-    /// An atomic write failed.
-    #[error(transparent)]
-    Atomic(#[from] AtomicWriteError),
-    /// The placement file could not be written.
-    #[error(transparent)]
-    Fusion(#[from] FusionError),
-}
-
-impl crate::error::Classify for SessionError {
-    fn kind(&self) -> crate::error::ErrorKind {
-        use crate::error::ErrorKind;
-        match self {
-            Self::Config(_) => ErrorKind::BadInput,
-            Self::Ik(e) => e.kind(),
-            Self::Model(e) => e.kind(),
-            Self::Sim(e) => e.kind(),
-            Self::Fusion(e) => e.kind(),
-            _ => ErrorKind::Failure,
-        }
-    }
-}
-
 /// A simulated session in memory.
 #[derive(Debug, Clone)]
 pub struct Session {
@@ -620,162 +478,10 @@ fn gauge_jig(cfg: &SessionConfig, noise: &Normal<f64>, rng: &mut ChaCha8Rng) -> 
         .collect()
 }
 
-impl Session {
-    /// The potentiometer samples as the board stamped them.
-    pub fn pot_samples(&self) -> Vec<crate::fusion::pot::PotSample> {
-        self.pot_raw
-            .iter()
-            .enumerate()
-            .map(|(j, &raw)| crate::fusion::pot::PotSample {
-                t_us: self.board_t0_us + j as u64 * u64::from(self.pot_period_us),
-                raw,
-            })
-            .collect()
-    }
-}
-
 /// Joint readings as the controller logs them (6 decimals of a degree).
 fn round_q(q: &[f64]) -> Vec<f64> {
     q.iter().map(|v| (v * 1e6).round() / 1e6).collect()
 }
 
-/// The simulated scan of the session's sheet.
-pub fn render_session_scan(s: &Session, cfg: &SessionConfig) -> RgbImage {
-    render_scan(&RenderSpec {
-        dpi: cfg.dpi,
-        pencil_mm: s.pencil_mm.clone(),
-        pencil_closed: cfg.path == SessionPath::Circle,
-        reference: Some(cfg.path.reference()),
-        rotation_deg: cfg.scan_rotation_deg,
-        shift_mm: [1.5, -2.0],
-        seed: cfg.seed.wrapping_add(17),
-        ..RenderSpec::default()
-    })
-}
-
-/// Writes the session's files into `dir` (created if missing); see the module documentation.
-pub fn write_session(dir: &Path, s: &Session, cfg: &SessionConfig) -> Result<(), SessionError> {
-    let io = |path: &Path| {
-        let path = path.to_path_buf();
-        move |source| SessionError::Write { path, source }
-    };
-    // the files of one session, never a mix of concurrent runs into the same directory
-    let _lock = crate::io::atomic::lock_dir(dir)?;
-    let nj = s.q_deg.first().map_or(0, Vec::len);
-    let qhead: Vec<String> = (1..=nj).map(|j| format!("q{j}")).collect();
-    let mut joints = format!("t,{}\n", qhead.join(","));
-    let mut truth_path = format!("t,{},x,y,z\n", qhead.join(","));
-    for ((t, q), p) in s.t_s.iter().zip(&s.q_deg).zip(&s.truth_mm) {
-        let qs: Vec<String> = q.iter().map(|v| format!("{v:.6}")).collect();
-        joints.push_str(&format!("{t:.3},{}\n", qs.join(",")));
-        truth_path.push_str(&format!(
-            "{t:.3},{},{:.9},{:.9},{:.9}\n",
-            qs.join(","),
-            p.x,
-            p.y,
-            p.z
-        ));
-    }
-    let csv = crate::io::finite::TextFormat::Csv;
-    crate::io::atomic::check_text_for(&dir.join("joints.csv"), csv, &joints)?;
-    crate::io::atomic::check_text_for(&dir.join("truth_path.csv"), csv, &truth_path)?;
-    write_bytes_atomic(&dir.join("joints.csv"), joints.as_bytes())?;
-    write_bytes_atomic(&dir.join("truth_path.csv"), truth_path.as_bytes())?;
-    let mut jig =
-        String::from("# gauge-block jig: mean counts of 100 readings per gauge\nraw,travel_mm\n");
-    for p in &s.jig {
-        jig.push_str(&format!("{:.2},{}\n", p.raw, p.travel_mm));
-    }
-    crate::io::atomic::write_text_atomic(&dir.join("potjig.csv"), csv, &jig)?;
-    s.placement.write(&dir.join("placement.toml"))?;
-    s.truth.write_file(&dir.join("truth.toml"))?;
-    // the recording: written under a temporary name, renamed when complete
-    let rec = dir.join("pot.rec");
-    let tmp = dir.join(".pot.rec.tmp");
-    let meta = RecordingMeta {
-        protocol_version: rig_protocol::PROTOCOL_VERSION,
-        port: "simulated".into(),
-        start_time_unix_us: 0,
-        pot_rate_hz: cfg.pot_rate_hz,
-        tilt_rate_hz: 0,
-        hello: None,
-        rigctl_version: env!("CARGO_PKG_VERSION").into(),
-    };
-    let mut w = RecordingWriter::create(&tmp, &meta, true)?;
-    for (rx, f) in &s.frames {
-        w.append(*rx, f)?;
-    }
-    w.finish()?;
-    std::fs::rename(&tmp, &rec).map_err(io(&rec))?;
-    // the scan
-    let img = render_session_scan(s, cfg);
-    let mut png = Vec::new();
-    image::codecs::png::PngEncoder::new(&mut png)
-        .write_image(
-            img.as_raw(),
-            img.width(),
-            img.height(),
-            image::ExtendedColorType::Rgb8,
-        )
-        .map_err(|e| SessionError::Image(e.to_string()))?;
-    write_bytes_atomic(&dir.join("scan.png"), &png)?;
-    let errors: serde_json::Map<String, serde_json::Value> = s
-        .geometric_errors
-        .iter()
-        .map(|(k, v)| (k.clone(), serde_json::json!(v)))
-        .collect();
-    let json = serde_json::json!({
-        "format": SESSION_FORMAT,
-        "path": cfg.path.as_str(),
-        "seed": cfg.seed,
-        "clock_offset_s": cfg.clock_offset_s,
-        "clock_drift_ppm": cfg.clock_drift_ppm,
-        "counts_at_zero": cfg.counts_at_zero,
-        "counts_per_mm": cfg.counts_per_mm,
-        "pot_noise_counts": cfg.pot_noise_counts,
-        "pencil_stop_mm": cfg.pencil_stop_mm,
-        "draw_duration_s": cfg.draw_duration_s,
-        "dpi": cfg.dpi,
-        "scan_rotation_deg": cfg.scan_rotation_deg,
-        "geometric_errors_deg": errors,
-        "effects": cfg
-            .effects
-            .iter()
-            .map(|e| serde_json::json!({"id": e.id, "values": e.values}))
-            .collect::<Vec<_>>(),
-    });
-    let text = serde_json::to_string_pretty(&json).unwrap_or_default();
-    write_bytes_atomic(&dir.join("session.json"), format!("{text}\n").as_bytes())?;
-    Ok(())
-}
-
-use image::ImageEncoder as _;
-
 #[cfg(test)]
-mod tests {
-    use super::*;
-
-    #[test]
-    fn timeline_is_continuous_and_has_two_dips() {
-        let cfg = SessionConfig::default();
-        let total = session_duration_s(&cfg);
-        let mut prev = timeline(&cfg, 0.0);
-        let mut minima = 0;
-        let mut was_low = false;
-        for k in 1..=(total * 1000.0) as usize {
-            let cur = timeline(&cfg, k as f64 * 1e-3);
-            assert!(
-                (cur.0 - prev.0).abs() < 1e-3 && (cur.1 - prev.1).abs() < 0.05,
-                "{k}"
-            );
-            let low = cur.1 < -0.5 * cfg.dip_mm;
-            if low && !was_low {
-                minima += 1;
-            }
-            was_low = low;
-            prev = cur;
-        }
-        assert_eq!(minima, 2);
-        assert_eq!(timeline(&cfg, total), (1.0, cfg.lift_mm));
-    }
-}
+mod tests;

@@ -29,6 +29,7 @@
 //!   `tool_d*` is always a point in the tip link's frame.
 
 use super::frame::Frame;
+pub use super::frame::{rpy_matrix, rpy_of};
 use nalgebra::{Matrix3, Rotation3, Vector3};
 
 use super::error::UrdfError;
@@ -81,29 +82,6 @@ pub fn param_stem(joint_name: &str) -> String {
             }
         })
         .collect()
-}
-
-/// `Rz(y) Ry(p) Rx(r)` of URDF `rpy = [r, p, y]` (rad).
-pub fn rpy_matrix(rpy_rad: [f64; 3]) -> Matrix3<f64> {
-    let [r, p, y] = rpy_rad;
-    *(Rotation3::from_axis_angle(&Vector3::z_axis(), y)
-        * Rotation3::from_axis_angle(&Vector3::y_axis(), p)
-        * Rotation3::from_axis_angle(&Vector3::x_axis(), r))
-    .matrix()
-}
-
-/// URDF `rpy` (rad) of a rotation matrix: `R = Rz(y) Ry(p) Rx(r)`, `p` in `[-pi/2, pi/2]`; at
-/// gimbal lock (`cos p < 1e-12`) `r = 0`. Near gimbal lock the angles are exact to about
-/// `1e-16 / cos p` rad each, and the recomposed matrix to a few 1e-12.
-pub fn rpy_of(m: &Matrix3<f64>) -> [f64; 3] {
-    let cp = m[(0, 0)].hypot(m[(1, 0)]);
-    let p = (-m[(2, 0)]).atan2(cp);
-    if cp < 1e-12 {
-        // R = Rz(y) Ry(+-pi/2): the first two rows of column 1 are (-sin y, cos y).
-        [0.0, p, (-m[(0, 1)]).atan2(m[(1, 1)])]
-    } else {
-        [m[(2, 1)].atan2(m[(2, 2)]), p, m[(1, 0)].atan2(m[(0, 0)])]
-    }
 }
 
 struct Emitter<'u> {

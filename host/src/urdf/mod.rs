@@ -12,11 +12,13 @@ pub mod export;
 mod frame;
 pub mod import;
 pub mod parse;
+pub mod rewrite;
 
 pub use error::UrdfError;
-pub use export::{model_into_urdf, model_to_urdf, Exported, Origin, OriginChange};
+pub use export::{model_to_urdf, Exported, Origin, OriginChange};
 pub use import::{
     import_chain, import_chain_with_masses, param_stem, rpy_matrix, rpy_of, widen_limits,
     ImportOptions, Imported,
 };
 pub use parse::{JointType, LinkInertial, Urdf, UrdfJoint};
+pub use rewrite::model_into_urdf;

@@ -1,0 +1,45 @@
+//! What the sections of the page share, importing none of them: a chart drawn as a page
+//! [`Figure`], HTML escaping, and a figure's HTML (`<figure>` with inline SVG and caption).
+
+use std::fmt::Write as _;
+
+use super::Figure;
+use crate::plot::{svg_string, Chart};
+
+/// `chart` as a [`Figure`] with `caption`; a chart that cannot be drawn becomes a note.
+pub(crate) fn figure<C: Chart>(
+    caption: String,
+    chart: &C,
+    notes: &mut Vec<String>,
+) -> Option<Figure> {
+    match svg_string(chart) {
+        Ok(svg) => Some(Figure { caption, svg }),
+        Err(e) => {
+            notes.push(format!("figure {:?} skipped: {e}", chart.title()));
+            None
+        }
+    }
+}
+
+/// `text` with `& < > " '` escaped for HTML text and attribute values.
+pub fn escape(text: &str) -> String {
+    crate::io::markup::escape(text, crate::io::markup::Blanks::Literal)
+}
+
+/// Strips an XML declaration, so the SVG can be inlined in HTML.
+fn inline_svg(svg: &str) -> &str {
+    match svg.find("<svg") {
+        Some(i) => &svg[i..],
+        None => svg,
+    }
+}
+
+/// Appends `f` as a `<figure>` (inline SVG and caption).
+pub(crate) fn render_figure(s: &mut String, f: &Figure) {
+    let _ = writeln!(
+        s,
+        "<figure>{}<figcaption>{}</figcaption></figure>",
+        inline_svg(&f.svg),
+        escape(&f.caption)
+    );
+}
