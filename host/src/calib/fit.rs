@@ -186,65 +186,52 @@ pub fn fit_parameters(
 }
 
 /// What a fit does not determine keeps its input value: a parameter fixed by a later analysis
-/// than the one that first moved it is put back to its value in `start`, and a fitted one whose
-/// sigma is infinite at the solution (a direction the start did not show as null) is fixed at
-/// its input too; the others are refitted from there, until nothing moves.
+/// than the one that first moved it is put back to its value in `start`, and where a fitted
+/// parameter's sigma is infinite at the solution (a direction the start did not show as null)
+/// the analysis there fixes the ones that direction needs (the later in preference order);
+/// the others are refitted from there, until nothing moves.
 fn keep_what_is_not_determined(
     start: &Model,
     mut fit: Fit,
     on: &PositionFit<'_>,
 ) -> Result<Fit, CalibError> {
     for _ in 0..MAX_RANK_REFITS {
-        let undetermined: Vec<usize> = fit
-            .fitted
-            .iter()
-            .zip(&fit.sigma)
-            .filter(|(_, s)| !s.is_finite())
-            .map(|(p, _)| *p)
-            .collect();
+        let undetermined = fit.sigma.iter().any(|s| !s.is_finite());
         let moved: Vec<usize> = fit
             .fixed
             .iter()
             .copied()
             .filter(|&p| fit.model.params()[p].value != start.params()[p].value)
             .collect();
-        if undetermined.is_empty() && moved.is_empty() {
+        if !undetermined && moved.is_empty() {
             break;
         }
         let mut from = fit.model.clone();
-        for &p in undetermined.iter().chain(&moved) {
+        for &p in &moved {
             from.set_param_at(p, start.params()[p].value)?;
         }
-        let keep: Vec<usize> = fit
-            .fitted
+        // the fitted ones in preference order, analysed again where the fit stands
+        let keep: Vec<usize> = on
+            .selection
             .iter()
             .copied()
-            .filter(|p| !undetermined.contains(p))
+            .filter(|p| fit.fitted.contains(p))
             .collect();
-        let names: Vec<String> = undetermined
-            .iter()
-            .map(|&p| {
-                format!(
-                    "{} (not determined at the solution)",
-                    start.params()[p].name
-                )
-            })
-            .collect();
-        let next = if keep.is_empty() {
-            return Err(CalibError::NothingToFit);
-        } else {
-            PositionFit {
-                selection: &keep,
-                ..*on
-            }
-            .once(&from)?
+        let next = match (PositionFit {
+            selection: &keep,
+            ..*on
+        })
+        .once(&from)
+        {
+            Ok(next) => next,
+            Err(CalibError::NothingToFit) => break,
+            Err(e) => return Err(e),
         };
         let mut fixed: Vec<usize> = fit.fixed.clone();
-        fixed.extend(undetermined.iter().chain(&next.fixed));
+        fixed.extend(&next.fixed);
         fixed.sort_by_key(|p| on.selection.iter().position(|s| s == p));
         fixed.dedup();
         let mut unidentifiable = fit.unidentifiable.clone();
-        unidentifiable.extend(names);
         unidentifiable.extend(next.unidentifiable.iter().cloned());
         fit = Fit {
             fixed,

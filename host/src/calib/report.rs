@@ -36,7 +36,25 @@ impl Serialize for NamedValues {
     }
 }
 
+/// `{name: value}` with a value that is not a finite number written `null`.
+fn finite_or_null<S: Serializer>(v: &NamedValues, s: S) -> Result<S::Ok, S::Error> {
+    let mut m = s.serialize_map(Some(v.0.len()))?;
+    for (k, x) in &v.0 {
+        m.serialize_entry(k, &x.is_finite().then_some(*x))?;
+    }
+    m.end()
+}
+
 impl NamedValues {
+    /// The names of the values that are not finite numbers.
+    pub fn not_finite(&self) -> Vec<String> {
+        self.0
+            .iter()
+            .filter(|(_, v)| !v.is_finite())
+            .map(|(k, _)| k.clone())
+            .collect()
+    }
+
     /// Whether there is no value.
     pub fn is_empty(&self) -> bool {
         self.0.is_empty()
@@ -76,7 +94,9 @@ pub struct CalibrateReport {
     pub condition_number: f64,
     /// Standard calibration for comparison (table 4.5 "conventional calibration").
     pub standard: StandardSummary,
-    /// One standard deviation of each fitted parameter (file units), `sigma^2 (J^T J)^-1`.
+    /// One standard deviation of each fitted parameter (file units), `sigma^2 (J^T J)^-1`;
+    /// `null` for one the poses do not determine (an infinite sigma).
+    #[serde(serialize_with = "finite_or_null")]
     pub sigma: NamedValues,
     /// Parameters kept at their nominal value because they are not identifiable.
     pub fixed: Vec<String>,
@@ -165,5 +185,13 @@ mod tests {
         // Model order is kept.
         assert!(text.find("\"dth2\"").unwrap() < text.find("\"al2\"").unwrap());
         assert_eq!(v["parameters"]["al2"], 90.01);
+        assert!(r.sigma.not_finite().is_empty());
+        // a sigma the poses do not determine is null, and the document is still written
+        let mut r = r;
+        r.sigma.0.push(("al2".into(), f64::INFINITY));
+        assert_eq!(r.sigma.not_finite(), ["al2"]);
+        let v: serde_json::Value = serde_json::to_value(&r).unwrap();
+        assert!(v["sigma"]["al2"].is_null() && v["sigma"]["dth2"] == 0.001);
+        crate::io::finite_json::check_json(&r).unwrap();
     }
 }

@@ -190,7 +190,7 @@ pub fn run(args: Args) -> Result<(), CliError> {
         args.validate.as_deref(),
     ));
     outcome.report.large_changes = large_changes(&model, &outcome.model);
-    let write_model = outcome.report.large_changes.is_empty() || args.allow_large_changes;
+    let write_model = writes_model(&outcome.report, &args);
     if let Some(path) = &args.json {
         rigctl::io::atomic::write_json_atomic(path, &outcome.report)?;
     }
@@ -394,7 +394,7 @@ fn run_samples(args: &Args, samples: &std::path::Path) -> Result<(), CliError> {
     let (mut outcome, rejected) = (g.outcome, g.rejected);
     no_redundancy(samples, data.n_residuals(), outcome.report.rank)?;
     outcome.report.large_changes = large_changes(&model, &outcome.model);
-    let write_model = outcome.report.large_changes.is_empty() || args.allow_large_changes;
+    let write_model = writes_model(&outcome.report, args);
     if let Some(path) = &args.json {
         rigctl::io::atomic::write_json_atomic(path, &outcome.report)?;
     }
@@ -429,12 +429,28 @@ fn run_samples(args: &Args, samples: &std::path::Path) -> Result<(), CliError> {
     not_converged(&outcome.report)
 }
 
-/// Exit 1 when the calibration moved the robot's geometry further than a real arm's errors
-/// (the model not written), unless `--allow-large-changes` (then said on stderr).
+/// Whether `--out` is written: not when a fitted parameter is not determined (an infinite
+/// sigma), nor when the robot's geometry moved beyond a real arm's errors without
+/// `--allow-large-changes`.
+fn writes_model(r: &rigctl::calib::report::CalibrateReport, args: &Args) -> bool {
+    r.sigma.not_finite().is_empty() && (r.large_changes.is_empty() || args.allow_large_changes)
+}
+
+/// Exit 1 when a fitted parameter is not determined (its sigma infinite: the JSON has `null`),
+/// or when the calibration moved the robot's geometry further than a real arm's errors, unless
+/// `--allow-large-changes` (then said on stderr); in both cases no model was written.
 fn plausible_changes(
     r: &rigctl::calib::report::CalibrateReport,
     args: &Args,
 ) -> Result<(), CliError> {
+    let undetermined = r.sigma.not_finite();
+    if !undetermined.is_empty() {
+        return Err(CliError::failure(format!(
+            "fitted but not determined by these poses (infinite sigma, `null` in the JSON): {}; \
+             no model was written: leave them out of --params or add poses that move them",
+            undetermined.join(", ")
+        )));
+    }
     if r.large_changes.is_empty() {
         return Ok(());
     }

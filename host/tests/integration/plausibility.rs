@@ -42,6 +42,30 @@ fn s(p: &Path) -> &str {
     p.to_str().unwrap()
 }
 
+/// The TIAGo motion-capture folder and the URDF's arm chain as a model file in `dir`
+/// (`urdf2model`), or `None` when the shared data is absent.
+fn tiago(test: &str, dir: &Path) -> Option<(PathBuf, PathBuf)> {
+    let rel = "data/real/thanhndv212__figaroh-examples/examples/tiago";
+    let urdf = common::shared_file(test, &format!("{rel}/urdf/tiago_48_schunk.urdf"))?;
+    let root = urdf.parent()?.parent()?.to_path_buf();
+    let model = dir.join("tiago.toml");
+    let out = output(&[
+        "urdf2model",
+        "--urdf",
+        s(&urdf),
+        "--base-link",
+        "base_footprint",
+        "--tip",
+        "wrist_ft_tool_link",
+        "--limit-margin-pct",
+        "1",
+        "--out",
+        s(&model),
+    ]);
+    assert!(out.status.success(), "{}", text(&out.stderr));
+    Some((root.join("data/calibration/mocap"), model))
+}
+
 /// `rigctl ARGS` exits 2 with a message naming `file` and containing each of `words`; neither
 /// `--json` nor `--out` (in `dir`) is written.
 fn refused(args: &[&str], dir: &Path, file: &Path, words: &[&str]) {
@@ -123,32 +147,12 @@ fn ur5_points_in_metres_or_inches_and_joints_in_radians_are_refused() {
 
 #[test]
 fn tiago_in_metres_and_radians_read_as_millimetres_and_degrees_is_refused() {
-    let rel = "data/real/thanhndv212__figaroh-examples/examples/tiago";
-    let Some(urdf) = common::shared_file(
-        "plausible_tiago",
-        &format!("{rel}/urdf/tiago_48_schunk.urdf"),
-    ) else {
-        return;
-    };
-    let root = urdf.parent().unwrap().parent().unwrap().to_path_buf();
-    let poses = root.join("data/calibration/mocap/qualisys_2021-11-30_static_postures.csv");
     let dir = tempfile::tempdir().unwrap();
     let d = dir.path();
-    let model = d.join("tiago.toml");
-    let out = output(&[
-        "urdf2model",
-        "--urdf",
-        s(&urdf),
-        "--base-link",
-        "base_footprint",
-        "--tip",
-        "wrist_ft_tool_link",
-        "--limit-margin-pct",
-        "1",
-        "--out",
-        s(&model),
-    ]);
-    assert!(out.status.success(), "{}", text(&out.stderr));
+    let Some((mocap, model)) = tiago("plausible_tiago", d) else {
+        return;
+    };
+    let poses = mocap.join("qualisys_2021-11-30_static_postures.csv");
     let json = d.join("c.json");
     let args = [
         "calibrate",
@@ -283,30 +287,12 @@ fn a_calibration_that_moves_a_link_by_25_mm_is_not_written() {
 /// them).
 #[test]
 fn tiago_kept_parameters_keep_their_input_and_a_wandering_fit_is_refused() {
-    let rel = "data/real/thanhndv212__figaroh-examples/examples/tiago";
-    let Some(urdf) = common::shared_file("tiago_kept", &format!("{rel}/urdf/tiago_48_schunk.urdf"))
-    else {
-        return;
-    };
-    let root = urdf.parent().unwrap().parent().unwrap().to_path_buf();
-    let mocap = root.join("data/calibration/mocap");
     let dir = tempfile::tempdir().unwrap();
     let d = dir.path();
-    let (model, json, out_model) = (d.join("tiago.toml"), d.join("c.json"), d.join("c.toml"));
-    let out = output(&[
-        "urdf2model",
-        "--urdf",
-        s(&urdf),
-        "--base-link",
-        "base_footprint",
-        "--tip",
-        "wrist_ft_tool_link",
-        "--limit-margin-pct",
-        "1",
-        "--out",
-        s(&model),
-    ]);
-    assert!(out.status.success(), "{}", text(&out.stderr));
+    let Some((mocap, model)) = tiago("tiago_kept", d) else {
+        return;
+    };
+    let (json, out_model) = (d.join("c.json"), d.join("c.toml"));
     let cal = mocap.join("qualisys_2021-11-30_static_postures.csv");
     let val = mocap.join("qualisys_2021-11-26_static_postures.csv");
     let out = output(&[

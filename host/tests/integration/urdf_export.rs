@@ -319,6 +319,10 @@ fn tiago_round_trip_keeps_the_urdf_and_matches_pinocchio() {
         "standard",
         "--params",
         "@base,@tool,@offsets,arm_5_joint_x,arm_3_joint_rz,arm_1_joint_rx",
+        // base_rz and arm_1's offset split a turn about the vertical that 37 postures barely
+        // tell apart (+-10 deg each): beyond a real arm's errors, written here only to test the
+        // round trip of whatever model calibrate writes
+        "--allow-large-changes",
         "--out",
         s(&cal),
     ]);
