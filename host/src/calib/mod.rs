@@ -12,12 +12,13 @@
 //! | `helper` | the second core of an identification: a thread for the problem's lifetime that accumulates half of the chunks |
 //! | [`problem`] | joint readings with one full point each (`Poses`, the core of [`MeasuredSet`]), position errors, [`problem::ModelProblem`]: every identification on the tall Jacobian as one least-squares problem (the unknowns of a state and the residual rows of its measurements), the rows of a full position (`put_position_rows`) |
 //! | [`projected`] | identification from partial measurements (projections on known directions, `calibrate --samples`), reached through `calibrate_poses`; the outlier rule around any fit |
-//! | [`fit`] | identifiability + LM + covariance: the one result [`fit::Fit`], the split of a selection ([`fit::Split`]) and its solve ([`fit::solve_split`]) shared by every identification, the rank re-analysed at the solution |
+//! | [`fit`] | identifiability + LM + covariance: the one result [`fit::Fit`] of every identification (`diagnose`'s extended fit included), the split of a selection ([`fit::Split`]) and its solve ([`fit::solve_split`], [`fit::fit_at_normal`]), the rank re-analysed at the solution, what it does not determine kept at its input |
 //! | [`influence`] | influence-based identification (thesis eq. 3.7-3.8) |
 //! | [`calibrate`] | the whole `calibrate` command: selection, methods, report |
 //! | [`measured`] | the one measurement set: joint readings, one or several points per pose, partial projections, times, ids, file lines, approach directions, inertial moments |
 //! | [`general`] | identification with point offsets and joint compliance |
-//! | [`unknown`] | the one `Unknown`, the `Values` of a state named by them, and `Freed` (the unknowns a solver writes) |
+//! | [`unknown`] | the `Values` of a state named by `Unknown`s (declared in [`crate::model::unknown`]) and `Freed` (the unknowns a solver writes) |
+//! | [`plausible`] | plausibility: the registration of a set onto its model before any fit (units, motion), the robot's geometry changes beyond a real arm's errors after it |
 //! | [`error`] | the identification's errors |
 //! | [`outliers`] | gross errors in measured poses: the robust fit-and-flag rule shared by `calibrate` and `diagnose` |
 //! | [`press`] | block-PRESS (leave-one-pose-out) forward selection |
