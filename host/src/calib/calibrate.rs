@@ -6,12 +6,16 @@ use std::str::FromStr;
 use nalgebra::Vector3;
 
 use super::error::CalibError;
-use super::fit::{fit_parameters, Fit};
+use super::fit::fit_parameters_with;
+use super::fit::Fit;
 use super::identifiability::DEFAULT_RTOL;
 use super::influence::{fit_influence, InfluenceConfig};
 use super::lm::LmConfig;
 use super::outliers;
+use super::predict::prediction_sd_mm;
+use super::prior::{PriorMode, PriorScales};
 use super::problem::{error_norms_mm, position_errors, Poses};
+use super::regularise::choose_prior;
 use super::report::{BeforeAfter, CalibrateReport, NamedValues, StandardSummary};
 use super::stats::Stats;
 use crate::model::{Model, ParamKind, KATANA_GEOMETRIC_PARAMS};
@@ -71,6 +75,10 @@ pub struct CalibrateOptions {
     pub influence: InfluenceConfig,
     /// Keep every pose (no gross-error rule, [`super::outliers`]).
     pub keep_outliers: bool,
+    /// The prior of ill-posed sets ([`super::prior`]).
+    pub prior: PriorMode,
+    /// Its scales per kind of parameter.
+    pub prior_scales: PriorScales,
 }
 
 impl Default for CalibrateOptions {
@@ -83,6 +91,8 @@ impl Default for CalibrateOptions {
             rtol: DEFAULT_RTOL,
             influence: InfluenceConfig::default(),
             keep_outliers: false,
+            prior: PriorMode::default(),
+            prior_scales: PriorScales::default(),
         }
     }
 }
@@ -242,6 +252,9 @@ pub(super) fn fit_report(
         outliers: Vec::new(),
         outlier_note: None,
         large_changes: Vec::new(),
+        validation_all: None,
+        extrapolated: Vec::new(),
+        prior: None,
     }
 }
 
@@ -284,19 +297,27 @@ pub fn calibrate(
     // for the standard method, whose residual carries the tilting's steps); the last fit on the
     // kept poses is reused when it is the chosen method's.
     let judge_tilt = nominal.has_tilt();
+    // the prior of an ill-posed set, chosen once on every pose, used by every fit below
+    let prior = choose_prior(
+        nominal,
+        cal,
+        &selection,
+        judge_tilt,
+        &opts.lm,
+        opts.rtol,
+        opts.prior,
+        &opts.prior_scales,
+    )?;
+    let at = prior.at(&opts.prior_scales, nominal);
+    let fit = |poses: &Poses, tilt: bool| {
+        fit_parameters_with(nominal, poses, &selection, tilt, &opts.lm, opts.rtol, at)
+    };
     let mut last: Option<(Vec<usize>, Fit)> = None;
     let trimmed = if opts.keep_outliers || cal.len() < MIN_POSES_FOR_OUTLIERS {
         None
     } else {
         Some(outliers::trim(cal.len(), 3, None, |keep| {
-            let f = fit_parameters(
-                nominal,
-                &cal.subset(keep),
-                &selection,
-                judge_tilt,
-                &opts.lm,
-                opts.rtol,
-            )?;
+            let f = fit(&cal.subset(keep), judge_tilt)?;
             let errors = error_norms_mm(&f.model, cal, judge_tilt)?;
             last = Some((keep.to_vec(), f));
             Ok::<_, CalibError>(errors)
@@ -315,23 +336,23 @@ pub fn calibrate(
         &cal_kept
     };
     // the declared model's fit on the kept poses judges the held-out poses
-    let judge: Option<Model> = last
+    let judge: Option<Fit> = last
         .as_ref()
         .filter(|(k, _)| *k == keep)
-        .map(|(_, f)| f.model.clone());
+        .map(|(_, f)| f.clone());
     let reused = last
         .filter(|(k, _)| *k == keep && judge_tilt == tilt)
         .map(|(_, f)| f);
     let standard = match (&reused, tilt) {
         (Some(f), false) => f.clone(),
-        _ => fit_parameters(nominal, cal, &selection, false, &opts.lm, opts.rtol)?,
+        _ => fit(cal, false)?,
     };
     let chosen: Fit = match opts.method {
         Method::Standard => standard.clone(),
         Method::Tilting if !tilt => standard.clone(),
         Method::Tilting => match reused {
             Some(f) => f,
-            None => fit_parameters(nominal, cal, &selection, true, &opts.lm, opts.rtol)?,
+            None => fit(cal, true)?,
         },
         Method::Influence => {
             // Same identifiable set as the standard fit; the influence iteration on it.
@@ -363,17 +384,16 @@ pub fn calibrate(
     };
     let cal_errors = errs(cal)?;
     // The flagged poses' errors under the final model, and the held-out poses judged by the
-    // calibration's threshold.
+    // calibration's scale and the model's prediction uncertainty at each.
     let chosen_errors =
         |p: &Poses| -> Result<Vec<f64>, CalibError> { Ok(error_norms_mm(&chosen.model, p, tilt)?) };
     let mut outlier_reports = Vec::new();
+    let mut extrapolated = Vec::new();
     let mut val_kept_store = None;
-    if let Some(threshold) = trimmed.as_ref().map(|t| t.threshold_mm) {
+    if let Some(t) = trimmed.as_ref() {
+        let judge_model = judge.as_ref().map_or(&chosen.model, |f| &f.model);
         let judged = |p: &Poses| -> Result<Vec<f64>, CalibError> {
-            match &judge {
-                Some(m) => Ok(error_norms_mm(m, p, judge_tilt)?),
-                None => chosen_errors(p),
-            }
+            Ok(error_norms_mm(judge_model, p, judge_tilt)?)
         };
         if !flagged.is_empty() {
             let all = chosen_errors(cal_all)?;
@@ -383,29 +403,75 @@ pub fn calibrate(
                 &flagged,
                 &all,
                 &judged_all,
-                threshold,
+                t.threshold_mm,
             ));
         }
         if let Some(v) = val {
             let norms = judged(v)?;
-            let (vflag, vthr) = outliers::flag_set_against(&norms, threshold);
+            let judge_fit = judge.as_ref().unwrap_or(&chosen);
+            let prior_rows = at.map(|a| a.on(&judge_fit.fitted));
+            let sd = prediction_sd_mm(
+                judge_fit,
+                cal,
+                v,
+                judge_tilt,
+                t.sigma_mm,
+                prior_rows.as_ref(),
+            )?;
+            // outside the calibration's joint ranges the covariance knows nothing: never a
+            // gross error there
+            let outside = outliers::outside_range(&cal.q_deg, &v.q_deg);
+            let judged_sd: Vec<f64> = sd
+                .iter()
+                .zip(&outside)
+                .map(|(s, o)| if o.is_empty() { *s } else { f64::INFINITY })
+                .collect();
+            let (vflag, thresholds) = outliers::flag_held_out(&norms, &judged_sd, t.sigma_mm);
+            let final_norms = chosen_errors(v)?;
+            // listed: the poses the calibration's scale alone would call gross errors, that
+            // the prediction uncertainty or the joint ranges explain
+            let (plain, _) = outliers::flag_held_out(&norms, &vec![0.0; v.len()], t.sigma_mm);
+            extrapolated = plain
+                .iter()
+                .copied()
+                .filter(|k| vflag.binary_search(k).is_err())
+                .map(|k| outliers::Extrapolated {
+                    file: "val".into(),
+                    line: None,
+                    id: None,
+                    error_mm: final_norms[k],
+                    prediction_sd_mm: sd[k],
+                    outside_joints: outside[k].clone(),
+                    index: k,
+                })
+                .collect();
             if !vflag.is_empty() {
-                let final_norms = chosen_errors(v)?;
-                outlier_reports.extend(outliers::reports(
-                    "val",
+                outlier_reports.extend(outliers::held_out_reports(
                     &vflag,
                     &final_norms,
                     &norms,
-                    vthr,
+                    &thresholds,
+                    &sd,
                 ));
                 val_kept_store = Some(v.subset(&outliers::kept(v.len(), &vflag)));
             }
         }
     }
+    let val_all = val;
     let val = val_kept_store.as_ref().or(val);
     let val_errors = match val {
         Some(v) => errs(v)?,
         None => [Vec::new(), Vec::new(), Vec::new()],
+    };
+    let validation_all = match (val_all, &val_kept_store) {
+        (Some(v), Some(_)) => {
+            let e = errs(v)?;
+            Some(super::report::BeforeAfter {
+                before: super::stats::Stats::from_errors(&e[0]),
+                after: super::stats::Stats::from_errors(&e[2]),
+            })
+        }
+        _ => None,
     };
     let mut report = fit_report(
         &chosen,
@@ -417,6 +483,9 @@ pub fn calibrate(
     );
     report.outliers = outlier_reports;
     report.outlier_note = trimmed.and_then(|t| t.note);
+    report.validation_all = validation_all.or(report.validation);
+    report.extrapolated = extrapolated;
+    report.prior = Some(prior).filter(|p| p.chosen_by != "well_posed");
     Ok(Outcome {
         model: chosen.model,
         tilt,

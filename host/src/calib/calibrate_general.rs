@@ -279,17 +279,21 @@ impl Run<'_> {
         }
         let sets = unknown_sets(nominal, cal, opts, gen)?;
         let tau_cal = torques(nominal, cal, gen.compliance)?;
-        let tau_val = match val {
-            Some(v) => torques(nominal, v, gen.compliance)?,
-            None => PoseTorques::default(),
-        };
         let tilt = opts.method == Method::Tilting && nominal.has_tilt();
         let run = |tilt: bool| {
             let start = GeneralModel::new(nominal.clone(), cal.n_slots(), tilt)?;
             identify(&start, cal, &tau_cal, &sets, opts)
         };
         let (chosen, added) = run(tilt)?;
+        let (chosen, held) = settle(cal, chosen, opts, gen.compliance)?;
         let standard = if tilt { run(false)?.0 } else { chosen.clone() };
+        // the errors with the torques of the model they are reported for (what `fk` on the
+        // written model computes)
+        let tau_cal = torques(&chosen.model.model, cal, gen.compliance)?;
+        let tau_val = match val {
+            Some(v) => torques(&chosen.model.model, v, gen.compliance)?,
+            None => PoseTorques::default(),
+        };
         let mut before = GeneralModel::new(nominal.clone(), cal.n_slots(), false)?;
         for (b, c) in before
             .offsets_mm
@@ -331,6 +335,7 @@ impl Run<'_> {
             val.map(|_| &val_errors),
             tilt,
         );
+        report.unphysical.extend(held);
         for (u, s) in chosen.fitted.iter().zip(&chosen.sigma) {
             if !matches!(u, Unknown::Param(_)) {
                 let name = chosen.model.name(*u, cal);
@@ -396,6 +401,74 @@ impl Run<'_> {
             rejected: p.rejected,
         })
     }
+}
+
+/// Most refits of [`settle`].
+const MAX_SETTLE_REFITS: usize = 4;
+
+/// With compliance: the fit made consistent with its own chain and with the physical bounds
+/// ([`crate::model::effect::bound`], one table for `calibrate` and `diagnose`). The gravity
+/// torques are those of the fitted chain (as `fk` on the written model computes them), not of
+/// the input's, and a compliance fitted below its bound (negative) is held at the bound and
+/// left out of the fitted set; the others are refitted, until nothing changes. Returns the fit
+/// and a line for every value held.
+fn settle(
+    cal: &MeasuredSet,
+    mut fit: GeneralFit,
+    opts: &CalibrateOptions,
+    compliance: bool,
+) -> Result<(GeneralFit, Vec<String>), CalibError> {
+    use crate::model::effect::bound;
+    let mut held = Vec::new();
+    if !compliance {
+        return Ok((fit, held));
+    }
+    for _ in 0..MAX_SETTLE_REFITS {
+        let below: Vec<(Unknown, f64, f64)> = fit
+            .fitted
+            .iter()
+            .zip(&fit.sigma)
+            .filter_map(|(&u, &s)| {
+                let b = bound(u, &fit.model.model)?;
+                b.below(fit.model.value(u)).then_some((u, b.hold, s))
+            })
+            .collect();
+        let mut start = fit.model.clone();
+        for &(u, hold, sigma) in &below {
+            held.push(format!(
+                "{} = {:.4} +- {sigma:.4} fitted below its physical bound: held at {hold} and \
+                 left out of the fit (the term stood in for something the model lacks, e.g. a \
+                 length or the link masses)",
+                start.name(u, cal),
+                start.value(u)
+            ));
+            start.set_value(u, hold)?;
+        }
+        let selection: Vec<Unknown> = fit
+            .fitted
+            .iter()
+            .copied()
+            .filter(|u| !below.iter().any(|b| b.0 == *u))
+            .collect();
+        let tau = torques(&start.model, cal, true)?;
+        let next = fit_general(&start, cal, &tau, &selection, &opts.lm, opts.rtol)?;
+        let moved = (next.rss_mm2 - fit.rss_mm2).abs() > 1e-9 * fit.rss_mm2.max(f64::MIN_POSITIVE);
+        let mut fixed = fit.fixed.clone();
+        fixed.extend(below.iter().map(|b| b.0));
+        fixed.extend(next.fixed.iter().copied());
+        fixed.dedup();
+        let iterations = fit.iterations + next.iterations;
+        fit = GeneralFit {
+            fixed,
+            iterations,
+            converged: fit.converged && next.converged,
+            ..next
+        };
+        if below.is_empty() && !moved {
+            break;
+        }
+    }
+    Ok((fit, held))
 }
 
 /// RMS of the error lengths of every slot (mm).

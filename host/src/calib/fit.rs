@@ -6,8 +6,9 @@ use nalgebra::{DMatrix, DVector};
 use super::accumulate::{normal_equations_with, JointTrig, PositionNormalProblem};
 use super::error::CalibError;
 use super::identifiability::{analyse, scaled_svd, Identifiability};
-use super::lm::{solve, LmConfig};
+use super::lm::{solve, LmConfig, Problem};
 use super::normal::{solve_normal, solve_normal_from, use_normal_equations, NormalReport};
+use super::prior::{Prior, PriorScales, WithPrior};
 use super::problem::{
     param_vector, position_problem, stacked_jacobian, ModelProblem, Poses, Rows, SetUnknowns,
     Unknowns,
@@ -160,12 +161,27 @@ pub fn fit_parameters(
     lm: &LmConfig,
     rtol: f64,
 ) -> Result<Fit, CalibError> {
+    fit_parameters_with(start, poses, selection, tilt, lm, rtol, None)
+}
+
+/// [`fit_parameters`] with a prior toward the values of `prior.center` ([`super::prior`]);
+/// `None`, or a weight of 0, is the plain fit.
+pub fn fit_parameters_with(
+    start: &Model,
+    poses: &Poses,
+    selection: &[usize],
+    tilt: bool,
+    lm: &LmConfig,
+    rtol: f64,
+    prior: Option<PriorAt<'_>>,
+) -> Result<Fit, CalibError> {
     let on = PositionFit {
         poses,
         selection,
         tilt,
         lm,
         rtol,
+        prior: prior.filter(|p| p.weight > 0.0),
     };
     if poses.is_empty() {
         return Err(CalibError::NoPoses);
@@ -255,18 +271,49 @@ pub struct PositionFit<'a> {
     pub tilt: bool,
     pub lm: &'a LmConfig,
     pub rtol: f64,
+    /// A prior on the fitted parameters (solved on the tall Jacobian: ill-posed sets are small).
+    pub prior: Option<PriorAt<'a>>,
+}
+
+/// A prior of an identification: its weight, the scales per kind, and the model whose values
+/// are the prior's centre (the input model, whatever point a refit starts from).
+#[derive(Debug, Clone, Copy)]
+pub struct PriorAt<'a> {
+    pub weight: f64,
+    pub scales: &'a PriorScales,
+    pub center: &'a Model,
+}
+
+impl PriorAt<'_> {
+    /// The prior on the fitted parameters `fitted` (model indices).
+    pub fn on(&self, fitted: &[usize]) -> Prior {
+        Prior {
+            weight: self.weight,
+            x0: param_vector(self.center, fitted),
+            scales: fitted
+                .iter()
+                .map(|&i| self.scales.of(self.center, i))
+                .collect(),
+        }
+    }
 }
 
 impl PositionFit<'_> {
     /// One identification from `start`: the analysis there, then the solve.
     fn once(&self, start: &Model) -> Result<Fit, CalibError> {
-        if use_normal_equations(self.rtol) {
+        if use_normal_equations(self.rtol) && self.prior.is_none() {
             return fit_parameters_normal(start, self);
         }
         let (poses, tilt) = (self.poses, self.tilt);
         let jac0 = stacked_jacobian(start, poses, self.selection, tilt)?;
-        let make = |cols| position_problem(start, poses, cols, tilt);
-        fit_problem(start, self.selection, &jac0, make, self.lm, self.rtol)
+        let split = split_selection(start, self.selection, &jac0, self.rtol)?;
+        let x0 = param_vector(start, &split.fitted);
+        let prior = self.prior.map(|p| p.on(&split.fitted));
+        let problem = position_problem(start, poses, split.fitted.clone(), tilt);
+        Ok(
+            solve_split_with(split, problem, x0, self.lm, self.rtol, prior.as_ref())?
+                .map_model(Unknowns::into_model),
+        )
     }
 
     /// The rank of the selection's Jacobian at `model`.
@@ -409,26 +456,47 @@ fn split_selection(
 /// condition number of the Jacobian there.
 pub fn solve_split<U, S: SetUnknowns, F: Rows<S>>(
     split: Split<U>,
-    mut problem: ModelProblem<S, F>,
+    problem: ModelProblem<S, F>,
     x0: DVector<f64>,
     lm: &LmConfig,
     rtol: f64,
 ) -> Result<Fit<S, U>, CalibError> {
-    let rep = solve(&mut problem, x0, lm).map_err(CalibError::from_lm)?;
+    solve_split_with(split, problem, x0, lm, rtol, None)
+}
+
+/// [`solve_split`] with a prior's rows after the measurements' ([`super::prior`]): the residual
+/// sum of squares and the condition number are those of the measurements; the sigmas are the
+/// posterior ones (`(J^T J + P)^-1`, measurement degrees of freedom).
+pub fn solve_split_with<U, S: SetUnknowns, F: Rows<S>>(
+    split: Split<U>,
+    mut problem: ModelProblem<S, F>,
+    x0: DVector<f64>,
+    lm: &LmConfig,
+    rtol: f64,
+    prior: Option<&Prior>,
+) -> Result<Fit<S, U>, CalibError> {
+    let m = problem.n_residuals();
+    let rep = match prior {
+        Some(p) => solve(&mut WithPrior::new(&mut problem, p), x0, lm),
+        None => solve(&mut problem, x0, lm),
+    }
+    .map_err(CalibError::from_lm)?;
     let mut state = problem.into_state();
     state.set(&rep.x)?;
+    let rss_mm2 = rep.residuals.rows(0, m).norm_squared();
+    let data_jac = rep.jacobian.rows(0, m).into_owned();
     Ok(Fit {
         model: state,
         fitted: split.fitted,
         fixed: split.fixed,
         unidentifiable: split.unidentifiable,
-        sigma: parameter_sigmas(&rep.jacobian, rep.residuals.norm_squared(), rtol),
-        condition_number: analyse(&rep.jacobian, rtol).condition_number,
+        sigma: parameter_sigmas_m(&rep.jacobian, m, rss_mm2, rtol),
+        condition_number: analyse(&data_jac, rtol).condition_number,
         rank: split.rank,
         iterations: rep.iterations,
         converged: rep.termination.converged(),
-        rss_mm2: rep.residuals.norm_squared(),
-        n_residuals: rep.residuals.len(),
+        rss_mm2,
+        n_residuals: m,
     })
 }
 

@@ -9,8 +9,10 @@
 //!
 //! To fix a basis of the null space, one parameter per null direction is chosen to be *fixed*
 //! (kept at its nominal value, removed from the fitted set): greedily the parameter with the
-//! largest remaining null-space component, ties (within 1e-3) going to the **later** column, so
-//! callers list the parameters they would rather keep first (encoder offsets before twists).
+//! **last** column (in the caller's order) whose remaining null-space component is at least
+//! [`PIVOT_SHARE`] of the largest, so callers list the parameters they would rather fit first
+//! (the instrument frame and the tool point before the joint offsets, encoder offsets before
+//! twists) and a confounded set keeps the earlier ones fitted.
 //! The null basis is then reduced so that each vector is 1 on its fixed parameter and 0 on the
 //! other fixed ones; its other members name the combination, e.g. `"dth5+be4"`.
 
@@ -25,6 +27,12 @@ pub const DEFAULT_RTOL: f64 = 1e-4;
 /// A column whose norm is below this fraction of the largest column norm counts as zero (the
 /// parameter has no effect; its entries are round-off).
 pub const ZERO_COLUMN_RTOL: f64 = 1e-10;
+
+/// The fixed member of a null direction is the **last** column (in the caller's preference
+/// order) whose share of the direction is at least this fraction of the largest share: among
+/// confounded parameters the later ones are fixed whenever they take a real part in the
+/// direction, so the earlier ones (the instrument frame, the tool point) are the ones fitted.
+pub const PIVOT_SHARE: f64 = 0.2;
 
 /// A null-space member smaller than this (scaled, relative to the fixed member = 1) is left out
 /// of a combination's name.
@@ -181,7 +189,7 @@ pub fn analyse(jac: &DMatrix<f64>, rtol: f64) -> Identifiability {
             .fold(0.0, f64::max);
         let Some(p) = (0..n)
             .rev()
-            .find(|&i| !pivots.contains(&i) && row_norm(i) >= best * (1.0 - 1e-3))
+            .find(|&i| !pivots.contains(&i) && row_norm(i) >= best * PIVOT_SHARE)
         else {
             break;
         };

@@ -274,6 +274,25 @@ impl MeasuredSet {
             })
     }
 
+    /// The poses of `other` that repeat a pose of this set exactly (the same joint readings and
+    /// the same measured points, bit for bit): `(index in other, index here)`. A real
+    /// measurement never repeats to the last bit; such poses are a copy of the calibration data.
+    pub fn repeats(&self, other: &MeasuredSet) -> Vec<(usize, usize)> {
+        use std::collections::HashMap;
+        let key = |set: &MeasuredSet, k: usize| -> Vec<u64> {
+            let mut v: Vec<u64> = set.poses.q_deg[k].iter().map(|x| x.to_bits()).collect();
+            v.extend(set.poses.xyz_mm[k].iter().map(|x| x.to_bits()));
+            v
+        };
+        let mut here: HashMap<Vec<u64>, usize> = HashMap::new();
+        for k in 0..self.poses.len() {
+            here.entry(key(self, k)).or_insert(k);
+        }
+        (0..other.poses.len())
+            .filter_map(|k| here.get(&key(other, k)).map(|&h| (k, h)))
+            .collect()
+    }
+
     /// Number of measured points.
     pub fn n_points(&self) -> usize {
         self.len() + self.further_mm.iter().map(Vec::len).sum::<usize>()

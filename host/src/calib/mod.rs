@@ -22,6 +22,9 @@
 //! | [`error`] | the identification's errors |
 //! | [`outliers`] | gross errors in measured poses: the robust fit-and-flag rule shared by `calibrate` and `diagnose` |
 //! | [`press`] | block-PRESS (leave-one-pose-out) forward selection |
+//! | [`prior`] | the prior of ill-posed sets: scales per kind, the rows added to a problem, ridge PRESS, the weight's grid |
+//! | [`regularise`] | the prior of an identification on full positions chosen: off on well-posed sets, else by cross-validation |
+//! | [`predict`] | the prediction uncertainty of a fit at poses it was not fitted on (held-out gross errors vs extrapolation) |
 //! | [`calibrate_general`] | `calibrate_poses`, the one library entry of `calibrate` on a [`MeasuredSet`]: the model's terms applied, then partial measurements, one point per pose, or several points, `--compliance`, `--select press` |
 //! | [`samples`] | the pencil rig's partial measurement: a fused sample (`FUSED.csv` row) |
 
@@ -40,9 +43,12 @@ pub mod measured;
 pub mod normal;
 pub mod outliers;
 pub mod plausible;
+pub mod predict;
 pub mod press;
+pub mod prior;
 pub mod problem;
 pub mod projected;
+pub mod regularise;
 pub mod report;
 pub mod samples;
 pub mod stats;

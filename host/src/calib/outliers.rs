@@ -240,6 +240,122 @@ fn threshold_mm_of(errors_mm: &[f64]) -> f64 {
     threshold_mm(robust_sigma_mm(errors_mm, 3), None)
 }
 
+/// A held-out pose the model extrapolates to (the `extrapolated` entries of the `calibrate`
+/// JSON): its prediction uncertainty is larger than the calibration residual. Reported, never
+/// left out.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct Extrapolated {
+    /// `"val"`.
+    pub file: String,
+    /// Line of the pose in its file, when read from a file.
+    pub line: Option<usize>,
+    /// The pose's `id`, when the file has them.
+    pub id: Option<String>,
+    /// The pose's error under the final model, mm.
+    pub error_mm: f64,
+    /// One standard deviation (per coordinate) of the model's prediction at the pose, from the
+    /// fit's covariance, mm.
+    pub prediction_sd_mm: f64,
+    /// The joints (`q6`) whose reading lies outside the calibration poses' range (by more than
+    /// [`RANGE_MARGIN`] of it): what the fit never saw, whatever its covariance says.
+    pub outside_joints: Vec<String>,
+    /// Index of the pose in its set.
+    #[serde(skip)]
+    pub index: usize,
+}
+
+/// Share of a joint's calibration range by which a held-out reading may lie outside it before
+/// the pose counts as extrapolated.
+pub const RANGE_MARGIN: f64 = 0.05;
+
+/// The joints (`q<i>`, 1-based) of every pose of `at` whose reading lies outside the range of
+/// the readings `cal` by more than [`RANGE_MARGIN`] of that range.
+pub fn outside_range(cal: &[Vec<f64>], at: &[Vec<f64>]) -> Vec<Vec<String>> {
+    let nj = cal.first().map_or(0, Vec::len);
+    let range: Vec<(f64, f64)> = (0..nj)
+        .map(|j| {
+            let (lo, hi) = cal
+                .iter()
+                .filter_map(|q| q.get(j))
+                .fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), &v| {
+                    (a.min(v), b.max(v))
+                });
+            let m = RANGE_MARGIN * (hi - lo).max(0.0);
+            (lo - m, hi + m)
+        })
+        .collect();
+    at.iter()
+        .map(|q| {
+            q.iter()
+                .zip(&range)
+                .enumerate()
+                .filter(|(_, (v, (lo, hi)))| *v < lo || *v > hi)
+                .map(|(j, _)| format!("q{}", j + 1))
+                .collect()
+        })
+        .collect()
+}
+
+/// Held-out poses judged with the model's own prediction uncertainty: pose `k` is flagged when
+/// its error norm exceeds [`OUTLIER_SIGMAS`] times `sqrt(s^2 + p_k^2)` (per coordinate), `s` the
+/// larger of the calibration's robust scale `sigma_mm` and this set's own, `p_k` the prediction
+/// standard deviation at the pose (`prediction_sd_mm`), and stands apart from the other poses
+/// (the gap rule on the normalised errors); none when more than [`MAX_OUTLIER_SHARE`] would be.
+/// A pose the fit extrapolates to badly has a large `p_k` and is not a gross error. Returns the
+/// flagged indices and every pose's threshold (mm).
+pub fn flag_held_out(
+    errors_mm: &[f64],
+    prediction_sd_mm: &[f64],
+    sigma_mm: f64,
+) -> (Vec<usize>, Vec<f64>) {
+    let s = sigma_mm.max(robust_sigma_mm(errors_mm, 3));
+    let scale: Vec<f64> = (0..errors_mm.len())
+        .map(|k| {
+            let p = prediction_sd_mm.get(k).copied().unwrap_or(0.0);
+            (s * s + if p.is_finite() { p * p } else { f64::INFINITY }).sqrt()
+        })
+        .collect();
+    let z: Vec<f64> = errors_mm
+        .iter()
+        .zip(&scale)
+        .map(|(e, sc)| if *sc > 0.0 { e / sc } else { *e })
+        .collect();
+    let flagged = beyond_gap(&z, OUTLIER_SIGMAS);
+    let max_flagged = ((MAX_OUTLIER_SHARE * errors_mm.len() as f64).floor() as usize).max(1);
+    let thresholds = scale.iter().map(|sc| OUTLIER_SIGMAS * sc).collect();
+    if flagged.len() > max_flagged {
+        (Vec::new(), thresholds)
+    } else {
+        (flagged, thresholds)
+    }
+}
+
+/// The report entries of held-out poses flagged by [`flag_held_out`].
+pub fn held_out_reports(
+    flagged: &[usize],
+    errors_mm: &[f64],
+    judged_mm: &[f64],
+    thresholds_mm: &[f64],
+    prediction_sd_mm: &[f64],
+) -> Vec<OutlierReport> {
+    flagged
+        .iter()
+        .map(|&k| OutlierReport {
+            file: "val".to_string(),
+            line: None,
+            id: None,
+            error_mm: errors_mm[k],
+            note: format!(
+                "error {:.4} mm > {:.4} mm ({OUTLIER_SIGMAS} sigmas of the calibration residual and \
+                 of the model's prediction uncertainty at this pose, {:.4} mm) and apart from the \
+                 other held-out poses' errors: a gross error",
+                judged_mm[k], thresholds_mm[k], prediction_sd_mm[k]
+            ),
+            index: k,
+        })
+        .collect()
+}
+
 /// The report entries of `flagged` poses of set `file` (`"cal"`, `"val"`): `errors_mm` under the
 /// final model, `judged_mm` under the model that judged them against `threshold_mm`.
 pub fn reports(

@@ -129,6 +129,19 @@ pub struct CalibrateReport {
     /// `--allow-large-changes`. Absent when empty.
     #[serde(skip_serializing_if = "Vec::is_empty")]
     pub large_changes: Vec<super::plausible::LargeChange>,
+    /// Statistics over every held-out pose, the listed gross errors included (FORMATS.md "Gross
+    /// errors in measured poses"; with validation poses only).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub validation_all: Option<BeforeAfter>,
+    /// Held-out poses whose error the calibration residual alone would call a gross error, but
+    /// which the model extrapolates to (a large prediction uncertainty at the pose, or joints
+    /// outside the calibration poses' ranges): reported, kept in the statistics.
+    #[serde(skip_serializing_if = "Vec::is_empty")]
+    pub extrapolated: Vec<super::outliers::Extrapolated>,
+    /// The prior of an ill-posed identification ([`super::regularise`]); absent when none was
+    /// considered.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub prior: Option<super::regularise::PriorChoice>,
 }
 
 #[cfg(test)]
@@ -164,6 +177,9 @@ mod tests {
             outliers: Vec::new(),
             outlier_note: None,
             large_changes: Vec::new(),
+            validation_all: None,
+            extrapolated: Vec::new(),
+            prior: None,
         };
         let text = serde_json::to_string(&r).unwrap();
         let v: serde_json::Value = serde_json::from_str(&text).unwrap();

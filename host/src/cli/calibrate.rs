@@ -105,6 +105,23 @@ pub struct Args {
     /// --out); the output says they were allowed.
     #[arg(long)]
     pub allow_large_changes: bool,
+    /// The prior of ill-posed sets (fewer than 10 measured coordinates per parameter): `auto`
+    /// (the robot's lengths and angles drawn toward their input values with a weight chosen by
+    /// leave-one-pose-out cross-validation; none on well-posed sets), `off`, or a weight.
+    #[arg(
+        long,
+        value_name = "auto|off|WEIGHT",
+        default_value = "auto",
+        conflicts_with = "samples"
+    )]
+    pub prior: rigctl::calib::prior::PriorMode,
+    /// The prior's scales: `length=MM,angle=DEG` (default 1 mm, 0.1 deg).
+    #[arg(
+        long,
+        value_name = "length=MM,angle=DEG",
+        default_value = "length=1,angle=0.1"
+    )]
+    pub prior_scale: rigctl::calib::prior::PriorScales,
 }
 
 /// A relative threshold strictly between 0 and 1 (NaN and infinities refused).
@@ -157,12 +174,17 @@ pub fn run(args: Args) -> Result<(), CliError> {
         Some((v, l)) => (Some(v), Some(l)),
         None => (None, None),
     };
+    if let (Some(v), Some(vp)) = (&val, args.validate.as_deref()) {
+        super::pose_args::check_apart(&cal, v, poses, vp)?;
+    }
     let opts = CalibrateOptions {
         method: args.method,
         params: args.params.clone(),
         base: args.base,
         rtol: args.rtol,
         keep_outliers: args.keep_outliers,
+        prior: args.prior,
+        prior_scales: args.prior_scale,
         ..Default::default()
     };
     let gen = GeneralOptions {
@@ -184,6 +206,13 @@ pub fn run(args: Args) -> Result<(), CliError> {
             l.fill(o);
         }
     }
+    for e in &mut outcome.report.extrapolated {
+        if let Some(l) = val_labels.as_ref() {
+            e.line = l.lines.get(e.index).copied();
+            e.id = l.ids.get(e.index).cloned().flatten();
+        }
+    }
+    notes.push_str(&held_out_lines(&outcome.report));
     notes.push_str(&outlier_lines(
         &outcome.report,
         poses,
@@ -270,6 +299,57 @@ pub(super) fn outlier_lines(
     }
     if let Some(note) = &r.outlier_note {
         let _ = writeln!(s, "gross errors: {note}");
+    }
+    s
+}
+
+/// The held-out figure over every held-out pose when some are listed, the poses the model
+/// extrapolates to, and the prior of an ill-posed set.
+fn held_out_lines(r: &rigctl::calib::report::CalibrateReport) -> String {
+    let mut s = String::new();
+    if let Some(line) = r.prior.as_ref().and_then(|p| p.line()) {
+        let _ = writeln!(s, "{line}");
+    }
+    let listed = r.outliers.iter().filter(|o| o.file == "val").count();
+    if let (Some(all), true) = (&r.validation_all, listed > 0) {
+        let _ = writeln!(
+            s,
+            "held out over all {} poses (the {listed} listed included): mean {:.4} mm, RMS {:.4} mm, max {:.4} mm",
+            all.after.n, all.after.mean_mm, all.after.rms_mm, all.after.max_mm
+        );
+    }
+    if !r.extrapolated.is_empty() {
+        let worst = r
+            .extrapolated
+            .iter()
+            .map(|e| e.prediction_sd_mm)
+            .fold(0.0, f64::max);
+        let outside = r
+            .extrapolated
+            .iter()
+            .filter(|e| !e.outside_joints.is_empty())
+            .count();
+        let _ = writeln!(
+            s,
+            "extrapolated: {} held-out pose(s) with errors beyond the calibration residual's \
+             gross-error threshold lie where the fit extrapolates ({outside} with joints outside \
+             the calibration poses' ranges; prediction sd up to {worst:.3} mm per coordinate; JSON \
+             `extrapolated`): not gross errors, kept in the statistics",
+            r.extrapolated.len()
+        );
+        for e in r
+            .extrapolated
+            .iter()
+            .filter(|e| !e.outside_joints.is_empty())
+        {
+            let _ = writeln!(
+                s,
+                "  held-out line {}: error {:.3} mm, {} outside the calibration range",
+                e.line.map_or_else(|| "?".into(), |l| l.to_string()),
+                e.error_mm,
+                e.outside_joints.join(", ")
+            );
+        }
     }
     s
 }

@@ -118,6 +118,9 @@ pub fn run(args: Args) -> Result<(), CliError> {
         } else {
             let set = MeasuredSet::read_with(path, &spec)?;
             super::pose_args::check_plausible(&model, &set, path)?;
+            if let Some(p) = args.poses.as_deref() {
+                super::pose_args::check_apart(&cal, &set, p, path)?;
+            }
             set
         };
         val = Some(match val {

@@ -40,3 +40,33 @@ pub fn check_plausible(
 ) -> Result<(), rigctl::calib::CalibError> {
     rigctl::calib::plausible::check_set(model, set, &path.display().to_string()).map(|_| ())
 }
+
+/// Refuses held-out poses that repeat calibration poses exactly (a renamed copy of the
+/// calibration file): the held-out numbers would be the calibration numbers.
+pub fn check_apart(
+    cal: &MeasuredSet,
+    val: &MeasuredSet,
+    cal_path: &std::path::Path,
+    val_path: &std::path::Path,
+) -> Result<(), super::CliError> {
+    let repeats = cal.repeats(val);
+    let Some(&(k, h)) = repeats.first() else {
+        return Ok(());
+    };
+    let line = |set: &MeasuredSet, i: usize| {
+        set.lines
+            .as_ref()
+            .and_then(|l| l.get(i))
+            .map_or_else(|| format!("pose {}", i + 1), |l| format!("line {l}"))
+    };
+    Err(super::CliError::bad_input(format!(
+        "{}: {} of {} held-out poses repeat calibration poses exactly ({} = {} {}): the held-out \
+         numbers would be the calibration numbers; give poses measured apart from the calibration",
+        val_path.display(),
+        repeats.len(),
+        val.len(),
+        line(val, k),
+        cal_path.display(),
+        line(cal, h)
+    )))
+}

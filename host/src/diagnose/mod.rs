@@ -51,7 +51,7 @@ pub mod select;
 pub mod stat;
 pub mod verdict;
 
-use crate::calib::fit::Fit;
+use crate::calib::fit::{Fit, Split};
 use crate::calib::outliers::{self, OutlierReport};
 use crate::calib::problem::norms_mm;
 use nalgebra::Vector3;
@@ -174,6 +174,24 @@ pub fn declared_fit(
     ext.tilt = tilt;
     // the residual of the extended model (its own evaluation of every pose)
     let rss_mm2 = ext.errors(cal)?.iter().map(|e| e.norm_squared()).sum();
+    // never worse than the model as given: the geometric fit does not see every term of a model
+    // file (its compliance, say), so it can end above where the input already is; the input is
+    // then the declared fit, unchanged
+    let mut start = ExtModel::new(model.clone());
+    start.tilt = tilt;
+    let start_rss: f64 = start.errors(cal)?.iter().map(|e| e.norm_squared()).sum();
+    if start_rss < rss_mm2 {
+        let split = Split {
+            fitted: Vec::new(),
+            fixed: requested.clone(),
+            unidentifiable: f.unidentifiable.clone(),
+            rank: f.rank,
+        };
+        return Ok((
+            Fit::unfitted(start, split, start_rss, cal.n_residuals()),
+            requested,
+        ));
+    }
     let fit = Fit {
         rss_mm2,
         n_residuals: cal.n_residuals(),

@@ -216,6 +216,9 @@ pub fn no_effect_line(kind: &str) -> &'static str {
         "change_between_sets" => {
             "no effect added: the declared model explains the calibration poses down to the noise; the held-out set differs (verdict below)"
         }
+        "instrument" => {
+            "no effect added: what is left has no structure, and is consistent with a worse instrument than the one stated (verdict below)"
+        }
         _ => "no effect added (no independent floor: verdict below)",
     }
 }

@@ -60,10 +60,17 @@ pub const UNCERTAIN_PREDICTION_RATIO: f64 = 1.2;
 /// path's, whose held-out excess may be another session's noise.
 pub const SERIAL_TAU_MAX: f64 = 1.5;
 
+/// Largest ratio of the final residual to a stated instrument at which a residual without
+/// structure is said to be the instrument's ([`judge`]: verdict `instrument`), not a missing
+/// effect.
+pub const INSTRUMENT_CHECK_MAX_RATIO: f64 = 2.0;
+
 /// The `verdict` object of `diagnose --json` (extra key).
 #[derive(Debug, Clone, PartialEq, Serialize)]
 pub struct Verdict {
-    /// `floor`, `missing_effect`, `overfitting`, `change_between_sets` or `no_floor`.
+    /// `floor`, `missing_effect`, `overfitting`, `change_between_sets`, `no_floor` or
+    /// `instrument` (above the stated instrument by at most [`INSTRUMENT_CHECK_MAX_RATIO`], with
+    /// no structure found: the instrument figure is likely optimistic).
     pub kind: String,
     /// Final calibration residual per coordinate over the floor.
     pub calibration_over_floor: f64,
@@ -295,6 +302,18 @@ pub fn judge(floor: &FloorReport, probe: &ProbeResult, c: Counts) -> Verdict {
     } else {
         "floor"
     };
+    // the instrument figure checked: above a stated instrument by a modest factor, with no
+    // structure that a smooth function of the variables finds, the data say the instrument is
+    // worse than stated rather than that the model lacks something
+    let kind = if kind == "missing_effect"
+        && floor.used == "instrument"
+        && !probe.structured
+        && floor.final_over_floor <= INSTRUMENT_CHECK_MAX_RATIO
+    {
+        "instrument"
+    } else {
+        kind
+    };
     let mut v = Verdict {
         kind: kind.to_string(),
         calibration_over_floor: floor.final_over_floor,
@@ -337,6 +356,16 @@ pub fn sentence(v: &Verdict, floor: &FloorReport) -> String {
     );
     match v.kind.as_str() {
         "floor" => format!("at the floor: {numbers}"),
+        "instrument" => format!(
+            "consistent with an instrument of about {:.4} mm per coordinate (the stated one is {} \
+             mm): the residual is {:.2} x the stated figure, but no smooth function of the joint \
+             angles or the time explains any of it, so the instrument figure is more likely \
+             optimistic than the model short of an effect; check it with repeated poses (measure \
+             some poses twice): {numbers}",
+            floor.residual_mm,
+            floor.instrument_mm.map_or("-".into(), |x| format!("{x}")),
+            v.calibration_over_floor
+        ),
         "missing_effect" if v.calibration_p_value.is_some_and(|p| p < FLOOR_ALPHA) => format!(
             "a missing effect: the model still lacks something the calibration poses already show: {numbers}"
         ),

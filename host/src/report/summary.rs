@@ -382,6 +382,11 @@ pub fn verdict(doc: &Value) -> Option<String> {
                 "Overfitting: the calibration residual is at the floor but the poses left out are not{floor_words}{counts}. Measure more poses or fit fewer parameters."
             ));
         }
+        Some("instrument") => {
+            return Some(format!(
+                "Consistent with a worse instrument than stated{floor_words}: what is left has no structure that a smooth function of the joint angles or the time explains. Check the instrument figure by measuring some poses twice."
+            ));
+        }
         Some("change_between_sets") => {
             return Some(format!(
                 "A change between the sets: the calibration poses and their cross-validation are at the floor, the held-out set is not{floor_words} (drift, another day, another tool mounting or base)."

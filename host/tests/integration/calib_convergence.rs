@@ -10,6 +10,7 @@ use crate::common::record::record;
 use nalgebra::Vector3;
 use rand::{Rng, SeedableRng};
 use rigctl::calib::calibrate::{calibrate, default_selection, CalibrateOptions, Method};
+use rigctl::calib::prior::PriorMode;
 use rigctl::calib::Poses;
 use rigctl::model::{Model, Tilt, Unit};
 use rigctl::urdf::{import_chain, ImportOptions, Urdf};
@@ -71,6 +72,7 @@ fn training_rms(model: &Model, poses: &Poses) -> f64 {
 fn nine_joint_arms_converge_in_one_run() {
     let (mut unknowns, mut ranks, mut conditions) = (Vec::new(), Vec::new(), Vec::new());
     let (mut iterations, mut rms_mm, mut second_rms_mm) = (Vec::new(), Vec::new(), Vec::new());
+    let mut held_out_mm = Vec::new();
     for seed in [3_u64, 17, 29, 41, 53] {
         let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(seed);
         let urdf = Urdf::parse(&nine_joint_urdf(&mut rng), "arm9.urdf").unwrap();
@@ -95,27 +97,68 @@ fn nine_joint_arms_converge_in_one_run() {
                 .set_param_at(i, p.value + rng.gen_range(-size..size))
                 .unwrap();
         }
-        let mut poses = Poses {
-            q_deg: Vec::new(),
-            xyz_mm: Vec::new(),
+        let mut draw = |n: usize| {
+            let mut poses = Poses {
+                q_deg: Vec::new(),
+                xyz_mm: Vec::new(),
+            };
+            for _ in 0..n {
+                let q: Vec<f64> = (0..9).map(|_| rng.gen_range(-70.0..70.0)).collect();
+                let x = truth.position_mm(&q, Tilt::Off).unwrap();
+                let noise = Vector3::new(
+                    rng.gen_range(-0.3..0.3),
+                    rng.gen_range(-0.3..0.3),
+                    rng.gen_range(-0.3..0.3),
+                );
+                poses.q_deg.push(q);
+                poses.xyz_mm.push(x + noise);
+            }
+            poses
         };
-        for _ in 0..40 {
-            let q: Vec<f64> = (0..9).map(|_| rng.gen_range(-70.0..70.0)).collect();
-            let x = truth.position_mm(&q, Tilt::Off).unwrap();
-            let noise = Vector3::new(
-                rng.gen_range(-0.3..0.3),
-                rng.gen_range(-0.3..0.3),
-                rng.gen_range(-0.3..0.3),
-            );
-            poses.q_deg.push(q);
-            poses.xyz_mm.push(x + noise);
-        }
+        let poses = draw(40);
+        let held_out = draw(40);
+        // the convergence of the least-squares fit itself: no prior
         let opts = CalibrateOptions {
             method: Method::Standard,
             base: true,
+            prior: PriorMode::Off,
             ..Default::default()
         };
+        // 120 coordinates for about 40 identifiable parameters: ill-posed, so `auto` chooses a
+        // prior by cross-validation; it must predict the held-out poses no worse
+        let with_prior = calibrate(
+            &nominal,
+            &poses,
+            None,
+            &CalibrateOptions {
+                prior: PriorMode::Auto,
+                ..opts.clone()
+            },
+        )
+        .unwrap();
         let first = calibrate(&nominal, &poses, None, &opts).unwrap();
+        for fit in [&first, &with_prior] {
+            for name in &fit.report.fixed {
+                assert_eq!(
+                    fit.model.param(name),
+                    nominal.param(name),
+                    "seed {seed}: {name} kept but moved"
+                );
+            }
+        }
+        let (h_off, h_prior) = (
+            training_rms(&first.model, &held_out),
+            training_rms(&with_prior.model, &held_out),
+        );
+        println!(
+            "seed {seed}: held out {h_off:.4} mm without prior, {h_prior:.4} mm with the prior ({:?})",
+            with_prior.report.prior.as_ref().map(|p| p.weight)
+        );
+        assert!(
+            h_prior <= 1.05 * h_off,
+            "seed {seed}: the prior predicts worse: {h_prior} vs {h_off} mm"
+        );
+        held_out_mm.push(vec![h_off, h_prior]);
         assert!(
             first.report.converged,
             "seed {seed}: not converged after {} iterations",
@@ -152,4 +195,5 @@ fn nine_joint_arms_converge_in_one_run() {
     record("iterations", iterations);
     record("rms_mm", rms_mm);
     record("second_rms_mm", second_rms_mm);
+    record("held_out_mm_without_and_with_prior", held_out_mm);
 }

@@ -41,6 +41,7 @@ fn normal_fit(start: &Model, poses: &Poses, sel: &[usize], tilt: bool) -> Fit {
         tilt,
         lm: &lm,
         rtol: DEFAULT_RTOL,
+        prior: None,
     };
     fit_parameters_normal(start, &on).unwrap()
 }

@@ -193,8 +193,9 @@ fn four_markers_recover_the_rigid_body_geometry() {
 /// Every identifiable parameter with the base (`calibrate --base` on the URDF model: 37
 /// postures, an ill-conditioned problem) converges in one run: the run says so
 /// (`"converged": true`), and a second run started from its `--out` cannot lower the training
-/// residual. The fit moves the torso far beyond a real arm's errors, so the model is written
-/// only with `--allow-large-changes` (without it: exit 1, `plausibility.rs`).
+/// residual. The least-squares fit itself (`--prior off`: a prior would be centred on each
+/// run's input, so a second run would fit a different problem); the default, with the prior
+/// chosen by cross-validation, is recorded beside it (held out over all 62 postures).
 #[test]
 fn full_identification_converges_in_one_run() {
     let Some((dir, tmp)) = setup("converge") else {
@@ -209,11 +210,24 @@ fn full_identification_converges_in_one_run() {
             "--markers",
             "1",
             "--base",
-            "--allow-large-changes",
+            "--prior",
+            "off",
             "--out",
             first_model.to_str().unwrap(),
         ],
     );
+    let default = calibrate(&dir, &tmp, "full_prior", &["--markers", "1", "--base"]);
+    let all62 =
+        |doc: &serde_json::Value| doc["validation_all"]["after"]["rms_mm"].as_f64().unwrap();
+    println!(
+        "held out over all 62: {:.4} mm without prior, {:.4} mm with the prior (weight {})",
+        all62(&first),
+        all62(&default),
+        default["prior"]["weight"]
+    );
+    record("full_validation_all_mm", all62(&first));
+    record("full_prior_validation_all_mm", all62(&default));
+    record("full_prior_weight", default["prior"]["weight"].clone());
     assert_eq!(first["converged"], serde_json::Value::Bool(true));
     let again = |model: &Path, tag: &str| -> serde_json::Value {
         let json = tmp.join(format!("{tag}.json"));
@@ -229,7 +243,8 @@ fn full_identification_converges_in_one_run() {
             "--markers",
             "1",
             "--base",
-            "--allow-large-changes",
+            "--prior",
+            "off",
             "--poses",
             train.to_str().unwrap(),
             "--json",
