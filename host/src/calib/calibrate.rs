@@ -235,11 +235,12 @@ pub(super) fn fit_report(
         unidentifiable: fit.unidentifiable.clone(),
         condition_number: fit.condition_number,
         standard,
+        // the kept parameters' sigma is `null` (FORMATS.md): NaN here
         sigma: NamedValues(
-            fit.fitted
+            reported
                 .iter()
-                .zip(&fit.sigma)
-                .map(|(&c, &s)| (name(c), s))
+                .map(|&c| (name(c), fit.sigma_of(c)))
+                .map(|(n, s)| (n, if s.is_finite() { s } else { f64::NAN }))
                 .collect(),
         ),
         fixed: fit.fixed.iter().map(|&c| name(c)).collect(),

@@ -513,7 +513,7 @@ fn run_samples(args: &Args, samples: &std::path::Path) -> Result<(), CliError> {
 /// sigma), nor when the robot's geometry moved beyond a real arm's errors without
 /// `--allow-large-changes`.
 fn writes_model(r: &rigctl::calib::report::CalibrateReport, args: &Args) -> bool {
-    r.sigma.not_finite().is_empty() && (r.large_changes.is_empty() || args.allow_large_changes)
+    fitted_not_finite(r).is_empty() && (r.large_changes.is_empty() || args.allow_large_changes)
 }
 
 /// Exit 1 when a fitted parameter is not determined (its sigma infinite: the JSON has `null`),
@@ -523,7 +523,7 @@ fn plausible_changes(
     r: &rigctl::calib::report::CalibrateReport,
     args: &Args,
 ) -> Result<(), CliError> {
-    let undetermined = r.sigma.not_finite();
+    let undetermined = fitted_not_finite(r);
     if !undetermined.is_empty() {
         return Err(CliError::failure(format!(
             "fitted but not determined by these poses (infinite sigma, `null` in the JSON): {}; \
@@ -559,6 +559,18 @@ fn no_redundancy(file: &std::path::Path, measured: usize, rank: usize) -> Result
 }
 
 /// Method, rank, condition, unidentifiable parameters and the parameter table.
+/// Most kept parameters or unidentifiable combinations named in the text (the JSON has all).
+const LISTED_MAX: usize = 6;
+
+/// The fitted parameters whose sigma is not a finite number (the kept ones have `null`).
+fn fitted_not_finite(r: &rigctl::calib::report::CalibrateReport) -> Vec<String> {
+    r.sigma
+        .not_finite()
+        .into_iter()
+        .filter(|n| !r.fixed.contains(n))
+        .collect()
+}
+
 fn report_tail(r: &rigctl::calib::report::CalibrateReport) -> String {
     let mut s = String::new();
     let _ = writeln!(
@@ -575,19 +587,37 @@ fn report_tail(r: &rigctl::calib::report::CalibrateReport) -> String {
         r.iterations,
         if r.converged { "" } else { " (not converged)" }
     );
-    if !r.unidentifiable.is_empty() {
+    if !r.fixed.is_empty() {
+        let fitted = r.parameters.0.len().saturating_sub(r.fixed.len());
         let _ = writeln!(
             s,
-            "unidentifiable: {} (kept nominal: {})",
-            r.unidentifiable.join(", "),
-            r.fixed.join(", ")
+            "{fitted} of {} parameters identified; the other {} kept at their input values{}",
+            r.parameters.0.len(),
+            r.fixed.len(),
+            if r.fixed.len() <= LISTED_MAX {
+                format!(": {}", r.fixed.join(", "))
+            } else {
+                " (JSON `fixed`)".to_string()
+            }
         );
+    }
+    if !r.unidentifiable.is_empty() {
+        if r.unidentifiable.len() <= LISTED_MAX {
+            let _ = writeln!(s, "unidentifiable: {}", r.unidentifiable.join(", "));
+        } else {
+            let _ = writeln!(
+                s,
+                "unidentifiable: {} combinations the poses do not tell apart (JSON `unidentifiable`)",
+                r.unidentifiable.len()
+            );
+        }
     }
     let _ = writeln!(s, "{:<12} {:>14} {:>12}", "parameter", "value", "sigma");
     for (name, v) in r.parameters.0.iter().chain(&r.terms.0) {
         let sig = r
             .sigma
             .get(name)
+            .filter(|_| !r.fixed.contains(name))
             .map_or_else(|| "fixed".to_string(), |x| format!("{x:.6}"));
         let _ = writeln!(s, "{name:<12} {v:>14.6} {sig:>12}");
     }
