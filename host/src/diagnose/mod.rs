@@ -596,6 +596,16 @@ pub fn diagnose(
     // the sets or overfitting, not a structure of this residual)
     unexplained.structured |= verdict.kind == "missing_effect";
     unexplained.add_probe(&probe);
+    if verdict.kind == "missing_effect" {
+        let explained: Vec<(String, f64)> = regs
+            .iter()
+            .map(|r| {
+                let e = explain(&final_cal, r);
+                (e.regressor, e.r2)
+            })
+            .collect();
+        unexplained.add_where_to_look(&explained);
+    }
     let report = DiagnoseReport {
         declared: SetStats {
             calibration: Stats::from_errors(&declared_cal),
@@ -841,5 +851,6 @@ fn unexplained(
         note,
         depends_on: Vec::new(),
         explainable_share: 0.0,
+        depends_on_shares: Vec::new(),
     }
 }

@@ -95,6 +95,11 @@ pub struct Unexplained {
     pub depends_on: Vec<String>,
     /// Share of the residual variance the probe explains out of sample.
     pub explainable_share: f64,
+    /// With a `missing_effect` verdict and no term of the probe accepted: the variables the
+    /// regressor scan ranks highest on the final residual, with the share of it each explains
+    /// in sample (where to look; `depends_on` then names them). Absent otherwise.
+    #[serde(skip_serializing_if = "Vec::is_empty")]
+    pub depends_on_shares: Vec<(String, f64)>,
 }
 
 impl Unexplained {
@@ -106,6 +111,64 @@ impl Unexplained {
         self.structured |= probe.structured;
         self.note.push_str("; probe: ");
         self.note.push_str(&probe.sentence());
+    }
+
+    /// Where to look when the model lacks something and the probe accepted no term: the
+    /// variables of the regressors (`explained`: name and in-sample share of the final
+    /// residual) ranked highest, at most [`WHERE_TO_LOOK`] of them with a share of at least
+    /// [`WHERE_TO_LOOK_MIN_SHARE`], into `depends_on` with their shares.
+    pub fn add_where_to_look(&mut self, explained: &[(String, f64)]) {
+        if !self.depends_on.is_empty() {
+            return;
+        }
+        let mut ranked: Vec<(String, f64)> = explained
+            .iter()
+            .filter_map(|(name, share)| variable_of(name).map(|v| (v, *share)))
+            .filter(|(_, s)| s.is_finite() && *s >= WHERE_TO_LOOK_MIN_SHARE)
+            .collect();
+        ranked.sort_by(|a, b| b.1.total_cmp(&a.1));
+        let mut seen: Vec<(String, f64)> = Vec::new();
+        for (v, s) in ranked {
+            if seen.len() < WHERE_TO_LOOK && !seen.iter().any(|(w, _)| *w == v) {
+                seen.push((v, s));
+            }
+        }
+        if seen.is_empty() {
+            return;
+        }
+        self.note.push_str(&format!(
+            "; where to look: {}",
+            seen.iter()
+                .map(|(v, s)| format!("{v} ({:.0} % of the residual in sample)", 100.0 * s))
+                .collect::<Vec<_>>()
+                .join(", ")
+        ));
+        self.depends_on = seen.iter().map(|(v, _)| v.clone()).collect();
+        self.depends_on_shares = seen;
+    }
+}
+
+/// Most variables named by [`Unexplained::add_where_to_look`].
+pub const WHERE_TO_LOOK: usize = 3;
+/// Smallest in-sample share of the residual a variable must explain to be named.
+pub const WHERE_TO_LOOK_MIN_SHARE: f64 = 0.02;
+
+/// The variable of a regressor's name: `q6` of `sin/cos(2 q6)`, `t` of `t`, `None` for a
+/// regressor of no single variable (a torque, the position).
+fn variable_of(name: &str) -> Option<String> {
+    let tokens: Vec<&str> = name
+        .split(|c: char| !(c.is_ascii_alphanumeric() || c == '_'))
+        .filter(|t| !t.is_empty())
+        .collect();
+    let vars: Vec<&str> = tokens
+        .iter()
+        .copied()
+        .filter(|t| *t == "t" || (t.starts_with('q') && t[1..].parse::<usize>().is_ok()))
+        .collect();
+    match vars.as_slice() {
+        [] => None,
+        [v] => Some((*v).to_string()),
+        [a, b, ..] => Some(format!("{a}:{b}")),
     }
 }
 
@@ -375,5 +438,33 @@ impl DiagnoseReport {
             let _ = writeln!(s, "gross errors: {note}");
         }
         s
+    }
+}
+
+#[cfg(test)]
+mod where_to_look_tests {
+    use super::*;
+
+    #[test]
+    fn names_the_variables_of_the_strongest_regressors() {
+        assert_eq!(variable_of("sin/cos(2 q6)").as_deref(), Some("q6"));
+        assert_eq!(variable_of("t").as_deref(), Some("t"));
+        assert_eq!(variable_of("tau_j2"), None);
+        let mut u = Unexplained {
+            structured: true,
+            note: String::new(),
+            depends_on: Vec::new(),
+            explainable_share: 0.0,
+            depends_on_shares: Vec::new(),
+        };
+        u.add_where_to_look(&[
+            ("q1".into(), 0.01),
+            ("sin/cos(1 q3)".into(), 0.2),
+            ("q3".into(), 0.1),
+            ("tau_j2".into(), 0.5),
+            ("q5".into(), 0.05),
+        ]);
+        assert_eq!(u.depends_on, ["q3", "q5"]);
+        assert!(u.note.contains("where to look: q3 (20 %"), "{}", u.note);
     }
 }

@@ -148,6 +148,14 @@ fn an_effect_not_added_is_a_missing_effect() {
             d.report.table()
         );
         assert!(d.report.table().contains("lacks something"));
+        // where to look: the joint whose scale is off is named, with its share
+        let u = &d.report.unexplained;
+        assert!(
+            u.depends_on.iter().any(|v| v.split(':').any(|x| x == "q2")),
+            "seed {seed}: {:?} {:?}",
+            u.depends_on,
+            u.depends_on_shares
+        );
         calibration.push(d.report.verdict.calibration_over_floor);
         cv.push(d.report.verdict.cv_over_floor);
     }
