@@ -8,6 +8,7 @@ mod calib_markers;
 mod calib_normal;
 mod calib_synthetic;
 mod calib_ur5;
+mod capture_poses;
 mod cli_value_enums;
 mod compensate_line;
 mod compensate_transmission;
