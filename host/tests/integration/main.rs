@@ -25,6 +25,7 @@ mod fusion_session;
 mod gross_errors;
 mod hostile_inputs;
 mod joints_fit;
+mod messages;
 mod model_cli;
 mod model_effects;
 mod model_jacobian;
