@@ -117,22 +117,28 @@ fn median(mut v: Vec<f64>) -> f64 {
     v[v.len() / 2]
 }
 
-/// The instrument's first-marker points with single-sample spikes (a sample far from the
-/// midpoint of its neighbours, more than 10 times the log's median such distance) removed:
-/// for the speed signal only.
+/// The instrument's first-marker points with single-sample spikes removed, for the speed
+/// signal only: a sample farther from the midpoint of its neighbours than 10 times the larger
+/// of the log's median such distance and half the neighbours' distance from each other (so
+/// that neither noise at rest nor fast motion looks like a spike).
 fn despiked(inst: &InstrumentLog) -> Vec<Option<[f64; 3]>> {
     let p: Vec<Option<[f64; 3]>> = inst.points.iter().map(|m| m[0]).collect();
-    let dev = |k: usize| -> Option<f64> {
+    let norm = |v: [f64; 3]| (v[0] * v[0] + v[1] * v[1] + v[2] * v[2]).sqrt();
+    let dev = |k: usize| -> Option<(f64, f64)> {
         let (a, b, c) = (p[k - 1]?, p[k]?, p[k + 1]?);
-        Some((0..3).map(|i| (b[i] - 0.5 * (a[i] + c[i])).powi(2)).sum::<f64>().sqrt())
+        let mid = [0, 1, 2].map(|i| b[i] - 0.5 * (a[i] + c[i]));
+        Some((norm(mid), 0.5 * norm([0, 1, 2].map(|i| c[i] - a[i]))))
     };
-    let devs: Vec<Option<f64>> = (0..p.len())
+    let devs: Vec<Option<(f64, f64)>> = (0..p.len())
         .map(|k| if k == 0 || k + 1 >= p.len() { None } else { dev(k) })
         .collect();
-    let limit = 10.0 * median(devs.iter().flatten().copied().collect()).max(average::MIN_SCATTER_MM);
+    let typical = median(devs.iter().flatten().map(|d| d.0).collect()).max(average::MIN_SCATTER_MM);
     p.iter()
         .zip(&devs)
-        .map(|(&pt, d)| if d.is_some_and(|d| d > limit) { None } else { pt })
+        .map(|(&pt, d)| match d {
+            Some((dev, half)) if *dev > 10.0 * typical.max(*half) => None,
+            _ => pt,
+        })
         .collect()
 }
 
