@@ -34,7 +34,11 @@ pub fn edit_distance(a: &str, b: &str) -> usize {
 
 /// The names `known`, nearest to `name` first (edit distance, ties in their given order),
 /// back-quoted and comma-separated; past `max` of them "and N more".
-pub fn nearest_first<'a>(name: &str, known: impl IntoIterator<Item = &'a str>, max: usize) -> String {
+pub fn nearest_first<'a>(
+    name: &str,
+    known: impl IntoIterator<Item = &'a str>,
+    max: usize,
+) -> String {
     let mut all: Vec<(usize, usize, &str)> = known
         .into_iter()
         .enumerate()
@@ -42,7 +46,11 @@ pub fn nearest_first<'a>(name: &str, known: impl IntoIterator<Item = &'a str>, m
         .collect();
     all.sort();
     all.dedup_by(|a, b| a.2 == b.2);
-    let mut out: Vec<String> = all.iter().take(max).map(|(_, _, k)| format!("`{k}`")).collect();
+    let mut out: Vec<String> = all
+        .iter()
+        .take(max)
+        .map(|(_, _, k)| format!("`{k}`"))
+        .collect();
     if all.len() > max {
         out.push(format!("and {} more", all.len() - max));
     }
@@ -62,6 +70,9 @@ mod tests {
             nearest_first("base_link", links, 3),
             "`base`, `panda_link0`, `panda_link1`, and 2 more"
         );
-        assert_eq!(nearest_first("panda_lnk1", links, 10).split(", ").next(), Some("`panda_link1`"));
+        assert_eq!(
+            nearest_first("panda_lnk1", links, 10).split(", ").next(),
+            Some("`panda_link1`")
+        );
     }
 }

@@ -35,7 +35,12 @@ pub fn robust_mean(points: &[[f64; 3]], k: f64) -> Option<RobustMean> {
         return None;
     }
     let centre = [0, 1, 2].map(|c| median(&mut points.iter().map(|p| p[c]).collect::<Vec<_>>()));
-    let dist = |p: &[f64; 3]| (0..3).map(|c| (p[c] - centre[c]).powi(2)).sum::<f64>().sqrt();
+    let dist = |p: &[f64; 3]| {
+        (0..3)
+            .map(|c| (p[c] - centre[c]).powi(2))
+            .sum::<f64>()
+            .sqrt()
+    };
     let mut d: Vec<f64> = points.iter().map(dist).collect();
     let sigma = (median(&mut d) / CHI3_MEDIAN).max(MIN_SCATTER_MM);
     let kept: Vec<&[f64; 3]> = points.iter().filter(|p| dist(p) <= k * sigma).collect();
@@ -71,7 +76,11 @@ mod tests {
             .map(|k| {
                 let f = f64::from(k);
                 // deterministic noise of about 0.05 mm per coordinate
-                [0.07 * (f * 1.3).sin(), 0.07 * (f * 2.7).cos(), 0.07 * (f * 0.9).sin()]
+                [
+                    0.07 * (f * 1.3).sin(),
+                    0.07 * (f * 2.7).cos(),
+                    0.07 * (f * 0.9).sin(),
+                ]
             })
             .map(|e| [100.0 + e[0], 200.0 + e[1], 300.0 + e[2]])
             .collect();

@@ -160,10 +160,12 @@ fn detect(text: &str) -> Format {
 /// Reads an instrument log.
 pub fn read_instrument(path: &Path, opts: &ReadOptions) -> Result<InstrumentLog, CaptureError> {
     let file = path.display().to_string();
-    let text = crate::io::read::read_text_capped(path, crate::io::read::CAP_TABLE)
-        .map_err(|source| CaptureError::Read {
-            file: file.clone(),
-            source,
+    let text =
+        crate::io::read::read_text_capped(path, crate::io::read::CAP_TABLE).map_err(|source| {
+            CaptureError::Read {
+                file: file.clone(),
+                source,
+            }
         })?;
     parse_instrument(&text, &file, opts)
 }
@@ -224,7 +226,11 @@ fn generic(text: &str, file: &str, opts: &ReadOptions) -> Result<InstrumentLog, 
                 let Some(x) = table.find(&format!("x{k}")) else {
                     break;
                 };
-                cols.push([x, table.need(&format!("y{k}"))?, table.need(&format!("z{k}"))?]);
+                cols.push([
+                    x,
+                    table.need(&format!("y{k}"))?,
+                    table.need(&format!("z{k}"))?,
+                ]);
                 names.push(format!("x{k},y{k},z{k}"));
             }
             if cols.is_empty() {
@@ -291,7 +297,10 @@ mod tests {
         let e = parse_instrument("t,x,y,z\n0,1,2,3\n0,1,2,3\n1,1,2,3\n", "g.csv", &opts())
             .unwrap_err()
             .to_string();
-        assert!(e.contains("g.csv:3") && e.contains("does not increase"), "{e}");
+        assert!(
+            e.contains("g.csv:3") && e.contains("does not increase"),
+            "{e}"
+        );
         let e = parse_instrument("t,x,y,z\n0,1,2,abc\n", "g.csv", &opts())
             .unwrap_err()
             .to_string();

@@ -100,7 +100,11 @@ impl Capture {
         }
         s.sort_by(f64::total_cmp);
         let n = s.len();
-        Some(if n % 2 == 1 { s[n / 2] } else { 0.5 * (s[n / 2 - 1] + s[n / 2]) })
+        Some(if n % 2 == 1 {
+            s[n / 2]
+        } else {
+            0.5 * (s[n / 2 - 1] + s[n / 2])
+        })
     }
 
     /// Whether some standstill gave no pose.
@@ -130,7 +134,13 @@ fn despiked(inst: &InstrumentLog) -> Vec<Option<[f64; 3]>> {
         Some((norm(mid), 0.5 * norm([0, 1, 2].map(|i| c[i] - a[i]))))
     };
     let devs: Vec<Option<(f64, f64)>> = (0..p.len())
-        .map(|k| if k == 0 || k + 1 >= p.len() { None } else { dev(k) })
+        .map(|k| {
+            if k == 0 || k + 1 >= p.len() {
+                None
+            } else {
+                dev(k)
+            }
+        })
         .collect();
     let typical = median(devs.iter().flatten().map(|d| d.0).collect()).max(average::MIN_SCATTER_MM);
     p.iter()
@@ -151,7 +161,10 @@ fn tool_points(model: &Model, joints: &JointLog) -> Result<Vec<Option<[f64; 3]>>
         .map(|(k, q)| {
             let fk = model
                 .fk(q, Tilt::Off)
-                .map_err(|source| CaptureError::Model { sample: k + 1, source })?;
+                .map_err(|source| CaptureError::Model {
+                    sample: k + 1,
+                    source,
+                })?;
             let p = fk.position_mm;
             Ok(Some([p.x, p.y, p.z]))
         })
@@ -182,13 +195,14 @@ fn estimate_offset(
     let coarse_j = Signal::speed(&joints.t_s, &pj, cs, 1, gap_j);
     let fine_i = Signal::speed(&inst.t_s, &pi, fine, span, gap_i);
     let fine_j = Signal::speed(&joints.t_s, &pj, fine, span, gap_j);
-    let e = offset::estimate((&coarse_i, &coarse_j), (&fine_i, &fine_j), range).ok_or_else(|| {
-        CaptureError::Offset(
-            "no shift of the logs overlaps enough motion of both (do they record the same \
+    let e =
+        offset::estimate((&coarse_i, &coarse_j), (&fine_i, &fine_j), range).ok_or_else(|| {
+            CaptureError::Offset(
+                "no shift of the logs overlaps enough motion of both (do they record the same \
              session? give --offset-s when the offset is known)"
-                .into(),
-        )
-    })?;
+                    .into(),
+            )
+        })?;
     if e.correlation < MIN_CORRELATION {
         return Err(CaptureError::Offset(format!(
             "the tool speeds from the joints and from the instrument agree at best with \
@@ -207,7 +221,10 @@ fn check(joints: &JointLog, opts: &Options) -> Result<(), CaptureError> {
         problem,
     };
     if joints.t_s.len() < 3 {
-        return Err(bad(format!("{} samples: a joint log needs many", joints.t_s.len())));
+        return Err(bad(format!(
+            "{} samples: a joint log needs many",
+            joints.t_s.len()
+        )));
     }
     if let Some(k) = joints.t_s.windows(2).position(|w| w[1] <= w[0]) {
         return Err(bad(format!(
@@ -233,10 +250,20 @@ pub fn capture(
     opts: &Options,
 ) -> Result<Capture, CaptureError> {
     check(joints, opts)?;
-    let stills = standstill::find_standstills(&joints.t_s, &joints.q, opts.still_speed, opts.min_still_s);
+    let stills =
+        standstill::find_standstills(&joints.t_s, &joints.q, opts.still_speed, opts.min_still_s);
     let (offset, offset_given) = match opts.offset_s {
-        Some(o) => (OffsetEstimate { offset_s: o, correlation: f64::NAN }, true),
-        None => (estimate_offset(model, joints, inst, opts.offset_range_s)?, false),
+        Some(o) => (
+            OffsetEstimate {
+                offset_s: o,
+                correlation: f64::NAN,
+            },
+            true,
+        ),
+        None => (
+            estimate_offset(model, joints, inst, opts.offset_range_s)?,
+            false,
+        ),
     };
     let n_markers = inst.marker_names.len();
     let valid_total = inst.points.iter().flatten().filter(|p| p.is_some()).count();
@@ -254,7 +281,12 @@ pub fn capture(
     let mut in_windows = 0usize;
     for (k, s) in stills.iter().enumerate() {
         let (a, b) = (s.start_s + opts.trim_s, s.end_s - opts.trim_s);
-        let gap = |reason: String| Gap { standstill: k + 1, start_s: s.start_s, end_s: s.end_s, reason };
+        let gap = |reason: String| Gap {
+            standstill: k + 1,
+            start_s: s.start_s,
+            end_s: s.end_s,
+            reason,
+        };
         let js: Vec<&Vec<f64>> = (s.first..=s.last)
             .filter(|&i| (a..=b).contains(&joints.t_s[i]))
             .map(|i| &joints.q[i])
@@ -297,12 +329,15 @@ pub fn capture(
             continue;
         }
         let nq = js[0].len();
-        let q = (0..nq).map(|j| js.iter().map(|v| v[j]).sum::<f64>() / js.len() as f64).collect();
+        let q = (0..nq)
+            .map(|j| js.iter().map(|v| v[j]).sum::<f64>() / js.len() as f64)
+            .collect();
         let used = means.iter().map(|r| r.used).min().unwrap_or(0);
         let rejected: usize = means.iter().map(|r| r.rejected).sum();
         out.samples_used += means.iter().map(|r| r.used).sum::<usize>();
         out.samples_rejected += rejected;
-        let spread = (means.iter().map(|r| r.spread_mm.powi(2)).sum::<f64>() / n_markers as f64).sqrt();
+        let spread =
+            (means.iter().map(|r| r.spread_mm.powi(2)).sum::<f64>() / n_markers as f64).sqrt();
         out.poses.push(CapturedPose {
             id: format!("s{:03}", k + 1),
             t_s: 0.5 * (a + b),

@@ -30,7 +30,11 @@ impl Signal {
         max_gap_s: f64,
     ) -> Self {
         let (Some(&t0), Some(&t1)) = (t_s.first(), t_s.last()) else {
-            return Self { t0: 0.0, step, v: Vec::new() };
+            return Self {
+                t0: 0.0,
+                step,
+                v: Vec::new(),
+            };
         };
         let n = ((t1 - t0) / step).floor() as usize + 1;
         let mut pos = vec![[f64::NAN; 3]; n];
@@ -41,12 +45,18 @@ impl Signal {
                 k += 1;
             }
             let j = (k + 1).min(t_s.len() - 1);
-            let (Some(a), Some(b)) = (p[k], p[j]) else { continue };
+            let (Some(a), Some(b)) = (p[k], p[j]) else {
+                continue;
+            };
             let dt = t_s[j] - t_s[k];
             if dt > max_gap_s {
                 continue;
             }
-            let w = if dt > 0.0 { ((t - t_s[k]) / dt).clamp(0.0, 1.0) } else { 0.0 };
+            let w = if dt > 0.0 {
+                ((t - t_s[k]) / dt).clamp(0.0, 1.0)
+            } else {
+                0.0
+            };
             *slot = [0, 1, 2].map(|c| a[c] + w * (b[c] - a[c]));
         }
         let m = span_steps.max(1);
@@ -71,7 +81,11 @@ impl Signal {
         }
         let i = x.floor() as usize;
         if i + 1 >= self.v.len() {
-            return if i + 1 == self.v.len() && x == i as f64 { self.v[i] } else { f64::NAN };
+            return if i + 1 == self.v.len() && x == i as f64 {
+                self.v[i]
+            } else {
+                f64::NAN
+            };
         }
         let w = x - i as f64;
         self.v[i] + w * (self.v[i + 1] - self.v[i])
@@ -156,10 +170,7 @@ pub fn estimate(
     let offsets: Vec<f64> = (0..n_fine)
         .map(|k| best_coarse.0 - half + k as f64 * step)
         .collect();
-    let values: Vec<f64> = offsets
-        .iter()
-        .map(|&o| correlation(fi, fj, o).0)
-        .collect();
+    let values: Vec<f64> = offsets.iter().map(|&o| correlation(fi, fj, o).0).collect();
     let (k, &c) = values
         .iter()
         .enumerate()
@@ -203,7 +214,10 @@ mod tests {
             Signal::speed(t, p, step, m, 1.0)
         };
         let e = estimate(
-            (&sig(&ti, &pi, COARSE_STEP_S, 1), &sig(&tj, &pj, COARSE_STEP_S, 1)),
+            (
+                &sig(&ti, &pi, COARSE_STEP_S, 1),
+                &sig(&tj, &pj, COARSE_STEP_S, 1),
+            ),
             (&sig(&ti, &pi, 0.005, 10), &sig(&tj, &pj, 0.005, 10)),
             None,
         )

@@ -94,7 +94,13 @@ mod tests {
             .collect();
         let s = find_standstills(&t, &q, 0.5, 1.0);
         assert_eq!(s.len(), 2, "{s:?}");
-        assert!(s[0].start_s == 0.0 && (s[0].end_s - 2.0).abs() < 0.1, "{s:?}");
-        assert!((s[1].start_s - 3.0).abs() < 0.1 && s[1].end_s == 5.0, "{s:?}");
+        assert!(
+            s[0].start_s == 0.0 && (s[0].end_s - 2.0).abs() < 0.1,
+            "{s:?}"
+        );
+        assert!(
+            (s[1].start_s - 3.0).abs() < 0.1 && s[1].end_s == 5.0,
+            "{s:?}"
+        );
     }
 }

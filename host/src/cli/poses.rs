@@ -77,7 +77,9 @@ fn positive(name: &str, v: f64) -> Result<f64, CliError> {
     if v.is_finite() && v > 0.0 {
         Ok(v)
     } else {
-        Err(CliError::bad_input(format!("{name} {v}: must be a positive number")))
+        Err(CliError::bad_input(format!(
+            "{name} {v}: must be a positive number"
+        )))
     }
 }
 
@@ -92,10 +94,17 @@ fn joint_log(args: &Args, model: &Model) -> Result<JointLog, CliError> {
             )));
         }
         let s = args.joint_log.read_samples(&args.joints, model, false)?;
-        return Ok(JointLog { source, t_s: s.t_s, q: s.q_deg });
+        return Ok(JointLog {
+            source,
+            t_s: s.t_s,
+            q: s.q_deg,
+        });
     }
     let file = read_poses(&args.joints, &args.pose.spec(model, false, 0))?;
-    let mut log = JointLog { source, ..Default::default() };
+    let mut log = JointLog {
+        source,
+        ..Default::default()
+    };
     for p in &file.poses {
         let t = p.t_s.ok_or_else(|| {
             CliError::bad_input(format!(
@@ -118,13 +127,19 @@ fn report(c: &Capture, n_markers: usize) -> Result<(), CliError> {
             c.offset.offset_s, c.offset.correlation
         )
     };
-    outln!("standstills {}, poses {}, {offset}", c.standstills, c.poses.len())?;
+    outln!(
+        "standstills {}, poses {}, {offset}",
+        c.standstills,
+        c.poses.len()
+    )?;
     match c.repeatability_mm() {
-        Some(r) => outln!(
+        Some(r) => {
+            outln!(
             "instrument repeatability {r:.4} mm (median over the poses of the one-sigma spread \
              per coordinate{})",
             if n_markers > 1 { ", RMS over the markers" } else { "" }
-        )?,
+        )?
+        }
         None => outln!("instrument repeatability: no pose")?,
     }
     outln!(
@@ -151,7 +166,10 @@ pub fn run(args: Args) -> Result<(), CliError> {
         trim_s: if args.trim_s.is_finite() && args.trim_s >= 0.0 {
             args.trim_s
         } else {
-            return Err(CliError::bad_input(format!("--trim-s {}: must be >= 0", args.trim_s)));
+            return Err(CliError::bad_input(format!(
+                "--trim-s {}: must be >= 0",
+                args.trim_s
+            )));
         },
         reject_sigma: positive("--reject-sigma", args.reject_sigma)?,
         min_samples: args.min_samples.max(1),
@@ -203,12 +221,17 @@ pub fn run(args: Args) -> Result<(), CliError> {
         format!(
             "clock offset {:.6} s (t of the joint log = instrument time + offset){}",
             c.offset.offset_s,
-            if c.offset_given { ", given" } else { ", estimated" }
+            if c.offset_given {
+                ", given"
+            } else {
+                ", estimated"
+            }
         ),
         format!(
             "t: joint-log time (s); x,y,z: mean of the kept instrument samples (mm); spread_mm: \
              their one-sigma scatter per coordinate; repeatability (median spread) {}",
-            c.repeatability_mm().map_or("-".into(), |r| format!("{r:.6} mm"))
+            c.repeatability_mm()
+                .map_or("-".into(), |r| format!("{r:.6} mm"))
         ),
     ];
     if !c.poses.is_empty() {
@@ -230,7 +253,11 @@ pub fn run(args: Args) -> Result<(), CliError> {
             "{} of {} standstills gave no pose{}",
             c.gaps.len(),
             c.standstills,
-            if c.poses.is_empty() { "; nothing written" } else { "; the others are written" }
+            if c.poses.is_empty() {
+                "; nothing written"
+            } else {
+                "; the others are written"
+            }
         )));
     }
     Ok(())

@@ -208,11 +208,17 @@ fn joint_columns(table: &Table, spec: &PoseSpec) -> Result<Vec<usize>, PoseCsvEr
             .filter(|&i| table.find(&name(i)).is_some())
             .collect()
     } else {
-        (0..).take_while(|&i| table.find(&name(i)).is_some()).collect()
+        (0..)
+            .take_while(|&i| table.find(&name(i)).is_some())
+            .collect()
     };
     if !found.is_empty() && found.len() < spec.n_joints {
         let columns = match by_name {
-            true => found.iter().map(|&i| name(i)).collect::<Vec<_>>().join(", "),
+            true => found
+                .iter()
+                .map(|&i| name(i))
+                .collect::<Vec<_>>()
+                .join(", "),
             false if found.len() == 1 => "q1".into(),
             false => format!("q1..q{}", found.len()),
         };
@@ -277,8 +283,16 @@ fn limit_error(
     let hint = if (min..=max).contains(&in_other) {
         let flag = format!(
             "{},{}",
-            if other.length == LengthUnit::M { "m" } else { "mm" },
-            if other.angle == AngleUnit::Rad { "rad" } else { "deg" }
+            if other.length == LengthUnit::M {
+                "m"
+            } else {
+                "mm"
+            },
+            if other.angle == AngleUnit::Rad {
+                "rad"
+            } else {
+                "deg"
+            }
         );
         format!(
             "; read as {other_name} it is within them: is the file in {other_name}? \

@@ -24,7 +24,10 @@ fn s(p: &Path) -> &str {
 }
 
 fn py(python: &Path, args: &[&str]) {
-    let out = Command::new(python).args(args).output().expect("python runs");
+    let out = Command::new(python)
+        .args(args)
+        .output()
+        .expect("python runs");
     assert!(
         out.status.success(),
         "{}: {}",
@@ -49,23 +52,44 @@ fn rig(args: &[&str]) -> Output {
 /// Numeric rows of a CSV with a header (comment lines skipped), by column name.
 fn table(path: &Path) -> (Vec<String>, Vec<Vec<f64>>) {
     let t = std::fs::read_to_string(path).unwrap();
-    let mut lines = t.lines().filter(|l| !l.starts_with('#') && !l.trim().is_empty());
-    let head: Vec<String> = lines.next().unwrap().split(',').map(str::to_string).collect();
+    let mut lines = t
+        .lines()
+        .filter(|l| !l.starts_with('#') && !l.trim().is_empty());
+    let head: Vec<String> = lines
+        .next()
+        .unwrap()
+        .split(',')
+        .map(str::to_string)
+        .collect();
     let rows = lines
-        .map(|l| l.split(',').map(|c| c.parse::<f64>().unwrap_or(f64::NAN)).collect())
+        .map(|l| {
+            l.split(',')
+                .map(|c| c.parse::<f64>().unwrap_or(f64::NAN))
+                .collect()
+        })
         .collect();
     (head, rows)
 }
 
 fn col(head: &[String], name: &str) -> usize {
-    head.iter().position(|h| h == name).unwrap_or_else(|| panic!("no column {name}"))
+    head.iter()
+        .position(|h| h == name)
+        .unwrap_or_else(|| panic!("no column {name}"))
 }
 
 /// The clock offset a pose file's comment states.
 fn stated_offset(path: &Path) -> f64 {
     let t = std::fs::read_to_string(path).unwrap();
-    let l = t.lines().find(|l| l.starts_with("# clock offset ")).expect("offset comment");
-    l["# clock offset ".len()..].split(' ').next().unwrap().parse().unwrap()
+    let l = t
+        .lines()
+        .find(|l| l.starts_with("# clock offset "))
+        .expect("offset comment");
+    l["# clock offset ".len()..]
+        .split(' ')
+        .next()
+        .unwrap()
+        .parse()
+        .unwrap()
 }
 
 /// Checks a written pose file against the generator's truth; returns the largest point error.
@@ -90,7 +114,10 @@ fn check_poses(dir: &Path, poses: &Path, true_offset: f64, what: &str) -> f64 {
     for (k, r) in rows.iter().enumerate() {
         let t = r[col(&h, "t")];
         let (a, b) = (tq[k][col(&th, "start")], tq[k][col(&th, "end")]);
-        assert!(a < t && t < b, "{what}: pose {k} at {t} s outside its dwell {a}..{b}");
+        assert!(
+            a < t && t < b,
+            "{what}: pose {k} at {t} s outside its dwell {a}..{b}"
+        );
         for j in 1..=5 {
             let name = format!("q{j}");
             let d = (r[col(&h, &name)] - tq[k][col(&th, &name)]).abs();
@@ -109,7 +136,10 @@ fn check_poses(dir: &Path, poses: &Path, true_offset: f64, what: &str) -> f64 {
     spreads.sort_by(f64::total_cmp);
     let repeat = spreads[n / 2];
     eprintln!("{what}: point error max {worst:.4} rms {rms:.4} mm, fewest samples {n_min}, repeatability {repeat:.4} mm");
-    assert!(worst < noise, "{what}: a point {worst} mm from the truth (noise {noise})");
+    assert!(
+        worst < noise,
+        "{what}: a point {worst} mm from the truth (noise {noise})"
+    );
     assert!(
         rms < 3.0 * noise * (3.0 / n_min as f64).sqrt(),
         "{what}: rms {rms} mm over {n_min} samples of {noise} mm noise"
@@ -123,22 +153,44 @@ fn check_poses(dir: &Path, poses: &Path, true_offset: f64, what: &str) -> f64 {
 
 #[test]
 fn poses_from_a_bag_and_a_csv_joint_log_recover_the_session() {
-    let Some(python) = common::python_env("poses_from_a_bag_and_a_csv_joint_log_recover_the_session") else {
+    let Some(python) =
+        common::python_env("poses_from_a_bag_and_a_csv_joint_log_recover_the_session")
+    else {
         return;
     };
     let dir = tempfile::tempdir().unwrap();
     let d = dir.path();
     let gen = common::py_script("capture_session.py");
     let limits = "-160:160,-25:95,-115:115,-105:105,-160:160";
-    py(&python, &[s(&gen), "joints", s(d), "--n", "30", "--seed", "7", "--limits", limits]);
-    let mut fk = vec!["fk".to_string(), "--joints".into(), s(&d.join("fk_in.csv")).into()];
+    py(
+        &python,
+        &[
+            s(&gen),
+            "joints",
+            s(d),
+            "--n",
+            "30",
+            "--seed",
+            "7",
+            "--limits",
+            limits,
+        ],
+    );
+    let mut fk = vec![
+        "fk".to_string(),
+        "--joints".into(),
+        s(&d.join("fk_in.csv")).into(),
+    ];
     for (name, v) in TRUE_ERRORS {
         fk.push("--set".into());
         fk.push(format!("{name}={v}"));
     }
     let truth = rig(&fk.iter().map(String::as_str).collect::<Vec<_>>());
     std::fs::write(d.join("fk_out.csv"), &truth.stdout).unwrap();
-    py(&python, &[s(&gen), "instrument", s(d), s(&d.join("fk_out.csv"))]);
+    py(
+        &python,
+        &[s(&gen), "instrument", s(d), s(&d.join("fk_out.csv"))],
+    );
     let bag = d.join("session_bag");
     py(
         &python,
@@ -161,8 +213,15 @@ fn poses_from_a_bag_and_a_csv_joint_log_recover_the_session() {
     // the bag with the generic tracker CSV
     let from_bag = d.join("poses_bag.csv");
     let out = rig(&[
-        "poses", "--joints", s(&bag), "--joint-names", KATANA_NAMES, "--points",
-        s(&d.join("points.csv")), "--out", s(&from_bag),
+        "poses",
+        "--joints",
+        s(&bag),
+        "--joint-names",
+        KATANA_NAMES,
+        "--points",
+        s(&d.join("points.csv")),
+        "--out",
+        s(&from_bag),
     ]);
     let report = text(&out.stdout);
     eprintln!("{report}");
@@ -174,16 +233,32 @@ fn poses_from_a_bag_and_a_csv_joint_log_recover_the_session() {
     // the controller CSV with the Vicon export (`;`, decimal commas: recognised)
     let from_csv = d.join("poses_csv.csv");
     rig(&[
-        "poses", "--joints", s(&d.join("joints.csv")), "--points",
-        s(&d.join("points_vicon.csv")), "--out", s(&from_csv),
+        "poses",
+        "--joints",
+        s(&d.join("joints.csv")),
+        "--points",
+        s(&d.join("points_vicon.csv")),
+        "--out",
+        s(&from_csv),
     ]);
     let w_csv = check_poses(d, &from_csv, vicon_offset, "CSV + Vicon");
     record("poses_point_error_max_mm", w_bag.max(w_csv));
-    record("poses_offset_error_s", (stated_offset(&from_bag) - offset).abs());
+    record(
+        "poses_offset_error_s",
+        (stated_offset(&from_bag) - offset).abs(),
+    );
 
     // the written poses calibrate back to the robot's errors
     let json = d.join("cal.json");
-    rig(&["calibrate", "--poses", s(&from_bag), "--method", "standard", "--json", s(&json)]);
+    rig(&[
+        "calibrate",
+        "--poses",
+        s(&from_bag),
+        "--method",
+        "standard",
+        "--json",
+        s(&json),
+    ]);
     let cal: serde_json::Value =
         serde_json::from_str(&std::fs::read_to_string(&json).unwrap()).unwrap();
     let after = cal["calibration"]["after"]["mean_mm"].as_f64().unwrap();
@@ -217,12 +292,22 @@ fn a_standstill_without_instrument_samples_is_partial() {
     std::fs::write(d.join("j.csv"), joints).unwrap();
     std::fs::write(d.join("p.csv"), points).unwrap();
     let out = output(&[
-        "poses", "--joints", s(&d.join("j.csv")), "--points", s(&d.join("p.csv")), "--out",
-        s(&d.join("poses.csv")), "--offset-s", "0",
+        "poses",
+        "--joints",
+        s(&d.join("j.csv")),
+        "--points",
+        s(&d.join("p.csv")),
+        "--out",
+        s(&d.join("poses.csv")),
+        "--offset-s",
+        "0",
     ]);
     assert_eq!(out.status.code(), Some(1), "{}", text(&out.stderr));
     let err = text(&out.stderr);
-    assert!(err.contains("standstill 2") && err.contains("no instrument samples"), "{err}");
+    assert!(
+        err.contains("standstill 2") && err.contains("no instrument samples"),
+        "{err}"
+    );
     let (_, rows) = table(&d.join("poses.csv"));
     assert_eq!(rows.len(), 1, "the first pose is written");
 }

@@ -49,19 +49,28 @@ fn a_joint_out_of_limits_is_quoted_in_the_files_unit() {
     let dir = tempfile::tempdir().unwrap();
     let f = write(dir.path(), "deg.csv", joints_csv(",", '.'));
     // a file in degrees declared as radians
-    let err = refused(&rig!(30; "fk", "--joints", f, "--units", "mm,rad"), "deg as rad");
+    let err = refused(
+        &rig!(30; "fk", "--joints", f, "--units", "mm,rad"),
+        "deg as rad",
+    );
     assert!(
         err.contains("column `q1`: joint value -63.5 outside the limits [-2.958"),
         "{err}"
     );
-    assert!(err.contains("] rad; read as deg it is within them"), "{err}");
+    assert!(
+        err.contains("] rad; read as deg it is within them"),
+        "{err}"
+    );
     assert!(err.contains("--units mm,deg"), "{err}");
     // not the converted value (-63.5 rad = -3638.28 deg)
     assert!(!err.contains("3638"), "{err}");
     // a value out of limits in either unit gets no suggestion
     let f = write(dir.path(), "far.csv", "q1,q2,q3,q4,q5\n400,1,1,1,1\n");
     let err = refused(&rig!(30; "fk", "--joints", f), "400 deg");
-    assert!(err.contains("joint value 400 outside the limits [-169.5, 169.5] deg"), "{err}");
+    assert!(
+        err.contains("joint value 400 outside the limits [-169.5, 169.5] deg"),
+        "{err}"
+    );
     assert!(!err.contains("read as"), "{err}");
 }
 
@@ -74,12 +83,18 @@ fn an_unknown_urdf_link_lists_the_links_nearest_first() {
         &rig!(30; "urdf2model", "--urdf", u, "--tip", "link2", "--out", out),
         "typo'd tip",
     );
-    assert!(err.contains("no link `link2`; its links, nearest first: `l2`, `l1`, `base`"), "{err}");
+    assert!(
+        err.contains("no link `link2`; its links, nearest first: `l2`, `l1`, `base`"),
+        "{err}"
+    );
     let err = refused(
         &rig!(30; "urdf2model", "--urdf", u, "--base-link", "base_link", "--tip", "l2", "--out", out),
         "base_link",
     );
-    assert!(err.contains("no link `base_link`; its links, nearest first: `base`,"), "{err}");
+    assert!(
+        err.contains("no link `base_link`; its links, nearest first: `base`,"),
+        "{err}"
+    );
     assert!(!out.exists());
 }
 
@@ -103,11 +118,22 @@ fn a_german_spreadsheet_export_is_read_with_sep_and_decimal_or_named() {
     );
     assert_eq!(got, want);
     // --sep ';' alone on decimal commas names the missing flag
-    let err = refused(&rig!(30; "fk", "--joints", german, "--sep", ";"), "sep only");
+    let err = refused(
+        &rig!(30; "fk", "--joints", german, "--sep", ";"),
+        "sep only",
+    );
     assert!(err.contains("--decimal ','"), "{err}");
     // a `;`-separated instrument log for `poses`
-    let p = write(dir.path(), "p.csv", "t;x;y;z\n0,0;1,5;2,5;3,5\n0,1;1,5;2,5;3,5\n");
-    let j = write(dir.path(), "j.csv", "t,q1,q2,q3,q4,q5\n0,1,2,3,4,5\n0.1,1,2,3,4,5\n0.2,1,2,3,4,5\n");
+    let p = write(
+        dir.path(),
+        "p.csv",
+        "t;x;y;z\n0,0;1,5;2,5;3,5\n0,1;1,5;2,5;3,5\n",
+    );
+    let j = write(
+        dir.path(),
+        "j.csv",
+        "t,q1,q2,q3,q4,q5\n0,1,2,3,4,5\n0.1,1,2,3,4,5\n0.2,1,2,3,4,5\n",
+    );
     let err = refused(
         &rig!(30; "poses", "--joints", j, "--points", p, "--out", dir.path().join("o.csv")),
         "poses",
@@ -124,7 +150,10 @@ fn utf16_is_read_with_a_byte_order_mark_and_named_without() {
     let mut le = vec![0xFF, 0xFE];
     le.extend(text.encode_utf16().flat_map(u16::to_le_bytes));
     let f = write(dir.path(), "utf16.csv", &le);
-    assert_eq!(ok(&rig!(30; "fk", "--joints", f), "UTF-16 LE with BOM"), want);
+    assert_eq!(
+        ok(&rig!(30; "fk", "--joints", f), "UTF-16 LE with BOM"),
+        want
+    );
     let f = write(dir.path(), "nobom.csv", &le[2..]);
     let err = refused(&rig!(30; "fk", "--joints", f), "UTF-16 without BOM");
     assert!(err.contains("UTF-16"), "{err}");

@@ -300,13 +300,19 @@ fn commands(dir: &Path) -> Vec<(&'static str, Vec<OsString>)> {
 /// log (50 Hz, 0.4 s behind) of its tool point: inputs for `poses`.
 fn capture_logs() -> (String, String) {
     let model = katana450(200.0).unwrap();
-    let poses = [[10.0, 20.0, 30.0, 40.0, 50.0], [-30.0, 60.0, -10.0, 0.0, 20.0], [50.0, 40.0, 60.0, -40.0, 0.0]];
+    let poses = [
+        [10.0, 20.0, 30.0, 40.0, 50.0],
+        [-30.0, 60.0, -10.0, 0.0, 20.0],
+        [50.0, 40.0, 60.0, -40.0, 0.0],
+    ];
     let q = |t: f64| -> Vec<f64> {
         let k = ((t / 3.0).floor() as usize).min(2);
         let u = ((t - 3.0 * k as f64 - 2.0) / 1.0).clamp(0.0, 1.0);
         let s = 0.5 - 0.5 * (u * std::f64::consts::PI).cos();
         let b = poses[(k + 1).min(2)];
-        (0..5).map(|j| poses[k][j] + s * (b[j] - poses[k][j])).collect()
+        (0..5)
+            .map(|j| poses[k][j] + s * (b[j] - poses[k][j]))
+            .collect()
     };
     let mut log = String::from("t,q1,q2,q3,q4,q5\n");
     for i in 0..=900 {
@@ -317,7 +323,10 @@ fn capture_logs() -> (String, String) {
     let mut points = String::from("t,x,y,z\n");
     for i in 0..450 {
         let t = f64::from(i) * 0.02;
-        let p = model.fk(&q((t - 0.4).max(0.0)), rigctl::model::Tilt::Off).unwrap().position_mm;
+        let p = model
+            .fk(&q((t - 0.4).max(0.0)), rigctl::model::Tilt::Off)
+            .unwrap()
+            .position_mm;
         points.push_str(&format!("{t:.3},{:.4},{:.4},{:.4}\n", p.x, p.y, p.z));
     }
     (log, points)

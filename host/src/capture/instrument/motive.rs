@@ -29,7 +29,10 @@ pub(super) fn parse(
         .ok_or_else(|| err(1, "no header row `Frame,Time (Seconds),...`".into()))?;
     let d = detect_dialect(opts, lines[head_at].1, lines.get(head_at + 1).map(|l| l.1));
     let split = |l: &str| -> Vec<String> {
-        d.normalize(l).split(',').map(|f| f.trim().to_string()).collect()
+        d.normalize(l)
+            .split(',')
+            .map(|f| f.trim().to_string())
+            .collect()
     };
     // the first line's key,value pairs
     let meta = split(first);
@@ -42,7 +45,12 @@ pub(super) fn parse(
         Some("Meters") => 1000.0,
         Some("Centimeters") => 10.0,
         Some("Millimeters") => 1.0,
-        Some(other) => return Err(err(1, format!("Length Units `{other}` (Meters, Centimeters or Millimeters)"))),
+        Some(other) => {
+            return Err(err(
+                1,
+                format!("Length Units `{other}` (Meters, Centimeters or Millimeters)"),
+            ))
+        }
         None => opts.mm_per_unit,
     };
     let row_named = |label: &str| {
@@ -52,8 +60,12 @@ pub(super) fn parse(
             .map(|(n, l)| (*n, split(l)))
     };
     let (_, types) = row_named("Type").ok_or_else(|| err(1, "no row `,Type,...`".into()))?;
-    let (names_line, names) = row_named("Name").ok_or_else(|| err(1, "no row `,Name,...`".into()))?;
-    let kinds = head_at.checked_sub(1).map(|i| split(lines[i].1)).unwrap_or_default();
+    let (names_line, names) =
+        row_named("Name").ok_or_else(|| err(1, "no row `,Name,...`".into()))?;
+    let kinds = head_at
+        .checked_sub(1)
+        .map(|i| split(lines[i].1))
+        .unwrap_or_default();
     let head = split(lines[head_at].1);
     let time_col = head
         .iter()
@@ -75,14 +87,23 @@ pub(super) fn parse(
     } else {
         for want in &opts.markers {
             if !objects.iter().any(|o| &o.0 == want) {
-                let known = crate::error::nearest_first(want, objects.iter().map(|o| o.0.as_str()), 30);
-                return Err(err(names_line, format!("no rigid body or marker `{want}`; its objects, nearest first: {known}")));
+                let known =
+                    crate::error::nearest_first(want, objects.iter().map(|o| o.0.as_str()), 30);
+                return Err(err(
+                    names_line,
+                    format!(
+                        "no rigid body or marker `{want}`; its objects, nearest first: {known}"
+                    ),
+                ));
             }
         }
         objects.retain(|o| opts.markers.contains(&o.0));
     }
     if objects.is_empty() {
-        return Err(err(lines[head_at].0, "no rigid-body or marker Position X,Y,Z columns".into()));
+        return Err(err(
+            lines[head_at].0,
+            "no rigid-body or marker Position X,Y,Z columns".into(),
+        ));
     }
     let mut rows = Vec::new();
     for &(line, l) in &lines[head_at + 1..] {
@@ -103,7 +124,12 @@ pub(super) fn parse(
             .map_err(|p| err(line, p))?;
         rows.push((line, t, pts));
     }
-    assemble(file, Format::Motive, objects.into_iter().map(|o| o.0).collect(), rows)
+    assemble(
+        file,
+        Format::Motive,
+        objects.into_iter().map(|o| o.0).collect(),
+        rows,
+    )
 }
 
 #[cfg(test)]

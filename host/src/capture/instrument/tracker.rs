@@ -36,7 +36,9 @@ fn date(s: &str) -> Option<i64> {
 /// `HH:MM:SS[.fff]`: seconds of the day.
 fn time_of_day(s: &str) -> Option<f64> {
     let p: Vec<&str> = s.split(':').collect();
-    let [h, m, sec] = p.as_slice() else { return None };
+    let [h, m, sec] = p.as_slice() else {
+        return None;
+    };
     let (h, m, sec): (f64, f64, f64) = (h.parse().ok()?, m.parse().ok()?, sec.parse().ok()?);
     (h >= 0.0 && h < 24.0 && m >= 0.0 && m < 60.0 && sec >= 0.0 && sec < 61.0)
         .then_some(h * 3600.0 + m * 60.0 + sec)
@@ -81,17 +83,29 @@ pub(super) fn parse(
         }
         let l = opts.dialect.normalize(l);
         let fields: Vec<&str> = if l.contains(',') {
-            l.split(',').map(str::trim).filter(|f| !f.is_empty()).collect()
+            l.split(',')
+                .map(str::trim)
+                .filter(|f| !f.is_empty())
+                .collect()
         } else {
             l.split_whitespace().collect()
         };
         let numeric = |f: &str| matches!(cell(f), Ok(Some(_)));
         let at = (0..fields.len().saturating_sub(2))
             .find(|&k| numeric(fields[k]) && numeric(fields[k + 1]) && numeric(fields[k + 2]))
-            .ok_or_else(|| err(line, "no X Y Z coordinates (three numbers) on the line".into()))?;
-        let p = [0, 1, 2].map(|c| cell(fields[at + c]).ok().flatten().unwrap_or(0.0) * opts.mm_per_unit);
+            .ok_or_else(|| {
+                err(
+                    line,
+                    "no X Y Z coordinates (three numbers) on the line".into(),
+                )
+            })?;
+        let p = [0, 1, 2]
+            .map(|c| cell(fields[at + c]).ok().flatten().unwrap_or(0.0) * opts.mm_per_unit);
         let t_abs = stamp(&fields[at + 3..]).ok_or_else(|| {
-            err(line, "no time stamp (export the points with Time Stamps on)".into())
+            err(
+                line,
+                "no time stamp (export the points with Time Stamps on)".into(),
+            )
         })?;
         let t = t_abs - *t0.get_or_insert(t_abs);
         rows.push((line, t, vec![Some(p)]));
@@ -114,9 +128,13 @@ mod tests {
         assert_eq!(log.t_s.len(), 3);
         assert!((log.t_s[2] - 0.2).abs() < 1e-6, "{:?}", log.t_s);
         assert_eq!(log.points[1][0], Some([1000.126, -200.5, 300.25]));
-        let e = parse_instrument("// x\nP1, 1, 2, 3\nP2, 1, 2, 3\nP3, 1, 2, 3\n", "sa.txt", &opts())
-            .unwrap_err()
-            .to_string();
+        let e = parse_instrument(
+            "// x\nP1, 1, 2, 3\nP2, 1, 2, 3\nP3, 1, 2, 3\n",
+            "sa.txt",
+            &opts(),
+        )
+        .unwrap_err()
+        .to_string();
         assert!(e.contains("sa.txt:2") && e.contains("Time Stamps"), "{e}");
     }
 

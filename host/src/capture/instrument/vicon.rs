@@ -28,16 +28,29 @@ pub(super) fn parse(
         problem,
     };
     let lines: Vec<(usize, &str)> = text.lines().enumerate().map(|(i, l)| (i + 1, l)).collect();
-    let first = |l: &str| l.split([',', ';', '\t']).next().unwrap_or("").trim().to_string();
+    let first = |l: &str| {
+        l.split([',', ';', '\t'])
+            .next()
+            .unwrap_or("")
+            .trim()
+            .to_string()
+    };
     let start = lines
         .iter()
         .position(|(_, l)| first(l) == "Trajectories")
-        .ok_or_else(|| err(1, "no `Trajectories` section (export the marker trajectories)".into()))?;
+        .ok_or_else(|| {
+            err(
+                1,
+                "no `Trajectories` section (export the marker trajectories)".into(),
+            )
+        })?;
     let need = |i: usize, what: &str| {
-        lines
-            .get(i)
-            .copied()
-            .ok_or_else(|| err(lines.len(), format!("the Trajectories section ends before its {what}")))
+        lines.get(i).copied().ok_or_else(|| {
+            err(
+                lines.len(),
+                format!("the Trajectories section ends before its {what}"),
+            )
+        })
     };
     let (rate_line, rate_text) = need(start + 1, "frame rate")?;
     let (names_line, names_text) = need(start + 2, "marker names")?;
@@ -46,33 +59,60 @@ pub(super) fn parse(
     let data_probe = lines.get(start + 5).map(|(_, l)| *l);
     let d = detect_dialect(opts, head_text, data_probe);
     let split = |l: &str| -> Vec<String> {
-        d.normalize(l).split(',').map(|f| f.trim().to_string()).collect()
+        d.normalize(l)
+            .split(',')
+            .map(|f| f.trim().to_string())
+            .collect()
     };
     let rate_hz = match cell(&split(rate_text)[0]) {
         Ok(Some(r)) if r > 0.0 => r,
-        _ => return Err(err(rate_line, format!("frame rate `{}`: not a positive number", rate_text.trim()))),
+        _ => {
+            return Err(err(
+                rate_line,
+                format!("frame rate `{}`: not a positive number", rate_text.trim()),
+            ))
+        }
     };
     let names = split(names_text);
     let head = split(head_text);
     let units = split(units_text);
     if head.first().map(String::as_str) != Some("Frame") {
-        return Err(err(head_line, "expected the header `Frame,Sub Frame,X,Y,Z,...`".into()));
+        return Err(err(
+            head_line,
+            "expected the header `Frame,Sub Frame,X,Y,Z,...`".into(),
+        ));
     }
     let mut markers: Vec<(String, usize, f64)> = Vec::new();
     for c in 0..head.len().saturating_sub(2) {
         if head[c] == "X" && head[c + 1] == "Y" && head[c + 2] == "Z" {
-            let name = names.get(c).filter(|n| !n.is_empty()).cloned().unwrap_or(format!("marker{}", markers.len() + 1));
+            let name = names
+                .get(c)
+                .filter(|n| !n.is_empty())
+                .cloned()
+                .unwrap_or(format!("marker{}", markers.len() + 1));
             let u = units.get(c).map(String::as_str).unwrap_or("");
-            let mm = unit_mm(u).ok_or_else(|| err(units_line, format!("marker `{name}`: unit `{u}` (mm, cm or m)")))?;
+            let mm = unit_mm(u).ok_or_else(|| {
+                err(
+                    units_line,
+                    format!("marker `{name}`: unit `{u}` (mm, cm or m)"),
+                )
+            })?;
             markers.push((name, c, mm));
         }
     }
     if !opts.markers.is_empty() {
         let short = |n: &str| n.rsplit(':').next().unwrap_or(n).to_string();
         for want in &opts.markers {
-            if !markers.iter().any(|(n, _, _)| n == want || short(n) == *want) {
-                let known = crate::error::nearest_first(want, markers.iter().map(|m| m.0.as_str()), 30);
-                return Err(err(names_line, format!("no marker `{want}`; its markers, nearest first: {known}")));
+            if !markers
+                .iter()
+                .any(|(n, _, _)| n == want || short(n) == *want)
+            {
+                let known =
+                    crate::error::nearest_first(want, markers.iter().map(|m| m.0.as_str()), 30);
+                return Err(err(
+                    names_line,
+                    format!("no marker `{want}`; its markers, nearest first: {known}"),
+                ));
             }
         }
         markers.retain(|(n, _, _)| opts.markers.iter().any(|w| w == n || *w == short(n)));
@@ -97,7 +137,12 @@ pub(super) fn parse(
         }
         rows.push((line, frame / rate_hz, pts));
     }
-    assemble(file, Format::Vicon, markers.into_iter().map(|m| m.0).collect(), rows)
+    assemble(
+        file,
+        Format::Vicon,
+        markers.into_iter().map(|m| m.0).collect(),
+        rows,
+    )
 }
 
 #[cfg(test)]
@@ -121,6 +166,9 @@ mod tests {
         assert_eq!(one.marker_names, ["Arm:SMR"]);
         o.markers = vec!["SMX".into()];
         let e = parse_instrument(text, "v.csv", &o).unwrap_err().to_string();
-        assert!(e.contains("no marker `SMX`") && e.contains("`Arm:SMR`"), "{e}");
+        assert!(
+            e.contains("no marker `SMX`") && e.contains("`Arm:SMR`"),
+            "{e}"
+        );
     }
 }
