@@ -68,7 +68,8 @@ mod tests {
         let links = ["world", "panda_link0", "panda_link1", "panda_hand", "base"];
         assert_eq!(
             nearest_first("base_link", links, 3),
-            "`base`, `panda_link0`, `panda_link1`, and 2 more"
+            // Levenshtein: base_link -> panda_link0 is 4 edits, -> base 5
+            "`panda_link0`, `panda_link1`, `base`, and 2 more"
         );
         assert_eq!(
             nearest_first("panda_lnk1", links, 10).split(", ").next(),

@@ -104,12 +104,15 @@ pub(crate) fn point(cells: [&str; 3], mm: f64) -> Result<Option<[f64; 3]>, Strin
     })
 }
 
+/// One parsed sample: its line, its time (s) and its points (mm, `None` where missing).
+pub(crate) type SampleRow = (usize, f64, Vec<Option<[f64; 3]>>);
+
 /// Builds the log from rows `(line, t, points)`, checking that times increase.
 pub(crate) fn assemble(
     source: &str,
     format: Format,
     marker_names: Vec<String>,
-    rows: Vec<(usize, f64, Vec<Option<[f64; 3]>>)>,
+    rows: Vec<SampleRow>,
 ) -> Result<InstrumentLog, CaptureError> {
     let mut log = InstrumentLog {
         source: source.into(),

@@ -233,7 +233,7 @@ fn check(joints: &JointLog, opts: &Options) -> Result<(), CaptureError> {
             joints.t_s[k + 1]
         )));
     }
-    if !(opts.min_still_s > 2.0 * opts.trim_s) {
+    if opts.min_still_s.is_nan() || opts.min_still_s <= 2.0 * opts.trim_s {
         return Err(CaptureError::Options(format!(
             "--min-still-s {} must be longer than twice --trim-s {} (what is left is averaged)",
             opts.min_still_s, opts.trim_s

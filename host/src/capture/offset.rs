@@ -76,7 +76,7 @@ impl Signal {
     /// The value at time `t` (linear between grid points; NaN outside or next to NaN).
     pub fn at(&self, t: f64) -> f64 {
         let x = (t - self.t0) / self.step;
-        if !(x >= 0.0) {
+        if x.is_nan() || x < 0.0 {
             return f64::NAN;
         }
         let i = x.floor() as usize;
@@ -153,7 +153,7 @@ pub fn estimate(
         lo = lo.max(a);
         hi = hi.min(b);
     }
-    if !(hi >= lo) {
+    if hi.is_nan() || lo.is_nan() || hi < lo {
         return None;
     }
     let n_coarse = ((hi - lo) / ci.step).ceil() as usize + 1;

@@ -131,7 +131,7 @@ fn looks_utf16(chunk: &[u8]) -> bool {
 fn decode_utf16(bytes: &[u8], little: bool) -> std::io::Result<String> {
     let bad = |what: String| std::io::Error::new(std::io::ErrorKind::InvalidData, what);
     let body = &bytes[2..];
-    if body.len() % 2 != 0 {
+    if !body.len().is_multiple_of(2) {
         return Err(bad(format!(
             "UTF-16 text (byte-order mark {}) of an odd number of bytes",
             if little { "LE" } else { "BE" }

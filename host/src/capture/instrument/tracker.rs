@@ -40,7 +40,7 @@ fn time_of_day(s: &str) -> Option<f64> {
         return None;
     };
     let (h, m, sec): (f64, f64, f64) = (h.parse().ok()?, m.parse().ok()?, sec.parse().ok()?);
-    (h >= 0.0 && h < 24.0 && m >= 0.0 && m < 60.0 && sec >= 0.0 && sec < 61.0)
+    ((0.0..24.0).contains(&h) && (0.0..60.0).contains(&m) && (0.0..61.0).contains(&sec))
         .then_some(h * 3600.0 + m * 60.0 + sec)
 }
 
