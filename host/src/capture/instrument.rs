@@ -82,13 +82,21 @@ impl InstrumentLog {
     }
 }
 
-/// One cell: empty or NaN = missing, else a finite number (`Err` otherwise).
+/// Largest magnitude of a coordinate (in any unit, before scaling) or a time: 1e9 (a
+/// kilometre in um, 30 years in s); beyond it a value is out of physical range.
+pub const MAX_ABS_VALUE: f64 = 1e9;
+
+/// One cell: empty or NaN = missing, else a finite number within [`MAX_ABS_VALUE`] (`Err`
+/// otherwise).
 pub(crate) fn cell(s: &str) -> Result<Option<f64>, String> {
     let s = s.trim();
     if s.is_empty() || s.eq_ignore_ascii_case("nan") {
         return Ok(None);
     }
     match s.parse::<f64>() {
+        Ok(v) if v.is_finite() && v.abs() > MAX_ABS_VALUE => {
+            Err(format!("`{s}` is out of physical range"))
+        }
         Ok(v) if v.is_finite() => Ok(Some(v)),
         Ok(_) => Err(format!("`{s}` is infinite")),
         Err(_) => Err(format!("`{s}` is not a number")),
@@ -304,6 +312,10 @@ mod tests {
             e.contains("g.csv:3") && e.contains("does not increase"),
             "{e}"
         );
+        let e = parse_instrument("t,x,y,z\n0,1,2,1e300\n1,1,2,3\n2,1,2,3\n", "g.csv", &opts())
+            .unwrap_err()
+            .to_string();
+        assert!(e.contains("out of physical range"), "{e}");
         let e = parse_instrument("t,x,y,z\n0,1,2,abc\n", "g.csv", &opts())
             .unwrap_err()
             .to_string();
