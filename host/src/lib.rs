@@ -6,6 +6,7 @@
 //! | [`io`] | CSV readers (pose, joints, trace, jig, fused files), atomic output files, interrupt handling |
 //! | [`joints`] | joint-tilting values (clearance, backlash, stiffness) from inclinometer readings (`rigctl joints`) |
 //! | [`sim`] | the virtual rig with known truth (`rigctl simulate`) |
+//! | [`capture`] | `rigctl poses`: poses from a continuous joint log and an instrument log (standstills, clock offset, robust means) |
 //! | [`calib`] | identification (`rigctl calibrate`): solvers, identifiability, statistics |
 //! | [`compensate`] | trajectory correction (`rigctl compensate`, eq. 5.22): joints that put the calibrated, tilting arm on a path |
 //! | [`diagnose`] | `rigctl diagnose`: residual analysis, candidate effects, forward selection |
@@ -21,6 +22,7 @@
 #![forbid(unsafe_code)]
 
 pub mod calib;
+pub mod capture;
 pub mod compensate;
 pub mod daq;
 pub mod diagnose;

@@ -88,14 +88,22 @@ impl JointLogArgs {
         let summary = read_joint_log(path, &spec, |r: JointReading| {
             for (k, (v, [lo, hi])) in r.q.iter().zip(&limits).enumerate() {
                 if !(lo <= v && v <= hi) {
-                    let unit = if prismatic[k] { "mm" } else { "deg" };
+                    // in the bag's own units (JointState: rad, m), the model's beside them
+                    let (unit, file_unit, per) = if prismatic[k] {
+                        ("mm", "m", 1e3)
+                    } else {
+                        ("deg", "rad", 180.0 / std::f64::consts::PI)
+                    };
                     return Err(CliError::bad_input(format!(
-                        "{}: message {} on `{}`: joint `{}` = {v} {unit} is outside its limits \
-                         [{lo}, {hi}] {unit}",
+                        "{}: message {} on `{}`: joint `{}` = {} {file_unit} is outside its \
+                         limits [{}, {}] {file_unit} ({v} {unit}, limits [{lo}, {hi}] {unit})",
                         path.display(),
                         r.message,
                         self.joint_topic,
-                        names[k]
+                        names[k],
+                        v / per,
+                        lo / per,
+                        hi / per
                     )));
                 }
             }
@@ -209,6 +217,57 @@ mod tests {
         assert_eq!(err.exit_code(), 2);
         assert!(err.message.contains("--strict refuses"), "{}", err.message);
         assert!(err.message.contains("CRC"), "{}", err.message);
+    }
+
+    /// A bag value outside the limits is quoted in the bag's unit (rad), the model's beside.
+    #[test]
+    fn a_bag_value_out_of_limits_is_quoted_in_rad() {
+        let dir = tempfile::tempdir().unwrap();
+        let (model, _) = damaged_bag(dir.path());
+        let mut buf = std::io::Cursor::new(Vec::new());
+        let mut w = mcap::WriteOptions::new().create(&mut buf).unwrap();
+        let schema = w
+            .add_schema("sensor_msgs/msg/JointState", "ros2msg", b"")
+            .unwrap();
+        let ch = w
+            .add_channel(schema, "/joint_states", "cdr", &Default::default())
+            .unwrap();
+        let m = JointState {
+            sec: 1,
+            nanosec: 0,
+            frame_id: String::new(),
+            names: vec!["a".into()],
+            position: vec![4.0],
+        };
+        let h = mcap::records::MessageHeader {
+            channel_id: ch,
+            sequence: 0,
+            log_time: 0,
+            publish_time: 0,
+        };
+        w.write_to_known_channel(&h, &encode_joint_state(&m))
+            .unwrap();
+        w.finish().unwrap();
+        drop(w);
+        let path = dir.path().join("far.mcap");
+        std::fs::write(&path, buf.into_inner()).unwrap();
+        let args = JointLogArgs {
+            joint_topic: DEFAULT_JOINT_TOPIC.into(),
+            joint_names: Vec::new(),
+        };
+        let err = args.read_samples(&path, &model, false).unwrap_err();
+        assert_eq!(err.exit_code(), 2);
+        assert!(
+            err.message
+                .contains("joint `a` = 4 rad is outside its limits [-3.14159"),
+            "{}",
+            err.message
+        );
+        assert!(
+            err.message.contains("limits [-180, 180] deg"),
+            "{}",
+            err.message
+        );
     }
 
     #[test]

@@ -17,6 +17,7 @@ pub mod out;
 mod plan;
 mod ports;
 mod pose_args;
+mod poses;
 mod potcal;
 mod record;
 mod report;
@@ -76,6 +77,9 @@ pub enum Command {
     /// Choose the calibration poses that identify the model best (A-optimal by default; G, I or
     /// D with --criterion), or that separate the effects a diagnosis found aliased.
     Plan(plan::Args),
+    /// Measured poses from a continuous joint log (CSV or ROS 2 bag) and an instrument log:
+    /// standstills, clock offset, averaged points and their spread.
+    Poses(poses::Args),
 }
 
 pub fn run(cli: Cli) -> Result<(), CliError> {
@@ -98,6 +102,7 @@ pub fn run(cli: Cli) -> Result<(), CliError> {
         Command::Joints(a) => joints::run(a),
         Command::Compensate(a) => compensate::run(a),
         Command::Plan(a) => plan::run(a),
+        Command::Poses(a) => poses::run(a),
     }
 }
 

@@ -2,6 +2,7 @@
 //! (README "Pose files: extensions"; lengths mm|m, angles deg|rad, converted on reading).
 
 use rigctl::calib::MeasuredSet;
+use rigctl::io::dialect::Dialect;
 use rigctl::io::pose_csv::PoseSpec;
 use rigctl::io::units::Units;
 use rigctl::model::Model;
@@ -13,10 +14,25 @@ pub struct PoseArgs {
     /// and nothing else: LENGTH,ANGLE with LENGTH mm|m and ANGLE deg|rad.
     #[arg(long, value_name = "LENGTH,ANGLE", default_value = "mm,deg", value_parser = parse_units)]
     pub units: Units,
+    /// Field separator of the CSV files read: `,` (default), `;` (a spreadsheet in a German or
+    /// French locale) or `\t`.
+    #[arg(long, value_name = "CHAR", default_value = ",", value_parser = parse_sep)]
+    pub sep: char,
+    /// Decimal mark of the CSV files read: `.` (default) or `,` (with --sep ';').
+    #[arg(long, value_name = "CHAR", default_value = ".", value_parser = parse_decimal)]
+    pub decimal: char,
 }
 
 fn parse_units(s: &str) -> Result<Units, String> {
     s.parse()
+}
+
+fn parse_sep(s: &str) -> Result<char, String> {
+    Dialect::new(s, ".").map(|d| d.sep).map_err(|e| e.0)
+}
+
+fn parse_decimal(s: &str) -> Result<char, String> {
+    Dialect::new(";", s).map(|d| d.decimal).map_err(|e| e.0)
 }
 
 impl PoseArgs {
@@ -26,7 +42,17 @@ impl PoseArgs {
         PoseSpec {
             units: self.units,
             marker,
+            dialect: self.dialect(),
             ..PoseSpec::for_model(model, require_xyz)
+        }
+    }
+
+    /// The separator and decimal mark given (a pair that cannot be used, both `,`, is
+    /// refused when a file is read).
+    pub fn dialect(&self) -> Dialect {
+        Dialect {
+            sep: self.sep,
+            decimal: self.decimal,
         }
     }
 }

@@ -469,6 +469,7 @@ impl FusionError {
                 source,
             },
             TableError::NoHeader { .. } => csv(1, "header", "no header row".into()),
+            TableError::Dialect { line, hint, .. } => csv(line, "header", hint),
             TableError::NoRows { line, .. } => csv(line, "rows", no_rows.into()),
             TableError::MissingColumn { line, column, .. } => {
                 csv(line, &column, "column missing from the header".into())

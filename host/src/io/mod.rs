@@ -4,6 +4,7 @@
 
 pub mod atomic;
 pub mod cdr;
+pub mod dialect;
 pub mod files;
 pub mod finite;
 pub mod finite_json;

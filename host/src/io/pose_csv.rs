@@ -13,8 +13,9 @@
 
 use std::path::Path;
 
+use super::dialect::Dialect;
 use super::table::{Table, TableError};
-use super::units::Units;
+use super::units::{AngleUnit, LengthUnit, Units};
 use crate::error::{Classify, ErrorKind};
 
 /// What a reader expects of a pose file (`PoseSpec::for_model` builds it from a model, in
@@ -36,6 +37,8 @@ pub struct PoseSpec {
     pub units: Units,
     /// The measured point reported as [`Pose::xyz_mm`] in a file with several (0-based).
     pub marker: usize,
+    /// Field separator and decimal mark of the file (`--sep`, `--decimal`).
+    pub dialect: Dialect,
 }
 
 /// One row of a pose file.
@@ -119,8 +122,11 @@ pub enum PoseCsvError {
         column: String,
         problem: String,
     },
+    /// A joint reading outside the model's limits, all in the file's own unit (`unit`);
+    /// `hint` says when the value is within the limits read in the other unit.
     #[error(
-        "{file}:{line}: column `{column}`: joint value {value} outside the limits [{min}, {max}]"
+        "{file}:{line}: column `{column}`: joint value {value} outside the limits [{min}, {max}] \
+         {unit}{hint}"
     )]
     JointLimit {
         file: String,
@@ -129,6 +135,21 @@ pub enum PoseCsvError {
         value: f64,
         min: f64,
         max: f64,
+        unit: &'static str,
+        hint: String,
+    },
+    /// The file has fewer joint columns than the model has joints (another robot's file).
+    #[error(
+        "{file}:{line}: {in_file} joint{s} in the file ({columns}), {in_model} in the model: \
+         a file of another robot, or another --robot / --model?",
+        s = if *in_file == 1 { "" } else { "s" }
+    )]
+    JointCount {
+        file: String,
+        line: usize,
+        in_file: usize,
+        in_model: usize,
+        columns: String,
     },
 }
 
@@ -172,17 +193,124 @@ struct Layout {
 }
 
 /// The joint columns: `q1..qN`, or the joint names when the file has no `q1` and the spec
-/// names the joints.
-fn joint_columns(table: &Table, spec: &PoseSpec) -> Result<Vec<usize>, TableError> {
+/// names the joints. A file with fewer of them than the model has joints (`q1..qM`, M < N,
+/// or M of the names) is [`PoseCsvError::JointCount`].
+fn joint_columns(table: &Table, spec: &PoseSpec) -> Result<Vec<usize>, PoseCsvError> {
     let by_name = table.find("q1").is_none()
         && spec.joint_names.len() == spec.n_joints
         && spec.joint_names.iter().any(|n| table.find(n).is_some());
-    (0..spec.n_joints)
-        .map(|i| match by_name {
-            true => table.need(&spec.joint_names[i]),
-            false => table.need(&format!("q{}", i + 1)),
-        })
-        .collect()
+    let name = |i: usize| match by_name {
+        true => spec.joint_names[i].clone(),
+        false => format!("q{}", i + 1),
+    };
+    let found: Vec<usize> = if by_name {
+        (0..spec.n_joints)
+            .filter(|&i| table.find(&name(i)).is_some())
+            .collect()
+    } else {
+        (0..)
+            .take_while(|&i| table.find(&name(i)).is_some())
+            .collect()
+    };
+    if !found.is_empty() && found.len() < spec.n_joints {
+        let columns = match by_name {
+            true => found
+                .iter()
+                .map(|&i| name(i))
+                .collect::<Vec<_>>()
+                .join(", "),
+            false if found.len() == 1 => "q1".into(),
+            false => format!("q1..q{}", found.len()),
+        };
+        return Err(PoseCsvError::JointCount {
+            file: table.file.clone(),
+            line: table.header_line,
+            in_file: found.len(),
+            in_model: spec.n_joints,
+            columns,
+        });
+    }
+    Ok((0..spec.n_joints)
+        .map(|i| table.need(&name(i)))
+        .collect::<Result<_, _>>()?)
+}
+
+/// The unit of a joint's readings in a file of `units` and, for the message, the other unit
+/// and the `--units` value that names it.
+fn joint_unit(units: Units, prismatic: bool) -> (&'static str, Units, &'static str) {
+    let mut other = units;
+    let (unit, other_name) = if prismatic {
+        match units.length {
+            LengthUnit::Mm => {
+                other.length = LengthUnit::M;
+                ("mm", "m")
+            }
+            LengthUnit::M => {
+                other.length = LengthUnit::Mm;
+                ("m", "mm")
+            }
+        }
+    } else {
+        match units.angle {
+            AngleUnit::Deg => {
+                other.angle = AngleUnit::Rad;
+                ("deg", "rad")
+            }
+            AngleUnit::Rad => {
+                other.angle = AngleUnit::Deg;
+                ("rad", "deg")
+            }
+        }
+    };
+    (unit, other, other_name)
+}
+
+/// [`PoseCsvError::JointLimit`] for the file's value `raw` (in `spec.units`) of joint `j`,
+/// limits `[min, max]` in model units (deg, mm).
+fn limit_error(
+    table: &Table,
+    row: &super::table::Row,
+    col: usize,
+    spec: &PoseSpec,
+    j: usize,
+    raw: f64,
+    [min, max]: [f64; 2],
+) -> PoseCsvError {
+    let prismatic = spec.prismatic.get(j).copied().unwrap_or(false);
+    let (unit, other, other_name) = joint_unit(spec.units, prismatic);
+    let per = spec.units.joint(1.0, prismatic);
+    let in_other = other.joint(raw, prismatic);
+    let hint = if (min..=max).contains(&in_other) {
+        let flag = format!(
+            "{},{}",
+            if other.length == LengthUnit::M {
+                "m"
+            } else {
+                "mm"
+            },
+            if other.angle == AngleUnit::Rad {
+                "rad"
+            } else {
+                "deg"
+            }
+        );
+        format!(
+            "; read as {other_name} it is within them: is the file in {other_name}? \
+             (--units {flag})"
+        )
+    } else {
+        String::new()
+    };
+    PoseCsvError::JointLimit {
+        file: table.file.clone(),
+        line: row.line,
+        column: table.header[col].clone(),
+        value: raw,
+        min: min / per,
+        max: max / per,
+        unit,
+        hint,
+    }
 }
 
 /// The measured points' columns: `x,y,z` when all three are present (FORMATS.md; any numbered
@@ -280,24 +408,18 @@ impl Layout {
 /// Parses pose-file text (a leading byte-order mark is ignored); `file` names it in messages.
 pub fn parse_poses(text: &str, file: &str, spec: &PoseSpec) -> Result<PoseFile, PoseCsvError> {
     let text = text.strip_prefix('\u{feff}').unwrap_or(text);
-    let table = Table::parse(text, file)?;
+    let table = Table::parse_dialect(text, file, spec.dialect)?;
     let lay = Layout::new(&table, spec)?;
     let mut poses = Vec::with_capacity(table.rows.len());
     for row in &table.rows {
         let mut q = Vec::with_capacity(lay.q.len());
         for (j, &col) in lay.q.iter().enumerate() {
             let prismatic = spec.prismatic.get(j).copied().unwrap_or(false);
-            let v = spec.units.joint(table.number(row, col)?, prismatic);
+            let raw = table.number(row, col)?;
+            let v = spec.units.joint(raw, prismatic);
             if let Some(&[min, max]) = spec.limits.get(j) {
                 if v < min || v > max {
-                    return Err(PoseCsvError::JointLimit {
-                        file: table.file.clone(),
-                        line: row.line,
-                        column: table.header[col].clone(),
-                        value: v,
-                        min,
-                        max,
-                    });
+                    return Err(limit_error(&table, row, col, spec, j, raw, [min, max]));
                 }
             }
             q.push(v);

@@ -68,11 +68,21 @@ fn read_inner(path: &Path, cap: u64, text: bool, prefix: &[u8]) -> std::io::Resu
             Err(e) => return Err(e),
         };
         let chunk = &buf[..n];
-        if text {
+        // UTF-16 text (a byte-order mark first) holds NUL bytes: decoded by the caller
+        let utf16 = utf16_bom(if out.is_empty() { chunk } else { &out });
+        if text && utf16.is_none() {
             if let Some(at) = chunk.iter().position(|&b| b == 0) {
+                let what = if looks_utf16(chunk) && out.is_empty() {
+                    "UTF-16 text without a byte-order mark? save it as UTF-8; "
+                } else {
+                    ""
+                };
                 return Err(std::io::Error::new(
                     std::io::ErrorKind::InvalidData,
-                    format!("not a text file (a NUL byte at offset {})", out.len() + at),
+                    format!(
+                        "not a text file ({what}a NUL byte at offset {})",
+                        out.len() + at
+                    ),
                 ));
             }
         }
@@ -100,10 +110,59 @@ pub fn read_capped_magic(path: &Path, cap: u64, magic: &[u8]) -> std::io::Result
     read_inner(path, cap, false, magic)
 }
 
-/// The UTF-8 text of `path`, at most `cap` bytes, without NUL bytes (errors of kind
+/// Whether `bytes` start with a UTF-16 byte-order mark: `Some(true)` little-endian.
+fn utf16_bom(bytes: &[u8]) -> Option<bool> {
+    match bytes {
+        [0xFF, 0xFE, ..] => Some(true),
+        [0xFE, 0xFF, ..] => Some(false),
+        _ => None,
+    }
+}
+
+/// Whether a first block looks like UTF-16 without a mark: ASCII with a NUL every other byte.
+fn looks_utf16(chunk: &[u8]) -> bool {
+    let n = chunk.len().min(64) & !1;
+    n >= 4
+        && (chunk[..n].iter().skip(1).step_by(2).all(|&b| b == 0)
+            || chunk[..n].iter().step_by(2).all(|&b| b == 0))
+}
+
+/// UTF-16 text (after its byte-order mark) as a `String`.
+fn decode_utf16(bytes: &[u8], little: bool) -> std::io::Result<String> {
+    let bad = |what: String| std::io::Error::new(std::io::ErrorKind::InvalidData, what);
+    let body = &bytes[2..];
+    if !body.len().is_multiple_of(2) {
+        return Err(bad(format!(
+            "UTF-16 text (byte-order mark {}) of an odd number of bytes",
+            if little { "LE" } else { "BE" }
+        )));
+    }
+    let units = body.chunks_exact(2).map(|p| {
+        if little {
+            u16::from_le_bytes([p[0], p[1]])
+        } else {
+            u16::from_be_bytes([p[0], p[1]])
+        }
+    });
+    let text: String = char::decode_utf16(units)
+        .collect::<Result<_, _>>()
+        .map_err(|e| bad(format!("UTF-16 text with an invalid code unit: {e}")))?;
+    if let Some(at) = text.find('\0') {
+        return Err(bad(format!(
+            "not a text file (UTF-16 with a NUL character at character {at})"
+        )));
+    }
+    Ok(text)
+}
+
+/// The text of `path`, at most `cap` bytes: UTF-8, or UTF-16 with a byte-order mark (a
+/// spreadsheet's "Unicode text" export; decoded), without NUL characters (errors of kind
 /// `FileTooLarge` / `InvalidData`).
 pub fn read_text_capped(path: &Path, cap: u64) -> std::io::Result<String> {
     let bytes = read_inner(path, cap, true, &[])?;
+    if let Some(little) = utf16_bom(&bytes) {
+        return decode_utf16(&bytes, little);
+    }
     String::from_utf8(bytes).map_err(|e| {
         std::io::Error::new(
             std::io::ErrorKind::InvalidData,
@@ -127,6 +186,23 @@ mod tests {
             let e = read_capped(Path::new("/dev/zero"), 1 << 20).unwrap_err();
             assert_eq!(e.kind(), std::io::ErrorKind::FileTooLarge);
         }
+    }
+
+    #[test]
+    fn utf16_with_a_mark_is_decoded_and_without_one_named() {
+        let dir = tempfile::tempdir().unwrap();
+        let p = dir.path().join("f");
+        let mut le = vec![0xFF, 0xFE];
+        le.extend("t,x\n1,2\n".encode_utf16().flat_map(u16::to_le_bytes));
+        std::fs::write(&p, &le).unwrap();
+        assert_eq!(read_text_capped(&p, 1 << 20).unwrap(), "t,x\n1,2\n");
+        let mut be = vec![0xFE, 0xFF];
+        be.extend("a\u{e4}".encode_utf16().flat_map(u16::to_be_bytes));
+        std::fs::write(&p, &be).unwrap();
+        assert_eq!(read_text_capped(&p, 1 << 20).unwrap(), "a\u{e4}");
+        std::fs::write(&p, &le[2..]).unwrap();
+        let e = read_text_capped(&p, 1 << 20).unwrap_err().to_string();
+        assert!(e.contains("UTF-16"), "{e}");
     }
 
     #[test]

@@ -11,6 +11,7 @@
 use std::path::Path;
 
 use crate::error::{Classify, ErrorKind};
+use crate::io::dialect::{sniff, Dialect};
 use crate::io::ranges::Quantity;
 
 /// A problem with a CSV table (always bad input, exit code 2).
@@ -50,6 +51,14 @@ pub enum TableError {
         line: usize,
         expected: usize,
         found: usize,
+    },
+    /// The file is not in the declared separator / decimal mark (`hint` says what it looks
+    /// like and which flags read it).
+    #[error("{file}:{line}: {hint}")]
+    Dialect {
+        file: String,
+        line: usize,
+        hint: String,
     },
     /// A field that is not what its column needs.
     #[error("{file}:{line}: column `{column}`: {problem} (`{value}`)")]
@@ -103,10 +112,21 @@ impl Table {
         Self::parse(&text, &file)
     }
 
-    /// Parses table text; `file` names it in messages.
+    /// Parses table text; `file` names it in messages. A file that looks `;`- or
+    /// tab-separated is refused with the flags that read it ([`Self::parse_dialect`]).
     pub fn parse(text: &str, file: &str) -> Result<Self, TableError> {
+        Self::parse_dialect(text, file, Dialect::default())
+    }
+
+    /// Parses table text written with `dialect`'s separator and decimal mark; a file that
+    /// looks written otherwise (its header one field under `dialect`'s separator, or decimal
+    /// commas not declared) is [`TableError::Dialect`] naming what it looks like.
+    pub fn parse_dialect(text: &str, file: &str, dialect: Dialect) -> Result<Self, TableError> {
         // A UTF-8 byte-order mark (spreadsheet exports) is not part of the header.
         let text = text.strip_prefix('\u{feff}').unwrap_or(text);
+        check_dialect(text, file, dialect)?;
+        let text = dialect.normalize(text);
+        let text = text.as_ref();
         let split =
             |l: &str| -> Vec<String> { l.split(',').map(|f| f.trim().to_string()).collect() };
         let mut lines = text
@@ -223,6 +243,43 @@ impl Table {
         }
         Ok(out)
     }
+}
+
+/// [`TableError::Dialect`] when the first lines of `text` do not look written with `dialect`.
+fn check_dialect(text: &str, file: &str, dialect: Dialect) -> Result<(), TableError> {
+    let err = |line: usize, hint: String| TableError::Dialect {
+        file: file.into(),
+        line,
+        hint,
+    };
+    if dialect.sep == dialect.decimal {
+        return Err(err(
+            1,
+            "--sep and --decimal are both `,`: a file with decimal commas separates its fields \
+             with `;` (--sep ';')"
+                .into(),
+        ));
+    }
+    let mut lines = text
+        .lines()
+        .enumerate()
+        .map(|(i, l)| (i + 1, l.trim()))
+        .filter(|(_, l)| !l.is_empty() && !l.starts_with('#'));
+    let Some((line, head)) = lines.next() else {
+        return Ok(());
+    };
+    let data = lines.next().map(|(_, l)| l);
+    let Some(hint) = sniff(head, data, dialect) else {
+        return Ok(());
+    };
+    let single = head.split(dialect.sep).count() == 1;
+    let undeclared_commas = dialect.decimal == '.'
+        && dialect.sep != ','
+        && data.is_some_and(|d| d.split(dialect.sep).any(super::dialect::decimal_comma));
+    if single || undeclared_commas {
+        return Err(err(line, hint));
+    }
+    Ok(())
 }
 
 #[cfg(test)]

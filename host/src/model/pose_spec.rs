@@ -14,6 +14,7 @@ impl PoseSpec {
             prismatic: model.joints().iter().map(|j| j.prismatic).collect(),
             units: Default::default(),
             marker: 0,
+            dialect: Default::default(),
         }
     }
 }

@@ -28,8 +28,13 @@ pub enum UrdfError {
         message: String,
     },
     /// A link named on the command line or in a joint that the file does not define.
-    #[error("URDF {source_name}: no link `{link}`")]
-    UnknownLink { source_name: String, link: String },
+    #[error("URDF {source_name}: no link `{link}`; its links, nearest first: {known}")]
+    UnknownLink {
+        source_name: String,
+        link: String,
+        /// The file's links, nearest to `link` first ([`crate::error::nearest_first`]).
+        known: String,
+    },
     /// The tip link is not below the base link in the tree.
     #[error("URDF {source_name}: link `{tip}` is not below link `{base}`")]
     NotBelow {

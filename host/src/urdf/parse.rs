@@ -167,11 +167,22 @@ impl Urdf {
                     return Err(UrdfError::UnknownLink {
                         source_name: self.source_name.clone(),
                         link: link.clone(),
+                        known: self.links_nearest(link),
                     });
                 }
             }
         }
         Ok(())
+    }
+
+    /// The file's links, nearest to `name` first (for a message about a link it lacks).
+    pub fn links_nearest(&self, name: &str) -> String {
+        crate::error::nearest_first(name, self.links.iter().map(String::as_str), 30)
+    }
+
+    /// The file's joints, nearest to `name` first (for a message about a joint it lacks).
+    pub fn joints_nearest(&self, name: &str) -> String {
+        crate::error::nearest_first(name, self.joints.iter().map(|j| j.name.as_str()), 30)
     }
 
     /// The root link: the only link that is no joint's child.
@@ -205,6 +216,7 @@ impl Urdf {
                 return Err(UrdfError::UnknownLink {
                     source_name: self.source_name.clone(),
                     link: link.to_string(),
+                    known: self.links_nearest(link),
                 });
             }
         }

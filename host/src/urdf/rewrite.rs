@@ -84,7 +84,10 @@ fn check_model_joints(model: &Model, urdf: &Urdf) -> Result<String, UrdfError> {
         let Some(uj) = urdf.joints.iter().find(|j| &j.name == name) else {
             return Err(invalid(
                 urdf,
-                format!("no joint `{name}` (a joint of the model)"),
+                format!(
+                    "no joint `{name}` (a joint of the model); its joints, nearest first: {}",
+                    urdf.joints_nearest(name)
+                ),
             ));
         };
         let ok = match uj.joint_type {

@@ -203,7 +203,10 @@ fn fk_bad_input_exits_2() {
         &output(&["fk", "--joints", g, "--robot", "puma"]),
         &["puma"],
     );
-    assert_bad_input(&output(&["fk", "--joints", g, "--robot", "ur5"]), &["q6"]);
+    assert_bad_input(
+        &output(&["fk", "--joints", g, "--robot", "ur5"]),
+        &["5 joints in the file (q1..q5), 6 in the model"],
+    );
     let ur = dir.path().join("u.csv");
     std::fs::write(&ur, "q1,q2,q3,q4,q5,q6\n0,0,0,0,0,0\n").unwrap();
     assert_bad_input(

@@ -145,6 +145,9 @@ fn commands(dir: &Path) -> Vec<(&'static str, Vec<OsString>)> {
     std::fs::write(dir.join("path.csv"), "x,y,z\n300,0,200\n310,0,200\n").unwrap();
     std::fs::write(dir.join("tilt.csv"), tilt_readings()).unwrap();
     std::fs::write(dir.join("arm.urdf"), URDF).unwrap();
+    let (log, points) = capture_logs();
+    std::fs::write(dir.join("log.csv"), log).unwrap();
+    std::fs::write(dir.join("points.csv"), points).unwrap();
 
     let s = |f: &str| sess.join(f).into_os_string();
     let p = |f: &str| sim.join(f).into_os_string();
@@ -278,7 +281,55 @@ fn commands(dir: &Path) -> Vec<(&'static str, Vec<OsString>)> {
                 d("plan.csv"),
             ],
         ),
+        (
+            "poses",
+            vec![
+                o("poses"),
+                o("--joints"),
+                d("log.csv"),
+                o("--points"),
+                d("points.csv"),
+                o("--out"),
+                d("poses.csv"),
+            ],
+        ),
     ]
+}
+
+/// A joint log (100 Hz) of the Katana dwelling at three poses with 1 s moves, and a tracker
+/// log (50 Hz, 0.4 s behind) of its tool point: inputs for `poses`.
+fn capture_logs() -> (String, String) {
+    let model = katana450(200.0).unwrap();
+    let poses = [
+        [10.0, 20.0, 30.0, 40.0, 50.0],
+        [-30.0, 60.0, -10.0, 0.0, 20.0],
+        [50.0, 40.0, 60.0, -40.0, 0.0],
+    ];
+    let q = |t: f64| -> Vec<f64> {
+        let k = ((t / 3.0).floor() as usize).min(2);
+        let u = ((t - 3.0 * k as f64 - 2.0) / 1.0).clamp(0.0, 1.0);
+        let s = 0.5 - 0.5 * (u * std::f64::consts::PI).cos();
+        let b = poses[(k + 1).min(2)];
+        (0..5)
+            .map(|j| poses[k][j] + s * (b[j] - poses[k][j]))
+            .collect()
+    };
+    let mut log = String::from("t,q1,q2,q3,q4,q5\n");
+    for i in 0..=900 {
+        let t = f64::from(i) * 0.01;
+        let qs: Vec<String> = q(t).iter().map(|v| format!("{v:.4}")).collect();
+        log.push_str(&format!("{t:.2},{}\n", qs.join(",")));
+    }
+    let mut points = String::from("t,x,y,z\n");
+    for i in 0..450 {
+        let t = f64::from(i) * 0.02;
+        let p = model
+            .fk(&q((t - 0.4).max(0.0)), rigctl::model::Tilt::Off)
+            .unwrap()
+            .position_mm;
+        points.push_str(&format!("{t:.3},{:.4},{:.4},{:.4}\n", p.x, p.y, p.z));
+    }
+    (log, points)
 }
 
 /// Paired inclinometer readings (a configuration and its mirror, 0 and 3 kg) of the declared
