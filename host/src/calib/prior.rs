@@ -258,7 +258,7 @@ pub fn ridge_press(
     let mut start = 0;
     for &size in blocks {
         let jb = js.rows(start, size);
-        let h = &jb * &inv * jb.transpose();
+        let h = jb * &inv * jb.transpose();
         let i_h = DMatrix::identity(size, size) - h;
         let loo = i_h.lu().solve(&r.rows(start, size).into_owned())?;
         if !loo.iter().all(|v| v.is_finite()) {

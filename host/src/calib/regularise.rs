@@ -114,7 +114,7 @@ pub fn choose_prior(
             Err(CalibError::NothingToFit) => return Ok(None),
             Err(e) => return Err(e),
         };
-        Ok(score(&fit, poses, tilt, &at, &blocks)?)
+        score(&fit, poses, tilt, &at, &blocks)
     })?;
     Ok(choice(weight, "cross_validation", press))
 }
