@@ -40,9 +40,12 @@ pub fn stdout_error(e: std::io::Error) -> CliError {
 }
 
 /// Writes `args` to stderr, ignoring errors.
+/// Control characters other than newline and tab, and the bidirectional overrides, are
+/// escaped (`rigctl::io::shown`): a file name cannot drive the terminal.
 pub fn stderr_fmt(args: fmt::Arguments<'_>) {
+    let text = rigctl::io::shown::escape_keep_lines(&args.to_string());
     let mut err = std::io::stderr().lock();
-    let _ = err.write_fmt(args);
+    let _ = err.write_all(text.as_bytes());
     let _ = err.flush();
 }
 

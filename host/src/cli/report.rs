@@ -27,7 +27,8 @@ pub struct Args {
 
 pub fn run(args: Args) -> Result<(), CliError> {
     super::files()
-        .input("RUN_DIR", Some(&args.run_dir))
+        // every file of the run is an input; an --html inside it only under a new name
+        .input_dir("RUN_DIR", &args.run_dir)
         .output("--html", Some(&args.html))
         .check()?;
     let opts = ReportOptions {

@@ -13,5 +13,6 @@ pub mod pose_csv;
 pub mod ranges;
 pub mod read;
 pub mod rosbag;
+pub mod shown;
 pub mod table;
 pub mod units;
