@@ -181,7 +181,9 @@ fn parent_dir(path: &Path) -> PathBuf {
     }
 }
 
-fn temp_path(path: &Path) -> PathBuf {
+/// The temporary name `.NAME.tmp-PID` beside `path`, which [`clean_stale_temps`] removes once
+/// its process is gone.
+pub fn temp_path(path: &Path) -> PathBuf {
     let name = path
         .file_name()
         .map(|n| n.to_string_lossy().into_owned())
