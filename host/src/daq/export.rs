@@ -126,6 +126,8 @@ pub fn export_csv(path: &Path, dir: &Path, strict: bool) -> Result<ExportSummary
     let frames = &kept;
     // the three files of one run, never a mix of concurrent exports into the same directory
     let _lock = crate::io::atomic::lock_dir(dir)?;
+    // the three files as one commit (crate::io::file_set)
+    let set = crate::io::file_set::begin(dir, crate::io::file_set::keep_all)?;
     let mut tally = Tally::new();
     for (_, msg) in frames {
         tally.on_message(msg);
@@ -186,6 +188,7 @@ pub fn export_csv(path: &Path, dir: &Path, strict: bool) -> Result<ExportSummary
         }
         Ok(rows)
     })?;
+    set.commit()?;
     Ok(ExportSummary {
         pot_rows,
         tilt_rows,

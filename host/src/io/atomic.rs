@@ -322,13 +322,23 @@ where
             let result = fill(&mut w).and_then(|()| {
                 let file = w.into_inner().map_err(|e| io_err(e.into_error()))?;
                 file.sync_all().map_err(io_err)?;
-                std::fs::rename(&tmp, &target).map_err(io_err)?;
                 Ok(())
             });
             if result.is_err() {
                 let _ = std::fs::remove_file(&tmp);
+                interrupt::unregister_temp(&tmp);
+                return result;
+            }
+            // a set of files open for the folder renames it with the others at its commit
+            if super::file_set::stage(&tmp, &target) {
+                return result;
+            }
+            let renamed = std::fs::rename(&tmp, &target).map_err(io_err);
+            if renamed.is_err() {
+                let _ = std::fs::remove_file(&tmp);
             }
             interrupt::unregister_temp(&tmp);
+            renamed?;
             result
         }
     }

@@ -13,6 +13,14 @@ use std::sync::{Arc, Mutex, OnceLock};
 pub const INTERRUPTED_EXIT: i32 = 130;
 
 static LIVE_TEMPS: Mutex<Vec<PathBuf>> = Mutex::new(Vec::new());
+/// Held while a set of files is renamed into place ([`commit_guard`]).
+static COMMIT: Mutex<()> = Mutex::new(());
+
+/// Held by [`crate::io::file_set::FileSet::commit`] while it renames its files: an
+/// interruption waits for the commit to end, so a folder never holds half of a set.
+pub fn commit_guard() -> std::sync::MutexGuard<'static, ()> {
+    COMMIT.lock().unwrap_or_else(std::sync::PoisonError::into_inner)
+}
 static COOPERATIVE: AtomicBool = AtomicBool::new(false);
 static STOP: OnceLock<Arc<AtomicBool>> = OnceLock::new();
 
@@ -49,6 +57,9 @@ pub fn remove_live_temps() {
 /// holding the registry: the rest of the process, still running until the exit completes,
 /// cannot register (and so cannot create, see [`register_temp`]) another temporary file.
 fn remove_live_temps_and_exit() -> ! {
+    // a set of files being renamed into place is finished first (it never deadlocks: the
+    // commit takes this lock, then the registry's, in the same order as here)
+    let _commit = commit_guard();
     let guard = LIVE_TEMPS.lock();
     if let Ok(mut live) = guard {
         for p in live.drain(..) {

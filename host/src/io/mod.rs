@@ -4,6 +4,7 @@
 
 pub mod atomic;
 pub mod cdr;
+pub mod file_set;
 pub mod files;
 pub mod finite;
 pub mod finite_json;
