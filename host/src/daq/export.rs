@@ -112,11 +112,15 @@ pub fn export_csv(path: &Path, dir: &Path, strict: bool) -> Result<ExportSummary
         Some(salvaged.meta.pot_rate_hz),
         salvaged.meta.hello.as_ref().map(|h| h.tilt_sensors),
     );
+    let start = |m: &DeviceMsg| matches!(m, DeviceMsg::Ack(rig_protocol::CommandKind::Start));
+    if !salvaged.frames.iter().any(|(_, m)| start(m)) {
+        check.restart(); // no Start in the file (a simulated session): every frame is of the run
+    }
     let kept: Vec<(u64, DeviceMsg)> = salvaged
         .frames
         .iter()
         .filter(|(_, msg)| {
-            if matches!(msg, DeviceMsg::Ack(rig_protocol::CommandKind::Start)) {
+            if start(msg) {
                 check.restart();
             }
             check.accept(msg)

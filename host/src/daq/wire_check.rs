@@ -6,7 +6,9 @@
 //! the `Hello`'s `tilt_sensors`, board time going backwards (per stream: the potentiometer
 //! batches, each inclinometer), or a batch whose sample times do not fit in a `u64`. Such a
 //! frame is not stored, not counted in the [`super::tally::Tally`] and not exported; it is
-//! counted here, and `record` / `export` report the count and the first one and exit 1.
+//! counted here, and `record` / `export` report the count and the first one and exit 1. The
+//! period and the monotone times are checked from the acknowledged `Start` on
+//! ([`WireCheck::restart`]); the frames before it may be the end of an earlier run.
 
 use rig_protocol::device::RunConfig;
 use rig_protocol::DeviceMsg;
@@ -62,6 +64,9 @@ pub struct WireCheck {
     pot_next_us: Option<u64>,
     /// Last reading time of each inclinometer.
     tilt_last_us: Vec<Option<u64>>,
+    /// `Start` acknowledged: the period and the monotone times are checked from here (frames
+    /// before it may be the end of a run left over from an earlier session).
+    armed: bool,
     /// Frames out of range.
     pub count: u64,
     /// The first of them.
@@ -82,10 +87,12 @@ impl WireCheck {
         }
     }
 
-    /// A new `Start`: board time and counters may restart.
+    /// A new `Start` (acknowledged): board time and counters may restart, and from here every
+    /// check applies.
     pub fn restart(&mut self) {
         self.pot_next_us = None;
         self.tilt_last_us.clear();
+        self.armed = true;
     }
 
     /// Checks one frame; `false` (and counted) when it is out of range.
@@ -103,7 +110,7 @@ impl WireCheck {
     fn verdict(&mut self, msg: &DeviceMsg) -> Result<(), OutOfRange> {
         match msg {
             DeviceMsg::Pot(b) => {
-                if let Some(expected_us) = self.pot_period_us {
+                if let Some(expected_us) = self.pot_period_us.filter(|_| self.armed) {
                     if b.period_us != expected_us {
                         return Err(OutOfRange::Period {
                             got_us: b.period_us,
@@ -124,7 +131,7 @@ impl WireCheck {
                     .checked_mul(u64::from(b.period_us))
                     .and_then(|d| b.t0_us.checked_add(d))
                     .ok_or(OutOfRange::TimeOverflow { t0_us: b.t0_us })?;
-                if let Some(after_us) = self.pot_next_us.filter(|&n| b.t0_us < n) {
+                if let Some(after_us) = self.pot_next_us.filter(|&n| self.armed && b.t0_us < n) {
                     return Err(OutOfRange::Backwards {
                         stream: "potentiometer".into(),
                         t_us: b.t0_us,
@@ -144,7 +151,7 @@ impl WireCheck {
                 if self.tilt_last_us.len() <= s {
                     self.tilt_last_us.resize(s + 1, None);
                 }
-                if let Some(after_us) = self.tilt_last_us[s].filter(|&l| r.t_us <= l) {
+                if let Some(after_us) = self.tilt_last_us[s].filter(|&l| self.armed && r.t_us <= l) {
                     return Err(OutOfRange::Backwards {
                         stream: format!("inclinometer {}", r.sensor),
                         t_us: r.t_us,
@@ -198,6 +205,12 @@ mod tests {
     #[test]
     fn absurd_values_are_refused_and_good_ones_kept() {
         let mut c = WireCheck::new(Some(1000), Some(3));
+        // before Start: a left-over run at another rate passes, a 16-bit count does not
+        assert!(c.accept(&pot(500, 250, &[1])));
+        assert!(!c.accept(&pot(600, 250, &[65535])));
+        c.restart();
+        c.count = 0;
+        c.first = None;
         assert!(c.accept(&pot(0, 1000, &[0, 4095])));
         assert!(!c.accept(&pot(2000, 0, &[1])));
         assert!(!c.accept(&pot(2000, 1, &[1])));

@@ -75,7 +75,11 @@ fn report_html_onto_a_file_of_its_run_is_refused() {
     let tmp = tempfile::tempdir().unwrap();
     let w = tmp.path();
     workspace(w);
-    std::fs::write(w.join("RUN/diagnose.json"), "{\"effects\": []}\n").unwrap();
+    let (code, err) = run(
+        w,
+        &["diagnose", "--poses", "RUN/cal.csv", "--validate", "RUN/val.csv", "--json", "RUN/diagnose.json"],
+    );
+    assert_eq!(code, Some(0), "{err}");
     let before = inputs(w);
     let json = std::fs::read(w.join("RUN/diagnose.json")).unwrap();
     symlink("diagnose.json", w.join("RUN/page.html")).unwrap();
@@ -171,12 +175,12 @@ fn names(writer: usize) -> &'static [&'static str] {
 fn input_spelling(rng: &mut ChaCha8Rng, from_sub: bool) -> String {
     let up = if from_sub { "../" } else { "" };
     let files = ["cal.csv", "val.csv", "truth.toml", "truth.json"];
-    match rng.random_range(0..5) {
+    match rng.gen_range(0..5) {
         0 => format!("{up}M.toml"),
         1 => format!("{up}REC"),
-        2 => format!("{up}ALIAS/{}", files[rng.random_range(0..4)]),
-        3 => format!("{up}RUN/./{}", files[rng.random_range(0..4)]),
-        _ => format!("{up}RUN/{}", files[rng.random_range(0..4)]),
+        2 => format!("{up}ALIAS/{}", files[rng.gen_range(0..4)]),
+        3 => format!("{up}RUN/./{}", files[rng.gen_range(0..4)]),
+        _ => format!("{up}RUN/{}", files[rng.gen_range(0..4)]),
     }
 }
 
@@ -206,7 +210,7 @@ fn no_layout_of_links_changes_an_input() {
         let out = if writer >= 2 {
             // a page or a model file: one path, planted as a link / hard link / alias spelling
             let name = if writer == 2 { "page.html" } else { "model.toml" };
-            match rng.random_range(0..5) {
+            match rng.gen_range(0..5) {
                 0 => {
                     let target = input_spelling(&mut rng, false);
                     symlink(&target, w.join(name)).unwrap();
@@ -219,7 +223,7 @@ fn no_layout_of_links_changes_an_input() {
                 }
                 2 => {
                     // a link inside the run folder to a file of the run
-                    let target = ["cal.csv", "truth.toml", "val.csv"][rng.random_range(0..3)];
+                    let target = ["cal.csv", "truth.toml", "val.csv"][rng.gen_range(0..3)];
                     symlink(target, w.join("RUN").join(name)).unwrap();
                     format!("ALIAS/{name}")
                 }
@@ -229,7 +233,7 @@ fn no_layout_of_links_changes_an_input() {
         } else {
             // an output folder: new, a plain folder, or an alias of the run folder, with
             // links and hard links to inputs planted under the names the command writes
-            let dir = match rng.random_range(0..3) {
+            let dir = match rng.gen_range(0..3) {
                 0 => "OUT".to_string(),
                 1 => {
                     std::fs::create_dir(w.join("OUT")).unwrap();
@@ -238,14 +242,14 @@ fn no_layout_of_links_changes_an_input() {
                 _ => "ALIAS".to_string(),
             };
             if w.join(&dir).is_dir() {
-                for _ in 0..rng.random_range(1..4) {
-                    let name = names(writer)[rng.random_range(0..names(writer).len())];
+                for _ in 0..rng.gen_range(1..4) {
+                    let name = names(writer)[rng.gen_range(0..names(writer).len())];
                     let at = w.join(&dir).join(name);
                     if std::fs::symlink_metadata(&at).is_ok() {
                         continue;
                     }
                     let target = input_spelling(&mut rng, true);
-                    if rng.random_bool(0.5) {
+                    if rng.gen_bool(0.5) {
                         symlink(&target, &at).unwrap();
                     } else {
                         let resolved = w.join(&dir).join(&target);
@@ -290,4 +294,48 @@ fn no_layout_of_links_changes_an_input() {
     }
     // both outcomes occur: the layouts are not all refused, nor all harmless
     assert!(codes[0] > 0 && codes[2] > 0, "exit codes {codes:?}");
+}
+
+#[test]
+fn report_reads_symlinked_run_files() {
+    let tmp = tempfile::tempdir().unwrap();
+    let w = tmp.path();
+    workspace(w);
+    std::fs::create_dir(w.join("LINKED")).unwrap();
+    for f in ["cal.csv", "val.csv", "truth.toml", "truth.json"] {
+        symlink(format!("../RUN/{f}"), w.join("LINKED").join(f)).unwrap();
+    }
+    symlink("../RUN/nothing.json", w.join("LINKED/dangling.json")).unwrap();
+    let (code, err) = run(w, &["report", "LINKED", "--html", "linked.html"]);
+    assert_eq!(code, Some(0), "{err}");
+    assert!(!err.contains("nothing to report"), "{err}");
+    assert!(err.contains("dangling.json: a symbolic link to nothing readable"), "{err}");
+}
+
+#[test]
+fn hidden_characters_in_file_names_are_escaped_in_messages() {
+    let tmp = tempfile::tempdir().unwrap();
+    let w = tmp.path();
+    for name in [
+        "a\nrigctl: all good.csv",
+        "b\u{1b}[2J\u{1b}[31m.csv",
+        "c\u{202e}vsc.csv",
+        "d\r\u{7}.csv",
+    ] {
+        for args in [
+            vec!["calibrate", "--poses", name],
+            vec!["simulate", "--model", name, "--out", "o"],
+            vec!["export", name, "--csv", "o"],
+        ] {
+            let (code, err) = run(w, &args);
+            assert_eq!(code, Some(2), "{args:?}: {err}");
+            let body = err.strip_suffix('\n').unwrap_or(&err);
+            assert!(!body.contains('\n'), "{args:?}: a raw newline in {err:?}");
+            assert!(
+                !body.chars().any(|c| c.is_control() || c == '\u{202e}'),
+                "{args:?}: a raw control character in {err:?}"
+            );
+            assert!(body.contains("\\u{") || body.contains("\\n") || body.contains("\\r"), "{err:?}");
+        }
+    }
 }
