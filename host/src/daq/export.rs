@@ -240,7 +240,8 @@ mod tests {
             protocol_version: 1,
             port: "test".into(),
             start_time_unix_us: 0,
-            pot_rate_hz: 1000,
+            // the batches below are 250 us apart
+            pot_rate_hz: 4000,
             tilt_rate_hz: 100,
             hello: None,
             rigctl_version: "test".into(),

@@ -159,9 +159,8 @@ pub fn open(path: &Path, overwrite: bool) -> Result<(File, RecTarget), Recording
         };
         lock(&old, path)?;
         // the name may have been replaced between the open and the lock: lock what it is now
-        let same = |a: &std::fs::Metadata, b: &std::fs::Metadata| {
-            a.dev() == b.dev() && a.ino() == b.ino()
-        };
+        let same =
+            |a: &std::fs::Metadata, b: &std::fs::Metadata| a.dev() == b.dev() && a.ino() == b.ino();
         let now = std::fs::metadata(&target);
         let held = old.metadata().map_err(open_err(path))?;
         if !now.is_ok_and(|m| same(&m, &held)) {

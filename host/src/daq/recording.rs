@@ -214,7 +214,11 @@ impl RecordingWriter {
 
     /// Writes the header into `file` (already opened, for example locked by
     /// [`super::rec_file::open`]) and returns the writer; `path` names it in messages.
-    pub fn with_file(file: File, path: &Path, meta: &RecordingMeta) -> Result<Self, RecordingError> {
+    pub fn with_file(
+        file: File,
+        path: &Path,
+        meta: &RecordingMeta,
+    ) -> Result<Self, RecordingError> {
         let mut writer = Self {
             file,
             path: path.to_path_buf(),

@@ -138,7 +138,10 @@ fn kept(out: &std::path::Path, recorded: bool, frames: u64) -> String {
             out.display()
         )
     } else {
-        format!("nothing was recorded; {} is as it was before", out.display())
+        format!(
+            "nothing was recorded; {} is as it was before",
+            out.display()
+        )
     }
 }
 

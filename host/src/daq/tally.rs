@@ -98,7 +98,8 @@ impl Tally {
                     .saturating_add(u64::from(batch.seq - prev.seq - 1));
                 if batch.t0_us > prev.next_t_us {
                     let gap_us = batch.t0_us - prev.next_t_us;
-                    let gap = gap_us / period_us + u64::from(gap_us % period_us >= period_us - period_us / 2);
+                    let gap = gap_us / period_us
+                        + u64::from(gap_us % period_us >= period_us - period_us / 2);
                     self.gap_samples = self.gap_samples.saturating_add(gap);
                 }
             }
@@ -125,7 +126,8 @@ impl Tally {
         if *last > 0 && t_us > *last {
             let dt = t_us - *last;
             let pending = &mut self.tilt_unresolved[s];
-            let count = |dt: u64, p: u64| (dt / p + u64::from(dt % p >= p - p / 2)).saturating_sub(1);
+            let count =
+                |dt: u64, p: u64| (dt / p + u64::from(dt % p >= p - p / 2)).saturating_sub(1);
             match *period {
                 // The first two intervals wait: their smaller one is the grid.
                 None if pending.is_empty() => pending.push(dt),

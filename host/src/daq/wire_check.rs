@@ -19,11 +19,25 @@ pub const ADC_MAX: u16 = 4095;
 /// Why a frame is out of range.
 #[derive(Debug, Clone, PartialEq, Eq)]
 pub enum OutOfRange {
-    Period { got_us: u32, expected_us: u32 },
-    Raw { value: u16 },
-    Sensor { sensor: u8, sensors: u8 },
-    Backwards { stream: String, t_us: u64, after_us: u64 },
-    TimeOverflow { t0_us: u64 },
+    Period {
+        got_us: u32,
+        expected_us: u32,
+    },
+    Raw {
+        value: u16,
+    },
+    Sensor {
+        sensor: u8,
+        sensors: u8,
+    },
+    Backwards {
+        stream: String,
+        t_us: u64,
+        after_us: u64,
+    },
+    TimeOverflow {
+        t0_us: u64,
+    },
 }
 
 impl std::fmt::Display for OutOfRange {
@@ -151,7 +165,8 @@ impl WireCheck {
                 if self.tilt_last_us.len() <= s {
                     self.tilt_last_us.resize(s + 1, None);
                 }
-                if let Some(after_us) = self.tilt_last_us[s].filter(|&l| self.armed && r.t_us <= l) {
+                if let Some(after_us) = self.tilt_last_us[s].filter(|&l| self.armed && r.t_us <= l)
+                {
                     return Err(OutOfRange::Backwards {
                         stream: format!("inclinometer {}", r.sensor),
                         t_us: r.t_us,
@@ -222,7 +237,10 @@ mod tests {
         assert!(!c.accept(&tilt(255, 20)));
         assert!(!c.accept(&tilt(2, 10)));
         assert_eq!(c.count, 7);
-        assert!(matches!(c.first, Some(OutOfRange::Period { got_us: 0, .. })));
+        assert!(matches!(
+            c.first,
+            Some(OutOfRange::Period { got_us: 0, .. })
+        ));
         assert!(c.summary().unwrap().starts_with("7 frames out of"));
         c.restart();
         assert!(c.accept(&pot(0, 1000, &[1])));

@@ -253,10 +253,7 @@ pub fn check_output(path: &Path) -> Result<(), AtomicWriteError> {
             let probe = temp_path(&target);
             // registered before it exists: a signal at any point leaves no probe behind
             interrupt::register_temp(&probe);
-            let created = OpenOptions::new()
-                .write(true)
-                .create_new(true)
-                .open(&probe);
+            let created = OpenOptions::new().write(true).create_new(true).open(&probe);
             if created.is_ok() {
                 let _ = std::fs::remove_file(&probe);
             }

@@ -19,7 +19,9 @@ static COMMIT: Mutex<()> = Mutex::new(());
 /// Held by [`crate::io::file_set::FileSet::commit`] while it renames its files: an
 /// interruption waits for the commit to end, so a folder never holds half of a set.
 pub fn commit_guard() -> std::sync::MutexGuard<'static, ()> {
-    COMMIT.lock().unwrap_or_else(std::sync::PoisonError::into_inner)
+    COMMIT
+        .lock()
+        .unwrap_or_else(std::sync::PoisonError::into_inner)
 }
 static COOPERATIVE: AtomicBool = AtomicBool::new(false);
 static STOP: OnceLock<Arc<AtomicBool>> = OnceLock::new();

@@ -43,12 +43,7 @@ pub fn escape_keep_lines(text: &str) -> String {
         return text.to_string();
     }
     text.split('\n')
-        .map(|line| {
-            line.split('\t')
-                .map(escape)
-                .collect::<Vec<_>>()
-                .join("\t")
-        })
+        .map(|line| line.split('\t').map(escape).collect::<Vec<_>>().join("\t"))
         .collect::<Vec<_>>()
         .join("\n")
 }

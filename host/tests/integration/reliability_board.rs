@@ -56,8 +56,16 @@ fn overwrite_keeps_the_old_recording_when_start_is_never_acknowledged() {
     board.join().unwrap();
     assert!(matches!(err, RecordError::NoAck { .. }), "{err}");
     assert_eq!(err.kind(), ErrorKind::Failure);
-    assert_eq!(std::fs::read(&out).unwrap(), OLD, "the old recording was touched");
-    assert!(others(dir.path(), "run.rigrec").is_empty(), "{:?}", others(dir.path(), "run.rigrec"));
+    assert_eq!(
+        std::fs::read(&out).unwrap(),
+        OLD,
+        "the old recording was touched"
+    );
+    assert!(
+        others(dir.path(), "run.rigrec").is_empty(),
+        "{:?}",
+        others(dir.path(), "run.rigrec")
+    );
 }
 
 #[test]
@@ -156,15 +164,9 @@ fn two_records_into_one_file_one_is_refused_and_the_file_is_one_stream() {
                 board_b.join().unwrap();
             }
             let expected = if overwrite_b {
-                matches!(
-                    err,
-                    RecordError::Recording(RecordingError::Busy { .. })
-                )
+                matches!(err, RecordError::Recording(RecordingError::Busy { .. }))
             } else {
-                matches!(
-                    err,
-                    RecordError::Recording(RecordingError::Exists { .. })
-                )
+                matches!(err, RecordError::Recording(RecordingError::Exists { .. }))
             };
             assert!(expected, "second writer (overwrite {overwrite_b}): {err}");
             assert_eq!(err.kind(), ErrorKind::BadInput);
@@ -181,11 +183,14 @@ fn two_records_into_one_file_one_is_refused_and_the_file_is_one_stream() {
 #[test]
 fn a_board_sending_only_garbage_after_start_is_lost_after_the_silence_timeout() {
     // bytes that never make a good frame: a frame-sized run of 0x55 between delimiters
-    let (port, board) = fake_board::spawn(true, Box::new(|_| {
-        let mut b = vec![0x55; 40];
-        b.push(0);
-        b
-    }));
+    let (port, board) = fake_board::spawn(
+        true,
+        Box::new(|_| {
+            let mut b = vec![0x55; 40];
+            b.push(0);
+            b
+        }),
+    );
     let dir = tempfile::tempdir().unwrap();
     let out = dir.path().join("run.rigrec");
     let stop = AtomicBool::new(false);
@@ -202,9 +207,9 @@ fn absurd(k: u64) -> DeviceMsg {
     let seq = k as u32;
     let t0 = k * 20_000;
     match k % 6 {
-        1 => batch_at(seq, t0, 0, &[1; 20]),         // sample period 0
-        2 => batch_at(seq, t0, 1, &[1; 20]),         // 1 MHz
-        3 => batch_at(seq, t0, 1000, &[65535; 20]),  // beyond 12 bits
+        1 => batch_at(seq, t0, 0, &[1; 20]),        // sample period 0
+        2 => batch_at(seq, t0, 1, &[1; 20]),        // 1 MHz
+        3 => batch_at(seq, t0, 1000, &[65535; 20]), // beyond 12 bits
         4 => DeviceMsg::Tilt(TiltReading {
             sensor: 255, // on a 3-sensor board
             t_us: t0,
@@ -235,13 +240,21 @@ fn absurd_wire_values_are_counted_not_kept_and_fail_the_run() {
     let dir = tempfile::tempdir().unwrap();
     let out = dir.path().join("run.rigrec");
     let stop = AtomicBool::new(false);
-    let err = record(&config(&port, &out, false, Some(400)), &stop, &mut |_, _| {}).unwrap_err();
+    let err = record(
+        &config(&port, &out, false, Some(400)),
+        &stop,
+        &mut |_, _| {},
+    )
+    .unwrap_err();
     board.join().unwrap();
     let RecordError::OutOfRange { summary, tally, .. } = &err else {
         panic!("{err}");
     };
     assert_eq!(err.kind(), ErrorKind::Failure);
-    assert!(summary.contains("out of the board's announced range"), "{summary}");
+    assert!(
+        summary.contains("out of the board's announced range"),
+        "{summary}"
+    );
     // only the good batches were counted: nothing absurd in the counts
     assert!(tally.samples > 0 && tally.samples % 20 == 0);
     assert!(tally.dropped() < 1_000_000, "dropped {}", tally.dropped());
@@ -256,7 +269,10 @@ fn absurd_wire_values_are_counted_not_kept_and_fail_the_run() {
         .map(|l| l.split(',').nth(1).unwrap().parse().unwrap())
         .collect();
     assert!(!times.is_empty());
-    assert!(times.windows(2).all(|w| w[0] < w[1]), "pot.csv times not increasing");
+    assert!(
+        times.windows(2).all(|w| w[0] < w[1]),
+        "pot.csv times not increasing"
+    );
     assert!(pot.lines().skip(1).all(|l| l.ends_with(",2048")));
 }
 
@@ -288,7 +304,9 @@ fn export_of_absurd_recorded_frames_never_wraps_and_reports_them() {
     let csv = dir.path().join("csv");
     let summary = export_csv(&rec, &csv, false).unwrap();
     assert_eq!(summary.pot_rows, 40, "the two good batches");
-    let why = summary.out_of_range.expect("the absurd frames are reported");
+    let why = summary
+        .out_of_range
+        .expect("the absurd frames are reported");
     assert!(why.starts_with("10 frames out of"), "{why}");
     let pot = std::fs::read_to_string(csv.join("pot.csv")).unwrap();
     assert!(!pot.contains("18446744073709"), "{pot}");

@@ -96,7 +96,10 @@ fn harness(name: &str, old_args: &[&str], new_args: &[&str], trials: usize, seed
         }
         std::fs::remove_dir_all(&dir).unwrap();
     }
-    eprintln!("{name}: {trials} trials: old set {}, new set {} (+{} finished)", outcomes[0], outcomes[1], outcomes[2]);
+    eprintln!(
+        "{name}: {trials} trials: old set {}, new set {} (+{} finished)",
+        outcomes[0], outcomes[1], outcomes[2]
+    );
 }
 
 fn seed_and_trials() -> (u64, usize) {
@@ -135,7 +138,12 @@ fn interrupted_export_leaves_the_old_set_or_the_new_one() {
             .unwrap();
         assert_eq!(o.status.code(), Some(0), "{}", text(&o.stderr));
     }
-    let rec = |s: &str| tmp.path().join(format!("s{s}/pot.rec")).display().to_string();
+    let rec = |s: &str| {
+        tmp.path()
+            .join(format!("s{s}/pot.rec"))
+            .display()
+            .to_string()
+    };
     let (r1, r2) = (rec("1"), rec("2"));
     harness(
         "export",
@@ -167,7 +175,13 @@ fn a_second_simulate_removes_the_files_of_an_earlier_kind_of_run() {
     let names: Vec<String> = set(&dir).into_iter().map(|(n, _)| n).collect();
     assert_eq!(
         names,
-        ["cal.csv", "notes.txt", "truth.json", "truth.toml", "val.csv"],
+        [
+            "cal.csv",
+            "notes.txt",
+            "truth.json",
+            "truth.toml",
+            "val.csv"
+        ],
         "the session's files are stale; a file of the user's stays"
     );
 }

@@ -20,7 +20,10 @@ fn run(cwd: &Path, args: &[&str]) -> (Option<i32>, String) {
 /// A workspace: RUN/ (a simulated run: cal.csv, val.csv, truth.toml, truth.json), M.toml (a
 /// model), REC (a recording) and ALIAS -> RUN.
 fn workspace(dir: &Path) {
-    let (code, err) = run(dir, &["simulate", "--seed", "5", "--val", "20", "--out", "RUN"]);
+    let (code, err) = run(
+        dir,
+        &["simulate", "--seed", "5", "--val", "20", "--out", "RUN"],
+    );
     assert_eq!(code, Some(0), "{err}");
     let (code, err) = run(dir, &["simulate", "--session", "line", "--out", "S"]);
     assert_eq!(code, Some(0), "{err}");
@@ -32,10 +35,17 @@ fn workspace(dir: &Path) {
 
 /// Every input file of the workspace and its bytes.
 fn inputs(dir: &Path) -> Vec<(PathBuf, Vec<u8>)> {
-    ["RUN/cal.csv", "RUN/val.csv", "RUN/truth.toml", "RUN/truth.json", "M.toml", "REC"]
-        .iter()
-        .map(|n| (dir.join(n), std::fs::read(dir.join(n)).unwrap()))
-        .collect()
+    [
+        "RUN/cal.csv",
+        "RUN/val.csv",
+        "RUN/truth.toml",
+        "RUN/truth.json",
+        "M.toml",
+        "REC",
+    ]
+    .iter()
+    .map(|n| (dir.join(n), std::fs::read(dir.join(n)).unwrap()))
+    .collect()
 }
 
 fn assert_inputs_intact(before: &[(PathBuf, Vec<u8>)], what: &str) {
@@ -43,7 +53,10 @@ fn assert_inputs_intact(before: &[(PathBuf, Vec<u8>)], what: &str) {
         let now = std::fs::read(p).unwrap_or_default();
         assert!(&now == bytes, "{what}: {} changed", p.display());
         assert!(
-            !std::fs::symlink_metadata(p).unwrap().file_type().is_symlink(),
+            !std::fs::symlink_metadata(p)
+                .unwrap()
+                .file_type()
+                .is_symlink(),
             "{what}: {} became a link",
             p.display()
         );
@@ -77,7 +90,15 @@ fn report_html_onto_a_file_of_its_run_is_refused() {
     workspace(w);
     let (code, err) = run(
         w,
-        &["diagnose", "--poses", "RUN/cal.csv", "--validate", "RUN/val.csv", "--json", "RUN/diagnose.json"],
+        &[
+            "diagnose",
+            "--poses",
+            "RUN/cal.csv",
+            "--validate",
+            "RUN/val.csv",
+            "--json",
+            "RUN/diagnose.json",
+        ],
     );
     assert_eq!(code, Some(0), "{err}");
     let before = inputs(w);
@@ -103,7 +124,9 @@ fn report_html_onto_a_file_of_its_run_is_refused() {
     for html in ["RUN/report.html", "page2.html"] {
         let (code, err) = run(w, &["report", "RUN", "--html", html]);
         assert_eq!(code, Some(0), "{html}: {err}");
-        assert!(std::fs::read_to_string(w.join(html)).unwrap().contains("<html"));
+        assert!(std::fs::read_to_string(w.join(html))
+            .unwrap()
+            .contains("<html"));
     }
     assert_no_temp(w, "report");
 }
@@ -119,7 +142,15 @@ fn planted_links_in_output_folders_are_refused_or_replaced_never_followed() {
     symlink("../RUN/cal.csv", w.join("plots/01_link_length_d4.svg")).unwrap();
     let (code, err) = run(
         w,
-        &["diagnose", "--poses", "RUN/cal.csv", "--validate", "RUN/val.csv", "--plots", "plots"],
+        &[
+            "diagnose",
+            "--poses",
+            "RUN/cal.csv",
+            "--validate",
+            "RUN/val.csv",
+            "--plots",
+            "plots",
+        ],
     );
     assert_eq!(code, Some(2), "{err}");
     assert!(err.contains("is a link to the input"), "{err}");
@@ -144,7 +175,10 @@ fn planted_links_in_output_folders_are_refused_or_replaced_never_followed() {
     symlink("../bystander.txt", w.join("csv/status.csv")).unwrap();
     let (code, err) = run(w, &["export", "REC", "--csv", "csv"]);
     assert_eq!(code, Some(0), "{err}");
-    assert_eq!(std::fs::read_to_string(w.join("bystander.txt")).unwrap(), "keep me\n");
+    assert_eq!(
+        std::fs::read_to_string(w.join("bystander.txt")).unwrap(),
+        "keep me\n"
+    );
     let status = std::fs::symlink_metadata(w.join("csv/status.csv")).unwrap();
     assert!(status.is_file(), "the planted link was followed");
     assert_no_temp(w, "planted links");
@@ -158,7 +192,13 @@ fn command(writer: usize, out: &str) -> Vec<String> {
         1 => v(&["export", "REC", "--csv", out]),
         2 => v(&["report", "RUN", "--html", out]),
         _ => v(&[
-            "calibrate", "--poses", "RUN/cal.csv", "--validate", "RUN/val.csv", "--out", out,
+            "calibrate",
+            "--poses",
+            "RUN/cal.csv",
+            "--validate",
+            "RUN/val.csv",
+            "--out",
+            out,
         ]),
     }
 }
@@ -201,7 +241,14 @@ fn no_layout_of_links_changes_an_input() {
             std::fs::copy(base.path().join(rel), w.join(rel)).unwrap();
         };
         std::fs::create_dir(w.join("RUN")).unwrap();
-        for f in ["RUN/cal.csv", "RUN/val.csv", "RUN/truth.toml", "RUN/truth.json", "M.toml", "REC"] {
+        for f in [
+            "RUN/cal.csv",
+            "RUN/val.csv",
+            "RUN/truth.toml",
+            "RUN/truth.json",
+            "M.toml",
+            "REC",
+        ] {
             cp(f);
         }
         symlink("RUN", w.join("ALIAS")).unwrap();
@@ -209,7 +256,11 @@ fn no_layout_of_links_changes_an_input() {
         let writer = trial % 4;
         let out = if writer >= 2 {
             // a page or a model file: one path, planted as a link / hard link / alias spelling
-            let name = if writer == 2 { "page.html" } else { "model.toml" };
+            let name = if writer == 2 {
+                "page.html"
+            } else {
+                "model.toml"
+            };
             match rng.gen_range(0..5) {
                 0 => {
                     let target = input_spelling(&mut rng, false);
@@ -272,7 +323,12 @@ fn no_layout_of_links_changes_an_input() {
         let own: &[&str] = match writer {
             0 => &["M.toml"],
             1 => &["REC"],
-            2 => &["RUN/cal.csv", "RUN/val.csv", "RUN/truth.toml", "RUN/truth.json"],
+            2 => &[
+                "RUN/cal.csv",
+                "RUN/val.csv",
+                "RUN/truth.toml",
+                "RUN/truth.json",
+            ],
             _ => &["RUN/cal.csv", "RUN/val.csv"],
         };
         let guarded: Vec<(PathBuf, Vec<u8>)> = before
@@ -309,7 +365,10 @@ fn report_reads_symlinked_run_files() {
     let (code, err) = run(w, &["report", "LINKED", "--html", "linked.html"]);
     assert_eq!(code, Some(0), "{err}");
     assert!(!err.contains("nothing to report"), "{err}");
-    assert!(err.contains("dangling.json: a symbolic link to nothing readable"), "{err}");
+    assert!(
+        err.contains("dangling.json: a symbolic link to nothing readable"),
+        "{err}"
+    );
 }
 
 #[test]
@@ -335,7 +394,10 @@ fn hidden_characters_in_file_names_are_escaped_in_messages() {
                 !body.chars().any(|c| c.is_control() || c == '\u{202e}'),
                 "{args:?}: a raw control character in {err:?}"
             );
-            assert!(body.contains("\\u{") || body.contains("\\n") || body.contains("\\r"), "{err:?}");
+            assert!(
+                body.contains("\\u{") || body.contains("\\n") || body.contains("\\r"),
+                "{err:?}"
+            );
         }
     }
 }
