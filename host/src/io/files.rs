@@ -122,7 +122,7 @@ pub struct RunFiles {
     inputs: Vec<(String, PathBuf)>,
     outputs: Vec<(String, PathBuf)>,
     dirs: Vec<OutDir>,
-    run_dirs: Vec<(String, PathBuf)>,
+    run_dirs: Vec<(String, PathBuf, fn(&Path) -> bool)>,
     apart: Vec<(String, String)>,
 }
 
@@ -148,15 +148,19 @@ impl RunFiles {
     }
 
     /// A directory the command reads (`report RUN_DIR`): every file in it is an input (links
-    /// followed), and an output inside it must be a new name (no entry of that name at all).
-    pub fn input_dir(mut self, flag: &str, path: &Path) -> Self {
+    /// followed), and an output inside it must be a new name (no entry of that name at all) or
+    /// a file `replaceable` accepts (an earlier output of the same command, e.g. a report page).
+    pub fn input_dir(mut self, flag: &str, path: &Path, replaceable: fn(&Path) -> bool) -> Self {
         if let Ok(entries) = std::fs::read_dir(path) {
             for e in entries.flatten() {
-                self.inputs
-                    .push((format!("{flag} file"), path.join(e.file_name())));
+                let p = path.join(e.file_name());
+                if !replaceable(&p) {
+                    self.inputs.push((format!("{flag} file"), p));
+                }
             }
         }
-        self.run_dirs.push((flag.to_string(), path.to_path_buf()));
+        self.run_dirs
+            .push((flag.to_string(), path.to_path_buf(), replaceable));
         self
     }
 
@@ -245,9 +249,9 @@ impl RunFiles {
         let Ok(parent) = std::fs::canonicalize(parent) else {
             return Ok(());
         };
-        for (rflag, dir) in &self.run_dirs {
+        for (rflag, dir, replaceable) in &self.run_dirs {
             let same = std::fs::canonicalize(dir).is_ok_and(|d| d == parent);
-            if same && std::fs::symlink_metadata(path).is_ok() {
+            if same && std::fs::symlink_metadata(path).is_ok() && !replaceable(path) {
                 return Err(FilesError::InRunDir {
                     flag: flag.to_string(),
                     path: path.to_path_buf(),

@@ -128,6 +128,23 @@ fn report_html_onto_a_file_of_its_run_is_refused() {
             .unwrap()
             .contains("<html"));
     }
+    // the page of an earlier report is replaced; a page-like file that is not one, or a report
+    // page with a second hard link, is not
+    let (code, err) = run(w, &["report", "RUN", "--html", "RUN/report.html"]);
+    assert_eq!(code, Some(0), "a second report over its own page: {err}");
+    std::fs::write(
+        w.join("RUN/notes.html"),
+        "<!DOCTYPE html>\n<html>mine</html>\n",
+    )
+    .unwrap();
+    std::fs::hard_link(w.join("page2.html"), w.join("RUN/linked.html")).unwrap();
+    for html in ["RUN/notes.html", "RUN/linked.html"] {
+        let (code, err) = run(w, &["report", "RUN", "--html", html]);
+        assert_eq!(code, Some(2), "{html}: {err}");
+    }
+    assert!(std::fs::read_to_string(w.join("RUN/notes.html"))
+        .unwrap()
+        .contains("mine"));
     assert_no_temp(w, "report");
 }
 
