@@ -116,13 +116,17 @@ struct OutDir {
     writes: fn(&str) -> bool,
 }
 
+/// A directory read by the command: its flag, its path, and which existing files in it an
+/// output may replace.
+type RunDir = (String, PathBuf, fn(&Path) -> bool);
+
 /// The declared files of one run; [`RunFiles::check`] before the work.
 #[derive(Default)]
 pub struct RunFiles {
     inputs: Vec<(String, PathBuf)>,
     outputs: Vec<(String, PathBuf)>,
     dirs: Vec<OutDir>,
-    run_dirs: Vec<(String, PathBuf, fn(&Path) -> bool)>,
+    run_dirs: Vec<RunDir>,
     apart: Vec<(String, String)>,
 }
 
