@@ -26,6 +26,10 @@ if ! command -v qemu-system-arm >/dev/null 2>&1; then
   echo "run.sh: qemu-system-arm not found (Debian: apt-get install qemu-system-arm)" >&2
   exit 3
 fi
+if ! command -v flip-link >/dev/null 2>&1; then
+  echo "run.sh: flip-link not found, the firmware's linker (cargo install flip-link --locked)" >&2
+  exit 3
+fi
 (cd "$firmware" && cargo build --release --locked --quiet \
   --no-default-features --features mps2-an386 --target-dir target/mps2)
 elf=$firmware/target/mps2/thumbv7em-none-eabihf/release/rig-firmware

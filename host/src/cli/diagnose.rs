@@ -187,8 +187,11 @@ pub fn run(args: Args) -> Result<(), CliError> {
     }
     if let Some(dir) = &args.plots {
         let _lock = rigctl::io::atomic::lock_dir(dir)?;
+        // every plot as one commit; the plots of an earlier run that this one lacks go
+        let set = rigctl::io::file_set::begin(dir, is_diagnose_plot)?;
         write_plots(dir, &diag)?;
         write_probe_plots(dir, &diag.probe)?;
+        set.commit()?;
     }
     out!("{}", diag.report.table())?;
     if !diag.report.converged {
@@ -198,6 +201,14 @@ pub fn run(args: Args) -> Result<(), CliError> {
         )));
     }
     Ok(())
+}
+
+/// A plot `diagnose --plots` writes: `NN_ID.svg` or `probe_NAME.svg`.
+fn is_diagnose_plot(name: &str) -> bool {
+    let b = name.as_bytes();
+    name.ends_with(".svg")
+        && (name.starts_with("probe_")
+            || (b.len() > 3 && b[0].is_ascii_digit() && b[1].is_ascii_digit() && b[2] == b'_'))
 }
 
 /// Whether `path` is a fused-samples file (its first line names the format).

@@ -47,5 +47,11 @@ pub fn run(args: Args) -> Result<(), CliError> {
         summary.status_rows,
         summary.tally.dropped()
     );
+    if let Some(why) = &summary.out_of_range {
+        return Err(CliError::failure(format!(
+            "{}: {why}",
+            rigctl::io::shown::shown(&args.file)
+        )));
+    }
     Ok(())
 }

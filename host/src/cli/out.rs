@@ -11,6 +11,17 @@ use std::io::Write;
 
 use super::CliError;
 
+/// The command-line arguments with a hidden character (`rigctl::io::shown::is_hidden`).
+fn hostile_args() -> &'static [String] {
+    static ARGS: std::sync::OnceLock<Vec<String>> = std::sync::OnceLock::new();
+    ARGS.get_or_init(|| {
+        std::env::args_os()
+            .map(|a| a.to_string_lossy().into_owned())
+            .filter(|a| a.chars().any(rigctl::io::shown::is_hidden))
+            .collect()
+    })
+}
+
 /// Exit status when stdout's reader has gone (128 + SIGPIPE).
 pub const BROKEN_PIPE_EXIT: u8 = 141;
 
@@ -40,9 +51,20 @@ pub fn stdout_error(e: std::io::Error) -> CliError {
 }
 
 /// Writes `args` to stderr, ignoring errors.
+/// Control characters other than newline and tab, and the bidirectional overrides, are
+/// escaped (`rigctl::io::shown`): a file name cannot drive the terminal.
+/// A command-line argument holding a hidden character (a file name with a newline) is shown
+/// escaped wherever it appears in a message, newline included.
 pub fn stderr_fmt(args: fmt::Arguments<'_>) {
+    let mut text = args.to_string();
+    for arg in hostile_args() {
+        if text.contains(arg.as_str()) {
+            text = text.replace(arg.as_str(), &rigctl::io::shown::escape(arg));
+        }
+    }
+    let text = rigctl::io::shown::escape_keep_lines(&text);
     let mut err = std::io::stderr().lock();
-    let _ = err.write_fmt(args);
+    let _ = err.write_all(text.as_bytes());
     let _ = err.flush();
 }
 

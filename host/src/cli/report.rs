@@ -27,7 +27,13 @@ pub struct Args {
 
 pub fn run(args: Args) -> Result<(), CliError> {
     super::files()
-        .input("RUN_DIR", Some(&args.run_dir))
+        // every file of the run is an input; an --html inside it only under a new name or
+        // over the page of an earlier report (a plain file beginning as every report page)
+        .input_dir(
+            "RUN_DIR",
+            &args.run_dir,
+            rigctl::report::html::is_report_page,
+        )
         .output("--html", Some(&args.html))
         .check()?;
     let opts = ReportOptions {

@@ -90,28 +90,10 @@ fn run_session(args: &Args, path: SessionPath) -> Result<(), CliError> {
     Ok(())
 }
 
-/// The files `simulate` writes into its directory (plain and `--session`).
-fn writes(name: &str) -> bool {
-    matches!(
-        name,
-        "cal.csv"
-            | "val.csv"
-            | "truth.toml"
-            | "truth.json"
-            | "joints.csv"
-            | "truth_path.csv"
-            | "potjig.csv"
-            | "placement.toml"
-            | "pot.rec"
-            | "scan.png"
-            | "session.json"
-    )
-}
-
 pub fn run(args: Args) -> Result<(), CliError> {
     super::files()
         .input("--model", args.model.model.as_deref())
-        .output_dir("--out", Some(&args.out), writes)
+        .output_dir("--out", Some(&args.out), rigctl::sim::output::sim_file)
         .check()?;
     if let Some(path) = args.session {
         return run_session(&args, path);

@@ -59,11 +59,22 @@ pub enum PathArg {
     Free,
 }
 
+/// The files `trace --paths DIR` writes (and removes, when stale) in its folder.
+fn writes_in_paths_dir(name: &str) -> bool {
+    let numbered = |prefix: &str| {
+        name.strip_prefix(prefix)
+            .and_then(|r| r.strip_suffix(".csv"))
+            .is_some_and(|d| !d.is_empty() && d.bytes().all(|b| b.is_ascii_digit()))
+    };
+    name == rigctl::trace::SUMMARY_FILE || numbered("path-") || numbered("line-")
+}
+
 pub fn run(args: Args) -> Result<(), CliError> {
     super::files()
         .input("SCAN", Some(&args.scan))
         .output("--out", args.out.as_deref())
         .output("--overlay", args.overlay.as_deref())
+        .output_dir("--paths", args.paths.as_deref(), writes_in_paths_dir)
         .check()?;
     let mapping = match (args.no_fiducials, args.mm_per_px) {
         (true, Some(mm_per_px)) => Mapping::Scale { mm_per_px },

@@ -6,6 +6,8 @@
 //! | `tilt.csv` | `sensor,t_us,x,y,z,temp` | inclinometer reading, raw counts (SCL3300 mode 1: 6000 counts/g; T(degC) = -273 + temp / 18.9) |
 //! | `status.csv` | `host_rx_us,uptime_us,dropped_samples,dropped_frames,overruns,sensor_errors,rx_errors` | board `Status` frame; `host_rx_us` = host receive time (us since the recording's start), the rest as in `rig_protocol::Status` |
 //!
+//! Frames with values out of the board's announced range (`super::wire_check`) are left out
+//! and counted ([`ExportSummary::out_of_range`]; `rigctl export` exits 1 then).
 //! Rows are in the order the frames arrived. Each file is written under a temporary name and
 //! renamed when complete. Every stored frame is decoded (and its CRC checked) again; a frame
 //! that fails means the file was damaged after recording, which is bad input.
@@ -14,6 +16,7 @@ use super::link::decode_stored;
 use super::recording::{Recording, RecordingError};
 use super::salvage::{read_salvaged, DamagedRegion};
 use super::tally::Tally;
+use super::wire_check::WireCheck;
 use crate::io::atomic::{write_atomic, AtomicWriteError};
 use rig_protocol::{CorruptReason, DeviceMsg};
 use std::io::Write;
@@ -73,6 +76,9 @@ pub struct ExportSummary {
     pub truncated_tail_bytes: usize,
     /// Damaged stretches skipped (empty for an intact file).
     pub damaged: Vec<DamagedRegion>,
+    /// Frames out of the board's announced range, not exported
+    /// ([`super::wire_check::WireCheck::summary`]); `None` when there were none.
+    pub out_of_range: Option<String>,
 }
 
 /// The decoded frames of a recording, with their receive times.
@@ -101,9 +107,31 @@ pub fn decode_recording(
 /// skipped and reported in [`ExportSummary::damaged`]; with `strict` they are an error.
 pub fn export_csv(path: &Path, dir: &Path, strict: bool) -> Result<ExportSummary, ExportError> {
     let salvaged = read_salvaged(path, strict)?;
-    let frames = &salvaged.frames;
+    // frames out of the board's announced range are not exported (counted in the summary)
+    let mut check = WireCheck::new(
+        Some(salvaged.meta.pot_rate_hz),
+        salvaged.meta.hello.as_ref().map(|h| h.tilt_sensors),
+    );
+    let start = |m: &DeviceMsg| matches!(m, DeviceMsg::Ack(rig_protocol::CommandKind::Start));
+    if !salvaged.frames.iter().any(|(_, m)| start(m)) {
+        check.restart(); // no Start in the file (a simulated session): every frame is of the run
+    }
+    let kept: Vec<(u64, DeviceMsg)> = salvaged
+        .frames
+        .iter()
+        .filter(|(_, msg)| {
+            if start(msg) {
+                check.restart();
+            }
+            check.accept(msg)
+        })
+        .cloned()
+        .collect();
+    let frames = &kept;
     // the three files of one run, never a mix of concurrent exports into the same directory
     let _lock = crate::io::atomic::lock_dir(dir)?;
+    // the three files as one commit (crate::io::file_set)
+    let set = crate::io::file_set::begin(dir, crate::io::file_set::keep_all)?;
     let mut tally = Tally::new();
     for (_, msg) in frames {
         tally.on_message(msg);
@@ -115,7 +143,13 @@ pub fn export_csv(path: &Path, dir: &Path, strict: bool) -> Result<ExportSummary
         for (_, msg) in frames {
             if let DeviceMsg::Pot(b) = msg {
                 for (i, raw) in b.samples.iter().enumerate() {
-                    let t_us = b.t0_us + i as u64 * u64::from(b.period_us);
+                    // checked (the batch's last time fits, `WireCheck`); never a wrap
+                    let Some(t_us) = (i as u64)
+                        .checked_mul(u64::from(b.period_us))
+                        .and_then(|d| b.t0_us.checked_add(d))
+                    else {
+                        continue;
+                    };
                     writeln!(w, "{},{t_us},{raw}", b.seq)?;
                     rows += 1;
                 }
@@ -158,6 +192,7 @@ pub fn export_csv(path: &Path, dir: &Path, strict: bool) -> Result<ExportSummary
         }
         Ok(rows)
     })?;
+    set.commit()?;
     Ok(ExportSummary {
         pot_rows,
         tilt_rows,
@@ -165,6 +200,7 @@ pub fn export_csv(path: &Path, dir: &Path, strict: bool) -> Result<ExportSummary
         tally,
         truncated_tail_bytes: salvaged.truncated_tail_bytes,
         damaged: salvaged.damaged.clone(),
+        out_of_range: check.summary(),
     })
 }
 
@@ -204,7 +240,8 @@ mod tests {
             protocol_version: 1,
             port: "test".into(),
             start_time_unix_us: 0,
-            pot_rate_hz: 1000,
+            // the batches below are 250 us apart
+            pot_rate_hz: 4000,
             tilt_rate_hz: 100,
             hello: None,
             rigctl_version: "test".into(),

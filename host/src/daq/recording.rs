@@ -130,6 +130,8 @@ pub enum RecordingError {
     },
     #[error("{path} already exists (pass --overwrite to replace it)")]
     Exists { path: PathBuf },
+    #[error("{path} is being written by another process (another `rigctl record`?): refusing a second writer")]
+    Busy { path: PathBuf },
     #[error("cannot write recording {path}: {source}")]
     Write {
         path: PathBuf,
@@ -161,6 +163,7 @@ impl crate::error::Classify for RecordingError {
             Self::Write { .. } => ErrorKind::Failure,
             Self::Open { .. }
             | Self::Exists { .. }
+            | Self::Busy { .. }
             | Self::NotARecording { .. }
             | Self::UnsupportedVersion { .. }
             | Self::BadHeader { .. }
@@ -206,6 +209,16 @@ impl RecordingWriter {
                 }
             }
         })?;
+        Self::with_file(file, path, meta)
+    }
+
+    /// Writes the header into `file` (already opened, for example locked by
+    /// [`super::rec_file::open`]) and returns the writer; `path` names it in messages.
+    pub fn with_file(
+        file: File,
+        path: &Path,
+        meta: &RecordingMeta,
+    ) -> Result<Self, RecordingError> {
         let mut writer = Self {
             file,
             path: path.to_path_buf(),

@@ -13,13 +13,15 @@
 //! 4. Send `Stop` and store frames until `Ack(Stop)` (the board sends the last batch and a final
 //!    `Status` before it) or [`Timing::drain_timeout`].
 //!
-//! A read error, a hang-up or [`Timing::silence_timeout`] without a byte while running is a lost
+//! A read error, a hang-up or [`Timing::silence_timeout`] without a good frame while running is a lost
 //! device: the recording keeps every complete frame received so far and the error carries the
 //! counts ([`RecordError::tally`]).
 
 use super::link::{open_port, FrameReader, LinkError, LinkEvent};
+use super::rec_file::RecTarget;
 use super::recording::{HelloMeta, RecordingError, RecordingMeta, RecordingWriter};
 use super::tally::Tally;
+use super::wire_check::WireCheck;
 use rig_protocol::{
     check_hello, encode_host, CommandKind, DeviceMsg, Hello, HelloMismatch, HostMsg, NackReason,
     HOST_FRAME_MAX, PROTOCOL_VERSION,
@@ -109,6 +111,15 @@ pub enum RecordError {
     NoAck { port: PathBuf, attempts: u32 },
     #[error("interrupted before the recording started")]
     Interrupted,
+    #[error("{}: {summary}; {} keeps the {} good frames", .port.display(), .out.display(), .tally.frames)]
+    OutOfRange {
+        port: PathBuf,
+        out: PathBuf,
+        summary: String,
+        tally: Box<Tally>,
+    },
+    #[error("the run on {port} ended before the board sent a frame of data; {} is as it was before", .out.display())]
+    NoData { port: PathBuf, out: PathBuf },
     #[error("device on {port} lost ({reason}); {}", kept(out, *recorded, tally.frames))]
     DeviceLost {
         port: PathBuf,
@@ -127,7 +138,10 @@ fn kept(out: &std::path::Path, recorded: bool, frames: u64) -> String {
             out.display()
         )
     } else {
-        "nothing was recorded".into()
+        format!(
+            "nothing was recorded; {} is as it was before",
+            out.display()
+        )
     }
 }
 
@@ -135,7 +149,7 @@ impl RecordError {
     /// The counts of a session that failed after recording started.
     pub fn tally(&self) -> Option<&Tally> {
         match self {
-            Self::DeviceLost { tally, .. } => Some(tally),
+            Self::DeviceLost { tally, .. } | Self::OutOfRange { tally, .. } => Some(tally),
             _ => None,
         }
     }
@@ -172,8 +186,15 @@ struct Session<'a> {
     start_time_unix_us: u64,
     buf: Vec<u8>,
     writer: Option<RecordingWriter>,
+    /// Where the recording goes (with `--overwrite`: a temporary file until the commit).
+    target: Option<RecTarget>,
+    /// `Start` was acknowledged.
+    started: bool,
     tally: Tally,
-    last_byte: Instant,
+    /// Frames checked against the `Hello` and `Start` (created with the recording).
+    check: Option<WireCheck>,
+    /// When the last good, in-range frame arrived (the silence timeout counts these).
+    last_good: Instant,
 }
 
 impl Session<'_> {
@@ -197,7 +218,6 @@ impl Session<'_> {
             }
             Err(e) => return Err(format!("read failed: {e}")),
         };
-        self.last_byte = Instant::now();
         let rx_us = self.origin.elapsed().as_micros() as u64;
         let mut frames = Vec::new();
         self.reader.push_slice(&self.buf[..n], |event| {
@@ -215,9 +235,22 @@ impl Session<'_> {
 
     /// Stores and counts a frame (once the recording exists).
     fn keep(&mut self, frame: &Received) -> Result<(), RecordError> {
+        if let Some(check) = &mut self.check {
+            if !check.accept(&frame.msg) {
+                return Ok(()); // counted there; not stored, not counted as a frame
+            }
+        }
+        self.last_good = Instant::now();
         if let Some(writer) = &mut self.writer {
             writer.append(frame.rx_us, &frame.raw)?;
             self.tally.on_message(&frame.msg);
+            // the run has started and holds data: now the new recording may replace the old
+            let data = matches!(frame.msg, DeviceMsg::Pot(_) | DeviceMsg::Tilt(_));
+            if self.started && data {
+                if let Some(target) = self.target.as_mut().filter(|t| !t.committed()) {
+                    target.commit()?;
+                }
+            }
         }
         Ok(())
     }
@@ -232,10 +265,15 @@ impl Session<'_> {
 
     fn lost(&mut self, reason: String) -> RecordError {
         let writer = self.writer.take();
-        let recorded = writer.is_some();
+        let target = self.target.take();
+        let committed = target.as_ref().is_some_and(RecTarget::committed);
+        let recorded = writer.is_some() && committed;
         if let Some(writer) = writer {
             // The records are already with the OS; a failed sync changes nothing for them.
             let _ = writer.finish();
+        }
+        if let Some(t) = target.filter(|t| !t.committed()) {
+            t.discard(); // the old recording stays
         }
         RecordError::DeviceLost {
             port: self.cfg.port.clone(),
@@ -291,12 +329,22 @@ impl Session<'_> {
             hello: Some(HelloMeta::from(hello)),
             rigctl_version: env!("CARGO_PKG_VERSION").to_string(),
         };
-        self.writer = Some(RecordingWriter::create(
-            &self.cfg.out,
-            &meta,
-            self.cfg.overwrite,
-        )?);
-        Ok(())
+        self.check = Some(WireCheck::new(
+            Some(self.cfg.pot_rate_hz),
+            Some(hello.tilt_sensors),
+        ));
+        let (file, target) = super::rec_file::open(&self.cfg.out, self.cfg.overwrite)?;
+        match RecordingWriter::with_file(file, target.write_path(), &meta) {
+            Ok(w) => {
+                self.writer = Some(w);
+                self.target = Some(target);
+                Ok(())
+            }
+            Err(e) => {
+                target.discard();
+                Err(e.into())
+            }
+        }
     }
 
     /// Step 2: `Start` until acknowledged.
@@ -319,12 +367,18 @@ impl Session<'_> {
                     match frame.msg {
                         DeviceMsg::Ack(CommandKind::Start) => {
                             self.tally.start_run();
+                            if let Some(c) = &mut self.check {
+                                c.restart();
+                            }
                             started = true;
                         }
                         // The Ack was lost but our run's first batches arrive (`seq` restarts
                         // at 0 on `Start`; a run left over from before has larger ones).
                         DeviceMsg::Pot(ref batch) if batch.seq < IMPLICIT_ACK_SEQ && !started => {
                             self.tally.start_run();
+                            if let Some(c) = &mut self.check {
+                                c.restart();
+                            }
                             started = true;
                         }
                         DeviceMsg::Nack {
@@ -386,7 +440,7 @@ impl Session<'_> {
         let t = self.cfg.timing;
         let run_start = Instant::now();
         let mut last_progress = run_start;
-        self.last_byte = run_start;
+        self.last_good = run_start;
         loop {
             let elapsed = run_start.elapsed();
             if stop.load(Ordering::Relaxed) || self.cfg.duration.is_some_and(|d| elapsed >= d) {
@@ -398,9 +452,9 @@ impl Session<'_> {
                     return Ok(true);
                 }
             }
-            if self.last_byte.elapsed() >= t.silence_timeout {
-                let silent = self.last_byte.elapsed().as_secs_f64();
-                return Err(self.lost(format!("no byte for {silent:.1} s")));
+            if self.last_good.elapsed() >= t.silence_timeout {
+                let silent = self.last_good.elapsed().as_secs_f64();
+                return Err(self.lost(format!("no good frame for {silent:.1} s")));
             }
             if last_progress.elapsed() >= t.progress_interval {
                 last_progress = Instant::now();
@@ -437,17 +491,23 @@ pub fn record(
         start_time_unix_us,
         buf: vec![0u8; 4096],
         writer: None,
+        target: None,
+        started: false,
         tally: Tally::new(),
-        last_byte: origin,
+        check: None,
+        last_good: origin,
     };
     s.handshake(stop)?;
     if let Err(e) = s.start(stop) {
-        if s.writer.take().is_some() && e.tally().is_none() {
-            // Nothing was recorded but the Hello: leave no file behind a refused start.
-            let _ = std::fs::remove_file(&cfg.out);
+        s.writer = None;
+        if let Some(t) = s.target.take() {
+            // Nothing was recorded but the Hello: leave no new file behind a refused start,
+            // and an old recording (`--overwrite`) as it was.
+            t.discard();
         }
         return Err(e);
     }
+    s.started = true;
     let board_ended = s.run(stop, progress)?;
     if !board_ended {
         s.send(HostMsg::Stop).map_err(|r| s.lost(r))?;
@@ -459,6 +519,24 @@ pub fn record(
     }
     if let Some(writer) = s.writer.take() {
         writer.finish()?;
+    }
+    if let Some(t) = s.target.take() {
+        if !t.committed() {
+            // `--overwrite`: no frame of data came; the old recording stays
+            t.discard();
+            return Err(RecordError::NoData {
+                port: cfg.port.clone(),
+                out: cfg.out.clone(),
+            });
+        }
+    }
+    if let Some(summary) = s.check.as_ref().and_then(WireCheck::summary) {
+        return Err(RecordError::OutOfRange {
+            port: cfg.port.clone(),
+            out: cfg.out.clone(),
+            summary,
+            tally: Box::new(s.tally),
+        });
     }
     Ok(s.tally)
 }

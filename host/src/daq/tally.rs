@@ -76,7 +76,7 @@ impl Tally {
 
     /// Counts one good frame.
     pub fn on_message(&mut self, msg: &DeviceMsg) {
-        self.frames += 1;
+        self.frames = self.frames.saturating_add(1);
         match msg {
             DeviceMsg::Pot(batch) => self.on_pot(batch),
             DeviceMsg::Tilt(r) => self.on_tilt(r.sensor, r.t_us),
@@ -93,26 +93,30 @@ impl Tally {
         let period_us = u64::from(batch.period_us.max(1));
         match self.last_pot {
             Some(prev) if batch.seq > prev.seq => {
-                self.gap_batches += u64::from(batch.seq - prev.seq - 1);
+                self.gap_batches = self
+                    .gap_batches
+                    .saturating_add(u64::from(batch.seq - prev.seq - 1));
                 if batch.t0_us > prev.next_t_us {
                     let gap_us = batch.t0_us - prev.next_t_us;
-                    self.gap_samples += (gap_us + period_us / 2) / period_us;
+                    let gap = gap_us / period_us
+                        + u64::from(gap_us % period_us >= period_us - period_us / 2);
+                    self.gap_samples = self.gap_samples.saturating_add(gap);
                 }
             }
             // A repeated or older seq: the board restarted its run; start counting afresh.
             Some(_) => {}
             None => self.first_seq = Some(batch.seq),
         }
-        self.samples += len;
-        self.pot_batches += 1;
+        self.samples = self.samples.saturating_add(len);
+        self.pot_batches = self.pot_batches.saturating_add(1);
         self.last_pot = Some(PotEnd {
             seq: batch.seq,
-            next_t_us: batch.t0_us.saturating_add(len * period_us),
+            next_t_us: batch.t0_us.saturating_add(len.saturating_mul(period_us)),
         });
     }
 
     fn on_tilt(&mut self, sensor: u8, t_us: u64) {
-        self.tilt_readings += 1;
+        self.tilt_readings = self.tilt_readings.saturating_add(1);
         let s = usize::from(sensor);
         if self.tilt_grid.len() <= s {
             self.tilt_grid.resize(s + 1, (0, None));
@@ -122,7 +126,8 @@ impl Tally {
         if *last > 0 && t_us > *last {
             let dt = t_us - *last;
             let pending = &mut self.tilt_unresolved[s];
-            let count = |dt: u64, p: u64| ((dt + p / 2) / p).saturating_sub(1);
+            let count =
+                |dt: u64, p: u64| (dt / p + u64::from(dt % p >= p - p / 2)).saturating_sub(1);
             match *period {
                 // The first two intervals wait: their smaller one is the grid.
                 None if pending.is_empty() => pending.push(dt),
@@ -131,13 +136,14 @@ impl Tally {
                     let p = pending.iter().copied().min().unwrap_or(dt).max(1);
                     *period = Some(p);
                     for dt in pending.drain(..) {
-                        self.tilt_gap_readings += count(dt, p);
+                        self.tilt_gap_readings =
+                            self.tilt_gap_readings.saturating_add(count(dt, p));
                     }
                 }
                 Some(p) => {
                     let p = p.min(dt);
                     *period = Some(p);
-                    self.tilt_gap_readings += count(dt, p);
+                    self.tilt_gap_readings = self.tilt_gap_readings.saturating_add(count(dt, p));
                 }
             }
         }
@@ -168,9 +174,9 @@ impl Tally {
     /// Lost potentiometer samples (module documentation: the larger of the stream's and the
     /// board's count).
     pub fn dropped(&self) -> u64 {
-        let stream = self.gap_samples + self.leading_samples();
+        let stream = self.gap_samples.saturating_add(self.leading_samples());
         let board = self.last_status.map_or(0, |s| u64::from(s.dropped_samples));
-        stream.max(board) + self.tilt_gap_readings
+        stream.max(board).saturating_add(self.tilt_gap_readings)
     }
 
     /// The summary line: `frames N, samples N, dropped N, crc_errors N`.

@@ -18,20 +18,22 @@
 use std::fs::{File, OpenOptions};
 use std::io::{BufWriter, Write};
 use std::path::{Path, PathBuf};
+use std::sync::Mutex;
 
 use crate::io::interrupt;
+use crate::io::shown::shown;
 
 #[derive(Debug, thiserror::Error)]
 pub enum AtomicWriteError {
-    #[error("cannot write {path}: {source}")]
+    #[error("cannot write {}: {source}", shown(path))]
     Io {
         path: PathBuf,
         #[source]
         source: std::io::Error,
     },
-    #[error("cannot write {path}: {reason}")]
+    #[error("cannot write {}: {reason}", shown(path))]
     Unusable { path: PathBuf, reason: String },
-    #[error("{path}: {source}")]
+    #[error("{}: {source}", shown(path))]
     NonFinite {
         path: PathBuf,
         #[source]
@@ -131,6 +133,46 @@ pub fn resolve_output(path: &Path) -> Result<OutputTarget, AtomicWriteError> {
     Err(unusable("too many levels of symbolic links".into()))
 }
 
+/// Output folders (`simulate --out`, `diagnose --plots`, `export --csv`, `trace --paths`): a
+/// file written into one replaces whatever entry has its name, and a symbolic link there is
+/// replaced, never followed (a link planted in an output folder cannot send a write to another
+/// file).
+static OUTPUT_DIRS: Mutex<Vec<PathBuf>> = Mutex::new(Vec::new());
+
+/// Declares `dir` an output folder of this process (see [`OUTPUT_DIRS`]); it need not exist yet.
+pub fn declare_output_dir(dir: &Path) {
+    if let Ok(mut dirs) = OUTPUT_DIRS.lock() {
+        dirs.push(dir.to_path_buf());
+    }
+}
+
+/// Whether `path` names an entry of a declared output folder.
+fn in_output_dir(path: &Path) -> bool {
+    let Ok(dirs) = OUTPUT_DIRS.lock() else {
+        return false;
+    };
+    if dirs.is_empty() {
+        return false;
+    }
+    let Ok(parent) = std::fs::canonicalize(parent_dir(path)) else {
+        return false;
+    };
+    dirs.iter()
+        .any(|d| std::fs::canonicalize(d).is_ok_and(|d| d == parent))
+}
+
+/// The target of a write into an output folder: the entry itself, whatever it is (a link is
+/// replaced by the new file), unless it is a directory.
+fn replace_in_place(path: &Path) -> Result<OutputTarget, AtomicWriteError> {
+    match std::fs::symlink_metadata(path) {
+        Ok(m) if m.is_dir() => Err(AtomicWriteError::Unusable {
+            path: path.to_path_buf(),
+            reason: "is a directory".into(),
+        }),
+        _ => Ok(OutputTarget::Replace(path.to_path_buf())),
+    }
+}
+
 /// The directory a new file at `path` goes into (`.` for a bare file name).
 fn parent_dir(path: &Path) -> PathBuf {
     match path.parent() {
@@ -139,7 +181,9 @@ fn parent_dir(path: &Path) -> PathBuf {
     }
 }
 
-fn temp_path(path: &Path) -> PathBuf {
+/// The temporary name `.NAME.tmp-PID` beside `path`, which [`clean_stale_temps`] removes once
+/// its process is gone.
+pub fn temp_path(path: &Path) -> PathBuf {
     let name = path
         .file_name()
         .map(|n| n.to_string_lossy().into_owned())
@@ -207,17 +251,17 @@ pub fn check_output(path: &Path) -> Result<(), AtomicWriteError> {
                 });
             }
             let probe = temp_path(&target);
-            let file = OpenOptions::new()
-                .write(true)
-                .create_new(true)
-                .open(&probe)
-                .map_err(|source| AtomicWriteError::Io {
-                    path: path.to_path_buf(),
-                    source,
-                })?;
-            drop(file);
-            let _ = std::fs::remove_file(&probe);
-            Ok(())
+            // registered before it exists: a signal at any point leaves no probe behind
+            interrupt::register_temp(&probe);
+            let created = OpenOptions::new().write(true).create_new(true).open(&probe);
+            if created.is_ok() {
+                let _ = std::fs::remove_file(&probe);
+            }
+            interrupt::unregister_temp(&probe);
+            created.map(drop).map_err(|source| AtomicWriteError::Io {
+                path: path.to_path_buf(),
+                source,
+            })
         }
     }
 }
@@ -243,7 +287,12 @@ where
         path: path.to_path_buf(),
         source,
     };
-    match resolve_output(path)? {
+    let target = if in_output_dir(path) {
+        replace_in_place(path)?
+    } else {
+        resolve_output(path)?
+    };
+    match target {
         OutputTarget::Direct(target) => {
             let file = OpenOptions::new()
                 .write(true)
@@ -257,19 +306,36 @@ where
         OutputTarget::Replace(target) => {
             clean_stale_temps(&parent_dir(&target));
             let tmp = temp_path(&target);
-            let file = File::create(&tmp).map_err(io_err)?;
+            // registered before it exists: no gap in which a signal would leave it behind
             interrupt::register_temp(&tmp);
+            let file = match File::create(&tmp) {
+                Ok(f) => f,
+                Err(e) => {
+                    interrupt::unregister_temp(&tmp);
+                    return Err(io_err(e).into());
+                }
+            };
             let mut w = BufWriter::new(file);
             let result = fill(&mut w).and_then(|()| {
                 let file = w.into_inner().map_err(|e| io_err(e.into_error()))?;
                 file.sync_all().map_err(io_err)?;
-                std::fs::rename(&tmp, &target).map_err(io_err)?;
                 Ok(())
             });
             if result.is_err() {
                 let _ = std::fs::remove_file(&tmp);
+                interrupt::unregister_temp(&tmp);
+                return result;
+            }
+            // a set of files open for the folder renames it with the others at its commit
+            if super::file_set::stage(&tmp, &target) {
+                return result;
+            }
+            let renamed = std::fs::rename(&tmp, &target).map_err(io_err);
+            if renamed.is_err() {
+                let _ = std::fs::remove_file(&tmp);
             }
             interrupt::unregister_temp(&tmp);
+            renamed?;
             result
         }
     }

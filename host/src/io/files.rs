@@ -15,12 +15,15 @@
 use std::os::unix::fs::MetadataExt;
 use std::path::{Path, PathBuf};
 
-use crate::io::atomic::{check_output, resolve_output, AtomicWriteError};
+use crate::io::atomic::{check_output, declare_output_dir, resolve_output, AtomicWriteError};
+use crate::io::shown::shown;
 
 #[derive(Debug, thiserror::Error)]
 pub enum FilesError {
     #[error(
-        "{flag} {path}: is also the input {input_flag} {input}: refusing to overwrite an input"
+        "{flag} {}: is also the input {input_flag} {}: refusing to overwrite an input",
+        shown(path),
+        shown(input)
     )]
     OutputIsInput {
         flag: String,
@@ -28,24 +31,42 @@ pub enum FilesError {
         input_flag: String,
         input: PathBuf,
     },
-    #[error("{flag} {path} and {other_flag} {other}: the same file written twice")]
+    #[error(
+        "{flag} {} and {other_flag} {}: the same file written twice",
+        shown(path),
+        shown(other)
+    )]
     OutputTwice {
         flag: String,
         path: PathBuf,
         other_flag: String,
         other: PathBuf,
     },
-    #[error("{flag} {path} is also {other_flag}: the held-out data must be other data")]
+    #[error(
+        "{flag} {} is also {other_flag}: the held-out data must be other data",
+        shown(path)
+    )]
     SameData {
         flag: String,
         path: PathBuf,
         other_flag: String,
     },
-    #[error("{flag} {path}: {reason}")]
+    #[error("{flag} {}: {reason}", shown(path))]
     BadDir {
         flag: String,
         path: PathBuf,
         reason: String,
+    },
+    #[error(
+        "{flag} {}: already exists in the run directory {dir_flag} {} that the command reads: refusing to overwrite a file of the run (give a new name)",
+        shown(path),
+        shown(dir)
+    )]
+    InRunDir {
+        flag: String,
+        path: PathBuf,
+        dir_flag: String,
+        dir: PathBuf,
     },
     #[error(transparent)]
     Output(#[from] AtomicWriteError),
@@ -95,12 +116,17 @@ struct OutDir {
     writes: fn(&str) -> bool,
 }
 
+/// A directory read by the command: its flag, its path, and which existing files in it an
+/// output may replace.
+type RunDir = (String, PathBuf, fn(&Path) -> bool);
+
 /// The declared files of one run; [`RunFiles::check`] before the work.
 #[derive(Default)]
 pub struct RunFiles {
     inputs: Vec<(String, PathBuf)>,
     outputs: Vec<(String, PathBuf)>,
     dirs: Vec<OutDir>,
+    run_dirs: Vec<RunDir>,
     apart: Vec<(String, String)>,
 }
 
@@ -122,6 +148,23 @@ impl RunFiles {
         for p in paths {
             self.inputs.push((flag.to_string(), p.clone()));
         }
+        self
+    }
+
+    /// A directory the command reads (`report RUN_DIR`): every file in it is an input (links
+    /// followed), and an output inside it must be a new name (no entry of that name at all) or
+    /// a file `replaceable` accepts (an earlier output of the same command, e.g. a report page).
+    pub fn input_dir(mut self, flag: &str, path: &Path, replaceable: fn(&Path) -> bool) -> Self {
+        if let Ok(entries) = std::fs::read_dir(path) {
+            for e in entries.flatten() {
+                let p = path.join(e.file_name());
+                if !replaceable(&p) {
+                    self.inputs.push((format!("{flag} file"), p));
+                }
+            }
+        }
+        self.run_dirs
+            .push((flag.to_string(), path.to_path_buf(), replaceable));
         self
     }
 
@@ -172,6 +215,7 @@ impl RunFiles {
         }
         let mut seen: Vec<(&str, &Path, Identity)> = Vec::new();
         for (flag, path) in &self.outputs {
+            self.check_not_in_run_dir(flag, path)?;
             check_output(path)?;
             let Some(id) = output_identity(path) else {
                 continue;
@@ -196,6 +240,29 @@ impl RunFiles {
         }
         for d in &self.dirs {
             self.check_dir(d, &inputs, &seen)?;
+        }
+        Ok(())
+    }
+
+    /// An output inside a run directory the command reads must be a new name.
+    fn check_not_in_run_dir(&self, flag: &str, path: &Path) -> Result<(), FilesError> {
+        let parent = match path.parent() {
+            Some(p) if !p.as_os_str().is_empty() => p,
+            _ => Path::new("."),
+        };
+        let Ok(parent) = std::fs::canonicalize(parent) else {
+            return Ok(());
+        };
+        for (rflag, dir, replaceable) in &self.run_dirs {
+            let same = std::fs::canonicalize(dir).is_ok_and(|d| d == parent);
+            if same && std::fs::symlink_metadata(path).is_ok() && !replaceable(path) {
+                return Err(FilesError::InRunDir {
+                    flag: flag.to_string(),
+                    path: path.to_path_buf(),
+                    dir_flag: rflag.clone(),
+                    dir: dir.clone(),
+                });
+            }
         }
         Ok(())
     }
@@ -245,20 +312,27 @@ impl RunFiles {
                 if let Some((f, p, _)) = inputs.iter().find(|(_, p, _)| inside(p)) {
                     return Err(bad(format!(
                         "would overwrite the input {f} {}: refusing",
-                        p.display()
+                        shown(p)
                     )));
                 }
                 if let Some((f, p, _)) = outputs.iter().find(|(_, p, _)| inside(p)) {
-                    return Err(bad(format!("would be written over by {f} {}", p.display())));
+                    return Err(bad(format!("would be written over by {f} {}", shown(p))));
                 }
+                self.check_dir_entries(d, inputs, outputs)?;
                 let probe = d
                     .path
                     .join(format!(".rigctl-probe.tmp-{}", std::process::id()));
-                std::fs::File::create(&probe).map_err(|source| AtomicWriteError::Io {
+                // registered before it exists: a signal at any point leaves no probe behind
+                crate::io::interrupt::register_temp(&probe);
+                let created = std::fs::File::create(&probe);
+                if created.is_ok() {
+                    let _ = std::fs::remove_file(&probe);
+                }
+                crate::io::interrupt::unregister_temp(&probe);
+                created.map_err(|source| AtomicWriteError::Io {
                     path: d.path.clone(),
                     source,
                 })?;
-                let _ = std::fs::remove_file(&probe);
             }
             Err(_) => {
                 if std::fs::symlink_metadata(&d.path).is_ok() {
@@ -271,9 +345,58 @@ impl RunFiles {
                 if !parent.is_dir() {
                     return Err(bad(format!(
                         "its directory {} does not exist",
-                        parent.display()
+                        shown(parent)
                     )));
                 }
+            }
+        }
+        // whatever the command writes into the folder replaces the entry there (a link is
+        // replaced, never followed)
+        declare_output_dir(&d.path);
+        Ok(())
+    }
+
+    /// The entries already in an output folder under the names the command writes: none may
+    /// be, resolve to (a symbolic link) or share its inode with (a hard link) an input or
+    /// another output.
+    fn check_dir_entries(
+        &self,
+        d: &OutDir,
+        inputs: &[(&str, &Path, Identity)],
+        outputs: &[(&str, &Path, Identity)],
+    ) -> Result<(), FilesError> {
+        let Ok(entries) = std::fs::read_dir(&d.path) else {
+            return Ok(());
+        };
+        for e in entries.flatten() {
+            let name = e.file_name();
+            if !(d.writes)(&name.to_string_lossy()) {
+                continue;
+            }
+            let entry = d.path.join(&name);
+            let Some(id) = identity(&entry) else {
+                continue;
+            };
+            let clash = inputs
+                .iter()
+                .map(|(f, p, i)| (f, p, i, "input "))
+                .chain(outputs.iter().map(|(f, p, i)| (f, p, i, "output ")))
+                .find(|(_, _, i, _)| **i == id);
+            if let Some((f, p, _, role)) = clash {
+                let how = if e.file_type().is_ok_and(|t| t.is_symlink()) {
+                    "a link to"
+                } else {
+                    "the same file as (hard link)"
+                };
+                return Err(FilesError::BadDir {
+                    flag: d.flag.clone(),
+                    path: d.path.clone(),
+                    reason: format!(
+                        "{} is {how} the {role}{f} {}: refusing to write it",
+                        shown(&entry),
+                        shown(p)
+                    ),
+                });
             }
         }
         Ok(())

@@ -5,6 +5,7 @@
 pub mod atomic;
 pub mod cdr;
 pub mod dialect;
+pub mod file_set;
 pub mod files;
 pub mod finite;
 pub mod finite_json;
@@ -14,5 +15,6 @@ pub mod pose_csv;
 pub mod ranges;
 pub mod read;
 pub mod rosbag;
+pub mod shown;
 pub mod table;
 pub mod units;

@@ -275,6 +275,25 @@ fn provenance(s: &mut String, r: &Report) {
 }
 
 /// The whole page: the first screen (the answer), a table of contents, then the details.
+/// How every page `render_html` writes begins (before the run directory's name).
+pub const PAGE_PREFIX: &str =
+    "<!DOCTYPE html>\n<html lang=\"en\"><head><meta charset=\"utf-8\"><title>rigctl report: ";
+
+/// Whether `path` is a page an earlier `rigctl report` wrote: a regular file (not a link), with
+/// no other hard link, beginning with [`PAGE_PREFIX`]. Such a page in the run directory may be
+/// replaced by a new report; no other file of the run may.
+pub fn is_report_page(path: &std::path::Path) -> bool {
+    use std::io::Read as _;
+    use std::os::unix::fs::MetadataExt as _;
+    let plain = std::fs::symlink_metadata(path).is_ok_and(|m| m.is_file() && m.nlink() == 1);
+    let mut head = vec![0u8; PAGE_PREFIX.len()];
+    plain
+        && std::fs::File::open(path)
+            .and_then(|mut f| f.read_exact(&mut head))
+            .is_ok()
+        && head == PAGE_PREFIX.as_bytes()
+}
+
 pub fn render_html(r: &Report) -> String {
     let mut s = String::new();
     let _ = writeln!(
@@ -364,7 +383,7 @@ mod tests {
             ..Default::default()
         };
         let html = render_html(&r);
-        assert!(html.starts_with("<!DOCTYPE html>"));
+        assert!(html.starts_with(PAGE_PREFIX));
         assert!(!html.contains("<script"));
         assert!(!html.contains("http://") && !html.contains("https://"));
         assert!(html.contains("&lt;dir&gt;"));

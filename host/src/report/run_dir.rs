@@ -112,18 +112,28 @@ impl RunDir {
             path: dir.to_path_buf(),
             source,
         };
-        let mut names: Vec<String> = std::fs::read_dir(dir)
-            .map_err(io)?
-            .filter_map(|e| e.ok())
-            .filter(|e| e.file_type().map(|t| t.is_file()).unwrap_or(false))
-            .map(|e| e.file_name().to_string_lossy().into_owned())
-            .filter(|n| !n.starts_with('.'))
-            .collect();
-        names.sort();
         let mut run = RunDir {
             dir: dir.to_path_buf(),
             ..Default::default()
         };
+        let mut names: Vec<String> = Vec::new();
+        for e in std::fs::read_dir(dir).map_err(io)?.flatten() {
+            let name = e.file_name().to_string_lossy().into_owned();
+            if name.starts_with('.') {
+                continue;
+            }
+            let link = e.file_type().is_ok_and(|t| t.is_symlink());
+            // a symbolic link is read as the file it points to; a dangling one is a note
+            match std::fs::metadata(e.path()) {
+                Ok(m) if m.is_file() => names.push(name),
+                Err(err) if link => run.notes.push(format!(
+                    "{}: a symbolic link to nothing readable ({err}): skipped",
+                    crate::io::shown::escape(&name)
+                )),
+                _ => {}
+            }
+        }
+        names.sort();
         for name in names {
             let path = dir.join(&name);
             let bytes = match crate::io::read::read_capped(&path, crate::io::read::CAP_TABLE) {

@@ -22,6 +22,25 @@ use super::simulate::{SimConfig, SimError, SimOutput, SimPose};
 use crate::io::atomic::{check_text_for, write_bytes_atomic};
 use crate::io::finite::TextFormat;
 
+/// Every file `simulate` writes into its folder (plain and `--session`): a run's set replaces
+/// the set of an earlier run, whose files the new set lacks are removed at the commit.
+pub fn sim_file(name: &str) -> bool {
+    matches!(
+        name,
+        "cal.csv"
+            | "val.csv"
+            | "truth.toml"
+            | "truth.json"
+            | "joints.csv"
+            | "truth_path.csv"
+            | "potjig.csv"
+            | "placement.toml"
+            | "pot.rec"
+            | "scan.png"
+            | "session.json"
+    )
+}
+
 /// Format tag of `truth.json`.
 pub const TRUTH_JSON_FORMAT: &str = "rigctl-simulate-truth/1";
 
@@ -123,6 +142,8 @@ pub fn write_outputs(dir: &Path, out: &SimOutput, cfg: &SimConfig) -> Result<(),
     }
     // the four files of one run, never a mix of concurrent runs into the same directory
     let _lock = crate::io::atomic::lock_dir(dir)?;
+    // written as one commit (crate::io::file_set)
+    let set = crate::io::file_set::begin(dir, sim_file)?;
     let n = out.declared.n_joints();
     let json_text = serde_json::to_string_pretty(&truth_json(out, cfg))
         .map_err(|e| SimError::Config(format!("cannot serialise truth.json: {e}")))?;
@@ -139,5 +160,6 @@ pub fn write_outputs(dir: &Path, out: &SimOutput, cfg: &SimConfig) -> Result<(),
         write_bytes_atomic(&dir.join(name), text.as_bytes())?;
     }
     write_bytes_atomic(&dir.join("truth.json"), (json_text + "\n").as_bytes())?;
+    set.commit()?;
     Ok(())
 }

@@ -276,22 +276,8 @@ pub fn write_drawing(dir: &Path, drawing: &Drawing) -> Result<PathBuf, TraceErro
         source,
     };
     std::fs::create_dir_all(dir).map_err(|e| io_err(dir, e))?;
-    for entry in std::fs::read_dir(dir).map_err(|e| io_err(dir, e))? {
-        let entry = entry.map_err(|e| io_err(dir, e))?;
-        let name = entry.file_name();
-        let stale = name.to_str().is_some_and(|n| {
-            let numbered = |prefix: &str, count: usize| {
-                n.strip_prefix(prefix)
-                    .and_then(|r| r.strip_suffix(".csv"))
-                    .and_then(|d| d.parse::<usize>().ok())
-                    .is_some_and(|k| k == 0 || k > count)
-            };
-            numbered("path-", drawing.paths.len()) || numbered("line-", drawing.lines.len())
-        });
-        if stale {
-            std::fs::remove_file(entry.path()).map_err(|e| io_err(&entry.path(), e))?;
-        }
-    }
+    // the files as one commit; numbered files of an earlier run beyond the new ones go then
+    let set = crate::io::file_set::begin(dir, numbered_file)?;
     for (i, p) in drawing.paths.iter().enumerate() {
         write_csv(&dir.join(path_file_name(i)), &p.stroke.points_mm)?;
     }
@@ -301,7 +287,17 @@ pub fn write_drawing(dir: &Path, drawing: &Drawing) -> Result<PathBuf, TraceErro
     let summary = dir.join(SUMMARY_FILE);
     let text = serde_json::to_string_pretty(&summary_json(drawing)).unwrap_or_default() + "\n";
     write_bytes_atomic(&summary, text.as_bytes())?;
+    set.commit()?;
     Ok(summary)
+}
+
+/// `path-NNN.csv` or `line-NNN.csv`: the numbered files of `write_drawing`.
+fn numbered_file(name: &str) -> bool {
+    ["path-", "line-"].iter().any(|p| {
+        name.strip_prefix(p)
+            .and_then(|r| r.strip_suffix(".csv"))
+            .is_some_and(|d| !d.is_empty() && d.bytes().all(|b| b.is_ascii_digit()))
+    })
 }
 
 fn point(p: [f64; 2]) -> Value {

@@ -51,6 +51,8 @@ pub fn write_session(dir: &Path, s: &Session, cfg: &SessionConfig) -> Result<(),
     };
     // the files of one session, never a mix of concurrent runs into the same directory
     let _lock = crate::io::atomic::lock_dir(dir)?;
+    // written as one commit (crate::io::file_set)
+    let set = crate::io::file_set::begin(dir, crate::sim::output::sim_file)?;
     let nj = s.q_deg.first().map_or(0, Vec::len);
     let qhead: Vec<String> = (1..=nj).map(|j| format!("q{j}")).collect();
     let mut joints = format!("t,{}\n", qhead.join(","));
@@ -81,7 +83,8 @@ pub fn write_session(dir: &Path, s: &Session, cfg: &SessionConfig) -> Result<(),
     s.truth.write_file(&dir.join("truth.toml"))?;
     // the recording: written under a temporary name, renamed when complete
     let rec = dir.join("pot.rec");
-    let tmp = dir.join(".pot.rec.tmp");
+    let tmp = crate::io::atomic::temp_path(&rec);
+    crate::io::interrupt::register_temp(&tmp);
     let meta = RecordingMeta {
         protocol_version: rig_protocol::PROTOCOL_VERSION,
         port: "simulated".into(),
@@ -96,7 +99,10 @@ pub fn write_session(dir: &Path, s: &Session, cfg: &SessionConfig) -> Result<(),
         w.append(*rx, f)?;
     }
     w.finish()?;
-    std::fs::rename(&tmp, &rec).map_err(io(&rec))?;
+    if !crate::io::file_set::stage(&tmp, &rec) {
+        std::fs::rename(&tmp, &rec).map_err(io(&rec))?;
+        crate::io::interrupt::unregister_temp(&tmp);
+    }
     // the scan
     let img = render_session_scan(s, cfg);
     let mut png = Vec::new();
@@ -136,5 +142,6 @@ pub fn write_session(dir: &Path, s: &Session, cfg: &SessionConfig) -> Result<(),
     });
     let text = serde_json::to_string_pretty(&json).unwrap_or_default();
     write_bytes_atomic(&dir.join("session.json"), format!("{text}\n").as_bytes())?;
+    set.commit()?;
     Ok(())
 }

@@ -3,6 +3,7 @@
 
 use std::path::PathBuf;
 
+pub mod fake_board;
 pub mod long_urdf;
 pub mod record;
 pub mod spawn;

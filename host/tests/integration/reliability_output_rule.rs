@@ -1,0 +1,420 @@
+//! One output rule for every writer (docs/reliability.md, "One output rule"): the cases of
+//! issue 48, items 1 and 2, and a seeded property test over random layouts of symbolic links,
+//! hard links and folder aliases between the inputs and outputs of every subcommand that writes
+//! a folder or a page: no input's bytes ever change. `RELIABILITY_SEED=N` draws other layouts.
+
+use std::os::unix::fs::symlink;
+use std::path::{Path, PathBuf};
+
+use rand::{Rng, SeedableRng};
+use rand_chacha::ChaCha8Rng;
+
+use super::common::spawn::{rigctl, text};
+
+/// `rigctl ARGS` in `cwd`: (exit code, stderr).
+fn run(cwd: &Path, args: &[&str]) -> (Option<i32>, String) {
+    let o = rigctl().current_dir(cwd).args(args).output().unwrap();
+    (o.status.code(), text(&o.stderr))
+}
+
+/// A workspace: RUN/ (a simulated run: cal.csv, val.csv, truth.toml, truth.json), M.toml (a
+/// model), REC (a recording) and ALIAS -> RUN.
+fn workspace(dir: &Path) {
+    let (code, err) = run(
+        dir,
+        &["simulate", "--seed", "5", "--val", "20", "--out", "RUN"],
+    );
+    assert_eq!(code, Some(0), "{err}");
+    let (code, err) = run(dir, &["simulate", "--session", "line", "--out", "S"]);
+    assert_eq!(code, Some(0), "{err}");
+    std::fs::rename(dir.join("S/pot.rec"), dir.join("REC")).unwrap();
+    std::fs::remove_dir_all(dir.join("S")).unwrap();
+    std::fs::copy(dir.join("RUN/truth.toml"), dir.join("M.toml")).unwrap();
+    symlink("RUN", dir.join("ALIAS")).unwrap();
+}
+
+/// Every input file of the workspace and its bytes.
+fn inputs(dir: &Path) -> Vec<(PathBuf, Vec<u8>)> {
+    [
+        "RUN/cal.csv",
+        "RUN/val.csv",
+        "RUN/truth.toml",
+        "RUN/truth.json",
+        "M.toml",
+        "REC",
+    ]
+    .iter()
+    .map(|n| (dir.join(n), std::fs::read(dir.join(n)).unwrap()))
+    .collect()
+}
+
+fn assert_inputs_intact(before: &[(PathBuf, Vec<u8>)], what: &str) {
+    for (p, bytes) in before {
+        let now = std::fs::read(p).unwrap_or_default();
+        assert!(&now == bytes, "{what}: {} changed", p.display());
+        assert!(
+            !std::fs::symlink_metadata(p)
+                .unwrap()
+                .file_type()
+                .is_symlink(),
+            "{what}: {} became a link",
+            p.display()
+        );
+    }
+}
+
+/// No temporary file (`.NAME.tmp-PID`) anywhere in the workspace.
+fn assert_no_temp(dir: &Path, what: &str) {
+    for e in walk(dir) {
+        let n = e.file_name().unwrap().to_string_lossy().into_owned();
+        assert!(!n.contains(".tmp-"), "{what}: left {}", e.display());
+    }
+}
+
+fn walk(dir: &Path) -> Vec<PathBuf> {
+    let mut out = Vec::new();
+    for e in std::fs::read_dir(dir).into_iter().flatten().flatten() {
+        let p = e.path();
+        if e.file_type().is_ok_and(|t| t.is_dir()) {
+            out.extend(walk(&p));
+        }
+        out.push(p);
+    }
+    out
+}
+
+#[test]
+fn report_html_onto_a_file_of_its_run_is_refused() {
+    let tmp = tempfile::tempdir().unwrap();
+    let w = tmp.path();
+    workspace(w);
+    let (code, err) = run(
+        w,
+        &[
+            "diagnose",
+            "--poses",
+            "RUN/cal.csv",
+            "--validate",
+            "RUN/val.csv",
+            "--json",
+            "RUN/diagnose.json",
+        ],
+    );
+    assert_eq!(code, Some(0), "{err}");
+    let before = inputs(w);
+    let json = std::fs::read(w.join("RUN/diagnose.json")).unwrap();
+    symlink("diagnose.json", w.join("RUN/page.html")).unwrap();
+    std::fs::hard_link(w.join("RUN/cal.csv"), w.join("hard.html")).unwrap();
+    for html in [
+        "RUN/cal.csv",
+        "RUN/page.html",    // a link to diagnose.json
+        "ALIAS/truth.toml", // through an alias of the run folder
+        "RUN/./truth.toml",
+        "hard.html", // a hard link to cal.csv elsewhere
+    ] {
+        for run_dir in ["RUN", "ALIAS"] {
+            let (code, err) = run(w, &["report", run_dir, "--html", html]);
+            assert_eq!(code, Some(2), "report {run_dir} --html {html}: {err}");
+            assert!(err.contains("refusing"), "{err}");
+        }
+    }
+    assert_inputs_intact(&before, "report");
+    assert_eq!(std::fs::read(w.join("RUN/diagnose.json")).unwrap(), json);
+    // a new name inside the run folder, and a name outside it, are written
+    for html in ["RUN/report.html", "page2.html"] {
+        let (code, err) = run(w, &["report", "RUN", "--html", html]);
+        assert_eq!(code, Some(0), "{html}: {err}");
+        assert!(std::fs::read_to_string(w.join(html))
+            .unwrap()
+            .contains("<html"));
+    }
+    // the page of an earlier report is replaced; a page-like file that is not one, or a report
+    // page with a second hard link, is not
+    let (code, err) = run(w, &["report", "RUN", "--html", "RUN/report.html"]);
+    assert_eq!(code, Some(0), "a second report over its own page: {err}");
+    std::fs::write(
+        w.join("RUN/notes.html"),
+        "<!DOCTYPE html>\n<html>mine</html>\n",
+    )
+    .unwrap();
+    std::fs::hard_link(w.join("page2.html"), w.join("RUN/linked.html")).unwrap();
+    for html in ["RUN/notes.html", "RUN/linked.html"] {
+        let (code, err) = run(w, &["report", "RUN", "--html", html]);
+        assert_eq!(code, Some(2), "{html}: {err}");
+    }
+    assert!(std::fs::read_to_string(w.join("RUN/notes.html"))
+        .unwrap()
+        .contains("mine"));
+    assert_no_temp(w, "report");
+}
+
+#[test]
+fn planted_links_in_output_folders_are_refused_or_replaced_never_followed() {
+    let tmp = tempfile::tempdir().unwrap();
+    let w = tmp.path();
+    workspace(w);
+    let before = inputs(w);
+    // the issue's three cases: each refused before the work
+    std::fs::create_dir(w.join("plots")).unwrap();
+    symlink("../RUN/cal.csv", w.join("plots/01_link_length_d4.svg")).unwrap();
+    let (code, err) = run(
+        w,
+        &[
+            "diagnose",
+            "--poses",
+            "RUN/cal.csv",
+            "--validate",
+            "RUN/val.csv",
+            "--plots",
+            "plots",
+        ],
+    );
+    assert_eq!(code, Some(2), "{err}");
+    assert!(err.contains("is a link to the input"), "{err}");
+    std::fs::create_dir(w.join("csv")).unwrap();
+    symlink("../REC", w.join("csv/status.csv")).unwrap();
+    let (code, err) = run(w, &["export", "REC", "--csv", "csv"]);
+    assert_eq!(code, Some(2), "{err}");
+    std::fs::create_dir(w.join("sim")).unwrap();
+    symlink("../M.toml", w.join("sim/truth.toml")).unwrap();
+    let (code, err) = run(w, &["simulate", "--model", "M.toml", "--out", "sim"]);
+    assert_eq!(code, Some(2), "{err}");
+    // hard links are refused the same way
+    std::fs::hard_link(w.join("M.toml"), w.join("sim/cal.csv")).unwrap();
+    std::fs::remove_file(w.join("sim/truth.toml")).unwrap();
+    let (code, err) = run(w, &["simulate", "--model", "M.toml", "--out", "sim"]);
+    assert_eq!(code, Some(2), "{err}");
+    assert!(err.contains("hard link"), "{err}");
+    assert_inputs_intact(&before, "planted links");
+    // a link to a file that is not an input is replaced by the new file, its target untouched
+    std::fs::write(w.join("bystander.txt"), "keep me\n").unwrap();
+    std::fs::remove_file(w.join("csv/status.csv")).unwrap();
+    symlink("../bystander.txt", w.join("csv/status.csv")).unwrap();
+    let (code, err) = run(w, &["export", "REC", "--csv", "csv"]);
+    assert_eq!(code, Some(0), "{err}");
+    assert_eq!(
+        std::fs::read_to_string(w.join("bystander.txt")).unwrap(),
+        "keep me\n"
+    );
+    let status = std::fs::symlink_metadata(w.join("csv/status.csv")).unwrap();
+    assert!(status.is_file(), "the planted link was followed");
+    assert_no_temp(w, "planted links");
+}
+
+/// One writer's command line in a workspace, with its output folder (or page) `out`.
+fn command(writer: usize, out: &str) -> Vec<String> {
+    let v = |s: &[&str]| s.iter().map(|x| x.to_string()).collect::<Vec<_>>();
+    match writer {
+        0 => v(&["simulate", "--model", "M.toml", "--val", "10", "--out", out]),
+        1 => v(&["export", "REC", "--csv", out]),
+        2 => v(&["report", "RUN", "--html", out]),
+        _ => v(&[
+            "calibrate",
+            "--poses",
+            "RUN/cal.csv",
+            "--validate",
+            "RUN/val.csv",
+            "--out",
+            out,
+        ]),
+    }
+}
+
+/// The names writer `writer` writes into its folder.
+fn names(writer: usize) -> &'static [&'static str] {
+    match writer {
+        0 => &["cal.csv", "val.csv", "truth.toml", "truth.json"],
+        _ => &["pot.csv", "tilt.csv", "status.csv"],
+    }
+}
+
+/// A path to an input, spelled at random: direct, through ALIAS, or through `..` / `.`.
+fn input_spelling(rng: &mut ChaCha8Rng, from_sub: bool) -> String {
+    let up = if from_sub { "../" } else { "" };
+    let files = ["cal.csv", "val.csv", "truth.toml", "truth.json"];
+    match rng.gen_range(0..5) {
+        0 => format!("{up}M.toml"),
+        1 => format!("{up}REC"),
+        2 => format!("{up}ALIAS/{}", files[rng.gen_range(0..4)]),
+        3 => format!("{up}RUN/./{}", files[rng.gen_range(0..4)]),
+        _ => format!("{up}RUN/{}", files[rng.gen_range(0..4)]),
+    }
+}
+
+#[test]
+fn no_layout_of_links_changes_an_input() {
+    let seed: u64 = std::env::var("RELIABILITY_SEED")
+        .ok()
+        .and_then(|s| s.parse().ok())
+        .unwrap_or(48);
+    let mut rng = ChaCha8Rng::seed_from_u64(seed);
+    let base = tempfile::tempdir().unwrap();
+    workspace(base.path());
+    let mut codes = [0usize; 3];
+    for trial in 0..48 {
+        let tmp = tempfile::tempdir().unwrap();
+        let w = tmp.path();
+        let cp = |rel: &str| {
+            std::fs::copy(base.path().join(rel), w.join(rel)).unwrap();
+        };
+        std::fs::create_dir(w.join("RUN")).unwrap();
+        for f in [
+            "RUN/cal.csv",
+            "RUN/val.csv",
+            "RUN/truth.toml",
+            "RUN/truth.json",
+            "M.toml",
+            "REC",
+        ] {
+            cp(f);
+        }
+        symlink("RUN", w.join("ALIAS")).unwrap();
+        let before = inputs(w);
+        let writer = trial % 4;
+        let out = if writer >= 2 {
+            // a page or a model file: one path, planted as a link / hard link / alias spelling
+            let name = if writer == 2 {
+                "page.html"
+            } else {
+                "model.toml"
+            };
+            match rng.gen_range(0..5) {
+                0 => {
+                    let target = input_spelling(&mut rng, false);
+                    symlink(&target, w.join(name)).unwrap();
+                    name.to_string()
+                }
+                1 => {
+                    let target = input_spelling(&mut rng, false);
+                    std::fs::hard_link(w.join(&target), w.join(name)).unwrap();
+                    name.to_string()
+                }
+                2 => {
+                    // a link inside the run folder to a file of the run
+                    let target = ["cal.csv", "truth.toml", "val.csv"][rng.gen_range(0..3)];
+                    symlink(target, w.join("RUN").join(name)).unwrap();
+                    format!("ALIAS/{name}")
+                }
+                3 => input_spelling(&mut rng, false),
+                _ => format!("RUN/{name}"),
+            }
+        } else {
+            // an output folder: new, a plain folder, or an alias of the run folder, with
+            // links and hard links to inputs planted under the names the command writes
+            let dir = match rng.gen_range(0..3) {
+                0 => "OUT".to_string(),
+                1 => {
+                    std::fs::create_dir(w.join("OUT")).unwrap();
+                    "OUT".to_string()
+                }
+                _ => "ALIAS".to_string(),
+            };
+            if w.join(&dir).is_dir() {
+                for _ in 0..rng.gen_range(1..4) {
+                    let name = names(writer)[rng.gen_range(0..names(writer).len())];
+                    let at = w.join(&dir).join(name);
+                    if std::fs::symlink_metadata(&at).is_ok() {
+                        continue;
+                    }
+                    let target = input_spelling(&mut rng, true);
+                    if rng.gen_bool(0.5) {
+                        symlink(&target, &at).unwrap();
+                    } else {
+                        let resolved = w.join(&dir).join(&target);
+                        let _ = std::fs::hard_link(resolved, &at);
+                    }
+                }
+            }
+            dir
+        };
+        // what the command may legitimately replace: the files it writes (links followed for
+        // a single output, as documented; the folder's entries by name); its own inputs never
+        let canon = std::fs::canonicalize(w.join(&out));
+        let may_write: Vec<PathBuf> = if writer >= 2 {
+            canon.into_iter().collect()
+        } else {
+            canon
+                .map(|d| names(writer).iter().map(|n| d.join(n)).collect())
+                .unwrap_or_default()
+        };
+        let own: &[&str] = match writer {
+            0 => &["M.toml"],
+            1 => &["REC"],
+            2 => &[
+                "RUN/cal.csv",
+                "RUN/val.csv",
+                "RUN/truth.toml",
+                "RUN/truth.json",
+            ],
+            _ => &["RUN/cal.csv", "RUN/val.csv"],
+        };
+        let guarded: Vec<(PathBuf, Vec<u8>)> = before
+            .iter()
+            .filter(|(p, _)| {
+                own.iter().any(|o| w.join(o) == *p)
+                    || !std::fs::canonicalize(p).is_ok_and(|c| may_write.contains(&c))
+            })
+            .cloned()
+            .collect();
+        let args = command(writer, &out);
+        let args_ref: Vec<&str> = args.iter().map(String::as_str).collect();
+        let (code, err) = run(w, &args_ref);
+        let what = format!("trial {trial} (seed {seed}): rigctl {}", args.join(" "));
+        assert!(matches!(code, Some(0..=2)), "{what}: exit {code:?}: {err}");
+        codes[code.unwrap() as usize] += 1;
+        assert_inputs_intact(&guarded, &what);
+        assert_no_temp(w, &what);
+    }
+    // both outcomes occur: the layouts are not all refused, nor all harmless
+    assert!(codes[0] > 0 && codes[2] > 0, "exit codes {codes:?}");
+}
+
+#[test]
+fn report_reads_symlinked_run_files() {
+    let tmp = tempfile::tempdir().unwrap();
+    let w = tmp.path();
+    workspace(w);
+    std::fs::create_dir(w.join("LINKED")).unwrap();
+    for f in ["cal.csv", "val.csv", "truth.toml", "truth.json"] {
+        symlink(format!("../RUN/{f}"), w.join("LINKED").join(f)).unwrap();
+    }
+    symlink("../RUN/nothing.json", w.join("LINKED/dangling.json")).unwrap();
+    let (code, err) = run(w, &["report", "LINKED", "--html", "linked.html"]);
+    assert_eq!(code, Some(0), "{err}");
+    assert!(!err.contains("nothing to report"), "{err}");
+    assert!(
+        err.contains("dangling.json: a symbolic link to nothing readable"),
+        "{err}"
+    );
+}
+
+#[test]
+fn hidden_characters_in_file_names_are_escaped_in_messages() {
+    let tmp = tempfile::tempdir().unwrap();
+    let w = tmp.path();
+    for name in [
+        "a\nrigctl: all good.csv",
+        "b\u{1b}[2J\u{1b}[31m.csv",
+        "c\u{202e}vsc.csv",
+        "d\r\u{7}.csv",
+    ] {
+        for args in [
+            vec!["calibrate", "--poses", name],
+            vec!["simulate", "--model", name, "--out", "o"],
+            vec!["export", name, "--csv", "o"],
+        ] {
+            let (code, err) = run(w, &args);
+            assert_eq!(code, Some(2), "{args:?}: {err}");
+            let body = err.strip_suffix('\n').unwrap_or(&err);
+            assert!(!body.contains('\n'), "{args:?}: a raw newline in {err:?}");
+            assert!(
+                !body.chars().any(|c| c.is_control() || c == '\u{202e}'),
+                "{args:?}: a raw control character in {err:?}"
+            );
+            assert!(
+                body.contains("\\u{") || body.contains("\\n") || body.contains("\\r"),
+                "{err:?}"
+            );
+        }
+    }
+}
