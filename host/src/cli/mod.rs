@@ -15,6 +15,7 @@ mod model2urdf;
 mod model_args;
 pub mod out;
 mod plan;
+mod plan_safety;
 mod ports;
 mod pose_args;
 mod potcal;
