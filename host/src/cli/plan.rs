@@ -303,11 +303,7 @@ pub fn run(args: Args) -> Result<(), CliError> {
         } else {
             model.joint_names().to_vec()
         };
-        let prismatic: Vec<bool> = model
-            .joints()
-            .iter()
-            .map(|j| j.prismatic)
-            .collect();
+        let prismatic: Vec<bool> = model.joints().iter().map(|j| j.prismatic).collect();
         let q: Vec<Vec<f64>> = result.poses.iter().map(|p| p.q_deg.clone()).collect();
         let yaml = rigctl::plan::trajectory::joint_trajectory_yaml(
             &names,
@@ -327,12 +323,13 @@ pub fn run(args: Args) -> Result<(), CliError> {
     }
     let o = &result.order;
     out!(
-        "order: joint travel {:.0} deg (random order {:.0} deg); {} segments checked at most {} deg apart ({} configurations), none unsafe\n",
+        "order: joint travel {:.0} deg (random order {:.0} deg); {} segments checked at most {} deg apart ({} configurations), {} unsafe ones avoided, none left\n",
         o.travel_deg,
         o.random_travel_deg,
         o.segments_checked,
         o.step_deg,
-        o.configurations_checked
+        o.configurations_checked,
+        o.segments_unsafe
     )?;
     if let Some(r) = &sheets {
         out!("{}", sheets_table(r))?;

@@ -17,7 +17,12 @@ use super::CliError;
 pub struct SafetyArgs {
     /// Height of the table plane (z in R, mm): the tool point, every link frame origin and
     /// every moving link's collision shape stay above it.
-    #[arg(long, value_name = "MM", default_value_t = 0.0, allow_hyphen_values = true)]
+    #[arg(
+        long,
+        value_name = "MM",
+        default_value_t = 0.0,
+        allow_hyphen_values = true
+    )]
     pub table_z_mm: f64,
     /// No table plane (a robot mounted on a wall or a pedestal with nothing below).
     #[arg(long)]
@@ -125,7 +130,9 @@ impl SafetyArgs {
                 .ok()
                 .filter(|b: &[f64; 6]| b.iter().all(|x| x.is_finite()))
                 .ok_or_else(|| {
-                    CliError::bad_input(format!("--keep-out {text}: 6 finite numbers X0,Y0,Z0,X1,Y1,Z1 (mm)"))
+                    CliError::bad_input(format!(
+                        "--keep-out {text}: 6 finite numbers X0,Y0,Z0,X1,Y1,Z1 (mm)"
+                    ))
                 })?;
             ws.keep_out_mm.push(b);
         }

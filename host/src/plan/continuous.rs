@@ -14,9 +14,9 @@
 
 use nalgebra::{DMatrix, DVector};
 
-use super::candidates::CandidatePose;
 #[cfg(test)]
 use super::candidates::usable_range;
+use super::candidates::CandidatePose;
 use super::criteria::Criterion;
 use super::optimum::{approximate_optimum, approximate_optimum_from, Extension, Optimum};
 use super::refine::Refiner;

@@ -50,7 +50,11 @@ pub fn resolve_mesh(
     if let Some(found) = tried.iter().find(|p| p.is_file()) {
         return Ok(found.clone());
     }
-    let shown: Vec<String> = tried.iter().take(8).map(|p| p.display().to_string()).collect();
+    let shown: Vec<String> = tried
+        .iter()
+        .take(8)
+        .map(|p| p.display().to_string())
+        .collect();
     Err(PlanError::Geometry(format!(
         "collision mesh `{filename}` of {} not found (tried {}{}); give --package-path DIR or set ROS_PACKAGE_PATH",
         urdf_path.display(),
@@ -61,7 +65,8 @@ pub fn resolve_mesh(
 
 /// Whether `path` is an STL file by its extension.
 pub fn is_stl(path: &Path) -> bool {
-    path.extension().is_some_and(|e| e.eq_ignore_ascii_case("stl"))
+    path.extension()
+        .is_some_and(|e| e.eq_ignore_ascii_case("stl"))
 }
 
 /// The vertices of the STL file `path` (binary or ASCII), each multiplied by `scale_mm` (the

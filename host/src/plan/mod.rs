@@ -42,8 +42,8 @@ pub mod design;
 pub mod evaluate;
 pub mod meshes;
 pub mod metrics;
-pub mod order;
 pub mod optimum;
+pub mod order;
 pub mod output;
 pub mod refine;
 pub mod robust;
@@ -51,10 +51,10 @@ pub mod setup;
 pub mod sheets;
 pub mod sheets_output;
 mod steps;
-pub mod trajectory;
-pub mod workspace;
 #[cfg(test)]
 mod test_support;
+pub mod trajectory;
+pub mod workspace;
 
 use rand::SeedableRng;
 use rand_chacha::ChaCha8Rng;

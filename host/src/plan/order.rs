@@ -38,6 +38,8 @@ pub struct Ordered {
     /// Segments checked and configurations checked along them.
     pub segments_checked: usize,
     pub configurations_checked: usize,
+    /// Of the segments checked, those found unsafe (barred from the order).
+    pub segments_unsafe: usize,
     /// The joint step of the check, deg (mm).
     pub step_deg: f64,
     /// Poses dropped (index) because every order left an unsafe segment to them, and why.
@@ -112,9 +114,17 @@ fn search(alive: &[usize], start: usize, cost: &dyn Fn(usize, usize) -> f64) -> 
         for i in 1..n {
             for j in i + 1..n {
                 let before = cost(path[i - 1], path[i])
-                    + if j + 1 < n { cost(path[j], path[j + 1]) } else { 0.0 };
+                    + if j + 1 < n {
+                        cost(path[j], path[j + 1])
+                    } else {
+                        0.0
+                    };
                 let after = cost(path[i - 1], path[j])
-                    + if j + 1 < n { cost(path[i], path[j + 1]) } else { 0.0 };
+                    + if j + 1 < n {
+                        cost(path[i], path[j + 1])
+                    } else {
+                        0.0
+                    };
                 if after < before - 1e-9 {
                     path[i..=j].reverse();
                     improved = true;
@@ -202,6 +212,7 @@ pub fn order_poses(
         random_travel_deg,
         order,
         segments_checked: segments,
+        segments_unsafe: checked.values().filter(|v| v.is_some()).count(),
         configurations_checked: configs,
         step_deg,
         dropped,
@@ -233,6 +244,8 @@ mod tests {
             }
         };
         let p = search(&[0, 1, 2, 3, 4, 5], 0, &barred);
-        assert!(p.windows(2).all(|e| (e[0].min(e[1]), e[0].max(e[1])) != (2, 4)));
+        assert!(p
+            .windows(2)
+            .all(|e| (e[0].min(e[1]), e[0].max(e[1])) != (2, 4)));
     }
 }

@@ -146,7 +146,11 @@ mod tests {
     fn draws_both_views() {
         let planned = [[100.0, 0.0, 200.0], [0.0, 150.0, 300.0]];
         let cands = [[50.0, 50.0, 250.0]];
-        let robot = vec![vec![[0.0, 0.0, 0.0], [0.0, 0.0, 150.0], [100.0, 0.0, 200.0]]];
+        let robot = vec![vec![
+            [0.0, 0.0, 0.0],
+            [0.0, 0.0, 150.0],
+            [100.0, 0.0, 200.0],
+        ]];
         let svg = super::poses_svg("plan", &planned, &cands, &robot).unwrap();
         assert!(svg.contains("top view") && svg.contains("side view"));
         assert!(svg.contains("robot at a few poses") && svg.contains("<polyline"));

@@ -33,7 +33,12 @@ pub struct LinkCollision {
     pub line: u32,
 }
 
-fn element_err(doc: &roxmltree::Document, node: roxmltree::Node, src: &str, m: String) -> UrdfError {
+fn element_err(
+    doc: &roxmltree::Document,
+    node: roxmltree::Node,
+    src: &str,
+    m: String,
+) -> UrdfError {
     let pos = doc.text_pos_at(node.range().start);
     UrdfError::Element {
         source_name: src.to_string(),
@@ -116,9 +121,7 @@ fn geometry(
         "mesh" => CollisionGeometry::Mesh {
             filename: shape
                 .attribute("filename")
-                .ok_or_else(|| {
-                    element_err(doc, shape, src, "<mesh> needs a `filename`".into())
-                })?
+                .ok_or_else(|| element_err(doc, shape, src, "<mesh> needs a `filename`".into()))?
                 .to_string(),
             scale: numbers::<3>(doc, shape, src, "scale")?.unwrap_or([1.0; 3]),
         },
@@ -218,7 +221,9 @@ mod tests {
             }
         );
         assert_eq!(c[2].link, "b");
-        assert!(matches!(c[3].geometry, CollisionGeometry::Mesh { ref filename, scale } if filename == "package://p/m.stl" && scale[0] == 0.001));
+        assert!(
+            matches!(c[3].geometry, CollisionGeometry::Mesh { ref filename, scale } if filename == "package://p/m.stl" && scale[0] == 0.001)
+        );
         let bad = text.replace("0.1 0.2 0.3", "0.1 0.2");
         assert!(link_collisions(&bad, "t.urdf")
             .unwrap_err()

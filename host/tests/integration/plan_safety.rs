@@ -65,7 +65,13 @@ fn rows(path: &Path) -> Vec<Vec<f64>> {
 
 fn travel(q: &[Vec<f64>]) -> f64 {
     q.windows(2)
-        .map(|p| p[0][..7].iter().zip(&p[1][..7]).map(|(a, b)| (a - b).abs()).sum::<f64>())
+        .map(|p| {
+            p[0][..7]
+                .iter()
+                .zip(&p[1][..7])
+                .map(|(a, b)| (a - b).abs())
+                .sum::<f64>()
+        })
         .sum()
 }
 
@@ -105,7 +111,9 @@ fn panda_plans_have_no_collision_and_keep_the_margins() {
     assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
     // the checker can fail: random configurations within the limits collide or go below
     let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(5);
-    let limits = rigctl::model::Model::from_file(&model).unwrap().joint_limits();
+    let limits = rigctl::model::Model::from_file(&model)
+        .unwrap()
+        .joint_limits();
     let mut text = String::from("q1,q2,q3,q4,q5,q6,q7\n");
     for _ in 0..40 {
         let r: Vec<String> = limits
@@ -117,7 +125,8 @@ fn panda_plans_have_no_collision_and_keep_the_margins() {
     let random_csv = dir.path().join("random.csv");
     std::fs::write(&random_csv, text).unwrap();
     let r = check(&py, &share, &random_csv);
-    let bad = r["pose_collisions"].as_array().unwrap().len() + r["below_table"].as_array().unwrap().len();
+    let bad =
+        r["pose_collisions"].as_array().unwrap().len() + r["below_table"].as_array().unwrap().len();
     assert!(bad > 0, "the checker finds unsafe random poses: {r}");
     for n in [60usize, 150] {
         let csv = dir.path().join(format!("plan{n}.csv"));
@@ -140,7 +149,10 @@ fn panda_plans_have_no_collision_and_keep_the_margins() {
             .unwrap();
         let stdout = String::from_utf8_lossy(&o.stdout);
         assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
-        assert!(stdout.contains("collision check: 11 links with shapes"), "{stdout}");
+        assert!(
+            stdout.contains("collision check: 11 links with shapes"),
+            "{stdout}"
+        );
         assert!(!stdout.contains("NO COLLISION CHECK"));
         let q = rows(&csv);
         assert_eq!(q.len(), n);
@@ -185,7 +197,15 @@ fn keep_out_boxes_and_no_geometry_said_on_the_katana() {
     let out = dir.path().join("p.csv");
     let boxes = ["-1000,-1000,-10,-50,1000,2000", "50,50,-10,1000,1000,150"];
     let o = rigctl()
-        .args(["plan", "--robot", "katana450", "--n", "12", "--candidates", "1500"])
+        .args([
+            "plan",
+            "--robot",
+            "katana450",
+            "--n",
+            "12",
+            "--candidates",
+            "1500",
+        ])
         .args(["--keep-out", boxes[0], "--keep-out", boxes[1]])
         .arg("--out")
         .arg(&out)
@@ -206,7 +226,15 @@ fn keep_out_boxes_and_no_geometry_said_on_the_katana() {
     // boxes that leave no room: exit 1, saying how many were found, nothing written
     std::fs::remove_file(&out).unwrap();
     let o = rigctl()
-        .args(["plan", "--robot", "katana450", "--n", "12", "--candidates", "200"])
+        .args([
+            "plan",
+            "--robot",
+            "katana450",
+            "--n",
+            "12",
+            "--candidates",
+            "200",
+        ])
         .args(["--keep-out", "-2000,-2000,-10,2000,2000,2000"])
         .arg("--out")
         .arg(&out)
@@ -216,7 +244,15 @@ fn keep_out_boxes_and_no_geometry_said_on_the_katana() {
     assert!(String::from_utf8_lossy(&o.stderr).contains("only 0 of"));
     assert!(!out.exists());
     let o = rigctl()
-        .args(["plan", "--robot", "katana450", "--n", "12", "--keep-out", "1,2,3"])
+        .args([
+            "plan",
+            "--robot",
+            "katana450",
+            "--n",
+            "12",
+            "--keep-out",
+            "1,2,3",
+        ])
         .arg("--out")
         .arg(&out)
         .output()

@@ -172,8 +172,7 @@ pub(super) fn build_bodies(
                     if let Some(s) = hull_cache.get(&key) {
                         s.clone()
                     } else {
-                        let pts: Vec<Point3<f64>> =
-                            stl_vertices_mm(&path, scale.map(|s| s * 1e3))?;
+                        let pts: Vec<Point3<f64>> = stl_vertices_mm(&path, scale.map(|s| s * 1e3))?;
                         let s = SharedShape::convex_hull(&pts).ok_or_else(|| {
                             geo_err(format!(
                                 "collision mesh {}: no convex hull (flat or degenerate)",
@@ -201,4 +200,3 @@ pub(super) fn build_bodies(
     }
     Ok(bodies)
 }
-

@@ -88,7 +88,11 @@ pub fn box_shape(b: &[f64; 6]) -> (Isometry3<f64>, Cuboid) {
     let lo = Vector3::new(b[0].min(b[3]), b[1].min(b[4]), b[2].min(b[5]));
     let hi = Vector3::new(b[0].max(b[3]), b[1].max(b[4]), b[2].max(b[5]));
     (
-        Isometry3::translation(0.5 * (lo.x + hi.x), 0.5 * (lo.y + hi.y), 0.5 * (lo.z + hi.z)),
+        Isometry3::translation(
+            0.5 * (lo.x + hi.x),
+            0.5 * (lo.y + hi.y),
+            0.5 * (lo.z + hi.z),
+        ),
         Cuboid::new((hi - lo) * 0.5),
     )
 }
@@ -301,8 +305,7 @@ impl Collider {
             b.shapes.iter().any(|(lb, sb)| {
                 let pb = poses[b.node] * lb;
                 aa.intersects(&sb.compute_aabb(&pb))
-                    && query::distance(&pa, sa.as_ref(), &pb, sb.as_ref())
-                        .map_or(true, |d| d < c)
+                    && query::distance(&pa, sa.as_ref(), &pb, sb.as_ref()).map_or(true, |d| d < c)
             })
         })
     }
@@ -362,7 +365,8 @@ impl Collider {
                     continue;
                 }
                 let hit = b.shapes.iter().any(|(l, s)| {
-                    query::distance(&(poses[b.node] * l), s.as_ref(), bp, bs).map_or(true, |d| d < c)
+                    query::distance(&(poses[b.node] * l), s.as_ref(), bp, bs)
+                        .map_or(true, |d| d < c)
                 });
                 if hit {
                     return Some(format!(
@@ -378,8 +382,7 @@ impl Collider {
             {
                 return Some(format!(
                     "links `{}` and `{}` within {c} mm of each other",
-                    self.nodes[self.bodies[i].node].name,
-                    self.nodes[self.bodies[j].node].name
+                    self.nodes[self.bodies[i].node].name, self.nodes[self.bodies[j].node].name
                 ));
             }
         }

@@ -24,12 +24,12 @@ endsolid m
 ";
 
 const URDF: &str = r#"<robot name="arm">
-  <link name="b"><collision><origin xyz="0 0 0.05"/><geometry><box size="0.2 0.2 0.1"/></geometry></collision></link>
+  <link name="b"><collision><origin xyz="0 0 0.15"/><geometry><box size="0.2 0.2 0.3"/></geometry></collision></link>
   <link name="l1"><collision><origin xyz="0 0 0.25"/><geometry><cylinder radius="0.03" length="0.5"/></geometry></collision></link>
   <link name="l2"><collision><origin xyz="0 0 0.275"/><geometry><box size="0.05 0.05 0.55"/></geometry></collision>
     <collision><origin xyz="0 0 0.55"/><geometry><sphere radius="0.03"/></geometry></collision></link>
   <link name="tip"><collision><geometry><mesh filename="package://armpkg/tip.stl"/></geometry></collision></link>
-  <joint name="j1" type="revolute"><parent link="b"/><child link="l1"/><origin xyz="0 0 0.1"/><axis xyz="0 1 0"/><limit lower="-3" upper="3"/></joint>
+  <joint name="j1" type="revolute"><parent link="b"/><child link="l1"/><origin xyz="0 0 0.3"/><axis xyz="0 1 0"/><limit lower="-3" upper="3"/></joint>
   <joint name="j2" type="revolute"><parent link="l1"/><child link="l2"/><origin xyz="0 0 0.5"/><axis xyz="0 1 0"/><limit lower="-3" upper="3"/></joint>
   <joint name="jt" type="fixed"><parent link="l2"/><child link="tip"/><origin xyz="0 0 0.6"/></joint>
 </robot>"#;
@@ -76,10 +76,15 @@ fn free_table_box_and_self_collision() {
     };
     assert_eq!(c.collision(&[0.0, 0.0], &env), None, "upright");
     assert_eq!(c.collision(&[90.0, 0.0], &env), None, "level");
-    let low = c.collision(&[100.0, 0.0], &env).expect("below the level");
+    let low = c.collision(&[150.0, 0.0], &env).expect("below the level");
     assert!(low.contains("table"), "{low}");
-    let folded = c.collision(&[0.0, 170.0], &env).expect("folded onto the base");
-    assert!(folded.contains("`b`") && folded.contains("`l2`"), "{folded}");
+    let folded = c
+        .collision(&[0.0, 170.0], &env)
+        .expect("folded onto the base");
+    assert!(
+        folded.contains("`b`") && folded.contains("`l2`"),
+        "{folded}"
+    );
     // a keep-out box around the upright arm's second link
     let boxes = [[-100.0, -100.0, 800.0, 100.0, 100.0, 900.0]];
     let env_box = Environment {
@@ -93,16 +98,19 @@ fn free_table_box_and_self_collision() {
         table_z_mm: None,
         keep_out_mm: &[],
     };
-    assert_eq!(c.collision(&[100.0, 0.0], &no_table), None);
+    assert_eq!(c.collision(&[150.0, 0.0], &no_table), None);
     // the stick figure: base, l1, l2, tip
     let o = c.chain_origins_mm(&[0.0, 0.0]);
     assert_eq!(o.len(), 4);
-    assert!((o[3].z - 1200.0).abs() < 1e-9);
-    // an SRDF disabling b-l2: the folded pose is then free of self-collision
+    assert!((o[3].z - 1400.0).abs() < 1e-9);
+    // an SRDF disabling b-l1, b-l2 and b-tip: the folded pose no longer collides with the base (its
+    // pairs are exactly the SRDF's: l1-l2, adjacent, is checked then)
     let srdf = src.urdf.with_file_name("arm.srdf");
     std::fs::write(
         &srdf,
-        r#"<robot name="arm"><disable_collisions link1="l2" link2="b" reason="x"/></robot>"#,
+        r#"<robot name="arm"><disable_collisions link1="l2" link2="b" reason="x"/>
+<disable_collisions link1="b" link2="tip" reason="x"/>
+<disable_collisions link1="b" link2="l1" reason="Adjacent"/></robot>"#,
     )
     .unwrap();
     let with = GeometrySource {
@@ -110,9 +118,13 @@ fn free_table_box_and_self_collision() {
         ..src.clone()
     };
     let c2 = Collider::from_urdf(&with, &model, 10.0, Some(0.0)).unwrap();
-    assert!(c2.collision(&[0.0, 170.0], &env).is_none_or(|w| !w.contains("`b`")));
+    assert!(c2
+        .collision(&[0.0, 170.0], &env)
+        .is_none_or(|w| !w.contains("`b`")));
     // a model with other joints is refused
     let mut other = model.clone();
-    other.set_joint_names(vec!["x1".into(), "x2".into()]).unwrap();
+    other
+        .set_joint_names(vec!["x1".into(), "x2".into()])
+        .unwrap();
     assert!(Collider::from_urdf(&src, &other, 10.0, Some(0.0)).is_err());
 }
