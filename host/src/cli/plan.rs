@@ -304,7 +304,13 @@ pub fn run(args: Args) -> Result<(), CliError> {
             model.joint_names().to_vec()
         };
         let prismatic: Vec<bool> = model.joints().iter().map(|j| j.prismatic).collect();
-        let q: Vec<Vec<f64>> = result.poses.iter().map(|p| p.q_deg.clone()).collect();
+        let mut q: Vec<(Vec<f64>, bool)> = Vec::new();
+        for (k, p) in result.poses.iter().enumerate() {
+            if let (Some(true), Some(v)) = (result.order.via_before.get(k), &result.order.via_q) {
+                q.push((v.clone(), false));
+            }
+            q.push((p.q_deg.clone(), true));
+        }
         let yaml = rigctl::plan::trajectory::joint_trajectory_yaml(
             &names,
             &prismatic,
@@ -323,14 +329,22 @@ pub fn run(args: Args) -> Result<(), CliError> {
     }
     let o = &result.order;
     out!(
-        "order: joint travel {:.0} deg (random order {:.0} deg); {} segments checked at most {} deg apart ({} configurations), {} unsafe ones avoided, none left\n",
+        "order: joint travel {:.0} deg (random order {:.0} deg); {} segments checked at most {} deg apart ({} configurations), {} unsafe ones avoided ({} through the via configuration), none left\n",
         o.travel_deg,
         o.random_travel_deg,
         o.segments_checked,
         o.step_deg,
         o.configurations_checked,
-        o.segments_unsafe
+        o.segments_unsafe,
+        o.via_before.iter().filter(|v| **v).count()
     )?;
+    if let Some(v) = &o.via_q {
+        let deg: Vec<String> = v.iter().map(|x| format!("{x:.1}")).collect();
+        out!(
+            "via configuration (home or mid-range): {}\n",
+            deg.join(", ")
+        )?;
+    }
     if let Some(r) = &sheets {
         out!("{}", sheets_table(r))?;
     }

@@ -4,7 +4,8 @@
 //! `sum_j w_j |q_j - q'_j|` (deg; mm for prismatic joints). Each segment is the straight line in
 //! joint space, checked at configurations at most `step_deg` apart in every joint
 //! ([`Workspace::violation`]); a segment that is not safe is barred and the order searched
-//! again; a pose whose every ordering keeps an unsafe segment is dropped.
+//! again, or taken through a via configuration (home, else mid-range, when safe) when both
+//! halves are safe; a pose whose every ordering keeps an unsafe segment is dropped.
 
 use std::collections::HashMap;
 
@@ -44,6 +45,11 @@ pub struct Ordered {
     pub step_deg: f64,
     /// Poses dropped (index) because every order left an unsafe segment to them, and why.
     pub dropped: Vec<(usize, String)>,
+    /// Per position in `order`: the way to it goes through [`Ordered::via_q`] (its straight
+    /// segment is not safe).
+    pub via_before: Vec<bool>,
+    /// The via configuration (deg), when a segment uses it.
+    pub via_q: Option<Vec<f64>>,
 }
 
 /// Weighted joint distance.
@@ -82,9 +88,8 @@ pub fn segment_violation(
     for s in 1..k {
         let t = s as f64 / k as f64;
         let q: Vec<f64> = a.iter().zip(b).map(|(x, y)| x + (y - x) * t).collect();
-        let fk = model.fk(&q, Tilt::Off)?;
-        let axis = fk.rotation.column(2).into_owned();
-        if let Some(why) = ws.violation(model, &q, &fk.position_mm, &axis)? {
+        let p = model.position_mm(&q, Tilt::Off)?;
+        if let Some(why) = ws.path_violation(model, &q, &p)? {
             return Ok((Some(format!("at {:.0} % of the way: {why}", 100.0 * t)), s));
         }
     }
@@ -135,8 +140,43 @@ fn search(alive: &[usize], start: usize, cost: &dyn Fn(usize, usize) -> f64) -> 
     path
 }
 
+/// A checked segment between two poses.
+#[derive(Debug, Clone, PartialEq)]
+enum Edge {
+    /// The straight segment is safe.
+    Direct,
+    /// Not straight, but through the via configuration (both halves safe).
+    Via,
+    /// Neither: why the straight one is not.
+    Barred(String),
+}
+
+/// The via configuration: home ([`home_configuration`]), else mid-range, when it is safe.
+fn via_configuration(model: &Model, ws: &Workspace) -> Result<Option<Vec<f64>>, PlanError> {
+    let mid: Vec<f64> = model
+        .joint_limits()
+        .iter()
+        .map(|l| {
+            let (lo, hi) = ws.usable_range(l);
+            0.5 * (lo + hi)
+        })
+        .collect();
+    for q in [home_configuration(model), mid] {
+        let p = model.position_mm(&q, Tilt::Off)?;
+        let inside = q.iter().zip(model.joint_limits()).all(|(v, l)| {
+            let (lo, hi) = ws.usable_range(&l);
+            *v >= lo && *v <= hi
+        });
+        if inside && ws.path_violation(model, &q, &p)?.is_none() {
+            return Ok(Some(q));
+        }
+    }
+    Ok(None)
+}
+
 /// Orders `poses` (see the module docs) with joint weights `w`, checking every segment at
-/// `step_deg`.
+/// `step_deg`; a pair whose straight segment is unsafe may go through the via configuration
+/// (home, else mid-range, when safe) when both halves are safe.
 pub fn order_poses(
     model: &Model,
     ws: &Workspace,
@@ -152,11 +192,17 @@ pub fn order_poses(
     let q: Vec<Vec<f64>> = poses.iter().map(|p| p.q_deg.clone()).collect();
     let n = q.len();
     let home = home_configuration(model);
-    let mut checked: HashMap<(usize, usize), Option<String>> = HashMap::new();
-    let (mut segments, mut configs) = (0, 0);
+    let via = via_configuration(model, ws)?;
+    let mut to_via: HashMap<usize, bool> = HashMap::new();
+    let mut checked: HashMap<(usize, usize), Edge> = HashMap::new();
+    let (mut segments, mut configs, mut unsafe_segments) = (0, 0, 0);
     let mut alive: Vec<usize> = (0..n).collect();
     let mut dropped = Vec::new();
     let mut order = Vec::new();
+    let via_cost = |a: usize, b: usize| match &via {
+        Some(v) => joint_distance(&q[a], v, w) + joint_distance(v, &q[b], w),
+        None => f64::INFINITY,
+    };
     while !alive.is_empty() {
         let start = *alive
             .iter()
@@ -167,9 +213,12 @@ pub fn order_poses(
         let mut bad: Option<(usize, String)> = None;
         for _ in 0..MAX_SEARCHES {
             let cost = |a: usize, b: usize| {
-                let key = (a.min(b), a.max(b));
-                let barred = checked.get(&key).is_some_and(Option::is_some);
-                joint_distance(&q[a], &q[b], w) + if barred { BARRED } else { 0.0 }
+                let d = joint_distance(&q[a], &q[b], w);
+                match checked.get(&(a.min(b), a.max(b))) {
+                    None | Some(Edge::Direct) => d,
+                    Some(Edge::Via) => via_cost(a, b),
+                    Some(Edge::Barred(_)) => d + BARRED,
+                }
             };
             order = search(&alive, start, &cost);
             bad = None;
@@ -179,9 +228,34 @@ pub fn order_poses(
                     let (why, c) = segment_violation(model, ws, &q[p[0]], &q[p[1]], step_deg)?;
                     segments += 1;
                     configs += c;
-                    checked.insert(key, why);
+                    let edge = match why {
+                        None => Edge::Direct,
+                        Some(why) => {
+                            unsafe_segments += 1;
+                            let mut both = via.is_some();
+                            for k in [p[0], p[1]] {
+                                if !both {
+                                    break;
+                                }
+                                if let (Some(v), None) = (&via, to_via.get(&k)) {
+                                    let (w2, c2) =
+                                        segment_violation(model, ws, &q[k], v, step_deg)?;
+                                    segments += 1;
+                                    configs += c2;
+                                    to_via.insert(k, w2.is_none());
+                                }
+                                both = to_via.get(&k).copied().unwrap_or(false);
+                            }
+                            if both {
+                                Edge::Via
+                            } else {
+                                Edge::Barred(why)
+                            }
+                        }
+                    };
+                    checked.insert(key, edge);
                 }
-                if let Some(Some(why)) = checked.get(&key) {
+                if let Some(Edge::Barred(why)) = checked.get(&key) {
                     bad = bad.or(Some((p[1], why.clone())));
                 }
             }
@@ -198,6 +272,24 @@ pub fn order_poses(
             }
         }
     }
+    let via_before: Vec<bool> = (0..order.len())
+        .map(|k| {
+            k > 0
+                && checked.get(&(order[k - 1].min(order[k]), order[k - 1].max(order[k])))
+                    == Some(&Edge::Via)
+        })
+        .collect();
+    let travel_deg = order
+        .windows(2)
+        .zip(via_before.iter().skip(1))
+        .map(|(p, v)| {
+            if *v {
+                via_cost(p[0], p[1])
+            } else {
+                joint_distance(&q[p[0]], &q[p[1]], w)
+            }
+        })
+        .sum();
     let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(7);
     let mut shuffled = order.clone();
     let random_travel_deg = (0..100)
@@ -208,14 +300,16 @@ pub fn order_poses(
         .sum::<f64>()
         / 100.0;
     Ok(Ordered {
-        travel_deg: travel(&q, &order, w),
+        travel_deg,
         random_travel_deg,
         order,
         segments_checked: segments,
-        segments_unsafe: checked.values().filter(|v| v.is_some()).count(),
+        segments_unsafe: unsafe_segments,
         configurations_checked: configs,
         step_deg,
         dropped,
+        via_q: via.filter(|_| via_before.iter().any(|v| *v)),
+        via_before,
     })
 }
 

@@ -128,6 +128,8 @@ pub fn plan_json(plan: &Plan, noise_mm: f64, seed: u64, sheets: Option<Value>) -
             "segments_unsafe": plan.order.segments_unsafe,
             "configurations_checked": plan.order.configurations_checked,
             "step_deg": num(plan.order.step_deg),
+            "via_before": plan.order.via_before,
+            "via_q": plan.order.via_q,
         },
     })
 }

@@ -30,11 +30,12 @@ fn stamp(out: &mut String, t_s: f64) {
     );
 }
 
-/// The YAML of a JointTrajectory through `q_deg` (deg; mm where `prismatic`), in order.
+/// The YAML of a JointTrajectory through `points` (deg; mm where `prismatic`), in order; a
+/// point marked `true` is a pose (a standstill of the dwell), `false` a via point.
 pub fn joint_trajectory_yaml(
     joint_names: &[String],
     prismatic: &[bool],
-    q_deg: &[Vec<f64>],
+    points: &[(Vec<f64>, bool)],
     timing: TrajectoryTiming,
 ) -> String {
     let si = |k: usize, v: f64| {
@@ -52,7 +53,7 @@ pub fn joint_trajectory_yaml(
     let zeros = vec!["0.0"; joint_names.len()].join(", ");
     let mut t = 0.0;
     let mut prev: Option<&Vec<f64>> = None;
-    for q in q_deg {
+    for (q, pose) in points {
         if let Some(p) = prev {
             let span = p
                 .iter()
@@ -66,7 +67,7 @@ pub fn joint_trajectory_yaml(
             .enumerate()
             .map(|(k, v)| format!("{:.9}", si(k, *v)))
             .collect();
-        let reps = if timing.dwell_s > 0.0 { 2 } else { 1 };
+        let reps = if *pose && timing.dwell_s > 0.0 { 2 } else { 1 };
         for r in 0..reps {
             if r == 1 {
                 t += timing.dwell_s;
@@ -87,7 +88,7 @@ mod tests {
     #[test]
     fn times_follow_the_largest_move() {
         let names = vec!["a".to_string(), "b".to_string()];
-        let q = vec![vec![0.0, 0.0], vec![90.0, 10.0]];
+        let q = vec![(vec![0.0, 0.0], true), (vec![90.0, 10.0], true)];
         let y = joint_trajectory_yaml(
             &names,
             &[false, true],

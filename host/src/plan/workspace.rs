@@ -143,6 +143,29 @@ impl Workspace {
         p: &Vector3<f64>,
         axis: &Vector3<f64>,
     ) -> Result<Option<String>, PlanError> {
+        self.check(model, q, p, axis, true)
+    }
+
+    /// As [`Workspace::violation`] for a configuration on the way between two poses: the safety
+    /// checks only (the tool point above the table and out of the keep-out boxes; `--box` and
+    /// `--visible-from` are about measuring, not about the way).
+    pub fn path_violation(
+        &self,
+        model: &Model,
+        q: &[f64],
+        p: &Vector3<f64>,
+    ) -> Result<Option<String>, PlanError> {
+        self.check(model, q, p, &Vector3::z(), false)
+    }
+
+    fn check(
+        &self,
+        model: &Model,
+        q: &[f64],
+        p: &Vector3<f64>,
+        axis: &Vector3<f64>,
+        measuring: bool,
+    ) -> Result<Option<String>, PlanError> {
         for (k, (v, l)) in q.iter().zip(model.joint_limits()).enumerate() {
             let (lo, hi) = self.usable_range(&l);
             if !(*v >= lo - 1e-9 && *v <= hi + 1e-9) {
@@ -153,8 +176,14 @@ impl Workspace {
                 )));
             }
         }
-        if !self.admits(p, axis) {
+        if measuring && !self.admits(p, axis) {
             return Ok(Some("tool point outside the workspace constraints".into()));
+        }
+        if self.tool_min_z_mm().is_some_and(|z| p.z < z) {
+            return Ok(Some("tool point below its lowest height".into()));
+        }
+        if self.keep_out_mm.iter().any(|b| in_box(p, b)) {
+            return Ok(Some("tool point in a keep-out box".into()));
         }
         match &self.collision {
             Some(c) => {
