@@ -118,6 +118,7 @@ impl SafetyArgs {
         let ws = &mut cfg.workspace;
         ws.table_z_mm = (!self.no_table).then_some(self.table_z_mm);
         ws.limit_margin_deg = self.limit_margin_deg;
+        ws.path_tolerance_mm = self.clearance_mm;
         for text in &self.keep_out {
             let v: Vec<f64> = text
                 .split(',')

@@ -53,6 +53,10 @@ pub struct Workspace {
     pub limit_margin_deg: f64,
     /// The robot's collision geometry (from its URDF), or none: no collision check.
     pub collision: Option<SharedCollider>,
+    /// On the way between poses, the tool point and (without collision geometry) the joint
+    /// frames' origins may come this much closer to the table than a pose may (mm): a pose on
+    /// the boundary could otherwise not be left.
+    pub path_tolerance_mm: f64,
 }
 
 impl Default for Workspace {
@@ -66,6 +70,7 @@ impl Default for Workspace {
             cone_half_angle_deg: 60.0,
             limit_margin_deg: LIMIT_MARGIN_DEG,
             collision: None,
+            path_tolerance_mm: DEFAULT_CLEARANCE_MM,
         }
     }
 }
@@ -179,7 +184,12 @@ impl Workspace {
         if measuring && !self.admits(p, axis) {
             return Ok(Some("tool point outside the workspace constraints".into()));
         }
-        if self.tool_min_z_mm().is_some_and(|z| p.z < z) {
+        let slack = if measuring {
+            0.0
+        } else {
+            self.path_tolerance_mm
+        };
+        if self.tool_min_z_mm().is_some_and(|z| p.z < z - slack) {
             return Ok(Some("tool point below its lowest height".into()));
         }
         if self.keep_out_mm.iter().any(|b| in_box(p, b)) {
@@ -198,7 +208,7 @@ impl Workspace {
                     return Ok(None);
                 }
                 for (k, o) in model_joint_origins_mm(model, q)?.iter().enumerate() {
-                    if self.table_z_mm.is_some_and(|z| o.z < z) {
+                    if self.table_z_mm.is_some_and(|z| o.z < z - slack) {
                         return Ok(Some(format!("joint {} frame below the table", k + 1)));
                     }
                     if self.keep_out_mm.iter().any(|b| in_box(o, b)) {
