@@ -76,7 +76,7 @@ pub enum Command {
     Compensate(compensate::Args),
     /// Choose the calibration poses that identify the model best (A-optimal by default; G, I or
     /// D with --criterion), or that separate the effects a diagnosis found aliased.
-    Plan(plan::Args),
+    Plan(Box<plan::Args>),
 }
 
 pub fn run(cli: Cli) -> Result<(), CliError> {
@@ -98,7 +98,7 @@ pub fn run(cli: Cli) -> Result<(), CliError> {
         Command::Model2urdf(a) => model2urdf::run(a),
         Command::Joints(a) => joints::run(a),
         Command::Compensate(a) => compensate::run(a),
-        Command::Plan(a) => plan::run(a),
+        Command::Plan(a) => plan::run(*a),
     }
 }
 

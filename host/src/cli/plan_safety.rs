@@ -181,7 +181,7 @@ impl SafetyArgs {
         let mut pts: Vec<[f64; 3]> = vec![[0.0; 3]];
         let origins = match &cfg.workspace.collision {
             Some(c) => c.0.chain_origins_mm(q),
-            None => model_joint_origins_mm(model, q).map_err(rigctl::plan::PlanError::from)?,
+            None => model_joint_origins_mm(model, q)?,
         };
         pts.extend(origins.iter().map(|p| [p.x, p.y, p.z]));
         let tool = model

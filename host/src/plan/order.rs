@@ -224,7 +224,7 @@ pub fn order_poses(
             bad = None;
             for p in order.windows(2) {
                 let key = (p[0].min(p[1]), p[0].max(p[1]));
-                if !checked.contains_key(&key) {
+                if let std::collections::hash_map::Entry::Vacant(slot) = checked.entry(key) {
                     let (why, c) = segment_violation(model, ws, &q[p[0]], &q[p[1]], step_deg)?;
                     segments += 1;
                     configs += c;
@@ -253,7 +253,7 @@ pub fn order_poses(
                             }
                         }
                     };
-                    checked.insert(key, edge);
+                    slot.insert(edge);
                 }
                 if let Some(Edge::Barred(why)) = checked.get(&key) {
                     bad = bad.or(Some((p[1], why.clone())));
