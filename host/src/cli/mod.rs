@@ -15,6 +15,7 @@ mod model2urdf;
 mod model_args;
 pub mod out;
 mod plan;
+mod plan_safety;
 mod ports;
 mod pose_args;
 mod poses;
@@ -76,7 +77,7 @@ pub enum Command {
     Compensate(compensate::Args),
     /// Choose the calibration poses that identify the model best (A-optimal by default; G, I or
     /// D with --criterion), or that separate the effects a diagnosis found aliased.
-    Plan(plan::Args),
+    Plan(Box<plan::Args>),
     /// Measured poses from a continuous joint log (CSV or ROS 2 bag) and an instrument log:
     /// standstills, clock offset, averaged points and their spread.
     Poses(poses::Args),
@@ -101,7 +102,7 @@ pub fn run(cli: Cli) -> Result<(), CliError> {
         Command::Model2urdf(a) => model2urdf::run(a),
         Command::Joints(a) => joints::run(a),
         Command::Compensate(a) => compensate::run(a),
-        Command::Plan(a) => plan::run(a),
+        Command::Plan(a) => plan::run(*a),
         Command::Poses(a) => poses::run(a),
     }
 }

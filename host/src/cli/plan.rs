@@ -19,6 +19,7 @@ use rigctl::plot::plan::poses_svg;
 
 use super::model_args::ModelArgs;
 use super::out::out;
+use super::plan_safety::SafetyArgs;
 use super::pose_args::PoseArgs;
 use super::CliError;
 
@@ -26,6 +27,9 @@ use super::CliError;
 pub struct Args {
     #[command(flatten)]
     pub model: ModelArgs,
+    // table, keep-out boxes, limit margin, collision geometry, segments, trajectory
+    #[command(flatten)]
+    pub safety: SafetyArgs,
     // --units LENGTH,ANGLE of --poses.
     #[command(flatten)]
     pub pose: PoseArgs,
@@ -110,7 +114,8 @@ pub struct Args {
         requires = "visible_from"
     )]
     pub cone_deg: f64,
-    /// Lowest tool-point height (z in R, mm); default 40 for the Katana (table), none otherwise.
+    /// Lowest tool-point height (z in R, mm); default 40 for the Katana, the table plane's
+    /// (--table-z-mm) otherwise.
     #[arg(long, value_name = "MM")]
     pub min_z_mm: Option<f64>,
     /// Poses already measured (pose CSV; only the joints are used): the plan adds to them.
@@ -147,9 +152,16 @@ pub fn run(args: Args) -> Result<(), CliError> {
         .output("--out", Some(&args.out))
         .output("--json", args.json.as_deref())
         .output("--plot", args.plot.as_deref())
+        .output("--trajectory", args.safety.trajectory.as_deref())
+        .input("--urdf", args.safety.urdf.as_deref())
+        .input("--srdf", args.safety.srdf.as_deref())
         .check()?;
-    let model = args.model.choose()?;
+    let model = match args.safety.urdf_model()? {
+        Some(m) if args.model.model.is_none() && args.model.robot.is_none() => m,
+        _ => args.model.choose()?,
+    };
     let mut cfg = PlanConfig::new(&model, args.n);
+    let safety_lines = args.safety.apply(&model, &mut cfg)?;
     cfg.seed = args.seed;
     cfg.noise_mm = args.noise_mm;
     cfg.candidates = args.candidates;
@@ -254,11 +266,18 @@ pub fn run(args: Args) -> Result<(), CliError> {
         };
         let background: Vec<[f64; 3]> = cands.iter().map(|c| c.nominal_mm.into()).collect();
         let title = format!("{} planned poses, {}", result.poses.len(), result.robot);
+        // the robot at 4 poses spread over the order
+        let n_pose = result.poses.len();
+        let mut robots = Vec::new();
+        for k in 0..4.min(n_pose) {
+            let q = &result.poses[k * (n_pose - 1) / 3].q_deg;
+            robots.push(SafetyArgs::stick(&cfg, &model, q)?);
+        }
         let bytes = if path
             .extension()
             .is_some_and(|e| e.eq_ignore_ascii_case("svg"))
         {
-            let svg = poses_svg(&title, &planned, &background)?;
+            let svg = poses_svg(&title, &planned, &background, &robots)?;
             rigctl::io::atomic::check_text_for(path, TextFormat::Xml, &svg)?;
             svg.into_bytes()
         } else {
@@ -266,6 +285,7 @@ pub fn run(args: Args) -> Result<(), CliError> {
                 title,
                 planned_mm: planned,
                 candidates_mm: background,
+                robots_mm: robots,
             })?
         };
         write_bytes_atomic(path, &bytes)?;
@@ -277,8 +297,54 @@ pub fn run(args: Args) -> Result<(), CliError> {
             .map_err(|e| CliError::failure(format!("JSON: {e}")))?;
         write_bytes_atomic(path, format!("{text}\n").as_bytes())?;
     }
+    if let Some(path) = &args.safety.trajectory {
+        let names: Vec<String> = if model.joint_names().is_empty() {
+            (1..=model.n_joints()).map(|k| format!("q{k}")).collect()
+        } else {
+            model.joint_names().to_vec()
+        };
+        let prismatic: Vec<bool> = model.joints().iter().map(|j| j.prismatic).collect();
+        let mut q: Vec<(Vec<f64>, bool)> = Vec::new();
+        for (k, p) in result.poses.iter().enumerate() {
+            if let (Some(true), Some(v)) = (result.order.via_before.get(k), &result.order.via_q) {
+                q.push((v.clone(), false));
+            }
+            q.push((p.q_deg.clone(), true));
+        }
+        let yaml = rigctl::plan::trajectory::joint_trajectory_yaml(
+            &names,
+            &prismatic,
+            &q,
+            rigctl::plan::trajectory::TrajectoryTiming {
+                max_speed_deg_s: args.safety.max_joint_speed_deg_s,
+                dwell_s: args.safety.dwell_s,
+            },
+        );
+        write_bytes_atomic(path, yaml.as_bytes())?;
+    }
     write_text_atomic(&args.out, TextFormat::Csv, &plan_csv(&result))?;
     out!("{}", summary_table(&result, cfg.noise_mm))?;
+    for line in &safety_lines {
+        out!("{line}\n")?;
+    }
+    let o = &result.order;
+    out!(
+        "order: joint travel {:.0} deg (random order {:.0} deg); {} segments checked at most {} deg apart ({} configurations), {} unsafe ones avoided ({} through the via configuration), none left\n",
+        o.travel_deg,
+        o.random_travel_deg,
+        o.segments_checked,
+        o.step_deg,
+        o.configurations_checked,
+        o.segments_unsafe,
+        o.via_before.iter().filter(|v| **v).count()
+    )?;
+    if let Some(v) = &o.via_q {
+        let deg: Vec<String> = v.iter().map(|x| format!("{x:.1}")).collect();
+        out!(
+            "via configuration (home or mid-range): {}\n",
+            deg.join(", ")
+        )?;
+    }
     if let Some(r) = &sheets {
         out!("{}", sheets_table(r))?;
     }

@@ -9,68 +9,12 @@ use super::PlanError;
 use crate::calib::{MeasuredSet, Poses};
 use crate::model::{Model, Tilt};
 
-/// Tool-tip height above the table (z in frame R) that the Katana must keep, mm (FORMATS.md).
-pub const KATANA_TABLE_CLEARANCE_MM: f64 = 40.0;
-
-/// Joint angles are drawn this far inside each limit, deg (a pose right on a limit is not
-/// commanded safely).
-pub const LIMIT_MARGIN_DEG: f64 = 2.0;
+pub use super::workspace::{
+    usable_range_with, Workspace, KATANA_TABLE_CLEARANCE_MM, LIMIT_MARGIN_DEG,
+};
 
 /// Tries per wanted candidate before giving up on the constraints.
 const TRIES_PER_CANDIDATE: usize = 200;
-
-/// Where a calibration pose may be.
-#[derive(Debug, Clone, PartialEq)]
-pub struct Workspace {
-    /// Lowest allowed tool-point height (z in R), mm; `None`: no table.
-    pub min_z_mm: Option<f64>,
-    /// Axis-aligned box `[x0, y0, z0, x1, y1, z1]` (mm, R) the tool point must lie in.
-    pub box_mm: Option<[f64; 6]>,
-    /// A tracker at this point (mm, R) must see the tool point: the direction from the tool
-    /// point to it lies within `cone_half_angle_deg` of the tool's z axis.
-    pub visible_from_mm: Option<Vector3<f64>>,
-    /// Acceptance half-angle of the target (e.g. a reflector on the tool), deg.
-    pub cone_half_angle_deg: f64,
-}
-
-impl Workspace {
-    /// The default constraints for `model`: the Katana keeps its tool tip
-    /// [`KATANA_TABLE_CLEARANCE_MM`] above the table; other robots have none.
-    pub fn for_model(model: &Model) -> Self {
-        let katana = model.name().to_ascii_lowercase().starts_with("katana");
-        Self {
-            min_z_mm: katana.then_some(KATANA_TABLE_CLEARANCE_MM),
-            box_mm: None,
-            visible_from_mm: None,
-            cone_half_angle_deg: 60.0,
-        }
-    }
-
-    /// Whether a tool point `p` with tool z axis `axis` satisfies the constraints.
-    pub fn admits(&self, p: &Vector3<f64>, axis: &Vector3<f64>) -> bool {
-        if self.min_z_mm.is_some_and(|z| p.z < z) {
-            return false;
-        }
-        if let Some(b) = self.box_mm {
-            let inside = (0..3).all(|i| p[i] >= b[i].min(b[i + 3]) && p[i] <= b[i].max(b[i + 3]));
-            if !inside {
-                return false;
-            }
-        }
-        if let Some(t) = self.visible_from_mm {
-            let d = t - p;
-            let (dn, an) = (d.norm(), axis.norm());
-            if dn <= 0.0 || an <= 0.0 {
-                return false;
-            }
-            let cos = d.dot(axis) / (dn * an);
-            if cos < self.cone_half_angle_deg.to_radians().cos() {
-                return false;
-            }
-        }
-        true
-    }
-}
 
 /// One candidate pose: joint readings and the nominal (declared, rigid) tool point.
 #[derive(Debug, Clone, PartialEq)]
@@ -107,7 +51,10 @@ impl CandidatePose {
         ws: &Workspace,
     ) -> Result<Option<Self>, PlanError> {
         let (pose, axis) = Self::with_axis(model, q_deg)?;
-        Ok(ws.admits(&pose.nominal_mm, &axis).then_some(pose))
+        let ok = ws
+            .violation(model, &pose.q_deg, &pose.nominal_mm, &axis)?
+            .is_none();
+        Ok(ok.then_some(pose))
     }
 }
 
@@ -135,7 +82,7 @@ pub fn draw_candidates(
         let q: Vec<f64> = limits
             .iter()
             .map(|l| {
-                let (lo, hi) = usable_range(l);
+                let (lo, hi) = ws.usable_range(l);
                 if hi > lo && (hi - lo).is_finite() {
                     rng.gen_range(lo..hi)
                 } else {
@@ -172,13 +119,7 @@ pub const MAX_STRUCTURED: usize = 2187;
 /// The joint range a pose may use: the limits less [`LIMIT_MARGIN_DEG`] (the midpoint when the
 /// range is narrower than twice the margin).
 pub fn usable_range(limit: &[f64; 2]) -> (f64, f64) {
-    let (lo, hi) = (limit[0] + LIMIT_MARGIN_DEG, limit[1] - LIMIT_MARGIN_DEG);
-    if hi > lo {
-        (lo, hi)
-    } else {
-        let mid = 0.5 * (limit[0] + limit[1]);
-        (mid, mid)
-    }
+    usable_range_with(limit, LIMIT_MARGIN_DEG)
 }
 
 /// The structured candidates: every combination of each joint at its lower usable limit, its
@@ -189,7 +130,11 @@ pub fn structured_candidates(
     model: &Model,
     ws: &Workspace,
 ) -> Result<Vec<CandidatePose>, PlanError> {
-    let ranges: Vec<(f64, f64)> = model.joint_limits().iter().map(usable_range).collect();
+    let ranges: Vec<(f64, f64)> = model
+        .joint_limits()
+        .iter()
+        .map(|l| ws.usable_range(l))
+        .collect();
     let total = 3usize
         .checked_pow(ranges.len() as u32)
         .unwrap_or(usize::MAX);
@@ -231,6 +176,7 @@ mod tests {
             box_mm: Some([0.0, 0.0, 0.0, 100.0, 100.0, 100.0]),
             visible_from_mm: Some(Vector3::new(50.0, 50.0, 1000.0)),
             cone_half_angle_deg: 30.0,
+            ..Workspace::default()
         };
         let up = Vector3::z();
         assert!(ws.admits(&Vector3::new(50.0, 50.0, 50.0), &up));

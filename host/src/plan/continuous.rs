@@ -14,7 +14,9 @@
 
 use nalgebra::{DMatrix, DVector};
 
-use super::candidates::{usable_range, CandidatePose};
+#[cfg(test)]
+use super::candidates::usable_range;
+use super::candidates::CandidatePose;
 use super::criteria::Criterion;
 use super::optimum::{approximate_optimum, approximate_optimum_from, Extension, Optimum};
 use super::refine::Refiner;
@@ -60,7 +62,7 @@ pub fn extend(
         .model
         .joint_limits()
         .iter()
-        .map(usable_range)
+        .map(|l| refiner.workspace.usable_range(l))
         .collect();
     let mut pool_q: Vec<Vec<f64>> = cands.iter().map(|c| c.q_deg.clone()).collect();
     let mut pool_b = b.clone();

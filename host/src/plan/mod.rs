@@ -2,6 +2,11 @@
 //!
 //! | module | holds |
 //! |---|---|
+//! | [`workspace`] | the safety of a configuration: joint-limit margin, table plane, keep-out boxes, link origins, collisions |
+//! | [`collision`] | the URDF's collision geometry (parry3d): self-collision of non-adjacent links, table, keep-out boxes |
+//! | [`meshes`] | collision meshes: `package://` and relative paths, STL vertices |
+//! | [`order`] | the poses in a short joint-travel order, every segment checked at a joint step |
+//! | [`trajectory`] | the ordered poses as a ROS JointTrajectory YAML |
 //! | [`candidates`] | random reachable configurations within the limits and workspace constraints, and the structured extremes (limits and mid-range) |
 //! | [`setup`] | the identification Jacobian of every candidate (declared tilting on), identifiability, column scaling |
 //! | `steps` | the steps of [`plan`] around the exchange: options refused, the candidate set, the random baseline and criterion A's weights, refinement sweeps, the best possible design's report |
@@ -30,12 +35,15 @@
 
 pub mod aliased;
 pub mod candidates;
+pub mod collision;
 pub mod continuous;
 pub mod criteria;
 pub mod design;
 pub mod evaluate;
+pub mod meshes;
 pub mod metrics;
 pub mod optimum;
+pub mod order;
 pub mod output;
 pub mod refine;
 pub mod robust;
@@ -45,6 +53,8 @@ pub mod sheets_output;
 mod steps;
 #[cfg(test)]
 mod test_support;
+pub mod trajectory;
+pub mod workspace;
 
 use rand::SeedableRng;
 use rand_chacha::ChaCha8Rng;
@@ -95,12 +105,27 @@ pub enum PlanError {
     /// The model failed.
     #[error(transparent)]
     Model(#[from] ModelError),
+    /// The collision geometry cannot be read (a mesh, the chain, an SRDF).
+    #[error("{0}")]
+    Geometry(String),
+    /// The URDF cannot be read.
+    #[error(transparent)]
+    Urdf(#[from] crate::urdf::UrdfError),
+    /// Fewer safe poses than asked (collision-free, above the table, in the limits).
+    #[error("only {found} of the {wanted} poses asked are safe: {why}")]
+    Unsafe {
+        wanted: usize,
+        found: usize,
+        why: String,
+    },
 }
 
 impl Classify for PlanError {
     fn kind(&self) -> ErrorKind {
         match self {
-            PlanError::Candidates { .. } | PlanError::Numerical(_) => ErrorKind::Failure,
+            PlanError::Candidates { .. } | PlanError::Numerical(_) | PlanError::Unsafe { .. } => {
+                ErrorKind::Failure
+            }
             PlanError::Model(e) => e.kind(),
             _ => ErrorKind::BadInput,
         }
@@ -160,6 +185,9 @@ pub struct PlanConfig {
     pub pool_q: Option<Vec<Vec<f64>>>,
     /// Plan for the base frame too (`--base`, as `calibrate --base` identifies it).
     pub base: bool,
+    /// Largest joint step between the configurations checked along a segment between two
+    /// consecutive poses, deg (mm for prismatic joints).
+    pub segment_step_deg: f64,
 }
 
 impl PlanConfig {
@@ -180,6 +208,7 @@ impl PlanConfig {
             refine_sweeps: None,
             pool_q: None,
             base: false,
+            segment_step_deg: order::DEFAULT_STEP_DEG,
         }
     }
 }
@@ -227,6 +256,8 @@ pub struct Plan {
     /// The best possible on the candidates (approximate optimum and its bound) and the plan's
     /// efficiency against it; `None` with poses already measured or `--from-diagnose`.
     pub optimum: Option<optimum::OptimumReport>,
+    /// The visiting order ([`order`]): `poses` (and `pool_index`) are in that order.
+    pub order: order::Ordered,
 }
 
 /// What the continuous refinement did.
@@ -337,12 +368,39 @@ pub fn plan(
     let refinement = RefineSummary::of(&refined);
     setup.b = refined.blocks;
     let from_diagnose = from.map(|f| f.report(&setup, &chosen));
+    let weights_j = vec![1.0; model.n_joints()];
+    let ordered = order::order_poses(
+        model,
+        &cfg.workspace,
+        &refined.poses,
+        &weights_j,
+        cfg.segment_step_deg,
+    )?;
+    if let Some((_, why)) = ordered.dropped.first() {
+        return Err(PlanError::Unsafe {
+            wanted: cfg.n,
+            found: ordered.order.len(),
+            why: format!(
+                "{} poses have no safe segment to any other (first: {why}); loosen the constraints or plan fewer",
+                ordered.dropped.len()
+            ),
+        });
+    }
+    let poses: Vec<CandidatePose> = ordered
+        .order
+        .iter()
+        .map(|&k| refined.poses[k].clone())
+        .collect();
+    let pool_index = pool_index.map(|index| {
+        let chosen: Vec<usize> = design.chosen.iter().map(|&c| index[c]).collect();
+        ordered.order.iter().map(|&k| chosen[k]).collect()
+    });
     Ok(Plan {
         robot: model.name().to_string(),
         criterion: cfg.criterion.name(!setup.interest.is_empty()).into(),
         candidates: n_pool,
         structured_candidates: n_pool - n_uniform,
-        poses: refined.poses,
+        poses,
         parameters: setup.names.clone(),
         scale: setup.scale.clone(),
         unidentifiable: setup.unidentifiable.clone(),
@@ -354,8 +412,9 @@ pub fn plan(
         ratio_per_draw,
         direct,
         refinement,
-        pool_index: pool_index.map(|index| design.chosen.iter().map(|&c| index[c]).collect()),
+        pool_index,
         optimum,
+        order: ordered,
     })
 }
 

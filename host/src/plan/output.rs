@@ -121,6 +121,16 @@ pub fn plan_json(plan: &Plan, noise_mm: f64, seed: u64, sheets: Option<Value>) -
             "p50": num(quantile(&plan.ratio_per_draw, 0.5)),
             "p90": num(quantile(&plan.ratio_per_draw, 0.9)),
         },
+        "order": {
+            "travel_deg": num(plan.order.travel_deg),
+            "random_travel_deg": num(plan.order.random_travel_deg),
+            "segments_checked": plan.order.segments_checked,
+            "segments_unsafe": plan.order.segments_unsafe,
+            "configurations_checked": plan.order.configurations_checked,
+            "step_deg": num(plan.order.step_deg),
+            "via_before": plan.order.via_before,
+            "via_q": plan.order.via_q,
+        },
     })
 }
 

@@ -13,7 +13,9 @@
 
 use nalgebra::DMatrix;
 
-use super::candidates::{usable_range, CandidatePose, Workspace};
+#[cfg(test)]
+use super::candidates::usable_range;
+use super::candidates::{CandidatePose, Workspace};
 use super::criteria::{value_weighted, Criterion};
 use super::setup::Setup;
 use super::PlanError;
@@ -112,7 +114,12 @@ impl Refiner<'_> {
             blocks.view_mut((3 * k, 0), (3, p)).copy_from(&bk);
         }
         let criterion_before = self.value(&m);
-        let ranges: Vec<(f64, f64)> = self.model.joint_limits().iter().map(usable_range).collect();
+        let ranges: Vec<(f64, f64)> = self
+            .model
+            .joint_limits()
+            .iter()
+            .map(|l| self.workspace.usable_range(l))
+            .collect();
         let (mut moves, mut run) = (0, 0);
         for _ in 0..sweeps {
             run += 1;

@@ -254,6 +254,9 @@ pub fn sheet_joints(model: &Model, spec: &SheetSpec, ws: &Workspace) -> Option<V
             axis,
         };
         let q = solve(model, &target, &seed, IkTilt::Off).ok()?;
+        if ws.violation(model, &q, &p, &axis).ok()?.is_some() {
+            return None;
+        }
         seed.clone_from(&q);
         out.push(q);
     }

@@ -16,9 +16,13 @@ pub struct PlanPoses {
     pub planned_mm: Vec<[f64; 3]>,
     /// Tool points of (some of) the candidates, mm, drawn light grey.
     pub candidates_mm: Vec<[f64; 3]>,
+    /// The robot at a few poses: stick figures from the base through the link origins to the
+    /// tool point, mm.
+    pub robots_mm: Vec<Vec<[f64; 3]>>,
 }
 
 const GREY: RGBColor = RGBColor(200, 200, 200);
+const ROBOT: RGBColor = RGBColor(60, 60, 60);
 
 impl PlanPoses {
     fn projection<DB: DrawingBackend>(
@@ -28,7 +32,12 @@ impl PlanPoses {
         caption: &str,
     ) -> Result<(), PlotError> {
         let t = self.title.as_str();
-        let all = || self.planned_mm.iter().chain(&self.candidates_mm);
+        let all = || {
+            self.planned_mm
+                .iter()
+                .chain(&self.candidates_mm)
+                .chain(self.robots_mm.iter().flatten())
+        };
         let xs: Vec<f64> = all().map(|p| p[axes.0]).collect();
         let ys: Vec<f64> = all().map(|p| p[axes.1]).collect();
         let (x0, x1) = finite_range(&xs).ok_or_else(|| data_err(t, "no finite tool point"))?;
@@ -66,6 +75,25 @@ impl PlanPoses {
             .map_err(draw_err(t))?
             .label("planned")
             .legend(|(x, y)| Circle::new((x, y), 4, AFTER.filled()));
+        for (k, robot) in self.robots_mm.iter().enumerate() {
+            let line = chart
+                .draw_series(LineSeries::new(
+                    robot.iter().map(|p| (p[axes.0], p[axes.1])),
+                    ShapeStyle::from(&ROBOT).stroke_width(3),
+                ))
+                .map_err(draw_err(t))?;
+            if k == 0 {
+                line.label("robot at a few poses")
+                    .legend(|(x, y)| PathElement::new(vec![(x - 8, y), (x + 8, y)], ROBOT));
+            }
+            chart
+                .draw_series(
+                    robot
+                        .iter()
+                        .map(|p| Circle::new((p[axes.0], p[axes.1]), 2, ROBOT.filled())),
+                )
+                .map_err(draw_err(t))?;
+        }
         chart
             .configure_series_labels()
             .background_style(WHITE.mix(0.8))
@@ -102,11 +130,13 @@ pub fn poses_svg(
     title: &str,
     planned_mm: &[[f64; 3]],
     candidates_mm: &[[f64; 3]],
+    robots_mm: &[Vec<[f64; 3]>],
 ) -> Result<String, PlotError> {
     svg_string(&PlanPoses {
         title: title.to_string(),
         planned_mm: planned_mm.to_vec(),
         candidates_mm: candidates_mm.to_vec(),
+        robots_mm: robots_mm.to_vec(),
     })
 }
 
@@ -116,8 +146,14 @@ mod tests {
     fn draws_both_views() {
         let planned = [[100.0, 0.0, 200.0], [0.0, 150.0, 300.0]];
         let cands = [[50.0, 50.0, 250.0]];
-        let svg = super::poses_svg("plan", &planned, &cands).unwrap();
+        let robot = vec![vec![
+            [0.0, 0.0, 0.0],
+            [0.0, 0.0, 150.0],
+            [100.0, 0.0, 200.0],
+        ]];
+        let svg = super::poses_svg("plan", &planned, &cands, &robot).unwrap();
         assert!(svg.contains("top view") && svg.contains("side view"));
-        assert!(super::poses_svg("plan", &[], &cands).is_err());
+        assert!(svg.contains("robot at a few poses") && svg.contains("<polyline"));
+        assert!(super::poses_svg("plan", &[], &cands, &[]).is_err());
     }
 }

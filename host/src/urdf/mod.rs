@@ -7,6 +7,7 @@
 //! * [`import_chain`]`(&urdf, &ImportOptions) -> Imported { model, joint_names }`: the chain as
 //!   elementary transforms; the structure and parameter names are documented in [`import`].
 
+pub mod collision;
 pub mod error;
 pub mod export;
 mod frame;

@@ -38,6 +38,7 @@ mod model_transmission;
 mod model_ur5;
 mod model_workspace;
 mod plan_pool;
+mod plan_safety;
 mod plan_sheets;
 mod plan_sim;
 mod plan_workspace_cli;

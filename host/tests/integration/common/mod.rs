@@ -72,6 +72,10 @@ pub fn path_row(t_s: f64, x: &nalgebra::Vector3<f64>, a: &nalgebra::Vector3<f64>
 /// Packages of the Python consumers the ROS-ecosystem tests run (PyPI names and versions).
 pub const PY_PACKAGES: [&str; 2] = ["pin==4.1.0", "rosbags==0.11.9"];
 
+/// The robot descriptions package (the Panda's URDF, SRDF and STL collision meshes), installed
+/// in the same venv by `.ci/run` (and by the tests that need it when absent).
+pub const PY_ROBOTS: &str = "example-robot-data==6.0.0";
+
 /// The Python interpreter of a virtual environment with [`PY_PACKAGES`] (pinocchio, rosbags),
 /// `target/pyenv` (`.ci/run` makes it; made here when absent: `python3 -m venv` and `pip
 /// install` into a temporary folder, renamed into place). `None` after a `SKIPPED` message when
