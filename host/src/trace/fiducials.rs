@@ -58,13 +58,72 @@ pub(crate) fn find(
     paper: &PaperMap,
     spacing_mm: f64,
 ) -> Result<Fiducials, TraceError> {
-    let discs = candidate_discs(img, map, paper);
+    let discs = candidate_discs(img, map, paper, BLACK_FRACTION);
     identify::identify(&discs, spacing_mm)
 }
 
-/// Every disc-like dark blob, refined to sub-pixel centroids, largest first.
-pub(crate) fn candidate_discs(img: &RgbImage, map: &CoarseMap, paper: &PaperMap) -> Vec<Disc> {
-    let mask = map.classify(paper, |v, level| (v as f32) < level * BLACK_FRACTION);
+/// A block under this fraction of the paper level is dark enough to be print through any tone
+/// curve the tracer undoes (black at 0.03-0.08 of the paper is 0.2-0.35 through sRGB or a gamma
+/// of 1/2.2); used only to find the marks whose black measures the curve.
+const ENCODED_BLACK_FRACTION: f32 = 0.5;
+
+/// The print's black relative to the paper around it, as the image holds it: the median over
+/// the four corner discs of the median red value within a quarter of each disc's diameter of
+/// its centre, over the paper level there. The marks are searched for as
+/// [`find`] does, and again more leniently (a black lifted by a tone curve) where that finds
+/// none. `None` when no marks are found.
+pub(crate) fn black_of_paper(
+    img: &RgbImage,
+    map: &CoarseMap,
+    paper: &PaperMap,
+    spacing_mm: f64,
+) -> Option<f64> {
+    let fid = find(img, map, paper, spacing_mm).or_else(|_| {
+        let discs = candidate_discs(img, map, paper, ENCODED_BLACK_FRACTION);
+        identify::identify(&discs, spacing_mm)
+    });
+    let fid = fid.ok()?;
+    let raw = img.as_raw();
+    let (w, h) = (img.width() as i64, img.height() as i64);
+    let mut ratios: Vec<f64> = fid
+        .corners
+        .iter()
+        .filter_map(|d| {
+            let r = 0.25 * d.diameter_px;
+            let [cx, cy] = d.centre_px;
+            let mut v: Vec<u8> = Vec::new();
+            let (x0, x1) = ((cx - r).floor() as i64, (cx + r).ceil() as i64);
+            let (y0, y1) = ((cy - r).floor() as i64, (cy + r).ceil() as i64);
+            for y in y0.max(0)..y1.min(h) {
+                for x in x0.max(0)..x1.min(w) {
+                    if (x as f64 + 0.5 - cx).hypot(y as f64 + 0.5 - cy) <= r {
+                        v.push(raw[3 * (y * w + x) as usize]);
+                    }
+                }
+            }
+            if v.is_empty() {
+                return None;
+            }
+            v.sort_unstable();
+            let level = f64::from(paper.at(cx, cy)[0]);
+            (level > 1.0).then(|| f64::from(v[v.len() / 2]) / level)
+        })
+        .collect();
+    if ratios.is_empty() {
+        return None;
+    }
+    ratios.sort_by(f64::total_cmp);
+    Some(0.5 * (ratios[(ratios.len() - 1) / 2] + ratios[ratios.len() / 2]))
+}
+
+/// Every disc-like dark blob (its blocks under `black_fraction` of the paper), refined to sub-pixel centroids, largest first.
+pub(crate) fn candidate_discs(
+    img: &RgbImage,
+    map: &CoarseMap,
+    paper: &PaperMap,
+    black_fraction: f32,
+) -> Vec<Disc> {
+    let mask = map.classify(paper, |v, level| (v as f32) < level * black_fraction);
     let (_, comps) = components(&mask, map.w, map.h);
     let mut discs: Vec<Disc> = comps
         .iter()

@@ -14,6 +14,8 @@ mod drawing;
 mod render2;
 #[path = "trace_independent/reported.rs"]
 mod reported;
+#[path = "trace_independent/tone_curves.rs"]
+mod tone_curves;
 
 use crate::trace_cli::trace_to;
 use cases::{case, measure, Case};
@@ -22,7 +24,7 @@ use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
 use render2::{photo_view, scan_view, Printed, Scene};
 use rigctl::sheet::ReferencePath;
-use rigctl::trace::synth::{render_photo, render_scan, PhotoSpec, RenderSpec};
+use rigctl::trace::synth::{render_photo, render_scan, DeviceTone, PhotoSpec, RenderSpec};
 use rigctl::trace::{trace_image, TraceOptions};
 
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -84,6 +86,17 @@ fn render_independent(c: &Case, kind: Kind, seed: u64) -> image::RgbImage {
 
 /// [`render_independent`] with the camera and light of `s`.
 fn render_independent_shot(c: &Case, kind: Kind, s: &Shot, seed: u64) -> image::RgbImage {
+    render_independent_toned(c, kind, s, seed, None)
+}
+
+/// [`render_independent_shot`] written through the tone curve `tone` (`None`: linear).
+fn render_independent_toned(
+    c: &Case,
+    kind: Kind,
+    s: &Shot,
+    seed: u64,
+    tone: Option<fn(f64) -> f64>,
+) -> image::RgbImage {
     let mut marks = vec![render2::Mark {
         pts: c.truth.clone(),
         width_mm: c.width_mm,
@@ -144,10 +157,16 @@ fn render_independent_shot(c: &Case, kind: Kind, s: &Shot, seed: u64) -> image::
         noise,
         jpeg,
         seed,
+        tone,
     })
 }
 
 fn render_project(c: &Case, kind: Kind, seed: u64) -> image::RgbImage {
+    render_project_toned(c, kind, seed, DeviceTone::Linear)
+}
+
+/// [`render_project`] written through the device's tone curve `tone`.
+fn render_project_toned(c: &Case, kind: Kind, seed: u64, tone: DeviceTone) -> image::RgbImage {
     let s = shot(kind, seed);
     let spec = RenderSpec {
         dpi: if kind == Kind::Photo {
@@ -166,6 +185,7 @@ fn render_project(c: &Case, kind: Kind, seed: u64) -> image::RgbImage {
         dust_mm: c.dust.iter().map(|d| [d[0], d[1], d[2]]).collect(),
         fibres_mm: c.fibres.clone(),
         seed,
+        device_tone: tone,
         ..RenderSpec::default()
     };
     match kind {

@@ -5,12 +5,16 @@
 //!   with a small rotation and shift; its drawing primitives and noise are in `draw.rs`, the
 //!   desk around the page and the arc length along the pencil in `desk.rs`;
 //! - [`render_photo`] ([`photo`]): a phone photo of that sheet through a tilted pinhole camera
-//!   with lens distortion, uneven light, blur, noise and JPEG compression ([`jpeg_bytes`]).
+//!   with lens distortion, uneven light, blur, noise and JPEG compression ([`jpeg_bytes`]);
+//! - both written through a device's tone curve ([`DeviceTone`], `device.rs`: sRGB, a gamma, a
+//!   phone's S-curve; linear by default).
 
 mod desk;
+pub mod device;
 mod draw;
 pub mod photo;
 pub mod scan;
 
+pub use device::DeviceTone;
 pub use photo::{jpeg_bytes, render_photo, Camera, PhotoSpec};
 pub use scan::{render_scan, RenderSpec};

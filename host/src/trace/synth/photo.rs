@@ -177,6 +177,7 @@ pub fn render_photo(sheet: &RenderSpec, photo: &PhotoSpec) -> RgbImage {
         shift_mm: [0.0, 0.0],
         mirrored: false,
         desk_level: None,
+        device_tone: super::DeviceTone::Linear,
         ..sheet.clone()
     };
     let tex = render_scan(&tex_spec);
@@ -224,6 +225,7 @@ pub fn render_photo(sheet: &RenderSpec, photo: &PhotoSpec) -> RgbImage {
         gaussian_blur(&mut img, photo.blur_px);
     }
     add_noise(&mut img, photo.noise, photo.seed);
+    sheet.device_tone.apply(&mut img);
     match photo.jpeg_quality {
         Some(q) => jpeg_roundtrip(&img, q).unwrap_or(img),
         None => img,

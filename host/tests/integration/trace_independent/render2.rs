@@ -71,6 +71,9 @@ pub struct Scene {
     pub noise: f64,
     pub jpeg: Option<u8>,
     pub seed: u64,
+    /// The device's tone curve, reflectance (0..1) to the value written (0..1), applied to the
+    /// exposed, blurred and noisy values before they are rounded; `None`: linear.
+    pub tone: Option<fn(f64) -> f64>,
 }
 
 fn hash(a: u64) -> u64 {
@@ -666,6 +669,11 @@ pub fn render(scene: &Scene) -> RgbImage {
     }
     if photo {
         blur(&mut buf, w as usize, h as usize);
+    }
+    if let Some(curve) = scene.tone {
+        for v in buf.iter_mut() {
+            *v = (255.0 * curve((f64::from(*v) / 255.0).clamp(0.0, 1.0))) as f32;
+        }
     }
     let img = RgbImage::from_fn(w, h, |x, y| {
         let o = 3 * (y as usize * w as usize + x as usize);
