@@ -36,6 +36,7 @@ pub mod chain;
 mod error;
 pub mod fiducials;
 mod files;
+pub mod flatness;
 pub mod grey_print;
 pub mod homography;
 mod ink;
@@ -60,6 +61,7 @@ pub use chain::{polyline_length, resample, Stroke};
 pub use error::TraceError;
 pub use fiducials::{Disc, Fiducials};
 pub use files::{load_prepared, load_scan, write_csv, MAX_RGB_BYTES};
+pub use flatness::Flatness;
 pub use grey_print::GreyPrint;
 pub use homography::Homography;
 pub use lines::DrawnLine;
@@ -98,6 +100,9 @@ pub struct Trace {
     pub px_per_mm: f64,
     /// The device's tone curve the image was linearised through, and how it was known.
     pub tone: Tone,
+    /// The printed marks' residual pattern under the camera (sheet v2): how far from flat the
+    /// sheet lay, as the marks see it.
+    pub flatness: Option<Flatness>,
 }
 
 impl Trace {
@@ -191,6 +196,7 @@ pub fn trace_prepared(
         camera_fit: meta.camera_fit,
         px_per_mm: meta.px_per_mm,
         tone: meta.tone,
+        flatness: meta.flatness,
     })
 }
 
@@ -234,6 +240,7 @@ pub fn trace_paths(
 struct Meta {
     /// The tone curve the image was linearised through.
     tone: tone::Tone,
+    flatness: Option<Flatness>,
     /// Whether red ink was found (the printed path told from the pencil by colour).
     red_ink: bool,
     fiducials: Option<Fiducials>,
@@ -325,6 +332,7 @@ fn track(
         camera,
         camera_fit,
         dot_residual_mm,
+        flatness,
         px_per_mm,
         occluders,
     } = mapped;
@@ -352,6 +360,7 @@ fn track(
         linear,
         meta: Meta {
             tone,
+            flatness,
             red_ink: ink.red_ink.is_some(),
             fiducials: fids,
             dot_residual_mm,

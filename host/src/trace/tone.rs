@@ -20,8 +20,8 @@ mod icc;
 
 use image::RgbImage;
 
-/// The print's black, reflectance relative to the paper (toner or inkjet black: 0.03-0.08).
-pub const PRINT_BLACK: f64 = 0.06;
+/// The print's black, reflectance relative to the paper (toner or inkjet black: 0.03-0.10; the project's renderers print 0.07).
+pub const PRINT_BLACK: f64 = 0.07;
 /// A black darker than this fraction of the paper is taken as written in linear light.
 pub const LINEAR_BLACK_MAX: f64 = 0.15;
 /// The gamma fitted from the black is kept within this range.

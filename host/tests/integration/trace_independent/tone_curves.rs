@@ -74,6 +74,17 @@ fn run(name: &str, toned: Toned, seeds: std::ops::Range<u64>) -> Counts {
                 render_independent_toned(&c, kind, &shot(kind, seed), seed, Some(f))
             }
         };
+        if let Some(dir) = std::env::var_os("TRACE_TONE_DUMP") {
+            let f = std::path::Path::new(&dir)
+                .join(format!("{}_{seed}.png", name.replace([' ', '/'], "_")));
+            img.save(&f).expect("dump");
+            let rows: String = c
+                .truth
+                .iter()
+                .map(|p| format!("{},{}\n", p[0], p[1]))
+                .collect();
+            std::fs::write(f.with_extension("truth.csv"), rows).expect("dump truth");
+        }
         let o: Outcome = trace_outcome(&img, &c);
         k.n += 1;
         let verdict = if !o.exit0 {
@@ -111,9 +122,20 @@ fn check(name: &str, k: &Counts) {
 
 const SEEDS: std::ops::Range<u64> = 1..22;
 
+/// The seeds: 1..22, or `TRACE_TONE_SEEDS=a..b` for a closer look.
+fn seeds() -> std::ops::Range<u64> {
+    std::env::var("TRACE_TONE_SEEDS")
+        .ok()
+        .and_then(|v| {
+            let (a, b) = v.split_once("..")?;
+            Some(a.parse().ok()?..b.parse().ok()?)
+        })
+        .unwrap_or(SEEDS)
+}
+
 #[test]
 fn project_renderer_through_srgb() {
-    let k = run("project sRGB", Toned::Project(DeviceTone::Srgb), SEEDS);
+    let k = run("project sRGB", Toned::Project(DeviceTone::Srgb), seeds());
     check("project sRGB", &k);
 }
 
@@ -122,7 +144,7 @@ fn project_renderer_through_gamma_1_over_2_2() {
     let k = run(
         "project gamma 1/2.2",
         Toned::Project(DeviceTone::Gamma(2.2)),
-        SEEDS,
+        seeds(),
     );
     check("project gamma 1/2.2", &k);
 }
@@ -132,14 +154,14 @@ fn project_renderer_through_a_phone_s_curve() {
     let k = run(
         "project phone S-curve",
         Toned::Project(DeviceTone::PhoneS { share: 0.3 }),
-        SEEDS,
+        seeds(),
     );
     check("project phone S-curve", &k);
 }
 
 #[test]
 fn independent_renderer_through_srgb() {
-    let k = run("independent sRGB", Toned::Independent(srgb), SEEDS);
+    let k = run("independent sRGB", Toned::Independent(srgb), seeds());
     check("independent sRGB", &k);
 }
 
@@ -148,14 +170,18 @@ fn independent_renderer_through_gamma_1_over_2_2() {
     let k = run(
         "independent gamma 1/2.2",
         Toned::Independent(gamma_22),
-        SEEDS,
+        seeds(),
     );
     check("independent gamma 1/2.2", &k);
 }
 
 #[test]
 fn independent_renderer_through_a_phone_curve() {
-    let k = run("independent phone curve", Toned::Independent(phone), SEEDS);
+    let k = run(
+        "independent phone curve",
+        Toned::Independent(phone),
+        seeds(),
+    );
     check("independent phone curve", &k);
 }
 
