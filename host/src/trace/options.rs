@@ -64,7 +64,7 @@ impl Default for TraceOptions {
             path: PathChoice::Auto,
             band_mm: 6.0,
             max_camera_rms_mm: 0.08,
-            max_bend_pattern_mm: 0.015,
+            max_bend_pattern_mm: 0.006,
         }
     }
 }
