@@ -223,7 +223,7 @@ pub fn estimate(black_of_paper: f64) -> Option<Tone> {
 
 /// Applies `curve` to every sample of `img` in place.
 pub fn apply(img: &mut RgbImage, curve: &ToneCurve) {
-    apply_raw(&mut **img, curve);
+    apply_raw(img, curve);
 }
 
 /// Applies `curve` to RGB bytes in place.
