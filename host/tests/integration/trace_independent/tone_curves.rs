@@ -219,6 +219,9 @@ fn the_tone_curve_is_measured_from_the_print() {
     }
 }
 
+/// A CLI case: name, the device's curve, whether the file says sRGB, what the report says.
+type CliCase = (&'static str, fn(f64) -> f64, bool, &'static str);
+
 /// Writes `img` as a PNG with an `sRGB` chunk.
 fn save_srgb_png(img: &image::RgbImage, path: &std::path::Path) {
     let file = std::fs::File::create(path).expect("create");
@@ -260,7 +263,7 @@ fn simulated_scan_through_device_curves_is_traced_by_the_cli() {
             .collect()
     };
     let linear = read(&linear_out);
-    let cases: [(&str, fn(f64) -> f64, bool, &str); 3] = [
+    let cases: [CliCase; 3] = [
         ("srgb-tagged", srgb, true, "sRGB chunk"),
         ("srgb-untagged", srgb, false, "measured"),
         ("gamma", gamma_22, false, "measured"),
