@@ -32,8 +32,8 @@ pub fn load_scan(path: &Path) -> Result<RgbImage, TraceError> {
 
 /// Reads a scan (PNG or JPEG) as RGB together with its whole-image maps, for
 /// [`super::trace_prepared`]. The image is the same as [`load_scan`]'s (8-bit samples; grey
-/// is copied to the three channels; alpha is dropped), linearised when the file names its tone
-/// curve (a PNG's `sRGB`, `iCCP` or `gAMA` chunk, a JPEG's ICC profile: [`super::tone`]).
+/// is copied to the three channels; alpha is dropped), linearised when a PNG names its tone
+/// curve (its `sRGB`, `iCCP` or `gAMA` chunk: [`super::tone`]).
 pub fn load_prepared(path: &Path) -> Result<(RgbImage, Prepared), TraceError> {
     let read = |source| TraceError::Read {
         path: path.to_path_buf(),
@@ -45,26 +45,10 @@ pub fn load_prepared(path: &Path) -> Result<(RgbImage, Prepared), TraceError> {
     if let Some(done) = super::png_read::read_png(reader, MAX_RGB_BYTES).map_err(read)? {
         return Ok(done);
     }
-    // The `image` crate decodes it; an embedded ICC profile names its tone curve.
-    let decoder = image::ImageReader::open(path)
-        .map_err(|e| read(ImageError::IoError(e)))?
-        .with_guessed_format()
-        .map_err(|e| read(ImageError::IoError(e)))?
-        .into_decoder()
-        .map_err(read)?;
-    let mut decoder = decoder;
-    let icc = image::ImageDecoder::icc_profile(&mut decoder).unwrap_or(None);
-    let mut img = image::DynamicImage::from_decoder(decoder)
-        .map_err(read)?
-        .into_rgb8();
-    let tone = icc.as_deref().and_then(super::tone::from_icc);
-    if let Some(t) = &tone {
-        super::tone::apply(&mut img, &t.curve);
-    }
-    let mut prepared = Prepared::build(&img);
-    if let Some(t) = tone {
-        prepared.tone = t;
-    }
+    // JPEG (or a PNG left to the `image` crate): its tone curve is measured on the print
+    // ([`super::trace_prepared`]); a JPEG's ICC profile is not read.
+    let img = load_scan(path)?;
+    let prepared = Prepared::build(&img);
     Ok((img, prepared))
 }
 

@@ -5,8 +5,7 @@
 //! local paper level in linear light. So the image is linearised first:
 //!
 //! - a PNG that says how it is encoded (an `sRGB` chunk, an `iCCP` profile's tone curve, a
-//!   `gAMA` chunk) and a JPEG with an ICC profile are decoded as they say, while they are read
-//!   ([`super::files`]);
+//!   `gAMA` chunk) is decoded as it says, while it is read ([`super::files`]);
 //! - an image that says nothing is measured ([`estimate`]): the print's black is ink or toner
 //!   reflecting about [`PRINT_BLACK`] of the paper; where the corner discs are lighter than
 //!   [`LINEAR_BLACK_MAX`] of the paper around them, the image went through a tone curve, fitted
