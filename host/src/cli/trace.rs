@@ -191,6 +191,9 @@ fn report(trace: &Trace) {
         },
         trace.px_per_mm,
     );
+    if trace.tone.source != rigctl::trace::ToneSource::Assumed {
+        errln!("rigctl trace: the image was {}", trace.tone.describe());
+    }
     let l = &trace.linking;
     for g in l.gaps.iter().filter(|g| g.bridged) {
         errln!(

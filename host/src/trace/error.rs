@@ -42,6 +42,19 @@ pub enum TraceError {
         found: usize,
         limit_mm: f64,
     },
+    #[error(
+        "the sheet is not flat: the printed marks sit in a smooth pattern of {pattern_mm:.3} mm RMS \
+         ({pattern_max_mm:.3} mm at worst) off a flat sheet's image, over their own scatter of \
+         {scatter_mm:.3} mm (limit {limit_mm} mm): a bow or a lifted edge, which the trace inside \
+         the ring would follow by more than that: lay the sheet flat (under glass, or taped at \
+         its edges) and photograph it again"
+    )]
+    NotFlat {
+        pattern_mm: f64,
+        pattern_max_mm: f64,
+        scatter_mm: f64,
+        limit_mm: f64,
+    },
     #[error("fiducials degenerate: no homography through the four corner fiducials")]
     DegenerateFiducials,
     #[error(

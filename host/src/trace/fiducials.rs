@@ -58,13 +58,82 @@ pub(crate) fn find(
     paper: &PaperMap,
     spacing_mm: f64,
 ) -> Result<Fiducials, TraceError> {
-    let discs = candidate_discs(img, map, paper);
+    let discs = candidate_discs(img, map, paper, BLACK_FRACTION);
     identify::identify(&discs, spacing_mm)
 }
 
-/// Every disc-like dark blob, refined to sub-pixel centroids, largest first.
-pub(crate) fn candidate_discs(img: &RgbImage, map: &CoarseMap, paper: &PaperMap) -> Vec<Disc> {
-    let mask = map.classify(paper, |v, level| (v as f32) < level * BLACK_FRACTION);
+/// A block under this fraction of the paper level is dark enough to be print through any tone
+/// curve the tracer undoes (black at 0.03-0.08 of the paper is 0.2-0.35 through sRGB or a gamma
+/// of 1/2.2); used only to find the marks whose black measures the curve.
+const ENCODED_BLACK_FRACTION: f32 = 0.5;
+
+/// The print's black relative to the paper around it, as the image holds it: the median over
+/// the four corner discs of the median red value within a quarter of each disc's diameter of
+/// its centre, over the median in a ring 0.8-1.1 diameters from it (the paper). The marks are
+/// searched for as [`find`] does, and where that finds none again more leniently (a black
+/// lifted by a tone curve: under half the paper level around, [`PaperMap::ceiling`]). `None` when no marks are found.
+pub(crate) fn black_of_paper(
+    img: &RgbImage,
+    map: &CoarseMap,
+    paper: &PaperMap,
+    spacing_mm: f64,
+) -> Option<f64> {
+    let corners = match find(img, map, paper, spacing_mm) {
+        Ok(f) => f.corners,
+        Err(_) => {
+            // Against the paper around the marks: inside a disc several blocks wide the paper
+            // map holds the disc, which a black lifted by a tone curve is not far below.
+            let ceiling = paper.ceiling(3);
+            let discs = candidate_discs(img, map, &ceiling, ENCODED_BLACK_FRACTION);
+            identify::corner_discs(&discs, spacing_mm)?
+        }
+    };
+    let raw = img.as_raw();
+    let (w, h) = (img.width() as i64, img.height() as i64);
+    // The median red value at distances r0..r1 (pixels) from `c`.
+    let median_within = |c: [f64; 2], r0: f64, r1: f64| -> Option<f64> {
+        let mut v: Vec<u8> = Vec::new();
+        let (x0, x1) = ((c[0] - r1).floor() as i64, (c[0] + r1).ceil() as i64);
+        let (y0, y1) = ((c[1] - r1).floor() as i64, (c[1] + r1).ceil() as i64);
+        for y in y0.max(0)..y1.min(h) {
+            for x in x0.max(0)..x1.min(w) {
+                let d = (x as f64 + 0.5 - c[0]).hypot(y as f64 + 0.5 - c[1]);
+                if d >= r0 && d <= r1 {
+                    v.push(raw[3 * (y * w + x) as usize]);
+                }
+            }
+        }
+        if v.is_empty() {
+            return None;
+        }
+        v.sort_unstable();
+        Some(f64::from(v[v.len() / 2]))
+    };
+    let mut ratios: Vec<f64> = corners
+        .iter()
+        .filter_map(|d| {
+            // The disc's core, and the paper in a ring clear of its blurred edge (the paper map
+            // inside a disc several blocks wide holds the disc, not the paper).
+            let core = median_within(d.centre_px, 0.0, 0.25 * d.diameter_px)?;
+            let level = median_within(d.centre_px, 0.8 * d.diameter_px, 1.1 * d.diameter_px)?;
+            (level > 1.0).then(|| core / level)
+        })
+        .collect();
+    if ratios.is_empty() {
+        return None;
+    }
+    ratios.sort_by(f64::total_cmp);
+    Some(0.5 * (ratios[(ratios.len() - 1) / 2] + ratios[ratios.len() / 2]))
+}
+
+/// Every disc-like dark blob (its blocks under `black_fraction` of the paper), refined to sub-pixel centroids, largest first.
+pub(crate) fn candidate_discs(
+    img: &RgbImage,
+    map: &CoarseMap,
+    paper: &PaperMap,
+    black_fraction: f32,
+) -> Vec<Disc> {
+    let mask = map.classify(paper, |v, level| (v as f32) < level * black_fraction);
     let (_, comps) = components(&mask, map.w, map.h);
     let mut discs: Vec<Disc> = comps
         .iter()

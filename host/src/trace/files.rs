@@ -32,7 +32,8 @@ pub fn load_scan(path: &Path) -> Result<RgbImage, TraceError> {
 
 /// Reads a scan (PNG or JPEG) as RGB together with its whole-image maps, for
 /// [`super::trace_prepared`]. The image is the same as [`load_scan`]'s (8-bit samples; grey
-/// is copied to the three channels; alpha is dropped).
+/// is copied to the three channels; alpha is dropped), linearised when a PNG names its tone
+/// curve (its `sRGB`, `iCCP` or `gAMA` chunk: [`super::tone`]).
 pub fn load_prepared(path: &Path) -> Result<(RgbImage, Prepared), TraceError> {
     let read = |source| TraceError::Read {
         path: path.to_path_buf(),
@@ -44,6 +45,8 @@ pub fn load_prepared(path: &Path) -> Result<(RgbImage, Prepared), TraceError> {
     if let Some(done) = super::png_read::read_png(reader, MAX_RGB_BYTES).map_err(read)? {
         return Ok(done);
     }
+    // JPEG (or a PNG left to the `image` crate): its tone curve is measured on the print
+    // ([`super::trace_prepared`]); a JPEG's ICC profile is not read.
     let img = load_scan(path)?;
     let prepared = Prepared::build(&img);
     Ok((img, prepared))

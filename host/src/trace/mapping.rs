@@ -5,7 +5,8 @@ use super::centreline::Occluders;
 use super::paper::PaperMap;
 use super::raster::CoarseMap;
 use super::{
-    fiducials, CameraModel, Fiducials, FitQuality, Homography, Mapping, TraceError, TraceOptions,
+    fiducials, flatness, CameraModel, Fiducials, FitQuality, Homography, Mapping, TraceError,
+    TraceOptions,
 };
 use crate::sheet::{
     fiducial_centres_mm, orientation_dot_mm, ring_dots_mm, FIDUCIAL_SPACING_MM,
@@ -13,14 +14,25 @@ use crate::sheet::{
 };
 use image::RgbImage;
 
+/// The camera, its fit on the marks, the orientation dot's residual (mm) and the marks'
+/// residual pattern.
+pub(crate) type CameraFit = (
+    CameraModel,
+    Option<FitQuality>,
+    f64,
+    Option<flatness::Flatness>,
+);
+
 /// The camera of a fiducial mapping: fitted on all marks with the ring, else the corners'
-/// homography. Returns the model, the fit (ring) and the orientation dot's residual, mm.
+/// homography. Returns the model, the fit (ring), the orientation dot's residual, mm, and the
+/// marks' residual pattern (ring; [`flatness`]). A pattern over
+/// `opts.max_bend_pattern_mm` is [`TraceError::NotFlat`].
 pub(crate) fn fit_camera(
     img: &RgbImage,
     fid: &Fiducials,
     spacing_mm: f64,
     opts: &TraceOptions,
-) -> Result<(CameraModel, Option<FitQuality>, f64), TraceError> {
+) -> Result<CameraFit, TraceError> {
     let size = [img.width() as f64, img.height() as f64];
     let expected = orientation_dot_mm(spacing_mm);
     if fid.ring.len() >= 8 {
@@ -33,6 +45,7 @@ pub(crate) fn fit_camera(
             px.push(d.centre_px);
         }
         let (cam, q) = CameraModel::fit(&mm, &px, size).ok_or(TraceError::DegenerateFiducials)?;
+        let flat = flatness_of(&cam, &mm, &px);
         let limit_mm = opts.max_camera_rms_mm * spacing_mm / FIDUCIAL_SPACING_MM;
         if !(q.rms_mm <= limit_mm && q.max_mm <= 4.0 * limit_mm) {
             return Err(TraceError::CameraCheck {
@@ -43,9 +56,17 @@ pub(crate) fn fit_camera(
                 limit_mm,
             });
         }
+        if let Some(f) = flat.filter(|f| f.is_bent(opts.max_bend_pattern_mm)) {
+            return Err(TraceError::NotFlat {
+                pattern_mm: f.pattern_mm,
+                pattern_max_mm: f.pattern_max_mm,
+                scatter_mm: f.scatter_mm,
+                limit_mm: opts.max_bend_pattern_mm,
+            });
+        }
         let dot = cam.to_mm(fid.dot.centre_px);
         let residual = (dot[0] - expected[0]).hypot(dot[1] - expected[1]);
-        return Ok((cam, Some(q), residual));
+        return Ok((cam, Some(q), residual, flat));
     }
     let px: Vec<[f64; 2]> = fid.corners.iter().map(|d| d.centre_px).collect();
     let to_px = Homography::fit(&fiducial_centres_mm(spacing_mm), &px)
@@ -56,7 +77,29 @@ pub(crate) fn fit_camera(
     if residual_mm.is_nan() || residual_mm > 1.0 {
         return Err(TraceError::FiducialResidual { residual_mm });
     }
-    Ok((cam, None, residual_mm))
+    Ok((cam, None, residual_mm, None))
+}
+
+/// The residual pattern of the marks under the camera (marks off the fit by more than five
+/// times the median left out, as the fit leaves them out; the corners and the dot kept).
+fn flatness_of(cam: &CameraModel, mm: &[[f64; 2]], px: &[[f64; 2]]) -> Option<flatness::Flatness> {
+    let res: Vec<[f64; 2]> = mm
+        .iter()
+        .zip(px)
+        .map(|(m, p)| {
+            let q = cam.to_mm(*p);
+            [q[0] - m[0], q[1] - m[1]]
+        })
+        .collect();
+    let mut len: Vec<f64> = res.iter().map(|r| r[0].hypot(r[1])).collect();
+    len.sort_by(f64::total_cmp);
+    let med = len.get(len.len() / 2).copied()?;
+    let keep: Vec<usize> = (0..res.len())
+        .filter(|&i| i < 5 || res[i][0].hypot(res[i][1]) <= (5.0 * med).max(0.05))
+        .collect();
+    let s: Vec<[f64; 2]> = keep.iter().map(|&i| mm[i]).collect();
+    let r: Vec<[f64; 2]> = keep.iter().map(|&i| res[i]).collect();
+    flatness::measure(&s, &r)
 }
 
 /// A pixel -> sheet mm map.
@@ -91,6 +134,8 @@ pub(crate) struct Mapped {
     pub camera: Option<CameraModel>,
     pub camera_fit: Option<FitQuality>,
     pub dot_residual_mm: Option<f64>,
+    /// The marks' residual pattern under the camera (ring).
+    pub flatness: Option<flatness::Flatness>,
     /// Image scale, pixels per mm.
     pub px_per_mm: f64,
     /// The ring dots, which the pencil may cross.
@@ -139,7 +184,7 @@ pub(crate) fn map_pixels(
     match opts.mapping {
         Mapping::Fiducials { spacing_mm } => {
             let fid = fiducials::find(img, map, paper, spacing_mm)?;
-            let (cam, fit, residual) = fit_camera(img, &fid, spacing_mm, opts)?;
+            let (cam, fit, residual, flat) = fit_camera(img, &fid, spacing_mm, opts)?;
             let ppmm = fid.side_px() / spacing_mm;
             for (d, _) in &fid.ring {
                 occluders
@@ -157,6 +202,7 @@ pub(crate) fn map_pixels(
                 camera: Some(cam),
                 camera_fit: fit,
                 dot_residual_mm: Some(residual),
+                flatness: flat,
                 px_per_mm: ppmm,
                 occluders,
             })
@@ -172,6 +218,7 @@ pub(crate) fn map_pixels(
             camera: None,
             camera_fit: None,
             dot_residual_mm: None,
+            flatness: None,
             px_per_mm: 1.0 / mm_per_px,
             occluders,
         }),

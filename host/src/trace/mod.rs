@@ -36,6 +36,7 @@ pub mod chain;
 mod error;
 pub mod fiducials;
 mod files;
+pub mod flatness;
 pub mod grey_print;
 pub mod homography;
 mod ink;
@@ -53,12 +54,14 @@ mod probe;
 mod raster;
 mod smooth;
 pub mod synth;
+pub mod tone;
 
 pub use camera::{CameraModel, FitQuality};
 pub use chain::{polyline_length, resample, Stroke};
 pub use error::TraceError;
 pub use fiducials::{Disc, Fiducials};
 pub use files::{load_prepared, load_scan, write_csv, MAX_RGB_BYTES};
+pub use flatness::Flatness;
 pub use grey_print::GreyPrint;
 pub use homography::Homography;
 pub use lines::DrawnLine;
@@ -67,6 +70,7 @@ pub use options::{Mapping, PathChoice, TraceOptions};
 pub use paths::{line_file_name, path_file_name, write_drawing, Drawing, DrawnPath, SUMMARY_FILE};
 pub use png_read::read_png;
 pub use prepare::Prepared;
+pub use tone::{Tone, ToneCurve, ToneSource};
 
 use crate::sheet::ReferencePath;
 use image::RgbImage;
@@ -94,6 +98,11 @@ pub struct Trace {
     pub camera_fit: Option<FitQuality>,
     /// Image scale, pixels per mm (mean over the fiducial square).
     pub px_per_mm: f64,
+    /// The device's tone curve the image was linearised through, and how it was known.
+    pub tone: Tone,
+    /// The printed marks' residual pattern under the camera (sheet v2): how far from flat the
+    /// sheet lay, as the marks see it.
+    pub flatness: Option<Flatness>,
 }
 
 impl Trace {
@@ -128,7 +137,9 @@ pub fn trace_prepared(
     opts: &TraceOptions,
     progress: &ProgressBar,
 ) -> Result<Trace, TraceError> {
-    let Tracked { pieces_mm, meta } = track(img, prepared, opts, progress)?;
+    let Tracked {
+        pieces_mm, meta, ..
+    } = track(img, prepared, opts, progress)?;
     // Without red ink the printed path, if printed, is graphite to the tracker.
     let grey_print = match opts.mapping {
         Mapping::Scale { .. } => None,
@@ -184,6 +195,8 @@ pub fn trace_prepared(
         camera: meta.camera,
         camera_fit: meta.camera_fit,
         px_per_mm: meta.px_per_mm,
+        tone: meta.tone,
+        flatness: meta.flatness,
     })
 }
 
@@ -195,7 +208,15 @@ pub fn trace_paths(
     opts: &TraceOptions,
     progress: &ProgressBar,
 ) -> Result<Drawing, TraceError> {
-    let Tracked { pieces_mm, meta } = track(img, prepared, opts, progress)?;
+    let Tracked {
+        pieces_mm,
+        meta,
+        linear,
+    } = track(img, prepared, opts, progress)?;
+    let (img, prepared) = match &linear {
+        Some((i, p)) => (i, p),
+        None => (img, prepared),
+    };
     let no_trace = || TraceError::NoTrace {
         min_length_mm: opts.min_stroke_mm,
     };
@@ -217,6 +238,9 @@ pub fn trace_paths(
 
 /// How the image was mapped to sheet mm.
 struct Meta {
+    /// The tone curve the image was linearised through.
+    tone: tone::Tone,
+    flatness: Option<Flatness>,
     /// Whether red ink was found (the printed path told from the pencil by colour).
     red_ink: bool,
     fiducials: Option<Fiducials>,
@@ -229,7 +253,37 @@ struct Meta {
 /// The tracked pieces of graphite in sheet mm (steps 1-5 of the pipeline).
 struct Tracked {
     pieces_mm: Vec<chain::PieceMm>,
+    /// The image linearised through a measured tone curve, with its maps (`None`: the image as
+    /// given was used).
+    linear: Option<(RgbImage, Prepared)>,
     meta: Meta,
+}
+
+/// The tone curve of an image the file said nothing about, measured on its marks
+/// ([`tone::estimate`]); the linearised image and its maps when it is not linear.
+fn settle_tone(
+    img: &RgbImage,
+    prepared: &Prepared,
+    opts: &TraceOptions,
+) -> (tone::Tone, Option<(RgbImage, Prepared)>) {
+    let given = prepared.tone.clone();
+    let Mapping::Fiducials { spacing_mm } = opts.mapping else {
+        return (given, None);
+    };
+    if given.from_file() {
+        return (given, None);
+    }
+    let black = fiducials::black_of_paper(img, &prepared.map, &prepared.paper, spacing_mm);
+    match black.and_then(tone::estimate) {
+        None => (given, None),
+        Some(t) => {
+            let mut lin = img.clone();
+            tone::apply(&mut lin, &t.curve);
+            let mut p = Prepared::build(&lin);
+            p.tone = t.clone();
+            (t, Some((lin, p)))
+        }
+    }
 }
 
 fn track(
@@ -245,6 +299,13 @@ fn track(
     } else {
         rebuilt = Prepared::build(img);
         &rebuilt
+    };
+    // The device's tone curve undone before darkness is measured (a file that names its curve
+    // was linearised while read).
+    let (tone, linear) = settle_tone(img, prepared, opts);
+    let (img, prepared) = match &linear {
+        Some((i, p)) => (i, p),
+        None => (img, prepared),
     };
     let (paper, map) = (&prepared.paper, &prepared.map);
     let (w_px, h_px) = (img.width() as f64, img.height() as f64);
@@ -271,6 +332,7 @@ fn track(
         camera,
         camera_fit,
         dot_residual_mm,
+        flatness,
         px_per_mm,
         occluders,
     } = mapped;
@@ -295,7 +357,10 @@ fn track(
         .collect();
     Ok(Tracked {
         pieces_mm,
+        linear,
         meta: Meta {
+            tone,
+            flatness,
             red_ink: ink.red_ink.is_some(),
             fiducials: fids,
             dot_residual_mm,

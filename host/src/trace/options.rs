@@ -45,6 +45,9 @@ pub struct TraceOptions {
     pub band_mm: f64,
     /// Largest RMS residual of the camera model on the printed marks, mm.
     pub max_camera_rms_mm: f64,
+    /// Largest smooth pattern the camera model may leave on the printed marks (a sheet not
+    /// lying flat), RMS mm ([`super::flatness`]); `f64::INFINITY`: not checked.
+    pub max_bend_pattern_mm: f64,
 }
 
 impl Default for TraceOptions {
@@ -61,6 +64,7 @@ impl Default for TraceOptions {
             path: PathChoice::Auto,
             band_mm: 6.0,
             max_camera_rms_mm: 0.08,
+            max_bend_pattern_mm: 0.006,
         }
     }
 }

@@ -117,6 +117,19 @@ impl PaperMap {
         self.level[self.row_of(y) * self.w + self.col_of(x)][0]
     }
 
+    /// The map max-filtered `passes` more times over 3 x 3 blocks: the paper's level next to a
+    /// mark several blocks wide (a corner disc), where this map holds the mark itself.
+    pub fn ceiling(&self, passes: usize) -> Self {
+        let mut level = self.level.clone();
+        for _ in 0..passes {
+            level = max_filter(&level, self.w, self.h);
+        }
+        Self {
+            level,
+            ..self.clone()
+        }
+    }
+
     /// Block column holding pixel x coordinate `x`.
     #[inline]
     pub fn col_of(&self, x: f64) -> usize {

@@ -9,7 +9,8 @@
 //!
 //! The image is the one the `image` crate's `into_rgb8` gives (it decodes with the same crate
 //! and the same expansion): grey copied to the three channels, alpha dropped, 16-bit samples
-//! rounded to 8 bits.
+//! rounded to 8 bits; a file that names its tone curve (`sRGB`, `iCCP`, `gAMA`) is then
+//! linearised through it row by row, before the maps are built ([`super::tone`]).
 
 use super::prepare::{BandMaps, Bands, Geometry, Prepared};
 use image::error::{
@@ -95,6 +96,12 @@ fn read_batched<R: BufRead + Seek>(
         .filter(|&n| n <= max_rgb_bytes)
         .ok_or_else(too_large)?;
     let mut reader = decoder.read_info().map_err(from_png)?;
+    // The file's own word on its tone curve: the rows are linearised as they come.
+    let tone = super::tone::from_png_info(reader.info());
+    let lut = tone
+        .as_ref()
+        .filter(|t| t.curve != super::tone::ToneCurve::Linear)
+        .map(|t| t.curve.lut());
     let layout = Layout::of(reader.output_color_type(), width)?;
     let batch_rows = (batch_bytes / layout.row_bytes.max(1)).max(2);
     let mut rgb = vec![0u8; rgb_bytes];
@@ -106,7 +113,8 @@ fn read_batched<R: BufRead + Seek>(
     let (spare_tx, spare_rx) = sync_channel::<Vec<u8>>(2);
     let (decoded, maps) = std::thread::scope(|s| {
         let rgb = &mut rgb;
-        let worker = s.spawn(move || to_rgb_all(layout, rx, spare_tx, rgb, geometry, band_rows));
+        let worker =
+            s.spawn(move || to_rgb_all(layout, rx, spare_tx, rgb, geometry, band_rows, lut));
         let decoded = decode_rows(&mut reader, layout, height, batch_rows, &tx, &spare_rx);
         drop(tx);
         let maps = worker
@@ -118,7 +126,10 @@ fn read_batched<R: BufRead + Seek>(
     for m in maps {
         bands.push(m);
     }
-    let prepared = bands.finish();
+    let mut prepared = bands.finish();
+    if let Some(t) = tone {
+        prepared.tone = t;
+    }
     let img = RgbImage::from_raw(width as u32, height as u32, rgb)
         .ok_or_else(|| ImageError::Limits(LimitError::from_kind(LimitErrorKind::DimensionError)))?;
     Ok(Some((img, prepared)))
@@ -233,6 +244,7 @@ fn to_rgb_all(
     rgb: &mut [u8],
     geometry: Geometry,
     band_rows: usize,
+    lut: Option<[u8; 256]>,
 ) -> Vec<BandMaps> {
     let w3 = 3 * (layout.row_bytes / (layout.channels * layout.bytes_per_sample));
     let height = rgb.len() / w3.max(1);
@@ -244,7 +256,13 @@ fn to_rgb_all(
             .chunks_exact(layout.row_bytes.max(1))
             .take(batch.rows)
         {
-            to_rgb(row, layout, &mut rgb[y * w3..(y + 1) * w3]);
+            let dst = &mut rgb[y * w3..(y + 1) * w3];
+            to_rgb(row, layout, dst);
+            if let Some(lut) = &lut {
+                for v in dst.iter_mut() {
+                    *v = lut[*v as usize];
+                }
+            }
             y += 1;
             if y.is_multiple_of(band_rows) || y == height {
                 let y0 = (y - 1) / band_rows * band_rows;

@@ -7,6 +7,7 @@
 
 use super::paper::PaperMap;
 use super::raster::CoarseMap;
+use super::tone::Tone;
 use image::RgbImage;
 
 /// The whole-image maps of one image, ready for [`super::trace_prepared`].
@@ -16,9 +17,17 @@ pub struct Prepared {
     pub(crate) map: CoarseMap,
     /// Width and height of the image the maps were built from, pixels.
     size: [usize; 2],
+    /// The tone curve the image was linearised through while it was read (the file said so),
+    /// or [`Tone::assumed`] (left to [`super::trace_prepared`] to measure).
+    pub(crate) tone: Tone,
 }
 
 impl Prepared {
+    /// The tone curve the image was linearised through, and how it was known.
+    pub fn tone(&self) -> &Tone {
+        &self.tone
+    }
+
     /// Whether these are the maps of an image of `img`'s size.
     pub fn fits(&self, img: &RgbImage) -> bool {
         self.size == [img.width() as usize, img.height() as usize]
@@ -155,6 +164,7 @@ impl Bands {
                 min_red,
             },
             size: [self.iw, self.ih],
+            tone: Tone::assumed(),
         }
     }
 }

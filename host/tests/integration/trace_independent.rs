@@ -6,6 +6,8 @@
 //! 0.1 mm of the trace) and RMS; the exit rule: exit 0 only with the whole drawn path written,
 //! so never exit 0 below 0.95 coverage, and an incomplete path exits 1 naming where.
 
+#[path = "trace_independent/bends.rs"]
+mod bends;
 #[path = "trace_independent/cases.rs"]
 mod cases;
 #[path = "trace_independent/drawing.rs"]
@@ -14,6 +16,8 @@ mod drawing;
 mod render2;
 #[path = "trace_independent/reported.rs"]
 mod reported;
+#[path = "trace_independent/tone_curves.rs"]
+mod tone_curves;
 
 use crate::trace_cli::trace_to;
 use cases::{case, measure, Case};
@@ -22,7 +26,7 @@ use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
 use render2::{photo_view, scan_view, Printed, Scene};
 use rigctl::sheet::ReferencePath;
-use rigctl::trace::synth::{render_photo, render_scan, PhotoSpec, RenderSpec};
+use rigctl::trace::synth::{render_photo, render_scan, Bend, DeviceTone, PhotoSpec, RenderSpec};
 use rigctl::trace::{trace_image, TraceOptions};
 
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -84,6 +88,29 @@ fn render_independent(c: &Case, kind: Kind, seed: u64) -> image::RgbImage {
 
 /// [`render_independent`] with the camera and light of `s`.
 fn render_independent_shot(c: &Case, kind: Kind, s: &Shot, seed: u64) -> image::RgbImage {
+    render_independent_toned(c, kind, s, seed, None)
+}
+
+/// [`render_independent_shot`] written through the tone curve `tone` (`None`: linear).
+fn render_independent_toned(
+    c: &Case,
+    kind: Kind,
+    s: &Shot,
+    seed: u64,
+    tone: Option<fn(f64) -> f64>,
+) -> image::RgbImage {
+    render_independent_with(c, kind, s, seed, tone, None)
+}
+
+/// [`render_independent_toned`] with a photo's sheet sagging by `sag`.
+fn render_independent_with(
+    c: &Case,
+    kind: Kind,
+    s: &Shot,
+    seed: u64,
+    tone: Option<fn(f64) -> f64>,
+    sag: Option<render2::Sag>,
+) -> image::RgbImage {
     let mut marks = vec![render2::Mark {
         pts: c.truth.clone(),
         width_mm: c.width_mm,
@@ -144,10 +171,28 @@ fn render_independent_shot(c: &Case, kind: Kind, s: &Shot, seed: u64) -> image::
         noise,
         jpeg,
         seed,
+        tone,
+        sag,
     })
 }
 
 fn render_project(c: &Case, kind: Kind, seed: u64) -> image::RgbImage {
+    render_project_toned(c, kind, seed, DeviceTone::Linear)
+}
+
+/// [`render_project`] written through the device's tone curve `tone`.
+fn render_project_toned(c: &Case, kind: Kind, seed: u64, tone: DeviceTone) -> image::RgbImage {
+    render_project_with(c, kind, seed, tone, None)
+}
+
+/// [`render_project_toned`] with a photo's sheet bent by `bend`.
+fn render_project_with(
+    c: &Case,
+    kind: Kind,
+    seed: u64,
+    tone: DeviceTone,
+    bend: Option<Bend>,
+) -> image::RgbImage {
     let s = shot(kind, seed);
     let spec = RenderSpec {
         dpi: if kind == Kind::Photo {
@@ -166,6 +211,7 @@ fn render_project(c: &Case, kind: Kind, seed: u64) -> image::RgbImage {
         dust_mm: c.dust.iter().map(|d| [d[0], d[1], d[2]]).collect(),
         fibres_mm: c.fibres.clone(),
         seed,
+        device_tone: tone,
         ..RenderSpec::default()
     };
     match kind {
@@ -186,6 +232,7 @@ fn render_project(c: &Case, kind: Kind, seed: u64) -> image::RgbImage {
                     texture_dpi: 450.0,
                     jpeg_quality: Some(s.jpeg),
                     seed,
+                    bend,
                     ..PhotoSpec::default()
                 },
             )
@@ -212,6 +259,12 @@ fn trace_outcome(img: &image::RgbImage, c: &Case) -> Outcome {
                 };
             };
             let (coverage, rms) = measure(&c.truth, c.closed, &main.points_mm, main.closed);
+            let flat = t.flatness.map_or(String::new(), |f| {
+                format!(
+                    "; marks' pattern {:.4} mm (F {:.1}, scatter {:.4})",
+                    f.pattern_mm, f.f_stat, f.scatter_mm
+                )
+            });
             Outcome {
                 coverage,
                 rms,
@@ -242,8 +295,8 @@ fn trace_outcome(img: &image::RgbImage, c: &Case) -> Outcome {
                             )
                             .collect();
                         format!("; {}", why.join("; "))
-                    }
-                ),
+                    },
+                ) + &flat,
             }
         }
     }

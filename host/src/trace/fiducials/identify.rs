@@ -30,6 +30,27 @@ struct Labelling {
 /// Finds the corner fiducials, the orientation dot and the ring dots among `discs` (largest
 /// first).
 pub(crate) fn identify(discs: &[Disc], spacing_mm: f64) -> Result<Fiducials, TraceError> {
+    let (best, any_quad) = best_labelling(discs, spacing_mm);
+    match best {
+        Some(l) if l.mirrored => Err(TraceError::Mirrored),
+        Some(l) => Ok(Fiducials {
+            corners: l.corners,
+            dot: l.dot,
+            ring: l.ring,
+        }),
+        None if any_quad => Err(TraceError::NoOrientationDot),
+        None => Err(TraceError::NoFiducials { discs: discs.len() }),
+    }
+}
+
+/// The four corner discs of the best labelling, mirrored or not (for measuring the print's
+/// black, where the sheet's sense does not matter).
+pub(crate) fn corner_discs(discs: &[Disc], spacing_mm: f64) -> Option<[Disc; 4]> {
+    best_labelling(discs, spacing_mm).0.map(|l| l.corners)
+}
+
+/// The best labelling of `discs`, and whether any four of them made a plausible square.
+fn best_labelling(discs: &[Disc], spacing_mm: f64) -> (Option<Labelling>, bool) {
     let cand = &discs[..discs.len().min(MAX_CORNER_CANDIDATES)];
     let n = cand.len();
     let mut best: Option<Labelling> = None;
@@ -77,16 +98,7 @@ pub(crate) fn identify(discs: &[Disc], spacing_mm: f64) -> Result<Fiducials, Tra
             }
         }
     }
-    match best {
-        Some(l) if l.mirrored => Err(TraceError::Mirrored),
-        Some(l) => Ok(Fiducials {
-            corners: l.corners,
-            dot: l.dot,
-            ring: l.ring,
-        }),
-        None if any_quad => Err(TraceError::NoOrientationDot),
-        None => Err(TraceError::NoFiducials { discs: discs.len() }),
-    }
+    (best, any_quad)
 }
 
 fn better(a: &Labelling, b: &Labelling) -> bool {

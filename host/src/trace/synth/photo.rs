@@ -47,6 +47,8 @@ pub struct PhotoSpec {
     /// Level of the desk around the page, 0..1.
     pub desk_level: f64,
     pub seed: u64,
+    /// The sheet bent (a bow, a lifted edge); `None`: flat on the desk.
+    pub bend: Option<super::Bend>,
 }
 
 impl Default for PhotoSpec {
@@ -70,6 +72,7 @@ impl Default for PhotoSpec {
             texture_dpi: 600.0,
             desk_level: 0.35,
             seed: 7,
+            bend: None,
         }
     }
 }
@@ -143,6 +146,43 @@ impl Camera {
         Some([self.c[0] + d[0] * g, self.c[1] + d[1] * g])
     }
 
+    /// Pixel -> sheet mm: the ray's intersection with the sheet, bent by `bend` (then the
+    /// paper's own, unrolled coordinates) or flat.
+    pub fn unproject_onto(&self, p: [f64; 2], bend: Option<&super::Bend>) -> Option<[f64; 2]> {
+        let Some(b) = bend else {
+            return self.unproject(p);
+        };
+        let ray = self.ray(p)?;
+        // The ray meets the surface where its height is the surface's there: iterate from the
+        // desk plane (slopes well under 1, so this converges quickly).
+        let mut z = 0.0;
+        let mut q = [0.0; 2];
+        for _ in 0..12 {
+            let l = (z - self.centre[2]) / ray[2];
+            q = [self.centre[0] + l * ray[0], self.centre[1] + l * ray[1]];
+            z = b.height_at(q);
+        }
+        Some(b.unroll(q))
+    }
+
+    /// The world direction of the ray through pixel `p`, pointing down (`None` otherwise).
+    fn ray(&self, p: [f64; 2]) -> Option<[f64; 3]> {
+        let dd = [p[0] - self.c[0], p[1] - self.c[1]];
+        let mut d = dd;
+        for _ in 0..30 {
+            let r2 = (d[0] * d[0] + d[1] * d[1]) / (self.f * self.f);
+            let g = 1.0 + self.k[0] * r2 + self.k[1] * r2 * r2;
+            d = [dd[0] / g, dd[1] / g];
+        }
+        let ray_c = [d[0] / self.f, d[1] / self.f, 1.0];
+        let ray = [
+            self.rot[0][0] * ray_c[0] + self.rot[1][0] * ray_c[1] + self.rot[2][0] * ray_c[2],
+            self.rot[0][1] * ray_c[0] + self.rot[1][1] * ray_c[1] + self.rot[2][1] * ray_c[2],
+            self.rot[0][2] * ray_c[0] + self.rot[1][2] * ray_c[1] + self.rot[2][2] * ray_c[2],
+        ];
+        (ray[2] < -1e-12).then_some(ray)
+    }
+
     /// Pixel -> sheet mm (the ray's intersection with the sheet plane).
     pub fn unproject(&self, p: [f64; 2]) -> Option<[f64; 2]> {
         let dd = [p[0] - self.c[0], p[1] - self.c[1]];
@@ -177,6 +217,7 @@ pub fn render_photo(sheet: &RenderSpec, photo: &PhotoSpec) -> RgbImage {
         shift_mm: [0.0, 0.0],
         mirrored: false,
         desk_level: None,
+        device_tone: super::DeviceTone::Linear,
         ..sheet.clone()
     };
     let tex = render_scan(&tex_spec);
@@ -193,7 +234,7 @@ pub fn render_photo(sheet: &RenderSpec, photo: &PhotoSpec) -> RgbImage {
     for y in 0..h {
         for x in 0..w {
             let p = [x as f64 + 0.5, y as f64 + 0.5];
-            let mut v = match cam.unproject(p) {
+            let mut v = match cam.unproject_onto(p, photo.bend.as_ref()) {
                 Some(s) => {
                     let page = [
                         (PAGE_WIDTH_MM / 2.0 + s[0]) * ppmm,
@@ -224,6 +265,7 @@ pub fn render_photo(sheet: &RenderSpec, photo: &PhotoSpec) -> RgbImage {
         gaussian_blur(&mut img, photo.blur_px);
     }
     add_noise(&mut img, photo.noise, photo.seed);
+    sheet.device_tone.apply(&mut img);
     match photo.jpeg_quality {
         Some(q) => jpeg_roundtrip(&img, q).unwrap_or(img),
         None => img,

@@ -11,6 +11,7 @@
 //! not depend on the order of the work.
 
 use super::desk::{cumulative_arc, desk};
+use super::device::DeviceTone;
 use super::draw::{disc, hash, mul, paper, rect, stroke_coverage, triangular, Placement};
 use crate::sheet::{
     fiducial_centres_mm, orientation_dot_mm, ring_dots_mm, scale_bar_rects_mm, ReferencePath,
@@ -68,6 +69,9 @@ pub struct RenderSpec {
     pub fibres_mm: Vec<[f64; 4]>,
     /// Level (0..1) of whatever the scanner sees outside the page (desk, lid); `None`: paper.
     pub desk_level: Option<f64>,
+    /// The tone curve the device writes through (a photo applies it after its light, blur and
+    /// noise, before JPEG).
+    pub device_tone: DeviceTone,
 }
 
 impl Default for RenderSpec {
@@ -94,6 +98,7 @@ impl Default for RenderSpec {
             dust_mm: Vec::new(),
             fibres_mm: Vec::new(),
             desk_level: None,
+            device_tone: DeviceTone::Linear,
         }
     }
 }
@@ -207,6 +212,7 @@ pub fn render_scan(spec: &RenderSpec) -> RgbImage {
     if let Some(level) = spec.desk_level {
         desk(&mut img, &place, level);
     }
+    spec.device_tone.apply(&mut img);
     img
 }
 

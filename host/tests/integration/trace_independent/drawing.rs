@@ -98,6 +98,8 @@ fn a_sheet_of_several_lines_gives_one_path_per_line() {
         noise: 2.0,
         jpeg: None,
         seed: 24,
+        tone: None,
+        sag: None,
     });
     let opts = TraceOptions {
         path: PathChoice::Free,
@@ -226,6 +228,8 @@ fn a_grid_drawn_several_times_gives_one_line_per_grid_line() {
         noise: 2.0,
         jpeg: None,
         seed: 31,
+        tone: None,
+        sag: None,
     });
     let opts = TraceOptions {
         path: PathChoice::Free,

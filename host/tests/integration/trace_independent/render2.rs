@@ -71,6 +71,69 @@ pub struct Scene {
     pub noise: f64,
     pub jpeg: Option<u8>,
     pub seed: u64,
+    /// The device's tone curve, reflectance (0..1) to the value written (0..1), applied to the
+    /// exposed, blurred and noisy values before they are rounded; `None`: linear.
+    pub tone: Option<fn(f64) -> f64>,
+    /// A photographed sheet that sags or curls (`None`: flat).
+    pub sag: Option<Sag>,
+}
+
+/// A sheet not lying flat, as a height over the desk that varies across one direction only (so
+/// the paper unrolls exactly): `Roll` lifts both edges along a cosine, `Curl` one edge along a
+/// cubic from the middle third on.
+#[derive(Debug, Clone, Copy)]
+pub struct Sag {
+    pub height_mm: f64,
+    /// Direction across which the height varies, rad from the sheet's +x.
+    pub across_rad: f64,
+    /// Half extent across, mm: the height is `height_mm` there.
+    pub half_mm: f64,
+    pub curl: bool,
+}
+
+impl Sag {
+    fn z(&self, u: f64) -> f64 {
+        let w = self.half_mm;
+        if self.curl {
+            let u0 = w / 3.0;
+            self.height_mm * ((u - u0).max(0.0) / (w - u0)).powi(3)
+        } else {
+            self.height_mm * (1.0 - (std::f64::consts::FRAC_PI_2 * u / w).cos())
+        }
+    }
+
+    /// The paper point (unrolled) under the camera's ray through the desk point `p0`, the
+    /// camera at `c`: the ray walked to where its height meets the surface's, then the distance
+    /// across replaced by the arc length (trapezoids of 0.25 mm) from the middle.
+    fn paper_point(&self, c: [f64; 3], p0: [f64; 2]) -> [f64; 2] {
+        let (sn, cs) = self.across_rad.sin_cos();
+        let mut h = 0.0;
+        let mut p = p0;
+        for _ in 0..10 {
+            let t = 1.0 - h / c[2];
+            p = [c[0] + t * (p0[0] - c[0]), c[1] + t * (p0[1] - c[1])];
+            h = self.z(p[0] * cs + p[1] * sn);
+        }
+        let u = p[0] * cs + p[1] * sn;
+        let v = -p[0] * sn + p[1] * cs;
+        let n = ((u.abs() / 0.25).ceil() as usize).max(1);
+        let du = u / n as f64;
+        let mut arc = 0.0;
+        for i in 0..n {
+            let (a, b) = (i as f64 * du, (i + 1) as f64 * du);
+            arc += (b - a).hypot(self.z(b) - self.z(a)) * du.signum();
+        }
+        [arc * cs - v * sn, arc * sn + v * cs]
+    }
+}
+
+/// Pixel -> paper mm on `scene`'s sheet, flat or sagging.
+fn on_paper(scene: &Scene, q: [f64; 2]) -> Option<[f64; 2]> {
+    let p0 = scene.view.to_mm(q)?;
+    match (&scene.sag, &scene.view) {
+        (Some(sag), View::Photo { c, .. }) => Some(sag.paper_point(*c, p0)),
+        _ => Some(p0),
+    }
 }
 
 fn hash(a: u64) -> u64 {
@@ -613,7 +676,7 @@ pub fn render(scene: &Scene) -> RgbImage {
     for y in 0..h {
         for x in 0..w {
             let centre = [x as f64 + 0.5, y as f64 + 0.5];
-            let Some(pm) = scene.view.to_mm(centre) else {
+            let Some(pm) = on_paper(scene, centre) else {
                 continue;
             };
             let inked = idx(pm).is_some_and(|k| near[k] != 0);
@@ -631,7 +694,7 @@ pub fn render(scene: &Scene) -> RgbImage {
                             x as f64 + (i as f64 + 0.5) / sub as f64,
                             y as f64 + (j as f64 + 0.5) / sub as f64,
                         ];
-                        if let Some(pq) = scene.view.to_mm(q) {
+                        if let Some(pq) = on_paper(scene, q) {
                             let v = sheet(pq, aa);
                             for k in 0..3 {
                                 acc[k] += v[k];
@@ -666,6 +729,11 @@ pub fn render(scene: &Scene) -> RgbImage {
     }
     if photo {
         blur(&mut buf, w as usize, h as usize);
+    }
+    if let Some(curve) = scene.tone {
+        for v in buf.iter_mut() {
+            *v = (255.0 * curve((f64::from(*v) / 255.0).clamp(0.0, 1.0))) as f32;
+        }
     }
     let img = RgbImage::from_fn(w, h, |x, y| {
         let o = 3 * (y as usize * w as usize + x as usize);
