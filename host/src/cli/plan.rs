@@ -329,15 +329,24 @@ pub fn run(args: Args) -> Result<(), CliError> {
     }
     let o = &result.order;
     out!(
-        "order: joint travel {:.0} deg (random order {:.0} deg); {} segments checked at most {} deg apart ({} configurations), {} unsafe ones avoided ({} through the via configuration), none left\n",
+        "order: joint travel {:.0} deg (random order {:.0} deg); {} segments checked at most {} deg apart ({} configurations), {} unsafe ones avoided ({} through the via configuration), {} left\n",
         o.travel_deg,
         o.random_travel_deg,
         o.segments_checked,
         o.step_deg,
         o.configurations_checked,
         o.segments_unsafe,
-        o.via_before.iter().filter(|v| **v).count()
+        o.via_before.iter().filter(|v| **v).count(),
+        if o.unsafe_left.is_empty() { "none".to_string() } else { o.unsafe_left.len().to_string() }
     )?;
+    if let Some((a, b, why)) = o.unsafe_left.first() {
+        out!(
+            "WARNING: {} move(s) between consecutive poses leave the safe space on the straight way (first: poses {} -> {}, {why}); without collision geometry the joint frames' origins stand in for the links, so these moves are not verified: drive them with a motion planner, or give --urdf FILE --tip-link LINK (plan.json order.moves_verified = false)\n",
+            o.unsafe_left.len(),
+            a + 1,
+            b + 1
+        )?;
+    }
     if let Some(v) = &o.via_q {
         let deg: Vec<String> = v.iter().map(|x| format!("{x:.1}")).collect();
         out!(

@@ -50,6 +50,12 @@ pub struct Ordered {
     pub via_before: Vec<bool>,
     /// The via configuration (deg), when a segment uses it.
     pub via_q: Option<Vec<f64>>,
+    /// Without collision geometry (the joint frames' origins stand in for the links, which is
+    /// not exact): the moves of the order that leave the safe space on the straight way and have
+    /// no safe way through the via configuration, as `(from, to, why)` positions in `order`.
+    /// They are kept and said, not dropped: the plan's moves are then not verified. Empty
+    /// with collision geometry (such a pose is dropped instead).
+    pub unsafe_left: Vec<(usize, usize, String)>,
 }
 
 /// Weighted joint distance.
@@ -189,6 +195,8 @@ pub fn order_poses(
             "--segment-step-deg {step_deg}: a positive number"
         )));
     }
+    // with collision geometry an unsafe way drops the pose; without it, it is said
+    let strict = ws.collision.is_some();
     let q: Vec<Vec<f64>> = poses.iter().map(|p| p.q_deg.clone()).collect();
     let n = q.len();
     let home = home_configuration(model);
@@ -259,9 +267,12 @@ pub fn order_poses(
                     bad = bad.or(Some((p[1], why.clone())));
                 }
             }
-            if bad.is_none() {
+            if bad.is_none() || !strict {
                 break;
             }
+        }
+        if !strict {
+            bad = None;
         }
         match bad {
             None => break,
@@ -290,6 +301,16 @@ pub fn order_poses(
             }
         })
         .sum();
+    let unsafe_left: Vec<(usize, usize, String)> = order
+        .windows(2)
+        .enumerate()
+        .filter_map(
+            |(k, p)| match checked.get(&(p[0].min(p[1]), p[0].max(p[1]))) {
+                Some(Edge::Barred(why)) => Some((k, k + 1, why.clone())),
+                _ => None,
+            },
+        )
+        .collect();
     let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(7);
     let mut shuffled = order.clone();
     let random_travel_deg = (0..100)
@@ -310,6 +331,7 @@ pub fn order_poses(
         dropped,
         via_q: via.filter(|_| via_before.iter().any(|v| *v)),
         via_before,
+        unsafe_left,
     })
 }
 

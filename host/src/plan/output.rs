@@ -126,6 +126,8 @@ pub fn plan_json(plan: &Plan, noise_mm: f64, seed: u64, sheets: Option<Value>) -
             "random_travel_deg": num(plan.order.random_travel_deg),
             "segments_checked": plan.order.segments_checked,
             "segments_unsafe": plan.order.segments_unsafe,
+            "moves_verified": plan.order.unsafe_left.is_empty(),
+            "unsafe_moves_left": plan.order.unsafe_left.iter().map(|(a, b, why)| serde_json::json!({"from": a, "to": b, "why": why})).collect::<Vec<_>>(),
             "configurations_checked": plan.order.configurations_checked,
             "step_deg": num(plan.order.step_deg),
             "via_before": plan.order.via_before,
