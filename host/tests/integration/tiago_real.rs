@@ -140,22 +140,27 @@ fn figaroh_levels_and_the_press_compliance_model_from_the_cli() {
     assert!((rms(&off, "calibration") - 2.88).abs() < 0.01);
     assert!((rms(&off, "validation") - 4.23).abs() < 0.01);
     // The PRESS-selected chain constants generalise better than the offsets alone, and with
-    // the gravity compliance as candidates below FIGAROH's full-parameter 3.07 mm and 2.816 mm.
+    // the gravity compliance as candidates below FIGAROH's full-parameter 3.07 mm: 2.8207 mm
+    // with every compliance within its physical bound (2.816 when `compliance_j5` was kept at
+    // -0.22) and the torques of the calibrated chain, as `fk` computes them.
     assert!(rms(&geo, "validation") < rms(&off, "validation"));
     assert!(
-        rms(&comp, "validation") <= 2.816,
+        rms(&comp, "validation") <= 2.83,
         "{}",
         rms(&comp, "validation")
     );
     assert!(comp["terms"].as_object().is_some_and(|t| !t.is_empty()));
-    for j in [7, 5] {
-        let key = format!("compliance_j{j}_deg_per_kgfm");
-        record(&format!("compliance_j{j}"), comp["terms"][&key].clone());
-        record(
-            &format!("compliance_j{j}_sigma"),
-            comp["sigma"][&key].clone(),
-        );
-    }
+    let key = "compliance_j7_deg_per_kgfm";
+    record("compliance_j7", comp["terms"][key].clone());
+    record("compliance_j7_sigma", comp["sigma"][key].clone());
+    // joint 5's compliance is fitted below 0 and held at its bound: said, not kept
+    assert!(comp["terms"].get("compliance_j5_deg_per_kgfm").is_none());
+    let held = comp["unphysical"].as_array().unwrap();
+    assert!(
+        held.iter()
+            .any(|u| u.as_str().unwrap().starts_with("compliance_j5")),
+        "{held:?}"
+    );
     let _ = std::fs::remove_dir_all(&tmp);
 }
 
