@@ -168,6 +168,10 @@ fn no_other_file_spells_an_effect_id() {
                 continue;
             }
             for f in &families {
+                // the URDF's `<mesh scale="..">` attribute is XML, not the effect `scale`
+                if rel == "urdf/collision.rs" && *f == "scale" {
+                    continue;
+                }
                 if line.contains(&format!("\"{f}:"))
                     || (whole.contains(f) && line.contains(&format!("\"{f}\"")))
                 {
