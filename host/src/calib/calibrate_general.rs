@@ -89,14 +89,18 @@ fn unknown_sets(
 ) -> Result<(Vec<Unknown>, Vec<Unknown>), CalibError> {
     let selection = resolve_selection(nominal, opts)?;
     let press = gen.select == Select::Press;
-    let mut always: Vec<Unknown> = selection
-        .iter()
-        .filter(|&&i| !(press && opts.params.is_none() && chain_constant(nominal, i)))
-        .map(|&i| Unknown::Param(i))
-        .collect();
+    // in preference order among confounded unknowns: the further points' offsets (what the
+    // robot's software does not see) first, then the selection
+    let mut always: Vec<Unknown> = Vec::new();
     for slot in 1..data.n_slots() {
         always.extend((0..3).map(|axis| Unknown::Offset { slot, axis }));
     }
+    always.extend(
+        selection
+            .iter()
+            .filter(|&&i| !(press && opts.params.is_none() && chain_constant(nominal, i)))
+            .map(|&i| Unknown::Param(i)),
+    );
     let compliance: Vec<Unknown> = match gen.compliance {
         true => (0..nominal.n_joints())
             .filter(|&j| !nominal.joints()[j].prismatic)
