@@ -14,7 +14,7 @@ use super::lm::LmConfig;
 use super::outliers;
 use super::predict::prediction_sd_mm;
 use super::prior::{PriorMode, PriorScales};
-use super::problem::{error_norms_mm, position_errors, Poses};
+use super::problem::{error_norms_mm, norms_mm, position_errors, Poses};
 use super::regularise::choose_prior;
 use super::report::{BeforeAfter, CalibrateReport, NamedValues, StandardSummary};
 use super::stats::Stats;
@@ -388,9 +388,15 @@ pub fn calibrate(
     // calibration's scale and the model's prediction uncertainty at each.
     let chosen_errors =
         |p: &Poses| -> Result<Vec<f64>, CalibError> { Ok(error_norms_mm(&chosen.model, p, tilt)?) };
+    // the errors of every held-out pose once; the statistics leave the listed ones out, and
+    // `validation_all` keeps them (FORMATS.md)
+    let val_all_errors = match val {
+        Some(v) => errs(v)?,
+        None => [Vec::new(), Vec::new(), Vec::new()],
+    };
     let mut outlier_reports = Vec::new();
     let mut extrapolated = Vec::new();
-    let mut val_kept_store = None;
+    let mut val_flagged: Vec<usize> = Vec::new();
     if let Some(t) = trimmed.as_ref() {
         let judge_model = judge.as_ref().map_or(&chosen.model, |f| &f.model);
         let judged = |p: &Poses| -> Result<Vec<f64>, CalibError> {
@@ -428,7 +434,7 @@ pub fn calibrate(
                 .map(|(s, o)| if o.is_empty() { *s } else { f64::INFINITY })
                 .collect();
             let (vflag, thresholds) = outliers::flag_held_out(&norms, &judged_sd, t.sigma_mm);
-            let final_norms = chosen_errors(v)?;
+            let final_norms = norms_mm(&val_all_errors[2]);
             // listed: the poses the calibration's scale alone would call gross errors, that
             // the prediction uncertainty or the joint ranges explain
             let (plain, _) = outliers::flag_held_out(&norms, &vec![0.0; v.len()], t.sigma_mm);
@@ -454,26 +460,16 @@ pub fn calibrate(
                     &thresholds,
                     &sd,
                 ));
-                val_kept_store = Some(v.subset(&outliers::kept(v.len(), &vflag)));
+                val_flagged = vflag;
             }
         }
     }
-    let val_all = val;
-    let val = val_kept_store.as_ref().or(val);
-    let val_errors = match val {
-        Some(v) => errs(v)?,
-        None => [Vec::new(), Vec::new(), Vec::new()],
-    };
-    let validation_all = match (val_all, &val_kept_store) {
-        (Some(v), Some(_)) => {
-            let e = errs(v)?;
-            Some(super::report::BeforeAfter {
-                before: super::stats::Stats::from_errors(&e[0]),
-                after: super::stats::Stats::from_errors(&e[2]),
-            })
-        }
-        _ => None,
-    };
+    let validation_all = val.map(|_| super::report::BeforeAfter {
+        before: super::stats::Stats::from_errors(&val_all_errors[0]),
+        after: super::stats::Stats::from_errors(&val_all_errors[2]),
+    });
+    let keep = outliers::kept(val.map_or(0, Poses::len), &val_flagged);
+    let val_errors = val_all_errors.map(|e| keep.iter().map(|&k| e[k]).collect::<Vec<_>>());
     let mut report = fit_report(
         &chosen,
         &selection,
@@ -484,7 +480,7 @@ pub fn calibrate(
     );
     report.outliers = outlier_reports;
     report.outlier_note = trimmed.and_then(|t| t.note);
-    report.validation_all = validation_all.or(report.validation);
+    report.validation_all = validation_all;
     report.extrapolated = extrapolated;
     report.prior = Some(prior).filter(|p| p.chosen_by != "well_posed");
     Ok(Outcome {

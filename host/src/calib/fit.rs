@@ -306,13 +306,15 @@ impl PositionFit<'_> {
         }
         let (poses, tilt) = (self.poses, self.tilt);
         let jac0 = stacked_jacobian(start, poses, self.selection, tilt)?;
-        let split = split_selection(start, self.selection, &jac0, self.rtol)?;
-        let x0 = param_vector(start, &split.fitted);
-        let prior = self.prior.map(|p| p.on(&split.fitted));
-        let problem = position_problem(start, poses, split.fitted.clone(), tilt);
-        Ok(
-            solve_split_with(split, problem, x0, self.lm, self.rtol, prior.as_ref())?
-                .map_model(Unknowns::into_model),
+        let make = |cols| position_problem(start, poses, cols, tilt);
+        fit_problem(
+            start,
+            self.selection,
+            &jac0,
+            make,
+            self.lm,
+            self.rtol,
+            self.prior.as_ref(),
         )
     }
 
@@ -504,7 +506,8 @@ pub fn solve_split_with<U, S: SetUnknowns, F: Rows<S>>(
 /// `jac0` (the Jacobian of the residuals wrt `selection` at `start`, one column per selected
 /// parameter) splits the selection into fitted and fixed parameters; `make_problem` builds the
 /// least-squares problem on a copy of `start` with the fitted ones (model indices) as unknowns,
-/// which Levenberg-Marquardt solves from their values in `start` ([`solve_split`]).
+/// which Levenberg-Marquardt solves from their values in `start` ([`solve_split_with`], with the
+/// prior `prior` on the fitted ones when given).
 pub fn fit_problem<F: Rows<Unknowns>>(
     start: &Model,
     selection: &[usize],
@@ -512,11 +515,16 @@ pub fn fit_problem<F: Rows<Unknowns>>(
     make_problem: impl FnOnce(Vec<usize>) -> ModelProblem<Unknowns, F>,
     lm: &LmConfig,
     rtol: f64,
+    prior: Option<&PriorAt<'_>>,
 ) -> Result<Fit, CalibError> {
     let split = split_selection(start, selection, jac0, rtol)?;
     let x0 = param_vector(start, &split.fitted);
+    let prior = prior.map(|p| p.on(&split.fitted));
     let problem = make_problem(split.fitted.clone());
-    Ok(solve_split(split, problem, x0, lm, rtol)?.map_model(Unknowns::into_model))
+    Ok(
+        solve_split_with(split, problem, x0, lm, rtol, prior.as_ref())?
+            .map_model(Unknowns::into_model),
+    )
 }
 
 #[cfg(test)]
@@ -555,7 +563,7 @@ mod tests {
         assert!(fit.converged && fit.rank == 2);
         let wrong = DMatrix::zeros(3 * poses.len(), 1);
         let make = |c| position_problem(&nominal, &poses, c, false);
-        let res = fit_problem(&nominal, &cols, &wrong, make, &lm, 1e-4);
+        let res = fit_problem(&nominal, &cols, &wrong, make, &lm, 1e-4, None);
         assert!(matches!(res, Err(CalibError::Solver(_))), "{res:?}");
     }
 

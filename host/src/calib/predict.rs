@@ -8,7 +8,7 @@ use nalgebra::{DMatrix, DVector};
 
 use super::error::CalibError;
 use super::fit::Fit;
-use super::prior::Prior;
+use super::prior::{scaled_normal_inverse, Prior};
 use super::problem::{stacked_jacobian, Poses};
 
 /// One standard deviation per coordinate (mm) of `fit`'s prediction at every pose of `at`: the
@@ -28,24 +28,8 @@ pub fn prediction_sd_mm(
         return Ok(vec![0.0; at.len()]);
     }
     let j = stacked_jacobian(&fit.model, cal, &fit.fitted, tilt)?;
-    let norms: Vec<f64> = (0..n)
-        .map(|c| {
-            let p = prior.map_or(0.0, |p| p.normal()[c]);
-            (j.column(c).norm_squared() + p).sqrt().max(1e-300)
-        })
-        .collect();
-    let d = DVector::from_vec(norms);
-    let mut a = j.transpose() * &j;
-    if let Some(p) = prior {
-        let diag = p.normal();
-        for c in 0..n {
-            a[(c, c)] += diag[c];
-        }
-    }
-    let scaled = DMatrix::from_fn(n, n, |r, c| a[(r, c)] / (d[r] * d[c]));
-    let svd = scaled.svd(true, true);
-    let top = svd.singular_values.max();
-    let Ok(inv) = svd.pseudo_inverse(1e-12 * top) else {
+    let diag = prior.map_or_else(|| DVector::zeros(n), Prior::normal);
+    let Some((d, inv)) = scaled_normal_inverse(&j, &diag) else {
         return Ok(vec![f64::INFINITY; at.len()]);
     };
     let jk = stacked_jacobian(&fit.model, at, &fit.fitted, tilt)?;

@@ -224,6 +224,37 @@ impl<P: Problem> Problem for WithPrior<'_, P> {
     }
 }
 
+/// The column scales `d` (`d_j = sqrt(|J_j|^2 + P_jj)`) and the pseudo-inverse of the scaled
+/// regularised normal matrix `D^-1 (J^T J + P) D^-1` (`P` diagonal, `prior_diag`; singular values
+/// below 1e-12 of the largest dropped): what the leave-one-out error of a ridge fit
+/// ([`ridge_press`]) and a fit's prediction uncertainty ([`super::predict`]) are made of.
+/// `None` when `prior_diag` does not match the columns or the SVD fails.
+pub fn scaled_normal_inverse(
+    jac: &DMatrix<f64>,
+    prior_diag: &DVector<f64>,
+) -> Option<(Vec<f64>, DMatrix<f64>)> {
+    let n = jac.ncols();
+    if prior_diag.len() != n {
+        return None;
+    }
+    let d: Vec<f64> = (0..n)
+        .map(|j| {
+            (jac.column(j).norm_squared() + prior_diag[j])
+                .sqrt()
+                .max(1e-300)
+        })
+        .collect();
+    let mut a = jac.transpose() * jac;
+    for j in 0..n {
+        a[(j, j)] += prior_diag[j];
+    }
+    let scaled = DMatrix::from_fn(n, n, |r, c| a[(r, c)] / (d[r] * d[c]));
+    let svd = scaled.svd(true, true);
+    let top = svd.singular_values.max();
+    let inv = svd.pseudo_inverse(1e-12 * top).ok()?;
+    Some((d, inv))
+}
+
 /// Block PRESS of a regularised linearisation: data Jacobian `jac` and residuals `r` at the
 /// solution, prior normal diagonal `prior_diag` (`J^T J` of the prior rows), rows in blocks of
 /// `blocks`; leaving block `i` out predicts it with error `(I - H_ii)^-1 e_i`,
@@ -239,21 +270,11 @@ pub fn ridge_press(
     if blocks.iter().sum::<usize>() != m || r.len() != m || prior_diag.len() != n {
         return None;
     }
-    // column scaling for the conditioning of J^T J + P
-    let norms: Vec<f64> = (0..n)
-        .map(|j| jac.column(j).norm().max(prior_diag[j].sqrt()).max(1e-300))
-        .collect();
+    let (d, inv) = scaled_normal_inverse(jac, prior_diag)?;
     let mut js = jac.clone();
-    for (j, nj) in norms.iter().enumerate() {
-        js.column_mut(j).unscale_mut(*nj);
+    for (j, dj) in d.iter().enumerate() {
+        js.column_mut(j).unscale_mut(*dj);
     }
-    let mut a = js.transpose() * &js;
-    for j in 0..n {
-        a[(j, j)] += prior_diag[j] / (norms[j] * norms[j]);
-    }
-    let svd = a.svd(true, true);
-    let top = svd.singular_values.max();
-    let inv = svd.pseudo_inverse(1e-12 * top).ok()?;
     let mut press = 0.0;
     let mut start = 0;
     for &size in blocks {

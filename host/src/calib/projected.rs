@@ -140,6 +140,7 @@ pub fn fit_projected(
         |cols| projected_problem(start, data, cols, tilt),
         lm,
         rtol,
+        None,
     )
 }
 

@@ -132,24 +132,36 @@ pub(crate) fn assemble(
     };
     for (line, t, pts) in rows {
         if log.t_s.last().is_some_and(|&prev| t <= prev) {
-            return Err(CaptureError::Instrument {
-                file: source.into(),
+            return Err(at_line(source)(
                 line,
-                problem: format!("time {t} s does not increase"),
-            });
+                format!("time {t} s does not increase"),
+            ));
         }
         log.missing += pts.iter().filter(|p| p.is_none()).count();
         log.t_s.push(t);
         log.points.push(pts);
     }
     if log.t_s.len() < 3 {
-        return Err(CaptureError::Instrument {
-            file: source.into(),
-            line: 1,
-            problem: format!("{} samples: an instrument log needs many", log.t_s.len()),
-        });
+        return Err(at_line(source)(
+            1,
+            format!("{} samples: an instrument log needs many", log.t_s.len()),
+        ));
     }
     Ok(log)
+}
+
+/// The error of an instrument log `file` at a line: `at_line(file)(line, problem)`.
+pub(crate) fn at_line(file: &str) -> impl Fn(usize, String) -> CaptureError + '_ {
+    move |line, problem| CaptureError::Instrument {
+        file: file.into(),
+        line,
+        problem,
+    }
+}
+
+/// The lines of `text`, numbered from 1.
+pub(crate) fn numbered_lines(text: &str) -> Vec<(usize, &str)> {
+    text.lines().enumerate().map(|(i, l)| (i + 1, l)).collect()
 }
 
 /// The format of `text` from its first non-empty line.

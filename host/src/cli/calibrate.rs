@@ -208,8 +208,7 @@ pub fn run(args: Args) -> Result<(), CliError> {
     }
     for e in &mut outcome.report.extrapolated {
         if let Some(l) = val_labels.as_ref() {
-            e.line = l.lines.get(e.index).copied();
-            e.id = l.ids.get(e.index).cloned().flatten();
+            (e.line, e.id) = l.at(e.index);
         }
     }
     notes.push_str(&held_out_lines(&outcome.report));
@@ -258,9 +257,16 @@ impl PoseLabels {
         }
     }
 
+    /// The line and id of the pose at `index`.
+    fn at(&self, index: usize) -> (Option<usize>, Option<String>) {
+        (
+            self.lines.get(index).copied(),
+            self.ids.get(index).cloned().flatten(),
+        )
+    }
+
     fn fill(&self, o: &mut rigctl::calib::outliers::OutlierReport) {
-        o.line = self.lines.get(o.index).copied();
-        o.id = self.ids.get(o.index).cloned().flatten();
+        (o.line, o.id) = self.at(o.index);
     }
 }
 

@@ -24,7 +24,7 @@ fn tall_fit(start: &Model, poses: &Poses, sel: &[usize], tilt: bool) -> Fit {
     let jac0 = stacked_jacobian(start, poses, sel, tilt).unwrap();
     let lm = LmConfig::default();
     let make = |cols| position_problem(start, poses, cols, tilt);
-    fit_problem(start, sel, &jac0, make, &lm, DEFAULT_RTOL).unwrap()
+    fit_problem(start, sel, &jac0, make, &lm, DEFAULT_RTOL, None).unwrap()
 }
 
 /// Relative difference allowed between the two solvers' sigmas.

@@ -8,7 +8,10 @@
 //! Lengths in the file's `Length Units` (Meters, Centimeters, Millimeters; without the key,
 //! the --units length). Rotations are not used.
 
-use super::{assemble, cell, detect_dialect, point, Format, InstrumentLog, ReadOptions};
+use super::{
+    assemble, at_line, cell, detect_dialect, numbered_lines, point, Format, InstrumentLog,
+    ReadOptions,
+};
 use crate::capture::error::CaptureError;
 
 pub(super) fn parse(
@@ -16,12 +19,8 @@ pub(super) fn parse(
     file: &str,
     opts: &ReadOptions,
 ) -> Result<InstrumentLog, CaptureError> {
-    let err = |line: usize, problem: String| CaptureError::Instrument {
-        file: file.into(),
-        line,
-        problem,
-    };
-    let lines: Vec<(usize, &str)> = text.lines().enumerate().map(|(i, l)| (i + 1, l)).collect();
+    let err = at_line(file);
+    let lines = numbered_lines(text);
     let (_, first) = lines.first().copied().unwrap_or((1, ""));
     let head_at = lines
         .iter()

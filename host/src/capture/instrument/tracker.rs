@@ -8,7 +8,7 @@
 //! before the time), or the first field `t=SECONDS`. Every line is the one reflector (the SMR);
 //! `t` counts from the first point's time stamp.
 
-use super::{assemble, cell, Format, InstrumentLog, ReadOptions};
+use super::{assemble, at_line, cell, Format, InstrumentLog, ReadOptions};
 use crate::capture::error::CaptureError;
 
 /// Days from 1970-01-01 to the civil date (proleptic Gregorian).
@@ -68,11 +68,7 @@ pub(super) fn parse(
     file: &str,
     opts: &ReadOptions,
 ) -> Result<InstrumentLog, CaptureError> {
-    let err = |line: usize, problem: String| CaptureError::Instrument {
-        file: file.into(),
-        line,
-        problem,
-    };
+    let err = at_line(file);
     let mut rows = Vec::new();
     let mut t0 = None;
     for (i, raw) in text.lines().enumerate() {

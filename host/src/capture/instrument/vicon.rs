@@ -5,7 +5,10 @@
 //! Segments) are skipped. Files written with `;` and decimal commas are recognised.
 //! `t` = frame / rate (s).
 
-use super::{assemble, cell, detect_dialect, point, Format, InstrumentLog, ReadOptions};
+use super::{
+    assemble, at_line, cell, detect_dialect, numbered_lines, point, Format, InstrumentLog,
+    ReadOptions,
+};
 use crate::capture::error::CaptureError;
 
 fn unit_mm(u: &str) -> Option<f64> {
@@ -22,12 +25,8 @@ pub(super) fn parse(
     file: &str,
     opts: &ReadOptions,
 ) -> Result<InstrumentLog, CaptureError> {
-    let err = |line: usize, problem: String| CaptureError::Instrument {
-        file: file.into(),
-        line,
-        problem,
-    };
-    let lines: Vec<(usize, &str)> = text.lines().enumerate().map(|(i, l)| (i + 1, l)).collect();
+    let err = at_line(file);
+    let lines = numbered_lines(text);
     let first = |l: &str| {
         l.split([',', ';', '\t'])
             .next()
