@@ -265,8 +265,10 @@ pub struct Extrapolated {
 }
 
 /// Share of a joint's calibration range by which a held-out reading may lie outside it before
-/// the pose counts as extrapolated.
-pub const RANGE_MARGIN: f64 = 0.05;
+/// the pose counts as extrapolated: well outside (a quarter of the range), where the covariance
+/// of a fit says nothing about the model's own errors; a pose just past the range of random
+/// calibration poses is still judged by its prediction uncertainty.
+pub const RANGE_MARGIN: f64 = 0.25;
 
 /// The joints (`q<i>`, 1-based) of every pose of `at` whose reading lies outside the range of
 /// the readings `cal` by more than [`RANGE_MARGIN`] of that range.
@@ -436,5 +438,26 @@ mod tests {
         assert_eq!(flag_set_against(&e, 0.1).0, vec![3]);
         let all_worse = vec![0.5; 60];
         assert!(flag_set_against(&all_worse, 0.1).0.is_empty());
+    }
+
+    /// A held-out pose far off is a gross error where the model predicts well, and not where
+    /// its prediction is uncertain (extrapolation); joints outside the calibration range are
+    /// named.
+    #[test]
+    fn held_out_extrapolation_is_not_a_gross_error() {
+        let mut e = vec![0.015; 60];
+        e[3] = 2.0;
+        e[7] = 2.0;
+        let mut sd = vec![0.001; 60];
+        sd[7] = 1.0;
+        let (flagged, thr) = flag_held_out(&e, &sd, 0.01);
+        assert_eq!(flagged, vec![3]);
+        assert!(thr[7] > 2.0 && thr[3] < 0.1, "{thr:?}");
+        let cal = vec![vec![0.0, 10.0], vec![100.0, 20.0]];
+        let at = vec![vec![50.0, 15.0], vec![120.0, 25.0], vec![-30.0, 30.0]];
+        let out = outside_range(&cal, &at);
+        assert!(out[0].is_empty());
+        assert_eq!(out[1], ["q2"]);
+        assert_eq!(out[2], ["q1", "q2"]);
     }
 }

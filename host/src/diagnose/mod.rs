@@ -509,23 +509,28 @@ pub fn diagnose(
     let (cal, outliers, declared, requested, mut selection) = result;
     let cal = &cal;
     let bound_reports = bounds::enforce(&mut selection, cal, cfg);
-    // held-out poses judged by the calibration's threshold under the final model
+    // the fitted unknowns' Jacobians at the calibration poses (the held-out judgement and the
+    // probe of the final residual)
+    let cal_jac = probe::jacobians(&selection.last.model, cal, &selection.last.fitted)?;
+    // held-out poses judged by the calibration's scale and the final model's prediction
+    // uncertainty at each (FORMATS.md: extrapolation is not a gross error)
     let mut outlier_reports = Vec::new();
     let val_kept;
     let val = if gross {
-        let thr = outliers::threshold_mm(
-            outliers::robust_sigma_mm(&norms_mm(&selection.last.model.errors(cal)?), 3),
-            cfg.floor_mm,
-        );
+        let sigma = outliers::robust_sigma_mm(&norms_mm(&selection.last.model.errors(cal)?), 3)
+            .max(cfg.floor_mm.unwrap_or(0.0));
+        let thr = outliers::threshold_mm(sigma, None);
         let all = norms_mm(&selection.last.model.errors(&cal_all)?);
         outlier_reports.extend(labelled(
             outliers::reports("cal", &flagged, &all, &all, thr),
             &cal_all,
         ));
         let vn = norms_mm(&selection.last.model.errors(&val_all)?);
-        let (vflag, vthr) = outliers::flag_set_against(&vn, thr);
+        let val_jac = probe::jacobians(&selection.last.model, &val_all, &selection.last.fitted)?;
+        let sd = held_out_sd_mm(cal, &cal_jac, &val_all, &val_jac, sigma);
+        let (vflag, thresholds) = outliers::flag_held_out(&vn, &sd, sigma);
         outlier_reports.extend(labelled(
-            outliers::reports("val", &vflag, &vn, &vn, vthr),
+            outliers::held_out_reports(&vflag, &vn, &vn, &thresholds, &sd),
             &val_all,
         ));
         val_kept = val_all.subset(&outliers::kept(val_all.len(), &vflag));
@@ -533,8 +538,17 @@ pub fn diagnose(
     } else {
         &val_all
     };
+    let listed_val = val.len() < val_all.len();
     let declared_cal = declared.model.errors(cal)?;
     let declared_val = declared.model.errors(val)?;
+    // every held-out pose, the listed ones included (FORMATS.md)
+    let validation_all = |m: &ExtModel| -> Result<Stats, ModelError> {
+        Ok(Stats::from_errors(&m.errors(if listed_val {
+            &val_all
+        } else {
+            val
+        })?))
+    };
     let regs = regressors(&selection.last.model, cal)?;
 
     let (mut effects, traces) = effect_reports(&selection, &regs, cal, val, cfg)?;
@@ -552,7 +566,7 @@ pub fn diagnose(
         (cal.measured_dims(), tau),
     );
     let aliased = aliased_pairs(&selection, &requested, cal, &mut effects)?;
-    let (probe, probe_cfg, cal_jac) = probe_residual(model, last, cal, &final_cal, &floor, opts)?;
+    let (probe, probe_cfg) = probe_residual(model, last, cal, &final_cal, &cal_jac, &floor, opts)?;
     // the held-out Jacobians of the fitted unknowns are the first columns of those of the
     // unknowns a change between the sets may move (`change_unknowns` starts with them)
     let change = verdict::change_unknowns(&last.model.model, &last.fitted);
@@ -610,11 +624,13 @@ pub fn diagnose(
         declared: SetStats {
             calibration: Stats::from_errors(&declared_cal),
             validation: Stats::from_errors(&declared_val),
+            validation_all: validation_all(&declared.model)?,
         },
         effects,
         final_: SetStats {
             calibration: Stats::from_errors(&final_cal),
             validation: Stats::from_errors(&final_val),
+            validation_all: validation_all(&last.model)?,
         },
         unexplained,
         floor,
@@ -762,16 +778,10 @@ fn probe_residual(
     last: &Fit<ExtModel, Unknown>,
     cal: &MeasuredSet,
     final_cal: &[Vector3<f64>],
+    jac: &[nalgebra::DMatrix<f64>],
     floor: &floor::FloorReport,
     opts: &DiagnoseOptions,
-) -> Result<
-    (
-        probe::ProbeResult,
-        probe::ProbeConfig,
-        Vec<nalgebra::DMatrix<f64>>,
-    ),
-    DiagnoseError,
-> {
+) -> Result<(probe::ProbeResult, probe::ProbeConfig), DiagnoseError> {
     let cfg = &opts.decide;
     // an independent floor (instrument, repeatability) also sets the smallest term worth naming
     let known_floor_mm = match floor.used.as_str() {
@@ -785,15 +795,41 @@ fn probe_residual(
         floor_mm: opts.probe.floor_mm.or(known_floor_mm),
         ..opts.probe.clone()
     };
-    let jac = probe::jacobians(&last.model, cal, &last.fitted)?;
     let start = ExtModel::new(model.clone());
     let departure: Vec<f64> = last
         .fitted
         .iter()
         .map(|&u| last.model.value(u) - start.value(u))
         .collect();
-    let probe = probe::probe_dataset_with(cal, final_cal, &jac, &departure, &probe_cfg);
-    Ok((probe, probe_cfg, jac))
+    let probe = probe::probe_dataset_with(cal, final_cal, jac, &departure, &probe_cfg);
+    Ok((probe, probe_cfg))
+}
+
+/// One standard deviation per measured component (mm) of the final model's prediction at
+/// every held-out pose: the residual scale `sigma_mm` times the root of the pose's prediction
+/// variance per component ([`verdict::prediction_variances`]); infinite where a joint lies
+/// outside the calibration poses' range ([`outliers::outside_range`]: the fit never saw it).
+fn held_out_sd_mm(
+    cal: &MeasuredSet,
+    cal_jac: &[nalgebra::DMatrix<f64>],
+    val: &MeasuredSet,
+    val_jac: &[nalgebra::DMatrix<f64>],
+    sigma_mm: f64,
+) -> Vec<f64> {
+    let var = verdict::prediction_variances(cal, cal_jac, val, val_jac)
+        .unwrap_or_else(|| vec![0.0; val.len()]);
+    let outside = outliers::outside_range(&cal.poses.q_deg, &val.poses.q_deg);
+    var.iter()
+        .zip(&outside)
+        .enumerate()
+        .map(|(k, (v, o))| {
+            if o.is_empty() {
+                sigma_mm * (v.max(0.0) / val.rows(k).max(1) as f64).sqrt()
+            } else {
+                f64::INFINITY
+            }
+        })
+        .collect()
 }
 
 fn unexplained(

@@ -53,7 +53,10 @@ impl<T: Copy> Ordered<T> {
 #[derive(Debug, Clone, Copy, PartialEq, Serialize)]
 pub struct SetStats {
     pub calibration: Stats,
+    /// The held-out poses not listed as gross errors.
     pub validation: Stats,
+    /// Every held-out pose, the listed ones included (FORMATS.md "Gross errors").
+    pub validation_all: Stats,
 }
 
 /// One added effect.
@@ -432,6 +435,14 @@ impl DiagnoseReport {
                 s,
                 "the statistics leave these {} pose(s) out (--keep-outliers keeps every pose)",
                 self.outliers.len()
+            );
+        }
+        let all = &self.final_.validation_all;
+        if all.n != self.final_.validation.n {
+            let _ = writeln!(
+                s,
+                "held out over all {} poses (the listed ones included): mean {:.4} mm (declared model {:.4} mm)",
+                all.n, all.mean_mm, self.declared.validation_all.mean_mm
             );
         }
         if let Some(note) = &self.outlier_note {

@@ -125,17 +125,36 @@ pub struct Counts {
 /// `(m_val + sum_k tr(L_k N^+ L_k^T)) / m_val`, `N = sum L^T L` over the calibration poses and
 /// `L_k` the measured Jacobian of the fitted parameters at held-out pose `k` (the exact
 /// prediction variance at every held-out pose, which grows where the held-out poses leave the
-/// calibration poses' span). 1 without Jacobians.
+/// calibration poses' span, [`prediction_variances`]). 1 without Jacobians.
 pub fn prediction_inflation(
     cal: &MeasuredSet,
     cal_jac: &[DMatrix<f64>],
     val: &MeasuredSet,
     val_jac: &[DMatrix<f64>],
 ) -> f64 {
-    let p = cal_jac.first().map_or(0, DMatrix::ncols);
     let m_val: usize = (0..val.len()).map(|k| val.rows(k)).sum();
-    if p == 0 || m_val == 0 || val_jac.len() != val.len() {
+    let Some(v) = prediction_variances(cal, cal_jac, val, val_jac) else {
         return 1.0;
+    };
+    if m_val == 0 {
+        return 1.0;
+    }
+    let m = m_val as f64;
+    ((m + v.iter().sum::<f64>().max(0.0)) / m).max(1.0)
+}
+
+/// The prediction variance of every held-out pose `k` in units of the residual variance:
+/// `tr(L_k N^+ L_k^T)` over its measured components (see [`prediction_inflation`]); `None`
+/// without Jacobians.
+pub fn prediction_variances(
+    cal: &MeasuredSet,
+    cal_jac: &[DMatrix<f64>],
+    val: &MeasuredSet,
+    val_jac: &[DMatrix<f64>],
+) -> Option<Vec<f64>> {
+    let p = cal_jac.first().map_or(0, DMatrix::ncols);
+    if p == 0 || val.is_empty() || val_jac.len() != val.len() {
+        return None;
     }
     let mut n = DMatrix::zeros(p, p);
     for (k, j) in cal_jac.iter().enumerate() {
@@ -145,20 +164,20 @@ pub fn prediction_inflation(
         }
     }
     let scale = n.diagonal().amax().max(f64::MIN_POSITIVE);
-    let Ok(ninv) = n.pseudo_inverse(1e-10 * scale) else {
-        return 1.0;
-    };
-    let extra: f64 = val_jac
-        .iter()
-        .enumerate()
-        .filter(|(_, j)| j.ncols() == p)
-        .map(|(k, j)| {
-            let l = val.jacobian_rows(k, j);
-            (&l * &ninv * l.transpose()).trace()
-        })
-        .sum();
-    let m = m_val as f64;
-    ((m + extra.max(0.0)) / m).max(1.0)
+    let ninv = n.pseudo_inverse(1e-10 * scale).ok()?;
+    Some(
+        val_jac
+            .iter()
+            .enumerate()
+            .map(|(k, j)| {
+                if j.ncols() != p {
+                    return 0.0;
+                }
+                let l = val.jacobian_rows(k, j);
+                (&l * &ninv * l.transpose()).trace()
+            })
+            .collect(),
+    )
 }
 
 /// What may change between two sets of the same arm: the fitted parameters, and the base and
