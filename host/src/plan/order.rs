@@ -21,6 +21,10 @@ use crate::model::{Model, Tilt};
 /// Default largest joint step between the checked configurations of a segment, deg (mm).
 pub const DEFAULT_STEP_DEG: f64 = 1.0;
 
+/// Between two checked configurations of a segment the links may always move this far, mm
+/// (with a clearance below it, a move within it is not checked in between).
+const MIN_MOVE_MM: f64 = 1.0;
+
 /// Cost of a barred segment (it is only taken when nothing else is left).
 const BARRED: f64 = 1e12;
 
@@ -76,8 +80,10 @@ pub fn travel(q: &[Vec<f64>], order: &[usize], w: &[f64]) -> f64 {
 }
 
 /// Why the straight joint-space segment `a -> b` is not safe, checked at configurations at
-/// most `step` apart in every joint (the ends excluded: they are checked as poses); and how
-/// many configurations were checked.
+/// most `step` apart in every joint (the ends excluded: they are checked as poses), and, with
+/// collision geometry, between any two checked configurations no link moving farther than the
+/// distance it keeps, at least
+/// [`MIN_MOVE_MM`] (the interval halved until so); and how many configurations were checked.
 pub fn segment_violation(
     model: &Model,
     ws: &Workspace,
@@ -91,15 +97,41 @@ pub fn segment_violation(
         .map(|(x, y)| (x - y).abs())
         .fold(0.0, f64::max);
     let k = (span / step).ceil().max(1.0) as usize;
-    for s in 1..k {
-        let t = s as f64 / k as f64;
-        let q: Vec<f64> = a.iter().zip(b).map(|(x, y)| x + (y - x) * t).collect();
+    let at = |t: f64| -> Vec<f64> { a.iter().zip(b).map(|(x, y)| x + (y - x) * t).collect() };
+    let mut checked = 0;
+    let mut check = |t: f64| -> Result<Option<String>, PlanError> {
+        checked += 1;
+        let q = at(t);
         let p = model.position_mm(&q, Tilt::Off)?;
-        if let Some(why) = ws.path_violation(model, &q, &p)? {
-            return Ok((Some(format!("at {:.0} % of the way: {why}", 100.0 * t)), s));
+        Ok(ws
+            .path_violation(model, &q, &p)?
+            .map(|why| format!("at {:.0} % of the way: {why}", 100.0 * t)))
+    };
+    for s in 1..k {
+        if let Some(why) = check(s as f64 / k as f64)? {
+            return Ok((Some(why), checked));
         }
     }
-    Ok((None, k.saturating_sub(1)))
+    // the intervals between checked configurations, halved while a link may move farther
+    // than the distance it keeps (so that no contact hides between two checks)
+    let mut ts: Vec<f64> = (0..=k).map(|s| s as f64 / k as f64).collect();
+    let mut i = 0;
+    while i + 1 < ts.len() {
+        let (t0, t1) = (ts[i], ts[i + 1]);
+        let too_far = ws
+            .path_motion_mm(&at(t0), &at(t1))
+            .is_some_and(|(kept, moved)| moved > kept.max(MIN_MOVE_MM) && t1 - t0 > 1e-9);
+        if too_far {
+            let m = 0.5 * (t0 + t1);
+            if let Some(why) = check(m)? {
+                return Ok((Some(why), checked));
+            }
+            ts.insert(i + 1, m);
+        } else {
+            i += 1;
+        }
+    }
+    Ok((None, checked))
 }
 
 /// Nearest neighbour from `start`, then 2-opt, on `cost` over the poses `alive`.

@@ -163,6 +163,20 @@ impl Workspace {
         self.check(model, q, p, &Vector3::z(), false)
     }
 
+    /// With collision geometry: how far the links may move between two checked configurations
+    /// on the way (the distance they keep there, mm) and how far they move from `qa` to `qb`
+    /// at most (mm). `None` without geometry.
+    pub fn path_motion_mm(&self, qa: &[f64], qb: &[f64]) -> Option<(f64, f64)> {
+        self.collision.as_ref().map(|c| {
+            let env = Environment {
+                table_z_mm: self.table_z_mm,
+                keep_out_mm: &self.keep_out_mm,
+                slack_mm: self.path_tolerance_mm,
+            };
+            (c.0.kept_distance_mm(&env), c.0.motion_bound_mm(qa, qb))
+        })
+    }
+
     fn check(
         &self,
         model: &Model,
@@ -200,6 +214,7 @@ impl Workspace {
                 let env = Environment {
                     table_z_mm: self.table_z_mm,
                     keep_out_mm: &self.keep_out_mm,
+                    slack_mm: slack,
                 };
                 Ok(c.0.collision(q, &env))
             }

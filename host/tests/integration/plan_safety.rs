@@ -2,7 +2,8 @@
 //! test venv, read from the package, not committed) through `urdf2model` and `plan --urdf
 //! --srdf` for 60 and 150 poses. An independent checker (`host/tests/py/check_plan_safety.py`:
 //! pinocchio + coal on the URDF's own meshes, the SRDF's pairs, a half-space table) finds no
-//! pose and no segment point (every 0.5 deg, finer than the planner's 1 deg) in collision or
+//! pose and no point of the driven path (the trajectory's segments, via points included, every 0.5 deg,
+//! finer than the planner's 1 deg) in collision or
 //! below the table; every joint is >= 2 deg inside its limits; the order's joint travel is
 //! shorter than random orders'. The checker is shown to find collisions on random
 //! configurations (it can fail). On the Katana without a URDF: keep-out boxes are kept and the
@@ -75,7 +76,7 @@ fn travel(q: &[Vec<f64>]) -> f64 {
         .sum()
 }
 
-fn check(py: &Path, share: &Path, csv: &Path) -> serde_json::Value {
+fn check(py: &Path, share: &Path, csv: &Path, traj: Option<&Path>) -> serde_json::Value {
     let panda = share.join("example-robot-data/robots/panda_description");
     let o = Command::new(py)
         .arg(py_script("check_plan_safety.py"))
@@ -84,19 +85,14 @@ fn check(py: &Path, share: &Path, csv: &Path) -> serde_json::Value {
         .arg(share)
         .arg(csv)
         .args([JOINTS, "0", "0.5"])
+        .args(traj)
         .output()
         .expect("python runs");
     assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
     serde_json::from_slice(&o.stdout).expect("checker JSON")
 }
 
-// In CI (fresh clone, 2 cores) the 60-pose plan exits 1, "only 59 of the 60 poses asked are
-// safe": a chosen pose lies within the path clearance of the table, so no move can leave it.
-// The refusal is honest (exit 1, nothing written), but the plan should not choose such a pose:
-// the pose check must keep the path clearance too (open in issue 50). Run it by hand with
-// `cargo test -p rigctl --test integration -- --ignored plan_safety`.
 #[test]
-#[ignore = "open in issue 50: a pose within the path clearance of the table can be chosen and then not left (exit 1)"]
 fn panda_plans_have_no_collision_and_keep_the_margins() {
     let Some(py) = python_env("plan_safety") else {
         return;
@@ -130,7 +126,7 @@ fn panda_plans_have_no_collision_and_keep_the_margins() {
     }
     let random_csv = dir.path().join("random.csv");
     std::fs::write(&random_csv, text).unwrap();
-    let r = check(&py, &share, &random_csv);
+    let r = check(&py, &share, &random_csv, None);
     let bad =
         r["pose_collisions"].as_array().unwrap().len() + r["below_table"].as_array().unwrap().len();
     assert!(bad > 0, "the checker finds unsafe random poses: {r}");
@@ -162,7 +158,9 @@ fn panda_plans_have_no_collision_and_keep_the_margins() {
         assert!(!stdout.contains("NO COLLISION CHECK"));
         let q = rows(&csv);
         assert_eq!(q.len(), n);
-        let r = check(&py, &share, &csv);
+        // the segments a robot drives: the trajectory's, through the via configuration where
+        // the straight way between two poses is not safe
+        let r = check(&py, &share, &csv, Some(&traj));
         record(&format!("plan_safety_panda_{n}"), r.clone());
         assert_eq!(r["poses"], n);
         assert!(r["segment_points"].as_u64().unwrap() > 10 * n as u64);
@@ -189,7 +187,9 @@ fn panda_plans_have_no_collision_and_keep_the_margins() {
         // the trajectory: the joint names, an arrival and a departure point per pose, in rad
         let y = std::fs::read_to_string(&traj).unwrap();
         assert!(y.contains("  - \"panda_joint7\""));
-        assert_eq!(y.matches("positions:").count(), 2 * n);
+        assert_eq!(r["stops_match_poses"], true, "{r}");
+        let via = r["via_points"].as_u64().unwrap() as usize;
+        assert_eq!(y.matches("positions:").count(), 2 * n + via, "{r}");
         let first = format!("{:.9}", q[0][0].to_radians());
         assert!(y.contains(&first), "{first}");
         let s = std::fs::read_to_string(&svg).unwrap();

@@ -1,14 +1,17 @@
 #!/usr/bin/env python3
 """Independent safety check of a `rigctl plan` output with pinocchio + coal (hpp-fcl).
 
-    check_plan_safety.py URDF SRDF PACKAGE_DIR PLAN.csv JOINT,NAMES TABLE_Z_MM STEP_DEG
+    check_plan_safety.py URDF SRDF PACKAGE_DIR PLAN.csv JOINT,NAMES TABLE_Z_MM STEP_DEG [TRAJ.yaml]
 
 Loads the URDF with its collision meshes (the meshes themselves, as BVH models), locks every
 joint that is not in JOINT,NAMES at its neutral value, checks every pair of geometries of
 different joints except the SRDF's disabled pairs, and a half-space below z = TABLE_Z_MM (m
 in pinocchio) against every geometry not fixed to the base. Checks each planned pose (the
 plan's order) and the straight joint-space segments between consecutive poses at STEP_DEG,
-every frame origin above the table, and the joint margins. Prints one JSON object.
+every frame origin above the table, and the joint margins. With TRAJ.yaml (the plan's
+JointTrajectory, what a robot drives) the segments are those between its consecutive points
+(via points included) instead, and its standstills must be the CSV's poses in order. Prints
+one JSON object.
 """
 import csv
 import json
@@ -20,8 +23,24 @@ import pinocchio as pin
 import coal
 
 
+def trajectory_points(path, rmodel, idx):
+    """The `positions:` of a JointTrajectory YAML (rad), as configurations of `rmodel`."""
+    out = []
+    with open(path) as f:
+        for line in f:
+            line = line.strip()
+            if line.startswith("- positions: ["):
+                vals = [float(v) for v in line[len("- positions: ["):-1].split(",")]
+                q = pin.neutral(rmodel)
+                for j, v in zip(idx, vals):
+                    q[rmodel.joints[j].idx_q] = v
+                out.append(q)
+    return out
+
+
 def main():
     urdf, srdf, pkg, plan_csv, names, table_z_mm, step_deg = sys.argv[1:8]
+    traj = sys.argv[8] if len(sys.argv) > 8 else None
     names = names.split(",")
     table_z = float(table_z_mm) / 1000.0
     step = math.radians(float(step_deg))
@@ -85,8 +104,18 @@ def main():
             out["pose_collisions"].append([k, pair])
         if low:
             out["below_table"].append([k, low])
-    for k in range(len(poses) - 1):
-        a, b = q_of(poses[k]), q_of(poses[k + 1])
+    path = [q_of(p) for p in poses]
+    if traj:
+        path = trajectory_points(traj, rmodel, idx)
+        stops = [path[i] for i in range(len(path) - 1)
+                 if np.allclose(path[i], path[i + 1], atol=1e-9)]
+        out["trajectory_points"] = len(path)
+        out["stops_match_poses"] = len(stops) == len(poses) and all(
+            np.allclose(a, q_of(p), atol=1e-6) for a, p in zip(stops, poses))
+        out["via_points"] = sum(
+            1 for q in path if not any(np.allclose(q, s, atol=1e-9) for s in stops))
+    for k in range(len(path) - 1):
+        a, b = path[k], path[k + 1]
         n = max(1, int(math.ceil(np.max(np.abs(b - a)) / step)))
         for s in range(1, n):
             q = a + (b - a) * (s / n)

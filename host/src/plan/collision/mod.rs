@@ -77,6 +77,9 @@ impl std::fmt::Debug for Collider {
 pub struct Environment<'a> {
     pub table_z_mm: Option<f64>,
     pub keep_out_mm: &'a [[f64; 6]],
+    /// How much closer than the clearance the links may come (on the way between poses: a pose
+    /// at the clearance must be leavable), never below half the clearance; 0 at a pose.
+    pub slack_mm: f64,
 }
 
 fn geo_err(m: String) -> PlanError {
@@ -234,7 +237,7 @@ impl Collider {
                 }
                 if geo_parent(ni) == Some(j) || geo_parent(nj) == Some(i) {
                     adjacent += 1;
-                } else if self.bodies_close(i, j, home) {
+                } else if self.bodies_close(i, j, home, self.clearance_mm) {
                     at_home += 1;
                 } else {
                     self.pairs.push((i, j));
@@ -296,9 +299,8 @@ impl Collider {
             .fold(f64::INFINITY, f64::min)
     }
 
-    fn bodies_close(&self, i: usize, j: usize, poses: &[Isometry3<f64>]) -> bool {
+    fn bodies_close(&self, i: usize, j: usize, poses: &[Isometry3<f64>], c: f64) -> bool {
         let (a, b) = (&self.bodies[i], &self.bodies[j]);
-        let c = self.clearance_mm;
         a.shapes.iter().any(|(la, sa)| {
             let pa = poses[a.node] * la;
             let aa = sa.compute_aabb(&pa).loosened(c.max(0.0));
@@ -308,6 +310,35 @@ impl Collider {
                     && query::distance(&pa, sa.as_ref(), &pb, sb.as_ref()).map_or(true, |d| d < c)
             })
         })
+    }
+
+    /// The smallest distance kept with `env`, mm: the clearance, less the slack allowed on the
+    /// way between poses, never below half the clearance.
+    pub fn kept_distance_mm(&self, env: &Environment<'_>) -> f64 {
+        (self.clearance_mm - env.slack_mm.max(0.0)).max(0.5 * self.clearance_mm)
+    }
+
+    /// An upper bound of how far any point of any link's collision shapes moves (mm) between
+    /// joints `qa` and `qb` (deg, mm), as the chord of each link's motion: `|dt| + angle * r`,
+    /// `r` the radius of the link's shapes about its frame origin.
+    pub fn motion_bound_mm(&self, qa: &[f64], qb: &[f64]) -> f64 {
+        let (pa, pb) = (self.link_poses(qa), self.link_poses(qb));
+        self.bodies
+            .iter()
+            .map(|b| {
+                let (a, z) = (pa[b.node], pb[b.node]);
+                let r = b
+                    .shapes
+                    .iter()
+                    .map(|(l, s)| {
+                        let bs = s.compute_local_bounding_sphere();
+                        (l * bs.center).coords.norm() + bs.radius
+                    })
+                    .fold(0.0, f64::max);
+                let angle = (a.rotation.inverse() * z.rotation).angle();
+                (z.translation.vector - a.translation.vector).norm() + angle * r
+            })
+            .fold(0.0, f64::max)
     }
 
     /// The first collision at model joints `q` (deg, mm) with `env`, described; `None` when
@@ -327,7 +358,7 @@ impl Collider {
                 return Some(format!("link `{}` origin in a keep-out box", n.name));
             }
         }
-        let c = self.clearance_mm;
+        let c = self.kept_distance_mm(env);
         let aabbs: Vec<Aabb> = self
             .bodies
             .iter()
@@ -378,7 +409,7 @@ impl Collider {
         }
         for &(i, j) in &self.pairs {
             if aabbs[i].loosened(c.max(0.0)).intersects(&aabbs[j])
-                && self.bodies_close(i, j, &poses)
+                && self.bodies_close(i, j, &poses, c)
             {
                 return Some(format!(
                     "links `{}` and `{}` within {c} mm of each other",

@@ -73,6 +73,7 @@ fn free_table_box_and_self_collision() {
     let env = Environment {
         table_z_mm: Some(0.0),
         keep_out_mm: &[],
+        slack_mm: 0.0,
     };
     assert_eq!(c.collision(&[0.0, 0.0], &env), None, "upright");
     assert_eq!(c.collision(&[90.0, 0.0], &env), None, "level");
@@ -90,6 +91,7 @@ fn free_table_box_and_self_collision() {
     let env_box = Environment {
         table_z_mm: Some(0.0),
         keep_out_mm: &boxes,
+        slack_mm: 0.0,
     };
     assert!(c.collision(&[0.0, 0.0], &env_box).is_some());
     assert_eq!(c.collision(&[90.0, 0.0], &env_box), None);
@@ -97,6 +99,7 @@ fn free_table_box_and_self_collision() {
     let no_table = Environment {
         table_z_mm: None,
         keep_out_mm: &[],
+        slack_mm: 0.0,
     };
     assert_eq!(c.collision(&[150.0, 0.0], &no_table), None);
     // the stick figure: base, l1, l2, tip
@@ -127,4 +130,36 @@ fn free_table_box_and_self_collision() {
         .set_joint_names(vec!["x1".into(), "x2".into()])
         .unwrap();
     assert!(Collider::from_urdf(&src, &other, 10.0, Some(0.0)).is_err());
+}
+
+/// The motion bound holds for the corners of every shape's local box (they hold the shape),
+/// and is not loose by more than the shapes' extent: on small and large joint moves.
+#[test]
+fn motion_bound_covers_every_shape_point() {
+    let (_dir, src, model) = arm();
+    let c = Collider::from_urdf(&src, &model, 10.0, Some(0.0)).unwrap();
+    for (qa, qb) in [
+        ([0.0, 0.0], [1.0, 0.0]),
+        ([10.0, -20.0], [10.5, -19.0]),
+        ([-30.0, 40.0], [60.0, -90.0]),
+    ] {
+        let bound = c.motion_bound_mm(&qa, &qb);
+        let (pa, pb) = (c.link_poses(&qa), c.link_poses(&qb));
+        let mut moved = 0.0f64;
+        for b in &c.bodies {
+            for (l, s) in &b.shapes {
+                let box_local = s.compute_local_aabb();
+                for v in box_local.vertices() {
+                    let x = l * v;
+                    moved = moved.max(((pb[b.node] * x) - (pa[b.node] * x)).norm());
+                }
+            }
+        }
+        assert!(moved <= bound + 1e-9, "{qa:?}->{qb:?}: {moved} > {bound}");
+        // the tip sphere at 1.15 m from joint 1: one degree moves it about 20 mm
+        assert!(
+            bound < 2.0 * moved + 50.0,
+            "{qa:?}->{qb:?}: bound {bound}, moved {moved}"
+        );
+    }
 }
