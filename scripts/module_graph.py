@@ -9,6 +9,10 @@ names exactly the modules of the tree.
 An import is any `crate::NAME` path in a module's files (use statements and qualified paths),
 outside comments; `super::` stays inside the module. `cli` (the binary's commands) may use every
 module and is left out of the cycle check, as are `lib.rs` and `main.rs`.
+
+Inside the folders of STRICT_FOLDERS the files (and sub-folders) must not import each other in a
+circle either (`super::NAME`, `crate::FOLDER::NAME`); the circles of the other folders are
+listed, not failed.
 """
 import pathlib
 import re
@@ -56,6 +60,41 @@ def graph(mods):
                 if t in mods and t != m:
                     edges[m].setdefault(t, set()).add(f.relative_to(SRC).as_posix())
     return edges
+
+
+# Folders whose files may not import each other in a circle.
+STRICT_FOLDERS = ("calib", "diagnose")
+
+
+def folder_graph(folder):
+    """Imports between the files and sub-folders of `folder` (code only, unit tests left out)."""
+    parts = {}
+    for p in sorted(folder.iterdir()):
+        if p.is_dir():
+            parts[p.name] = sorted(q for q in p.rglob("*.rs") if q.name != "tests.rs")
+        elif p.suffix == ".rs" and p.stem != "mod":
+            parts[p.stem] = [p]
+    edges = {m: set() for m in parts}
+    for m, files in parts.items():
+        body = "\n".join(strip_comments(f.read_text(encoding="utf-8")) for f in files)
+        body = body.replace("super::super::", "super::")
+        for t in parts:
+            if t == m:
+                continue
+            here = rf"\bsuper::{t}\b|\bcrate::{folder.name}::{t}\b"
+            group = rf"\bsuper::\{{[^}}]*\b{t}\b"
+            if re.search(here, body) or re.search(group, body, flags=re.S):
+                edges[m].add(t)
+    return edges
+
+
+def folder_cycles():
+    """(folder, circle) for every import circle inside a folder of host/src."""
+    out = []
+    for p in sorted(SRC.iterdir()):
+        if p.is_dir():
+            out += [(p.name, c) for c in cycles(folder_graph(p))]
+    return out
 
 
 def cycles(edges):
@@ -146,6 +185,10 @@ def main():
             for t in comp:
                 if t in checked[m]:
                     print(f"  {m} -> {t}: {', '.join(sorted(checked[m][t]))}")
+    for folder, comp in folder_cycles():
+        strict = folder in STRICT_FOLDERS
+        bad |= int(strict)
+        print(f"\n{'CYCLE' if strict else 'circle (listed, not failed)'} inside {folder}/: {', '.join(comp)}")
     listed = table_modules()
     tree = set(mods) - IGNORED
     if listed is None:
@@ -158,7 +201,7 @@ def main():
         if listed - tree:
             print(f"\nthe module table (docs/ARCHITECTURE.md) names modules not in host/src: {', '.join(sorted(listed - tree))}")
     if not bad:
-        print("\nno import cycle between host/src modules; the module table and the graph of docs/ARCHITECTURE.md match the tree")
+        print(f"\nno import cycle between host/src modules nor inside {', '.join(f + '/' for f in STRICT_FOLDERS)}; the module table and the graph of docs/ARCHITECTURE.md match the tree")
     return bad
 
 

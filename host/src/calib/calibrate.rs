@@ -5,6 +5,7 @@ use std::str::FromStr;
 
 use nalgebra::Vector3;
 
+use super::accumulator::{error_norms_mm, position_errors};
 use super::error::CalibError;
 use super::fit::fit_parameters_with;
 use super::fit::Fit;
@@ -14,7 +15,7 @@ use super::lm::LmConfig;
 use super::outliers;
 use super::predict::prediction_sd_mm;
 use super::prior::{PriorMode, PriorScales};
-use super::problem::{error_norms_mm, norms_mm, position_errors, Poses};
+use super::problem::{norms_mm, Poses};
 use super::regularise::choose_prior;
 use super::report::{BeforeAfter, CalibrateReport, NamedValues, StandardSummary};
 use super::stats::Stats;

@@ -16,19 +16,10 @@ use std::thread::JoinHandle;
 
 use nalgebra::DVector;
 
-use super::accumulate::{Accumulator, JointTrig, CHUNK_POSES};
+use super::accumulator::{Accumulator, JointTrig, Work, CHUNK_POSES};
 use super::normal::Normal;
 use super::problem::{Poses, SetUnknowns, Unknowns};
 use crate::model::ModelError;
-
-/// What an evaluation computes.
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
-pub(super) enum Work {
-    /// Normal equations per chunk.
-    Normal,
-    /// `r^T r` per chunk.
-    SumSq,
-}
 
 /// The buffers that travel between the threads.
 struct Buffers {

@@ -21,8 +21,9 @@
 
 use nalgebra::{DVector, Matrix3};
 
+use super::accumulator::position_errors;
 use super::error::CalibError;
-use super::problem::{param_vector, position_errors, set_params, Poses};
+use super::problem::{param_vector, set_params, Poses};
 use crate::model::{Model, Tilt, Unit};
 
 /// Settings of the influence-based identification.

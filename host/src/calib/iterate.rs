@@ -7,7 +7,7 @@
 
 use nalgebra::DVector;
 
-use super::lm::{negligible, Damping, LmConfig, LmError, ScaledSvd, Termination};
+use super::lm_parts::{negligible, Damping, LmConfig, LmError, ScaledSvd, Termination};
 
 /// A problem linearised at a current point, able to evaluate trial points.
 pub(super) trait Linearisation {

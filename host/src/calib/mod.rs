@@ -3,12 +3,14 @@
 //! | module | holds |
 //! |---|---|
 //! | [`lm`] | Levenberg-Marquardt / Gauss-Newton on a generic least-squares problem |
+//! | `lm_parts` | what every linearisation of the iteration shares: settings, termination and errors, the scaled SVD step, the damping, the column scaling |
 //! | `iterate` | the Levenberg-Marquardt iteration itself (scaling, damping, stopping rules, budget by progress), generic over the linearisation |
 //! | [`normal`] | the same iteration on normal equations accumulated per measurement (bounded memory, many poses) |
 //! | [`identifiability`] | rank, condition number, unidentifiable parameters and their names |
 //! | [`stats`] | the error statistics object of FORMATS.md |
 //! | [`report`] | the `calibrate --json` document |
 //! | [`accumulate`] | the geometric identification on normal equations: per-pose accumulation in reusable model workspaces, chunked on two threads |
+//! | `accumulator` | the per-pose accumulation itself (FK and Jacobian per pose into `J^T J`, `J^T r`, `r^T r`, in fixed chunks, deterministic) and the position errors of a set |
 //! | `helper` | the second core of an identification: a thread for the problem's lifetime that accumulates half of the chunks |
 //! | [`problem`] | joint readings with one full point each (`Poses`, the core of [`MeasuredSet`]), position errors, [`problem::ModelProblem`]: every identification on the tall Jacobian as one least-squares problem (the unknowns of a state and the residual rows of its measurements), the rows of a full position (`put_position_rows`) |
 //! | [`projected`] | identification from partial measurements (projections on known directions, `calibrate --samples`), reached through `calibrate_poses`; the outlier rule around any fit |
@@ -29,6 +31,7 @@
 //! | [`samples`] | the pencil rig's partial measurement: a fused sample (`FUSED.csv` row) |
 
 pub mod accumulate;
+mod accumulator;
 pub mod calibrate;
 pub mod calibrate_general;
 pub mod error;
@@ -39,6 +42,7 @@ pub mod identifiability;
 pub mod influence;
 mod iterate;
 pub mod lm;
+mod lm_parts;
 pub mod measured;
 pub mod normal;
 pub mod outliers;
@@ -54,8 +58,9 @@ pub mod samples;
 pub mod stats;
 pub mod unknown;
 
+pub use accumulator::position_errors;
 pub use calibrate::{calibrate, default_selection, CalibrateOptions, Method, Outcome};
 pub use error::CalibError;
 pub use measured::MeasuredSet;
-pub use problem::{position_errors, Poses};
+pub use problem::Poses;
 pub use stats::Stats;

@@ -15,7 +15,7 @@ use nalgebra::{DMatrix, DVector};
 
 use super::identifiability::ZERO_COLUMN_RTOL;
 use super::iterate::{iterate, Linearisation};
-use super::lm::{check_dimensions, raise_scaling, LmConfig, LmError, ScaledSvd, Termination};
+use super::lm_parts::{check_dimensions, raise_scaling, LmConfig, LmError, ScaledSvd, Termination};
 
 /// Eigenvalues of the scaled normal matrix below this fraction of the largest are round-off
 /// (about 100 machine epsilons); their directions are not stepped along.

@@ -85,23 +85,9 @@ pub fn tilt_mode(tilt: bool) -> Tilt<'static> {
     }
 }
 
-/// Position errors `measured - model` of every pose (mm).
-pub fn position_errors(
-    model: &Model,
-    poses: &Poses,
-    tilt: bool,
-) -> Result<Vec<Vector3<f64>>, ModelError> {
-    super::accumulate::position_errors(model, poses, tilt)
-}
-
 /// Norms of error vectors (mm).
 pub fn norms_mm(errors_mm: &[Vector3<f64>]) -> Vec<f64> {
     errors_mm.iter().map(|e| e.norm()).collect()
-}
-
-/// Norm of the position error `measured - model` of every pose (mm).
-pub fn error_norms_mm(model: &Model, poses: &Poses, tilt: bool) -> Result<Vec<f64>, ModelError> {
-    Ok(norms_mm(&position_errors(model, poses, tilt)?))
 }
 
 /// The values of the parameters `cols` of `model`, as a vector (NaN for an index that is not a

@@ -3,12 +3,13 @@
 
 use serde::Serialize;
 
+use super::accumulator::position_errors;
 use super::error::CalibError;
 use super::fit::{fit_parameters_with, Fit, PriorAt};
 use super::identifiability::analyse;
 use super::lm::LmConfig;
 use super::prior::{choose_weight, ill_posed, ridge_press, PriorMode, PriorScales};
-use super::problem::{position_errors, stacked_jacobian, Poses};
+use super::problem::{stacked_jacobian, Poses};
 use crate::model::Model;
 use nalgebra::DVector;
 

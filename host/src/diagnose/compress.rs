@@ -18,8 +18,7 @@ use crate::model::ModelError;
 /// Rows gathered below the running factor before each QR.
 const CHUNK_ROWS: usize = 1024;
 
-/// Fewest residuals from which [`stacked_or_compressed`] compresses.
-pub const COMPRESS_MIN_RESIDUALS: usize = 6000;
+pub use super::extended::COMPRESS_MIN_RESIDUALS;
 
 /// `[J | e]` of `ext` on `data` wrt `unknowns` (as [`ExtModel::stacked`]) reduced to at most
 /// `unknowns.len() + 1` rows with the same inner products.

@@ -324,8 +324,6 @@ fn simplicity(c: &Candidate) -> (usize, u32) {
     }
 }
 
-pub use super::select::forward_selection;
-
 /// Indices of the candidates whose small move ([`DecideConfig::onset_probe`] on each of their
 /// unknowns) flips a sign of the joint moments at some pose: where the tilting law's sign steps
 /// sit exactly at zero in the current fit, the linear screen cannot see what the candidate would

@@ -436,12 +436,16 @@ impl Values for ExtModel {
     }
 }
 
+/// Fewest residuals from which [`super::compress::stacked_or_compressed`] compresses (and
+/// from which [`uses_normal`] may take the normal equations).
+pub const COMPRESS_MIN_RESIDUALS: usize = 6000;
+
 /// Whether the fits on `data` go through normal equations: from
-/// [`super::compress::COMPRESS_MIN_RESIDUALS`] residuals on (below, the tall Jacobian is small
+/// [`COMPRESS_MIN_RESIDUALS`] residuals on (below, the tall Jacobian is small
 /// and its QR keeps the full precision), when the identifiability threshold allows them
 /// ([`use_normal_equations`]).
 pub fn uses_normal(data: &MeasuredSet, rtol: f64) -> bool {
-    use_normal_equations(rtol) && data.n_residuals() >= super::compress::COMPRESS_MIN_RESIDUALS
+    use_normal_equations(rtol) && data.n_residuals() >= COMPRESS_MIN_RESIDUALS
 }
 
 /// The extended fit on normal equations (residual `predicted - measured`).

@@ -15,6 +15,7 @@
 //! | [`floor`] | the independent floor (`--instrument-mm`, repeatability) and its tests |
 //! | [`bounds`] | physical bounds on fitted values (a compliance, a mass cannot be negative): held at the bound and refitted |
 //! | [`alias`] | pairs of effects/parameters these poses cannot tell apart |
+//! | [`ordered`] | a map that keeps its insertion order in JSON |
 //! | [`report`] | the `diagnose --json` document and the text table |
 //! | [`plots`] | SVG plots of the residual against the regressor that traced each effect |
 //! | [`probe`] | a smooth function of the joint angles (and the time) fitted to the final residual under cross-validation: where the unexplained error lives |
@@ -41,6 +42,7 @@ pub mod compress;
 pub mod decide;
 pub mod extended;
 pub mod floor;
+pub mod ordered;
 pub mod parallel;
 pub mod plots;
 pub mod polish;
@@ -62,10 +64,11 @@ use crate::calib::{default_selection, CalibError, Stats};
 use crate::error::{Classify, ErrorKind};
 use crate::model::{Model, ModelError};
 use candidates::effect_values;
-use decide::{contribution, forward_selection, DecideConfig, Selection};
+use decide::{contribution, DecideConfig, Selection};
 use extended::{ExtModel, ExtendedFit, Unknown, Values};
 use report::{DiagnoseReport, EffectReport, NoiseReport, SetStats, TrialReport, Unexplained};
 use residual::{best_regressor, explain, explain_with, regressors};
+use select::forward_selection;
 
 /// Smallest share of the final residual a regressor must explain to call it structured.
 pub const STRUCTURE_MIN_R2: f64 = 0.05;

@@ -9,7 +9,7 @@ use super::basis::{point, Domain, Term};
 use super::design::Design;
 use crate::calib::MeasuredSet;
 use crate::calib::Stats;
-use crate::diagnose::report::Ordered;
+use crate::diagnose::ordered::Ordered;
 
 /// A smooth function of the joint angles and the time (mm, frame R) made of the probe's terms.
 #[derive(Debug, Clone, PartialEq, Default)]
