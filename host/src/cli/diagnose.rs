@@ -21,7 +21,7 @@ use rigctl::io::finite::TextFormat;
 use rigctl::model::KATANA_PENCIL_TOOL_MM;
 
 use super::model_args::ModelArgs;
-use super::out::out;
+use super::out::{out, outln};
 use super::pose_args::PoseArgs;
 use super::CliError;
 
@@ -75,6 +75,14 @@ pub struct Args {
     /// (1-based; the others are ignored).
     #[arg(long, value_name = "K", default_value_t = 1, value_parser = clap::value_parser!(u64).range(1..))]
     pub marker: u64,
+    /// A model without link masses: assume them (one per joint, mid-segment, in proportion to
+    /// the segment lengths, 20 kg per metre in total) so that joint compliance is offered; said
+    /// in the output (JSON `assumed_masses`).
+    #[arg(long)]
+    pub assume_masses: bool,
+    /// The robot's mass for `--assume-masses` (kg; implies it).
+    #[arg(long, value_name = "KG")]
+    pub robot_mass_kg: Option<f64>,
 }
 
 pub fn run(args: Args) -> Result<(), CliError> {
@@ -92,6 +100,7 @@ pub fn run(args: Args) -> Result<(), CliError> {
     // the pencil holder is on the arm when the rig's samples are measured
     let default_tool_mm = (!args.samples.is_empty()).then_some(KATANA_PENCIL_TOOL_MM);
     let model = args.model.choose_with_default_tool(default_tool_mm)?;
+    let model = assumed_masses(model, &args)?;
     let marker = usize::try_from(args.marker - 1).unwrap_or(usize::MAX);
     let spec = args.pose.spec(&model, true, marker);
     let mut cal: Option<MeasuredSet> = args
@@ -171,6 +180,7 @@ pub fn run(args: Args) -> Result<(), CliError> {
         ));
     }
     if let Some(path) = &args.json {
+        diag.report.assumed_masses = assumed_masses_json(&model);
         rigctl::io::atomic::write_json_atomic(path, &diag.report)?;
     }
     if let Some(path) = &args.out {
@@ -201,6 +211,56 @@ pub fn run(args: Args) -> Result<(), CliError> {
         )));
     }
     Ok(())
+}
+
+/// `model` with assumed link masses when asked (`--assume-masses`, `--robot-mass-kg`), said on
+/// stdout; a note when it has none and no tilting (no compliance candidate is offered).
+fn assumed_masses(
+    model: rigctl::model::Model,
+    args: &Args,
+) -> Result<rigctl::model::Model, CliError> {
+    let asked = args.assume_masses || args.robot_mass_kg.is_some();
+    if !model.masses().is_empty() {
+        if asked {
+            return Err(CliError::bad_input(
+                "--assume-masses / --robot-mass-kg: the model declares its link masses (remove the flag, or its [[mass]] rows)",
+            ));
+        }
+        return Ok(model);
+    }
+    if !asked {
+        if model.tilt_params().is_none() {
+            outln!("note: the model has no link masses: no joint compliance is offered (--assume-masses, or --robot-mass-kg KG, to offer it with assumed masses; [[mass]] rows for the robot's own)")?;
+        }
+        return Ok(model);
+    }
+    let m = model
+        .with_assumed_masses(args.robot_mass_kg)
+        .map_err(|e| CliError::bad_input(format!("--robot-mass-kg: {e}")))?;
+    let per: Vec<String> = m
+        .masses()
+        .iter()
+        .map(|p| format!("{:.2}", p.mass_kg))
+        .collect();
+    outln!(
+        "link masses ASSUMED (none declared): {:.2} kg in total, {} kg on joints 1..{}, mid-segment; compliance values are per kgf.m of these assumed torques",
+        m.masses().iter().map(|p| p.mass_kg).sum::<f64>(),
+        per.join(", "),
+        per.len()
+    )?;
+    Ok(m)
+}
+
+/// The JSON `assumed_masses` of a model whose masses are assumed.
+fn assumed_masses_json(model: &rigctl::model::Model) -> Option<serde_json::Value> {
+    model.masses_assumed().then(|| {
+        let kg: Vec<f64> = model.masses().iter().map(|p| p.mass_kg).collect();
+        serde_json::json!({
+            "total_kg": kg.iter().sum::<f64>(),
+            "per_joint_kg": kg,
+            "rule": "one point mass per joint, mid-segment, in proportion to the segment lengths",
+        })
+    })
 }
 
 /// A plot `diagnose --plots` writes: `NN_ID.svg` or `probe_NAME.svg`.

@@ -660,6 +660,7 @@ pub fn diagnose(
         converged: last.converged && declared.converged,
         probe: probe.report(&probe_cfg),
         residual_model: None,
+        assumed_masses: None,
         verdict,
         bounds: bound_reports,
     };

@@ -227,6 +227,10 @@ pub struct DiagnoseReport {
     /// Fitted values that fell below their physical bound and what was done (extra key,
     /// [`super::bounds`]).
     pub bounds: Vec<super::bounds::BoundReport>,
+    /// The link masses the model was given because it declared none (`diagnose
+    /// --assume-masses`): `{total_kg, per_joint_kg, rule}` (extra key).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub assumed_masses: Option<serde_json::Value>,
 }
 
 /// One-line statement of the decision rule in force.

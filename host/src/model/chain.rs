@@ -127,6 +127,8 @@ pub struct Model {
     pub(crate) joints: Vec<Joint>,
     pub(crate) params: Vec<Param>,
     pub(crate) masses: Vec<PointMass>,
+    /// The masses are assumed, not declared ([`Model::with_assumed_masses`]).
+    pub(crate) masses_assumed: bool,
     pub(crate) tilt: Option<Vec<TiltParams>>,
     pub(crate) gamma_law: GammaLaw,
     /// The Jacobian holds the clearance tilt's direction fixed (see
@@ -577,6 +579,7 @@ impl ModelBuilder {
             joints: self.joints,
             params: self.params,
             masses: self.masses,
+            masses_assumed: false,
             tilt,
             gamma_law: self.gamma_law,
             tilt_direction_frozen: false,

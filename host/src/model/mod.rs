@@ -64,6 +64,7 @@
 //! [`Model::from_toml_str`], [`Model::from_file`], [`Model::to_toml_string`],
 //! [`Model::write_file`]; the format is documented in [`toml_file`].
 
+mod assumed_masses;
 mod chain;
 mod data;
 pub mod dynamics;

@@ -126,6 +126,13 @@ impl Model {
             }
             write_joint_terms(&mut s, &self.transmission, j);
         }
+        if self.masses_assumed && !self.masses.is_empty() {
+            s.push_str(
+                "\n# The link masses below are ASSUMED by rigctl (the model declared none): one per\n\
+                 # joint, mid-segment, in proportion to the segment lengths. Replace them with the\n\
+                 # robot's own masses for compliance values in real units.\n",
+            );
+        }
         for m in &self.masses {
             let c = m.com_mm;
             let _ = writeln!(

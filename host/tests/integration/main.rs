@@ -13,6 +13,7 @@ mod cli_value_enums;
 mod compensate_line;
 mod compensate_transmission;
 mod daq_session;
+mod diagnose_assumed_masses;
 mod diagnose_partial;
 mod diagnose_probe;
 mod diagnose_sim;
