@@ -53,6 +53,7 @@ mod reliability_recording;
 mod reliability_roundtrip;
 mod reliability_streams;
 mod reliability_values;
+mod reliability_wire_readers;
 mod report_first_screen;
 mod report_plots;
 mod report_run;
