@@ -582,7 +582,11 @@ fn emulated_board_records_known_signals_and_reports_panics_and_overflows() {
     // so, naming the stack pointer below RAM, and fails.
     let overflowing = Emulator::start(dir.path(), "overflowing", 60, &["overflow-after-ms=1500"]);
     let (status, overflow_console) = overflowing.wait(Duration::from_secs(60));
-    assert_eq!(status.code(), Some(1), "run.sh exits 1 after a stack overflow");
+    assert_eq!(
+        status.code(),
+        Some(1),
+        "run.sh exits 1 after a stack overflow"
+    );
     assert!(
         overflow_console.contains("forced stack overflow after 1500 ms"),
         "the overflow was started: {overflow_console}"
@@ -597,7 +601,10 @@ fn emulated_board_records_known_signals_and_reports_panics_and_overflows() {
         .and_then(|r| r.split(',').next())
         .and_then(|h| u32::from_str_radix(h, 16).ok())
         .unwrap_or_else(|| panic!("stack pointer in the report: {report}"));
-    assert!(sp < 0x2000_0000, "stack pointer {sp:#x} below RAM: {report}");
+    assert!(
+        sp < 0x2000_0000,
+        "stack pointer {sp:#x} below RAM: {report}"
+    );
     assert!(
         !overflow_console.contains("PANIC"),
         "no panic, a fault: {overflow_console}"
