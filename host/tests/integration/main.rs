@@ -49,6 +49,7 @@ mod reliability_interrupt;
 mod reliability_loop;
 mod reliability_output_rule;
 mod reliability_outputs;
+mod reliability_plot_sets;
 mod reliability_recording;
 mod reliability_roundtrip;
 mod reliability_streams;

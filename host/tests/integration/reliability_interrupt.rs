@@ -192,38 +192,7 @@ fn interrupted_export_leaves_the_old_set_or_the_new_one() {
 fn interrupted_diagnose_plots_leave_the_old_set_or_the_new_one() {
     let (seed, trials) = seed_and_trials();
     let tmp = tempfile::tempdir().unwrap();
-    // old: one plot; new: three, one of the same effect under another number (30 poses: a
-    // run of a fraction of a second in the debug build)
-    for (s, effects) in [
-        ("1", vec!["encoder_harmonic:j3:h1=0.04,20"]),
-        (
-            "2",
-            vec!["encoder_harmonic:j3:h1=0.05,60", "joint_scale:j2=0.003"],
-        ),
-    ] {
-        let dir = tmp.path().join(format!("s{s}"));
-        let mut args = vec!["simulate", "--seed", s, "--val", "10"];
-        for e in &effects {
-            args.extend(["--effect", e]);
-        }
-        let o = rigctl()
-            .args(&args)
-            .arg("--out")
-            .arg(&dir)
-            .output()
-            .unwrap();
-        assert_eq!(o.status.code(), Some(0), "{}", text(&o.stderr));
-        let cal = std::fs::read_to_string(dir.join("cal.csv")).unwrap();
-        let head: Vec<&str> = cal.lines().take(31).collect();
-        std::fs::write(dir.join("cal30.csv"), head.join("\n") + "\n").unwrap();
-    }
-    let arg = |s: &str, f: &str| tmp.path().join(format!("s{s}/{f}")).display().to_string();
-    let (p1, v1, p2, v2) = (
-        arg("1", "cal30.csv"),
-        arg("1", "val.csv"),
-        arg("2", "cal30.csv"),
-        arg("2", "val.csv"),
-    );
+    let [(p1, v1), (p2, v2)] = super::reliability_plot_sets::diagnose_inputs(tmp.path());
     harness(
         "diagnose --plots",
         &["diagnose", "--poses", &p1, "--validate", &v1, "--plots"],
