@@ -106,9 +106,15 @@ async fn forced_panic_task(ms: u32) {
 #[embassy_executor::task]
 async fn forced_overflow_task(ms: u32) {
     embassy_time::Timer::at(embassy_time::Instant::from_millis(u64::from(ms))).await;
-    crate::log::info!("forced stack overflow after {} ms (overflow-after-ms switch)", ms);
+    crate::log::info!(
+        "forced stack overflow after {} ms (overflow-after-ms switch)",
+        ms
+    );
     let depth = recurse(0);
-    panic!("the recursion returned at depth {}: no stack overflow", depth);
+    panic!(
+        "the recursion returned at depth {}: no stack overflow",
+        depth
+    );
 }
 
 /// One 256-byte frame per call, kept live across the next call (`black_box`: neither the
