@@ -179,6 +179,19 @@ pub fn run(args: Args) -> Result<(), CliError> {
             &names,
         ));
     }
+    // The plots are written first and committed last: a plot that cannot be written (a full
+    // disk) leaves the JSON and the model as they were, and the old plots.
+    let plots = match &args.plots {
+        Some(dir) => {
+            let lock = rigctl::io::atomic::lock_dir(dir)?;
+            // every plot as one commit; the plots of an earlier run that this one lacks go
+            let set = rigctl::io::file_set::begin(dir, is_diagnose_plot)?;
+            write_plots(dir, &diag)?;
+            write_probe_plots(dir, &diag.probe)?;
+            Some((lock, set))
+        }
+        None => None,
+    };
     if let Some(path) = &args.json {
         diag.report.assumed_masses = assumed_masses_json(&model);
         rigctl::io::atomic::write_json_atomic(path, &diag.report)?;
@@ -195,12 +208,7 @@ pub fn run(args: Args) -> Result<(), CliError> {
         text.push_str(&ext.to_model().to_toml_string());
         write_text_atomic(path, TextFormat::Toml, &text)?;
     }
-    if let Some(dir) = &args.plots {
-        let _lock = rigctl::io::atomic::lock_dir(dir)?;
-        // every plot as one commit; the plots of an earlier run that this one lacks go
-        let set = rigctl::io::file_set::begin(dir, is_diagnose_plot)?;
-        write_plots(dir, &diag)?;
-        write_probe_plots(dir, &diag.probe)?;
+    if let Some((_lock, set)) = plots {
         set.commit()?;
     }
     out!("{}", diag.report.table())?;

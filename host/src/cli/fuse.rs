@@ -15,7 +15,7 @@ use rigctl::model::KATANA_PENCIL_TOOL_MM;
 use super::joint_log::JointLogArgs;
 use super::model_args::ModelArgs;
 use super::out::outln;
-use super::{note_damage, CliError};
+use super::{note_damage, note_out_of_range, out_of_range_failure, CliError};
 
 #[derive(clap::Args, Debug)]
 pub struct Args {
@@ -77,8 +77,16 @@ pub fn run(args: Args) -> Result<(), CliError> {
         JointSamples::read(&args.joints, &model)?
     };
     let cal = PotCalibration::read(&args.pot)?;
-    let samples = read_pot_samples(&args.recording, args.strict, &mut note_damage)?;
+    let read = read_pot_samples(&args.recording, args.strict, &mut note_damage)?;
+    note_out_of_range(&args.recording, read.out_of_range.as_deref());
+    let samples = read.samples;
     if samples.is_empty() {
+        if read.out_of_range.is_some() {
+            return Err(CliError::failure(
+                "no potentiometer sample within the board's announced range",
+            )
+            .in_file(&args.recording));
+        }
         return Err(
             CliError::bad_input("the recording has no potentiometer sample")
                 .in_file(&args.recording),
@@ -137,5 +145,8 @@ pub fn run(args: Args) -> Result<(), CliError> {
         rms(&|s| s.dev_n_mm),
         fused.stop_mm
     )?;
+    if read.out_of_range.is_some() {
+        return Err(out_of_range_failure(&args.recording, &args.out));
+    }
     Ok(())
 }

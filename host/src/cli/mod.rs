@@ -121,6 +121,24 @@ pub fn note_damage(rec: &rigctl::daq::salvage::SalvagedRecording) {
     }
 }
 
+/// Reports on stderr the frames of a recording left out as out of the board's announced range
+/// (`rigctl::fusion::pot::PotSamples::out_of_range`); the run goes on without them and ends with
+/// [`out_of_range_failure`].
+pub fn note_out_of_range(rec: &std::path::Path, out_of_range: Option<&str>) {
+    if let Some(why) = out_of_range {
+        out::errln!("rigctl: {}: {why}", rigctl::io::shown::shown(rec));
+    }
+}
+
+/// Exit 1 after an output was written from a recording's in-range frames only (as `export`).
+pub fn out_of_range_failure(rec: &std::path::Path, out: &std::path::Path) -> CliError {
+    CliError::failure(format!(
+        "{}: frames out of the board's announced range were left out (above); {} is from the others",
+        rigctl::io::shown::shown(rec),
+        rigctl::io::shown::shown(out)
+    ))
+}
+
 /// An error on its way to the exit code: the message and its class.
 #[derive(Debug)]
 pub struct CliError {

@@ -8,7 +8,7 @@ use rigctl::fusion::pot::read_pot_samples;
 use rigctl::fusion::potcal::{points_from_windows, read_jig_csv, JigFile, PotCalibration};
 
 use super::out::{errln, outln};
-use super::{note_damage, CliError};
+use super::{note_damage, note_out_of_range, out_of_range_failure, CliError};
 
 #[derive(clap::Args, Debug)]
 pub struct Args {
@@ -35,6 +35,7 @@ pub fn run(args: Args) -> Result<(), CliError> {
         .input("--recording", args.recording.as_deref())
         .output("--out", Some(&args.out))
         .check()?;
+    let mut out_of_range = false;
     let points = match read_jig_csv(&args.points)? {
         JigFile::Points(_) if args.recording.is_some() => {
             return Err(CliError::bad_input(format!(
@@ -50,8 +51,10 @@ pub fn run(args: Args) -> Result<(), CliError> {
                     args.points.display()
                 ))
             })?;
-            let samples = read_pot_samples(rec, args.strict, &mut note_damage)?;
-            points_from_windows(&samples, &w).map_err(|e| CliError::from(e).in_file(rec))?
+            let read = read_pot_samples(rec, args.strict, &mut note_damage)?;
+            note_out_of_range(rec, read.out_of_range.as_deref());
+            out_of_range = read.out_of_range.is_some();
+            points_from_windows(&read.samples, &w).map_err(|e| CliError::from(e).in_file(rec))?
         }
     };
     let cal = PotCalibration::fit(&points, args.degree)?;
@@ -74,5 +77,8 @@ pub fn run(args: Args) -> Result<(), CliError> {
     if let Some(w) = PotCalibration::nonlinearity(&points).filter(|_| args.degree == 1) {
         errln!("rigctl potcal: warning: {w}");
     }
-    Ok(())
+    match args.recording.as_deref() {
+        Some(rec) if out_of_range => Err(out_of_range_failure(rec, &args.out)),
+        _ => Ok(()),
+    }
 }

@@ -7,7 +7,8 @@
 //! | `status.csv` | `host_rx_us,uptime_us,dropped_samples,dropped_frames,overruns,sensor_errors,rx_errors` | board `Status` frame; `host_rx_us` = host receive time (us since the recording's start), the rest as in `rig_protocol::Status` |
 //!
 //! Frames with values out of the board's announced range (`super::wire_check`) are left out
-//! and counted ([`ExportSummary::out_of_range`]; `rigctl export` exits 1 then).
+//! and counted ([`ExportSummary::out_of_range`], [`super::wire_check::in_range`]; `rigctl
+//! export` exits 1 then).
 //! Rows are in the order the frames arrived. Each file is written under a temporary name and
 //! renamed when complete. Every stored frame is decoded (and its CRC checked) again; a frame
 //! that fails means the file was damaged after recording, which is bad input.
@@ -16,7 +17,7 @@ use super::link::decode_stored;
 use super::recording::{Recording, RecordingError};
 use super::salvage::{read_salvaged, DamagedRegion};
 use super::tally::Tally;
-use super::wire_check::WireCheck;
+use super::wire_check::in_range;
 use crate::io::atomic::{write_atomic, AtomicWriteError};
 use rig_protocol::{CorruptReason, DeviceMsg};
 use std::io::Write;
@@ -108,25 +109,7 @@ pub fn decode_recording(
 pub fn export_csv(path: &Path, dir: &Path, strict: bool) -> Result<ExportSummary, ExportError> {
     let salvaged = read_salvaged(path, strict)?;
     // frames out of the board's announced range are not exported (counted in the summary)
-    let mut check = WireCheck::new(
-        Some(salvaged.meta.pot_rate_hz),
-        salvaged.meta.hello.as_ref().map(|h| h.tilt_sensors),
-    );
-    let start = |m: &DeviceMsg| matches!(m, DeviceMsg::Ack(rig_protocol::CommandKind::Start));
-    if !salvaged.frames.iter().any(|(_, m)| start(m)) {
-        check.restart(); // no Start in the file (a simulated session): every frame is of the run
-    }
-    let kept: Vec<(u64, DeviceMsg)> = salvaged
-        .frames
-        .iter()
-        .filter(|(_, msg)| {
-            if start(msg) {
-                check.restart();
-            }
-            check.accept(msg)
-        })
-        .cloned()
-        .collect();
+    let (kept, check) = in_range(&salvaged.meta, salvaged.frames);
     let frames = &kept;
     // the three files of one run, never a mix of concurrent exports into the same directory
     let _lock = crate::io::atomic::lock_dir(dir)?;
@@ -199,7 +182,7 @@ pub fn export_csv(path: &Path, dir: &Path, strict: bool) -> Result<ExportSummary
         status_rows,
         tally,
         truncated_tail_bytes: salvaged.truncated_tail_bytes,
-        damaged: salvaged.damaged.clone(),
+        damaged: salvaged.damaged,
         out_of_range: check.summary(),
     })
 }

@@ -6,12 +6,18 @@
 //! the `Hello`'s `tilt_sensors`, board time going backwards (per stream: the potentiometer
 //! batches, each inclinometer), or a batch whose sample times do not fit in a `u64`. Such a
 //! frame is not stored, not counted in the [`super::tally::Tally`] and not exported; it is
-//! counted here, and `record` / `export` report the count and the first one and exit 1. The
-//! period and the monotone times are checked from the acknowledged `Start` on
-//! ([`WireCheck::restart`]); the frames before it may be the end of an earlier run.
+//! counted here, and `record` reports the count and the first one and exits 1. The period and
+//! the monotone times are checked from the acknowledged `Start` on ([`WireCheck::restart`]); the
+//! frames before it may be the end of an earlier run.
+//!
+//! Every reader of a stored recording (`export`, `fuse`, `potcal --recording`) keeps only the
+//! frames [`in_range`] passes (the same check, against the configuration the recording's header
+//! stores), reports the rest and exits 1.
 
 use rig_protocol::device::RunConfig;
-use rig_protocol::DeviceMsg;
+use rig_protocol::{CommandKind, DeviceMsg};
+
+use super::recording::RecordingMeta;
 
 /// Largest raw count of the board's 12-bit ADC.
 pub const ADC_MAX: u16 = 4095;
@@ -189,6 +195,34 @@ impl WireCheck {
             if self.count == 1 { "" } else { "s" }
         ))
     }
+}
+
+/// The frames of a stored recording that are within the configuration its header records
+/// (`pot_rate_hz`, the `Hello`'s `tilt_sensors`), in file order, and the check that counted the
+/// others. Each `Start` acknowledged in the file restarts the period and time checks; a file
+/// without one (a simulated session) is checked as one run from its first frame.
+pub fn in_range(
+    meta: &RecordingMeta,
+    frames: Vec<(u64, DeviceMsg)>,
+) -> (Vec<(u64, DeviceMsg)>, WireCheck) {
+    let mut check = WireCheck::new(
+        Some(meta.pot_rate_hz),
+        meta.hello.as_ref().map(|h| h.tilt_sensors),
+    );
+    let start = |m: &DeviceMsg| matches!(m, DeviceMsg::Ack(CommandKind::Start));
+    if !frames.iter().any(|(_, m)| start(m)) {
+        check.restart();
+    }
+    let kept = frames
+        .into_iter()
+        .filter(|(_, msg)| {
+            if start(msg) {
+                check.restart();
+            }
+            check.accept(msg)
+        })
+        .collect();
+    (kept, check)
 }
 
 #[cfg(test)]

@@ -6,6 +6,7 @@ use rig_protocol::DeviceMsg;
 
 use super::error::FusionError;
 use crate::daq::salvage::{read_salvaged, SalvagedRecording};
+use crate::daq::wire_check::in_range;
 
 /// One potentiometer sample.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -16,32 +17,52 @@ pub struct PotSample {
     pub raw: u16,
 }
 
+/// The potentiometer samples of a recording and what was left out of them.
+#[derive(Debug, Clone, PartialEq, Eq, Default)]
+pub struct PotSamples {
+    /// In board-time order.
+    pub samples: Vec<PotSample>,
+    /// Frames out of the board's announced range, not used
+    /// ([`crate::daq::wire_check::WireCheck::summary`]); `None` when there were none.
+    pub out_of_range: Option<String>,
+}
+
 /// Every potentiometer sample of the recording at `path`, in board-time order (a sample time
 /// recorded twice keeps its first value). Damaged records are skipped (see
 /// [`crate::daq::salvage`]) and reported through `on_damage`; with `strict` they are an error.
+/// Frames out of the board's announced range are left out, as `export` leaves them out
+/// ([`crate::daq::wire_check::in_range`]), and counted in [`PotSamples::out_of_range`].
 pub fn read_pot_samples(
     path: &Path,
     strict: bool,
     on_damage: &mut dyn FnMut(&SalvagedRecording),
-) -> Result<Vec<PotSample>, FusionError> {
-    let rec = read_salvaged(path, strict)?;
+) -> Result<PotSamples, FusionError> {
+    let mut rec = read_salvaged(path, strict)?;
     if !rec.damaged.is_empty() {
         on_damage(&rec);
     }
+    let (frames, check) = in_range(&rec.meta, std::mem::take(&mut rec.frames));
     let mut out = Vec::new();
-    for (_, msg) in &rec.frames {
+    for (_, msg) in &frames {
         if let DeviceMsg::Pot(b) = msg {
             for (i, &raw) in b.samples.iter().enumerate() {
-                out.push(PotSample {
-                    t_us: b.t0_us + i as u64 * u64::from(b.period_us),
-                    raw,
-                });
+                // checked (a kept batch's last time fits, `WireCheck`); never a wrap
+                let Some(t_us) = (i as u64)
+                    .checked_mul(u64::from(b.period_us))
+                    .and_then(|d| b.t0_us.checked_add(d))
+                else {
+                    continue;
+                };
+                out.push(PotSample { t_us, raw });
             }
         }
     }
     out.sort_by_key(|s| s.t_us);
     out.dedup_by_key(|s| s.t_us);
-    Ok(out)
+    Ok(PotSamples {
+        samples: out,
+        out_of_range: check.summary(),
+    })
 }
 
 /// Potentiometer travel as a time series on the board clock (s), for interpolation.

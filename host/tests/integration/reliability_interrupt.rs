@@ -1,7 +1,10 @@
 //! The interruption harness (docs/reliability.md, "Sets of files as one commit"): each writer
-//! of a set of files is interrupted (SIGINT or SIGTERM) at seeded random moments of its run,
-//! over a folder holding the set of an earlier run. After each trial no temporary file is left
-//! and the folder holds the old set or the new one, file for file, never a mix.
+//! of a set of files (`simulate --out`, `export --csv`, `diagnose --plots`) is interrupted
+//! (SIGINT or SIGTERM) at seeded random moments of its run, over a folder holding the set of an
+//! earlier run: half of the trials at a uniform moment of the run, half 0-2 ms after the first
+//! temporary file of the new set appears (the writes and the commit). After each trial no
+//! temporary file is left and the folder holds the old set or the new one, file for file,
+//! never a mix.
 //! `RELIABILITY_SEED=N` draws other moments; `RELIABILITY_TRIALS=N` sets the trials per writer.
 
 use std::os::unix::process::ExitStatusExt;
@@ -30,6 +33,16 @@ fn set(dir: &Path) -> Vec<(String, Vec<u8>)> {
     v
 }
 
+/// Whether a temporary file of a set is in `dir` (not the probe of the checks before the work).
+fn writing(dir: &Path) -> bool {
+    std::fs::read_dir(dir).is_ok_and(|entries| {
+        entries.flatten().any(|e| {
+            let n = e.file_name().to_string_lossy().into_owned();
+            n.contains(".tmp-") && !n.starts_with(".rigctl-probe")
+        })
+    })
+}
+
 /// Runs `args` + `--out`-like folder `dir` to the end; the folder's set.
 fn reference(args: &[&str], dir: &Path) -> Vec<(String, Vec<u8>)> {
     let o = rigctl().args(args).arg(dir).output().unwrap();
@@ -53,19 +66,36 @@ fn harness(name: &str, old_args: &[&str], new_args: &[&str], trials: usize, seed
     let full = t0.elapsed();
     assert_ne!(old, new, "{name}: the two runs must differ");
     let mut rng = ChaCha8Rng::seed_from_u64(seed);
-    let mut outcomes = [0usize; 3]; // old, new, finished before the signal
+    // old, new, finished before the signal; trials signalled while the set was being written
+    let mut outcomes = [0usize; 4];
     for trial in 0..trials {
         let dir = tmp.path().join(format!("t{trial}"));
         copy_set(&old, &dir);
-        let child = rigctl()
+        let mut child = rigctl()
             .args(new_args)
             .arg(&dir)
             .stdout(Stdio::null())
             .stderr(Stdio::null())
             .spawn()
             .unwrap();
-        let at = full.mul_f64(rng.gen_range(0.0..1.2));
-        std::thread::sleep(at);
+        let started = Instant::now();
+        let targeted = rng.gen_bool(0.5);
+        if targeted {
+            // at the writes: a temporary file of the set has appeared, then 0-2 ms more
+            while child.try_wait().unwrap().is_none()
+                && !writing(&dir)
+                && started.elapsed() < full * 3 + Duration::from_secs(5)
+            {
+                std::thread::sleep(Duration::from_micros(50));
+            }
+            if child.try_wait().unwrap().is_none() {
+                outcomes[3] += 1;
+            }
+            std::thread::sleep(Duration::from_micros(rng.gen_range(0..2000)));
+        } else {
+            std::thread::sleep(full.mul_f64(rng.gen_range(0.0..1.2)));
+        }
+        let at = started.elapsed();
         let sig = if rng.gen_bool(0.5) {
             Signal::SIGINT
         } else {
@@ -74,7 +104,10 @@ fn harness(name: &str, old_args: &[&str], new_args: &[&str], trials: usize, seed
         let _ = kill(Pid::from_raw(child.id() as i32), sig);
         let status = child.wait_with_output().unwrap().status;
         let code = status.code();
-        let what = format!("{name} trial {trial} (seed {seed}, {sig} after {at:?})");
+        let what = format!(
+            "{name} trial {trial} (seed {seed}, {sig} after {at:?}{})",
+            if targeted { ", at the writes" } else { "" }
+        );
         // killed by the signal itself: it came before the handler was installed (nothing
         // written yet)
         let before_handler = code.is_none() && status.signal() == Some(sig as i32);
@@ -97,8 +130,9 @@ fn harness(name: &str, old_args: &[&str], new_args: &[&str], trials: usize, seed
         std::fs::remove_dir_all(&dir).unwrap();
     }
     eprintln!(
-        "{name}: {trials} trials: old set {}, new set {} (+{} finished)",
-        outcomes[0], outcomes[1], outcomes[2]
+        "{name}: {trials} trials: old set {}, new set {} (+{} finished); {} signalled after the writes of \
+         the set began",
+        outcomes[0], outcomes[1], outcomes[2], outcomes[3]
     );
 }
 
@@ -151,6 +185,20 @@ fn interrupted_export_leaves_the_old_set_or_the_new_one() {
         &["export", &r2, "--csv"],
         trials,
         seed.wrapping_add(1),
+    );
+}
+
+#[test]
+fn interrupted_diagnose_plots_leave_the_old_set_or_the_new_one() {
+    let (seed, trials) = seed_and_trials();
+    let tmp = tempfile::tempdir().unwrap();
+    let [(p1, v1), (p2, v2)] = super::reliability_plot_sets::diagnose_inputs(tmp.path());
+    harness(
+        "diagnose --plots",
+        &["diagnose", "--poses", &p1, "--validate", &v1, "--plots"],
+        &["diagnose", "--poses", &p2, "--validate", &v2, "--plots"],
+        trials,
+        seed.wrapping_add(2),
     );
 }
 

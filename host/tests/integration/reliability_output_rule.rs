@@ -1,7 +1,8 @@
 //! One output rule for every writer (docs/reliability.md, "One output rule"): the cases of
 //! issue 48, items 1 and 2, and a seeded property test over random layouts of symbolic links,
-//! hard links and folder aliases between the inputs and outputs of every subcommand that writes
-//! a folder or a page: no input's bytes ever change. `RELIABILITY_SEED=N` draws other layouts.
+//! hard links and folder aliases between the inputs and outputs of the subcommands that write a
+//! folder (`simulate`, `export`, `diagnose --plots`) or one file (`report --html`, `calibrate
+//! --out`, `diagnose --json`, `model2urdf`, `plan --out`): no input's bytes ever change. `RELIABILITY_SEED=N` draws other layouts.
 
 use std::os::unix::fs::symlink;
 use std::path::{Path, PathBuf};
@@ -201,14 +202,30 @@ fn planted_links_in_output_folders_are_refused_or_replaced_never_followed() {
     assert_no_temp(w, "planted links");
 }
 
-/// One writer's command line in a workspace, with its output folder (or page) `out`.
+/// The writers of the property test: [`command`] gives each one's command line.
+const WRITERS: usize = 8;
+
+/// One writer's command line in a workspace, with its output folder (or file) `out`:
+/// `simulate --out`, `export --csv`, `diagnose --plots` write folders, the others one file.
+/// (`diagnose` fits the 20 held-out poses and checks on the 119 others: a fraction of a second.)
 fn command(writer: usize, out: &str) -> Vec<String> {
     let v = |s: &[&str]| s.iter().map(|x| x.to_string()).collect::<Vec<_>>();
+    let diagnose = |flag: &str| {
+        v(&[
+            "diagnose",
+            "--poses",
+            "RUN/val.csv",
+            "--validate",
+            "RUN/cal.csv",
+            flag,
+            out,
+        ])
+    };
     match writer {
         0 => v(&["simulate", "--model", "M.toml", "--val", "10", "--out", out]),
         1 => v(&["export", "REC", "--csv", out]),
         2 => v(&["report", "RUN", "--html", out]),
-        _ => v(&[
+        3 => v(&[
             "calibrate",
             "--poses",
             "RUN/cal.csv",
@@ -217,6 +234,32 @@ fn command(writer: usize, out: &str) -> Vec<String> {
             "--out",
             out,
         ]),
+        4 => diagnose("--plots"),
+        5 => diagnose("--json"),
+        6 => v(&["model2urdf", "--model", "M.toml", "--out", out]),
+        _ => v(&[
+            "plan",
+            "--model",
+            "M.toml",
+            "--n",
+            "6",
+            "--candidates",
+            "300",
+            "--out",
+            out,
+        ]),
+    }
+}
+
+/// The name of a writer's one output file; `None` for a writer of a folder.
+fn single_output(writer: usize) -> Option<&'static str> {
+    match writer {
+        2 => Some("page.html"),
+        3 => Some("model.toml"),
+        5 => Some("d.json"),
+        6 => Some("m.urdf"),
+        7 => Some("plan.csv"),
+        _ => None,
     }
 }
 
@@ -224,6 +267,11 @@ fn command(writer: usize, out: &str) -> Vec<String> {
 fn names(writer: usize) -> &'static [&'static str] {
     match writer {
         0 => &["cal.csv", "val.csv", "truth.toml", "truth.json"],
+        4 => &[
+            "01_encoder_harmonic_j3_h1.svg",
+            "02_link_length_d4.svg",
+            "probe_t.svg",
+        ],
         _ => &["pot.csv", "tilt.csv", "status.csv"],
     }
 }
@@ -251,7 +299,7 @@ fn no_layout_of_links_changes_an_input() {
     let base = tempfile::tempdir().unwrap();
     workspace(base.path());
     let mut codes = [0usize; 3];
-    for trial in 0..48 {
+    for trial in 0..8 * WRITERS {
         let tmp = tempfile::tempdir().unwrap();
         let w = tmp.path();
         let cp = |rel: &str| {
@@ -270,14 +318,9 @@ fn no_layout_of_links_changes_an_input() {
         }
         symlink("RUN", w.join("ALIAS")).unwrap();
         let before = inputs(w);
-        let writer = trial % 4;
-        let out = if writer >= 2 {
-            // a page or a model file: one path, planted as a link / hard link / alias spelling
-            let name = if writer == 2 {
-                "page.html"
-            } else {
-                "model.toml"
-            };
+        let writer = trial % WRITERS;
+        let out = if let Some(name) = single_output(writer) {
+            // one output file: one path, planted as a link / hard link / alias spelling
             match rng.gen_range(0..5) {
                 0 => {
                     let target = input_spelling(&mut rng, false);
@@ -330,7 +373,7 @@ fn no_layout_of_links_changes_an_input() {
         // what the command may legitimately replace: the files it writes (links followed for
         // a single output, as documented; the folder's entries by name); its own inputs never
         let canon = std::fs::canonicalize(w.join(&out));
-        let may_write: Vec<PathBuf> = if writer >= 2 {
+        let may_write: Vec<PathBuf> = if single_output(writer).is_some() {
             canon.into_iter().collect()
         } else {
             canon
@@ -338,7 +381,7 @@ fn no_layout_of_links_changes_an_input() {
                 .unwrap_or_default()
         };
         let own: &[&str] = match writer {
-            0 => &["M.toml"],
+            0 | 6 | 7 => &["M.toml"],
             1 => &["REC"],
             2 => &[
                 "RUN/cal.csv",

@@ -6,7 +6,9 @@
 //!
 //! One QEMU session serves two recordings with different rates (the board obeys `Start`'s
 //! rates, and `Stop`: it is silent but alive between the runs); a second session is forced to
-//! panic, which must be reported on QEMU's output and end it with a failure status.
+//! panic, which must be reported on QEMU's output and end it with a failure status, and a
+//! third to overflow its stack (unbounded recursion), which must lock the core up with the
+//! stack pointer below RAM (flip-link's layout) and be reported by `run.sh` (exit 1).
 //!
 //! Timing: QEMU's clock follows the host's (no `-icount`), so board time is real time but the
 //! guest runs only when the host schedules QEMU. Potentiometer timestamps are computed from
@@ -536,7 +538,7 @@ fn stack_marks(console: &str) -> Vec<(u64, u64)> {
 }
 
 #[test]
-fn emulated_board_records_known_signals_and_reports_panics() {
+fn emulated_board_records_known_signals_and_reports_panics_and_overflows() {
     if !qemu_or_skip() {
         return;
     }
@@ -573,6 +575,39 @@ fn emulated_board_records_known_signals_and_reports_panics() {
         panic_console.contains("PANIC panicked at")
             && panic_console.contains("forced panic after 1500 ms"),
         "panic message on the console: {panic_console}"
+    );
+
+    // A stack overflow (unbounded recursion) runs off the bottom of RAM, where flip-link put
+    // the stack: the core cannot even stack the HardFault's frame, locks up, and run.sh says
+    // so, naming the stack pointer below RAM, and fails.
+    let overflowing = Emulator::start(dir.path(), "overflowing", 60, &["overflow-after-ms=1500"]);
+    let (status, overflow_console) = overflowing.wait(Duration::from_secs(60));
+    assert_eq!(
+        status.code(),
+        Some(1),
+        "run.sh exits 1 after a stack overflow"
+    );
+    assert!(
+        overflow_console.contains("forced stack overflow after 1500 ms"),
+        "the overflow was started: {overflow_console}"
+    );
+    let report = overflow_console
+        .lines()
+        .find(|l| l.starts_with("run.sh: FAULT stack overflow"))
+        .unwrap_or_else(|| panic!("stack overflow reported: {overflow_console}"));
+    let sp = report
+        .split("stack pointer at 0x")
+        .nth(1)
+        .and_then(|r| r.split(',').next())
+        .and_then(|h| u32::from_str_radix(h, 16).ok())
+        .unwrap_or_else(|| panic!("stack pointer in the report: {report}"));
+    assert!(
+        sp < 0x2000_0000,
+        "stack pointer {sp:#x} below RAM: {report}"
+    );
+    assert!(
+        !overflow_console.contains("PANIC"),
+        "no panic, a fault: {overflow_console}"
     );
 
     for (name, run) in [("1 kHz / 100 Hz", &long), ("500 Hz / 50 Hz", &short)] {

@@ -84,10 +84,13 @@ pub fn init() -> Hardware {
     }
 }
 
-/// Starts what only this board runs: the forced panic, if asked for.
+/// Starts what only this board runs: the forced panic or stack overflow, if asked for.
 pub fn spawn_board_tasks(spawner: Spawner, switches: semihosting::Switches) {
     if let Some(ms) = switches.panic_after_ms {
         crate::spawn(spawner, forced_panic_task(ms));
+    }
+    if let Some(ms) = switches.overflow_after_ms {
+        crate::spawn(spawner, forced_overflow_task(ms));
     }
 }
 
@@ -96,4 +99,34 @@ pub fn spawn_board_tasks(spawner: Spawner, switches: semihosting::Switches) {
 async fn forced_panic_task(ms: u32) {
     embassy_time::Timer::at(embassy_time::Instant::from_millis(u64::from(ms))).await;
     panic!("forced panic after {} ms (panic-after-ms switch)", ms);
+}
+
+/// Recurses without end `ms` after boot (`overflow-after-ms=N`): the stack runs off the bottom
+/// of RAM (flip-link put it there) and the core faults; `run.sh` reports it.
+#[embassy_executor::task]
+async fn forced_overflow_task(ms: u32) {
+    embassy_time::Timer::at(embassy_time::Instant::from_millis(u64::from(ms))).await;
+    crate::log::info!(
+        "forced stack overflow after {} ms (overflow-after-ms switch)",
+        ms
+    );
+    let depth = recurse(0);
+    panic!(
+        "the recursion returned at depth {}: no stack overflow",
+        depth
+    );
+}
+
+/// One 256-byte frame per call, kept live across the next call (`black_box`: neither the
+/// frame nor the recursion can be optimised away or turned into a loop).
+#[inline(never)]
+fn recurse(depth: u32) -> u32 {
+    let mut frame = [0u8; 256];
+    core::hint::black_box(&mut frame);
+    if core::hint::black_box(depth) == u32::MAX {
+        return depth;
+    }
+    let deepest = recurse(depth + 1);
+    core::hint::black_box(&frame);
+    deepest
 }

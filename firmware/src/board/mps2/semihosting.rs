@@ -70,6 +70,9 @@ fn command_line(buf: &mut [u8; 128]) -> &str {
 pub struct Switches {
     /// `panic-after-ms=N`: panic N ms after boot, to show that a panic is reported.
     pub panic_after_ms: Option<u32>,
+    /// `overflow-after-ms=N`: recurse without end N ms after boot, to show that a stack
+    /// overflow is reported.
+    pub overflow_after_ms: Option<u32>,
 }
 
 /// Reads the switches from the command line; unknown words are logged and ignored.
@@ -81,6 +84,9 @@ pub fn switches() -> Switches {
         match word.split_once('=') {
             Some(("panic-after-ms", ms)) if ms.parse::<u32>().is_ok() => {
                 switches.panic_after_ms = ms.parse().ok();
+            }
+            Some(("overflow-after-ms", ms)) if ms.parse::<u32>().is_ok() => {
+                switches.overflow_after_ms = ms.parse().ok();
             }
             _ => crate::log::warning!("unknown switch {:?}", word),
         }
