@@ -36,7 +36,7 @@ mkdir -p "$U"
 UR5=(--robot ur5 --set tool_dx=0 --set tool_dy=0.07 --set tool_dz=31)
 "$R" calibrate "${UR5[@]}" --base --method standard --poses "$D/grid.csv" \
     --validate "$D/random.csv" --json "$U/calibrate.json" --out "$U/calibrated.toml" >/dev/null
-"$R" diagnose "${UR5[@]}" --base --poses "$D/grid.csv" --validate "$D/random.csv" \
+"$R" diagnose "${UR5[@]}" --poses "$D/grid.csv" --validate "$D/random.csv" \
     --instrument-mm 0.015 --json "$U/diagnose.json" --out "$U/extended.toml" >/dev/null \
     || [ $? -eq 1 ]
 "$R" report "$U" --html "$U/report.html" --robot ur5 >/dev/null
@@ -52,6 +52,9 @@ mkdir -p "$G"
 "$R" calibrate --model "$G/tiago.toml" --poses "$TRAIN" --validate "$VAL" --units m,rad \
     --markers 1 --method standard --params @base,@tool,@offsets --select press --compliance \
     --json "$G/calibrate.json" --out "$G/calibrated.toml" >/dev/null || [ $? -eq 1 ]
+"$R" diagnose --model "$G/tiago.toml" --poses "$TRAIN" --validate "$VAL" --units m,rad \
+    --marker 1 --instrument-mm 0.3 --json "$G/diagnose.json" --out "$G/extended.toml" \
+    >/dev/null || [ $? -eq 1 ]
 "$R" report "$G" --html "$G/report.html" >/dev/null
 
 shot() {

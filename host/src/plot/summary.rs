@@ -38,6 +38,11 @@ fn tick_text(v: f64) -> String {
 }
 
 impl StageBars {
+    /// Bands below the stages for the legend: one for mean and RMS, two with the floor.
+    fn legend_bands(&self) -> usize {
+        1 + usize::from(self.floor_mm.is_some())
+    }
+
     /// The axis range (mm): from the decade below the smallest value (floor included) to
     /// twice the largest, for the labels.
     pub fn axis_mm(&self) -> Option<(f64, f64)> {
@@ -62,7 +67,10 @@ impl Chart for StageBars {
     }
     fn size_px(&self) -> (u32, u32) {
         // one band per stage and, below them, one for the legend
-        (640, 90 + 46 * self.stages.len().max(1) as u32 + LEGEND_PX)
+        (
+            640,
+            90 + 46 * (self.stages.len().max(1) + self.legend_bands()) as u32,
+        )
     }
     fn draw<DB: DrawingBackend>(&self, area: &DrawingArea<DB, Shift>) -> Result<(), PlotError> {
         let t = self.title.as_str();
@@ -73,8 +81,8 @@ impl Chart for StageBars {
         if self.mean_mm.len() != n || self.rms_mm.len() != n {
             return Err(data_err(t, "one mean and one RMS per stage are needed"));
         }
-        // a whole band, so that the stage labels stay at the bands' middles
-        let legend_band = 1.0;
+        // whole bands, so that the stage labels stay at the bands' middles
+        let legend_band = self.legend_bands() as f64;
         let (x_min, x_max) = self
             .axis_mm()
             .ok_or_else(|| data_err(t, "no positive finite value"))?;
@@ -89,7 +97,7 @@ impl Chart for StageBars {
         chart
             .configure_mesh()
             .disable_y_mesh()
-            .y_labels((n + 1) * 2 + 1)
+            .y_labels((n + self.legend_bands()) * 2 + 1)
             .y_label_formatter(&|y| {
                 // a label at the middle of each stage's band, top to bottom
                 let k = y.floor();
@@ -166,9 +174,6 @@ impl Chart for StageBars {
             .map_err(draw_err(t))
     }
 }
-
-/// Height of the legend's band below the stages (px).
-const LEGEND_PX: u32 = 64;
 
 /// A length in mm with 3 significant digits (at least 4 decimals below 0.1 mm).
 pub fn fmt_mm(v: f64) -> String {

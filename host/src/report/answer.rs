@@ -93,26 +93,59 @@ fn beyond_urdf(doc: &Value) -> Vec<String> {
     out
 }
 
+/// Whether a calibrate document's `standard` fit is geometry only (no fitted compliance term:
+/// `--compliance` puts them in the standard fit too).
+fn standard_is_geometry(doc: &Value) -> bool {
+    doc.get("terms")
+        .and_then(Value::as_object)
+        .is_none_or(|t| !t.keys().any(|k| k.contains("compliance")))
+}
+
+/// The best stage of a headline: the lowest mean error after the first (the "before").
+pub fn best_stage(h: &Headline) -> Option<&Stage> {
+    h.stages
+        .iter()
+        .skip(1)
+        .min_by(|a, b| a.mean_mm.total_cmp(&b.mean_mm))
+}
+
 /// The URDF's held-out error beside the best model's, when the best model holds something a
-/// URDF cannot and the two differ by more than 5 %.
+/// URDF cannot and is better by more than 5 %. The URDF's figure is the geometry-only
+/// calibration: `standard` of a `calibrate*.json` without compliance terms, else the
+/// diagnosis's calibrated declared model when no calibration applied tilting (the declared
+/// model then has none).
 pub fn urdf_accuracy(
     h: &Headline,
     calibrate: &[(String, Value)],
     diagnose: &[(String, Value)],
 ) -> Option<UrdfAccuracy> {
-    let model = h.stages.last()?.clone();
+    let model = best_stage(h)?.clone();
     let set = if h.held_out {
         "validation"
     } else {
         "calibration"
     };
-    let (name, geo) = calibrate.iter().find_map(|(name, d)| {
+    let tilting = calibrate
+        .iter()
+        .any(|(_, d)| d.get("tilting_applied").and_then(Value::as_bool) == Some(true));
+    let of_n = |s: &Value| s.get("n").and_then(Value::as_u64) == Some(h.n as u64);
+    let from_calibrate = calibrate.iter().find_map(|(name, d)| {
         let s = d.get("standard")?.get(set)?;
-        let n = s.get("n")?.as_u64()? as usize;
-        (n == h.n).then_some((name, s))
-    })?;
+        (standard_is_geometry(d) && of_n(s)).then_some((
+            name,
+            s,
+            "calibrated geometry (standard fit)",
+        ))
+    });
+    let from_diagnose = || {
+        diagnose.iter().find_map(|(name, d)| {
+            let s = d.get("declared")?.get(set)?;
+            (!tilting && of_n(s)).then_some((name, s, "calibrated declared model"))
+        })
+    };
+    let (name, geo, label) = from_calibrate.or_else(from_diagnose)?;
     let urdf = Stage {
-        label: "calibrated geometry (standard), as a URDF holds it".to_string(),
+        label: label.to_string(),
         mean_mm: geo.get("mean_mm")?.as_f64()?,
         rms_mm: geo.get("rms_mm")?.as_f64()?,
         source: name.clone(),
@@ -124,14 +157,11 @@ pub fn urdf_accuracy(
         .map(|(_, d)| d)?;
     let mut lacks = beyond_urdf(doc);
     // the declared model's tilting (a calibration that applied it) is in a diagnosis's model too
-    let tilting = calibrate
-        .iter()
-        .any(|(_, d)| d.get("tilting_applied").and_then(Value::as_bool) == Some(true));
     if tilting && !lacks.iter().any(|l| l == "tilting") {
         lacks.push("tilting".to_string());
     }
-    let differ = (model.mean_mm - urdf.mean_mm).abs() > 0.05 * urdf.mean_mm.abs();
-    (!lacks.is_empty() && differ).then_some(UrdfAccuracy { urdf, model, lacks })
+    let better = model.mean_mm < 0.95 * urdf.mean_mm;
+    (!lacks.is_empty() && better).then_some(UrdfAccuracy { urdf, model, lacks })
 }
 
 /// The verdict's first clause, for one line: up to the first " (" or "; " after its head.
@@ -155,14 +185,15 @@ pub fn one_sentence(
     let Some(h) = h else {
         return "No error statistics in this run directory: run calibrate with --json (and diagnose) in it.".to_string();
     };
-    let (Some(first), Some(last)) = (h.stages.first(), h.stages.last()) else {
+    let (Some(first), Some(last)) = (h.stages.first(), best_stage(h).or(h.stages.first())) else {
         return String::new();
     };
     let now = if h.stages.len() > 1 {
         format!(
-            "{} mm mean error on {} now (was {} mm with {})",
+            "{} mm mean error on {} now with {} (was {} mm with {})",
             fmt_mm(last.mean_mm),
             h.set,
+            stage_words(&last.label),
             fmt_mm(first.mean_mm),
             stage_words(&first.label)
         )

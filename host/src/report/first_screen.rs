@@ -6,7 +6,7 @@ use std::fmt::Write as _;
 
 use serde_json::Value;
 
-use super::answer::{identified, one_sentence, urdf_accuracy, verdict_line};
+use super::answer::{best_stage, identified, one_sentence, urdf_accuracy, verdict_line};
 use super::markup::{escape, figure_with, render_figure};
 use super::run_dir::RunDir;
 use super::summary::{
@@ -313,7 +313,7 @@ pub(crate) fn build_summary(
         .collect();
     let held_out_missing = !heads.iter().any(|h| h.held_out);
     let next = next_steps(run, robot, report, &diagnoses, held_out_missing);
-    let model_file = chosen_model_file(run, &diagnoses);
+    let model_file = chosen_model_file(run, heads.first());
     let sentence = one_sentence(
         heads.first(),
         &diagnoses,
@@ -379,20 +379,22 @@ fn stage_caption(h: &Headline, floor: Option<&(String, f64)>) -> String {
     c
 }
 
-/// The model file to use: the extended one when a diagnosis found effects, else a calibrated
-/// one (any other model file of the run).
-fn chosen_model_file(run: &RunDir, diags: &[Diagnosis]) -> Option<String> {
+/// The model file to use: that of the best stage's document, the extended model for a
+/// diagnosis (`*extended*.toml`), else a calibrated one (`*calibrated*.toml`).
+fn chosen_model_file(run: &RunDir, h: Option<&Headline>) -> Option<String> {
     let names: Vec<String> = run
         .models
         .iter()
         .filter_map(|p| p.file_name().and_then(|n| n.to_str()).map(String::from))
         .collect();
-    let found = diags.iter().any(|d| !d.effects.is_empty());
-    names
-        .iter()
-        .find(|n| found && n.contains("extended"))
-        .or_else(|| names.iter().find(|n| n.contains("calibrated")))
-        .cloned()
+    let best = h.and_then(best_stage)?;
+    let from_diagnosis = run.diagnose.iter().any(|(n, _)| *n == best.source);
+    let want = if from_diagnosis {
+        "extended"
+    } else {
+        "calibrated"
+    };
+    names.iter().find(|n| n.contains(want)).cloned()
 }
 
 /// Backquoted spans as `<code>`, the rest escaped.
