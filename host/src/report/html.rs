@@ -25,7 +25,7 @@ pre{background:#f6f6f6;padding:6px;overflow-x:auto;white-space:pre-wrap}\
 nav.toc{margin:1em 0}nav.toc ol{columns:2;margin:0.3em 0}\
 @page{size:A4;margin:12mm}\
 @media print{body{max-width:none;margin:0;padding:0;font-size:9.5pt}section.details{break-before:page}\
-figure,tr,.answer{break-inside:avoid}details>*{display:block}nav.toc{break-after:page}a{color:inherit;text-decoration:none}\
+figure,tr,.answer{break-inside:avoid}nav.toc{break-after:page}a{color:inherit;text-decoration:none}\
 pre{white-space:pre-wrap}.headline .chart{flex-basis:100%}}";
 
 fn num(v: f64, decimals: usize) -> String {
