@@ -257,6 +257,7 @@ pub(super) fn fit_report(
         validation_all: None,
         extrapolated: Vec::new(),
         prior: None,
+        registered: None,
     }
 }
 

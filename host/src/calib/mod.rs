@@ -28,6 +28,7 @@
 //! | [`regularise`] | the prior of an identification on full positions chosen: off on well-posed sets, else by cross-validation |
 //! | [`predict`] | the prediction uncertainty of a fit at poses it was not fitted on (held-out gross errors vs extrapolation) |
 //! | [`calibrate_general`] | `calibrate_poses`, the one library entry of `calibrate` on a [`MeasuredSet`]: the model's terms applied, then partial measurements, one point per pose, or several points, `--compliance`, `--select press` |
+//! | [`registered`] | the input model with only the instrument's frame fitted (registration only): the report's "before" with `--base` |
 //! | [`samples`] | the pencil rig's partial measurement: a fused sample (`FUSED.csv` row) |
 
 pub mod accumulate;
@@ -52,6 +53,7 @@ pub mod press;
 pub mod prior;
 pub mod problem;
 pub mod projected;
+pub mod registered;
 pub mod regularise;
 pub mod report;
 pub mod samples;

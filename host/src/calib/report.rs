@@ -142,6 +142,10 @@ pub struct CalibrateReport {
     /// considered.
     #[serde(skip_serializing_if = "Option::is_none")]
     pub prior: Option<super::regularise::PriorChoice>,
+    /// The input model with only the base (instrument) frame fitted, every other parameter at
+    /// its input value ([`super::registered`]); with `--base` only.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub registered: Option<StandardSummary>,
 }
 
 #[cfg(test)]
@@ -180,6 +184,7 @@ mod tests {
             validation_all: None,
             extrapolated: Vec::new(),
             prior: None,
+            registered: None,
         };
         let text = serde_json::to_string(&r).unwrap();
         let v: serde_json::Value = serde_json::from_str(&text).unwrap();

@@ -218,6 +218,23 @@ pub fn run(args: Args) -> Result<(), CliError> {
         args.validate.as_deref(),
     ));
     outcome.report.large_changes = large_changes(&model, &outcome.model);
+    let group = |g: &str| {
+        args.params
+            .as_ref()
+            .is_some_and(|p| p.iter().any(|x| x == g))
+    };
+    if args.base || group("@base") {
+        // the report's "before": the input model with only the instrument frame (and the tool
+        // point when the run frees @tool) fitted; a registration that fails leaves the key out
+        // (the run's own fit stands)
+        outcome.report.registered = rigctl::calib::registered::registration_only(
+            &model,
+            &cal,
+            val.as_ref(),
+            group("@tool"),
+        )
+        .ok();
+    }
     let write_model = writes_model(&outcome.report, &args);
     if let Some(path) = &args.json {
         rigctl::io::atomic::write_json_atomic(path, &outcome.report)?;

@@ -350,7 +350,9 @@ impl DiagnoseReport {
         let _ = writeln!(
             s,
             "verdict: {}: {}; floor: {}",
-            self.verdict.kind, self.verdict.note, self.floor.note
+            self.verdict.kind,
+            note_without_kind(&self.verdict.kind, &self.verdict.note),
+            self.floor.note
         );
         if !self.aliased.is_empty() {
             let _ = writeln!(
@@ -429,9 +431,36 @@ impl DiagnoseReport {
     }
 }
 
+/// A verdict's note without the words of its kind in front ("overfitting: ..." after
+/// `verdict: overfitting:`), so the text line names the kind once.
+fn note_without_kind<'a>(kind: &str, note: &'a str) -> &'a str {
+    let words = kind.replace('_', " ");
+    ["", "a ", "at the "]
+        .iter()
+        .find_map(|lead| note.strip_prefix(&format!("{lead}{words}: ")))
+        .unwrap_or(note)
+}
+
 #[cfg(test)]
 mod where_to_look_tests {
     use super::*;
+
+    #[test]
+    fn the_verdict_line_names_its_kind_once() {
+        assert_eq!(
+            note_without_kind("overfitting", "overfitting: the calibration residual"),
+            "the calibration residual"
+        );
+        assert_eq!(
+            note_without_kind("missing_effect", "a missing effect: the model still lacks"),
+            "the model still lacks"
+        );
+        assert_eq!(note_without_kind("floor", "at the floor: 1.0 x"), "1.0 x");
+        assert_eq!(
+            note_without_kind("instrument", "consistent with"),
+            "consistent with"
+        );
+    }
 
     #[test]
     fn names_the_variables_of_the_strongest_regressors() {

@@ -9,8 +9,9 @@ use plotters::style::text_anchor::{HPos, Pos, VPos};
 use super::charts::{bar_swatch, data_err, dot_swatch, finite_range, legend_box, PALETTE};
 use super::{draw_err, Chart, PlotError, FONT_FAMILY};
 
-/// Horizontal bars: mean and RMS of the held-out error at each stage, with the value written
-/// at the end of each bar (so a bar too short to see still reads).
+/// Horizontal bars: mean and RMS of the held-out error at each stage on a logarithmic axis (so
+/// 0.036 mm reads beside 71.8 mm), with the value written at the end of each bar and, when
+/// known, the measurement floor as a dashed line.
 #[derive(Debug, Clone, PartialEq)]
 pub struct StageBars {
     /// Title.
@@ -21,6 +22,43 @@ pub struct StageBars {
     pub mean_mm: Vec<f64>,
     /// RMS error at each stage (mm).
     pub rms_mm: Vec<f64>,
+    /// The floor the errors are judged against: its name and its RMS Euclidean error (mm).
+    pub floor_mm: Option<(String, f64)>,
+}
+
+/// The decade at or below `v` (`v` > 0).
+fn decade_below(v: f64) -> f64 {
+    10f64.powf(v.log10().floor())
+}
+
+/// An axis tick of a logarithmic length axis: `0.01`, `0.1`, `1`, `10`.
+fn tick_text(v: f64) -> String {
+    let s = format!("{v:.6}");
+    s.trim_end_matches('0').trim_end_matches('.').to_string()
+}
+
+impl StageBars {
+    /// Bands below the stages for the legend: one for mean and RMS, two with the floor.
+    fn legend_bands(&self) -> usize {
+        1 + usize::from(self.floor_mm.is_some())
+    }
+
+    /// The axis range (mm): from the decade below the smallest value (floor included) to
+    /// twice the largest, for the labels.
+    pub fn axis_mm(&self) -> Option<(f64, f64)> {
+        let floor = self.floor_mm.iter().map(|f| f.1);
+        let positive: Vec<f64> = self
+            .mean_mm
+            .iter()
+            .chain(&self.rms_mm)
+            .copied()
+            .chain(floor)
+            .filter(|v| v.is_finite() && *v > 0.0)
+            .collect();
+        let lo = positive.iter().copied().reduce(f64::min)?;
+        let hi = positive.iter().copied().reduce(f64::max)?;
+        Some((decade_below(lo), hi * 4.0))
+    }
 }
 
 impl Chart for StageBars {
@@ -28,7 +66,11 @@ impl Chart for StageBars {
         &self.title
     }
     fn size_px(&self) -> (u32, u32) {
-        (640, 90 + 46 * self.stages.len().max(1) as u32)
+        // one band per stage and, below them, one for the legend
+        (
+            640,
+            90 + 46 * (self.stages.len().max(1) + self.legend_bands()) as u32,
+        )
     }
     fn draw<DB: DrawingBackend>(&self, area: &DrawingArea<DB, Shift>) -> Result<(), PlotError> {
         let t = self.title.as_str();
@@ -39,22 +81,23 @@ impl Chart for StageBars {
         if self.mean_mm.len() != n || self.rms_mm.len() != n {
             return Err(data_err(t, "one mean and one RMS per stage are needed"));
         }
-        let (_, hi) = finite_range(self.mean_mm.iter().chain(&self.rms_mm))
-            .ok_or_else(|| data_err(t, "no finite value"))?;
-        // room on the right for the value labels
-        let x_max = hi.max(1e-9) * 1.25;
+        // whole bands, so that the stage labels stay at the bands' middles
+        let legend_band = self.legend_bands() as f64;
+        let (x_min, x_max) = self
+            .axis_mm()
+            .ok_or_else(|| data_err(t, "no positive finite value"))?;
         let stages = self.stages.clone();
         let mut chart = ChartBuilder::on(area)
-            .caption(t, (FONT_FAMILY, 16))
+            .caption(t, (FONT_FAMILY, 17))
             .margin(8)
-            .x_label_area_size(32)
-            .y_label_area_size(210)
-            .build_cartesian_2d(0.0..x_max, 0.0..n as f64)
+            .x_label_area_size(36)
+            .y_label_area_size(225)
+            .build_cartesian_2d((x_min..x_max).log_scale(), -legend_band..n as f64)
             .map_err(draw_err(t))?;
         chart
             .configure_mesh()
             .disable_y_mesh()
-            .y_labels(n * 2 + 1)
+            .y_labels((n + self.legend_bands()) * 2 + 1)
             .y_label_formatter(&|y| {
                 // a label at the middle of each stage's band, top to bottom
                 let k = y.floor();
@@ -64,8 +107,9 @@ impl Chart for StageBars {
                     String::new()
                 }
             })
-            .x_desc("held-out error (mm)")
-            .label_style((FONT_FAMILY, 12))
+            .x_label_formatter(&|x| tick_text(*x))
+            .x_desc("held-out error (mm, logarithmic)")
+            .label_style((FONT_FAMILY, 15))
             .draw()
             .map_err(draw_err(t))?;
         let bands = [
@@ -77,10 +121,10 @@ impl Chart for StageBars {
             let bars = values
                 .iter()
                 .enumerate()
-                .filter(|(_, v)| v.is_finite())
+                .filter(|(_, v)| v.is_finite() && **v > 0.0)
                 .map(move |(i, &v)| {
                     let y = (n - 1 - i) as f64;
-                    Rectangle::new([(0.0, y + lo), (v, y + hi)], color.filled())
+                    Rectangle::new([(x_min, y + lo), (v, y + hi)], color.filled())
                 });
             chart
                 .draw_series(bars)
@@ -90,25 +134,42 @@ impl Chart for StageBars {
             let texts = values
                 .iter()
                 .enumerate()
-                .filter(|(_, v)| v.is_finite())
+                .filter(|(_, v)| v.is_finite() && **v > 0.0)
                 .map(move |(i, &v)| {
                     let y = (n - 1 - i) as f64 + (lo + hi) / 2.0;
                     Text::new(
                         format!(" {}", fmt_mm(v)),
                         (v, y),
-                        TextStyle::from((FONT_FAMILY, 12).into_font())
+                        TextStyle::from((FONT_FAMILY, 15).into_font())
                             .pos(Pos::new(HPos::Left, VPos::Center)),
                     )
                 });
             chart.draw_series(texts).map_err(draw_err(t))?;
         }
-        // lower right: the longest bars (before) are at the top
+        if let Some((name, f)) = &self.floor_mm {
+            if f.is_finite() && *f > 0.0 {
+                let grey = RGBColor(90, 90, 90);
+                chart
+                    .draw_series(DashedLineSeries::new(
+                        [(*f, -legend_band), (*f, n as f64)],
+                        5,
+                        4,
+                        grey.stroke_width(2),
+                    ))
+                    .map_err(draw_err(t))?
+                    .label(format!("{name} floor, RMS {} mm", fmt_mm(*f)))
+                    .legend(move |(x, y)| {
+                        PathElement::new([(x, y), (x + 16, y)], grey.stroke_width(2))
+                    });
+            }
+        }
+        // in the band below the stages
         chart
             .configure_series_labels()
             .position(SeriesLabelPosition::LowerRight)
             .background_style(WHITE.mix(0.85))
             .border_style(BLACK)
-            .label_font((FONT_FAMILY, 13))
+            .label_font((FONT_FAMILY, 14))
             .draw()
             .map_err(draw_err(t))
     }
@@ -198,6 +259,7 @@ mod tests {
             stages: vec!["nominal".into(), "calibrated".into()],
             mean_mm: vec![1.12, 0.0155],
             rms_mm: vec![1.3, 0.019],
+            floor_mm: Some(("instrument".into(), 0.015)),
         };
         let svg = svg_string(&c).unwrap();
         for want in [
@@ -210,6 +272,9 @@ mod tests {
         ] {
             assert!(svg.contains(want), "{want} missing");
         }
+        // logarithmic: from the decade below the smallest value
+        assert_eq!(c.axis_mm(), Some((0.01, 1.3 * 4.0)));
+        assert!(svg.contains("instrument floor, RMS 0.0150 mm"));
         let bad = StageBars {
             rms_mm: vec![1.0],
             ..c

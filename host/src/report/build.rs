@@ -5,10 +5,11 @@
 use serde_json::Value;
 
 use super::analysis::{demo_trajectory, moments_and_tilts, path_error};
+use super::captions::{near_zero, path_error_words};
 use super::docs::{diagnose_section, param_table, simulation_facts};
 use super::extras::{overlay_figures, plan_section};
 use super::first_screen::build_summary;
-use super::markup::figure;
+use super::markup::{figure, figure_with};
 use super::path_errors::path_errors_section;
 use super::pose_sets::pose_sets;
 use super::run_dir::RunDir;
@@ -199,7 +200,7 @@ fn trajectory_figures(
                     per_joint(&t, "|tilt|"),
                 );
                 report.figures.extend(figure(
-                    format!("Joint moments (RNEA, slender-rod links) and the tilts they cause along the {} (thesis fig. 5.8-5.10), nominal model: the tilts follow the moments, largest where the arm is stretched out.", demo.name),
+                    format!("Joint moments (RNEA, slender-rod links) and the tilts they cause along the {} (thesis fig. 5.8-5.10), nominal model.", demo.name),
                     &chart,
                     notes,
                 ));
@@ -212,18 +213,26 @@ fn trajectory_figures(
             let before = path_error(decl, truth, &demo);
             let after = path_error(model, truth, &demo);
             if let (Some((s, b)), Some((_, a))) = (before, after) {
-                let chart = LineChart::path_error(
-                    s,
-                    b,
-                    a,
-                    [
-                        "planned with the nominal model",
-                        "planned with the calibrated model",
-                    ],
-                );
-                report.figures.extend(figure(
-                    format!("Position error along the {} (thesis fig. 5.12), the simulated robot (truth.toml) following joints planned with the nominal model and with {name}: the calibrated curve should stay near zero all along.", demo.name),
-                    &chart,
+                let mut words = path_error_words(&b, &a);
+                if truth.has_tilt() && !near_zero(&b, &a) {
+                    words.push_str("; the joints are planned with rigid IK, so the robot's tilting under its own weight is not compensated by either plan");
+                }
+                let series = vec![
+                    ("before".to_string(), b.clone()),
+                    ("after".to_string(), a.clone()),
+                ];
+                report.figures.extend(figure_with(
+                    format!("Position error along the {} (thesis fig. 5.12), the simulated robot (truth.toml) following joints planned with the nominal model and with {name}: {words}.", demo.name),
+                    &LineChart::path_error(
+                        s,
+                        b,
+                        a,
+                        [
+                            "planned with the nominal model",
+                            "planned with the calibrated model",
+                        ],
+                    ),
+                    series,
                     notes,
                 ));
             } else {

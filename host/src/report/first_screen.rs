@@ -6,13 +6,15 @@ use std::fmt::Write as _;
 
 use serde_json::Value;
 
-use super::markup::{escape, figure, render_figure};
+use super::answer::{best_stage, identified, one_sentence, urdf_accuracy, verdict_line};
+use super::markup::{escape, figure_with, render_figure};
 use super::run_dir::RunDir;
 use super::summary::{
     aliased, found_effects, headline_sentence, headlines, verdict, Diagnosis, Headline, Stage,
     Summary,
 };
 use super::Report;
+use crate::plot::summary::fmt_mm;
 use crate::plot::StageBars;
 
 fn about(
@@ -132,6 +134,7 @@ fn path_error_headline(report: &Report) -> Option<Headline> {
         ),
         held_out: false,
         n: s.n_samples,
+        unregistered: None,
         stages: vec![
             stage("nominal model", &s.before),
             stage("calibrated model (standard)", &s.standard),
@@ -268,23 +271,28 @@ pub(crate) fn build_summary(
     if heads.is_empty() {
         heads.extend(path_error_headline(report));
     }
+    let floor = run.diagnose.iter().find_map(|(_, d)| floor_of(d));
     let fig = heads.first().and_then(|h| {
-        figure(
-            format!(
-                "Error on {} at each stage, from the top (mean and RMS){}",
-                h.set,
-                if h.stages.windows(2).all(|w| w[1].mean_mm <= w[0].mean_mm) {
-                    ": each stage lowers it."
-                } else {
-                    ": not every stage lowers it on these poses (a bar longer than the one above it is a stage that made the error worse here)."
-                }
-            ),
+        figure_with(
+            stage_caption(h, floor.as_ref()),
             &StageBars {
                 title: format!("Error on {}", h.set),
                 stages: h.stages.iter().map(|s| s.label.clone()).collect(),
                 mean_mm: h.stages.iter().map(|s| s.mean_mm).collect(),
                 rms_mm: h.stages.iter().map(|s| s.rms_mm).collect(),
+                floor_mm: floor.clone(),
             },
+            vec![
+                (
+                    "mean".to_string(),
+                    h.stages.iter().map(|s| s.mean_mm).collect(),
+                ),
+                (
+                    "rms".to_string(),
+                    h.stages.iter().map(|s| s.rms_mm).collect(),
+                ),
+                ("floor".to_string(), floor.iter().map(|f| f.1).collect()),
+            ],
             notes,
         )
     });
@@ -305,13 +313,88 @@ pub(crate) fn build_summary(
         .collect();
     let held_out_missing = !heads.iter().any(|h| h.held_out);
     let next = next_steps(run, robot, report, &diagnoses, held_out_missing);
+    let model_file = chosen_model_file(run, heads.first());
+    let sentence = one_sentence(
+        heads.first(),
+        &diagnoses,
+        model_file.as_deref(),
+        robot.unwrap_or("robot"),
+    );
+    let urdf = heads
+        .first()
+        .and_then(|h| urdf_accuracy(h, &run.calibrate, &run.diagnose));
     Summary {
         about: about(run, robot, noun_of),
         headlines: heads,
         figure: fig,
         diagnoses,
         next_steps: next,
+        sentence,
+        identified: run
+            .calibrate
+            .iter()
+            .filter_map(|(n, d)| identified(n, d))
+            .collect(),
+        urdf,
     }
+}
+
+/// The floor a diagnosis judged the residual against: its name and the RMS Euclidean error it
+/// alone gives (mm), drawn as a line on the stage chart: the floor is one sigma per
+/// coordinate, the chart's errors are Euclidean (RMS sqrt(3) x the per-coordinate sigma).
+fn floor_of(d: &Value) -> Option<(String, f64)> {
+    let fl = d.get("floor")?;
+    let used = fl.get("used").and_then(Value::as_str).unwrap_or("residual");
+    let key = match used {
+        "instrument" => "instrument_mm",
+        "repeatability" => "repeatability_mm",
+        _ => "residual_mm",
+    };
+    let v = fl.get(key).and_then(Value::as_f64)?;
+    Some((used.to_string(), v * 3f64.sqrt()))
+}
+
+/// The stage chart's caption, true to its bars: whether each stage lowers the error, and
+/// where the last stage stands against the floor.
+fn stage_caption(h: &Headline, floor: Option<&(String, f64)>) -> String {
+    let lowers = h.stages.windows(2).all(|w| w[1].mean_mm <= w[0].mean_mm);
+    let mut c = format!(
+        "Error on {} at each stage, from the top (mean and RMS, logarithmic axis){}",
+        h.set,
+        if h.stages.len() < 2 {
+            ".".to_string()
+        } else if lowers {
+            ": each stage lowers it.".to_string()
+        } else {
+            ": not every stage lowers it on these poses (a bar longer than the one above it is a stage that made the error worse here).".to_string()
+        }
+    );
+    if let (Some((name, f)), Some(last)) = (floor, h.stages.last()) {
+        c.push_str(&format!(
+            " Dashed: the RMS error the {name} floor alone gives, {} mm; the last stage's RMS is {:.1} x it.",
+            fmt_mm(*f),
+            last.rms_mm / f
+        ));
+    }
+    c
+}
+
+/// The model file to use: that of the best stage's document, the extended model for a
+/// diagnosis (`*extended*.toml`), else a calibrated one (`*calibrated*.toml`).
+fn chosen_model_file(run: &RunDir, h: Option<&Headline>) -> Option<String> {
+    let names: Vec<String> = run
+        .models
+        .iter()
+        .filter_map(|p| p.file_name().and_then(|n| n.to_str()).map(String::from))
+        .collect();
+    let best = h.and_then(best_stage)?;
+    let from_diagnosis = run.diagnose.iter().any(|(n, _)| *n == best.source);
+    let want = if from_diagnosis {
+        "extended"
+    } else {
+        "calibrated"
+    };
+    names.iter().find(|n| n.contains(want)).cloned()
 }
 
 /// Backquoted spans as `<code>`, the rest escaped.
@@ -336,67 +419,189 @@ fn value_text(v: f64, sigma: Option<f64>) -> String {
     }
 }
 
+/// One effect in a line: `id` and its values +- sigma.
+fn effect_line(e: &super::summary::FoundEffect) -> String {
+    let vals: Vec<String> = e
+        .values
+        .iter()
+        .map(|(n, v, sg)| format!("{} = {}", escape(n), value_text(*v, *sg)))
+        .collect();
+    format!("<code>{}</code> {}", escape(&e.id), vals.join(", "))
+}
+
+/// A diagnosis's verdict in one line, the statistics (the whole verdict, each effect's
+/// evidence, the aliased pairs) folded below it.
+fn render_verdict(out: &mut String, d: &Diagnosis) {
+    let v = d
+        .verdict
+        .as_deref()
+        .unwrap_or("No verdict in this document.");
+    let _ = writeln!(
+        out,
+        "<p class=\"verdict\">Verdict (<code>{}</code>): {}</p>",
+        escape(&d.source),
+        escape(&verdict_line(v))
+    );
+    let _ = writeln!(
+        out,
+        "<details class=\"stats\"><summary>The statistics{}</summary>",
+        if d.aliased.is_empty() {
+            String::new()
+        } else {
+            format!(
+                " and {} pair{} these {} cannot tell apart",
+                d.aliased.len(),
+                if d.aliased.len() == 1 { "" } else { "s" },
+                d.noun
+            )
+        }
+    );
+    let _ = writeln!(out, "<p class=\"verdict-full\">{}</p>", escape(v));
+    if !d.effects.is_empty() {
+        out.push_str("<ol class=\"found\">\n");
+        for e in &d.effects {
+            let _ = writeln!(
+                out,
+                "<li>{}<br><span class=\"evidence\">{}</span></li>",
+                effect_line(e),
+                escape(&e.evidence)
+            );
+        }
+        out.push_str("</ol>\n");
+    }
+    for a in &d.aliased {
+        let _ = writeln!(
+            out,
+            "<p class=\"aliased\">Aliased: <code>{}</code> and <code>{}</code>{} cannot be told apart by these {}{}.</p>",
+            escape(&a.a),
+            escape(&a.b),
+            a.correlation.map_or_else(String::new, |c| format!(" (correlation {c:.2})")),
+            d.noun,
+            if a.note.is_empty() { String::new() } else { format!(": {}", escape(&a.note)) }
+        );
+    }
+    out.push_str("</details>\n");
+}
+
+/// The effects a diagnosis found, one line each.
+fn render_found(out: &mut String, d: &Diagnosis) {
+    if d.effects.is_empty() {
+        let _ = writeln!(
+            out,
+            "<p>No effect the declared model lacks could be established (<code>{}</code>).</p>",
+            escape(&d.source)
+        );
+        return;
+    }
+    let _ = writeln!(
+        out,
+        "<p class=\"found-head\">Found by <code>{}</code> ({}):</p>\n<ol class=\"found\">",
+        escape(&d.source),
+        d.effects.len()
+    );
+    for e in &d.effects {
+        let _ = writeln!(out, "<li>{}</li>", effect_line(e));
+    }
+    out.push_str("</ol>\n");
+}
+
+/// The held-out error through the exported URDF beside the best model's.
+fn render_urdf(out: &mut String, u: &super::answer::UrdfAccuracy) {
+    let _ = writeln!(
+        out,
+        "<p class=\"urdf\">Through the exported URDF (<code>model2urdf</code>; the {}, <code>{}</code>): <b>{} mm</b> mean (RMS {}); with {} (<code>{}</code>): <b>{} mm</b> (RMS {}). A URDF cannot hold {}.</p>",
+        escape(&u.urdf.label),
+        escape(&u.urdf.source),
+        fmt_mm(u.urdf.mean_mm),
+        fmt_mm(u.urdf.rms_mm),
+        escape(&super::summary::stage_words(&u.model.label)),
+        escape(&u.model.source),
+        fmt_mm(u.model.mean_mm),
+        fmt_mm(u.model.rms_mm),
+        u.lacks
+            .iter()
+            .map(|l| format!("<code>{}</code>", escape(l)))
+            .collect::<Vec<_>>()
+            .join(", ")
+    );
+}
+
+/// "N of M parameters identified", the kept ones and the combinations folded.
+fn render_identified(out: &mut String, i: &super::answer::Identified) {
+    let _ = write!(
+        out,
+        "<details class=\"identified\"><summary><b>{} of {} parameters identified</b> (<code>{}</code>){}</summary>",
+        i.identified,
+        i.total,
+        escape(&i.source),
+        if i.kept.is_empty() { "" } else { "; the others kept at their input values" }
+    );
+    if !i.kept.is_empty() {
+        let _ = write!(
+            out,
+            "<p>Kept at their input values: {}.</p>",
+            i.kept
+                .iter()
+                .map(|k| format!("<code>{}</code>", escape(k)))
+                .collect::<Vec<_>>()
+                .join(", ")
+        );
+    }
+    if !i.combinations.is_empty() {
+        let _ = write!(
+            out,
+            "<p>Seen only together by these poses (fix one of each): {}.</p>",
+            i.combinations
+                .iter()
+                .map(|k| format!("<code>{}</code>", escape(k)))
+                .collect::<Vec<_>>()
+                .join(", ")
+        );
+    }
+    out.push_str("</details>\n");
+}
+
 /// Appends the first screen.
 pub(crate) fn render(out: &mut String, s: &Summary) {
     out.push_str("<section id=\"answer\" class=\"answer\">\n");
-    for a in &s.about {
-        let _ = writeln!(out, "<p class=\"about\">{}</p>", escape(a));
-    }
+    let _ = writeln!(out, "<p class=\"sentence\">{}</p>", escape(&s.sentence));
     out.push_str("<div class=\"headline\"><div class=\"words\">\n");
-    if s.headlines.is_empty() {
-        out.push_str("<p class=\"lead\">No error statistics in this run directory.</p>\n");
-    }
     for h in &s.headlines {
         let _ = writeln!(
             out,
             "<p class=\"lead\">{}</p>",
             escape(&headline_sentence(h))
         );
-    }
-    for d in &s.diagnoses {
-        let _ = writeln!(out, "<h3>Found by <code>{}</code></h3>", escape(&d.source));
-        if d.effects.is_empty() {
-            out.push_str("<p>No effect the declared model lacks could be established.</p>\n");
-        } else {
-            out.push_str("<ol class=\"found\">\n");
-            for e in &d.effects {
-                let vals: Vec<String> = e
-                    .values
-                    .iter()
-                    .map(|(n, v, sg)| format!("{} = {}", escape(n), value_text(*v, *sg)))
-                    .collect();
-                let _ = writeln!(
-                    out,
-                    "<li><code>{}</code> {}<br><span class=\"evidence\">{}</span></li>",
-                    escape(&e.id),
-                    vals.join(", "),
-                    escape(&e.evidence)
-                );
-            }
-            out.push_str("</ol>\n");
-        }
-        if let Some(v) = &d.verdict {
-            let _ = writeln!(out, "<p class=\"verdict\">{}</p>", escape(v));
-        }
-        for a in &d.aliased {
+        if let Some(u) = &h.unregistered {
             let _ = writeln!(
                 out,
-                "<p class=\"aliased\">Aliased: <code>{}</code> and <code>{}</code>{} cannot be told apart by these {}{}.</p>",
-                escape(&a.a),
-                escape(&a.b),
-                a.correlation.map_or_else(String::new, |c| format!(" (correlation {c:.2})")),
-                d.noun,
-                if a.note.is_empty() { String::new() } else { format!(": {}", escape(&a.note)) }
+                "<p class=\"unregistered\">Apart: the {} gives {} mm (RMS {}) on these poses: the distance between the instrument's frame and the robot's, not an error of the robot.</p>",
+                escape(&u.label),
+                fmt_mm(u.mean_mm),
+                fmt_mm(u.rms_mm)
             );
         }
     }
-    out.push_str("</div>\n");
-    if let Some(f) = &s.figure {
-        out.push_str("<div class=\"chart\">");
-        render_figure(out, f);
-        out.push_str("</div>");
+    for d in &s.diagnoses {
+        render_verdict(out, d);
     }
-    out.push_str("</div>\n");
+    for i in &s.identified {
+        render_identified(out, i);
+    }
+    if let Some(u) = &s.urdf {
+        render_urdf(out, u);
+    }
+    for d in &s.diagnoses {
+        render_found(out, d);
+    }
+    out.push_str("</div>\n<div class=\"chart\">");
+    if let Some(f) = &s.figure {
+        render_figure(out, f);
+    }
+    for a in &s.about {
+        let _ = writeln!(out, "<p class=\"about\">{}</p>", escape(a));
+    }
+    out.push_str("</div></div>\n");
     if !s.next_steps.is_empty() {
         out.push_str("<h3>What to do next</h3>\n<ul class=\"next\">\n");
         for n in &s.next_steps {

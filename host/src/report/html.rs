@@ -15,10 +15,13 @@ th.num{text-align:right}figure{margin:0.8em 0}figure svg,figure img{max-width:10
 figcaption{font-size:0.9em;color:#444}.note{color:#8a5a00}code,pre{font-size:0.85em}\
 pre{background:#f6f6f6;padding:6px;overflow-x:auto;white-space:pre-wrap}\
 .answer{border:2px solid #2a6;border-radius:6px;padding:8px 16px;background:#f7fcf8}\
-.answer .about{margin:0.2em 0;color:#333}.lead{font-size:1.1em;font-weight:bold;margin:0.5em 0}\
+.answer .about{margin:0.1em 0;color:#555;font-size:0.88em}.lead{font-weight:bold;margin:0.4em 0}\
+.sentence{font-size:1.3em;font-weight:bold;margin:0.3em 0 0.5em;line-height:1.3}\
+.unregistered,.urdf{margin:0.3em 0}.urdf{background:#fff8e6;padding:3px 6px;border-left:3px solid #c90}\
 .headline{display:flex;flex-wrap:wrap;gap:16px;align-items:flex-start}.headline .words{flex:1 1 460px}\
-.headline .chart{flex:0 1 560px}.headline figure{margin:0}ol.found{margin:0.2em 0;padding-left:1.4em}\
-.evidence{color:#444;font-size:0.92em}.verdict{font-weight:bold}.aliased{color:#8a5a00}\
+.headline .chart{flex:0 1 560px}.headline figure{margin:0}ol.found{margin:0.1em 0;padding-left:1.6em}\
+.found-head{margin:0.3em 0 0}details{margin:0.3em 0}summary{cursor:pointer}\
+.evidence{color:#444;font-size:0.92em}.verdict{font-weight:bold;margin:0.4em 0 0.2em}.aliased{color:#8a5a00}\
 nav.toc{margin:1em 0}nav.toc ol{columns:2;margin:0.3em 0}\
 @page{size:A4;margin:12mm}\
 @media print{body{max-width:none;margin:0;padding:0;font-size:9.5pt}section.details{break-before:page}\

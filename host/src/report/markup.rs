@@ -13,12 +13,26 @@ pub(crate) fn figure<C: Chart>(
     notes: &mut Vec<String>,
 ) -> Option<Figure> {
     match svg_string(chart) {
-        Ok(svg) => Some(Figure { caption, svg }),
+        Ok(svg) => Some(Figure {
+            caption,
+            svg,
+            series: Vec::new(),
+        }),
         Err(e) => {
             notes.push(format!("figure {:?} skipped: {e}", chart.title()));
             None
         }
     }
+}
+
+/// [`figure`] keeping the values the caption speaks of.
+pub(crate) fn figure_with<C: Chart>(
+    caption: String,
+    chart: &C,
+    series: Vec<(String, Vec<f64>)>,
+    notes: &mut Vec<String>,
+) -> Option<Figure> {
+    figure(caption, chart, notes).map(|f| Figure { series, ..f })
 }
 
 /// `text` with `& < > " '` escaped for HTML text and attribute values.

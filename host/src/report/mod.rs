@@ -5,12 +5,14 @@
 //! |---|---|
 //! | [`run_dir`] | the files understood (`cal.csv`, `val.csv`, `truth.json`, `truth.toml`, `calibrate*.json`, `diagnose*.json`, `path_errors.csv`, `plan.csv`, `plan.json`, `*overlay*.png`, other `*.toml` = calibrated models, `commands.txt` / `*.cmd`) and their SHA-256 |
 //! | [`summary`] | the first screen as data: error at each stage per set, effects found in words, floor verdict, aliased pairs (every newer diagnose key optional) |
+//! | [`answer`] | the top of the first screen: the one sentence, the verdict in one line, "N of M parameters identified", the held-out error through the exported URDF beside the best model's |
 //! | [`first_screen`] | builds the [`Summary`] (robot, data, next steps, the stage bar chart) and renders it |
 //! | [`table`] | thesis table 4.5 (min / max / average of abs(dX) abs(dY) abs(dZ) abs(dP)) from JSON stats or error vectors; tables of one set merged, each model once |
 //! | `docs`, `pose_sets` | parameters, diagnosis and simulation facts from the JSON documents; the pose files recomputed with every model, before / after figures |
 //! | [`extras`] | the plan section (`plan.csv` poses in the workspace, `plan.json` expected vs achieved sigma) and the trace overlays (PNG embedded, downscaled) |
 //! | [`analysis`] | recomputed numbers: per-pose errors, parameter influence (fig. 3.8), moments and tilts (fig. 5.8-5.10), path error (fig. 5.12) |
 //! | [`path_errors`] | the section "Path error along the drawn path (thesis fig. 5.12)" from `path_errors.csv`: the per-sample errors of the low-cost rig that `rigctl calibrate --samples FUSED.csv --errors-csv path_errors.csv` writes (columns `t,q1..qN,dev_u_before,dev_n_before,dp_before,dev_u_after,dev_n_after,dp_after,dev_u_standard,dev_n_standard,dp_standard`, mm; see [`crate::plot::path_errors`]), as a chart and a table of RMS / max / mean before, after the standard calibration and after the chosen method (named from `calibrate*.json`'s `method`) |
+//! | [`captions`] | captions true to their plots: "near zero", "at most X mm", "no trend remains" computed from the values drawn (kept in [`Figure`]'s `series`) |
 //! | [`build`] | [`build_report`]: run directory -> [`Report`] |
 //! | `markup` | what the sections share and that imports none of them: a chart as a [`Figure`], HTML escaping, a figure's HTML |
 //! | [`html`] | [`render_html`]: [`Report`] -> page: the first screen, a table of contents, then the details; A4 print styles |
@@ -19,7 +21,9 @@
 //! [`ReportError::NothingUsable`] (bad input, exit 2).
 
 pub mod analysis;
+pub mod answer;
 pub mod build;
+pub mod captions;
 mod docs;
 pub mod extras;
 pub mod first_screen;
@@ -100,6 +104,9 @@ pub struct Figure {
     pub caption: String,
     /// The SVG document.
     pub svg: String,
+    /// The values the chart draws that the caption speaks of, by name (`before`, `after`, `x`,
+    /// `mean`, `rms`): a caption's claims can be checked against them.
+    pub series: Vec<(String, Vec<f64>)>,
 }
 
 /// One identified parameter.

@@ -58,6 +58,7 @@ pub fn path_errors_section(
                 summary.n_samples, summary.n_segments
             ),
             svg,
+            series: Vec::new(),
         }),
         Err(e) => {
             notes.push(format!("path error figure skipped: {e}"));

@@ -8,7 +8,8 @@ use super::analysis::{
     evaluate, evaluate_in_order, influence_names, most_correlated_joint, parameter_influence,
     Evaluated,
 };
-use super::markup::figure;
+use super::captions::{histogram_words, pose_bars_words, scatter_words};
+use super::markup::{figure, figure_with};
 use super::run_dir::RunDir;
 use super::table::{Column, ErrorTable};
 use super::Figure;
@@ -147,9 +148,19 @@ fn before_after_figures(
         after_mm: after.clone(),
         labels: labels.clone(),
     };
-    figures.extend(figure(
-        format!("{title}, every pose sorted by its error with the nominal model: the red bars (after) should be short and even; {look}."),
+    let pair = || {
+        vec![
+            ("before".to_string(), before.clone()),
+            ("after".to_string(), after.clone()),
+        ]
+    };
+    figures.extend(figure_with(
+        format!(
+            "{title}, every pose sorted by its error with the nominal model: {}; {look}.",
+            pose_bars_words(&before, &after)
+        ),
         &bars,
+        pair(),
         notes,
     ));
     let hist = ErrorHistogram {
@@ -159,24 +170,38 @@ fn before_after_figures(
         bins: 20,
         labels: labels.clone(),
     };
-    figures.extend(figure(
-        format!("{title}, histogram of the errors: after calibration the mass should sit in the first bins, with no long tail of outliers."),
+    figures.extend(figure_with(
+        format!(
+            "{title}, histogram of the errors: {}.",
+            histogram_words(&before, &after)
+        ),
         &hist,
+        pair(),
         notes,
     ));
     if let Some((j, r)) = most_correlated_joint(&poses.q_deg, &before) {
+        let x: Vec<f64> = poses.q_deg.iter().map(|q| q[j]).collect();
+        let x_cols: Vec<Vec<f64>> = x.iter().map(|v| vec![*v]).collect();
+        let r_after = most_correlated_joint(&x_cols, &after).map(|(_, r)| r);
+        let mut series = pair();
+        series.push(("x".to_string(), x.clone()));
         let sc = Scatter {
             title: format!("{title}: residual against q{}", j + 1),
             x_label: format!("q{} (deg)", j + 1),
             y_label: "|dP| (mm)".into(),
-            x: poses.q_deg.iter().map(|q| q[j]).collect(),
+            x,
             before,
             after,
             labels,
         };
-        figures.extend(figure(
-            format!("{title}, error against q{} (the joint that correlates most with the error before, r = {r:.2}): after calibration no trend with q{} should remain.", j + 1, j + 1),
+        figures.extend(figure_with(
+            format!(
+                "{title}, error against q{} (the joint that correlates most with the error before, r = {r:.2}): {}.",
+                j + 1,
+                scatter_words(j + 1, r_after)
+            ),
             &sc,
+            series,
             notes,
         ));
     }

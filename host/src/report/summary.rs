@@ -31,8 +31,12 @@ pub struct Headline {
     pub held_out: bool,
     /// Number of poses or samples.
     pub n: usize,
-    /// Stages, first = before.
+    /// Stages, first = before: the input model with only the instrument frame fitted when a
+    /// document has it (`registered`), else the nominal model.
     pub stages: Vec<Stage>,
+    /// The input model as it is, the instrument frame not fitted, when the first stage is the
+    /// registered one: shown apart (it measures the frames' distance as much as the robot).
+    pub unregistered: Option<Stage>,
 }
 
 /// One effect found by `diagnose`, in words.
@@ -87,6 +91,12 @@ pub struct Summary {
     pub diagnoses: Vec<Diagnosis>,
     /// What to do next, one sentence each.
     pub next_steps: Vec<String>,
+    /// The answer in one sentence: how good now, what was wrong, what to do.
+    pub sentence: String,
+    /// "N of M parameters identified", one per calibrate document.
+    pub identified: Vec<super::answer::Identified>,
+    /// The held-out error through the exported URDF beside the best model's, when they differ.
+    pub urdf: Option<super::answer::UrdfAccuracy>,
 }
 
 fn f(v: &Value, k: &str) -> Option<f64> {
@@ -137,10 +147,26 @@ fn headline<'a>(
             held_out,
             n,
             stages: Vec::new(),
+            unregistered: None,
         });
         list.len() - 1
     });
     &mut list[k]
+}
+
+/// The first stage of a run whose instrument frame was fitted (`calibrate --base`).
+pub const REGISTERED_LABEL: &str = "input model, frame fitted";
+
+/// A stage's label in a sentence: "the nominal model", "the input model with only the
+/// instrument frame fitted", "the 2 effects found".
+pub fn stage_words(label: &str) -> String {
+    if label == REGISTERED_LABEL {
+        "the input model with only the instrument frame fitted".to_string()
+    } else if label.starts_with("with ") {
+        label.trim_start_matches("with ").to_string()
+    } else {
+        format!("the {label}")
+    }
 }
 
 /// Stages from the calibrate documents (nominal, standard, chosen method), then from the
@@ -167,7 +193,19 @@ pub fn headlines(
                 continue;
             };
             let h = headline(&mut out, before.0, held_out, noun_of(before.0));
-            push_stage(h, "nominal model", before, name);
+            let registered = stats(doc.get("registered").and_then(|r| r.get(set)));
+            match registered {
+                Some(reg) if h.stages.is_empty() => {
+                    h.unregistered = Some(Stage {
+                        label: "input model as it is (instrument frame not fitted)".to_string(),
+                        mean_mm: before.1,
+                        rms_mm: before.2,
+                        source: name.clone(),
+                    });
+                    push_stage(h, REGISTERED_LABEL, reg, name);
+                }
+                _ => push_stage(h, "nominal model", before, name),
+            }
             if method != "standard" {
                 if let Some(st) = stats(doc.get("standard").and_then(|s| s.get(set))) {
                     push_stage(h, "calibrated model (standard)", st, name);
@@ -237,11 +275,11 @@ pub fn headline_sentence(h: &Headline) -> String {
         .map(|s| format!("{} {} mm", s.label, fmt_mm(s.mean_mm)))
         .collect();
     format!(
-        "On {} the mean error goes from {} mm (RMS {}) with the {} to {} mm (RMS {}) {}{}.",
+        "On {} the mean error goes from {} mm (RMS {}) with {} to {} mm (RMS {}) {}{}.",
         h.set,
         fmt_mm(first.mean_mm),
         fmt_mm(first.rms_mm),
-        first.label,
+        stage_words(&first.label),
         fmt_mm(last.mean_mm),
         fmt_mm(last.rms_mm),
         if last.label.starts_with("with") {

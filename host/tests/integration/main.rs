@@ -56,6 +56,8 @@ mod reliability_roundtrip;
 mod reliability_streams;
 mod reliability_values;
 mod reliability_wire_readers;
+mod report_answer;
+mod report_captions;
 mod report_first_screen;
 mod report_plots;
 mod report_run;
