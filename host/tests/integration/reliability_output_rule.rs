@@ -2,7 +2,8 @@
 //! issue 48, items 1 and 2, and a seeded property test over random layouts of symbolic links,
 //! hard links and folder aliases between the inputs and outputs of the subcommands that write a
 //! folder (`simulate`, `export`, `diagnose --plots`) or one file (`report --html`, `calibrate
-//! --out`, `diagnose --json`, `model2urdf`, `plan --out`): no input's bytes ever change. `RELIABILITY_SEED=N` draws other layouts.
+//! --out`, `diagnose --json`, `model2urdf`, `plan --out`, `urdf2model`, `potcal`, `compensate`,
+//! `trace`): no input's bytes ever change. `RELIABILITY_SEED=N` draws other layouts.
 
 use std::os::unix::fs::symlink;
 use std::path::{Path, PathBuf};
@@ -19,7 +20,8 @@ fn run(cwd: &Path, args: &[&str]) -> (Option<i32>, String) {
 }
 
 /// A workspace: RUN/ (a simulated run: cal.csv, val.csv, truth.toml, truth.json), M.toml (a
-/// model), REC (a recording) and ALIAS -> RUN.
+/// model), M.urdf (it as a URDF), REC (a recording), SCAN.png (a simulated sheet's scan), J.csv
+/// (potentiometer jig points), P.csv (a path of three reachable points) and ALIAS -> RUN.
 fn workspace(dir: &Path) {
     let (code, err) = run(
         dir,
@@ -29,24 +31,50 @@ fn workspace(dir: &Path) {
     let (code, err) = run(dir, &["simulate", "--session", "line", "--out", "S"]);
     assert_eq!(code, Some(0), "{err}");
     std::fs::rename(dir.join("S/pot.rec"), dir.join("REC")).unwrap();
+    std::fs::rename(dir.join("S/scan.png"), dir.join("SCAN.png")).unwrap();
     std::fs::remove_dir_all(dir.join("S")).unwrap();
     std::fs::copy(dir.join("RUN/truth.toml"), dir.join("M.toml")).unwrap();
+    let (code, err) = run(dir, &["model2urdf", "--model", "M.toml", "--out", "M.urdf"]);
+    assert_eq!(code, Some(0), "{err}");
+    std::fs::write(
+        dir.join("J.csv"),
+        "raw,travel_mm\n100,0\n2000,10\n4000,20\n",
+    )
+    .unwrap();
+    // three measured points of the run: reachable by the model
+    let cal = std::fs::read_to_string(dir.join("RUN/cal.csv")).unwrap();
+    let head: Vec<&str> = cal.lines().next().unwrap().split(',').collect();
+    let col = |n: &str| head.iter().position(|h| *h == n).unwrap();
+    let (x, y, z) = (col("x"), col("y"), col("z"));
+    let mut path = String::from("x,y,z\n");
+    for line in cal.lines().skip(1).take(3) {
+        let f: Vec<&str> = line.split(',').collect();
+        path += &format!("{},{},{}\n", f[x], f[y], f[z]);
+    }
+    std::fs::write(dir.join("P.csv"), path).unwrap();
     symlink("RUN", dir.join("ALIAS")).unwrap();
 }
 
+/// The input files of the workspace.
+const INPUTS: [&str; 10] = [
+    "RUN/cal.csv",
+    "RUN/val.csv",
+    "RUN/truth.toml",
+    "RUN/truth.json",
+    "M.toml",
+    "REC",
+    "M.urdf",
+    "SCAN.png",
+    "J.csv",
+    "P.csv",
+];
+
 /// Every input file of the workspace and its bytes.
 fn inputs(dir: &Path) -> Vec<(PathBuf, Vec<u8>)> {
-    [
-        "RUN/cal.csv",
-        "RUN/val.csv",
-        "RUN/truth.toml",
-        "RUN/truth.json",
-        "M.toml",
-        "REC",
-    ]
-    .iter()
-    .map(|n| (dir.join(n), std::fs::read(dir.join(n)).unwrap()))
-    .collect()
+    INPUTS
+        .iter()
+        .map(|n| (dir.join(n), std::fs::read(dir.join(n)).unwrap()))
+        .collect()
 }
 
 fn assert_inputs_intact(before: &[(PathBuf, Vec<u8>)], what: &str) {
@@ -203,7 +231,7 @@ fn planted_links_in_output_folders_are_refused_or_replaced_never_followed() {
 }
 
 /// The writers of the property test: [`command`] gives each one's command line.
-const WRITERS: usize = 8;
+const WRITERS: usize = 12;
 
 /// One writer's command line in a workspace, with its output folder (or file) `out`:
 /// `simulate --out`, `export --csv`, `diagnose --plots` write folders, the others one file.
@@ -237,7 +265,7 @@ fn command(writer: usize, out: &str) -> Vec<String> {
         4 => diagnose("--plots"),
         5 => diagnose("--json"),
         6 => v(&["model2urdf", "--model", "M.toml", "--out", out]),
-        _ => v(&[
+        7 => v(&[
             "plan",
             "--model",
             "M.toml",
@@ -248,6 +276,26 @@ fn command(writer: usize, out: &str) -> Vec<String> {
             "--out",
             out,
         ]),
+        8 => v(&[
+            "urdf2model",
+            "--urdf",
+            "M.urdf",
+            "--tip",
+            "tool0",
+            "--out",
+            out,
+        ]),
+        9 => v(&["potcal", "--points", "J.csv", "--out", out]),
+        10 => v(&[
+            "compensate",
+            "--model",
+            "M.toml",
+            "--path",
+            "P.csv",
+            "--out",
+            out,
+        ]),
+        _ => v(&["trace", "SCAN.png", "--out", out]),
     }
 }
 
@@ -259,6 +307,10 @@ fn single_output(writer: usize) -> Option<&'static str> {
         5 => Some("d.json"),
         6 => Some("m.urdf"),
         7 => Some("plan.csv"),
+        8 => Some("m2.toml"),
+        9 => Some("pot.toml"),
+        10 => Some("joints.csv"),
+        11 => Some("trace.csv"),
         _ => None,
     }
 }
@@ -280,9 +332,13 @@ fn names(writer: usize) -> &'static [&'static str] {
 fn input_spelling(rng: &mut ChaCha8Rng, from_sub: bool) -> String {
     let up = if from_sub { "../" } else { "" };
     let files = ["cal.csv", "val.csv", "truth.toml", "truth.json"];
-    match rng.gen_range(0..5) {
+    match rng.gen_range(0..6) {
         0 => format!("{up}M.toml"),
         1 => format!("{up}REC"),
+        5 => format!(
+            "{up}{}",
+            ["M.urdf", "SCAN.png", "J.csv", "P.csv"][rng.gen_range(0..4)]
+        ),
         2 => format!("{up}ALIAS/{}", files[rng.gen_range(0..4)]),
         3 => format!("{up}RUN/./{}", files[rng.gen_range(0..4)]),
         _ => format!("{up}RUN/{}", files[rng.gen_range(0..4)]),
@@ -306,14 +362,7 @@ fn no_layout_of_links_changes_an_input() {
             std::fs::copy(base.path().join(rel), w.join(rel)).unwrap();
         };
         std::fs::create_dir(w.join("RUN")).unwrap();
-        for f in [
-            "RUN/cal.csv",
-            "RUN/val.csv",
-            "RUN/truth.toml",
-            "RUN/truth.json",
-            "M.toml",
-            "REC",
-        ] {
+        for f in INPUTS {
             cp(f);
         }
         symlink("RUN", w.join("ALIAS")).unwrap();
@@ -383,6 +432,10 @@ fn no_layout_of_links_changes_an_input() {
         let own: &[&str] = match writer {
             0 | 6 | 7 => &["M.toml"],
             1 => &["REC"],
+            8 => &["M.urdf"],
+            9 => &["J.csv"],
+            10 => &["M.toml", "P.csv"],
+            11 => &["SCAN.png"],
             2 => &[
                 "RUN/cal.csv",
                 "RUN/val.csv",
