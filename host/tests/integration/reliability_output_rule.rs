@@ -3,7 +3,7 @@
 //! hard links and folder aliases between the inputs and outputs of the subcommands that write a
 //! folder (`simulate`, `export`, `diagnose --plots`) or one file (`report --html`, `calibrate
 //! --out`, `diagnose --json`, `model2urdf`, `plan --out`, `urdf2model`, `potcal`, `compensate`,
-//! `trace`): no input's bytes ever change. `RELIABILITY_SEED=N` draws other layouts.
+//! `trace`, `fuse`): no input's bytes ever change. `RELIABILITY_SEED=N` draws other layouts.
 
 use std::os::unix::fs::symlink;
 use std::path::{Path, PathBuf};
@@ -20,8 +20,10 @@ fn run(cwd: &Path, args: &[&str]) -> (Option<i32>, String) {
 }
 
 /// A workspace: RUN/ (a simulated run: cal.csv, val.csv, truth.toml, truth.json), M.toml (a
-/// model), M.urdf (it as a URDF), REC (a recording), SCAN.png (a simulated sheet's scan), J.csv
-/// (potentiometer jig points), P.csv (a path of three reachable points) and ALIAS -> RUN.
+/// model), M.urdf (it as a URDF), a pencil session (REC its recording, SCAN.png its sheet's scan,
+/// T.csv the trace of it, JS.csv its joint log, PL.toml the sheet's placement, POT.toml the
+/// potentiometer's calibration), J.csv (potentiometer jig points), P.csv (a path of three
+/// reachable points) and ALIAS -> RUN.
 fn workspace(dir: &Path) {
     let (code, err) = run(
         dir,
@@ -32,7 +34,16 @@ fn workspace(dir: &Path) {
     assert_eq!(code, Some(0), "{err}");
     std::fs::rename(dir.join("S/pot.rec"), dir.join("REC")).unwrap();
     std::fs::rename(dir.join("S/scan.png"), dir.join("SCAN.png")).unwrap();
+    std::fs::rename(dir.join("S/joints.csv"), dir.join("JS.csv")).unwrap();
+    std::fs::rename(dir.join("S/placement.toml"), dir.join("PL.toml")).unwrap();
+    let (code, err) = run(
+        dir,
+        &["potcal", "--points", "S/potjig.csv", "--out", "POT.toml"],
+    );
+    assert_eq!(code, Some(0), "{err}");
     std::fs::remove_dir_all(dir.join("S")).unwrap();
+    let (code, err) = run(dir, &["trace", "SCAN.png", "--out", "T.csv"]);
+    assert_eq!(code, Some(0), "{err}");
     std::fs::copy(dir.join("RUN/truth.toml"), dir.join("M.toml")).unwrap();
     let (code, err) = run(dir, &["model2urdf", "--model", "M.toml", "--out", "M.urdf"]);
     assert_eq!(code, Some(0), "{err}");
@@ -56,7 +67,7 @@ fn workspace(dir: &Path) {
 }
 
 /// The input files of the workspace.
-const INPUTS: [&str; 10] = [
+const INPUTS: [&str; 14] = [
     "RUN/cal.csv",
     "RUN/val.csv",
     "RUN/truth.toml",
@@ -67,6 +78,10 @@ const INPUTS: [&str; 10] = [
     "SCAN.png",
     "J.csv",
     "P.csv",
+    "T.csv",
+    "JS.csv",
+    "PL.toml",
+    "POT.toml",
 ];
 
 /// Every input file of the workspace and its bytes.
@@ -231,7 +246,7 @@ fn planted_links_in_output_folders_are_refused_or_replaced_never_followed() {
 }
 
 /// The writers of the property test: [`command`] gives each one's command line.
-const WRITERS: usize = 12;
+const WRITERS: usize = 13;
 
 /// One writer's command line in a workspace, with its output folder (or file) `out`:
 /// `simulate --out`, `export --csv`, `diagnose --plots` write folders, the others one file.
@@ -295,7 +310,22 @@ fn command(writer: usize, out: &str) -> Vec<String> {
             "--out",
             out,
         ]),
-        _ => v(&["trace", "SCAN.png", "--out", out]),
+        11 => v(&["trace", "SCAN.png", "--out", out]),
+        _ => v(&[
+            "fuse",
+            "--joints",
+            "JS.csv",
+            "--recording",
+            "REC",
+            "--trace",
+            "T.csv",
+            "--placement",
+            "PL.toml",
+            "--pot",
+            "POT.toml",
+            "--out",
+            out,
+        ]),
     }
 }
 
@@ -311,6 +341,7 @@ fn single_output(writer: usize) -> Option<&'static str> {
         9 => Some("pot.toml"),
         10 => Some("joints.csv"),
         11 => Some("trace.csv"),
+        12 => Some("fused.csv"),
         _ => None,
     }
 }
@@ -337,7 +368,8 @@ fn input_spelling(rng: &mut ChaCha8Rng, from_sub: bool) -> String {
         1 => format!("{up}REC"),
         5 => format!(
             "{up}{}",
-            ["M.urdf", "SCAN.png", "J.csv", "P.csv"][rng.gen_range(0..4)]
+            ["M.urdf", "SCAN.png", "J.csv", "P.csv", "T.csv", "JS.csv", "PL.toml", "POT.toml"]
+                [rng.gen_range(0..8)]
         ),
         2 => format!("{up}ALIAS/{}", files[rng.gen_range(0..4)]),
         3 => format!("{up}RUN/./{}", files[rng.gen_range(0..4)]),
@@ -436,6 +468,7 @@ fn no_layout_of_links_changes_an_input() {
             9 => &["J.csv"],
             10 => &["M.toml", "P.csv"],
             11 => &["SCAN.png"],
+            12 => &["JS.csv", "REC", "T.csv", "PL.toml", "POT.toml"],
             2 => &[
                 "RUN/cal.csv",
                 "RUN/val.csv",
