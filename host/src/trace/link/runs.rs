@@ -10,6 +10,8 @@ use crate::trace::plane::{dist, Grid};
 /// Another run's end this close to the path (the tracker stopped it where it met the path's
 /// graphite) meets the path there, mm.
 const MEET_MM: f64 = 3.0;
+/// A mark's centre this close to the path touches it, mm.
+const TOUCH_MM: f64 = 0.75;
 /// Crossings closer than this along the sheet are one, mm.
 const SAME_MM: f64 = 3.0;
 /// A mark meeting the path at two places at least this far apart runs from one to the other
@@ -20,8 +22,8 @@ const APART_MM: f64 = 10.0;
 /// stroke, in the order of [`super::Linking::left_out`]): a mark that could be part of the
 /// path crossing or meeting it, or a mark of [`MIN_MARK_MM`] or more meeting it at two places
 /// [`APART_MM`] apart, is a second drawn path (its kind raised to
-/// [`LeftOutKind::Separate`]). Meeting: the polylines intersect, or an end of the mark lies
-/// within [`MEET_MM`] of the path. Each mark's places once (two parts of one run may meet the
+/// [`LeftOutKind::Separate`]). Meeting: the polylines intersect, a centre of the mark lies
+/// within [`TOUCH_MM`] of the path, or an end of it within [`MEET_MM`]. Each mark's places once (two parts of one run may meet the
 /// path at the same place); sorted along x.
 pub(super) fn crossings(path: &Stroke, left_out: &mut [(&Stroke, LeftOut)]) -> Vec<Crossing> {
     let pts = &path.points_mm;
@@ -57,11 +59,21 @@ pub(super) fn crossings(path: &Stroke, left_out: &mut [(&Stroke, LeftOut)]) -> V
             let (c, d) = (q[j], q[(j + 1) % m]);
             let mid = [0.5 * (c[0] + d[0]), 0.5 * (c[1] + d[1])];
             let reach = dist(c, d) + 1.0;
+            let mut nearest: Option<[f64; 2]> = None;
             for (_, i) in grid.around(mid, reach) {
                 let (a, b) = seg(*i);
                 if let Some(x) = intersect(a, b, c, d) {
                     add(x);
                 }
+                let f = foot(c, a, b);
+                if nearest.is_none_or(|n| dist(c, f) < dist(c, n)) {
+                    nearest = Some(f);
+                }
+            }
+            // Touching without crossing: where the tracker joined a half of each run at their
+            // crossing, the rest of the two runs touches the path there.
+            if let Some(f) = nearest.filter(|f| dist(c, *f) <= TOUCH_MM) {
+                add(f);
             }
         }
         if !s.closed {
