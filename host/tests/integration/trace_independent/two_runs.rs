@@ -45,7 +45,7 @@ fn runs(seed: u64) -> Runs {
         let a: f64 = rng.gen_range(0.0..TAU);
         let u = [a.cos(), a.sin()];
         let first = circle(c1, r1);
-        if seed % 2 == 0 {
+        if seed.is_multiple_of(2) {
             let r2 = rng.gen_range(30.0..55.0);
             let d = rng.gen_range((r1 - r2).abs() + 8.0..r1 + r2 - 8.0);
             let cos = (r1 * r1 + r2 * r2 - d * d) / (2.0 * r1 * r2);
