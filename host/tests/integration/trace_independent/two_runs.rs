@@ -270,3 +270,39 @@ fn two_runs_independent_renderer() {
     let k = run("two runs independent", false, seeds());
     check("two runs independent", &k);
 }
+
+/// The CLI on two circles crossing (a 600 dpi scan of each renderer): exit 1, the crossing
+/// named, nothing written.
+#[test]
+fn cli_names_two_runs_crossing() {
+    use super::super::common::spawn::text;
+    let dir = tempfile::tempdir().expect("tempdir");
+    let (c, cross, _) = two_run_case(2, Kind::Scan600);
+    for (name, img) in [
+        ("project", render_project(&c, Kind::Scan600, 2)),
+        ("independent", render_independent(&c, Kind::Scan600, 2)),
+    ] {
+        let png = dir.path().join(format!("{name}.png"));
+        img.save(&png).expect("save");
+        let out = dir.path().join(format!("{name}.csv"));
+        let st = super::trace_to(&png, &out);
+        let err = text(&st.stderr);
+        assert_eq!(st.status.code(), Some(1), "{name}: {err}");
+        assert!(err.contains("two drawn paths cross at"), "{name}: {err}");
+        assert!(!err.contains("a gap of"), "{name}: {err}");
+        assert!(!out.exists(), "{name}: nothing written");
+        // Both true crossings are named, to 0.1 mm as printed.
+        for p in &cross {
+            let at = format!("({:.1}, {:.1})", p[0], p[1]);
+            let near = err.match_indices('(').any(|(i, _)| {
+                let tail = &err[i + 1..];
+                let Some((xy, _)) = tail.split_once(')') else {
+                    return false;
+                };
+                let v: Vec<f64> = xy.split(", ").filter_map(|t| t.parse().ok()).collect();
+                v.len() == 2 && (v[0] - p[0]).hypot(v[1] - p[1]) < 2.0
+            });
+            assert!(near, "{name}: crossing {at} not named: {err}");
+        }
+    }
+}
