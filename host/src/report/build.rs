@@ -12,6 +12,7 @@ use super::markup::figure;
 use super::path_errors::path_errors_section;
 use super::pose_sets::pose_sets;
 use super::run_dir::RunDir;
+use super::suggest::Suggest;
 use super::table::{merge_tables, tables_from_calibrate_json};
 use super::{Report, ReportError, ReportOptions};
 use crate::model::{choose_model, Model, ModelChoice};
@@ -39,9 +40,10 @@ fn load_models(
     notes: &mut Vec<String>,
 ) -> Models {
     let declared = match choose_model(&ModelChoice {
-        robot,
+        robot: robot.filter(|_| opts.model_file.is_none()),
+        model_file: opts.model_file.as_deref(),
         tool_mm: opts.tool_mm,
-        ..Default::default()
+        sets: &opts.sets,
     }) {
         Ok(m) => Some(m),
         Err(e) => {
@@ -160,7 +162,15 @@ pub fn build_report(dir: &std::path::Path, opts: &ReportOptions) -> Result<Repor
             &mut notes,
         );
     }
-    report.summary = build_summary(&run, robot.as_deref(), &report, &noun_of, &mut notes);
+    let suggest = Suggest::new(dir, &run, robot.as_deref(), opts);
+    report.summary = build_summary(
+        &run,
+        robot.as_deref(),
+        &suggest,
+        &report,
+        &noun_of,
+        &mut notes,
+    );
     report.notes = notes;
     Ok(report)
 }

@@ -27,6 +27,7 @@ pub mod html;
 mod markup;
 pub mod path_errors;
 mod pose_sets;
+pub mod suggest;
 pub mod run_dir;
 pub mod summary;
 pub mod table;
@@ -91,6 +92,13 @@ pub struct ReportOptions {
     pub robot: Option<String>,
     /// Katana tool length d5 (mm) of the declared model.
     pub tool_mm: Option<f64>,
+    /// The declared model as a model file (instead of a preset).
+    pub model_file: Option<PathBuf>,
+    /// Overrides of the declared model's parameters (`NAME=VALUE`, as `--set`).
+    pub sets: Vec<String>,
+    /// The model flags of the commands the report suggests, each with a leading space (`Some("")`
+    /// when a project file supplies the model); default: from the model file or robot.
+    pub command_model: Option<String>,
 }
 
 /// A figure: caption and inline SVG.
