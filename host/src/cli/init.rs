@@ -41,24 +41,17 @@ pub struct Args {
     pub force: bool,
 }
 
-/// A path as written in the project file: relative to the project file's folder when it can be.
+/// A path as written in the project file (relative to its folder `dir`): as given when `dir` is
+/// the working directory or the path is absolute, else from `dir` through `..`.
 fn shown(path: &Path, dir: &Path) -> String {
+    if dir == Path::new(".") || path.is_absolute() {
+        return path.display().to_string();
+    }
     let abs = |p: &Path| std::path::absolute(p).unwrap_or_else(|_| p.to_path_buf());
     let (p, d) = (abs(path), abs(dir));
-    match p.strip_prefix(&d) {
-        Ok(r) => r.display().to_string(),
-        Err(_) => relative_up(&p, &d).unwrap_or_else(|| p.display().to_string()),
-    }
-}
-
-/// `p` relative to `d` through `..` (both absolute), if they share a root.
-fn relative_up(p: &Path, d: &Path) -> Option<String> {
     let pc: Vec<_> = p.components().collect();
     let dc: Vec<_> = d.components().collect();
     let common = pc.iter().zip(&dc).take_while(|(a, b)| a == b).count();
-    if common == 0 {
-        return None;
-    }
     let mut out = PathBuf::new();
     for _ in common..dc.len() {
         out.push("..");
@@ -66,7 +59,7 @@ fn relative_up(p: &Path, d: &Path) -> Option<String> {
     for c in &pc[common..] {
         out.push(c);
     }
-    Some(out.display().to_string())
+    out.display().to_string()
 }
 
 fn refuse_existing(path: &Path, force: bool) -> Result<(), CliError> {
@@ -110,13 +103,17 @@ pub fn run(args: Args) -> Result<(), CliError> {
         let stem = urdf_path
             .file_stem()
             .map_or_else(|| "robot".into(), |s| s.to_string_lossy().into_owned());
-        let model_path = dir.join(format!("{stem}.model.toml"));
+        let name = format!("{stem}.model.toml");
+        let model_path = if dir == Path::new(".") {
+            PathBuf::from(name)
+        } else {
+            dir.join(name)
+        };
         refuse_existing(&model_path, args.force)?;
         let _ = writeln!(
             robot,
-            "# The chain {}..{tip} of the URDF as a model file (joints in deg, mm for prismatic \
-             ones), written by `rigctl init` as `rigctl urdf2model` would; calibrate, diagnose, \
-             simulate and report work on it.\nmodel = {}",
+            "# The chain {}..{tip} of the URDF as a model file (joints in deg, mm for prismatic\n\
+             # ones), written by `rigctl init` as `rigctl urdf2model` would.\nmodel = {}",
             args.base_link.as_deref().unwrap_or("(root link)"),
             quoted(&shown(&model_path, &dir))
         );
