@@ -181,7 +181,12 @@ pub fn run(args: Args) -> Result<(), CliError> {
 }
 
 /// Why `plan` could not check the URDF's collision geometry (missing meshes), if it cannot.
-fn collision_note(urdf: &Path, base_link: Option<&str>, tip: &str, model: &Model) -> Option<String> {
+fn collision_note(
+    urdf: &Path,
+    base_link: Option<&str>,
+    tip: &str,
+    model: &Model,
+) -> Option<String> {
     let mut package_paths = Vec::new();
     if let Some(p) = std::env::var_os("ROS_PACKAGE_PATH") {
         package_paths.extend(std::env::split_paths(&p));
@@ -206,7 +211,9 @@ fn collision_note(urdf: &Path, base_link: Option<&str>, tip: &str, model: &Model
 
 /// The joints and their limits, as comment lines.
 fn joint_lines(model: &Model, names: &[String]) -> String {
-    let mut s = String::from("# The joints (q1..qN in pose files, or their URDF names) and their limits:\n");
+    let mut s = String::from(
+        "# The joints (q1..qN in pose files, or their URDF names) and their limits:\n",
+    );
     for (k, (j, lim)) in model.joints().iter().zip(model.joint_limits()).enumerate() {
         let unit = if j.prismatic { "mm" } else { "deg" };
         let name = names.get(k).map_or_else(String::new, |n| format!(" {n}"));

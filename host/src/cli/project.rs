@@ -379,9 +379,7 @@ pub fn merge_args(argv: Vec<OsString>, cwd_file: &Path) -> Result<Vec<OsString>,
     let project = Project::load(&file)?;
     let dir = file.parent().unwrap_or(Path::new("")).to_path_buf();
     let given = given_flags(rest);
-    let user_model = given
-        .iter()
-        .any(|g| MODEL_FLAGS[..2].contains(&g.as_str()));
+    let user_model = given.iter().any(|g| MODEL_FLAGS[..2].contains(&g.as_str()));
     let user_sets = user_set_names(rest);
     let mut extra: Vec<OsString> = Vec::new();
     let mut supplied = Vec::new();

@@ -186,11 +186,17 @@ fn diagnosis_steps(d: &Diagnosis, suggest: &Suggest, out: &mut Vec<String>) {
             d.source
         ));
     }
-    if !d.aliased.is_empty() || lacking {
+    if !d.aliased.is_empty() {
         out.push(format!(
             "Measure poses that separate what {} leaves open: `{}`, then measure them and run diagnose again.",
             d.source,
             suggest.plan_from_diagnose(&d.source)
+        ));
+    } else if lacking {
+        out.push(format!(
+            "{}: the model still lacks something no effect names yet: measure more poses (`{}`) and run diagnose again.",
+            d.source,
+            suggest.plan_more()
         ));
     }
 }

@@ -27,8 +27,8 @@ pub mod html;
 mod markup;
 pub mod path_errors;
 mod pose_sets;
-pub mod suggest;
 pub mod run_dir;
+pub mod suggest;
 pub mod summary;
 pub mod table;
 

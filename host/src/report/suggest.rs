@@ -72,11 +72,17 @@ impl Suggest {
     /// `rigctl plan` separating what the diagnose document `name` (in the run) leaves open,
     /// adding to the run's calibration poses.
     pub fn plan_from_diagnose(&self, name: &str) -> String {
-        let poses = self
-            .cal
-            .as_ref()
-            .map_or_else(String::new, |p| format!(" --poses {}", shell(&p.display().to_string())));
+        let poses = self.cal.as_ref().map_or_else(String::new, |p| {
+            format!(" --poses {}", shell(&p.display().to_string()))
+        });
         self.plan(&format!(" --from-diagnose {}{poses}", self.path(name)))
+    }
+
+    /// `rigctl plan` adding 60 poses to the run's calibration poses (when it holds them).
+    pub fn plan_more(&self) -> String {
+        self.plan(&self.cal.as_ref().map_or_else(String::new, |p| {
+            format!(" --poses {}", shell(&p.display().to_string()))
+        }))
     }
 
     /// `rigctl diagnose` on the run's pose files, when it holds both.
@@ -104,7 +110,10 @@ mod tests {
         assert_eq!(model_flags(&o, Some("ur5")), " --robot ur5");
         o.model_file = Some(PathBuf::from("my arm.toml"));
         o.sets = vec!["tool_dz=31".into()];
-        assert_eq!(model_flags(&o, Some("panda")), " --model 'my arm.toml' --set tool_dz=31");
+        assert_eq!(
+            model_flags(&o, Some("panda")),
+            " --model 'my arm.toml' --set tool_dz=31"
+        );
         o.command_model = Some(String::new());
         assert_eq!(model_flags(&o, Some("panda")), "");
     }

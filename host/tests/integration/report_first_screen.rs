@@ -93,7 +93,10 @@ fn newer_diagnose_keys_reach_the_first_screen() {
     assert!(s
         .next_steps
         .iter()
-        .any(|n| n.contains("--from-diagnose diagnose_samples.json")));
+        .any(|n| n.contains(&format!(
+            "--from-diagnose {}",
+            dir.path().join("diagnose_samples.json").display()
+        ))));
 
     let html = render_html(&r);
     let first = &html[..html.find("<table").expect("detail tables")];

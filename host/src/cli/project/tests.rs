@@ -12,7 +12,10 @@ fn load_err(text: &str) -> (u8, String) {
     let dir = tempfile::tempdir().unwrap();
     let p = write(dir.path(), text);
     let e = Project::load(&p).unwrap_err();
-    (e.exit_code(), e.message.replace(&p.display().to_string(), "F"))
+    (
+        e.exit_code(),
+        e.message.replace(&p.display().to_string(), "F"),
+    )
 }
 
 #[test]
@@ -60,11 +63,19 @@ fn every_entry_is_a_flag_of_its_commands() {
                 .get_arguments()
                 .find(|a| a.get_long() == Some(e.flag))
                 .unwrap_or_else(|| panic!("{c} has no --{}", e.flag));
-            assert_eq!(e.values.is_empty(), !arg.get_action().takes_values(), "{c} --{}", e.flag);
+            assert_eq!(
+                e.values.is_empty(),
+                !arg.get_action().takes_values(),
+                "{c} --{}",
+                e.flag
+            );
         }
     }
     let model = entries.iter().find(|e| e.flag == "model").unwrap();
-    assert_eq!(model.values, vec![Path::new("proj").join("m.toml").display().to_string()]);
+    assert_eq!(
+        model.values,
+        vec![Path::new("proj").join("m.toml").display().to_string()]
+    );
     let units = entries.iter().find(|e| e.flag == "units").unwrap();
     assert_eq!(units.values, vec!["m,rad".to_string()]);
 }
@@ -90,7 +101,10 @@ fn command_line_wins_and_only_the_commands_flags_are_added() {
          [frames]\nbase = true\n[data]\nposes = \"c.csv\"\n[instrument]\nsigma_mm = 0.02\n",
     );
     let d = dir.path().display().to_string();
-    let a = merged(dir.path(), &["calibrate", "--poses", "x.csv", "--set", "tool_dz=5"]);
+    let a = merged(
+        dir.path(),
+        &["calibrate", "--poses", "x.csv", "--set", "tool_dz=5"],
+    );
     assert!(a.contains(&format!("--model={d}/m.toml")), "{a:?}");
     assert!(a.contains(&"--set=tool_dx=1".to_string()), "{a:?}");
     assert!(!a.iter().any(|x| x.starts_with("--set=tool_dz")), "{a:?}");
@@ -99,7 +113,11 @@ fn command_line_wins_and_only_the_commands_flags_are_added() {
     assert!(!a.iter().any(|x| x.starts_with("--instrument-mm")), "{a:?}");
     // a robot on the command line: none of the file's model flags
     let a = merged(dir.path(), &["diagnose", "--robot", "ur5"]);
-    assert!(!a.iter().any(|x| x.starts_with("--model") || x.starts_with("--set")), "{a:?}");
+    assert!(
+        !a.iter()
+            .any(|x| x.starts_with("--model") || x.starts_with("--set")),
+        "{a:?}"
+    );
     assert!(a.contains(&"--instrument-mm=0.02".to_string()), "{a:?}");
     // init never reads it
     assert_eq!(merged(dir.path(), &["init", "--robot", "ur5"]).len(), 4);
