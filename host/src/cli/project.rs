@@ -356,14 +356,24 @@ pub fn merge_args(argv: Vec<OsString>, cwd_file: &Path) -> Result<Vec<OsString>,
         .iter()
         .map(|a| a.to_string_lossy().into_owned())
         .collect();
-    let Some(cmd) = text.get(1).filter(|c| !c.starts_with('-')).cloned() else {
+    // the subcommand: the first word, after a `--project FILE` given before it
+    let mut at = 1;
+    while let Some(a) = text.get(at) {
+        match a.as_str() {
+            "--project" => at += 2,
+            a if a.starts_with("--project=") => at += 1,
+            _ => break,
+        }
+    }
+    let Some(cmd) = text.get(at).filter(|c| !c.starts_with('-')).cloned() else {
         return Ok(argv);
     };
     if cmd == "init" || cmd == "help" {
         return Ok(argv);
     }
-    let rest = &text[2..];
-    let (file, explicit) = match project_flag(rest)? {
+    let rest = &text[at + 1..];
+    let before = &text[1..at];
+    let (file, explicit) = match project_flag(before)?.or(project_flag(rest)?) {
         Some(f) => {
             if !f.is_file() {
                 return Err(CliError::bad_input(format!(
@@ -432,9 +442,9 @@ pub fn merge_args(argv: Vec<OsString>, cwd_file: &Path) -> Result<Vec<OsString>,
         explicit,
         supplied,
     });
-    let mut out: Vec<OsString> = argv[..2].to_vec();
+    let mut out: Vec<OsString> = argv[..=at].to_vec();
     out.extend(extra);
-    out.extend(argv[2..].iter().cloned());
+    out.extend(argv[at + 1..].iter().cloned());
     Ok(out)
 }
 

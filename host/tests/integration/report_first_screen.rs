@@ -90,13 +90,10 @@ fn newer_diagnose_keys_reach_the_first_screen() {
         "{v}"
     );
     assert_eq!(d.aliased[0].correlation, Some(0.97));
-    assert!(s
-        .next_steps
-        .iter()
-        .any(|n| n.contains(&format!(
-            "--from-diagnose {}",
-            dir.path().join("diagnose_samples.json").display()
-        ))));
+    assert!(s.next_steps.iter().any(|n| n.contains(&format!(
+        "--from-diagnose {}",
+        dir.path().join("diagnose_samples.json").display()
+    ))));
 
     let html = render_html(&r);
     let first = &html[..html.find("<table").expect("detail tables")];

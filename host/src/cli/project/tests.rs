@@ -119,6 +119,17 @@ fn command_line_wins_and_only_the_commands_flags_are_added() {
         "{a:?}"
     );
     assert!(a.contains(&"--instrument-mm=0.02".to_string()), "{a:?}");
+    // --project before the subcommand
+    let other = tempfile::tempdir().unwrap();
+    let file = dir.path().join("rigctl.toml");
+    let f = file.display().to_string();
+    let a = merged(
+        other.path(),
+        &["--project", &f, "diagnose", "--validate", "v.csv"],
+    );
+    assert_eq!(a[3], "diagnose", "{a:?}");
+    assert!(a.contains(&format!("--poses={d}/c.csv")), "{a:?}");
+    assert!(!a.iter().any(|x| x.starts_with("--validate=")), "{a:?}");
     // init never reads it
     assert_eq!(merged(dir.path(), &["init", "--robot", "ur5"]).len(), 4);
 }
