@@ -77,14 +77,37 @@ fn quoted(s: &str) -> String {
     toml::Value::String(s.to_string()).to_string()
 }
 
+/// The model file `init` writes for the URDF `urdf`: `<stem>.model.toml` in `dir`.
+fn model_path_for(urdf: &Path, dir: &Path) -> PathBuf {
+    let stem = urdf
+        .file_stem()
+        .map_or_else(|| "robot".into(), |s| s.to_string_lossy().into_owned());
+    let name = format!("{stem}.model.toml");
+    if dir == Path::new(".") {
+        PathBuf::from(name)
+    } else {
+        dir.join(name)
+    }
+}
+
 pub fn run(args: Args) -> Result<(), CliError> {
-    refuse_existing(&args.out, args.force)?;
     let dir = args
         .out
         .parent()
         .filter(|d| !d.as_os_str().is_empty())
         .unwrap_or(Path::new("."))
         .to_path_buf();
+    let model_out = args.urdf.as_deref().map(|u| model_path_for(u, &dir));
+    super::files()
+        .input("--urdf", args.urdf.as_deref())
+        .input("--model", args.model.as_deref())
+        .output("--out", Some(&args.out))
+        .output("the model file", model_out.as_deref())
+        .check()?;
+    refuse_existing(&args.out, args.force)?;
+    if let Some(m) = &model_out {
+        refuse_existing(m, args.force)?;
+    }
     let mut robot = String::new();
     let model: Model;
     let mut joint_names = Vec::new();
@@ -100,16 +123,7 @@ pub fn run(args: Args) -> Result<(), CliError> {
                 tool_mm: [0.0; 3],
             },
         )?;
-        let stem = urdf_path
-            .file_stem()
-            .map_or_else(|| "robot".into(), |s| s.to_string_lossy().into_owned());
-        let name = format!("{stem}.model.toml");
-        let model_path = if dir == Path::new(".") {
-            PathBuf::from(name)
-        } else {
-            dir.join(name)
-        };
-        refuse_existing(&model_path, args.force)?;
+        let model_path = model_path_for(urdf_path, &dir);
         let _ = writeln!(
             robot,
             "# The chain {}..{tip} of the URDF as a model file (joints in deg, mm for prismatic\n\
