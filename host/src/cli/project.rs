@@ -134,7 +134,7 @@ const MODEL_CMDS: &[&str] = &[
     "model2urdf",
     "report",
 ];
-const POSE_CMDS: &[&str] = &["fk", "calibrate", "diagnose", "plan", "poses"];
+const POSE_CMDS: &[&str] = &["fk", "calibrate", "diagnose", "plan", "poses", "report"];
 
 /// A path of the file, relative to the file's folder.
 fn rel(dir: &Path, p: &Path) -> String {

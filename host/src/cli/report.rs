@@ -26,6 +26,9 @@ pub struct Args {
     /// Override a parameter of the declared model (deg, mm), e.g. tool_dz=31; repeatable.
     #[arg(long = "set", value_name = "NAME=VALUE")]
     pub sets: Vec<String>,
+    // --units, --sep, --decimal of the run's pose files.
+    #[command(flatten)]
+    pub pose: super::pose_args::PoseArgs,
     /// Katana tool length d5 of the declared model (mm).
     #[arg(long, value_name = "L")]
     pub tool_mm: Option<f64>,
@@ -63,6 +66,8 @@ pub fn run(args: Args) -> Result<(), CliError> {
         model_file: args.model,
         sets: args.sets,
         command_model: project_model_flags(),
+        pose_units: args.pose.units,
+        pose_dialect: args.pose.dialect(),
     };
     let report = write_report(&args.run_dir, &args.html, &opts)?;
     outln!(

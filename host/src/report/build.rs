@@ -97,7 +97,7 @@ pub fn build_report(dir: &std::path::Path, opts: &ReportOptions) -> Result<Repor
     let mut best_model = None;
     let mut pose_counts = Vec::new();
     if let Some(decl) = &models.declared {
-        let sets = pose_sets(&run, decl, &models.files, &mut notes);
+        let sets = pose_sets(&run, decl, &models.files, opts, &mut notes);
         tables.extend(sets.tables);
         report.figures.extend(sets.figures);
         best_model = sets.best_model;

@@ -99,6 +99,10 @@ pub struct ReportOptions {
     /// The model flags of the commands the report suggests, each with a leading space (`Some("")`
     /// when a project file supplies the model); default: from the model file or robot.
     pub command_model: Option<String>,
+    /// Units, separator and decimal mark of the run's pose files (`--units`, `--sep`,
+    /// `--decimal`; default mm, deg, `,` and `.`).
+    pub pose_units: crate::io::units::Units,
+    pub pose_dialect: crate::io::dialect::Dialect,
 }
 
 /// A figure: caption and inline SVG.

@@ -397,3 +397,71 @@ fn an_own_robots_report_names_its_model_and_its_suggested_commands_run() {
         assert!(c.contains("--model tiago_48_schunk.model.toml"), "{c}");
     }
 }
+
+/// `path` (a pose CSV in mm and deg, header `q1..,x,y,z,..`) in metres and radians.
+fn to_m_rad(path: &Path) -> String {
+    let text = std::fs::read_to_string(path).unwrap();
+    let mut lines = text.lines();
+    let header: Vec<&str> = lines.next().unwrap().split(',').collect();
+    let mut out = header.join(",") + "\n";
+    for l in lines {
+        let cells: Vec<String> = l
+            .split(',')
+            .zip(&header)
+            .map(
+                |(c, h)| match (h.starts_with('q'), ["x", "y", "z"].contains(h)) {
+                    (true, _) => format!("{:.12}", c.parse::<f64>().unwrap().to_radians()),
+                    (_, true) => format!("{:.12}", c.parse::<f64>().unwrap() / 1000.0),
+                    _ => c.to_string(),
+                },
+            )
+            .collect();
+        out.push_str(&(cells.join(",") + "\n"));
+    }
+    out
+}
+
+/// The report's table of position errors per set.
+fn error_table(page: &str) -> &str {
+    let start = page
+        .find("<h3>Calibration poses, ")
+        .expect("the pose-set table");
+    &page[start..start + page[start..].find("</table>").unwrap()]
+}
+
+#[test]
+fn report_reads_the_run_in_the_projects_units() {
+    let root = tempfile::tempdir().unwrap();
+    let root = root.path();
+    setup(
+        root,
+        "[robot]\npreset = \"ur5\"\n[units]\njoints = \"rad\"\npoints = \"m\"\n",
+    );
+    let proj = root.join("proj");
+    std::fs::create_dir(proj.join("run")).unwrap();
+    for f in ["cal.csv", "val.csv"] {
+        std::fs::write(
+            proj.join("run").join(f),
+            to_m_rad(&root.join("sim").join(f)),
+        )
+        .unwrap();
+    }
+    for f in ["truth.toml", "truth.json"] {
+        std::fs::copy(root.join("sim").join(f), proj.join("run").join(f)).unwrap();
+    }
+    ok(
+        &run_in(&proj, &["report", "run", "--html", "si.html"]),
+        "report, m and rad",
+    );
+    ok(
+        &run_in(
+            &root.join("long"),
+            &["report", "../sim", "--html", "mm.html", "--robot", "ur5"],
+        ),
+        "report, mm and deg",
+    );
+    let si = std::fs::read_to_string(proj.join("si.html")).unwrap();
+    let mm = std::fs::read_to_string(root.join("long/mm.html")).unwrap();
+    assert!(!si.contains("not evaluated"));
+    assert_eq!(error_table(&si), error_table(&mm));
+}
