@@ -11,7 +11,17 @@ use std::process::ExitCode;
 use cli::out::{errln, BROKEN_PIPE_EXIT};
 
 fn main() -> ExitCode {
-    let args = match cli::Cli::try_parse() {
+    let argv = match cli::project::merge_args(
+        std::env::args_os().collect(),
+        std::path::Path::new(cli::project::DEFAULT_FILE),
+    ) {
+        Ok(a) => a,
+        Err(e) => {
+            errln!("rigctl: {e}");
+            return ExitCode::from(e.exit_code());
+        }
+    };
+    let args = match cli::Cli::try_parse_from(argv) {
         Ok(args) => args,
         Err(e) => {
             if e.use_stderr() {

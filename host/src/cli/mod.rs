@@ -9,6 +9,7 @@ mod diagnose;
 mod export;
 mod fk;
 mod fuse;
+mod init;
 mod joint_log;
 mod joints;
 mod model2urdf;
@@ -20,6 +21,7 @@ mod ports;
 mod pose_args;
 mod poses;
 mod potcal;
+pub mod project;
 mod record;
 mod report;
 mod sheet;
@@ -35,6 +37,11 @@ mod urdf2model;
     about = "Low-cost robot calibration rig: record, model, simulate, calibrate"
 )]
 pub struct Cli {
+    /// Project file (TOML: robot, units, instrument, data files, plan environment;
+    /// docs/project.md); default: rigctl.toml in the working directory when present. Flags on
+    /// the command line win over its values.
+    #[arg(long, global = true, value_name = "FILE")]
+    pub project: Option<std::path::PathBuf>,
     #[command(subcommand)]
     pub command: Command,
 }
@@ -81,6 +88,8 @@ pub enum Command {
     /// Measured poses from a continuous joint log (CSV or ROS 2 bag) and an instrument log:
     /// standstills, clock offset, averaged points and their spread.
     Poses(poses::Args),
+    /// Write a commented project file (rigctl.toml) for a URDF's chain, a preset or a model file.
+    Init(init::Args),
 }
 
 pub fn run(cli: Cli) -> Result<(), CliError> {
@@ -104,6 +113,7 @@ pub fn run(cli: Cli) -> Result<(), CliError> {
         Command::Compensate(a) => compensate::run(a),
         Command::Plan(a) => plan::run(*a),
         Command::Poses(a) => poses::run(a),
+        Command::Init(a) => init::run(a),
     }
 }
 

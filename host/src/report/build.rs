@@ -13,6 +13,7 @@ use super::markup::{figure, figure_with};
 use super::path_errors::path_errors_section;
 use super::pose_sets::pose_sets;
 use super::run_dir::RunDir;
+use super::suggest::Suggest;
 use super::table::{merge_tables, tables_from_calibrate_json};
 use super::{Report, ReportError, ReportOptions};
 use crate::model::{choose_model, Model, ModelChoice};
@@ -40,9 +41,10 @@ fn load_models(
     notes: &mut Vec<String>,
 ) -> Models {
     let declared = match choose_model(&ModelChoice {
-        robot,
+        robot: robot.filter(|_| opts.model_file.is_none()),
+        model_file: opts.model_file.as_deref(),
         tool_mm: opts.tool_mm,
-        ..Default::default()
+        sets: &opts.sets,
     }) {
         Ok(m) => Some(m),
         Err(e) => {
@@ -96,7 +98,7 @@ pub fn build_report(dir: &std::path::Path, opts: &ReportOptions) -> Result<Repor
     let mut best_model = None;
     let mut pose_counts = Vec::new();
     if let Some(decl) = &models.declared {
-        let sets = pose_sets(&run, decl, &models.files, &mut notes);
+        let sets = pose_sets(&run, decl, &models.files, opts, &mut notes);
         tables.extend(sets.tables);
         report.figures.extend(sets.figures);
         best_model = sets.best_model;
@@ -161,7 +163,15 @@ pub fn build_report(dir: &std::path::Path, opts: &ReportOptions) -> Result<Repor
             &mut notes,
         );
     }
-    report.summary = build_summary(&run, robot.as_deref(), &report, &noun_of, &mut notes);
+    let suggest = Suggest::new(dir, &run, robot.as_deref(), opts);
+    report.summary = build_summary(
+        &run,
+        robot.as_deref(),
+        &suggest,
+        &report,
+        &noun_of,
+        &mut notes,
+    );
     report.notes = notes;
     Ok(report)
 }

@@ -9,6 +9,7 @@ use serde_json::Value;
 use super::answer::{best_stage, identified, one_sentence, urdf_accuracy, verdict_line};
 use super::markup::{escape, figure_with, render_figure};
 use super::run_dir::RunDir;
+use super::suggest::Suggest;
 use super::summary::{
     aliased, found_effects, headline_sentence, headlines, verdict, Diagnosis, Headline, Stage,
     Summary,
@@ -170,7 +171,7 @@ fn outlier_text(o: &serde_json::Value) -> String {
 
 /// The next steps a diagnosis `d` calls for (overfitting, a change between the sets, something
 /// left open), appended to `out`.
-fn diagnosis_steps(d: &Diagnosis, robot: &str, out: &mut Vec<String>) {
+fn diagnosis_steps(d: &Diagnosis, suggest: &Suggest, out: &mut Vec<String>) {
     let lacking = d
         .verdict
         .as_deref()
@@ -178,8 +179,9 @@ fn diagnosis_steps(d: &Diagnosis, robot: &str, out: &mut Vec<String>) {
     let v = d.verdict.as_deref().unwrap_or("");
     if v.starts_with("Overfitting") {
         out.push(format!(
-            "{}: the poses are too few for the parameters fitted. Measure more poses (`rigctl plan --robot {robot} --n 60 --out plan.csv`) or fit fewer parameters.",
-            d.source
+            "{}: the poses are too few for the parameters fitted. Measure more poses (`{}`) or fit fewer parameters.",
+            d.source,
+            suggest.plan("")
         ));
     } else if v.starts_with("A change between the sets") {
         out.push(format!(
@@ -187,23 +189,29 @@ fn diagnosis_steps(d: &Diagnosis, robot: &str, out: &mut Vec<String>) {
             d.source
         ));
     }
-    if !d.aliased.is_empty() || lacking {
+    if !d.aliased.is_empty() {
         out.push(format!(
-            "Measure poses that separate what {} leaves open: `rigctl plan --robot {robot} --n 60 --from-diagnose {} --out plan.csv`, then measure them and run diagnose again.",
-            d.source, d.source
+            "Measure poses that separate what {} leaves open: `{}`, then measure them and run diagnose again.",
+            d.source,
+            suggest.plan_from_diagnose(&d.source)
+        ));
+    } else if lacking {
+        out.push(format!(
+            "{}: the model still lacks something no effect names yet: measure more poses (`{}`) and run diagnose again.",
+            d.source,
+            suggest.plan_more()
         ));
     }
 }
 
 fn next_steps(
     run: &RunDir,
-    robot: Option<&str>,
+    suggest: &Suggest,
     report: &Report,
     diags: &[Diagnosis],
     held_out_missing: bool,
 ) -> Vec<String> {
     let mut out = Vec::new();
-    let robot = robot.unwrap_or("katana450");
     // poses left out as gross errors, by any document
     for (name, doc) in run.calibrate.iter().chain(&run.diagnose) {
         let listed: Vec<String> = doc
@@ -220,7 +228,7 @@ fn next_steps(
         }
     }
     for d in diags {
-        diagnosis_steps(d, robot, &mut out);
+        diagnosis_steps(d, suggest, &mut out);
     }
     let extended: Vec<&str> = run
         .models
@@ -240,12 +248,16 @@ fn next_steps(
         .collect();
     if !unident.is_empty() {
         out.push(format!(
-            "Not identifiable from these poses: {}. `rigctl plan --robot {robot} --n 60 --out plan.csv` says which of them no pose can identify (structural combinations: keep one parameter of each fixed) and chooses poses that identify the others.",
-            unident.join(", ")
+            "Not identifiable from these poses: {}. `{}` says which of them no pose can identify (structural combinations: keep one parameter of each fixed) and chooses poses that identify the others.",
+            unident.join(", "),
+            suggest.plan("")
         ));
     }
     if run.diagnose.is_empty() && (run.cal_csv.is_some() || !run.calibrate.is_empty()) {
-        out.push("Look for effects the declared model lacks: `rigctl diagnose --poses cal.csv --validate val.csv --json diagnose.json`.".into());
+        out.push(match suggest.diagnose() {
+            Some(c) => format!("Look for effects the declared model lacks: `{c}`."),
+            None => "Look for effects the declared model lacks: `rigctl diagnose` with the calibration poses and a held-out set (`--validate`).".into(),
+        });
     }
     if held_out_missing {
         out.push("Nothing was held out: measure a second set (poses or another sheet) and pass it as `--validate`, so that the error to expect is known.".into());
@@ -263,6 +275,7 @@ fn next_steps(
 pub(crate) fn build_summary(
     run: &RunDir,
     robot: Option<&str>,
+    suggest: &Suggest,
     report: &Report,
     noun_of: &dyn Fn(usize) -> &'static str,
     notes: &mut Vec<String>,
@@ -312,7 +325,7 @@ pub(crate) fn build_summary(
         })
         .collect();
     let held_out_missing = !heads.iter().any(|h| h.held_out);
-    let next = next_steps(run, robot, report, &diagnoses, held_out_missing);
+    let next = next_steps(run, suggest, report, &diagnoses, held_out_missing);
     let model_file = chosen_model_file(run, heads.first());
     let sentence = one_sentence(
         heads.first(),

@@ -32,6 +32,7 @@ mod markup;
 pub mod path_errors;
 mod pose_sets;
 pub mod run_dir;
+pub mod suggest;
 pub mod summary;
 pub mod table;
 
@@ -95,6 +96,17 @@ pub struct ReportOptions {
     pub robot: Option<String>,
     /// Katana tool length d5 (mm) of the declared model.
     pub tool_mm: Option<f64>,
+    /// The declared model as a model file (instead of a preset).
+    pub model_file: Option<PathBuf>,
+    /// Overrides of the declared model's parameters (`NAME=VALUE`, as `--set`).
+    pub sets: Vec<String>,
+    /// The model flags of the commands the report suggests, each with a leading space (`Some("")`
+    /// when a project file supplies the model); default: from the model file or robot.
+    pub command_model: Option<String>,
+    /// Units, separator and decimal mark of the run's pose files (`--units`, `--sep`,
+    /// `--decimal`; default mm, deg, `,` and `.`).
+    pub pose_units: crate::io::units::Units,
+    pub pose_dialect: crate::io::dialect::Dialect,
 }
 
 /// A figure: caption and inline SVG.

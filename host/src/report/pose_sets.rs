@@ -13,6 +13,7 @@ use super::markup::{figure, figure_with};
 use super::run_dir::RunDir;
 use super::table::{Column, ErrorTable};
 use super::Figure;
+use super::ReportOptions;
 use crate::calib::Poses;
 use crate::io::pose_csv::{read_poses, PoseCsvError, PoseSpec};
 use crate::model::{Model, KATANA_GEOMETRIC_PARAMS};
@@ -44,8 +45,14 @@ fn mean(v: &[f64]) -> f64 {
 fn read_with_times(
     path: &std::path::Path,
     model: &Model,
+    opts: &ReportOptions,
 ) -> Result<(Poses, Option<Vec<f64>>), PoseCsvError> {
-    let file = read_poses(path, &PoseSpec::for_model(model, true))?;
+    let spec = PoseSpec {
+        units: opts.pose_units,
+        dialect: opts.pose_dialect,
+        ..PoseSpec::for_model(model, true)
+    };
+    let file = read_poses(path, &spec)?;
     let times = file.poses.iter().map(|p| p.t_s).collect();
     Ok((Poses::from_pose_file(&file).unwrap_or_default(), times))
 }
@@ -55,6 +62,7 @@ pub(crate) fn pose_sets(
     run: &RunDir,
     decl: &Model,
     models: &[(String, Model)],
+    opts: &ReportOptions,
     notes: &mut Vec<String>,
 ) -> PoseSets {
     let mut out = PoseSets::default();
@@ -64,7 +72,7 @@ pub(crate) fn pose_sets(
         (&run.val_csv, "Held-out poses", true),
     ] {
         let Some(path) = path else { continue };
-        let (poses, times) = match read_with_times(path, decl) {
+        let (poses, times) = match read_with_times(path, decl, opts) {
             Ok((p, t)) if !p.is_empty() => (p, t),
             Ok(_) => {
                 notes.push(format!("{}: no poses", path.display()));

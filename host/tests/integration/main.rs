@@ -44,6 +44,7 @@ mod plan_sheets;
 mod plan_sim;
 mod plan_workspace_cli;
 mod plausibility;
+mod project_file;
 mod reliability_board;
 mod reliability_inputs;
 mod reliability_interrupt;

@@ -293,6 +293,17 @@ fn commands(dir: &Path) -> Vec<(&'static str, Vec<OsString>)> {
                 d("poses.csv"),
             ],
         ),
+        (
+            "init",
+            vec![
+                o("init"),
+                o("--robot"),
+                o("ur5"),
+                o("--force"),
+                o("--out"),
+                d("rigctl.toml"),
+            ],
+        ),
     ]
 }
 
