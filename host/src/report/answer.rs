@@ -59,10 +59,12 @@ pub struct UrdfAccuracy {
     pub lacks: Vec<String>,
 }
 
-/// Effect ids a URDF holds: the base and tool frames and link lengths (joint origins).
+/// Whether a URDF holds the effect (the effect table's `urdf_holds`: frames and joint
+/// origins); an id the table does not know is taken as not held.
 fn urdf_holds(effect_id: &str) -> bool {
-    ["base_tilt", "base_offset", "tool_offset"].contains(&effect_id)
-        || effect_id.starts_with("link_length:")
+    effect_id
+        .parse::<crate::model::effect::EffectId>()
+        .is_ok_and(|e| e.row().urdf_holds)
 }
 
 /// What a document's model holds that a URDF cannot: non-geometric effects found by a
