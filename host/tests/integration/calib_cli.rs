@@ -1,9 +1,8 @@
 //! `rigctl calibrate` end to end: JSON keys, the written model, bad input.
 
-use rand::{Rng, SeedableRng};
-use rand_chacha::ChaCha8Rng;
 use rigctl::model::{katana450, Tilt};
 
+use super::common::poses::write_exact_poses;
 use super::common::spawn::rigctl;
 
 /// A Katana pose file from the declared model with `dth2 = 0.05`, `al3 = 0.03` (exact data).
@@ -11,25 +10,7 @@ fn write_poses(path: &std::path::Path, n: usize, seed: u64) {
     let mut truth = katana450(200.0).unwrap();
     truth.set_param("dth2", 0.05).unwrap();
     truth.set_param("al3", 0.03).unwrap();
-    let mut rng = ChaCha8Rng::seed_from_u64(seed);
-    let mut text = String::from("# synthetic\nq1,q2,q3,q4,q5,x,y,z\n");
-    for _ in 0..n {
-        let q: Vec<f64> = truth
-            .joint_limits()
-            .iter()
-            .map(|l| rng.gen_range(l[0]..l[1]))
-            .collect();
-        let p = truth.position_mm(&q, Tilt::Static).unwrap();
-        let qs: Vec<String> = q.iter().map(|v| format!("{v:.9}")).collect();
-        text.push_str(&format!(
-            "{},{:.9},{:.9},{:.9}\n",
-            qs.join(","),
-            p.x,
-            p.y,
-            p.z
-        ));
-    }
-    std::fs::write(path, text).unwrap();
+    write_exact_poses(&truth, Tilt::Static, path, n, seed, "# synthetic\n");
 }
 
 #[test]

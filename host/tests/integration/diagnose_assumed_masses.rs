@@ -19,15 +19,10 @@ const NOISE_MM: f64 = 0.01;
 const D_MM: [f64; 6] = [89.159, 0.0, 0.0, 109.15, 94.65, 82.3];
 const A_MM: [f64; 6] = [0.0, -425.0, -392.25, 0.0, 0.0, 0.0];
 const ALPHA_DEG: [f64; 6] = [90.0, 0.0, 0.0, 90.0, -90.0, 0.0];
-const MASS_KG: [f64; 6] = [3.7, 8.393, 2.33, 1.219, 1.219, 0.1879];
-const COM_MM: [[f64; 3]; 6] = [
-    [0.0, -25.61, 1.93],
-    [212.5, 0.0, 113.36],
-    [150.0, 0.0, 26.5],
-    [0.0, -1.8, 16.34],
-    [0.0, 1.8, 16.34],
-    [0.0, 0.0, -1.159],
-];
+/// The masses and centres of mass Universal Robots publishes (the preset's constants: data,
+/// not an assumption of the generator).
+const MASS_KG: [f64; 6] = rigctl::model::UR5_LINK_MASS_KG;
+const COM_MM: [[f64; 3]; 6] = rigctl::model::UR5_LINK_COM_MM;
 
 fn dh(theta_deg: f64, d: f64, a: f64, alpha_deg: f64) -> Matrix4<f64> {
     let (st, ct) = theta_deg.to_radians().sin_cos();

@@ -5,11 +5,10 @@
 //! identified" with the list folded, and the held-out error through the exported URDF beside
 //! the extended model's.
 
-use rand::{Rng, SeedableRng};
-use rand_chacha::ChaCha8Rng;
 use rigctl::model::{katana450, Model, Tilt};
 use rigctl::report::{build_report, render_html, ReportOptions};
 
+use crate::common::poses::write_exact_poses;
 use crate::common::spawn::output;
 
 fn stats(n: usize, mean: f64, rms: f64) -> serde_json::Value {
@@ -237,23 +236,5 @@ fn calibrate_writes_the_registration_only_figure() {
 
 /// Exact poses of `truth` (rigid: the standard method's model) at random joint values.
 fn write_poses(truth: &Model, path: &std::path::Path, n: usize, seed: u64) {
-    let mut rng = ChaCha8Rng::seed_from_u64(seed);
-    let mut text = String::from("q1,q2,q3,q4,q5,x,y,z\n");
-    for _ in 0..n {
-        let q: Vec<f64> = truth
-            .joint_limits()
-            .iter()
-            .map(|l| rng.gen_range(l[0]..l[1]))
-            .collect();
-        let p = truth.position_mm(&q, Tilt::Off).unwrap();
-        let qs: Vec<String> = q.iter().map(|v| format!("{v:.9}")).collect();
-        text.push_str(&format!(
-            "{},{:.9},{:.9},{:.9}\n",
-            qs.join(","),
-            p.x,
-            p.y,
-            p.z
-        ));
-    }
-    std::fs::write(path, text).unwrap();
+    write_exact_poses(truth, Tilt::Off, path, n, seed, "");
 }

@@ -41,6 +41,9 @@ pub(super) struct LinkNode {
 pub(super) struct Body {
     pub(super) node: usize,
     pub(super) shapes: Vec<(Isometry3<f64>, SharedShape)>,
+    /// Radius of the shapes about the link frame's origin, mm (their bounding spheres'): how far
+    /// a point of them moves per radian the link turns.
+    pub(super) radius_mm: f64,
 }
 
 fn iso(xyz_mm: Vector3<f64>, rpy_rad: [f64; 3]) -> Isometry3<f64> {
@@ -189,7 +192,18 @@ pub(super) fn build_bodies(
         if shapes.is_empty() {
             bare.push(n.name.clone());
         } else {
-            bodies.push(Body { node: k, shapes });
+            let radius_mm = shapes
+                .iter()
+                .map(|(l, s)| {
+                    let bs = s.compute_local_bounding_sphere();
+                    (l * bs.center).coords.norm() + bs.radius
+                })
+                .fold(0.0, f64::max);
+            bodies.push(Body {
+                node: k,
+                shapes,
+                radius_mm,
+            });
         }
     }
     if !bare.is_empty() {

@@ -327,16 +327,8 @@ impl Collider {
             .iter()
             .map(|b| {
                 let (a, z) = (pa[b.node], pb[b.node]);
-                let r = b
-                    .shapes
-                    .iter()
-                    .map(|(l, s)| {
-                        let bs = s.compute_local_bounding_sphere();
-                        (l * bs.center).coords.norm() + bs.radius
-                    })
-                    .fold(0.0, f64::max);
                 let angle = (a.rotation.inverse() * z.rotation).angle();
-                (z.translation.vector - a.translation.vector).norm() + angle * r
+                (z.translation.vector - a.translation.vector).norm() + angle * b.radius_mm
             })
             .fold(0.0, f64::max)
     }

@@ -5,6 +5,7 @@ use std::path::PathBuf;
 
 pub mod fake_board;
 pub mod long_urdf;
+pub mod poses;
 pub mod record;
 pub mod spawn;
 pub mod spawn_rule;
