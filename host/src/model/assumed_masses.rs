@@ -10,6 +10,10 @@ use nalgebra::Vector3;
 use super::chain::PointMass;
 use super::{Model, ModelError};
 
+/// The heaviest robot mass taken as given, kg (the heaviest industrial arms weigh a few tonnes):
+/// more is a mass in grams or another unit.
+pub const MAX_ROBOT_MASS_KG: f64 = 10_000.0;
+
 /// A default total mass per metre of the summed segment lengths, kg/m (industrial and service
 /// arms of 0.6-1 m reach weigh about 15-25 kg: UR5 18.4 kg at 0.85 m, Panda 18 kg at 0.86 m).
 pub const DEFAULT_KG_PER_M: f64 = 20.0;
@@ -34,6 +38,12 @@ impl Model {
             if !(t.is_finite() && t > 0.0) {
                 return Err(ModelError::Invalid(format!(
                     "assumed robot mass {t} kg: must be a finite number > 0"
+                )));
+            }
+            if t > MAX_ROBOT_MASS_KG {
+                return Err(ModelError::Invalid(format!(
+                    "assumed robot mass {t} kg: more than {MAX_ROBOT_MASS_KG} kg, is it in grams ({} kg)?",
+                    t / 1000.0
                 )));
             }
         }
@@ -125,5 +135,11 @@ mod tests {
             "declared masses are kept"
         );
         assert!(ur5.with_assumed_masses(Some(-1.0)).is_err());
+        // a mass in grams is refused, naming it
+        let e = ur5
+            .with_assumed_masses(Some(18_400.0))
+            .unwrap_err()
+            .to_string();
+        assert!(e.contains("grams (18.4 kg)"), "{e}");
     }
 }

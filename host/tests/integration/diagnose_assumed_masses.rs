@@ -210,3 +210,39 @@ fn assumed_masses_offer_the_compliance_a_massless_model_cannot() {
         assert!(a < 0.5 * b, "{id}: assumed {a} mm against no masses' {b}");
     }
 }
+
+/// The user's mistakes: a robot mass in grams, and assumed masses on a model that declares its
+/// own: exit 2, naming it, nothing written.
+#[test]
+fn a_mass_in_grams_or_on_a_model_with_masses_is_refused() {
+    let dir = tempfile::tempdir().unwrap();
+    let mut rng = ChaCha8Rng::seed_from_u64(5);
+    std::fs::write(dir.path().join("cal.csv"), poses(40, 1, 0.02, &mut rng)).unwrap();
+    std::fs::write(dir.path().join("val.csv"), poses(20, 1, 0.02, &mut rng)).unwrap();
+    let text = rigctl::model::ur5().unwrap().to_toml_string();
+    std::fs::write(dir.path().join("masses.toml"), &text).unwrap();
+    std::fs::write(dir.path().join("bare.toml"), without_masses(&text)).unwrap();
+    for (model, flag, said) in [
+        ("bare", "--robot-mass-kg=18400", "grams (18.4 kg)"),
+        ("masses", "--assume-masses", "declares its link masses"),
+    ] {
+        let json = dir.path().join("d.json");
+        let o = rigctl()
+            .arg("diagnose")
+            .arg("--model")
+            .arg(dir.path().join(format!("{model}.toml")))
+            .arg("--poses")
+            .arg(dir.path().join("cal.csv"))
+            .arg("--validate")
+            .arg(dir.path().join("val.csv"))
+            .arg("--json")
+            .arg(&json)
+            .arg(flag)
+            .output()
+            .unwrap();
+        let err = String::from_utf8_lossy(&o.stderr);
+        assert_eq!(o.status.code(), Some(2), "{flag}: {err}");
+        assert!(err.contains(said), "{flag}: {err}");
+        assert!(!json.exists(), "{flag}: JSON written");
+    }
+}
