@@ -324,6 +324,16 @@ fn simplicity(c: &Candidate) -> (usize, u32) {
     }
 }
 
+/// The moves tried by [`onset_candidates`], in units of [`DecideConfig::onset_probe`]: from a
+/// step at a moment that sits exactly at zero up to, for an effect that changes the loads
+/// ([`crate::model::effect::Kind::changes_loads`]), a move of the unknown's own unit (a
+/// kilogram of payload, a degree of base tilt), which switches on the sign steps of every pose
+/// whose moment it crosses, in either direction (only while no effect on the loads has been
+/// accepted: [`super::select::shortlist`]'s `ladder`). Other effects move the joints, and a large
+/// move of theirs flips the moments of some pose whatever the data: only the first step is
+/// tried for them.
+const ONSET_LADDER: [f64; 4] = [1.0, 10.0, 100.0, 1000.0];
+
 /// Indices of the candidates whose small move ([`DecideConfig::onset_probe`] on each of their
 /// unknowns) flips a sign of the joint moments at some pose: where the tilting law's sign steps
 /// sit exactly at zero in the current fit, the linear screen cannot see what the candidate would
@@ -333,35 +343,36 @@ pub fn onset_candidates(
     cands: &[Candidate],
     data: &MeasuredSet,
     cfg: &DecideConfig,
+    ladder: bool,
 ) -> Result<Vec<usize>, CalibError> {
     let base = cur.model.moment_signs(data).map_err(CalibError::Model)?;
     if base.is_empty() || cfg.onset_probe <= 0.0 {
         return Ok(Vec::new());
     }
-    let mut out = Vec::new();
-    for (ci, cand) in cands.iter().enumerate() {
+    let flips = |cand: &Candidate, size: f64| -> bool {
         let mut probe = cur.model.clone();
-        let mut ok = true;
         for &u in &cand.unknowns {
-            if probe
-                .set_value(u, probe.value(u) + cfg.onset_probe)
-                .is_err()
-            {
-                ok = false;
-                break;
+            if probe.set_value(u, probe.value(u) + size).is_err() {
+                return false;
             }
         }
-        if !ok {
-            continue;
-        }
-        let Ok(signs) = probe.moment_signs(data) else {
-            continue;
-        };
-        if signs.iter().zip(&base).any(|(a, b)| a != b) {
-            out.push(ci);
-        }
-    }
-    Ok(out)
+        probe
+            .moment_signs(data)
+            .is_ok_and(|signs| signs.iter().zip(&base).any(|(a, b)| a != b))
+    };
+    Ok(cands
+        .iter()
+        .enumerate()
+        .filter(|(_, cand)| {
+            flips(cand, cfg.onset_probe)
+                || (ladder
+                    && cand.effect.row().kind.changes_loads()
+                    && ONSET_LADDER.iter().any(|m| {
+                        flips(cand, m * cfg.onset_probe) || flips(cand, -m * cfg.onset_probe)
+                    }))
+        })
+        .map(|(ci, _)| ci)
+        .collect())
 }
 
 /// The current model moved by the Gauss-Newton step of its fitted unknowns plus `cand`'s

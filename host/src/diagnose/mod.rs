@@ -12,6 +12,7 @@
 //! | [`parallel`] | deterministic use of both cores for independent fits |
 //! | [`polish`] | derivative-free polish of a refit across the sign steps of the tilting law |
 //! | [`stat`] | F distribution, BIC, noise statistics |
+//! | [`envelope`] | held-out poses a model within the fit's uncertainty predicts (a sign step): kept, not gross errors |
 //! | [`floor`] | the independent floor (`--instrument-mm`, repeatability) and its tests |
 //! | [`bounds`] | physical bounds on fitted values (a compliance, a mass cannot be negative): held at the bound and refitted |
 //! | [`alias`] | pairs of effects/parameters these poses cannot tell apart |
@@ -40,6 +41,7 @@ pub mod bounds;
 pub mod candidates;
 pub mod compress;
 pub mod decide;
+pub mod envelope;
 pub mod extended;
 pub mod floor;
 pub mod ordered;
@@ -518,6 +520,7 @@ pub fn diagnose(
     // held-out poses judged by the calibration's scale and the final model's prediction
     // uncertainty at each (FORMATS.md: extrapolation is not a gross error)
     let mut outlier_reports = Vec::new();
+    let mut within_reports = Vec::new();
     let val_kept;
     let val = if gross {
         let sigma = outliers::robust_sigma_mm(&norms_mm(&selection.last.model.errors(cal)?), 3)
@@ -532,6 +535,17 @@ pub fn diagnose(
         let val_jac = probe::jacobians(&selection.last.model, &val_all, &selection.last.fitted)?;
         let sd = held_out_sd_mm(cal, &cal_jac, &val_all, &val_jac, sigma);
         let (vflag, thresholds) = outliers::flag_held_out(&vn, &sd, sigma);
+        // a pose that a model within the fit's uncertainty predicts is not a gross error
+        let (vflag, kept) = envelope::within_uncertainty(
+            &selection.last,
+            cal,
+            &cal_jac,
+            &val_all,
+            &vflag,
+            &thresholds,
+            sigma,
+        )?;
+        within_reports = labelled(envelope::reports(&kept, &vn, &thresholds), &val_all);
         outlier_reports.extend(labelled(
             outliers::held_out_reports(&vflag, &vn, &vn, &thresholds, &sd),
             &val_all,
@@ -656,6 +670,7 @@ pub fn diagnose(
         .to_string(),
         outliers_left_out: outliers,
         outliers: outlier_reports,
+        within_uncertainty: within_reports,
         outlier_note,
         converged: last.converged && declared.converged,
         probe: probe.report(&probe_cfg),

@@ -209,6 +209,10 @@ pub struct DiagnoseReport {
     pub outliers_left_out: usize,
     /// Poses left out as gross errors (FORMATS.md); the statistics are over the other poses.
     pub outliers: Vec<crate::calib::outliers::OutlierReport>,
+    /// Held-out poses the gross-error rule flagged that a model within the fit's uncertainty
+    /// predicts (a sign step of a law, [`super::envelope`]): kept in the statistics (extra key).
+    #[serde(skip_serializing_if = "Vec::is_empty")]
+    pub within_uncertainty: Vec<crate::calib::outliers::OutlierReport>,
     /// Set when the gross-error rule was not applied as such (heavy tails) or did not settle.
     #[serde(skip_serializing_if = "Option::is_none")]
     pub outlier_note: Option<String>,
@@ -402,6 +406,17 @@ impl DiagnoseReport {
             let _ = writeln!(
                 s,
                 "outlier: {} line {}{}: {}",
+                o.file,
+                o.line.map_or_else(|| "?".to_string(), |l| l.to_string()),
+                o.id.as_ref()
+                    .map_or_else(String::new, |i| format!(" (id {i})")),
+                o.note
+            );
+        }
+        for o in &self.within_uncertainty {
+            let _ = writeln!(
+                s,
+                "kept: {} line {}{}: {}",
                 o.file,
                 o.line.map_or_else(|| "?".to_string(), |l| l.to_string()),
                 o.id.as_ref()

@@ -42,7 +42,13 @@ pub fn forward_selection(
         if cands.is_empty() {
             break;
         }
-        let shortlisted = shortlist(&cur, &cands, data, cfg)?;
+        // the onset ladder looks for the first effect on the loads; once one is in the model
+        // the sign steps sit where it put them, and a second load effect moved by the ladder
+        // only re-places a few of them (a stand-in for the first one's exact value)
+        let ladder = !steps
+            .iter()
+            .any(|s| s.trial.candidate.effect.row().kind.changes_loads());
+        let shortlisted = shortlist(&cur, &cands, data, cfg, ladder)?;
         let refitted: Vec<Option<(Trial, Fit<ExtModel, Unknown>)>> =
             map_ordered(&shortlisted, |&ci| {
                 refit_candidate(&cur, &requested, &cands[ci], data, cfg)
@@ -91,12 +97,14 @@ pub fn forward_selection(
 
 /// Step 1: the candidates to refit, by index into `cands`: the [`DecideConfig::refit_top`] best
 /// by the linearised change of BIC (only those that lower it), then every candidate whose small
-/// move flips a sign of the joint moments ([`onset_candidates`]).
+/// move flips a sign of the joint moments ([`onset_candidates`]; with `ladder`, the larger moves
+/// of the effects on the loads too).
 pub fn shortlist(
     cur: &Fit<ExtModel, Unknown>,
     cands: &[Candidate],
     data: &MeasuredSet,
     cfg: &DecideConfig,
+    ladder: bool,
 ) -> Result<Vec<usize>, CalibError> {
     let screens = screen(&cur.model, data, &cur.fitted, cands, cfg.rtol)?;
     let rss0 = cur.rss_mm2;
@@ -115,7 +123,7 @@ pub fn shortlist(
     ranked.sort_by(|a, b| a.1.total_cmp(&b.1));
     ranked.truncate(cfg.refit_top);
     let mut out: Vec<usize> = ranked.into_iter().map(|r| r.0).collect();
-    for ci in onset_candidates(cur, cands, data, cfg)? {
+    for ci in onset_candidates(cur, cands, data, cfg, ladder)? {
         if !out.contains(&ci) {
             out.push(ci);
         }

@@ -374,6 +374,14 @@ impl Kind {
         TABLE.iter().find(|r| r.kind == self).unwrap_or(&TABLE[0])
     }
 
+    /// Whether it changes the loads on the joints (the gravity moments) without moving the
+    /// chain: a payload, a tilt of the base against gravity. Such an effect switches the sign
+    /// steps of a declared law (the tilting's contact side) wherever its moments cross the
+    /// arm's own, which a linearisation at zero cannot see.
+    pub fn changes_loads(self) -> bool {
+        matches!(self, Kind::Payload | Kind::BaseTilt)
+    }
+
     /// The id's first part (`joint_scale`): also the name of the model's term it fits.
     pub fn family(self) -> &'static str {
         self.row().family

@@ -16,6 +16,7 @@ mod daq_session;
 mod diagnose_assumed_masses;
 mod diagnose_partial;
 mod diagnose_probe;
+mod diagnose_sign_steps;
 mod diagnose_sim;
 mod diagnose_thermal;
 mod diagnose_transmission;
