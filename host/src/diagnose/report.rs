@@ -402,27 +402,21 @@ impl DiagnoseReport {
             "unexplained: structured = {}; {}",
             self.unexplained.structured, self.unexplained.note
         );
-        for o in &self.outliers {
-            let _ = writeln!(
-                s,
-                "outlier: {} line {}{}: {}",
-                o.file,
-                o.line.map_or_else(|| "?".to_string(), |l| l.to_string()),
-                o.id.as_ref()
-                    .map_or_else(String::new, |i| format!(" (id {i})")),
-                o.note
-            );
-        }
-        for o in &self.within_uncertainty {
-            let _ = writeln!(
-                s,
-                "kept: {} line {}{}: {}",
-                o.file,
-                o.line.map_or_else(|| "?".to_string(), |l| l.to_string()),
-                o.id.as_ref()
-                    .map_or_else(String::new, |i| format!(" (id {i})")),
-                o.note
-            );
+        for (label, list) in [
+            ("outlier", &self.outliers),
+            ("kept", &self.within_uncertainty),
+        ] {
+            for o in list {
+                let _ = writeln!(
+                    s,
+                    "{label}: {} line {}{}: {}",
+                    o.file,
+                    o.line.map_or_else(|| "?".to_string(), |l| l.to_string()),
+                    o.id.as_ref()
+                        .map_or_else(String::new, |i| format!(" (id {i})")),
+                    o.note
+                );
+            }
         }
         if !self.outliers.is_empty() {
             let _ = writeln!(
