@@ -39,11 +39,9 @@ pub enum Select {
 impl FromStr for Select {
     type Err = String;
     fn from_str(s: &str) -> Result<Self, String> {
-        match s {
-            "all" => Ok(Select::All),
-            "press" => Ok(Select::Press),
-            _ => Err(format!("unknown selection `{s}` (all, press)")),
-        }
+        // the names are clap's (`ValueEnum`)
+        <Self as clap::ValueEnum>::from_str(s, false)
+            .map_err(|_| format!("unknown selection `{s}` (all, press)"))
     }
 }
 

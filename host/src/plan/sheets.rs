@@ -101,12 +101,8 @@ pub enum SheetRows {
 impl SheetRows {
     /// Parses `fused`, `trace` or `plane`.
     pub fn parse(s: &str) -> Option<Self> {
-        match s {
-            "fused" => Some(Self::Fused),
-            "trace" => Some(Self::Trace),
-            "plane" => Some(Self::Plane),
-            _ => None,
-        }
+        // the names are clap's (`ValueEnum`)
+        <Self as clap::ValueEnum>::from_str(s, false).ok()
     }
 
     /// The name.
