@@ -101,6 +101,12 @@ impl MeasuredSet {
         }
     }
 
+    /// Joint readings `q_deg` with one full measured point each (`xyz_mm`, mm, frame R), no
+    /// times.
+    pub fn from_points(q_deg: Vec<Vec<f64>>, xyz_mm: Vec<Vector3<f64>>) -> Self {
+        Self::from_poses(Poses { q_deg, xyz_mm })
+    }
+
     /// Reads a pose file with measured positions for `model` (joint count and limits checked).
     /// `t` is used only if every row has it.
     pub fn read(path: &Path, model: &Model) -> Result<Self, PoseCsvError> {

@@ -11,7 +11,7 @@ use super::{plan, PlanConfig, PlanError};
 use crate::calib::fit::fit_parameters;
 use crate::calib::identifiability::DEFAULT_RTOL;
 use crate::calib::lm::LmConfig;
-use crate::calib::{default_selection, position_errors, MeasuredSet, Poses, Stats};
+use crate::calib::{default_selection, position_errors, MeasuredSet, Stats};
 use crate::model::{Model, Tilt};
 
 /// Held-out result of one calibration.
@@ -43,10 +43,7 @@ pub fn measure(
         let p = truth.position_mm(qk, tilt)?;
         xyz.push(p + Vector3::from_fn(|_, _| normal.sample(rng)));
     }
-    Ok(MeasuredSet::from_poses(Poses {
-        q_deg: q.to_vec(),
-        xyz_mm: xyz,
-    }))
+    Ok(MeasuredSet::from_points(q.to_vec(), xyz))
 }
 
 /// Calibrates `declared` ([`default_selection`], declared tilting) on `cal` and evaluates on
