@@ -48,14 +48,9 @@ impl Method {
 impl FromStr for Method {
     type Err = String;
     fn from_str(s: &str) -> Result<Self, String> {
-        match s {
-            "standard" => Ok(Method::Standard),
-            "influence" => Ok(Method::Influence),
-            "tilting" => Ok(Method::Tilting),
-            _ => Err(format!(
-                "unknown method `{s}` (standard, influence, tilting)"
-            )),
-        }
+        // the names are clap's (`ValueEnum`, the variants' names in kebab case)
+        <Self as clap::ValueEnum>::from_str(s, false)
+            .map_err(|_| format!("unknown method `{s}` (standard, influence, tilting)"))
     }
 }
 

@@ -19,12 +19,11 @@ use super::calibrate::{
 };
 use super::error::CalibError;
 use super::fit::Fit;
-use super::general::{
-    fit_general, stacked, GeneralFit, GeneralModel, PoseTorques, Unknown, Values,
-};
+use super::general::{fit_general, stacked, ExtModel, GeneralFit, Unknown, Values};
 use super::measured::MeasuredSet;
 use super::press::forward_select;
 use super::projected::{calibrate_projected, SampleTilt};
+use crate::model::gravity::GravityModel;
 use crate::model::{Model, ParamKind};
 
 /// How the identified set is chosen (`--select`).
@@ -40,11 +39,9 @@ pub enum Select {
 impl FromStr for Select {
     type Err = String;
     fn from_str(s: &str) -> Result<Self, String> {
-        match s {
-            "all" => Ok(Select::All),
-            "press" => Ok(Select::Press),
-            _ => Err(format!("unknown selection `{s}` (all, press)")),
-        }
+        // the names are clap's (`ValueEnum`)
+        <Self as clap::ValueEnum>::from_str(s, false)
+            .map_err(|_| format!("unknown selection `{s}` (all, press)"))
     }
 }
 
@@ -125,20 +122,19 @@ fn unknown_sets(
 /// Fits `always`, then (with candidates) adds the ones chosen by block PRESS at that fit and
 /// fits them all.
 fn identify(
-    start: &GeneralModel,
+    start: &ExtModel,
     data: &MeasuredSet,
-    tau: &PoseTorques,
     sets: &(Vec<Unknown>, Vec<Unknown>),
     opts: &CalibrateOptions,
 ) -> Result<(GeneralFit, Vec<Unknown>), CalibError> {
     let (always, candidates) = sets;
-    let first = fit_general(start, data, tau, always, &opts.lm, opts.rtol)?;
+    let first = fit_general(start, data, always, &opts.lm, opts.rtol)?;
     if candidates.is_empty() {
         return Ok((first, Vec::new()));
     }
     let mut cols = first.fitted.clone();
     cols.extend(candidates.iter().filter(|c| !first.fitted.contains(c)));
-    let (jac, r) = stacked(&first.model, data, tau, &cols)?;
+    let (jac, r) = stacked(&first.model, data, &cols)?;
     let fixed: Vec<usize> = (0..first.fitted.len()).collect();
     let cand: Vec<usize> = (first.fitted.len()..cols.len()).collect();
     let added: Vec<Unknown> = forward_select(&jac, &r, &data.row_blocks(), &fixed, &cand)
@@ -150,15 +146,16 @@ fn identify(
     }
     let mut sel = first.fitted.clone();
     sel.extend(&added);
-    let fit = fit_general(&first.model, data, tau, &sel, &opts.lm, opts.rtol)?;
+    let fit = fit_general(&first.model, data, &sel, &opts.lm, opts.rtol)?;
     Ok((fit, added))
 }
 
-fn torques(nominal: &Model, data: &MeasuredSet, needed: bool) -> Result<PoseTorques, CalibError> {
-    if !needed {
-        return Ok(PoseTorques::default());
+/// `--compliance` needs link masses (the gravity torques).
+fn masses_for(nominal: &Model, compliance: bool) -> Result<(), CalibError> {
+    match compliance && GravityModel::for_model(nominal).is_none() {
+        true => Err(CalibError::NoMasses),
+        false => Ok(()),
     }
-    PoseTorques::of(nominal, data)?.ok_or(CalibError::NoMasses)
 }
 
 /// The model-parameter part of a general fit, for the report.
@@ -282,23 +279,16 @@ impl Run<'_> {
             )));
         }
         let sets = unknown_sets(nominal, cal, opts, gen)?;
-        let tau_cal = torques(nominal, cal, gen.compliance)?;
+        masses_for(nominal, gen.compliance)?;
         let tilt = opts.method == Method::Tilting && nominal.has_tilt();
         let run = |tilt: bool| {
-            let start = GeneralModel::new(nominal.clone(), cal.n_slots(), tilt)?;
-            identify(&start, cal, &tau_cal, &sets, opts)
+            let start = ExtModel::with_points(nominal.clone(), cal.n_slots(), tilt)?;
+            identify(&start, cal, &sets, opts)
         };
         let (chosen, added) = run(tilt)?;
         let (chosen, held) = settle(cal, chosen, opts, gen.compliance)?;
         let standard = if tilt { run(false)?.0 } else { chosen.clone() };
-        // the errors with the torques of the model they are reported for (what `fk` on the
-        // written model computes)
-        let tau_cal = torques(&chosen.model.model, cal, gen.compliance)?;
-        let tau_val = match val {
-            Some(v) => torques(&chosen.model.model, v, gen.compliance)?,
-            None => PoseTorques::default(),
-        };
-        let mut before = GeneralModel::new(nominal.clone(), cal.n_slots(), false)?;
+        let mut before = ExtModel::with_points(nominal.clone(), cal.n_slots(), false)?;
         for (b, c) in before
             .offsets_mm
             .iter_mut()
@@ -307,17 +297,19 @@ impl Run<'_> {
         {
             *b = *c;
         }
-        let errs = |m: &GeneralModel, d: &MeasuredSet, t: &PoseTorques| m.errors(d, t);
+        // every model's errors with the torques of its own chain (what `fk` on the written
+        // model computes)
+        let errs = |m: &ExtModel, d: &MeasuredSet| m.point_errors(d);
         let cal_errors = [
-            errs(&before, cal, &tau_cal)?,
-            errs(&standard.model, cal, &tau_cal)?,
-            errs(&chosen.model, cal, &tau_cal)?,
+            errs(&before, cal)?,
+            errs(&standard.model, cal)?,
+            errs(&chosen.model, cal)?,
         ];
         let val_errors = match val {
             Some(v) => [
-                errs(&before, v, &tau_val)?,
-                errs(&standard.model, v, &tau_val)?,
-                errs(&chosen.model, v, &tau_val)?,
+                errs(&before, v)?,
+                errs(&standard.model, v)?,
+                errs(&chosen.model, v)?,
             ],
             None => [Vec::new(), Vec::new(), Vec::new()],
         };
@@ -342,7 +334,7 @@ impl Run<'_> {
         report.unphysical.extend(held);
         for (u, s) in chosen.fitted.iter().zip(&chosen.sigma) {
             if !matches!(u, Unknown::Param(_)) {
-                let name = chosen.model.name(*u, cal);
+                let name = chosen.model.name_in(*u, cal);
                 let value = chosen.model.value(*u);
                 if matches!(u, Unknown::Compliance(_)) && value < 0.0 {
                     report.unphysical.push(format!(
@@ -360,7 +352,10 @@ impl Run<'_> {
             }
         }
         Ok(GeneralOutcome {
-            added: added.iter().map(|&u| chosen.model.name(u, cal)).collect(),
+            added: added
+                .iter()
+                .map(|&u| chosen.model.name_in(u, cal))
+                .collect(),
             outcome: Outcome {
                 model: chosen.model.model.clone(),
                 tilt,
@@ -412,8 +407,8 @@ const MAX_SETTLE_REFITS: usize = 4;
 
 /// With compliance: the fit made consistent with its own chain and with the physical bounds
 /// ([`crate::model::effect::bound`], one table for `calibrate` and `diagnose`). The gravity
-/// torques are those of the fitted chain (as `fk` on the written model computes them), not of
-/// the input's, and a compliance fitted below its bound (negative) is held at the bound and
+/// torques are always those of the state's chain (as `fk` on the written model computes them),
+/// and a compliance fitted below its bound (negative) is held at the bound and
 /// left out of the fitted set; the others are refitted, until nothing changes. Returns the fit
 /// and a line for every value held.
 fn settle(
@@ -443,7 +438,7 @@ fn settle(
                 "{} = {:.4} +- {sigma:.4} fitted below its physical bound: held at {hold} and \
                  left out of the fit (the term stood in for something the model lacks, e.g. a \
                  length or the link masses)",
-                start.name(u, cal),
+                start.name_in(u, cal),
                 start.value(u)
             ));
             start.set_value(u, hold)?;
@@ -454,8 +449,7 @@ fn settle(
             .copied()
             .filter(|u| !below.iter().any(|b| b.0 == *u))
             .collect();
-        let tau = torques(&start.model, cal, true)?;
-        let next = fit_general(&start, cal, &tau, &selection, &opts.lm, opts.rtol)?;
+        let next = fit_general(&start, cal, &selection, &opts.lm, opts.rtol)?;
         let moved = (next.rss_mm2 - fit.rss_mm2).abs() > 1e-9 * fit.rss_mm2.max(f64::MIN_POSITIVE);
         let mut fixed = fit.fixed.clone();
         fixed.extend(below.iter().map(|b| b.0));

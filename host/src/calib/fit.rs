@@ -16,9 +16,9 @@ use super::problem::{
 use crate::model::Model;
 
 /// Result of every identification: [`fit_parameters`] and [`fit_problem`] (a [`Model`] and its
-/// parameters by model index), [`super::general::fit_general`] (a model with point offsets and
+/// parameters by model index), [`super::general::fit_general`] (the state with point offsets and
 /// [`super::unknown::Unknown`]s), `diagnose`'s extended fit
-/// ([`crate::diagnose::extended::fit`]: the extended model and its `Unknown`s).
+/// ([`crate::diagnose::extended::fit`]: the one state [`super::state::ExtModel`] and its `Unknown`s).
 #[derive(Debug, Clone)]
 pub struct Fit<M = Model, U = usize> {
     /// The model with the fitted values.

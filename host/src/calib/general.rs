@@ -1,16 +1,18 @@
 //! The identification beyond one tool point and the chain parameters: several measured points
 //! per pose ([`MeasuredSet`], each point with its own offset in the tool frame) and joint
 //! compliance (a joint deflection proportional to the gravity torque about its axis, the
-//! `compliance:j<i>` law of [`crate::model::transmission::compliance_deflection_deg`]).
+//! `compliance:j<i>` law of [`crate::model::transmission::compliance_deflection_deg`]), on the
+//! one state [`ExtModel`] (its `offsets_mm`).
 //!
 //! Prediction of measurement (pose i, slot k):
 //!
 //! ```text
-//! q_eff = q_i + c . tau(q_i)                c deg per kgf.m, tau from the nominal link masses
+//! q_eff = q_i + c . tau(q_i)                c deg per kgf.m, tau from the link masses
 //! p     = fk(q_eff) with the tool point = slot k's offset (slot 0: tool_dx..dz)
 //! ```
 //!
-//! The torques are those of the nominal chain at the readings (fixed regressors: the
+//! The torques are those of the state's chain at the readings ([`ExtModel::torques_kgfm`], as
+//! the written model applies them); the Jacobian takes them as fixed regressors (the
 //! compliance is a small correction of a stiff joint).
 
 use nalgebra::{DMatrix, DVector, Vector3};
@@ -21,87 +23,12 @@ use super::identifiability::analyse;
 use super::lm::LmConfig;
 use super::measured::MeasuredSet;
 use super::problem::{put_position_rows, tilt_mode, ModelProblem};
+pub use super::state::ExtModel;
 use super::unknown::Freed;
 pub use super::unknown::{Unknown, Values};
 use crate::model::gravity::GravityModel;
 use crate::model::transmission::{compliance_deflected, compliance_regressor};
 use crate::model::{Model, ModelError, Wrt};
-
-/// Gravity torques about the joint axes (kgf.m) at every pose, from the link masses of a
-/// nominal model (empty vectors when not needed).
-#[derive(Debug, Clone, Default)]
-pub struct PoseTorques(pub Vec<Vec<f64>>);
-
-impl PoseTorques {
-    /// Torques of `nominal` (its masses, [`GravityModel::for_model`]) at the poses of `data`;
-    /// `None` if the model has no link masses.
-    pub fn of(nominal: &Model, data: &MeasuredSet) -> Result<Option<Self>, ModelError> {
-        let Some(g) = GravityModel::for_model(nominal) else {
-            return Ok(None);
-        };
-        let tau = data
-            .poses
-            .q_deg
-            .iter()
-            .map(|q| g.axis_torques_kgfm(nominal, q))
-            .collect::<Result<Vec<_>, _>>()?;
-        Ok(Some(Self(tau)))
-    }
-
-    fn at(&self, pose: usize) -> &[f64] {
-        self.0.get(pose).map_or(&[], Vec::as_slice)
-    }
-}
-
-/// A model with point offsets; its joint compliances are the model's own
-/// ([`crate::model::transmission::JointTerms::compliance_deg_per_kgfm`]).
-#[derive(Debug, Clone)]
-pub struct GeneralModel {
-    /// The robot model (slot 0's point is its tool point; its joint terms hold the
-    /// compliances).
-    pub model: Model,
-    /// Offset of every point slot in the tool frame (mm); slot 0 mirrors the tool point.
-    pub offsets_mm: Vec<Vector3<f64>>,
-    /// Whether the declared static tilting is applied.
-    pub tilt: bool,
-}
-
-impl Values for GeneralModel {
-    fn value(&self, u: Unknown) -> f64 {
-        match u {
-            Unknown::Param(i) => self.model.params().get(i).map_or(f64::NAN, |p| p.value),
-            Unknown::Offset { slot, axis } => self
-                .offsets_mm
-                .get(slot)
-                .map_or(f64::NAN, |o| o[axis.min(2)]),
-            Unknown::Compliance(j) => self
-                .compliance_deg_per_kgfm()
-                .get(j)
-                .copied()
-                .unwrap_or(f64::NAN),
-            _ => f64::NAN,
-        }
-    }
-
-    fn set_value(&mut self, u: Unknown, v: f64) -> Result<(), ModelError> {
-        match u {
-            Unknown::Param(i) => self.model.set_param_at(i, v)?,
-            Unknown::Offset { slot, axis } => {
-                if let Some(o) = self.offsets_mm.get_mut(slot) {
-                    o[axis.min(2)] = v;
-                }
-            }
-            Unknown::Compliance(j) => {
-                let c = &mut self.model.transmission_mut().compliance_deg_per_kgfm;
-                if let Some(c) = c.get_mut(j) {
-                    *c = v;
-                }
-            }
-            other => return Err(not_here(other, &self.model)),
-        }
-        Ok(())
-    }
-}
 
 /// An unknown this identification does not evaluate.
 fn not_here(u: Unknown, model: &Model) -> ModelError {
@@ -119,9 +46,11 @@ fn tool_of(model: &Model) -> Result<[usize; 3], ModelError> {
     ])
 }
 
-impl GeneralModel {
-    /// `model` with `slots` point slots, all starting at its tool point, and no compliance.
-    pub fn new(model: Model, slots: usize, tilt: bool) -> Result<Self, ModelError> {
+impl ExtModel {
+    /// `model` with `slots` point slots, all starting at its tool point, and no compliance (its
+    /// other terms as they are: the measured set has been through them,
+    /// [`MeasuredSet::through_terms`]).
+    pub fn with_points(model: Model, slots: usize, tilt: bool) -> Result<Self, ModelError> {
         let t = tool_of(&model)?;
         let v = model.param_values();
         let tool = Vector3::new(v[t[0]], v[t[1]], v[t[2]]);
@@ -129,6 +58,7 @@ impl GeneralModel {
         let n = model.n_joints();
         model.transmission_mut().compliance_deg_per_kgfm = vec![0.0; n];
         Ok(Self {
+            gravity: GravityModel::for_model(&model),
             offsets_mm: vec![tool; slots.max(1)],
             model,
             tilt,
@@ -141,7 +71,7 @@ impl GeneralModel {
     }
 
     /// The name of an unknown: the parameter's, `marker<k>_x_mm`, `compliance_j<i>_deg_per_kgfm`.
-    pub fn name(&self, u: Unknown, data: &MeasuredSet) -> String {
+    pub fn name_in(&self, u: Unknown, data: &MeasuredSet) -> String {
         match u {
             Unknown::Param(i) => self
                 .model
@@ -167,20 +97,29 @@ impl GeneralModel {
         Ok(out)
     }
 
-    /// Errors `measured - predicted` of every measurement (mm).
-    pub fn errors(
-        &self,
-        data: &MeasuredSet,
-        tau: &PoseTorques,
-    ) -> Result<Vec<Vector3<f64>>, ModelError> {
+    /// The gravity torques of every pose of `data` (kgf.m; empty ones when not `needed`).
+    fn pose_torques(&self, data: &MeasuredSet, needed: bool) -> Result<Vec<Vec<f64>>, ModelError> {
+        data.poses
+            .q_deg
+            .iter()
+            .map(|q| match needed {
+                true => self.torques_kgfm(q),
+                false => Ok(Vec::new()),
+            })
+            .collect()
+    }
+
+    /// Errors `measured - predicted` of every measured point (mm).
+    pub fn point_errors(&self, data: &MeasuredSet) -> Result<Vec<Vector3<f64>>, ModelError> {
         let models = self.slot_models()?;
         let tilt = tilt_mode(self.tilt);
+        let tau = self.pose_torques(data, self.needs_torques(&[]))?;
         data.points()
             .map(|m| {
                 let q = compliance_deflected(
                     &data.poses.q_deg[m.pose],
                     self.compliance_deg_per_kgfm(),
-                    tau.at(m.pose),
+                    &tau[m.pose],
                 );
                 let model = models.get(m.slot).unwrap_or(&self.model);
                 Ok(m.xyz_mm - model.position_mm(&q, tilt)?)
@@ -188,12 +127,11 @@ impl GeneralModel {
             .collect()
     }
 
-    /// Residuals `predicted - measured` (3 rows per measurement) and their Jacobian wrt
+    /// Residuals `predicted - measured` (3 rows per measured point) and their Jacobian wrt
     /// `unknowns`.
-    pub fn rows(
+    pub fn point_rows(
         &self,
         data: &MeasuredSet,
-        tau: &PoseTorques,
         unknowns: &[Unknown],
         r: &mut DVector<f64>,
         jac: Option<&mut DMatrix<f64>>,
@@ -210,12 +148,13 @@ impl GeneralModel {
                 other => Err(not_here(other, &self.model)),
             })
             .collect::<Result<_, _>>()?;
+        let tau = self.pose_torques(data, self.needs_torques(unknowns))?;
         let Some(jac) = jac else {
             for (i, m) in data.points().enumerate() {
                 let q = compliance_deflected(
                     &data.poses.q_deg[m.pose],
                     self.compliance_deg_per_kgfm(),
-                    tau.at(m.pose),
+                    &tau[m.pose],
                 );
                 let model = models.get(m.slot).unwrap_or(&self.model);
                 let p = model.position_mm(&q, tilt)?;
@@ -224,7 +163,7 @@ impl GeneralModel {
             return Ok(());
         };
         for (i, m) in data.points().enumerate() {
-            let tau_i = tau.at(m.pose);
+            let tau_i = &tau[m.pose];
             let q = compliance_deflected(
                 &data.poses.q_deg[m.pose],
                 self.compliance_deg_per_kgfm(),
@@ -254,27 +193,26 @@ impl GeneralModel {
 
 /// Result of [`fit_general`]: the fitted model, offsets and compliances, and the fitted and
 /// fixed unknowns.
-pub type GeneralFit = Fit<GeneralModel, Unknown>;
+pub type GeneralFit = Fit<ExtModel, Unknown>;
 
-/// Stacked Jacobian (rows `predicted - measured`) and residuals of `state` wrt `unknowns`.
+/// Stacked Jacobian (rows `predicted - measured`) and residuals of `state`'s measured points wrt
+/// `unknowns`.
 pub fn stacked(
-    state: &GeneralModel,
+    state: &ExtModel,
     data: &MeasuredSet,
-    tau: &PoseTorques,
     unknowns: &[Unknown],
 ) -> Result<(DMatrix<f64>, DVector<f64>), ModelError> {
     let mut r = DVector::zeros(3 * data.n_points());
     let mut jac = DMatrix::zeros(3 * data.n_points(), unknowns.len());
-    state.rows(data, tau, unknowns, &mut r, Some(&mut jac))?;
+    state.point_rows(data, unknowns, &mut r, Some(&mut jac))?;
     Ok((jac, r))
 }
 
 /// Identifies `selection` (in preference order: later ones are fixed first when a combination
-/// is unidentifiable, threshold `rtol`) from `start` on `data`.
+/// is unidentifiable, threshold `rtol`) from `start` on `data`'s measured points.
 pub fn fit_general(
-    start: &GeneralModel,
+    start: &ExtModel,
     data: &MeasuredSet,
-    tau: &PoseTorques,
     selection: &[Unknown],
     lm: &LmConfig,
     rtol: f64,
@@ -282,14 +220,14 @@ pub fn fit_general(
     if data.is_empty() {
         return Err(CalibError::NoPoses);
     }
-    let (jac0, _) = stacked(start, data, tau, selection)?;
-    let names: Vec<String> = selection.iter().map(|&u| start.name(u, data)).collect();
+    let (jac0, _) = stacked(start, data, selection)?;
+    let names: Vec<String> = selection.iter().map(|&u| start.name_in(u, data)).collect();
     let name_refs: Vec<&str> = names.iter().map(String::as_str).collect();
     let split = Split::of(selection, &name_refs, &analyse(&jac0, rtol)).nonempty()?;
     let freed = Freed::new(start.clone(), split.fitted.clone());
     let x0 = freed.values();
-    let rows = |f: &Freed<GeneralModel>, r: &mut DVector<f64>, jac: Option<&mut DMatrix<f64>>| {
-        f.state.rows(data, tau, &f.unknowns, r, jac)
+    let rows = |f: &Freed<ExtModel>, r: &mut DVector<f64>, jac: Option<&mut DMatrix<f64>>| {
+        f.state.point_rows(data, &f.unknowns, r, jac)
     };
     let problem = ModelProblem::new(freed, 3 * data.n_points(), rows);
     let mut fit = solve_split(split, problem, x0, lm, rtol)?.map_model(|f| f.state);
@@ -353,33 +291,32 @@ mod tests {
             }
         }
         let data = MeasuredSet::from_poses(poses);
-        let tau = PoseTorques::of(&model, &data).unwrap().unwrap();
-        let start = GeneralModel::new(model.clone(), 1, false).unwrap();
+        let start = ExtModel::with_points(model.clone(), 1, false).unwrap();
         let sel = [Unknown::Compliance(0), Unknown::Compliance(1)];
         // Jacobian against central differences at a point off the solution.
         let mut at = start.clone();
         at.model.transmission_mut().compliance_deg_per_kgfm = vec![0.02, 0.1];
-        let (jac, r0) = stacked(&at, &data, &tau, &sel).unwrap();
+        let (jac, r0) = stacked(&at, &data, &sel).unwrap();
         for (c, &u) in sel.iter().enumerate() {
             let h = 1e-6;
             let (mut p, mut m) = (at.clone(), at.clone());
             p.set_value(u, at.value(u) + h).unwrap();
             m.set_value(u, at.value(u) - h).unwrap();
-            let (_, rp) = stacked(&p, &data, &tau, &sel).unwrap();
-            let (_, rm) = stacked(&m, &data, &tau, &sel).unwrap();
+            let (_, rp) = stacked(&p, &data, &sel).unwrap();
+            let (_, rm) = stacked(&m, &data, &sel).unwrap();
             let fd = (rp - rm) / (2.0 * h);
             assert!(
                 (fd - jac.column(c)).amax() < 1e-5 * (1.0 + r0.amax()),
                 "column {c}"
             );
         }
-        let fit = fit_general(&start, &data, &tau, &sel, &LmConfig::default(), 1e-6).unwrap();
+        let fit = fit_general(&start, &data, &sel, &LmConfig::default(), 1e-6).unwrap();
         for (f, c) in fit.model.compliance_deg_per_kgfm().iter().zip(coef) {
             assert!((f - c).abs() < 1e-6, "{f} vs {c}");
         }
         let worst = fit
             .model
-            .errors(&data, &tau)
+            .point_errors(&data)
             .unwrap()
             .iter()
             .map(|e| e.norm())

@@ -17,8 +17,10 @@
 //! | [`fit`] | identifiability + LM + covariance: the one result [`fit::Fit`] of every identification (`diagnose`'s extended fit included), the split of a selection ([`fit::Split`]) and its solve ([`fit::solve_split`], [`fit::fit_at_normal`]), the rank re-analysed at the solution, what it does not determine kept at its input |
 //! | [`influence`] | influence-based identification (thesis eq. 3.7-3.8) |
 //! | [`calibrate`] | the whole `calibrate` command: selection, methods, report |
-//! | [`measured`] | the one measurement set: joint readings, one or several points per pose, partial projections, times, ids, file lines, approach directions, inertial moments |
-//! | [`general`] | identification with point offsets and joint compliance |
+//! | [`measured`] | the one measurement set: joint readings, one or several points per pose, partial projections, times, ids, file lines, approach directions, inertial moments; its readers and constructors |
+//! | `components` | the measured components of a pose of the set: rows, measured part, residual, error, Jacobian rows |
+//! | [`general`] | identification with point offsets and joint compliance (the prediction of several points per pose on [`state::ExtModel`]) |
+//! | [`state`] | `ExtModel`, the one state of every identification (`calibrate`'s and `diagnose`'s): the model, its joint map and time terms, point offsets, its one `Values` impl |
 //! | [`unknown`] | the `Values` of a state named by `Unknown`s (declared in [`crate::model::unknown`]) and `Freed` (the unknowns a solver writes) |
 //! | [`plausible`] | plausibility: the registration of a set onto its model before any fit (units, motion), the robot's geometry changes beyond a real arm's errors after it |
 //! | [`error`] | the identification's errors |
@@ -35,6 +37,7 @@ pub mod accumulate;
 mod accumulator;
 pub mod calibrate;
 pub mod calibrate_general;
+mod components;
 pub mod error;
 pub mod fit;
 pub mod general;
@@ -57,6 +60,7 @@ pub mod registered;
 pub mod regularise;
 pub mod report;
 pub mod samples;
+pub mod state;
 pub mod stats;
 pub mod unknown;
 

@@ -10,9 +10,8 @@ use super::problem::SetUnknowns;
 pub use crate::model::unknown::Unknown;
 use crate::model::ModelError;
 
-/// A model state whose values are named by [`Unknown`]s: the extended model of `diagnose`
-/// ([`crate::diagnose::extended::ExtModel`]) and the model with point offsets of `calibrate`
-/// ([`super::general::GeneralModel`]).
+/// A model state whose values are named by [`Unknown`]s: the one state of every
+/// identification ([`super::state::ExtModel`]).
 pub trait Values {
     /// Current value of an unknown.
     fn value(&self, u: Unknown) -> f64;

@@ -4,6 +4,7 @@ use rigctl::error::{Classify, ErrorKind};
 
 mod board_sim;
 mod calibrate;
+mod calibrate_text;
 mod compensate;
 mod diagnose;
 mod export;

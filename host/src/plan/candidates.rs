@@ -6,7 +6,7 @@ use nalgebra::Vector3;
 use rand::Rng;
 
 use super::PlanError;
-use crate::calib::{MeasuredSet, Poses};
+use crate::calib::MeasuredSet;
 use crate::model::{Model, Tilt};
 
 pub use super::workspace::{
@@ -159,10 +159,7 @@ pub fn structured_candidates(
 
 /// The poses `q` as a dataset (positions unused).
 pub fn joints_dataset(q: &[Vec<f64>]) -> MeasuredSet {
-    MeasuredSet::from_poses(Poses {
-        q_deg: q.to_vec(),
-        xyz_mm: vec![Vector3::zeros(); q.len()],
-    })
+    MeasuredSet::from_points(q.to_vec(), vec![Vector3::zeros(); q.len()])
 }
 
 #[cfg(test)]

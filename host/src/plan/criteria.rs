@@ -72,13 +72,8 @@ impl Criterion {
 
     /// Parses `d`, `a`, `g` or `i`.
     pub fn parse(s: &str) -> Option<Self> {
-        match s.to_ascii_lowercase().as_str() {
-            "d" => Some(Criterion::D),
-            "a" => Some(Criterion::A),
-            "g" => Some(Criterion::G),
-            "i" => Some(Criterion::I),
-            _ => None,
-        }
+        // the letters are clap's (`ValueEnum`), in either case
+        <Self as clap::ValueEnum>::from_str(s, true).ok()
     }
 }
 

@@ -11,7 +11,7 @@ use super::{plan, PlanConfig, PlanError};
 use crate::calib::fit::fit_parameters;
 use crate::calib::identifiability::DEFAULT_RTOL;
 use crate::calib::lm::LmConfig;
-use crate::calib::{default_selection, position_errors, Poses, Stats};
+use crate::calib::{default_selection, position_errors, MeasuredSet, Stats};
 use crate::model::{Model, Tilt};
 
 /// Held-out result of one calibration.
@@ -23,14 +23,14 @@ pub struct HeldOut {
     pub floor_mm: f64,
 }
 
-/// Measures `q` on `truth` (declared static tilting when it has tilting data) with Gaussian
-/// noise `noise_mm` per coordinate.
+/// The measured set of `q` on `truth` (declared static tilting when it has tilting data) with
+/// Gaussian noise `noise_mm` per coordinate.
 pub fn measure(
     truth: &Model,
     q: &[Vec<f64>],
     noise_mm: f64,
     rng: &mut ChaCha8Rng,
-) -> Result<Poses, PlanError> {
+) -> Result<MeasuredSet, PlanError> {
     let tilt = if truth.has_tilt() {
         Tilt::Static
     } else {
@@ -43,10 +43,7 @@ pub fn measure(
         let p = truth.position_mm(qk, tilt)?;
         xyz.push(p + Vector3::from_fn(|_, _| normal.sample(rng)));
     }
-    Ok(Poses {
-        q_deg: q.to_vec(),
-        xyz_mm: xyz,
-    })
+    Ok(MeasuredSet::from_points(q.to_vec(), xyz))
 }
 
 /// Calibrates `declared` ([`default_selection`], declared tilting) on `cal` and evaluates on
@@ -54,14 +51,14 @@ pub fn measure(
 pub fn held_out(
     declared: &Model,
     truth: &Model,
-    cal: &Poses,
-    val: &Poses,
+    cal: &MeasuredSet,
+    val: &MeasuredSet,
 ) -> Result<HeldOut, PlanError> {
     let tilt = declared.has_tilt();
     let sel = default_selection(declared, false);
     let fit = fit_parameters(
         declared,
-        cal,
+        &cal.poses,
         &sel,
         tilt,
         &LmConfig::default(),
@@ -69,7 +66,7 @@ pub fn held_out(
     )
     .map_err(|e| PlanError::Config(format!("calibration failed: {e}")))?;
     let mean = |m: &Model| -> Result<f64, PlanError> {
-        Ok(Stats::from_errors(&position_errors(m, val, tilt)?).mean_mm)
+        Ok(Stats::from_errors(&position_errors(m, &val.poses, tilt)?).mean_mm)
     };
     Ok(HeldOut {
         mean_mm: mean(&fit.model)?,

@@ -29,7 +29,6 @@ use super::PlanError;
 use crate::calib::default_selection;
 use crate::calib::identifiability::{analyse, DEFAULT_RTOL};
 use crate::calib::MeasuredSet;
-use crate::calib::Poses;
 use crate::diagnose::extended::{ExtModel, Unknown};
 use crate::fusion::SheetPlacement;
 use crate::model::ik::KATANA_SEED_DEG;
@@ -101,12 +100,8 @@ pub enum SheetRows {
 impl SheetRows {
     /// Parses `fused`, `trace` or `plane`.
     pub fn parse(s: &str) -> Option<Self> {
-        match s {
-            "fused" => Some(Self::Fused),
-            "trace" => Some(Self::Trace),
-            "plane" => Some(Self::Plane),
-            _ => None,
-        }
+        // the names are clap's (`ValueEnum`)
+        <Self as clap::ValueEnum>::from_str(s, false).ok()
     }
 
     /// The name.
@@ -292,12 +287,8 @@ fn rows_of(
     dirs: Vec<Vec<Vector3<f64>>>,
 ) -> Result<DMatrix<f64>, PlanError> {
     let data = MeasuredSet {
-        poses: Poses {
-            q_deg: q_deg.to_vec(),
-            xyz_mm: vec![Vector3::zeros(); q_deg.len()],
-        },
         directions: Some(dirs),
-        ..MeasuredSet::default()
+        ..MeasuredSet::from_points(q_deg.to_vec(), vec![Vector3::zeros(); q_deg.len()])
     };
     Ok(ext.stacked(&data, unknowns)?.0)
 }

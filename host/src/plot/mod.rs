@@ -1,7 +1,7 @@
 //! Plots of the calibration reports (thesis figures 3.8, 5.8-5.10, 5.12 and the error plots of
 //! chapter 4), as PNG or SVG files or as SVG text for inline HTML.
 //!
-//! Every chart is a plain-data struct implementing [`Chart`] (see [`charts`]):
+//! Every chart is a plain-data struct implementing [`Chart`] (see [`charts`], drawn on `scaffold`):
 //!
 //! | chart | shows |
 //! |---|---|
@@ -30,6 +30,7 @@ use crate::io::atomic::{write_bytes_atomic, AtomicWriteError};
 pub mod charts;
 pub mod path_errors;
 pub mod plan;
+mod scaffold;
 pub mod summary;
 
 pub use charts::{ErrorHistogram, LineChart, Panel, PoseErrorBars, Scatter, Series};

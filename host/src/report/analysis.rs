@@ -4,7 +4,7 @@
 
 use nalgebra::Vector3;
 
-use crate::calib::{position_errors, Poses};
+use crate::calib::{position_errors, MeasuredSet};
 use crate::model::dynamics::{moments_kgfm, Inertia};
 use crate::model::{Model, ModelError, ParamKind, Tilt, Unit};
 use crate::sim::paths::{quintic_profile, Circle, Line, Path};
@@ -32,7 +32,7 @@ pub struct Evaluated {
 pub fn evaluate(
     label: &str,
     model: &Model,
-    poses: &Poses,
+    set: &MeasuredSet,
     tilt: Option<bool>,
 ) -> Result<Evaluated, ModelError> {
     let modes: Vec<bool> = match tilt {
@@ -42,7 +42,7 @@ pub fn evaluate(
     };
     let mut best: Option<(f64, bool, Vec<Vector3<f64>>)> = None;
     for t in modes {
-        let e = position_errors(model, poses, t)?;
+        let e = position_errors(model, &set.poses, t)?;
         let mean = e.iter().map(|v| v.norm()).sum::<f64>() / e.len().max(1) as f64;
         if best.as_ref().is_none_or(|(m, _, _)| mean < *m) {
             best = Some((mean, t, e));
@@ -62,17 +62,14 @@ pub fn evaluate(
 pub fn evaluate_in_order(
     label: &str,
     model: &Model,
-    poses: &Poses,
-    t_s: Option<&[f64]>,
+    set: &MeasuredSet,
     tilt: Option<bool>,
 ) -> Result<Evaluated, ModelError> {
     if !model.transmission().is_active() {
-        return evaluate(label, model, poses, tilt);
+        return evaluate(label, model, set, tilt);
     }
-    let mapped = Poses {
-        q_deg: model.effective_pose_joints(&poses.q_deg, t_s)?,
-        xyz_mm: poses.xyz_mm.clone(),
-    };
+    let mut mapped = set.clone();
+    mapped.poses.q_deg = model.effective_pose_joints(&set.poses.q_deg, set.t_s.as_deref())?;
     evaluate(label, model, &mapped, tilt)
 }
 

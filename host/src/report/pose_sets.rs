@@ -14,8 +14,8 @@ use super::run_dir::RunDir;
 use super::table::{Column, ErrorTable};
 use super::Figure;
 use super::ReportOptions;
-use crate::calib::Poses;
-use crate::io::pose_csv::{read_poses, PoseCsvError, PoseSpec};
+use crate::calib::MeasuredSet;
+use crate::io::pose_csv::{PoseCsvError, PoseSpec};
 use crate::model::{Model, KATANA_GEOMETRIC_PARAMS};
 use crate::plot::{ErrorHistogram, LineChart, PoseErrorBars, Scatter, Series};
 
@@ -40,21 +40,19 @@ fn mean(v: &[f64]) -> f64 {
     v.iter().sum::<f64>() / v.len().max(1) as f64
 }
 
-/// The poses of a pose file read for `model`, and their times when every pose has one (the
+/// The measured set of a pose file read for `model` (its times when every pose has one: the
 /// pose order of the hysteresis terms, FORMATS.md "Pose order").
-fn read_with_times(
+fn read_set(
     path: &std::path::Path,
     model: &Model,
     opts: &ReportOptions,
-) -> Result<(Poses, Option<Vec<f64>>), PoseCsvError> {
+) -> Result<MeasuredSet, PoseCsvError> {
     let spec = PoseSpec {
         units: opts.pose_units,
         dialect: opts.pose_dialect,
         ..PoseSpec::for_model(model, true)
     };
-    let file = read_poses(path, &spec)?;
-    let times = file.poses.iter().map(|p| p.t_s).collect();
-    Ok((Poses::from_pose_file(&file).unwrap_or_default(), times))
+    MeasuredSet::read_with(path, &spec)
 }
 
 /// Evaluates `cal.csv` and `val.csv` with `decl` (nominal, no tilting) and every model.
@@ -72,8 +70,8 @@ pub(crate) fn pose_sets(
         (&run.val_csv, "Held-out poses", true),
     ] {
         let Some(path) = path else { continue };
-        let (poses, times) = match read_with_times(path, decl, opts) {
-            Ok((p, t)) if !p.is_empty() => (p, t),
+        let set = match read_set(path, decl, opts) {
+            Ok(s) if !s.is_empty() => s,
             Ok(_) => {
                 notes.push(format!("{}: no poses", path.display()));
                 continue;
@@ -83,9 +81,9 @@ pub(crate) fn pose_sets(
                 continue;
             }
         };
-        out.counts.push(poses.len());
+        out.counts.push(set.len());
         let mut cols: Vec<Evaluated> = Vec::new();
-        match evaluate("nominal model", decl, &poses, Some(false)) {
+        match evaluate("nominal model", decl, &set, Some(false)) {
             Ok(e) => cols.push(e),
             Err(e) => {
                 notes.push(format!("{title}: nominal model failed: {e}"));
@@ -93,7 +91,7 @@ pub(crate) fn pose_sets(
             }
         }
         for (name, m) in models {
-            match evaluate_in_order(name, m, &poses, times.as_deref(), None) {
+            match evaluate_in_order(name, m, &set, None) {
                 Ok(mut e) => {
                     e.label = format!("{name}.toml{}", if e.tilt { " (tilting)" } else { "" });
                     cols.push(e);
@@ -118,13 +116,13 @@ pub(crate) fn pose_sets(
                 .map(|k| k - 1);
         }
         match out.best_model.filter(|b| b + 1 < cols.len()) {
-            Some(b) => before_after_figures(title, held_out, &poses, &cols[0], &cols[b + 1], &mut out.figures, notes),
+            Some(b) => before_after_figures(title, held_out, &set, &cols[0], &cols[b + 1], &mut out.figures, notes),
             None => notes.push(format!(
                 "{title}: no calibrated model file (*.toml) in the run directory, so no before/after plots"
             )),
         }
         if cal_q.is_none() {
-            cal_q = Some(poses.q_deg.clone());
+            cal_q = Some(set.poses.q_deg.clone());
         }
     }
     if let Some(q) = &cal_q {
@@ -136,7 +134,7 @@ pub(crate) fn pose_sets(
 fn before_after_figures(
     title: &str,
     held_out: bool,
-    poses: &Poses,
+    set: &MeasuredSet,
     before_col: &Evaluated,
     after_col: &Evaluated,
     figures: &mut Vec<Figure>,
@@ -187,8 +185,8 @@ fn before_after_figures(
         pair(),
         notes,
     ));
-    if let Some((j, r)) = most_correlated_joint(&poses.q_deg, &before) {
-        let x: Vec<f64> = poses.q_deg.iter().map(|q| q[j]).collect();
+    if let Some((j, r)) = most_correlated_joint(&set.poses.q_deg, &before) {
+        let x: Vec<f64> = set.poses.q_deg.iter().map(|q| q[j]).collect();
         let x_cols: Vec<Vec<f64>> = x.iter().map(|v| vec![*v]).collect();
         let r_after = most_correlated_joint(&x_cols, &after).map(|(_, r)| r);
         let mut series = pair();

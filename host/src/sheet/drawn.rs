@@ -38,11 +38,9 @@ pub enum SessionPath {
 impl FromStr for SessionPath {
     type Err = String;
     fn from_str(s: &str) -> Result<Self, String> {
-        match s {
-            "circle" => Ok(Self::Circle),
-            "line" => Ok(Self::Line),
-            _ => Err(format!("unknown session path `{s}` (circle, line)")),
-        }
+        // the names are clap's (`ValueEnum`)
+        <Self as clap::ValueEnum>::from_str(s, false)
+            .map_err(|_| format!("unknown session path `{s}` (circle, line)"))
     }
 }
 

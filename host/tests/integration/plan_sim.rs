@@ -389,7 +389,6 @@ fn run_aliased_case_seeded(
     seeds: (u64, u64),
 ) -> Vec<(String, Option<f64>, Option<f64>, f64)> {
     use rigctl::calib::MeasuredSet;
-    use rigctl::calib::Poses;
     use rigctl::diagnose::{diagnose, DiagnoseOptions};
     use rigctl::plan::evaluate::measure;
     use rigctl::sim::effects::parse_effect;
@@ -417,17 +416,11 @@ fn run_aliased_case_seeded(
     };
     let existing = draw(12, &mut rng);
     let val_q = draw(40, &mut rng);
-    let first: Poses = measure(&truth, &existing, 0.01, &mut rng).unwrap();
-    let val = MeasuredSet::from_poses(measure(&truth, &val_q, 0.01, &mut rng).unwrap());
+    let first: MeasuredSet = measure(&truth, &existing, 0.01, &mut rng).unwrap();
+    let val = measure(&truth, &val_q, 0.01, &mut rng).unwrap();
     let opts = DiagnoseOptions::default();
     // the diagnosis of the 12 random poses, with the pair declared aliased
-    let d0 = diagnose(
-        &declared,
-        &MeasuredSet::from_poses(first.clone()),
-        &val,
-        &opts,
-    )
-    .unwrap();
+    let d0 = diagnose(&declared, &first, &val, &opts).unwrap();
     let mut doc = serde_json::to_value(&d0.report).unwrap();
     match pair {
         Some((a, b)) => {
@@ -454,11 +447,12 @@ fn run_aliased_case_seeded(
         }
         p.poses.iter().map(|c| c.q_deg.clone()).collect()
     };
-    let more: Poses = measure(&truth, &extra_q, 0.01, &mut rng).unwrap();
+    let more: MeasuredSet = measure(&truth, &extra_q, 0.01, &mut rng).unwrap();
+    // one visit order (not `concat`, which keeps each part's own history of approach)
     let mut cal = first;
-    cal.q_deg.extend(more.q_deg);
-    cal.xyz_mm.extend(more.xyz_mm);
-    let d = diagnose(&declared, &MeasuredSet::from_poses(cal), &val, &opts).unwrap();
+    cal.poses.q_deg.extend(more.poses.q_deg);
+    cal.poses.xyz_mm.extend(more.poses.xyz_mm);
+    let d = diagnose(&declared, &cal, &val, &opts).unwrap();
     let ids: Vec<&str> = d.report.effects.iter().map(|e| e.id.as_str()).collect();
     eprintln!("{extra:?}: effects {ids:?}");
     if pair.is_none() {
