@@ -38,6 +38,7 @@
 pub mod alias;
 pub mod bounds;
 pub mod candidates;
+pub mod changes;
 pub mod compress;
 pub mod decide;
 pub mod extended;

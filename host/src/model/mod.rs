@@ -65,6 +65,7 @@
 //! [`Model::write_file`]; the format is documented in [`toml_file`].
 
 mod assumed_masses;
+pub mod changes;
 mod chain;
 mod data;
 pub mod dynamics;
