@@ -31,7 +31,7 @@ use crate::model::changes::{Step, StepKind};
 use crate::model::effect::{self, EffectId, Offers};
 
 /// The best split of the poses by time for a step of given regressors.
-#[derive(Debug, Clone, PartialEq)]
+#[derive(Debug, Clone, PartialEq, serde::Serialize)]
 pub struct ChangePoint {
     /// The change time: the midpoint of the split's two pose times, s.
     pub t_s: f64,
@@ -252,6 +252,58 @@ pub fn open_slots(
         opened.push(effect);
     }
     Ok(opened)
+}
+
+/// The probe's change-point scan of the final residual of `last` ([`super::probe`]): a step at
+/// one time of a constant in the measurement frame (the columns of `base_x/y/z`) and of an
+/// offset in the last link frame (a tool point, marker or instrument frame that moved), with
+/// the fitted unknowns projected out. `Some` when the best split passes `alpha` after the
+/// Bonferroni correction over the splits: "something changed at t = ..." even where no
+/// candidate describes the change.
+pub fn residual_change_point(
+    last: &Fit<ExtModel, Unknown>,
+    data: &MeasuredSet,
+    alpha: f64,
+) -> Result<Option<ChangePoint>, CalibError> {
+    if !data.has_time() {
+        return Ok(None);
+    }
+    let mut ext = last.model.clone();
+    let mut step_unknowns: Vec<Unknown> = ["base_x", "base_y", "base_z"]
+        .iter()
+        .filter_map(|n| ext.model.param_index(n).map(Unknown::Param))
+        .collect();
+    if let Some(step) = empty_step(&EffectId::ToolChange, f64::NEG_INFINITY) {
+        ext.model.time_terms_mut().changes.push(step);
+        step_unknowns.extend(EffectId::ToolChange.unknowns(&ext.model).into_iter().flatten());
+    }
+    if step_unknowns.is_empty() {
+        return Ok(None);
+    }
+    let mut all = last.fitted.clone();
+    all.extend(step_unknowns.iter().copied());
+    let (jac, e) = ext.stacked(data, &all)?;
+    let p = last.fitted.len();
+    let l = jac.columns(0, p).into_owned();
+    let x = jac.columns(p, step_unknowns.len()).into_owned();
+    Ok(scan(data, &x, &orthonormal_basis(&l), &e).filter(|cp| cp.p_value < alpha))
+}
+
+impl ChangePoint {
+    /// The sentence of the probe's note.
+    pub fn sentence(&self) -> String {
+        format!(
+            "something changed at t = {:.1} s (between the poses at {:.1} and {:.1} s): a step \
+             there (a constant in the measurement frame and an offset in the last link frame) \
+             explains {:.0} % of the residual (p = {:.1e} after {} splits tried)",
+            self.t_s,
+            self.last_before_s,
+            self.first_after_s,
+            100.0 * self.gain_mm2 / self.rss_mm2.max(f64::MIN_POSITIVE),
+            self.p_value,
+            self.splits
+        )
+    }
 }
 
 /// The change slot an unknown sizes.
