@@ -22,7 +22,7 @@
 
 use nalgebra::{DMatrix, DVector};
 
-use super::extended::{fit, ExtModel, Unknown};
+use super::extended::{fit, ExtModel, Unknown, Values};
 use super::stat::f_test_p_value;
 use crate::calib::fit::Fit;
 use crate::calib::lm::LmConfig;
@@ -322,9 +322,44 @@ fn distinct_times(data: &MeasuredSet) -> Vec<f64> {
     t
 }
 
-/// Moves the time of change `slot` of `after` to the neighbouring splits of the pose times while
-/// the refit (every unknown of `after` from its values) lowers the residual; at most
-/// `max_moves` moves. The fit with the lowest residual.
+/// The best split for the change `slot` of `fit` at the other fitted values: the residual with
+/// that change's size set to zero, its columns at every pose, the other fitted unknowns'
+/// columns projected out.
+fn rescan_slot(
+    f: &Fit<ExtModel, Unknown>,
+    slot: usize,
+    data: &MeasuredSet,
+) -> Result<Option<ChangePoint>, CalibError> {
+    let mut ext = f.model.clone();
+    let (own, others): (Vec<Unknown>, Vec<Unknown>) =
+        f.fitted.iter().partition(|u| slot_of(**u) == Some(slot));
+    if own.is_empty() {
+        return Ok(None);
+    }
+    for u in &own {
+        ext.set_value(*u, 0.0)?;
+    }
+    match ext.model.time_terms_mut().changes.get_mut(slot) {
+        Some(step) => step.t_s = f64::NEG_INFINITY,
+        None => return Ok(None),
+    }
+    let mut all = others.clone();
+    all.extend(own.iter().copied());
+    let (jac, e) = ext.stacked(data, &all)?;
+    let p = others.len();
+    let l = jac.columns(0, p).into_owned();
+    let x = jac.columns(p, own.len()).into_owned();
+    Ok(scan(data, &x, &orthonormal_basis(&l), &e))
+}
+
+/// Most re-scans of a change's time at the refitted values ([`refine`]).
+const RESCANS: usize = 4;
+
+/// Refines the time of change `slot` of `after`: the split re-scanned at the refitted values of
+/// the other unknowns and the fit redone there, while the split moves and the residual drops
+/// (at most [`RESCANS`] times); then the neighbouring splits of the pose times while the refit
+/// (every unknown of `after` from its values) lowers the residual, at most `max_moves` moves.
+/// The fit with the lowest residual.
 pub fn refine(
     after: Fit<ExtModel, Unknown>,
     slot: usize,
@@ -333,25 +368,39 @@ pub fn refine(
     rtol: f64,
     max_moves: usize,
 ) -> Result<Fit<ExtModel, Unknown>, CalibError> {
-    let times = distinct_times(data);
-    let Some(t0) = after.model.model.steps().get(slot).map(|s| s.t_s) else {
-        return Ok(after);
-    };
-    // the split index i: between times[i] and times[i + 1]
-    let Some(i0) = (0..times.len().saturating_sub(1)).find(|&i| times[i] < t0 && t0 <= times[i + 1])
-    else {
-        return Ok(after);
-    };
     let unknowns = after.fitted.clone();
-    let at_split = |from: &Fit<ExtModel, Unknown>, i: usize| -> Option<Fit<ExtModel, Unknown>> {
+    let refit_at = |from: &Fit<ExtModel, Unknown>, t_s: f64| -> Option<Fit<ExtModel, Unknown>> {
         let mut start = from.model.clone();
-        let step = start.model.time_terms_mut().changes.get_mut(slot)?;
-        step.t_s = 0.5 * (times[i] + times[i + 1]);
+        start.model.time_terms_mut().changes.get_mut(slot)?.t_s = t_s;
         fit(&start, data, &unknowns, lm, rtol, true)
             .ok()
             .filter(|f| f.rss_mm2.is_finite())
     };
     let mut best = after;
+    for _ in 0..RESCANS {
+        let Some(t0) = best.model.model.steps().get(slot).map(|s| s.t_s) else {
+            return Ok(best);
+        };
+        let Some(cp) = rescan_slot(&best, slot, data)? else {
+            break;
+        };
+        if cp.t_s == t0 {
+            break;
+        }
+        match refit_at(&best, cp.t_s) {
+            Some(f) if f.rss_mm2 < best.rss_mm2 => best = f,
+            _ => break,
+        }
+    }
+    let times = distinct_times(data);
+    let Some(t0) = best.model.model.steps().get(slot).map(|s| s.t_s) else {
+        return Ok(best);
+    };
+    // the split index i: between times[i] and times[i + 1]
+    let Some(i0) = (0..times.len().saturating_sub(1)).find(|&i| times[i] < t0 && t0 <= times[i + 1])
+    else {
+        return Ok(best);
+    };
     let mut i = i0;
     for dir in [-1i64, 1] {
         let mut moves = 0;
@@ -360,10 +409,11 @@ pub fn refine(
             if j < 0 || j as usize + 1 >= times.len() || moves >= max_moves {
                 break;
             }
-            match at_split(&best, j as usize) {
+            let j = j as usize;
+            match refit_at(&best, 0.5 * (times[j] + times[j + 1])) {
                 Some(f) if f.rss_mm2 < best.rss_mm2 => {
                     best = f;
-                    i = j as usize;
+                    i = j;
                     moves += 1;
                 }
                 _ => break,
@@ -371,4 +421,29 @@ pub fn refine(
         }
     }
     Ok(best)
+}
+
+/// Refines the time of every change `cur` sizes except `skip` ([`refine`]) at `cur`'s values:
+/// after another effect is accepted an earlier change's best time may move. Whether any moved.
+pub fn refine_all(
+    cur: &mut Fit<ExtModel, Unknown>,
+    skip: Option<usize>,
+    data: &MeasuredSet,
+    lm: &LmConfig,
+    rtol: f64,
+    max_moves: usize,
+) -> Result<bool, CalibError> {
+    let mut slots: Vec<usize> = cur.fitted.iter().filter_map(|u| slot_of(*u)).collect();
+    slots.sort_unstable();
+    slots.dedup();
+    let mut moved = false;
+    for slot in slots.into_iter().filter(|s| Some(*s) != skip) {
+        let before = cur.model.model.steps().get(slot).map(|s| s.t_s);
+        let f = refine(cur.clone(), slot, data, lm, rtol, max_moves)?;
+        if f.model.model.steps().get(slot).map(|s| s.t_s) != before {
+            *cur = f;
+            moved = true;
+        }
+    }
+    Ok(moved)
 }

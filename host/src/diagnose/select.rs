@@ -4,7 +4,7 @@
 //! ([`test_in_order`]). The rule is documented in [`super::decide`].
 
 use super::candidates::{library, Candidate};
-use super::changes::{open_slots, refine, slot_of};
+use super::changes::{open_slots, refine, refine_all, slot_of};
 use super::decide::{
     cv_errors, linear_start, nonlinear_start, onset_candidates, paired_gain, rank_contenders,
     serial_tau, Accepted, DecideConfig, Selection, Trial,
@@ -19,7 +19,7 @@ use crate::calib::CalibError;
 use crate::calib::MeasuredSet;
 
 /// Most moves of a change's time from the split the linear scan found ([`refine`]).
-const REFINE_MAX_MOVES: usize = 8;
+const REFINE_MAX_MOVES: usize = 3;
 
 /// Independent residuals: all of them for full positions, fewer along a traced path.
 fn m_eff(data: &MeasuredSet, tau: f64) -> usize {
@@ -62,10 +62,14 @@ pub fn forward_selection(
         let (refits, cv_cache, equivalent_ids) = order_contenders(refits, data, cfg)?;
         let round = test_in_order(refits, cv_cache, &cur, cv_cur.take(), data, cfg)?;
         match round.chosen {
-            Some((trial, after, cv_after)) => {
+            Some((trial, mut after, cv_after)) => {
                 requested.extend(trial.candidate.unknowns.iter().copied());
+                // the times of the changes accepted earlier, at the new values
+                let own = trial.candidate.unknowns.first().copied().and_then(slot_of);
+                let moved =
+                    refine_all(&mut after, own, data, &cfg.lm, cfg.rtol, REFINE_MAX_MOVES)?;
                 let before = std::mem::replace(&mut cur, after.clone());
-                cv_cur = Some(cv_after);
+                cv_cur = (!moved).then_some(cv_after);
                 let equivalent = if equivalent_ids.contains(&trial.candidate.id) {
                     equivalent_ids
                         .iter()
