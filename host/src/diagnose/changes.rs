@@ -275,7 +275,12 @@ pub fn residual_change_point(
         .collect();
     if let Some(step) = empty_step(&EffectId::ToolChange, f64::NEG_INFINITY) {
         ext.model.time_terms_mut().changes.push(step);
-        step_unknowns.extend(EffectId::ToolChange.unknowns(&ext.model).into_iter().flatten());
+        step_unknowns.extend(
+            EffectId::ToolChange
+                .unknowns(&ext.model)
+                .into_iter()
+                .flatten(),
+        );
     }
     if step_unknowns.is_empty() {
         return Ok(None);
@@ -397,7 +402,8 @@ pub fn refine(
         return Ok(best);
     };
     // the split index i: between times[i] and times[i + 1]
-    let Some(i0) = (0..times.len().saturating_sub(1)).find(|&i| times[i] < t0 && t0 <= times[i + 1])
+    let Some(i0) =
+        (0..times.len().saturating_sub(1)).find(|&i| times[i] < t0 && t0 <= times[i + 1])
     else {
         return Ok(best);
     };

@@ -163,7 +163,9 @@ impl ExtModel {
         let (q_eff, _) = self.effective_joints(q_deg, t_s, approach, with_tau)?;
         // the model as it is at t: the changes within the session before it applied
         let at_t = self.model.at_time(t_s);
-        Ok(self.model.measured_mm(&at_t.position_mm(&q_eff, tilt)?, t_s))
+        Ok(self
+            .model
+            .measured_mm(&at_t.position_mm(&q_eff, tilt)?, t_s))
     }
 
     /// Predicted position of pose `k` of `data` and its Jacobian (3 x unknowns, mm per unit).
@@ -193,7 +195,9 @@ impl ExtModel {
         for u in unknowns {
             let w = match *u {
                 Unknown::Param(i) => Some(Wrt::Param(i)),
-                Unknown::ToolStep { slot, axis } => step_param(slot, Some(TOOL_PARAMS[axis.min(2)])),
+                Unknown::ToolStep { slot, axis } => {
+                    step_param(slot, Some(TOOL_PARAMS[axis.min(2)]))
+                }
                 Unknown::PayloadStep(slot) => step_param(slot, None),
                 Unknown::JointDrift(j)
                 | Unknown::Compliance(j)

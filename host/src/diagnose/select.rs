@@ -66,8 +66,7 @@ pub fn forward_selection(
                 requested.extend(trial.candidate.unknowns.iter().copied());
                 // the times of the changes accepted earlier, at the new values
                 let own = trial.candidate.unknowns.first().copied().and_then(slot_of);
-                let moved =
-                    refine_all(&mut after, own, data, &cfg.lm, cfg.rtol, REFINE_MAX_MOVES)?;
+                let moved = refine_all(&mut after, own, data, &cfg.lm, cfg.rtol, REFINE_MAX_MOVES)?;
                 let before = std::mem::replace(&mut cur, after.clone());
                 cv_cur = (!moved).then_some(cv_after);
                 let equivalent = if equivalent_ids.contains(&trial.candidate.id) {

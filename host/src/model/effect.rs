@@ -711,7 +711,8 @@ impl EffectId {
                     .collect()
             }
             EffectId::PayloadChange => {
-                vec![last_slot(model, |k| matches!(k, StepKind::Payload(_))).map(Unknown::PayloadStep)]
+                vec![last_slot(model, |k| matches!(k, StepKind::Payload(_)))
+                    .map(Unknown::PayloadStep)]
             }
         }
     }

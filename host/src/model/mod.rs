@@ -65,8 +65,8 @@
 //! [`Model::write_file`]; the format is documented in [`toml_file`].
 
 mod assumed_masses;
-pub mod changes;
 mod chain;
+pub mod changes;
 mod data;
 pub mod dynamics;
 pub mod effect;

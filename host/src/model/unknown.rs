@@ -66,7 +66,11 @@ impl Unknown {
                 format!("point{slot}_{}_mm", ["x", "y", "z"][axis.min(2)])
             }
             Unknown::ToolStep { slot, axis } => {
-                format!("change{}_tool_d{}_mm", slot + 1, ["x", "y", "z"][axis.min(2)])
+                format!(
+                    "change{}_tool_d{}_mm",
+                    slot + 1,
+                    ["x", "y", "z"][axis.min(2)]
+                )
             }
             Unknown::PayloadStep(slot) => format!("change{}_payload_kg", slot + 1),
         }

@@ -203,11 +203,7 @@ fn assert_no_change(d: &Value, what: &str) {
 fn a_knocked_tool_is_named_with_its_time() {
     let dir = tempfile::tempdir().unwrap();
     // rigctl simulate: the change between the poses at 580 and 590 s (118 poses, 0..1170 s)
-    let d = simulated(
-        dir.path(),
-        3,
-        Some("tool_change=0.06,-0.05,0.06,585"),
-    );
+    let d = simulated(dir.path(), 3, Some("tool_change=0.06,-0.05,0.06,585"));
     let (t, r) = assert_change(&d, "tool_change", 585.0, SIM_INTERVAL_S, "simulate");
     record("sim_tool_t_s", t);
     record("sim_tool_final_over_floor", r);
@@ -302,7 +298,12 @@ fn fk_applies_a_change_from_the_model_file_at_each_rows_t() {
     let cal = std::fs::read_to_string(out.join("cal.csv")).unwrap();
     let mut worst: f64 = 0.0;
     for (a, b) in cal.lines().skip(1).zip(fk.lines().skip(1)) {
-        let m: Vec<f64> = a.split(',').skip(5).take(3).map(|v| v.parse().unwrap()).collect();
+        let m: Vec<f64> = a
+            .split(',')
+            .skip(5)
+            .take(3)
+            .map(|v| v.parse().unwrap())
+            .collect();
         let p: Vec<f64> = b.split(',').take(3).map(|v| v.parse().unwrap()).collect();
         let d = Vector3::new(m[0] - p[0], m[1] - p[1], m[2] - p[2]).norm();
         worst = worst.max(d);

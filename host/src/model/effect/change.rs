@@ -6,8 +6,8 @@
 use nalgebra::Vector3;
 
 use super::EffectId;
-use crate::model::changes::{Step, StepKind};
 use crate::io::ranges::{show, MAX_ANGLE_DEG, MAX_POSITION_MM};
+use crate::model::changes::{Step, StepKind};
 use crate::model::ranges as r;
 
 /// What an effect changes.

@@ -31,7 +31,12 @@ fn every_listed_id_reads_back_and_frees_values_of_its_model() {
             assert!(u.iter().all(Option::is_some), "{text}: {u:?}");
             assert!(text.starts_with(row.family), "{text} vs {}", row.family);
             if row.report == Report::Step {
-                assert_eq!(u.len() + 1, row.labels.len(), "{text}: labels {:?}", row.labels);
+                assert_eq!(
+                    u.len() + 1,
+                    row.labels.len(),
+                    "{text}: labels {:?}",
+                    row.labels
+                );
             } else if row.report != Report::Harmonic && row.report != Report::ValueAndDelta {
                 assert_eq!(u.len(), row.labels.len(), "{text}: labels {:?}", row.labels);
             }
