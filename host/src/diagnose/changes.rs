@@ -228,7 +228,9 @@ pub fn open_slots(
     alpha: f64,
 ) -> Result<Vec<EffectId>, CalibError> {
     let mut opened = Vec::new();
-    if !data.has_time() {
+    // samples along a traced path are serially correlated: the scan's test assumes independent
+    // residuals, and a step at the path's start is the constant effect itself
+    if !data.has_time() || data.is_serial() {
         return Ok(opened);
     }
     for effect in change_kinds(&cur.model, data) {
@@ -265,7 +267,7 @@ pub fn residual_change_point(
     data: &MeasuredSet,
     alpha: f64,
 ) -> Result<Option<ChangePoint>, CalibError> {
-    if !data.has_time() {
+    if !data.has_time() || data.is_serial() {
         return Ok(None);
     }
     let mut ext = last.model.clone();

@@ -83,6 +83,25 @@ impl Model {
                 }
             }
         }
+        // the mass carried never below zero: a payload is put down only after it is picked up
+        let mut steps: Vec<&Step> = self.steps().iter().collect();
+        steps.sort_by(|a, b| a.t_s.total_cmp(&b.t_s));
+        let mut kg = self
+            .params()
+            .get(self.payload_param())
+            .map_or(0.0, |p| p.value);
+        for s in steps {
+            if let StepKind::Payload(m) = s.kind {
+                kg += m;
+                if kg < -1e-9 {
+                    return Err(ModelError::Invalid(format!(
+                        "a payload change of {m} kg at t_s = {} leaves {kg} kg carried: a \
+                         payload put down must have been carried",
+                        s.t_s
+                    )));
+                }
+            }
+        }
         Ok(())
     }
 
