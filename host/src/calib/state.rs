@@ -23,6 +23,7 @@ use nalgebra::{DMatrix, DVector, Vector3};
 use super::measured::MeasuredSet;
 use super::normal::Normal;
 pub use super::unknown::{Unknown, Values};
+use crate::model::changes::{StepKind, TOOL_PARAMS};
 use crate::model::gravity::GravityModel;
 use crate::model::time_terms::TimeTerms;
 use crate::model::transmission::{compliance_regressor, JointTerms};
@@ -162,9 +163,11 @@ impl ExtModel {
     ) -> Result<Vector3<f64>, ModelError> {
         let with_tau = self.model.transmission().has_compliance();
         let (q_eff, _) = self.effective_joints(q_deg, t_s, approach, with_tau)?;
+        // the model as it is at t: the changes within the session before it applied
+        let at_t = self.model.at_time(t_s);
         Ok(self
             .model
-            .measured_mm(&self.model.position_mm(&q_eff, tilt)?, t_s))
+            .measured_mm(&at_t.position_mm(&q_eff, tilt)?, t_s))
     }
 
     /// Predicted position of pose `k` of `data` and its Jacobian (3 x unknowns, mm per unit).
@@ -179,11 +182,25 @@ impl ExtModel {
         let approach = Self::approach_of(data, k);
         let q = &data.poses.q_deg[k];
         let (q_eff, tau) = self.effective_joints(q, t_s, approach, with_tau)?;
+        let at_t = self.model.at_time(t_s);
+        let steps = self.model.steps();
+        // a change's columns: those of the parameter it adds to, after its time
+        let step_param = |slot: usize, name: Option<&str>| -> Option<Wrt> {
+            steps.get(slot).filter(|s| s.applies_at(t_s))?;
+            match name {
+                Some(n) => at_t.param_index(n).map(Wrt::Param),
+                None => Some(Wrt::Param(at_t.payload_param())),
+            }
+        };
         let mut wrt: Vec<Wrt> = Vec::with_capacity(unknowns.len());
         let mut slot = Vec::with_capacity(unknowns.len());
         for u in unknowns {
             let w = match *u {
                 Unknown::Param(i) => Some(Wrt::Param(i)),
+                Unknown::ToolStep { slot, axis } => {
+                    step_param(slot, Some(TOOL_PARAMS[axis.min(2)]))
+                }
+                Unknown::PayloadStep(slot) => step_param(slot, None),
                 Unknown::JointDrift(j)
                 | Unknown::Compliance(j)
                 | Unknown::JointScale(j)
@@ -197,9 +214,7 @@ impl ExtModel {
                 wrt.len() - 1
             }));
         }
-        let (fk, jm) = self
-            .model
-            .position_jacobian(&q_eff, self.tilt_at(data, k), &wrt)?;
+        let (fk, jm) = at_t.position_jacobian(&q_eff, self.tilt_at(data, k), &wrt)?;
         // the time terms scale the chain's position (and so its derivatives)
         let thermal = self
             .model
@@ -248,7 +263,7 @@ impl ExtModel {
             let approach = Self::approach_of(data, k);
             let (q_eff, _) =
                 self.effective_joints(&data.poses.q_deg[k], data.t(k), approach, with_tau)?;
-            let mut moments = self.model.moments_kgfm(&q_eff)?;
+            let mut moments = self.model.at_time(data.t(k)).moments_kgfm(&q_eff)?;
             if let Some(extra) = data.moments(k) {
                 for (m, e) in moments.iter_mut().zip(extra) {
                     *m += e;
@@ -392,6 +407,14 @@ impl Values for ExtModel {
                 .offsets_mm
                 .get(slot)
                 .map_or(f64::NAN, |o| o[axis.min(2)]),
+            Unknown::ToolStep { slot, axis } => match time.changes.get(slot).map(|s| s.kind) {
+                Some(StepKind::Tool(d)) => d[axis.min(2)],
+                _ => 0.0,
+            },
+            Unknown::PayloadStep(slot) => match time.changes.get(slot).map(|s| s.kind) {
+                Some(StepKind::Payload(kg)) => kg,
+                _ => 0.0,
+            },
         }
     }
 
@@ -440,6 +463,28 @@ impl Values for ExtModel {
                 Some(o) => o[axis.min(2)] = v,
                 None => return Err(offsets_elsewhere(u, &self.model)),
             },
+            Unknown::ToolStep { slot, axis } => {
+                if let Some(StepKind::Tool(d)) = self
+                    .model
+                    .time_terms_mut()
+                    .changes
+                    .get_mut(slot)
+                    .map(|s| &mut s.kind)
+                {
+                    d[axis.min(2)] = v;
+                }
+            }
+            Unknown::PayloadStep(slot) => {
+                if let Some(StepKind::Payload(kg)) = self
+                    .model
+                    .time_terms_mut()
+                    .changes
+                    .get_mut(slot)
+                    .map(|s| &mut s.kind)
+                {
+                    *kg = v;
+                }
+            }
         }
         Ok(())
     }

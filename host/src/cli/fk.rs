@@ -3,7 +3,7 @@
 //! `x,y,z,phi,theta,psi` (mm in frame R, ZXZ Euler angles in deg, whatever `--units` says of
 //! the input) on stdout. A model file's transmission terms are applied to the readings first,
 //! hysteresis in the pose order of the file (by `t` when every row has one); its time terms
-//! (`[time]`: thermal growth, drifts) at each row's `t` (s from the start of the session; 0
+//! (`[time]`: thermal growth, drifts; `[[change]]`: changes within the session) at each row's `t` (s from the start of the session; 0
 //! when the file has no `t`, with a note; a bag's session starts at its first message). A ROS 2 bag as
 //! `--joints` (`.mcap` or rosbag2 directory; `--joint-topic`, `--joint-names`) is streamed:
 //! each message's row is written as it is read (all rows are gathered first only when the
@@ -47,7 +47,8 @@ fn fk_row(
     t_s: f64,
     tilt: Tilt,
 ) -> Result<(), CliError> {
-    let fk = model.fk(q, tilt)?;
+    // the model as it is at t: its changes within the session before t applied
+    let fk = model.at_time(t_s).fk(q, tilt)?;
     let p = model.measured_mm(&fk.position_mm, t_s);
     let [phi, theta, psi] = fk.zxz_deg();
     if ![p.x, p.y, p.z, phi, theta, psi]

@@ -218,8 +218,9 @@ pub fn compensate(
             position_mm: model.chain_mm_for(&p.target.position_mm, t_s),
             ..p.target
         };
-        let mut q =
-            solve(model, &target, &seed, tilt).map_err(|e| unreachable(p, "calibrated", e))?;
+        // the model as it is at t (its changes within the session: tool point, payload)
+        let mut q = solve(&model.at_time(t_s), &target, &seed, tilt)
+            .map_err(|e| unreachable(p, "calibrated", e))?;
         seed.clone_from(&q);
         for (j, v) in q.iter_mut().enumerate() {
             *v -= model.time_terms().joint_drift_deg(j, t_s);

@@ -120,6 +120,20 @@ pub fn effect_values(
                 add(label, after.value(x), sig(x));
             }
         }
+        // the size of the change, then its time (placed by the scan of the splits between pose
+        // times, not by the least squares: its sigma is the half-gap `diagnose` reports)
+        Report::Step if u.len() + 1 == row.labels.len() => {
+            for (label, &x) in row.labels.iter().zip(u) {
+                add(label, after.value(x), sig(x));
+            }
+            let t_s = match u.first() {
+                Some(Unknown::ToolStep { slot, .. }) | Some(Unknown::PayloadStep(slot)) => {
+                    after.model.steps().get(*slot).map_or(f64::NAN, |s| s.t_s)
+                }
+                _ => f64::NAN,
+            };
+            add(row.labels[u.len()], t_s, f64::INFINITY);
+        }
         Report::ValueAndDelta if u.len() == 1 => {
             add(row.labels[0], after.value(u[0]), sig(u[0]));
             add(row.labels[1], delta(u[0]), sig(u[0]));

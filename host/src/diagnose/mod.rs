@@ -39,6 +39,7 @@
 pub mod alias;
 pub mod bounds;
 pub mod candidates;
+pub mod changes;
 pub mod compress;
 pub mod decide;
 pub mod envelope;
@@ -627,6 +628,13 @@ pub fn diagnose(
     // the sets or overfitting, not a structure of this residual)
     unexplained.structured |= verdict.kind == "missing_effect";
     unexplained.add_probe(&probe);
+    // a step in time the accepted effects leave in the residual
+    let change_point = changes::residual_change_point(last, cal, cfg.alpha)?;
+    if let Some(cp) = &change_point {
+        unexplained.structured = true;
+        unexplained.note.push_str("; ");
+        unexplained.note.push_str(&cp.sentence());
+    }
     if verdict.kind == "missing_effect" {
         let explained: Vec<(String, f64)> = regs
             .iter()
@@ -673,7 +681,10 @@ pub fn diagnose(
         within_uncertainty: within_reports,
         outlier_note,
         converged: last.converged && declared.converged,
-        probe: probe.report(&probe_cfg),
+        probe: probe::ProbeReport {
+            change_point,
+            ..probe.report(&probe_cfg)
+        },
         residual_model: None,
         assumed_masses: None,
         verdict,

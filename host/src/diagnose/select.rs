@@ -4,6 +4,7 @@
 //! ([`test_in_order`]). The rule is documented in [`super::decide`].
 
 use super::candidates::{library, Candidate};
+use super::changes::{open_slots, refine, refine_all, slot_of};
 use super::decide::{
     cv_errors, linear_start, nonlinear_start, onset_candidates, paired_gain, rank_contenders,
     serial_tau, Accepted, DecideConfig, Selection, Trial,
@@ -16,6 +17,9 @@ use super::stat::{delta_bic, nested_f_test};
 use crate::calib::fit::Fit;
 use crate::calib::CalibError;
 use crate::calib::MeasuredSet;
+
+/// Most moves of a change's time from the split the linear scan found ([`refine`]).
+const REFINE_MAX_MOVES: usize = 3;
 
 /// Independent residuals: all of them for full positions, fewer along a traced path.
 fn m_eff(data: &MeasuredSet, tau: f64) -> usize {
@@ -38,7 +42,10 @@ pub fn forward_selection(
     // (the same unknowns from the same values on the same folds), computed once.
     let mut cv_cur: Option<Vec<f64>> = None;
     while steps.len() < cfg.max_effects {
-        let cands = library(&cur.model, &requested, data);
+        // changes within the session: a slot at the best split of each kind that shows one
+        let opened = open_slots(&mut cur, &requested, data, cfg.alpha)?;
+        let mut cands = library(&cur.model, &requested, data);
+        cands.retain(|c| !c.effect.is_change() || opened.contains(&c.effect));
         if cands.is_empty() {
             break;
         }
@@ -61,10 +68,13 @@ pub fn forward_selection(
         let (refits, cv_cache, equivalent_ids) = order_contenders(refits, data, cfg)?;
         let round = test_in_order(refits, cv_cache, &cur, cv_cur.take(), data, cfg)?;
         match round.chosen {
-            Some((trial, after, cv_after)) => {
+            Some((trial, mut after, cv_after)) => {
                 requested.extend(trial.candidate.unknowns.iter().copied());
+                // the times of the changes accepted earlier, at the new values
+                let own = trial.candidate.unknowns.first().copied().and_then(slot_of);
+                let moved = refine_all(&mut after, own, data, &cfg.lm, cfg.rtol, REFINE_MAX_MOVES)?;
                 let before = std::mem::replace(&mut cur, after.clone());
-                cv_cur = Some(cv_after);
+                cv_cur = (!moved).then_some(cv_after);
                 let equivalent = if equivalent_ids.contains(&trial.candidate.id) {
                     equivalent_ids
                         .iter()
@@ -178,6 +188,10 @@ pub fn refit_candidate(
     let Some(mut after) = best else {
         return Ok(None);
     };
+    // a change within the session: its time moved to the split the full refit prefers
+    if let Some(slot) = cand.unknowns.first().copied().and_then(slot_of) {
+        after = refine(after, slot, data, &cfg.lm, cfg.rtol, REFINE_MAX_MOVES)?;
+    }
     if needs_polish(&cur.model, &after, data, cfg.rtol)? {
         after = polish(after, &cur.model, &cand.unknowns, data, cfg)?;
     }

@@ -20,6 +20,12 @@
 //! | position drift | `time_drift` | drift x, y, z | `v*_mm_per_h` | `v` or `vx,vy,vz` mm/h | poses with `t` |
 //! | joint drift | `time_drift:j<i>` | joint-offset drift | `deg_per_h` | deg/h | poses with `t` |
 //! | thermal | `thermal` | growth `s`, time constant `tau` | `s_ppm`, `tau_min` | `s,tau` | poses with `t` |
+//! | tool change | `tool_change` | the tool point's offset after `t_s` (last frame) | `dx dy dz` mm, `t_s` | `dx,dy,dz,t_s` | poses with `t` |
+//! | payload change | `payload_change` | a mass picked up (put down: < 0) at `t_s` | `mass_kg`, `t_s` | `kg,t_s` | poses with `t`, tilting |
+//!
+//! A change within the session ([`super::changes`]) frees its size; its time `t_s` is not an
+//! unknown of the least-squares fit (the prediction is a step in it) but is found by `diagnose`
+//! with a scan over the splits between distinct pose times (`diagnose::changes`).
 //!
 //! Besides: the rank of a kind in a tie between equally good candidates ([`Tie`]), the path
 //! or time dependence that `plan` needs a measuring protocol for ([`Path`]), whether a URDF can
@@ -28,6 +34,7 @@
 
 use std::fmt;
 
+use super::changes::{StepKind, TOOL_PARAMS};
 use super::unknown::Unknown;
 use super::{Model, ParamKind};
 
@@ -52,6 +59,8 @@ pub enum Kind {
     TimeDrift,
     JointDrift,
     Thermal,
+    ToolChange,
+    PayloadChange,
 }
 
 /// When the candidate library offers a kind.
@@ -67,6 +76,8 @@ pub enum Offered {
     WithApproach,
     /// When the poses carry `t`.
     WithTime,
+    /// When the poses carry `t` and the model has tilting data (a payload's moments).
+    WithTimeAndTilting,
 }
 
 /// A kind's rank in a tie between candidates that predict equally well (Occam's order).
@@ -101,6 +112,9 @@ pub enum Report {
     ValueAndDelta,
     /// `A`, `phi` of `A sin(n q + phi)` from the sine and cosine parameters.
     Harmonic,
+    /// The size of a change within the session (its values: the change itself), then its time
+    /// `t_s` (the last label).
+    Step,
 }
 
 /// One row of the effect table.
@@ -131,7 +145,7 @@ pub struct Row {
 }
 
 /// The effect table, in the order the candidate library lists the kinds.
-pub const TABLE: [Row; 18] = [
+pub const TABLE: [Row; 20] = [
     Row {
         kind: Kind::LinkLength,
         family: "link_length",
@@ -366,6 +380,32 @@ pub const TABLE: [Row; 18] = [
         path: Path::Time,
         urdf_holds: false,
     },
+    Row {
+        kind: Kind::ToolChange,
+        family: "tool_change",
+        grammar: "tool_change",
+        what: "the tool point (marker) moves by an offset in the last link frame at time t_s",
+        labels: &["dx", "dy", "dz", "t_s"],
+        report: Report::Step,
+        sim_values: (&[4], "dx,dy,dz mm then t_s s"),
+        offered: Offered::WithTime,
+        tie: Tie::Named,
+        path: Path::Time,
+        urdf_holds: false,
+    },
+    Row {
+        kind: Kind::PayloadChange,
+        family: "payload_change",
+        grammar: "payload_change",
+        what: "a payload picked up (put down: < 0) at the tool point at time t_s",
+        labels: &["mass_kg", "t_s"],
+        report: Report::Step,
+        sim_values: (&[2], "kg then t_s s"),
+        offered: Offered::WithTimeAndTilting,
+        tie: Tie::Named,
+        path: Path::Time,
+        urdf_holds: false,
+    },
 ];
 
 impl Kind {
@@ -418,6 +458,8 @@ pub enum EffectId {
     TimeDrift,
     JointDrift(usize),
     Thermal,
+    ToolChange,
+    PayloadChange,
 }
 
 /// An id that is not in the table's grammar.
@@ -489,6 +531,8 @@ impl std::str::FromStr for EffectId {
                 Some(Kind::Scale) => Some(EffectId::Scale),
                 Some(Kind::TimeDrift) => Some(EffectId::TimeDrift),
                 Some(Kind::Thermal) => Some(EffectId::Thermal),
+                Some(Kind::ToolChange) => Some(EffectId::ToolChange),
+                Some(Kind::PayloadChange) => Some(EffectId::PayloadChange),
                 _ => None,
             },
             [family, name] if *family == Kind::LinkLength.family() => {
@@ -541,7 +585,9 @@ impl fmt::Display for EffectId {
             | EffectId::Payload
             | EffectId::Scale
             | EffectId::TimeDrift
-            | EffectId::Thermal => f.write_str(family),
+            | EffectId::Thermal
+            | EffectId::ToolChange
+            | EffectId::PayloadChange => f.write_str(family),
         }
     }
 }
@@ -568,6 +614,8 @@ impl EffectId {
             EffectId::TimeDrift => Kind::TimeDrift,
             EffectId::JointDrift(_) => Kind::JointDrift,
             EffectId::Thermal => Kind::Thermal,
+            EffectId::ToolChange => Kind::ToolChange,
+            EffectId::PayloadChange => Kind::PayloadChange,
         }
     }
 
@@ -599,6 +647,11 @@ impl EffectId {
             EffectId::JointCoupling(i, k) => vec![i, k],
             _ => self.joint().into_iter().collect(),
         }
+    }
+
+    /// Whether it is a change within the session at a time (`tool_change`, `payload_change`).
+    pub fn is_change(&self) -> bool {
+        self.row().report == Report::Step
     }
 
     /// The harmonic order (0 for an effect that is not a harmonic).
@@ -654,8 +707,28 @@ impl EffectId {
             EffectId::TimeDrift => (0..3).map(|a| Some(Unknown::PositionDrift(a))).collect(),
             EffectId::JointDrift(j) => vec![joint(*j, Unknown::JointDrift(*j))],
             EffectId::Thermal => vec![Some(Unknown::ThermalPpm), Some(Unknown::ThermalTauMin)],
+            // the model's last change slot of the kind (`diagnose` opens one at its scanned time)
+            EffectId::ToolChange => {
+                let slot = last_slot(model, |k| matches!(k, StepKind::Tool(_)));
+                let tool = TOOL_PARAMS.iter().all(|n| model.param_index(n).is_some());
+                (0..3)
+                    .map(|axis| {
+                        slot.filter(|_| tool)
+                            .map(|slot| Unknown::ToolStep { slot, axis })
+                    })
+                    .collect()
+            }
+            EffectId::PayloadChange => {
+                vec![last_slot(model, |k| matches!(k, StepKind::Payload(_)))
+                    .map(Unknown::PayloadStep)]
+            }
         }
     }
+}
+
+/// The index of the model's last change of a kind.
+fn last_slot(model: &Model, is: fn(&StepKind) -> bool) -> Option<usize> {
+    model.steps().iter().rposition(|s| is(&s.kind))
 }
 
 /// What the data offers the library: joints that move between poses, pose times.
@@ -681,6 +754,7 @@ pub fn library(model: &Model, offers: Offers) -> Vec<EffectId> {
             Offered::WithGravity => gravity && !tilting,
             Offered::WithApproach => offers.approach,
             Offered::WithTime => offers.time,
+            Offered::WithTimeAndTilting => offers.time && tilting,
         };
         if !on {
             continue;
@@ -734,6 +808,8 @@ pub fn library(model: &Model, offers: Offers) -> Vec<EffectId> {
             Kind::Scale => out.push(EffectId::Scale),
             Kind::TimeDrift => out.push(EffectId::TimeDrift),
             Kind::Thermal => out.push(EffectId::Thermal),
+            Kind::ToolChange => out.push(EffectId::ToolChange),
+            Kind::PayloadChange => out.push(EffectId::PayloadChange),
         }
     }
     out

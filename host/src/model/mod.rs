@@ -66,6 +66,7 @@
 
 mod assumed_masses;
 mod chain;
+pub mod changes;
 mod data;
 pub mod dynamics;
 pub mod effect;

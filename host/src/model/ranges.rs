@@ -130,6 +130,19 @@ impl Model {
         for v in time.drift_mm_per_h.iter() {
             within("[time] drift_mm_per_h", *v, MAX_POSITION_MM)?;
         }
+        for c in &time.changes {
+            within("[[change]] t_s", c.t_s, f64::MAX)?;
+            match c.kind {
+                super::changes::StepKind::Tool(d) => {
+                    for v in d.iter() {
+                        within("[[change]] tool_mm", *v, MAX_POSITION_MM)?;
+                    }
+                }
+                super::changes::StepKind::Payload(kg) => {
+                    within("[[change]] payload_kg", kg, MAX_MASS_KG)?;
+                }
+            }
+        }
         for (j, v) in time.joint_drift_deg_per_h.iter().enumerate() {
             within(
                 &format!("[time] joint_drift_deg_per_h j{}", j + 1),

@@ -33,6 +33,9 @@ pub struct TimeTerms {
     pub drift_mm_per_h: Vector3<f64>,
     /// Drift of each joint's offset, deg per hour (empty: none).
     pub joint_drift_deg_per_h: Vec<f64>,
+    /// Changes within the session at a time ([`super::changes`]: `tool_change`,
+    /// `payload_change`), in time order.
+    pub changes: Vec<super::changes::Step>,
 }
 
 impl Default for TimeTerms {
@@ -42,6 +45,7 @@ impl Default for TimeTerms {
             thermal_tau_min: DEFAULT_THERMAL_TAU_MIN,
             drift_mm_per_h: Vector3::zeros(),
             joint_drift_deg_per_h: Vec::new(),
+            changes: Vec::new(),
         }
     }
 }
@@ -60,6 +64,7 @@ impl TimeTerms {
         self.thermal_ppm != 0.0
             || self.drift_mm_per_h != Vector3::zeros()
             || self.joint_drift_deg_per_h.iter().any(|r| *r != 0.0)
+            || self.changes.iter().any(|c| c.is_active())
     }
 
     /// Joint `j`'s offset drift at `t_s`, deg.

@@ -59,6 +59,10 @@
 //! drift_mm_per_h = [0.0, 0.0, 0.05]               # time_drift: measured position += v t
 //! joint_drift_deg_per_h = [0.0, 0.01, 0.0, 0.0, 0.0]  # time_drift:j<i>: offsets += r t
 //!
+//! [[change]]                      # a change within the session (tool_change, payload_change)
+//! t_s = 585.0                     # from this pose time on (s) ...
+//! tool_mm = [0.06, -0.05, 0.06]   # ... the tool point moves (last frame), or payload_kg = 0.5
+//!
 //! [params]                        # overrides of any parameter, by name (deg / mm / kg / ppm)
 //! tool_dz = 12.5
 //! dth2 = 0.03
@@ -82,6 +86,7 @@ use std::collections::BTreeMap;
 use std::path::Path;
 
 use super::chain::{Axis, GammaLaw, Model, ModelBuilder, Motion, TiltValues};
+use super::changes::{Step, StepKind};
 use super::error::ModelError;
 use super::gravity::GravityModel;
 use super::time_terms::TimeTerms;
@@ -103,6 +108,18 @@ struct ModelFile {
     params: BTreeMap<String, f64>,
     #[serde(default)]
     time: Option<TimeEntry>,
+    #[serde(default)]
+    change: Vec<ChangeEntry>,
+}
+
+/// A `[[change]]` row: a change within the session at `t_s` (FORMATS.md effects extended by
+/// `tool_change`, `payload_change`; docs/diagnose.md).
+#[derive(Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+struct ChangeEntry {
+    t_s: f64,
+    tool_mm: Option<[f64; 3]>,
+    payload_kg: Option<f64>,
 }
 
 #[derive(Debug, Deserialize)]
@@ -222,6 +239,24 @@ fn build(file: ModelFile) -> Result<Model, String> {
     if let Some(t) = &file.time {
         model.set_time_terms(time_terms(t, model.n_joints())?);
     }
+    for c in &file.change {
+        let kind = match (c.tool_mm, c.payload_kg) {
+            (Some(d), None) => StepKind::Tool(nalgebra::Vector3::from(d)),
+            (None, Some(kg)) => StepKind::Payload(kg),
+            _ => {
+                return Err(format!(
+                    "[[change]] at t_s = {}: give exactly one of tool_mm = [dx, dy, dz] and \
+                     payload_kg",
+                    c.t_s
+                ))
+            }
+        };
+        model
+            .time_terms_mut()
+            .changes
+            .push(Step { t_s: c.t_s, kind });
+    }
+    model.check_steps().map_err(|e| format!("[[change]] {e}"))?;
     model.check_ranges()?;
     Ok(model)
 }

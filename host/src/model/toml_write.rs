@@ -6,8 +6,10 @@ use std::fmt::Write as _;
 use std::path::Path;
 
 use super::chain::{Axis, GammaLaw, Model, Motion};
+use super::changes::StepKind;
 use super::error::ModelError;
 use super::param::ParamKind;
+use super::time_terms::TimeTerms;
 use super::transmission::JointTerms;
 
 /// The `op` of an elementary transform.
@@ -147,7 +149,12 @@ impl Model {
             );
         }
         let time = &self.time_terms;
-        if time.is_active() {
+        // the laws of the pose time (the changes within the session are rows of their own)
+        let laws = TimeTerms {
+            changes: Vec::new(),
+            ..time.clone()
+        };
+        if laws.is_active() {
             let list = |v: &[f64]| v.iter().map(|x| fmt_f64(*x)).collect::<Vec<_>>().join(", ");
             let _ = writeln!(
                 s,
@@ -163,6 +170,18 @@ impl Model {
                     list(&time.joint_drift_deg_per_h)
                 );
             }
+        }
+        for step in time.changes.iter().filter(|c| c.is_active()) {
+            let what = match step.kind {
+                StepKind::Tool(d) => format!(
+                    "tool_mm = [{}, {}, {}]",
+                    fmt_f64(d.x),
+                    fmt_f64(d.y),
+                    fmt_f64(d.z)
+                ),
+                StepKind::Payload(kg) => format!("payload_kg = {}", fmt_f64(kg)),
+            };
+            let _ = writeln!(s, "\n[[change]]\nt_s = {}\n{what}", fmt_f64(step.t_s));
         }
         let _ = writeln!(s, "\n[params]");
         let extra = |k: ParamKind| {

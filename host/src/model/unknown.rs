@@ -30,6 +30,11 @@ pub enum Unknown {
     ThermalPpm,
     /// Thermal time constant, min ([`crate::model::time_terms::TimeTerms::thermal_tau_min`]); non-linear.
     ThermalTauMin,
+    /// Axis `axis` (0..3) of the tool point's offset after change `slot` of the model's
+    /// changes within the session ([`super::changes`]), mm in the last link frame.
+    ToolStep { slot: usize, axis: usize },
+    /// The mass picked up at change `slot` of the model's changes within the session, kg.
+    PayloadStep(usize),
     /// Coordinate `axis` (0..3) of point slot `slot` (>= 1) in the tool frame, mm: the other
     /// measured points of a pose ([`super::measured::MeasuredSet`]).
     Offset { slot: usize, axis: usize },
@@ -60,6 +65,14 @@ impl Unknown {
             Unknown::Offset { slot, axis } => {
                 format!("point{slot}_{}_mm", ["x", "y", "z"][axis.min(2)])
             }
+            Unknown::ToolStep { slot, axis } => {
+                format!(
+                    "change{}_tool_d{}_mm",
+                    slot + 1,
+                    ["x", "y", "z"][axis.min(2)]
+                )
+            }
+            Unknown::PayloadStep(slot) => format!("change{}_payload_kg", slot + 1),
         }
     }
 
@@ -76,6 +89,8 @@ impl Unknown {
             | Unknown::PositionDrift(_)
             | Unknown::ThermalPpm
             | Unknown::ThermalTauMin
+            | Unknown::ToolStep { .. }
+            | Unknown::PayloadStep(_)
             | Unknown::Offset { .. } => None,
         }
     }

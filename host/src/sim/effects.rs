@@ -149,6 +149,15 @@ impl Effect {
                 model.set_transmission(terms);
                 Ok(())
             }
+            Change::Step(step) => {
+                let mut m = model.clone();
+                m.time_terms_mut().changes.push(*step);
+                m.check_steps().map_err(err)?;
+                let changes = &mut model.time_terms_mut().changes;
+                changes.push(*step);
+                changes.sort_by(|a, b| a.t_s.total_cmp(&b.t_s));
+                Ok(())
+            }
             Change::JointDrift(j, rate) => {
                 let n = model.n_joints();
                 if *j >= n {

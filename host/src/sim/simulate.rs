@@ -255,8 +255,10 @@ pub fn simulate(declared: &Model, cfg: &SimConfig) -> Result<SimOutput, SimError
                     let q = written[k].clone();
                     // the truth carries the joint map and the time terms
                     let q_true = truth.effective_joints_at(&q, t_s, &approach[k])?;
-                    let chain_mm =
-                        truth.position_mm(&q_true, if tilt { Tilt::Static } else { Tilt::Off })?;
+                    // the truth as it is at t (changes within the session)
+                    let chain_mm = truth
+                        .at_time(t_s)
+                        .position_mm(&q_true, if tilt { Tilt::Static } else { Tilt::Off })?;
                     let time = truth.time_terms();
                     let truth_mm = time.grown_mm(&chain_mm, t_s);
                     let n = Vector3::new(

@@ -154,6 +154,7 @@ fn compensate_through_the_warm_up_lands_on_the_path() {
         thermal_tau_min: 10.0,
         drift_mm_per_h: nalgebra::Vector3::new(0.0, 0.05, 0.0),
         joint_drift_deg_per_h: vec![0.0, 0.02, 0.0, 0.0, 0.0],
+        ..TimeTerms::default()
     });
     let model_file = dir.path().join("warm.toml");
     model.write_file(&model_file).unwrap();
@@ -213,6 +214,19 @@ fn time_terms_read_back_identical_and_absurd_values_are_refused() {
         thermal_tau_min: 17.5,
         drift_mm_per_h: nalgebra::Vector3::new(0.1, -0.2, 0.3),
         joint_drift_deg_per_h: vec![0.0, 0.01, -0.02, 0.0, 0.005],
+        // changes within the session read back as `[[change]]` rows
+        changes: vec![
+            rigctl::model::changes::Step {
+                t_s: 600.5,
+                kind: rigctl::model::changes::StepKind::Tool(nalgebra::Vector3::new(
+                    0.1, -0.05, 0.02,
+                )),
+            },
+            rigctl::model::changes::Step {
+                t_s: 1200.0,
+                kind: rigctl::model::changes::StepKind::Payload(0.25),
+            },
+        ],
     });
     let text = model.to_toml_string();
     let back = Model::from_toml_str(&text, "m.toml").unwrap();

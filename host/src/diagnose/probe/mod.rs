@@ -146,6 +146,10 @@ pub struct ProbeReport {
     pub poses: usize,
     pub folds: usize,
     pub rule: String,
+    /// The change-point scan of the residual in time ([`crate::diagnose::changes`]), when a
+    /// step explains a significant part of it.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub change_point: Option<crate::diagnose::changes::ChangePoint>,
 }
 
 impl ProbeResult {
@@ -224,6 +228,7 @@ impl ProbeResult {
             poses: self.poses,
             folds: self.folds,
             rule: rule_text(cfg),
+            change_point: None,
         }
     }
 }

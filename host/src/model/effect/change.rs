@@ -7,6 +7,7 @@ use nalgebra::Vector3;
 
 use super::EffectId;
 use crate::io::ranges::{show, MAX_ANGLE_DEG, MAX_POSITION_MM};
+use crate::model::changes::{Step, StepKind};
 use crate::model::ranges as r;
 
 /// What an effect changes.
@@ -22,6 +23,8 @@ pub enum Change {
     Joint(JointTerm),
     /// Warm-up growth: ppm at saturation, time constant in min.
     Thermal { ppm: f64, tau_min: f64 },
+    /// A change within the session at a time.
+    Step(Step),
 }
 
 /// A joint-angle term, 0-based joint indices.
@@ -111,6 +114,14 @@ impl EffectId {
                 }
                 Change::Thermal { ppm: v0, tau_min }
             }
+            EffectId::ToolChange => Change::Step(Step {
+                t_s: values[3],
+                kind: StepKind::Tool(Vector3::new(values[0], values[1], values[2])),
+            }),
+            EffectId::PayloadChange => Change::Step(Step {
+                t_s: values[1],
+                kind: StepKind::Payload(v0),
+            }),
         };
         change.check_range()?;
         Ok(change)
@@ -136,6 +147,18 @@ impl Change {
                     )));
                 }
                 (vec![*ppm], r::MAX_THERMAL_PPM)
+            }
+            Change::Step(step) => {
+                if !(step.t_s.is_finite() && step.t_s >= 0.0) {
+                    return Err(ChangeError(format!(
+                        "the change time t_s (last value, s) must be >= 0, not {}",
+                        show(step.t_s)
+                    )));
+                }
+                match step.kind {
+                    StepKind::Tool(d) => (d.iter().copied().collect(), MAX_POSITION_MM),
+                    StepKind::Payload(kg) => (vec![kg], r::MAX_MASS_KG),
+                }
             }
         };
         match values.iter().find(|v| !(v.is_finite() && v.abs() <= limit)) {
