@@ -93,6 +93,8 @@ pub(crate) fn track_all(
         occluders,
         map,
         visited: vec![0; seeds.len()],
+        marked_at: vec![0; seeds.len()],
+        clock: 0,
         roi,
         p: params,
     };
@@ -130,6 +132,10 @@ pub(super) struct Tracker<'a> {
     occluders: &'a Occluders,
     map: &'a CoarseMap,
     visited: Vec<u32>,
+    /// When each block was first marked, on [`Self::clock`].
+    marked_at: Vec<u32>,
+    /// Counts the marks made (one per centre walked).
+    clock: u32,
     roi: &'a dyn Fn([f64; 2]) -> bool,
     p: &'a TrackParams,
 }
@@ -250,7 +256,7 @@ impl Tracker<'_> {
                 return End::Stopped;
             };
             let pred = [c[0] + step * t[0], c[1] + step * t[1]];
-            if !self.free_at(pred, id) {
+            if !self.free_at(pred, id) || self.on_own_track(pred, id, start, half_w) {
                 return End::Stopped;
             }
             let found = self.centre_at(pred, t, half_len, half_w);
@@ -353,6 +359,27 @@ impl Tracker<'_> {
         (self.roi)(p) && (owner == 0 || owner == id)
     }
 
+    /// Whether `p` lies on what piece `id` walked earlier, not in its last steps nor around its
+    /// start (`start`, where a closed stroke comes back): the stroke crosses itself, or runs
+    /// into another stroke crossing it and round back (two runs drawn across each other). The
+    /// walk stops there as at any crossing, so a piece never walks its own track again (round
+    /// two crossing circles, that went on until the step limit).
+    fn on_own_track(&self, p: [f64; 2], id: u32, start: [f64; 2], half_w: f64) -> bool {
+        let k = self.map.k as f64;
+        let step = self.p.step_px;
+        if dist(p, start) < half_w + 3.0 * k + 2.0 * step || p[0] < 0.0 || p[1] < 0.0 {
+            return false;
+        }
+        let (bx, by) = ((p[0] / k) as usize, (p[1] / k) as usize);
+        if bx >= self.map.w || by >= self.map.h {
+            return false;
+        }
+        let b = by * self.map.w + bx;
+        // The blocks the last steps marked reach this far ahead and behind.
+        let recent = (2.0 * (half_w + 2.0 * k) / step).ceil() as u32 + 4;
+        self.visited[b] == id && self.marked_at[b].saturating_add(recent) < self.clock
+    }
+
     /// The piece owning the block at `p`; 0 where none does (a seed too faint to begin a piece
     /// owns nothing).
     fn visited_at(&self, p: [f64; 2]) -> u32 {
@@ -372,6 +399,7 @@ impl Tracker<'_> {
 
     /// Marks the blocks within `radius_px` of `p` as belonging to piece `id`.
     fn mark(&mut self, p: [f64; 2], radius_px: f64, id: u32) {
+        self.clock = self.clock.wrapping_add(1);
         let k = self.map.k as f64;
         let bx0 = ((p[0] - radius_px) / k).floor().max(0.0) as usize;
         let by0 = ((p[1] - radius_px) / k).floor().max(0.0) as usize;
@@ -383,9 +411,11 @@ impl Tracker<'_> {
             for bx in bx0..=bx1 {
                 let c = self.map.block_centre_px(bx, by);
                 if dist(c, p) <= radius_px + 0.71 * k {
-                    let v = &mut self.visited[by * self.map.w + bx];
+                    let b = by * self.map.w + bx;
+                    let v = &mut self.visited[b];
                     if *v == 0 || *v == TRIED {
                         *v = id;
+                        self.marked_at[b] = self.clock;
                     }
                 }
             }
