@@ -10,7 +10,9 @@ use super::plane::dist;
 use super::raster::CoarseMap;
 use image::RgbImage;
 use indicatif::ProgressBar;
+use own_track::{Retrace, Verdict};
 
+mod own_track;
 mod section;
 
 pub(crate) use section::Occluders;
@@ -64,6 +66,8 @@ struct Geom {
     half_w: f64,
     width_px: f64,
     mass0: f64,
+    /// [`Tracker::clock`] when the piece began.
+    clock0: u32,
 }
 
 enum End {
@@ -94,6 +98,7 @@ pub(crate) fn track_all(
         map,
         visited: vec![0; seeds.len()],
         marked_at: vec![0; seeds.len()],
+        marked_dir: vec![[0.0; 2]; seeds.len()],
         clock: 0,
         roi,
         p: params,
@@ -118,7 +123,7 @@ pub(crate) fn track_all(
             Err(Unbegun::TooFaint) => TRIED,
             _ => id,
         };
-        tracker.mark(seed, 2.0 * map.k as f64, owner);
+        tracker.mark(seed, 2.0 * map.k as f64, owner, [0.0; 2]);
         pieces.push(piece.ok());
     }
     progress.set_position(seeds.len() as u64);
@@ -134,6 +139,8 @@ pub(super) struct Tracker<'a> {
     visited: Vec<u32>,
     /// When each block was first marked, on [`Self::clock`].
     marked_at: Vec<u32>,
+    /// The heading of the walk when it marked each block (zero where no walk did).
+    marked_dir: Vec<[f32; 2]>,
     /// Counts the marks made (one per centre walked).
     clock: u32,
     roi: &'a dyn Fn([f64; 2]) -> bool,
@@ -164,9 +171,10 @@ impl Tracker<'_> {
             half_w,
             width_px,
             mass0: s0.mass,
+            clock0: self.clock,
         };
         let mut fwd = vec![start];
-        self.mark(start, half_w + self.map.k as f64, id);
+        self.mark(start, half_w + self.map.k as f64, id, t0);
         let end_f = self.walk(&mut fwd, t0, geom, id, true);
         let closed = matches!(end_f, End::Closed);
         let mut pts = if closed {
@@ -243,6 +251,7 @@ impl Tracker<'_> {
             half_w,
             width_px,
             mass0,
+            clock0,
         } = geom;
         let step = self.p.step_px;
         let half_len = 0.5 * step;
@@ -250,13 +259,24 @@ impl Tracker<'_> {
         let mut ema = mass0;
         let mut last_mass = mass0;
         let start = pts[0];
+        let mut retrace = Retrace::new(self.retrace_patience(half_w));
         let max_steps = 4 * (self.img.width() as usize + self.img.height() as usize) * 4;
         for _ in 0..max_steps {
             let Some(&c) = pts.last() else {
                 return End::Stopped;
             };
             let pred = [c[0] + step * t[0], c[1] + step * t[1]];
-            if !self.free_at(pred, id) || self.on_own_track(pred, id, start, half_w) {
+            if !self.free_at(pred, id) {
+                return End::Stopped;
+            }
+            let own = self.own_track_cos(pred, t, id, start, half_w);
+            let marks = self.clock.wrapping_sub(clock0) as usize;
+            let v = retrace.step(own, pts.len(), marks, self.clock);
+            if let Verdict::StopAt { keep, since } = v {
+                pts.truncate(keep.max(1));
+                if let Some(since) = since {
+                    self.unmark_since(id, since);
+                }
                 return End::Stopped;
             }
             let found = self.centre_at(pred, t, half_len, half_w);
@@ -296,7 +316,7 @@ impl Tracker<'_> {
                 t = heading(pts, p, t);
                 ema = 0.9 * ema + 0.1 * m;
                 last_mass = m;
-                self.mark(p, half_w + self.map.k as f64, id);
+                self.mark(p, half_w + self.map.k as f64, id, t);
                 pts.push(p);
             }
         }
@@ -359,27 +379,6 @@ impl Tracker<'_> {
         (self.roi)(p) && (owner == 0 || owner == id)
     }
 
-    /// Whether `p` lies on what piece `id` walked earlier, not in its last steps nor around its
-    /// start (`start`, where a closed stroke comes back): the stroke crosses itself, or runs
-    /// into another stroke crossing it and round back (two runs drawn across each other). The
-    /// walk stops there as at any crossing, so a piece never walks its own track again (round
-    /// two crossing circles, that went on until the step limit).
-    fn on_own_track(&self, p: [f64; 2], id: u32, start: [f64; 2], half_w: f64) -> bool {
-        let k = self.map.k as f64;
-        let step = self.p.step_px;
-        if dist(p, start) < half_w + 3.0 * k + 2.0 * step || p[0] < 0.0 || p[1] < 0.0 {
-            return false;
-        }
-        let (bx, by) = ((p[0] / k) as usize, (p[1] / k) as usize);
-        if bx >= self.map.w || by >= self.map.h {
-            return false;
-        }
-        let b = by * self.map.w + bx;
-        // The blocks the last steps marked reach this far ahead and behind.
-        let recent = (2.0 * (half_w + 2.0 * k) / step).ceil() as u32 + 4;
-        self.visited[b] == id && self.marked_at[b].saturating_add(recent) < self.clock
-    }
-
     /// The piece owning the block at `p`; 0 where none does (a seed too faint to begin a piece
     /// owns nothing).
     fn visited_at(&self, p: [f64; 2]) -> u32 {
@@ -398,7 +397,7 @@ impl Tracker<'_> {
     }
 
     /// Marks the blocks within `radius_px` of `p` as belonging to piece `id`.
-    fn mark(&mut self, p: [f64; 2], radius_px: f64, id: u32) {
+    fn mark(&mut self, p: [f64; 2], radius_px: f64, id: u32, t: [f64; 2]) {
         self.clock = self.clock.wrapping_add(1);
         let k = self.map.k as f64;
         let bx0 = ((p[0] - radius_px) / k).floor().max(0.0) as usize;
@@ -416,6 +415,7 @@ impl Tracker<'_> {
                     if *v == 0 || *v == TRIED {
                         *v = id;
                         self.marked_at[b] = self.clock;
+                        self.marked_dir[b] = [t[0] as f32, t[1] as f32];
                     }
                 }
             }
