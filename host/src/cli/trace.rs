@@ -262,19 +262,10 @@ fn missing_message(trace: &Trace) -> String {
         .iter()
         .enumerate()
         .filter(|(i, g)| !g.bridged && !l.gaps_to_crossing.contains(i))
-        .map(|(i, g)| {
+        .map(|(_, g)| {
             format!(
-                "a gap of {:.1} mm from ({:.1}, {:.1}) to ({:.1}, {:.1}) mm (longer than --max-gap-mm){}",
-                g.length_mm,
-                g.from_mm[0],
-                g.from_mm[1],
-                g.to_mm[0],
-                g.to_mm[1],
-                if trace.gaps_at_shadow_edges.contains(&i) {
-                    " along the edge of a hard shadow (the light steps there: light the sheet evenly)"
-                } else {
-                    ""
-                }
+                "a gap of {:.1} mm from ({:.1}, {:.1}) to ({:.1}, {:.1}) mm (longer than --max-gap-mm)",
+                g.length_mm, g.from_mm[0], g.from_mm[1], g.to_mm[0], g.to_mm[1]
             )
         }));
     for (_, o) in l

@@ -39,7 +39,6 @@ mod files;
 pub mod flatness;
 pub mod grey_print;
 pub mod homography;
-mod illumination;
 mod ink;
 mod lines;
 pub mod link;
@@ -90,9 +89,6 @@ pub struct Trace {
     pub grey_print: Option<GreyPrint>,
     /// The path's free ends that meet the grey print: it may go on under the print, unseen.
     pub ends_at_print_mm: Vec<[f64; 2]>,
-    /// The missing gaps (indices into the linking's gaps) along a step of the light: the edge
-    /// of a hard shadow (or of the page) running along the drawing there.
-    pub gaps_at_shadow_edges: Vec<usize>,
     /// The fiducials (fiducial mapping only).
     pub fiducials: Option<Fiducials>,
     /// Distance between the orientation dot's measured and predicted positions, mm.
@@ -142,16 +138,8 @@ pub fn trace_prepared(
     progress: &ProgressBar,
 ) -> Result<Trace, TraceError> {
     let Tracked {
-        pieces_mm,
-        meta,
-        linear,
+        pieces_mm, meta, ..
     } = track(img, prepared, opts, progress)?;
-    let illum = linear
-        .as_ref()
-        .map_or(prepared, |(_, p)| p)
-        .paper
-        .illum
-        .clone();
     // Without red ink the printed path, if printed, is graphite to the tracker.
     let grey_print = match opts.mapping {
         Mapping::Scale { .. } => None,
@@ -197,14 +185,7 @@ pub fn trace_prepared(
         })
         .collect();
     let ends_at_print_mm = grey_print.map_or_else(Vec::new, |g| g.ends_meeting(&linking.path));
-    let gaps_at_shadow_edges = match (&illum, &meta.camera) {
-        (Some(il), Some(cam)) => {
-            illumination::gaps_at_steps(il, cam, &linking.gaps, meta.px_per_mm)
-        }
-        _ => Vec::new(),
-    };
     Ok(Trace {
-        gaps_at_shadow_edges,
         strokes,
         linking,
         grey_print,

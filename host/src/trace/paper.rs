@@ -7,7 +7,6 @@
 //! neighbours' paper) and smoothed; a pixel's level is interpolated bilinearly between block
 //! centres.
 
-use super::illumination::{Illumination, TOLERANCE};
 #[cfg(test)]
 use image::RgbImage;
 
@@ -20,9 +19,6 @@ pub(crate) struct PaperMap {
     pub h: usize,
     /// Level per block and channel, 0..255.
     pub level: Vec<[f32; 3]>,
-    /// The light at the scale of shadows: where it is well below `level` (a hard shadow's
-    /// edge the blocks carry into the shadow), the paper is at its level.
-    pub illum: Option<Illumination>,
 }
 
 /// Percentile of a block's pixels taken as its paper level.
@@ -99,34 +95,7 @@ impl PaperMap {
     /// 3 x 3 blocks and smoothed.
     pub(crate) fn from_block_levels(block: usize, w: usize, h: usize, raw: &[[f32; 3]]) -> Self {
         let level = smooth(&max_filter(raw, w, h), w, h);
-        Self {
-            block,
-            w,
-            h,
-            level,
-            illum: None,
-        }
-    }
-
-    /// The map with the light at the scale of shadows ([`Illumination`]).
-    pub(crate) fn lit_by(self, illum: Illumination) -> Self {
-        Self {
-            illum: Some(illum),
-            ..self
-        }
-    }
-
-    /// The red paper level for the darkest pixel of coarse block `i` (of the illumination's
-    /// cells) whose block-wise level is `level`.
-    #[inline]
-    pub fn red_for_cell(&self, i: usize, level: f32) -> f32 {
-        match &self.illum {
-            Some(il) => il
-                .low
-                .get(i)
-                .map_or(level, |l| level.min(l[0] * (1.0 + TOLERANCE))),
-            None => level,
-        }
+        Self { block, w, h, level }
     }
 
     /// Block size for an image: about 1/150 of its short side (1.4 mm on an A4 scan), at least
@@ -188,12 +157,6 @@ impl PaperMap {
         for k in 0..3 {
             out[k] = (1.0 - ay) * ((1.0 - ax) * a[k] + ax * b2[k])
                 + ay * ((1.0 - ax) * c[k] + ax * d[k]);
-        }
-        if let Some(il) = &self.illum {
-            let lit = il.at(x, y);
-            for k in 0..3 {
-                out[k] = out[k].min(lit[k] * (1.0 + TOLERANCE));
-            }
         }
         out
     }

@@ -5,7 +5,6 @@
 //! its rows alone and the bands are put together in order, so the maps are the same whatever
 //! the number of threads.
 
-use super::illumination::Illumination;
 use super::paper::PaperMap;
 use super::raster::CoarseMap;
 use super::tone::Tone;
@@ -89,8 +88,6 @@ pub(crate) struct Geometry {
 pub(crate) struct BandMaps {
     min_red: Vec<u8>,
     level: Vec<[f32; 3]>,
-    /// Mean RGB per coarse block ([`Illumination::band`]).
-    cells: Vec<[f32; 3]>,
 }
 
 impl Geometry {
@@ -101,7 +98,6 @@ impl Geometry {
         BandMaps {
             min_red: CoarseMap::band(rows, self.iw, n_rows, self.coarse_k),
             level: PaperMap::band(rows, self.iw, self.ih, y0, n_rows, self.paper_block),
-            cells: Illumination::band(rows, self.iw, n_rows, self.coarse_k),
         }
     }
 }
@@ -116,7 +112,6 @@ pub(crate) struct Bands {
     coarse_k: usize,
     min_red: Vec<u8>,
     level: Vec<[f32; 3]>,
-    cells: Vec<[f32; 3]>,
 }
 
 impl Bands {
@@ -133,7 +128,6 @@ impl Bands {
             coarse_k,
             min_red: Vec::new(),
             level: Vec::new(),
-            cells: Vec::new(),
         }
     }
 
@@ -150,7 +144,6 @@ impl Bands {
     pub(crate) fn push(&mut self, b: BandMaps) {
         self.min_red.extend(b.min_red);
         self.level.extend(b.level);
-        self.cells.extend(b.cells);
     }
 
     pub(crate) fn finish(self) -> Prepared {
@@ -163,14 +156,7 @@ impl Bands {
         let mut level = self.level;
         level.resize(pw * ph, [255.0; 3]);
         Prepared {
-            paper: PaperMap::from_block_levels(b, pw, ph, &level).lit_by(Illumination::from_cells(
-                k,
-                cw,
-                ch,
-                self.iw,
-                self.ih,
-                &self.cells,
-            )),
+            paper: PaperMap::from_block_levels(b, pw, ph, &level),
             map: CoarseMap {
                 k,
                 w: cw,

@@ -122,8 +122,8 @@ impl CoarseMap {
             .enumerate()
         {
             let levels = &paper.level[paper.row_of(self.block_centre_px(0, by)[1]) * paper.w..];
-            for (bx, ((v, o), &c)) in row.iter().zip(o.iter_mut()).zip(&cols).enumerate() {
-                *o = keep(*v, paper.red_for_cell(by * self.w + bx, levels[c][0]));
+            for ((v, o), &c) in row.iter().zip(o.iter_mut()).zip(&cols) {
+                *o = keep(*v, levels[c][0]);
             }
         }
         out

@@ -75,6 +75,5 @@ mod trace_hard;
 mod trace_independent;
 mod trace_photos;
 mod trace_scan;
-mod trace_shadows;
 mod urdf_export;
 mod urdf_import;

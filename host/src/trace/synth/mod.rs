@@ -9,9 +9,7 @@
 //! - a photo's sheet bent ([`Bend`], `bend.rs`: a bow or a lifted edge, a cylinder about an axis
 //!   in the sheet plane, the paper unrolled along it);
 //! - both written through a device's tone curve ([`DeviceTone`], `device.rs`: sRGB, a gamma, a
-//!   phone's S-curve; linear by default);
-//! - hard shadows across the sheet and a scanner's page edge inside the scan ([`HardShadow`],
-//!   [`PageEdge`], `shade.rs`).
+//!   phone's S-curve; linear by default).
 
 pub mod bend;
 mod desk;
@@ -19,10 +17,8 @@ pub mod device;
 mod draw;
 pub mod photo;
 pub mod scan;
-pub mod shade;
 
 pub use bend::{Bend, BendShape};
 pub use device::DeviceTone;
 pub use photo::{jpeg_bytes, render_photo, Camera, PhotoSpec};
 pub use scan::{render_scan, RenderSpec};
-pub use shade::{HardShadow, PageEdge};

@@ -217,7 +217,6 @@ pub fn render_photo(sheet: &RenderSpec, photo: &PhotoSpec) -> RgbImage {
         shift_mm: [0.0, 0.0],
         mirrored: false,
         desk_level: None,
-        page_edge: None,
         device_tone: super::DeviceTone::Linear,
         ..sheet.clone()
     };

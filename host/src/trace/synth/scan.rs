@@ -13,7 +13,6 @@
 use super::desk::{cumulative_arc, desk};
 use super::device::DeviceTone;
 use super::draw::{disc, hash, mul, paper, rect, stroke_coverage, triangular, Placement};
-use super::shade::{shade, HardShadow, PageEdge};
 use crate::sheet::{
     fiducial_centres_mm, orientation_dot_mm, ring_dots_mm, scale_bar_rects_mm, ReferencePath,
     FIDUCIAL_DIAMETER_MM, FIDUCIAL_SPACING_MM, ORIENTATION_DOT_DIAMETER_MM, PAGE_HEIGHT_MM,
@@ -76,11 +75,6 @@ pub struct RenderSpec {
     /// The tone curve the device writes through (a photo applies it after its light, blur and
     /// noise, before JPEG).
     pub device_tone: DeviceTone,
-    /// Hard shadows across the sheet (a phone's, a hand's), before the tone curve.
-    pub hard_shadows: Vec<HardShadow>,
-    /// The page's edge inside the scan with its shadow on the lid (a scan only: a photo's
-    /// texture leaves it out).
-    pub page_edge: Option<PageEdge>,
 }
 
 impl Default for RenderSpec {
@@ -109,8 +103,6 @@ impl Default for RenderSpec {
             fibres_mm: Vec::new(),
             desk_level: None,
             device_tone: DeviceTone::Linear,
-            hard_shadows: Vec::new(),
-            page_edge: None,
         }
     }
 }
@@ -224,12 +216,6 @@ pub fn render_scan(spec: &RenderSpec) -> RgbImage {
     if let Some(level) = spec.desk_level {
         desk(&mut img, &place, level);
     }
-    shade(
-        &mut img,
-        &place,
-        &spec.hard_shadows,
-        spec.page_edge.as_ref(),
-    );
     spec.device_tone.apply(&mut img);
     img
 }
