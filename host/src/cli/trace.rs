@@ -255,16 +255,25 @@ pub(super) fn describe(o: &LeftOut) -> String {
 
 fn missing_message(trace: &Trace) -> String {
     let l = &trace.linking;
-    let mut parts: Vec<String> = l
-        .missing()
-        .map(|g| {
+    let mut parts: Vec<String> = Vec::new();
+    let crossing_marks: Vec<usize> = l.crossings.iter().map(|c| c.other).collect();
+    parts.extend(l
+        .gaps
+        .iter()
+        .enumerate()
+        .filter(|(i, g)| !g.bridged && !l.gaps_to_crossing.contains(i))
+        .map(|(_, g)| {
             format!(
                 "a gap of {:.1} mm from ({:.1}, {:.1}) to ({:.1}, {:.1}) mm (longer than --max-gap-mm)",
                 g.length_mm, g.from_mm[0], g.from_mm[1], g.to_mm[0], g.to_mm[1]
             )
-        })
-        .collect();
-    for o in l.left_out.iter().filter(|o| o.could_be_path()) {
+        }));
+    for (_, o) in l
+        .left_out
+        .iter()
+        .enumerate()
+        .filter(|(i, o)| o.could_be_path() && !crossing_marks.contains(i))
+    {
         parts.push(format!(
             "{} {}",
             if o.kind == LeftOutKind::Continues {
@@ -281,10 +290,52 @@ fn missing_message(trace: &Trace) -> String {
             p[0], p[1]
         ));
     }
-    format!(
-        "the pencil trace is not the whole drawn path: missing {}; nothing written",
-        parts.join("; ")
-    )
+    match crossing_message(l) {
+        Some(cross) if parts.is_empty() => format!("{cross}; nothing written"),
+        Some(cross) => format!(
+            "{cross}; the path also misses {}; nothing written",
+            parts.join("; ")
+        ),
+        None => format!(
+            "the pencil trace is not the whole drawn path: missing {}; nothing written",
+            parts.join("; ")
+        ),
+    }
+}
+
+/// "two drawn paths cross at (x, y) and (x, y) mm (the other ...)" when another run crosses
+/// or meets the path.
+fn crossing_message(l: &rigctl::trace::Linking) -> Option<String> {
+    if l.crossings.is_empty() {
+        return None;
+    }
+    // Two parts of the other run (cut where it met the path) meet it at the same place.
+    let mut places: Vec<[f64; 2]> = Vec::new();
+    for c in &l.crossings {
+        if places
+            .iter()
+            .all(|p| (p[0] - c.at_mm[0]).hypot(p[1] - c.at_mm[1]) > 3.0)
+        {
+            places.push(c.at_mm);
+        }
+    }
+    let at: Vec<String> = places
+        .iter()
+        .map(|p| format!("({:.1}, {:.1})", p[0], p[1]))
+        .collect();
+    let mut others: Vec<usize> = l.crossings.iter().map(|c| c.other).collect();
+    others.sort_unstable();
+    others.dedup();
+    let seen: Vec<String> = others
+        .iter()
+        .filter_map(|&i| l.left_out.get(i))
+        .map(describe)
+        .collect();
+    Some(format!(
+        "two drawn paths cross at {} mm: the sheet holds a second drawing (the other path, seen as {}), so the trace is not the one drawn path; `--paths DIR` writes each",
+        at.join(", "),
+        seen.join(" and ")
+    ))
 }
 
 /// Whether `path` is a JPEG (starts with SOI) whose scan data is not followed by an end-of-image

@@ -10,7 +10,9 @@ use super::plane::dist;
 use super::raster::CoarseMap;
 use image::RgbImage;
 use indicatif::ProgressBar;
+use own_track::{Retrace, Verdict};
 
+mod own_track;
 mod section;
 
 pub(crate) use section::Occluders;
@@ -64,6 +66,8 @@ struct Geom {
     half_w: f64,
     width_px: f64,
     mass0: f64,
+    /// [`Tracker::clock`] when the piece began.
+    clock0: u32,
 }
 
 enum End {
@@ -93,6 +97,9 @@ pub(crate) fn track_all(
         occluders,
         map,
         visited: vec![0; seeds.len()],
+        marked_at: vec![0; seeds.len()],
+        marked_dir: vec![[0.0; 2]; seeds.len()],
+        clock: 0,
         roi,
         p: params,
     };
@@ -116,7 +123,7 @@ pub(crate) fn track_all(
             Err(Unbegun::TooFaint) => TRIED,
             _ => id,
         };
-        tracker.mark(seed, 2.0 * map.k as f64, owner);
+        tracker.mark(seed, 2.0 * map.k as f64, owner, [0.0; 2]);
         pieces.push(piece.ok());
     }
     progress.set_position(seeds.len() as u64);
@@ -130,6 +137,12 @@ pub(super) struct Tracker<'a> {
     occluders: &'a Occluders,
     map: &'a CoarseMap,
     visited: Vec<u32>,
+    /// When each block was first marked, on [`Self::clock`].
+    marked_at: Vec<u32>,
+    /// The heading of the walk when it marked each block (zero where no walk did).
+    marked_dir: Vec<[f32; 2]>,
+    /// Counts the marks made (one per centre walked).
+    clock: u32,
     roi: &'a dyn Fn([f64; 2]) -> bool,
     p: &'a TrackParams,
 }
@@ -158,9 +171,10 @@ impl Tracker<'_> {
             half_w,
             width_px,
             mass0: s0.mass,
+            clock0: self.clock,
         };
         let mut fwd = vec![start];
-        self.mark(start, half_w + self.map.k as f64, id);
+        self.mark(start, half_w + self.map.k as f64, id, t0);
         let end_f = self.walk(&mut fwd, t0, geom, id, true);
         let closed = matches!(end_f, End::Closed);
         let mut pts = if closed {
@@ -237,6 +251,7 @@ impl Tracker<'_> {
             half_w,
             width_px,
             mass0,
+            clock0,
         } = geom;
         let step = self.p.step_px;
         let half_len = 0.5 * step;
@@ -244,6 +259,7 @@ impl Tracker<'_> {
         let mut ema = mass0;
         let mut last_mass = mass0;
         let start = pts[0];
+        let mut retrace = Retrace::new(self.retrace_patience(half_w));
         let max_steps = 4 * (self.img.width() as usize + self.img.height() as usize) * 4;
         for _ in 0..max_steps {
             let Some(&c) = pts.last() else {
@@ -251,6 +267,16 @@ impl Tracker<'_> {
             };
             let pred = [c[0] + step * t[0], c[1] + step * t[1]];
             if !self.free_at(pred, id) {
+                return End::Stopped;
+            }
+            let own = self.own_track_cos(pred, t, id, start, half_w);
+            let marks = self.clock.wrapping_sub(clock0) as usize;
+            let v = retrace.step(own, pts.len(), marks, self.clock);
+            if let Verdict::StopAt { keep, since } = v {
+                pts.truncate(keep.max(1));
+                if let Some(since) = since {
+                    self.unmark_since(id, since);
+                }
                 return End::Stopped;
             }
             let found = self.centre_at(pred, t, half_len, half_w);
@@ -290,7 +316,7 @@ impl Tracker<'_> {
                 t = heading(pts, p, t);
                 ema = 0.9 * ema + 0.1 * m;
                 last_mass = m;
-                self.mark(p, half_w + self.map.k as f64, id);
+                self.mark(p, half_w + self.map.k as f64, id, t);
                 pts.push(p);
             }
         }
@@ -371,7 +397,8 @@ impl Tracker<'_> {
     }
 
     /// Marks the blocks within `radius_px` of `p` as belonging to piece `id`.
-    fn mark(&mut self, p: [f64; 2], radius_px: f64, id: u32) {
+    fn mark(&mut self, p: [f64; 2], radius_px: f64, id: u32, t: [f64; 2]) {
+        self.clock = self.clock.wrapping_add(1);
         let k = self.map.k as f64;
         let bx0 = ((p[0] - radius_px) / k).floor().max(0.0) as usize;
         let by0 = ((p[1] - radius_px) / k).floor().max(0.0) as usize;
@@ -383,9 +410,12 @@ impl Tracker<'_> {
             for bx in bx0..=bx1 {
                 let c = self.map.block_centre_px(bx, by);
                 if dist(c, p) <= radius_px + 0.71 * k {
-                    let v = &mut self.visited[by * self.map.w + bx];
+                    let b = by * self.map.w + bx;
+                    let v = &mut self.visited[b];
                     if *v == 0 || *v == TRIED {
                         *v = id;
+                        self.marked_at[b] = self.clock;
+                        self.marked_dir[b] = [t[0] as f32, t[1] as f32];
                     }
                 }
             }

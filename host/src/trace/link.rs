@@ -47,6 +47,7 @@ mod judge;
 mod kinks;
 mod network;
 mod relink;
+mod runs;
 #[cfg(test)]
 mod tests;
 
@@ -100,6 +101,16 @@ impl LeftOut {
     }
 }
 
+/// Where another drawn run crosses (or meets) the path: a second drawing on the sheet, not a
+/// gap or a continuation of the path.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Crossing {
+    /// Where the two cross, sheet mm.
+    pub at_mm: [f64; 2],
+    /// The other run (or a part of it): its index in [`Linking::left_out`].
+    pub other: usize,
+}
+
 /// The linked path and what was left out.
 #[derive(Debug, Clone)]
 pub struct Linking {
@@ -110,6 +121,11 @@ pub struct Linking {
     /// Gaps of the path: bridged ones in order along it, then the missing ones.
     pub gaps: Vec<Gap>,
     pub left_out: Vec<LeftOut>,
+    /// Where another drawn run crosses or meets the path (two drawn paths), along x.
+    pub crossings: Vec<Crossing>,
+    /// The missing gaps (indices into `gaps`) that lead to such a run: its part across the
+    /// path, not a pencil skip.
+    pub gaps_to_crossing: Vec<usize>,
     /// Number of tracked pieces linked into the path.
     pub pieces: usize,
     /// The printed path used as a hint, and the mean distance of the path from it, mm.
@@ -139,7 +155,22 @@ pub(crate) fn link(
     let net = Network::build(pieces, max_gap_mm, Strokes::OnePath)?;
     let main = net.choose_main(hint)?;
     let judged = net.judge(main);
-    let left_out = net.left_out(main, &judged);
+    // Another run crossing the path is named as such, whatever its length.
+    let indexed = net.left_out_indexed(main, &judged);
+    let chain_of: Vec<usize> = indexed.iter().map(|(ci, _)| *ci).collect();
+    let mut marks: Vec<(&Stroke, LeftOut)> = indexed
+        .into_iter()
+        .map(|(ci, o)| (net.chain_stroke(ci), o))
+        .collect();
+    let crossings = runs::crossings(&judged.path, &mut marks);
+    let left_out: Vec<LeftOut> = marks.into_iter().map(|(_, o)| o).collect();
+    let crossing_chains: Vec<usize> = crossings.iter().map(|c| chain_of[c.other]).collect();
+    let gaps_to_crossing: Vec<usize> = (0..judged.gaps.len())
+        .filter(|&g| !judged.gaps[g].bridged)
+        .zip(&judged.missing_to)
+        .filter(|(_, to)| to.is_some_and(|ci| crossing_chains.contains(&ci)))
+        .map(|(g, _)| g)
+        .collect();
     let mut others: Vec<Stroke> = (0..net.built.len())
         .filter(|&ci| ci != main)
         .map(|ci| net.chain_stroke(ci).clone())
@@ -152,6 +183,8 @@ pub(crate) fn link(
         others,
         gaps: judged.gaps,
         left_out,
+        crossings,
+        gaps_to_crossing,
         pieces: net.chains[main].order.len(),
         hint,
     })

@@ -65,7 +65,7 @@ pub use flatness::Flatness;
 pub use grey_print::GreyPrint;
 pub use homography::Homography;
 pub use lines::DrawnLine;
-pub use link::{Gap, LeftOut, LeftOutKind, Linking};
+pub use link::{Crossing, Gap, LeftOut, LeftOutKind, Linking};
 pub use options::{Mapping, PathChoice, TraceOptions};
 pub use paths::{line_file_name, path_file_name, write_drawing, Drawing, DrawnPath, SUMMARY_FILE};
 pub use png_read::read_png;

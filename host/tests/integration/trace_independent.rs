@@ -18,6 +18,8 @@ mod render2;
 mod reported;
 #[path = "trace_independent/tone_curves.rs"]
 mod tone_curves;
+#[path = "trace_independent/two_runs.rs"]
+mod two_runs;
 
 use crate::trace_cli::trace_to;
 use cases::{case, measure, Case};
@@ -117,6 +119,18 @@ fn render_independent_with(
         darkness: c.darkness,
         skips: c.skips.clone(),
     }];
+    if let Some((pts, closed)) = &c.second_run {
+        let mut pts = pts.clone();
+        if *closed {
+            pts.push(pts[0]);
+        }
+        marks.push(render2::Mark {
+            pts,
+            width_mm: c.width_mm,
+            darkness: c.darkness,
+            skips: Vec::new(),
+        });
+    }
     for extra in c.crossing.iter().chain(&c.strays) {
         marks.push(render2::Mark {
             pts: extra.clone(),
@@ -202,6 +216,7 @@ fn render_project_with(
         },
         pencil_mm: c.truth.clone(),
         pencil_closed: c.closed,
+        more_pencil_mm: c.second_run.iter().cloned().collect(),
         pencil_width_mm: c.width_mm,
         pencil_darkness: c.darkness,
         reference: Some(printed(c.printed)),
@@ -548,6 +563,7 @@ fn pencil_across_ring_dots() {
         strays: Vec::new(),
         dust: Vec::new(),
         fibres: Vec::new(),
+        second_run: None,
     };
     for (kind, seed, rms_bar) in [
         (Kind::Scan600, 71, 0.015),

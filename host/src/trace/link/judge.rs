@@ -155,15 +155,8 @@ impl Network {
         }
     }
 
-    /// What the judged chain `main` leaves out: every other chain, longest first, with why.
-    pub(in crate::trace) fn left_out(&self, main: usize, judged: &Judged) -> Vec<LeftOut> {
-        self.left_out_indexed(main, judged)
-            .into_iter()
-            .map(|(_, o)| o)
-            .collect()
-    }
-
-    /// [`Self::left_out`] with each mark's chain index.
+    /// What the judged chain `main` leaves out: every other chain with its index, longest
+    /// first, with why.
     pub(in crate::trace) fn left_out_indexed(
         &self,
         main: usize,

@@ -31,6 +31,9 @@ pub struct RenderSpec {
     pub pencil_mm: Vec<[f64; 2]>,
     /// Whether the pencil path closes on itself.
     pub pencil_closed: bool,
+    /// More pencil runs on the same sheet (a second drawing), each a centreline in sheet mm and
+    /// whether it closes; drawn as the first, without its skips or faint stretches.
+    pub more_pencil_mm: Vec<(Vec<[f64; 2]>, bool)>,
     /// Width of the graphite stroke, mm.
     pub pencil_width_mm: f64,
     /// Mean darkness of the graphite (fraction of light absorbed), 0..1.
@@ -80,6 +83,7 @@ impl Default for RenderSpec {
             dpi: 600.0,
             pencil_mm: Vec::new(),
             pencil_closed: false,
+            more_pencil_mm: Vec::new(),
             pencil_width_mm: 0.5,
             pencil_darkness: 0.52,
             pencil_grain: 0.12,
@@ -141,27 +145,27 @@ pub fn render_scan(spec: &RenderSpec) -> RgbImage {
             }
         }
     }
-    if spec.pencil_mm.len() >= 2 {
-        let cov = stroke_coverage(
-            &img,
-            &place,
-            &spec.pencil_mm,
-            spec.pencil_closed,
-            0.5 * spec.pencil_width_mm,
-        );
-        let arc = cumulative_arc(&spec.pencil_mm);
+    let runs = std::iter::once((&spec.pencil_mm, spec.pencil_closed, true))
+        .chain(spec.more_pencil_mm.iter().map(|(p, c)| (p, *c, false)));
+    for (run, (pencil_mm, closed, first)) in runs.enumerate() {
+        if pencil_mm.len() < 2 {
+            continue;
+        }
+        let cov = stroke_coverage(&img, &place, pencil_mm, closed, 0.5 * spec.pencil_width_mm);
+        let arc = cumulative_arc(pencil_mm);
         let raw: &mut [u8] = img.as_mut();
         for (idx, c, seg) in cov {
             let s_mm = arc[seg];
-            if spec.skips_mm.iter().any(|k| s_mm >= k[0] && s_mm <= k[1]) {
+            if first && spec.skips_mm.iter().any(|k| s_mm >= k[0] && s_mm <= k[1]) {
                 continue;
             }
             let mean = spec
                 .faint_mm
                 .iter()
+                .filter(|_| first)
                 .find(|f| s_mm >= f[0] && s_mm <= f[1])
                 .map_or(spec.pencil_darkness, |f| f[2]);
-            let n = triangular(hash(spec.seed ^ 0x5bd1_e995, idx as u64));
+            let n = triangular(hash(spec.seed ^ 0x5bd1_e995 ^ run as u64, idx as u64));
             let dark = (mean * (1.0 + spec.pencil_grain * n)).clamp(0.0, 0.97);
             let i = 3 * idx as usize;
             for ch in 0..3 {

@@ -25,6 +25,9 @@ pub struct Case {
     pub strays: Vec<Vec<[f64; 2]>>,
     pub dust: Vec<[f64; 4]>,
     pub fibres: Vec<[f64; 4]>,
+    /// A second drawn run on the same sheet (dense centreline, closed), drawn as the path is,
+    /// without skips.
+    pub second_run: Option<(Vec<[f64; 2]>, bool)>,
 }
 
 pub fn densify(f: impl Fn(f64) -> [f64; 2], closed: bool) -> Vec<[f64; 2]> {
@@ -56,7 +59,7 @@ pub fn length(pts: &[[f64; 2]]) -> f64 {
 }
 
 /// Inside the trace area, clear of the corner discs and the orientation dot.
-fn placeable(pts: &[[f64; 2]]) -> bool {
+pub fn placeable(pts: &[[f64; 2]]) -> bool {
     let keep_out = [
         ([-90.0, -90.0], 9.0),
         ([90.0, -90.0], 9.0),
@@ -274,6 +277,7 @@ pub fn case(seed: u64, faint: bool, crossing: bool) -> Case {
         strays,
         dust,
         fibres,
+        second_run: None,
     }
 }
 
