@@ -30,6 +30,18 @@ use crate::calib::{CalibError, MeasuredSet};
 use crate::model::changes::{Step, StepKind};
 use crate::model::effect::{self, EffectId, Offers};
 
+/// The fewest distinct pose times on either side of a change: at least 3 and 5 % of them. A
+/// change with one or two poses on a side is the constant effect with those poses off (a
+/// constant payload read as one picked up after the first pose), which nothing else tells apart.
+pub fn min_side(n_times: usize) -> usize {
+    MIN_SIDE_TIMES.max((MIN_SIDE_SHARE * n_times as f64).ceil() as usize)
+}
+
+/// See [`min_side`].
+const MIN_SIDE_TIMES: usize = 3;
+/// See [`min_side`].
+const MIN_SIDE_SHARE: f64 = 0.05;
+
 /// The best split of the poses by time for a step of given regressors.
 #[derive(Debug, Clone, PartialEq, serde::Serialize)]
 pub struct ChangePoint {
@@ -124,14 +136,17 @@ pub fn scan(
             _ => groups.push((data.t(k), vec![k])),
         }
     }
-    let splits = groups.len().checked_sub(1).filter(|&s| s > 0)?;
+    let side = min_side(groups.len());
+    let splits = (groups.len() + 1)
+        .checked_sub(2 * side)
+        .filter(|&s| s > 0)?;
     let qte_all = q.transpose() * e;
     let rss = (e.norm_squared() - qte_all.norm_squared()).max(0.0);
     let m = e.len();
     let (mut c1, mut c2) = (DMatrix::zeros(c, c), DMatrix::zeros(r, c));
     let (mut c3, mut c4) = (DVector::zeros(c), DVector::zeros(r));
     let mut best: Option<ChangePoint> = None;
-    for g in (1..groups.len()).rev() {
+    for g in (side..groups.len()).rev() {
         for &k in &groups[g].1 {
             let (a, n) = (off[k], off[k + 1] - off[k]);
             let xk = x.rows(a, n);
@@ -141,6 +156,9 @@ pub fn scan(
             c2 += qk.transpose() * xk;
             c3 += xk.transpose() * ek;
             c4 += qk.transpose() * ek;
+        }
+        if groups.len() - g < side {
+            continue;
         }
         let b = &c3 - c2.transpose() * &c4;
         let a = &c1 - c2.transpose() * &c2;
@@ -414,7 +432,12 @@ pub fn refine(
         let mut moves = 0;
         loop {
             let j = i as i64 + dir;
-            if j < 0 || j as usize + 1 >= times.len() || moves >= max_moves {
+            // split j leaves j + 1 times before it and times.len() - j - 1 after
+            let side = min_side(times.len());
+            if j + 1 < side as i64
+                || (times.len() as i64) - j - 1 < side as i64
+                || moves >= max_moves
+            {
                 break;
             }
             let j = j as usize;

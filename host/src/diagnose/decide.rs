@@ -320,7 +320,11 @@ pub(super) fn rank_contenders<'a>(
 fn simplicity(c: &Candidate) -> (usize, u32) {
     match c.effect.row().tie {
         Tie::Transmission => (usize::MAX, 0),
-        Tie::Named => (c.unknowns.len(), c.effect.harmonic_order()),
+        // a change's time is one more parameter: the constant effect first
+        Tie::Named => (
+            c.unknowns.len() + usize::from(c.effect.is_change()),
+            c.effect.harmonic_order(),
+        ),
     }
 }
 

@@ -189,18 +189,22 @@ pub fn refit_candidate(
         return Ok(None);
     };
     // a change within the session: its time moved to the split the full refit prefers
-    if let Some(slot) = cand.unknowns.first().copied().and_then(slot_of) {
+    let change = cand.unknowns.first().copied().and_then(slot_of);
+    if let Some(slot) = change {
         after = refine(after, slot, data, &cfg.lm, cfg.rtol, REFINE_MAX_MOVES)?;
     }
     if needs_polish(&cur.model, &after, data, cfg.rtol)? {
         after = polish(after, &cur.model, &cand.unknowns, data, cfg)?;
     }
     let rss0 = cur.rss_mm2;
-    let added = after.fitted.len().saturating_sub(cur.fitted.len());
+    let directions = after.fitted.len().saturating_sub(cur.fitted.len());
+    // a change's time is fitted too (chosen among the splits): one more parameter in the tests,
+    // so that a constant effect is not read as one that changed after the first poses
+    let added = directions + usize::from(change.is_some() && directions > 0);
     // the tests count the independent residuals of the refit: under the null hypothesis its
     // residual is the noise, whose serial correlation sets the count
     let m = m_eff(data, serial_tau(&after.model, data)?);
-    let dof = m.saturating_sub(after.fitted.len());
+    let dof = m.saturating_sub(cur.fitted.len() + added);
     let (f, p) = nested_f_test(rss0, after.rss_mm2, added, dof);
     let dbic = if added > 0 {
         delta_bic(m, rss0, after.rss_mm2, added)
