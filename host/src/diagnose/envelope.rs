@@ -37,13 +37,7 @@ pub fn principal_steps(
     if p == 0 || !(sigma_mm.is_finite() && sigma_mm > 0.0) {
         return Vec::new();
     }
-    let mut n = DMatrix::zeros(p, p);
-    for (k, j) in cal_jac.iter().enumerate() {
-        if j.ncols() == p {
-            let l = cal.jacobian_rows(k, j);
-            n += l.transpose() * l;
-        }
-    }
+    let n = super::verdict::calibration_normal(cal, cal_jac, p);
     let d: Vec<f64> = (0..p).map(|c| n[(c, c)].max(0.0).sqrt()).collect();
     if d.iter().any(|v| !(v.is_finite() && *v > 0.0)) {
         return Vec::new();

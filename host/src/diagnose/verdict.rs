@@ -143,6 +143,19 @@ pub fn prediction_inflation(
     ((m + v.iter().sum::<f64>().max(0.0)) / m).max(1.0)
 }
 
+/// The normal matrix `N = sum L_k^T L_k` of the calibration poses' measured rows
+/// ([`MeasuredSet::jacobian_rows`] of `cal_jac`, 3 x `p` each; others skipped).
+pub fn calibration_normal(cal: &MeasuredSet, cal_jac: &[DMatrix<f64>], p: usize) -> DMatrix<f64> {
+    let mut n = DMatrix::zeros(p, p);
+    for (k, j) in cal_jac.iter().enumerate() {
+        if j.ncols() == p {
+            let l = cal.jacobian_rows(k, j);
+            n += l.transpose() * l;
+        }
+    }
+    n
+}
+
 /// The prediction variance of every held-out pose `k` in units of the residual variance:
 /// `tr(L_k N^+ L_k^T)` over its measured components (see [`prediction_inflation`]); `None`
 /// without Jacobians.
@@ -156,13 +169,7 @@ pub fn prediction_variances(
     if p == 0 || val.is_empty() || val_jac.len() != val.len() {
         return None;
     }
-    let mut n = DMatrix::zeros(p, p);
-    for (k, j) in cal_jac.iter().enumerate() {
-        if j.ncols() == p {
-            let l = cal.jacobian_rows(k, j);
-            n += l.transpose() * l;
-        }
-    }
+    let n = calibration_normal(cal, cal_jac, p);
     let scale = n.diagonal().amax().max(f64::MIN_POSITIVE);
     let ninv = n.pseudo_inverse(1e-10 * scale).ok()?;
     Some(
