@@ -89,6 +89,7 @@ TESTS = [
             "diagnose_sign_steps::payload_steps_are_named_not_flagged_and_blunders_still_are",
             "diagnose_sign_steps::simulated_payload_sessions_keep_the_poses_at_a_switch",
             "diagnose_sign_steps::sets_without_a_payload_flag_no_pose",
+            "diagnose_simplest::two_lengths_changed_together_are_named_as_the_pair_not_stand_ins",
             "model_reference::katana_fk_reference_rows",
             "model_reference::katana_fk_reference_tilt_increments",
             "model_reference::katana_tilt_reference_rows",

@@ -165,6 +165,24 @@ pub struct Selection {
     pub last: Fit<ExtModel, Unknown>,
     /// All unknowns requested in the final fit.
     pub requested: Vec<Unknown>,
+    /// The greedy selection this one replaced, when a smaller set did as well
+    /// ([`super::simplest`]).
+    pub simpler: Option<Simpler>,
+}
+
+/// A smaller set that replaced the greedy selection (reported in the JSON and the text).
+#[derive(Debug, Clone, PartialEq)]
+pub struct Simpler {
+    /// The effects of the greedy selection, in order.
+    pub greedy: Vec<String>,
+    /// The effects of the smaller set taken instead.
+    pub taken: Vec<String>,
+    /// Cross-validated mean error (mm) of the greedy set and of the set taken.
+    pub cv_mean_mm: [f64; 2],
+    /// BIC of the set taken minus the greedy set's (negative: the smaller set is preferred).
+    pub delta_bic: f64,
+    /// Other sets no larger than the one taken that did as well (`a + b`), the closest first.
+    pub close: Vec<String>,
 }
 
 /// Fold of every pose: a seeded permutation cut into `k` nearly equal parts.

@@ -9,6 +9,7 @@
 //! | [`residual`] | regressors, linearised screening, structure tests |
 //! | [`decide`] | the decision rule: F-test + BIC + k-fold cross-validation, its settings and tests |
 //! | [`select`] | the greedy forward selection in named steps (shortlist, refit, near ties, tests) |
+//! | [`simplest`] | a smaller set of effects (single, pair) that does as well as the greedy selection is preferred |
 //! | [`parallel`] | deterministic use of both cores for independent fits |
 //! | [`polish`] | derivative-free polish of a refit across the sign steps of the tilting law |
 //! | [`stat`] | F distribution, BIC, noise statistics |
@@ -53,6 +54,7 @@ pub mod probe;
 pub mod report;
 pub mod residual;
 pub mod select;
+pub mod simplest;
 pub mod stat;
 pub mod verdict;
 
@@ -475,7 +477,8 @@ pub fn diagnose(
             Some((_, fit, requested)) => (kept_cal, 0, fit.clone(), requested.clone()),
             None => trim_outliers(model, &kept_cal, cfg)?,
         };
-        let selection = forward_selection(declared.clone(), &requested, &cal, cfg)?;
+        let greedy = forward_selection(declared.clone(), &requested, &cal, cfg)?;
+        let selection = simplest::prefer_simplest(greedy, &declared, &requested, &cal, cfg)?;
         Ok((cal, left_out, declared, requested, selection))
     };
     // the flags under the final model of `selection`, the scale from the poses not in `flagged`
@@ -687,6 +690,7 @@ pub fn diagnose(
         },
         residual_model: None,
         assumed_masses: None,
+        simplest: selection.simpler.as_ref().map(report::SimplestReport::from),
         verdict,
         bounds: bound_reports,
     };

@@ -235,6 +235,40 @@ pub struct DiagnoseReport {
     /// --assume-masses`): `{total_kg, per_joint_kg, rule}` (extra key).
     #[serde(skip_serializing_if = "Option::is_none")]
     pub assumed_masses: Option<serde_json::Value>,
+    /// The greedy selection a smaller set replaced because it did as well ([`super::simplest`];
+    /// extra key, absent when the greedy selection stood).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub simplest: Option<SimplestReport>,
+}
+
+/// A smaller set of effects taken instead of the greedy selection (extra key `simplest`).
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct SimplestReport {
+    /// The effects the greedy selection had accepted, in order.
+    pub greedy: Vec<String>,
+    /// The effects taken instead (as in `effects`).
+    pub taken: Vec<String>,
+    /// Cross-validated mean error of the greedy set (mm).
+    pub cv_mean_mm_greedy: f64,
+    /// Cross-validated mean error of the set taken (mm).
+    pub cv_mean_mm_taken: f64,
+    /// BIC of the set taken minus the greedy set's.
+    pub delta_bic: f64,
+    /// Other sets, no more than one effect larger than the one taken, that did as well.
+    pub close: Vec<String>,
+}
+
+impl From<&super::decide::Simpler> for SimplestReport {
+    fn from(s: &super::decide::Simpler) -> Self {
+        Self {
+            greedy: s.greedy.clone(),
+            taken: s.taken.clone(),
+            cv_mean_mm_greedy: s.cv_mean_mm[0],
+            cv_mean_mm_taken: s.cv_mean_mm[1],
+            delta_bic: s.delta_bic,
+            close: s.close.clone(),
+        }
+    }
 }
 
 /// One-line statement of the decision rule in force.
@@ -342,6 +376,24 @@ impl DiagnoseReport {
                     e.equivalent.join(", ")
                 );
             }
+        }
+        if let Some(x) = &self.simplest {
+            let _ = writeln!(
+                s,
+                "  simplest explanation: {} ({} effects) does as well as the greedy {} ({}): cross-validated mean {:.4} vs {:.4} mm, BIC {:+.1}; taken{}",
+                x.taken.join(" + "),
+                x.taken.len(),
+                x.greedy.join(" + "),
+                x.greedy.len(),
+                x.cv_mean_mm_taken,
+                x.cv_mean_mm_greedy,
+                x.delta_bic,
+                if x.close.is_empty() {
+                    String::new()
+                } else {
+                    format!(" (also close: {})", x.close.join("; "))
+                }
+            );
         }
         if self.effects.is_empty() {
             let _ = writeln!(s, "{}", no_effect_line(&self.verdict.kind));

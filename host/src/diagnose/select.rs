@@ -22,7 +22,7 @@ use crate::calib::MeasuredSet;
 const REFINE_MAX_MOVES: usize = 3;
 
 /// Independent residuals: all of them for full positions, fewer along a traced path.
-fn m_eff(data: &MeasuredSet, tau: f64) -> usize {
+pub(super) fn m_eff(data: &MeasuredSet, tau: f64) -> usize {
     ((data.n_residuals() as f64 / tau).round() as usize).max(1)
 }
 
@@ -33,6 +33,17 @@ pub fn forward_selection(
     declared_unknowns: &[Unknown],
     data: &MeasuredSet,
     cfg: &DecideConfig,
+) -> Result<Selection, CalibError> {
+    forward_selection_among(declared, declared_unknowns, data, cfg, None)
+}
+
+/// [`forward_selection`] over the library's effects whose ids are in `among` (all when `None`).
+pub fn forward_selection_among(
+    declared: Fit<ExtModel, Unknown>,
+    declared_unknowns: &[Unknown],
+    data: &MeasuredSet,
+    cfg: &DecideConfig,
+    among: Option<&[String]>,
 ) -> Result<Selection, CalibError> {
     let mut cur = declared;
     let mut requested: Vec<Unknown> = declared_unknowns.to_vec();
@@ -46,6 +57,9 @@ pub fn forward_selection(
         let opened = open_slots(&mut cur, &requested, data, cfg.alpha)?;
         let mut cands = library(&cur.model, &requested, data);
         cands.retain(|c| !c.effect.is_change() || opened.contains(&c.effect));
+        if let Some(ids) = among {
+            cands.retain(|c| ids.contains(&c.id));
+        }
         if cands.is_empty() {
             break;
         }
@@ -102,6 +116,7 @@ pub fn forward_selection(
         last_trials,
         last: cur,
         requested,
+        simpler: None,
     })
 }
 

@@ -316,6 +316,7 @@ fn a_negative_compliance_is_held_at_its_bound() {
             last_trials: Vec::new(),
             last: f,
             requested,
+            simpler: None,
         };
         let reports = bounds::enforce(&mut sel, &cal, &cfg);
         let held = sel.last.model.value(Unknown::Compliance(2));

@@ -19,6 +19,7 @@ mod diagnose_partial;
 mod diagnose_probe;
 mod diagnose_sign_steps;
 mod diagnose_sim;
+mod diagnose_simplest;
 mod diagnose_thermal;
 mod diagnose_transmission;
 mod diagnose_ur5;
