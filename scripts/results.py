@@ -90,6 +90,7 @@ TESTS = [
             "diagnose_sign_steps::simulated_payload_sessions_keep_the_poses_at_a_switch",
             "diagnose_sign_steps::sets_without_a_payload_flag_no_pose",
             "diagnose_simplest::two_lengths_changed_together_are_named_as_the_pair_not_stand_ins",
+            "diagnose_elastic_tilt::an_elastic_tilt_of_joint_1_in_the_arms_plane_is_named_as_the_compliance_of_joint_2",
             "model_reference::katana_fk_reference_rows",
             "model_reference::katana_fk_reference_tilt_increments",
             "model_reference::katana_tilt_reference_rows",

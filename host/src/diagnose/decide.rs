@@ -139,6 +139,9 @@ pub struct Trial {
     pub accepted: bool,
     /// Why not, when it was not.
     pub reason: String,
+    /// Its values that the refit put outside their physical bounds, held there before the
+    /// tests (`name = value held at bound`).
+    pub held: Vec<String>,
 }
 
 /// One accepted effect.

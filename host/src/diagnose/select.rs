@@ -9,7 +9,7 @@ use super::decide::{
     cv_errors, linear_start, nonlinear_start, onset_candidates, paired_gain, rank_contenders,
     serial_tau, Accepted, DecideConfig, Selection, Trial,
 };
-use super::extended::{fit, ExtModel, ExtendedFit, Unknown};
+use super::extended::{fit, ExtModel, ExtendedFit, Unknown, Values};
 use super::parallel::map_ordered;
 use super::polish::{needs_polish, polish};
 use super::residual::screen;
@@ -17,6 +17,7 @@ use super::stat::{delta_bic, nested_f_test};
 use crate::calib::fit::Fit;
 use crate::calib::CalibError;
 use crate::calib::MeasuredSet;
+use crate::model::effect::bound;
 
 /// Most moves of a change's time from the split the linear scan found ([`refine`]).
 const REFINE_MAX_MOVES: usize = 3;
@@ -211,6 +212,9 @@ pub fn refit_candidate(
     if needs_polish(&cur.model, &after, data, cfg.rtol)? {
         after = polish(after, &cur.model, &cand.unknowns, data, cfg)?;
     }
+    // the candidate's own values outside their physical bounds: held at the bound, the others
+    // refitted, before the tests (a negative compliance is not an explanation)
+    let (after, held) = hold_at_bounds(after, &req, cand, data, cfg)?;
     let rss0 = cur.rss_mm2;
     let directions = after.fitted.len().saturating_sub(cur.fitted.len());
     // a change's time is fitted too (chosen among the splits): one more parameter in the tests,
@@ -238,8 +242,48 @@ pub fn refit_candidate(
         cv_t: f64::NAN,
         accepted: false,
         reason: String::new(),
+        held,
     };
     Ok(Some((trial, after)))
+}
+
+/// `after` with every unknown of `cand` whose value lies outside its physical bound
+/// ([`crate::model::effect::bound`]) held at the bound and the other unknowns of `requested`
+/// refitted; the held values as `name = value` (empty when none was outside).
+fn hold_at_bounds(
+    after: ExtendedFit,
+    requested: &[Unknown],
+    cand: &Candidate,
+    data: &MeasuredSet,
+    cfg: &DecideConfig,
+) -> Result<(ExtendedFit, Vec<String>), CalibError> {
+    let model = &after.model.model;
+    let outside: Vec<(Unknown, f64, f64)> = cand
+        .unknowns
+        .iter()
+        .filter_map(|&u| {
+            let b = bound(u, model)?;
+            let v = after.model.value(u);
+            (b.below(v) || v > b.max).then_some((u, v, if v > b.max { b.max } else { b.hold }))
+        })
+        .collect();
+    if outside.is_empty() {
+        return Ok((after, Vec::new()));
+    }
+    let mut start = after.model.clone();
+    for &(u, _, hold) in &outside {
+        start.set_value(u, hold).map_err(CalibError::Model)?;
+    }
+    let keep: Vec<Unknown> = requested
+        .iter()
+        .copied()
+        .filter(|u| !outside.iter().any(|(o, _, _)| o == u))
+        .collect();
+    let held = outside
+        .iter()
+        .map(|&(u, v, hold)| format!("{} = {v:.4} held at {hold}", u.name(model)))
+        .collect();
+    Ok((fit(&start, data, &keep, &cfg.lm, cfg.rtol, false)?, held))
 }
 
 /// Whether a refit passes the F-test and lowers the BIC.
@@ -343,7 +387,12 @@ pub fn test_in_order(
             trials.push(trial);
             continue;
         }
-        if trial.added == 0 {
+        if trial.added == 0 && !trial.held.is_empty() {
+            trial.reason = format!(
+                "outside its physical bound ({}): held there it adds nothing",
+                trial.held.join(", ")
+            );
+        } else if trial.added == 0 {
             trial.reason = "adds no identifiable direction (aliases fitted parameters)".into();
         } else if !passes(&trial, cfg) {
             trial.reason = format!(

@@ -15,14 +15,14 @@ use rand_distr::{Distribution, Normal};
 use super::common::record::record;
 use super::common::spawn::rigctl;
 
-const NOISE_MM: f64 = 0.01;
+pub(super) const NOISE_MM: f64 = 0.01;
 const D_MM: [f64; 6] = [89.159, 0.0, 0.0, 109.15, 94.65, 82.3];
 const A_MM: [f64; 6] = [0.0, -425.0, -392.25, 0.0, 0.0, 0.0];
 const ALPHA_DEG: [f64; 6] = [90.0, 0.0, 0.0, 90.0, -90.0, 0.0];
 /// The masses and centres of mass Universal Robots publishes (the preset's constants: data,
 /// not an assumption of the generator).
-const MASS_KG: [f64; 6] = rigctl::model::UR5_LINK_MASS_KG;
-const COM_MM: [[f64; 3]; 6] = rigctl::model::UR5_LINK_COM_MM;
+pub(super) const MASS_KG: [f64; 6] = rigctl::model::UR5_LINK_MASS_KG;
+pub(super) const COM_MM: [[f64; 3]; 6] = rigctl::model::UR5_LINK_COM_MM;
 
 fn dh(theta_deg: f64, d: f64, a: f64, alpha_deg: f64) -> Matrix4<f64> {
     let (st, ct) = theta_deg.to_radians().sin_cos();
@@ -48,7 +48,7 @@ fn dh(theta_deg: f64, d: f64, a: f64, alpha_deg: f64) -> Matrix4<f64> {
 }
 
 /// The frames 0..=6 (frame 0 the base) at `q` (deg).
-fn frames(q: &[f64]) -> Vec<Matrix4<f64>> {
+pub(super) fn frames(q: &[f64]) -> Vec<Matrix4<f64>> {
     let mut t = vec![Matrix4::identity()];
     for i in 0..6 {
         let next = t[i] * dh(q[i], D_MM[i], A_MM[i], ALPHA_DEG[i]);
@@ -57,7 +57,7 @@ fn frames(q: &[f64]) -> Vec<Matrix4<f64>> {
     t
 }
 
-fn origin(t: &Matrix4<f64>) -> Vector3<f64> {
+pub(super) fn origin(t: &Matrix4<f64>) -> Vector3<f64> {
     Vector3::new(t[(0, 3)], t[(1, 3)], t[(2, 3)])
 }
 
