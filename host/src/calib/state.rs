@@ -493,7 +493,7 @@ impl Values for ExtModel {
 #[cfg(test)]
 mod transmission_tests {
     use super::*;
-    use crate::calib::Poses;
+    use crate::calib::measured::PosePoints;
     use crate::model::katana450;
 
     /// The analytic columns of the transmission unknowns match central differences.
@@ -505,7 +505,7 @@ mod transmission_tests {
             vec![-20.0, 95.0, -80.0, -10.0, 60.0],
             vec![35.0, 70.0, -40.0, 40.0, -30.0],
         ];
-        let data = MeasuredSet::from_poses(Poses {
+        let data = MeasuredSet::from_poses(PosePoints {
             xyz_mm: vec![Vector3::zeros(); q.len()],
             q_deg: q,
         })

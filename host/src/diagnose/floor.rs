@@ -368,7 +368,7 @@ pub fn judge(
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::calib::Poses;
+    use crate::calib::measured::PosePoints;
     use nalgebra::Vector3;
 
     #[test]
@@ -392,7 +392,7 @@ mod tests {
             Vector3::zeros(),
             Vector3::zeros(),
         ];
-        let d = MeasuredSet::from_poses(Poses {
+        let d = MeasuredSet::from_poses(PosePoints {
             q_deg: q,
             xyz_mm: xyz,
         });
@@ -447,7 +447,7 @@ mod tests {
                     v
                 })
                 .collect();
-            let mut d = MeasuredSet::from_poses(Poses {
+            let mut d = MeasuredSet::from_poses(PosePoints {
                 q_deg: q,
                 xyz_mm: (0..n).map(|_| Vector3::new(rng.gen(), 0.0, 0.0)).collect(),
             });
@@ -480,7 +480,7 @@ mod tests {
             })
             .collect();
         let xyz_mm = vec![Vector3::zeros(); q.len()];
-        let d = MeasuredSet::from_poses(Poses { q_deg: q, xyz_mm });
+        let d = MeasuredSet::from_poses(PosePoints { q_deg: q, xyz_mm });
         let t = std::time::Instant::now();
         let (_, dof) = repeatability_mm(&d).expect("repeated poses");
         assert_eq!(dof, 3 * n / 2);

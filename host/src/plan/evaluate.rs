@@ -8,9 +8,9 @@ use rand_distr::{Distribution, Normal};
 
 use super::candidates::{draw_candidates, CandidatePose};
 use super::{plan, PlanConfig, PlanError};
-use crate::calib::fit::fit_parameters;
 use crate::calib::identifiability::DEFAULT_RTOL;
 use crate::calib::lm::LmConfig;
+use crate::calib::position_fit::fit_parameters;
 use crate::calib::{default_selection, position_errors, MeasuredSet, Stats};
 use crate::model::{Model, Tilt};
 
