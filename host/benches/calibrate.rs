@@ -47,10 +47,10 @@ fn bench(c: &mut Criterion) {
     let cal = katana_poses();
     let sel = default_selection(&nominal, false);
     c.bench_function("katana_118_tilting", |b| {
-        b.iter(|| fit_parameters(&nominal, &cal, &sel, true, &lm, DEFAULT_RTOL).unwrap())
+        b.iter(|| fit_parameters(&nominal, &cal, &sel, true, &lm, DEFAULT_RTOL, None).unwrap())
     });
     c.bench_function("katana_118_standard", |b| {
-        b.iter(|| fit_parameters(&nominal, &cal, &sel, false, &lm, DEFAULT_RTOL).unwrap())
+        b.iter(|| fit_parameters(&nominal, &cal, &sel, false, &lm, DEFAULT_RTOL, None).unwrap())
     });
     // One LM linearisation (normal equations of 118 poses with tilting, 12 parameters).
     let x =
@@ -81,7 +81,7 @@ fn bench(c: &mut Criterion) {
     let mut g = c.benchmark_group("ur5");
     g.sample_size(20);
     g.bench_function("ur5_1000_standard", |b| {
-        b.iter(|| fit_parameters(&model, &grid, &sel, false, &lm, DEFAULT_RTOL).unwrap())
+        b.iter(|| fit_parameters(&model, &grid, &sel, false, &lm, DEFAULT_RTOL, None).unwrap())
     });
     g.finish();
 }

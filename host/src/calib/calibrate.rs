@@ -13,7 +13,7 @@ use super::influence::{fit_influence, InfluenceConfig};
 use super::lm::LmConfig;
 use super::measured::{MeasuredSet, PosePoints};
 use super::outliers;
-use super::position_fit::fit_parameters_with;
+use super::position_fit::fit_parameters;
 use super::predict::prediction_sd_mm;
 use super::prior::{PriorMode, PriorScales};
 use super::problem::norms_mm;
@@ -316,7 +316,7 @@ pub fn calibrate(
     )?;
     let at = prior.at(&opts.prior_scales, nominal);
     let fit = |poses: &PosePoints, tilt: bool| {
-        fit_parameters_with(nominal, poses, &selection, tilt, &opts.lm, opts.rtol, at)
+        fit_parameters(nominal, poses, &selection, tilt, &opts.lm, opts.rtol, at)
     };
     let mut last: Option<(Vec<usize>, Fit)> = None;
     let trimmed = if opts.keep_outliers || cal.len() < MIN_POSES_FOR_OUTLIERS {

@@ -21,7 +21,7 @@
 //! | [`measured`] | the one measurement set: joint readings, one or several points per pose, partial projections, times, ids, file lines, approach directions, inertial moments; its readers and constructors; its core (`measured/points.rs`: [`measured::PosePoints`], the joint readings and first point of every pose, and the points one by one) |
 //! | `components` | the measured components of a pose of the set: rows, measured part, residual, error, Jacobian rows |
 //! | [`general`] | identification with point offsets and joint compliance (the prediction of several points per pose on [`state::ExtModel`]) |
-//! | [`state`] | `ExtModel`, the one state of every identification (`calibrate`'s and `diagnose`'s): the model, its joint map and time terms, point offsets, its one `Values` impl |
+//! | [`state`] | `ExtModel`, the one state of every identification (`calibrate`'s and `diagnose`'s): the model, its joint map and time terms, point offsets; its one `Values` impl in `state/values.rs` |
 //! | [`unknown`] | the `Values` of a state named by `Unknown`s (declared in [`crate::model::unknown`]) and `Freed` (the unknowns a solver writes) |
 //! | [`plausible`] | plausibility before any fit: the registration of a set onto its model (units, motion) |
 //! | [`large_changes`] | plausibility after the fit: the robot's geometry changes beyond a real arm's errors |

@@ -24,20 +24,10 @@ const MAX_RANK_REFITS: usize = 3;
 /// is larger). The analysis is then repeated at the solution and the fit goes on from there with
 /// the larger set (at most [`MAX_RANK_REFITS`] times), so that a second run from the result
 /// cannot improve on it; the iterations add up.
+///
+/// With `prior`, a prior toward the values of `prior.center` ([`super::prior`]); `None`, or a
+/// weight of 0, is the plain fit.
 pub fn fit_parameters(
-    start: &Model,
-    poses: &PosePoints,
-    selection: &[usize],
-    tilt: bool,
-    lm: &LmConfig,
-    rtol: f64,
-) -> Result<Fit, CalibError> {
-    fit_parameters_with(start, poses, selection, tilt, lm, rtol, None)
-}
-
-/// [`fit_parameters`] with a prior toward the values of `prior.center` ([`super::prior`]);
-/// `None`, or a weight of 0, is the plain fit.
-pub fn fit_parameters_with(
     start: &Model,
     poses: &PosePoints,
     selection: &[usize],
@@ -237,7 +227,7 @@ mod tests {
         }
         let cols = ["dth2", "dth4"].map(|n| nominal.param_index(n).unwrap());
         let lm = LmConfig::default();
-        let fit = fit_parameters(&nominal, &poses, &cols, false, &lm, 1e-4).unwrap();
+        let fit = fit_parameters(&nominal, &poses, &cols, false, &lm, 1e-4, None).unwrap();
         assert_eq!(fit.fitted, cols);
         assert!((fit.model.param("dth2").unwrap() - 0.04).abs() < 1e-9);
         assert!((fit.model.param("dth4").unwrap() + 0.02).abs() < 1e-9);

@@ -73,7 +73,7 @@ mod tests {
             .iter()
             .filter_map(|n| m.param_index(n))
             .collect();
-        let fit = fit_parameters(&m, &cal, &sel, false, &LmConfig::default(), 1e-4).unwrap();
+        let fit = fit_parameters(&m, &cal, &sel, false, &LmConfig::default(), 1e-4, None).unwrap();
         let sd = prediction_sd_mm(&fit, &cal, &at, false, 0.1, None).unwrap();
         assert!(sd[0] > 0.0 && sd[1] > 2.0 * sd[0], "{sd:?}");
         let none = Fit {

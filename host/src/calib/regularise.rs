@@ -9,7 +9,7 @@ use super::fit::{Fit, PriorAt};
 use super::identifiability::analyse;
 use super::lm::LmConfig;
 use super::measured::PosePoints;
-use super::position_fit::fit_parameters_with;
+use super::position_fit::fit_parameters;
 use super::prior::{choose_weight, ill_posed, ridge_press, PriorMode, PriorScales};
 use super::problem::stacked_jacobian;
 use crate::model::Model;
@@ -112,7 +112,7 @@ pub fn choose_prior(
             scales,
             center: nominal,
         };
-        let fit = match fit_parameters_with(nominal, poses, selection, tilt, lm, rtol, Some(at)) {
+        let fit = match fit_parameters(nominal, poses, selection, tilt, lm, rtol, Some(at)) {
             Ok(f) => f,
             Err(CalibError::NothingToFit) => return Ok(None),
             Err(e) => return Err(e),

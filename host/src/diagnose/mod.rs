@@ -175,7 +175,7 @@ pub fn declared_fit(
         )?;
         return Ok((fit, requested));
     }
-    let f = fit_parameters(model, &cal.poses, &selection, tilt, &cfg.lm, cfg.rtol)?;
+    let f = fit_parameters(model, &cal.poses, &selection, tilt, &cfg.lm, cfg.rtol, None)?;
     let mut ext = ExtModel::new(f.model.clone());
     ext.tilt = tilt;
     // the residual of the extended model (its own evaluation of every pose)

@@ -63,6 +63,7 @@ pub fn held_out(
         tilt,
         &LmConfig::default(),
         DEFAULT_RTOL,
+        None,
     )
     .map_err(|e| PlanError::Config(format!("calibration failed: {e}")))?;
     let mean = |m: &Model| -> Result<f64, PlanError> {

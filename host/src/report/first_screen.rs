@@ -8,12 +8,11 @@ use std::fmt::Write as _;
 use serde_json::Value;
 
 use super::answer::{best_stage, identified, one_sentence, urdf_accuracy};
+use super::diagnosis_words::{aliased, found_effects, verdict};
 use super::markup::figure_with;
 use super::run_dir::RunDir;
 use super::suggest::Suggest;
-use super::summary::{
-    aliased, found_effects, headlines, verdict, Diagnosis, Headline, Stage, Summary,
-};
+use super::summary::{headlines, Diagnosis, Headline, Stage, Summary};
 use super::Report;
 use crate::plot::summary::fmt_mm;
 use crate::plot::StageBars;

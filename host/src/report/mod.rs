@@ -4,7 +4,8 @@
 //! | module | holds |
 //! |---|---|
 //! | [`run_dir`] | the files understood (`cal.csv`, `val.csv`, `truth.json`, `truth.toml`, `calibrate*.json`, `diagnose*.json`, `path_errors.csv`, `plan.csv`, `plan.json`, `*overlay*.png`, other `*.toml` = calibrated models, `commands.txt` / `*.cmd`) and their SHA-256 |
-//! | [`summary`] | the first screen as data: error at each stage per set, effects found in words, floor verdict, aliased pairs (every newer diagnose key optional) |
+//! | [`summary`] | the first screen as data: error at each stage per set (every newer diagnose key optional) |
+//! | [`diagnosis_words`] | a diagnose document in words: effects found with their evidence, floor verdict, aliased pairs |
 //! | [`answer`] | the top of the first screen: the one sentence, the verdict in one line, "N of M parameters identified", the held-out error through the exported URDF beside the best model's |
 //! | [`first_screen`] | builds the [`Summary`] (robot, data, next steps, the stage bar chart) |
 //! | [`first_screen_html`] | renders the [`Summary`] as the page's first screen |
@@ -25,6 +26,7 @@ pub mod analysis;
 pub mod answer;
 pub mod build;
 pub mod captions;
+pub mod diagnosis_words;
 mod docs;
 pub mod extras;
 pub mod first_screen;
