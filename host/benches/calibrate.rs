@@ -6,14 +6,16 @@ use nalgebra::Vector3;
 use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
 use rigctl::calib::accumulate::PositionNormalProblem;
-use rigctl::calib::fit::fit_parameters;
+use rigctl::calib::default_selection;
 use rigctl::calib::identifiability::DEFAULT_RTOL;
 use rigctl::calib::lm::LmConfig;
+use rigctl::calib::measured::PosePoints;
 use rigctl::calib::normal::{Normal, NormalProblem};
-use rigctl::calib::{default_selection, Poses};
+use rigctl::calib::position_fit::fit_parameters;
+use rigctl::calib::MeasuredSet;
 use rigctl::model::{katana450, ur5, Tilt, UR5_SMR_TOOL_MM};
 
-fn katana_poses() -> Poses {
+fn katana_poses() -> PosePoints {
     let mut truth = katana450(200.0).unwrap();
     for (n, v) in [
         ("dth2", 0.03),
@@ -24,7 +26,7 @@ fn katana_poses() -> Poses {
         truth.set_param(n, v).unwrap();
     }
     let mut rng = ChaCha8Rng::seed_from_u64(118);
-    let mut p = Poses::default();
+    let mut p = PosePoints::default();
     for _ in 0..118 {
         let q: Vec<f64> = truth
             .joint_limits()
@@ -45,10 +47,10 @@ fn bench(c: &mut Criterion) {
     let cal = katana_poses();
     let sel = default_selection(&nominal, false);
     c.bench_function("katana_118_tilting", |b| {
-        b.iter(|| fit_parameters(&nominal, &cal, &sel, true, &lm, DEFAULT_RTOL).unwrap())
+        b.iter(|| fit_parameters(&nominal, &cal, &sel, true, &lm, DEFAULT_RTOL, None).unwrap())
     });
     c.bench_function("katana_118_standard", |b| {
-        b.iter(|| fit_parameters(&nominal, &cal, &sel, false, &lm, DEFAULT_RTOL).unwrap())
+        b.iter(|| fit_parameters(&nominal, &cal, &sel, false, &lm, DEFAULT_RTOL, None).unwrap())
     });
     // One LM linearisation (normal equations of 118 poses with tilting, 12 parameters).
     let x =
@@ -72,12 +74,14 @@ fn bench(c: &mut Criterion) {
     {
         model.set_param(name, v).unwrap();
     }
-    let grid = Poses::read(&dir.join("grid.csv"), &model).unwrap();
+    let grid = MeasuredSet::read(&dir.join("grid.csv"), &model)
+        .unwrap()
+        .poses;
     let sel = default_selection(&model, true);
     let mut g = c.benchmark_group("ur5");
     g.sample_size(20);
     g.bench_function("ur5_1000_standard", |b| {
-        b.iter(|| fit_parameters(&model, &grid, &sel, false, &lm, DEFAULT_RTOL).unwrap())
+        b.iter(|| fit_parameters(&model, &grid, &sel, false, &lm, DEFAULT_RTOL, None).unwrap())
     });
     g.finish();
 }

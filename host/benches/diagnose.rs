@@ -6,8 +6,8 @@
 //! repeatability floor's grouping of repeated poses on 1e4 to 1e6 poses.
 
 use criterion::{criterion_group, criterion_main, Criterion};
+use rigctl::calib::measured::PosePoints;
 use rigctl::calib::MeasuredSet;
-use rigctl::calib::Poses;
 use rigctl::diagnose::{diagnose, DiagnoseOptions};
 use rigctl::model::{katana450, KATANA_PENCIL_TOOL_MM};
 use rigctl::sim::effects::parse_effect;
@@ -90,7 +90,7 @@ fn bench_probe(c: &mut Criterion) {
         let jac: Vec<DMatrix<f64>> = (0..n)
             .map(|_| DMatrix::from_fn(3, 12, |_, _| rng.gen_range(-1.0..1.0)))
             .collect();
-        let data = MeasuredSet::from_poses(Poses {
+        let data = MeasuredSet::from_poses(PosePoints {
             q_deg: q,
             xyz_mm: vec![Vector3::zeros(); n],
         });
@@ -146,7 +146,7 @@ fn ur5_session(n: usize, seed: u64) -> (rigctl::model::Model, MeasuredSet, Measu
                     + Vector3::from_fn(|_, _| noise.sample(&mut rng))
             })
             .collect();
-        MeasuredSet::from_poses(Poses {
+        MeasuredSet::from_poses(PosePoints {
             q_deg: q,
             xyz_mm: xyz,
         })
@@ -204,7 +204,7 @@ fn bench_repeatability(c: &mut Criterion) {
             .map(|_| (0..5).map(|_| rng.gen_range(-170.0..170.0)).collect())
             .collect();
         q.extend(q.clone());
-        let data = MeasuredSet::from_poses(Poses {
+        let data = MeasuredSet::from_poses(PosePoints {
             q_deg: q,
             xyz_mm: vec![Vector3::zeros(); n],
         });

@@ -10,19 +10,16 @@
 use rand::seq::index::sample;
 use rand::SeedableRng;
 use rand_chacha::ChaCha8Rng;
-use rigctl::calib::{calibrate, CalibrateOptions, Method, Poses};
+use rigctl::calib::{calibrate, CalibrateOptions, MeasuredSet, Method};
 use rigctl::model::{ur5, Model, UR5_SMR_TOOL_MM};
 use rigctl::plan::metrics::median;
 use rigctl::plan::{plan, quantile, Criterion, PlanConfig};
 
-fn subset(p: &Poses, idx: &[usize]) -> Poses {
-    Poses {
-        q_deg: idx.iter().map(|&i| p.q_deg[i].clone()).collect(),
-        xyz_mm: idx.iter().map(|&i| p.xyz_mm[i]).collect(),
-    }
-}
-
-fn held_out(model: &Model, cal: &Poses, val: &Poses) -> Result<f64, Box<dyn std::error::Error>> {
+fn held_out(
+    model: &Model,
+    cal: &MeasuredSet,
+    val: &MeasuredSet,
+) -> Result<f64, Box<dyn std::error::Error>> {
     let opts = CalibrateOptions {
         method: Method::Standard,
         base: true,
@@ -58,8 +55,8 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     {
         model.set_param(name, v)?;
     }
-    let cal = Poses::read(&dir.join("grid.csv"), &model)?;
-    let val = Poses::read(&dir.join("random.csv"), &model)?;
+    let cal = MeasuredSet::read(&dir.join("grid.csv"), &model)?;
+    let val = MeasuredSet::read(&dir.join("random.csv"), &model)?;
     println!(
         "full {} grid poses: held-out mean {:.4} mm",
         cal.len(),
@@ -80,19 +77,16 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         for &kind in &kinds {
             let mut cfg = PlanConfig::new(&model, n);
             cfg.criterion = kind;
-            cfg.pool_q = Some(cal.q_deg.clone());
+            cfg.pool_q = Some(cal.poses.q_deg.clone());
             cfg.base = true;
             let p = plan(&model, &cfg, None)?;
             let idx = p.pool_index.ok_or("no pool index")?;
-            cells.push(format!(
-                "{:.4}",
-                held_out(&model, &subset(&cal, &idx), &val)?
-            ));
+            cells.push(format!("{:.4}", held_out(&model, &cal.subset(&idx), &val)?));
         }
         let mut random = Vec::new();
         for _ in 0..draws {
             let idx = sample(&mut rng, cal.len(), n).into_vec();
-            random.push(held_out(&model, &subset(&cal, &idx), &val)?);
+            random.push(held_out(&model, &cal.subset(&idx), &val)?);
         }
         println!(
             "| {n} | {} | {:.4} | {:.4} / {:.4} |",

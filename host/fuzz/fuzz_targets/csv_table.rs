@@ -50,7 +50,7 @@ fuzz_target!(|data: &[u8]| {
             let _ = rigctl::fusion::potcal::parse_jig_csv(text, path);
         }
         _ => {
-            let _ = rigctl::fusion::fuse::parse_fused(text, path, 5);
+            let _ = rigctl::fusion::fused_file::parse_fused(text, path, 5);
         }
     }
 });

@@ -9,14 +9,15 @@ pub use super::accumulator::{
 };
 use super::accumulator::{n_chunks, Work};
 use super::helper::Helper;
+use super::measured::PosePoints;
 use super::normal::{Normal, NormalProblem};
-use super::problem::{Poses, SetUnknowns, Unknowns};
+use super::problem::{SetUnknowns, Unknowns};
 use crate::model::{Model, ModelError};
 
 /// The normal equations (symmetric) of `model - measured` over `poses` wrt the parameters `cols`.
 pub fn normal_equations(
     model: &Model,
-    poses: &Poses,
+    poses: &PosePoints,
     cols: &[usize],
     tilt: bool,
 ) -> Result<Normal, ModelError> {
@@ -26,7 +27,7 @@ pub fn normal_equations(
 /// [`normal_equations`] with the poses' [`JointTrig`].
 pub fn normal_equations_with(
     model: &Model,
-    poses: &Poses,
+    poses: &PosePoints,
     trig: Option<&JointTrig>,
     cols: &[usize],
     tilt: bool,
@@ -42,7 +43,7 @@ pub fn normal_equations_with(
 /// on two cores when there are several chunks (a [`Helper`] thread for the problem's lifetime).
 pub struct PositionNormalProblem<'a> {
     unknowns: Unknowns,
-    poses: &'a Poses,
+    poses: &'a PosePoints,
     trig: JointTrig,
     tilt: bool,
     acc: Accumulator,
@@ -51,14 +52,14 @@ pub struct PositionNormalProblem<'a> {
 
 impl<'a> PositionNormalProblem<'a> {
     /// A problem on a copy of `model` with the parameters `cols` as unknowns.
-    pub fn new(model: &Model, poses: &'a Poses, cols: Vec<usize>, tilt: bool) -> Self {
+    pub fn new(model: &Model, poses: &'a PosePoints, cols: Vec<usize>, tilt: bool) -> Self {
         Self::with_trig(model, poses, JointTrig::new(poses), cols, tilt)
     }
 
     /// [`PositionNormalProblem::new`] with the poses' [`JointTrig`] already computed.
     pub fn with_trig(
         model: &Model,
-        poses: &'a Poses,
+        poses: &'a PosePoints,
         trig: JointTrig,
         cols: Vec<usize>,
         tilt: bool,

@@ -9,8 +9,9 @@ use std::ops::Range;
 
 use nalgebra::{DMatrix, DMatrixView, Vector3};
 
+use super::measured::PosePoints;
 use super::normal::Normal;
-use super::problem::{norms_mm, tilt_mode, Poses};
+use super::problem::{norms_mm, tilt_mode};
 use crate::model::{Data, Model, ModelError, Tilt, Wrt};
 
 /// What an evaluation computes.
@@ -90,7 +91,7 @@ pub struct JointTrig {
 
 impl JointTrig {
     /// The table of `poses` (empty, i.e. unused, when the poses differ in their joint count).
-    pub fn new(poses: &Poses) -> Self {
+    pub fn new(poses: &PosePoints) -> Self {
         let joints = poses.q_deg.first().map_or(0, Vec::len);
         if poses.q_deg.iter().any(|q| q.len() != joints) {
             return Self::default();
@@ -147,13 +148,18 @@ impl Worker {
 #[derive(Clone, Copy)]
 struct Pass<'a> {
     model: &'a Model,
-    poses: &'a Poses,
+    poses: &'a PosePoints,
     trig: Option<&'a JointTrig>,
     tilt: Tilt<'a>,
 }
 
 impl<'a> Pass<'a> {
-    fn new(model: &'a Model, poses: &'a Poses, trig: Option<&'a JointTrig>, tilt: bool) -> Self {
+    fn new(
+        model: &'a Model,
+        poses: &'a PosePoints,
+        trig: Option<&'a JointTrig>,
+        tilt: bool,
+    ) -> Self {
         Self {
             model,
             poses,
@@ -250,7 +256,7 @@ impl Accumulator {
     pub fn normal(
         &mut self,
         model: &Model,
-        poses: &Poses,
+        poses: &PosePoints,
         tilt: bool,
         eq: &mut Normal,
     ) -> Result<(), ModelError> {
@@ -262,7 +268,7 @@ impl Accumulator {
     pub fn normal_with(
         &mut self,
         model: &Model,
-        poses: &Poses,
+        poses: &PosePoints,
         trig: Option<&JointTrig>,
         tilt: bool,
         eq: &mut Normal,
@@ -276,7 +282,7 @@ impl Accumulator {
     pub(super) fn normal_chunks_threaded(
         &mut self,
         model: &Model,
-        poses: &Poses,
+        poses: &PosePoints,
         trig: Option<&JointTrig>,
         tilt: bool,
     ) -> Result<(), ModelError> {
@@ -292,7 +298,7 @@ impl Accumulator {
     pub(super) fn run_here(
         &mut self,
         model: &Model,
-        poses: &Poses,
+        poses: &PosePoints,
         trig: Option<&JointTrig>,
         tilt: bool,
         work: Work,
@@ -330,7 +336,12 @@ impl Accumulator {
     }
 
     /// `r^T r` of `model - measured`.
-    pub fn sum_sq(&mut self, model: &Model, poses: &Poses, tilt: bool) -> Result<f64, ModelError> {
+    pub fn sum_sq(
+        &mut self,
+        model: &Model,
+        poses: &PosePoints,
+        tilt: bool,
+    ) -> Result<f64, ModelError> {
         self.sum_sq_with(model, poses, None, tilt)
     }
 
@@ -339,7 +350,7 @@ impl Accumulator {
     pub fn sum_sq_with(
         &mut self,
         model: &Model,
-        poses: &Poses,
+        poses: &PosePoints,
         trig: Option<&JointTrig>,
         tilt: bool,
     ) -> Result<f64, ModelError> {
@@ -356,7 +367,7 @@ impl Accumulator {
 /// there are several chunks (same values as one pose after the other).
 pub fn position_errors(
     model: &Model,
-    poses: &Poses,
+    poses: &PosePoints,
     tilt: bool,
 ) -> Result<Vec<Vector3<f64>>, ModelError> {
     let (len, t) = (poses.len(), tilt_mode(tilt));
@@ -378,6 +389,10 @@ pub fn position_errors(
 }
 
 /// Norms of the position errors of every pose (mm).
-pub fn error_norms_mm(model: &Model, poses: &Poses, tilt: bool) -> Result<Vec<f64>, ModelError> {
+pub fn error_norms_mm(
+    model: &Model,
+    poses: &PosePoints,
+    tilt: bool,
+) -> Result<Vec<f64>, ModelError> {
     Ok(norms_mm(&position_errors(model, poses, tilt)?))
 }

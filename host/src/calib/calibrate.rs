@@ -7,15 +7,16 @@ use nalgebra::Vector3;
 
 use super::accumulator::{error_norms_mm, position_errors};
 use super::error::CalibError;
-use super::fit::fit_parameters_with;
 use super::fit::Fit;
 use super::identifiability::DEFAULT_RTOL;
 use super::influence::{fit_influence, InfluenceConfig};
 use super::lm::LmConfig;
+use super::measured::{MeasuredSet, PosePoints};
 use super::outliers;
+use super::position_fit::fit_parameters;
 use super::predict::prediction_sd_mm;
 use super::prior::{PriorMode, PriorScales};
-use super::problem::{norms_mm, Poses};
+use super::problem::norms_mm;
 use super::regularise::choose_prior;
 use super::report::{BeforeAfter, CalibrateReport, NamedValues, StandardSummary};
 use super::stats::Stats;
@@ -283,12 +284,19 @@ pub const MIN_POSES_FOR_OUTLIERS: usize = 10;
 /// (for the comparison), then the chosen method. "before" is the nominal model without tilting.
 /// Poses with gross errors ([`super::outliers`]) are left out of the fits and of the statistics
 /// and listed in the report (`outliers`), unless [`CalibrateOptions::keep_outliers`].
+///
+/// Every measured point is a full position here, one pose per point
+/// ([`MeasuredSet::as_poses`]); partial measurements, point offsets and the model's terms are
+/// [`super::calibrate_general::calibrate_poses`]'s, which calls this for one point per pose.
 pub fn calibrate(
     nominal: &Model,
-    cal: &Poses,
-    val: Option<&Poses>,
+    cal: &MeasuredSet,
+    val: Option<&MeasuredSet>,
     opts: &CalibrateOptions,
 ) -> Result<Outcome, CalibError> {
+    let cal = &cal.as_poses();
+    let val = val.map(MeasuredSet::as_poses);
+    let val = val.as_ref();
     let selection = resolve_selection(nominal, opts)?;
     let tilt = opts.method == Method::Tilting && nominal.has_tilt();
     // Gross errors: fit-and-flag with the declared model (with its tilting when it has one, even
@@ -307,8 +315,8 @@ pub fn calibrate(
         &opts.prior_scales,
     )?;
     let at = prior.at(&opts.prior_scales, nominal);
-    let fit = |poses: &Poses, tilt: bool| {
-        fit_parameters_with(nominal, poses, &selection, tilt, &opts.lm, opts.rtol, at)
+    let fit = |poses: &PosePoints, tilt: bool| {
+        fit_parameters(nominal, poses, &selection, tilt, &opts.lm, opts.rtol, at)
     };
     let mut last: Option<(Vec<usize>, Fit)> = None;
     let trimmed = if opts.keep_outliers || cal.len() < MIN_POSES_FOR_OUTLIERS {
@@ -327,7 +335,7 @@ pub fn calibrate(
     let keep = outliers::kept(cal.len(), &flagged);
     let cal_all = cal;
     let cal_kept;
-    let cal: &Poses = if flagged.is_empty() {
+    let cal: &PosePoints = if flagged.is_empty() {
         cal_all
     } else {
         cal_kept = cal_all.subset(&keep);
@@ -370,7 +378,7 @@ pub fn calibrate(
     };
     // "standard" and "chosen" are often the same fit: its errors are computed once.
     let same = matches!(opts.method, Method::Standard) || !tilt && opts.method == Method::Tilting;
-    let errs = |p: &Poses| -> Result<[Vec<Vector3<f64>>; 3], CalibError> {
+    let errs = |p: &PosePoints| -> Result<[Vec<Vector3<f64>>; 3], CalibError> {
         let before = position_errors(nominal, p, false)?;
         let standard_errs = position_errors(&standard.model, p, false)?;
         let chosen_errs = if same {
@@ -383,8 +391,9 @@ pub fn calibrate(
     let cal_errors = errs(cal)?;
     // The flagged poses' errors under the final model, and the held-out poses judged by the
     // calibration's scale and the model's prediction uncertainty at each.
-    let chosen_errors =
-        |p: &Poses| -> Result<Vec<f64>, CalibError> { Ok(error_norms_mm(&chosen.model, p, tilt)?) };
+    let chosen_errors = |p: &PosePoints| -> Result<Vec<f64>, CalibError> {
+        Ok(error_norms_mm(&chosen.model, p, tilt)?)
+    };
     // the errors of every held-out pose once; the statistics leave the listed ones out, and
     // `validation_all` keeps them (FORMATS.md)
     let val_all_errors = match val {
@@ -396,7 +405,7 @@ pub fn calibrate(
     let mut val_flagged: Vec<usize> = Vec::new();
     if let Some(t) = trimmed.as_ref() {
         let judge_model = judge.as_ref().map_or(&chosen.model, |f| &f.model);
-        let judged = |p: &Poses| -> Result<Vec<f64>, CalibError> {
+        let judged = |p: &PosePoints| -> Result<Vec<f64>, CalibError> {
             Ok(error_norms_mm(judge_model, p, judge_tilt)?)
         };
         if !flagged.is_empty() {
@@ -465,7 +474,7 @@ pub fn calibrate(
         before: super::stats::Stats::from_errors(&val_all_errors[0]),
         after: super::stats::Stats::from_errors(&val_all_errors[2]),
     });
-    let keep = outliers::kept(val.map_or(0, Poses::len), &val_flagged);
+    let keep = outliers::kept(val.map_or(0, PosePoints::len), &val_flagged);
     let val_errors = val_all_errors.map(|e| keep.iter().map(|&k| e[k]).collect::<Vec<_>>());
     let mut report = fit_report(
         &chosen,

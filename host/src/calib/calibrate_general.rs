@@ -225,12 +225,7 @@ pub fn calibrate_poses(
         return run.partial();
     }
     if run.cal.n_slots() == 1 && *gen == GeneralOptions::default() {
-        let outcome = calibrate(
-            nominal,
-            &run.cal.as_poses(),
-            run.val.as_ref().map(MeasuredSet::as_poses).as_ref(),
-            opts,
-        )?;
+        let outcome = calibrate(nominal, &run.cal, run.val.as_ref(), opts)?;
         return Ok(GeneralOutcome {
             outcome,
             fit: None,

@@ -243,7 +243,7 @@ pub fn fit_general(
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::calib::problem::Poses;
+    use crate::calib::measured::PosePoints;
     use crate::model::Tilt;
     use crate::urdf::{import_chain_with_masses, ImportOptions, Urdf};
 
@@ -278,7 +278,7 @@ mod tests {
         let t0 = g.axis_torques_kgfm(&model, &[0.0, 0.0]).unwrap();
         assert!((t0[0].abs() - 1.9).abs() < 1e-12, "{t0:?}");
         let coef = [0.05, -0.2];
-        let mut poses = Poses::default();
+        let mut poses = PosePoints::default();
         for a in [-60.0, -25.0, 0.0, 30.0, 70.0] {
             for b in [-80.0, -20.0, 15.0, 50.0, 100.0] {
                 let q = vec![a, b];

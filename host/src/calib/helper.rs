@@ -17,8 +17,9 @@ use std::thread::JoinHandle;
 use nalgebra::DVector;
 
 use super::accumulator::{Accumulator, JointTrig, Work, CHUNK_POSES};
+use super::measured::PosePoints;
 use super::normal::Normal;
-use super::problem::{Poses, SetUnknowns, Unknowns};
+use super::problem::{SetUnknowns, Unknowns};
 use crate::model::ModelError;
 
 /// The buffers that travel between the threads.
@@ -56,14 +57,14 @@ impl Helper {
     /// cannot be started (the caller then works alone).
     pub(super) fn spawn(
         unknowns: &Unknowns,
-        poses: &Poses,
+        poses: &PosePoints,
         tilt: bool,
         first: usize,
         chunks: usize,
     ) -> Option<Self> {
         let n = unknowns.cols().len();
         let start = (first * CHUNK_POSES).min(poses.len());
-        let tail = Poses {
+        let tail = PosePoints {
             q_deg: poses.q_deg[start..].to_vec(),
             xyz_mm: poses.xyz_mm[start..].to_vec(),
         };
@@ -173,7 +174,7 @@ impl Helper {
 fn serve(
     unknowns: &mut Unknowns,
     acc: &mut Accumulator,
-    poses: &Poses,
+    poses: &PosePoints,
     trig: &JointTrig,
     tilt: bool,
     work: Work,

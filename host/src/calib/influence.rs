@@ -23,7 +23,8 @@ use nalgebra::{DVector, Matrix3};
 
 use super::accumulator::position_errors;
 use super::error::CalibError;
-use super::problem::{param_vector, set_params, Poses};
+use super::measured::PosePoints;
+use super::problem::{param_vector, set_params};
 use crate::model::{Model, Tilt, Unit};
 
 /// Settings of the influence-based identification.
@@ -82,7 +83,7 @@ fn median(v: &mut [f64]) -> f64 {
 /// thesis chapter 3).
 pub fn fit_influence(
     start: &Model,
-    poses: &Poses,
+    poses: &PosePoints,
     cols: &[usize],
     cfg: &InfluenceConfig,
 ) -> Result<InfluenceFit, CalibError> {

@@ -23,23 +23,14 @@ use std::path::Path;
 
 use nalgebra::Vector3;
 
-use super::problem::Poses;
 use super::samples::FusedSample;
 use crate::io::pose_csv::{read_poses, PoseCsvError, PoseFile, PoseSpec};
 use crate::model::motion::moments_in_motion;
 use crate::model::transmission::approach_directions;
 use crate::model::{Model, ModelError};
 
-/// One measured point of a pose.
-#[derive(Debug, Clone, Copy, PartialEq)]
-pub struct Measurement {
-    /// Index of the pose.
-    pub pose: usize,
-    /// Slot of the point: 0 = the tool point ([`Poses::xyz_mm`]), k = [`MeasuredSet::markers`]`[k]`.
-    pub slot: usize,
-    /// Measured position (mm, frame R).
-    pub xyz_mm: Vector3<f64>,
-}
+mod points;
+pub use points::{Measurement, PosePoints};
 
 /// A `--markers` choice that the file cannot satisfy.
 #[derive(Debug, Clone, PartialEq, thiserror::Error)]
@@ -61,7 +52,7 @@ impl crate::error::Classify for MarkerChoiceError {
 pub struct MeasuredSet {
     /// Joint readings and the first measured point of every pose (partial measurements: see
     /// the module docs).
-    pub poses: Poses,
+    pub poses: PosePoints,
     /// The further measured points of every pose (slots 1.., mm, frame R); empty with one
     /// point per pose.
     pub further_mm: Vec<Vec<Vector3<f64>>>,
@@ -94,7 +85,7 @@ pub struct MeasuredSet {
 
 impl MeasuredSet {
     /// Poses without times.
-    pub fn from_poses(poses: Poses) -> Self {
+    pub fn from_poses(poses: PosePoints) -> Self {
         Self {
             poses,
             ..Self::default()
@@ -104,7 +95,7 @@ impl MeasuredSet {
     /// Joint readings `q_deg` with one full measured point each (`xyz_mm`, mm, frame R), no
     /// times.
     pub fn from_points(q_deg: Vec<Vec<f64>>, xyz_mm: Vec<Vector3<f64>>) -> Self {
-        Self::from_poses(Poses { q_deg, xyz_mm })
+        Self::from_poses(PosePoints { q_deg, xyz_mm })
     }
 
     /// Reads a pose file with measured positions for `model` (joint count and limits checked).
@@ -123,7 +114,7 @@ impl MeasuredSet {
     /// has no positions), times (when every row has one), ids (when every row has one), lines,
     /// and the approach directions of the file order.
     pub fn from_pose_file(file: &PoseFile) -> Self {
-        let poses = Poses::from_pose_file(file).unwrap_or_default();
+        let poses = PosePoints::from_pose_file(file).unwrap_or_default();
         Self::labelled(file, poses, Vec::new(), Vec::new())
     }
 
@@ -147,11 +138,11 @@ impl MeasuredSet {
         }
         let point = |p: &crate::io::pose_csv::Pose, m: usize| Vector3::from(p.markers_mm[m]);
         let poses = match markers.first() {
-            Some(&first) => Poses {
+            Some(&first) => PosePoints {
                 q_deg: file.joints(),
                 xyz_mm: file.poses.iter().map(|p| point(p, first)).collect(),
             },
-            None => Poses::default(),
+            None => PosePoints::default(),
         };
         let further_mm = if markers.len() > 1 {
             file.poses
@@ -166,7 +157,7 @@ impl MeasuredSet {
 
     fn labelled(
         file: &PoseFile,
-        poses: Poses,
+        poses: PosePoints,
         further_mm: Vec<Vec<Vector3<f64>>>,
         markers: Vec<usize>,
     ) -> Self {
@@ -205,7 +196,7 @@ impl MeasuredSet {
             directions.push(vec![u, n]);
         }
         Ok(Self {
-            poses: Poses { q_deg, xyz_mm },
+            poses: PosePoints { q_deg, xyz_mm },
             t_s: Some(t_s),
             directions: Some(directions),
             ..Self::default()
@@ -251,35 +242,6 @@ impl MeasuredSet {
         Ok(out)
     }
 
-    /// Number of point slots (1 with one point per pose).
-    pub fn n_slots(&self) -> usize {
-        1 + self.further_mm.first().map_or(0, Vec::len)
-    }
-
-    /// The measured points, grouped by pose in pose order, slots in order.
-    pub fn points(&self) -> impl Iterator<Item = Measurement> + '_ {
-        let none: &[Vector3<f64>] = &[];
-        self.poses
-            .xyz_mm
-            .iter()
-            .enumerate()
-            .flat_map(move |(pose, &xyz_mm)| {
-                let more = self.further_mm.get(pose).map_or(none, Vec::as_slice);
-                std::iter::once(Measurement {
-                    pose,
-                    slot: 0,
-                    xyz_mm,
-                })
-                .chain(more.iter().enumerate().map(move |(k, &xyz_mm)| {
-                    Measurement {
-                        pose,
-                        slot: k + 1,
-                        xyz_mm,
-                    }
-                }))
-            })
-    }
-
     /// The poses of `other` that repeat a pose of this set exactly (the same joint readings and
     /// the same measured points, bit for bit): `(index in other, index here)`. A real
     /// measurement never repeats to the last bit; such poses are a copy of the calibration data.
@@ -297,39 +259,6 @@ impl MeasuredSet {
         (0..other.poses.len())
             .filter_map(|k| here.get(&key(other, k)).map(|&h| (k, h)))
             .collect()
-    }
-
-    /// Number of measured points.
-    pub fn n_points(&self) -> usize {
-        self.len() + self.further_mm.iter().map(Vec::len).sum::<usize>()
-    }
-
-    /// One pose per measured point (its joints and its point), e.g. for error statistics.
-    pub fn as_poses(&self) -> Poses {
-        if self.further_mm.is_empty() {
-            return self.poses.clone();
-        }
-        let (q_deg, xyz_mm) = self
-            .points()
-            .map(|m| (self.poses.q_deg[m.pose].clone(), m.xyz_mm))
-            .unzip();
-        Poses { q_deg, xyz_mm }
-    }
-
-    /// Residual rows per pose (3 per measured point), in row order: the blocks left out together
-    /// by [`super::press`].
-    pub fn row_blocks(&self) -> Vec<usize> {
-        vec![3 * self.n_slots(); self.len()]
-    }
-
-    /// The name of slot `slot`'s offset coordinate `axis` (0..3): `marker<k>_x_mm` with the
-    /// file's 1-based point number k.
-    pub fn offset_name(&self, slot: usize, axis: usize) -> String {
-        format!(
-            "marker{}_{}_mm",
-            self.markers.get(slot).map_or(slot, |m| *m) + 1,
-            ["x", "y", "z"][axis.min(2)]
-        )
     }
 
     /// `self` followed by `other` (e.g. the samples of two sheets, or poses and samples). Times

@@ -12,17 +12,19 @@
 //! | [`accumulate`] | the geometric identification on normal equations: per-pose accumulation in reusable model workspaces, chunked on two threads |
 //! | `accumulator` | the per-pose accumulation itself (FK and Jacobian per pose into `J^T J`, `J^T r`, `r^T r`, in fixed chunks, deterministic) and the position errors of a set |
 //! | `helper` | the second core of an identification: a thread for the problem's lifetime that accumulates half of the chunks |
-//! | [`problem`] | joint readings with one full point each (`Poses`, the core of [`MeasuredSet`]), position errors, [`problem::ModelProblem`]: every identification on the tall Jacobian as one least-squares problem (the unknowns of a state and the residual rows of its measurements), the rows of a full position (`put_position_rows`) |
+//! | [`problem`] | position errors, [`problem::ModelProblem`]: every identification on the tall Jacobian as one least-squares problem (the unknowns of a state and the residual rows of its measurements), the rows of a full position (`put_position_rows`) |
 //! | [`projected`] | identification from partial measurements (projections on known directions, `calibrate --samples`), reached through `calibrate_poses`; the outlier rule around any fit |
-//! | [`fit`] | identifiability + LM + covariance: the one result [`fit::Fit`] of every identification (`diagnose`'s extended fit included), the split of a selection ([`fit::Split`]) and its solve ([`fit::solve_split`], [`fit::fit_at_normal`]), the rank re-analysed at the solution, what it does not determine kept at its input |
+//! | [`fit`] | identifiability + LM + covariance: the one result [`fit::Fit`] of every identification (`diagnose`'s extended fit included), the split of a selection ([`fit::Split`]) and its solve ([`fit::solve_split`], [`fit::fit_at_normal`]) |
+//! | [`position_fit`] | the fit of model parameters on full positions ([`position_fit::fit_parameters`]): tall Jacobian or normal equations, the rank re-analysed at the solution, what it does not determine kept at its input |
 //! | [`influence`] | influence-based identification (thesis eq. 3.7-3.8) |
 //! | [`calibrate`] | the whole `calibrate` command: selection, methods, report |
-//! | [`measured`] | the one measurement set: joint readings, one or several points per pose, partial projections, times, ids, file lines, approach directions, inertial moments; its readers and constructors |
+//! | [`measured`] | the one measurement set: joint readings, one or several points per pose, partial projections, times, ids, file lines, approach directions, inertial moments; its readers and constructors; its core (`measured/points.rs`: [`measured::PosePoints`], the joint readings and first point of every pose, and the points one by one) |
 //! | `components` | the measured components of a pose of the set: rows, measured part, residual, error, Jacobian rows |
 //! | [`general`] | identification with point offsets and joint compliance (the prediction of several points per pose on [`state::ExtModel`]) |
-//! | [`state`] | `ExtModel`, the one state of every identification (`calibrate`'s and `diagnose`'s): the model, its joint map and time terms, point offsets, its one `Values` impl |
+//! | [`state`] | `ExtModel`, the one state of every identification (`calibrate`'s and `diagnose`'s): the model, its joint map and time terms, point offsets; its one `Values` impl in `state/values.rs` |
 //! | [`unknown`] | the `Values` of a state named by `Unknown`s (declared in [`crate::model::unknown`]) and `Freed` (the unknowns a solver writes) |
-//! | [`plausible`] | plausibility: the registration of a set onto its model before any fit (units, motion), the robot's geometry changes beyond a real arm's errors after it |
+//! | [`plausible`] | plausibility before any fit: the registration of a set onto its model (units, motion) |
+//! | [`large_changes`] | plausibility after the fit: the robot's geometry changes beyond a real arm's errors |
 //! | [`error`] | the identification's errors |
 //! | [`outliers`] | gross errors in measured poses: the robust fit-and-flag rule shared by `calibrate` and `diagnose` |
 //! | [`press`] | block-PRESS (leave-one-pose-out) forward selection |
@@ -45,12 +47,14 @@ mod helper;
 pub mod identifiability;
 pub mod influence;
 mod iterate;
+pub mod large_changes;
 pub mod lm;
 mod lm_parts;
 pub mod measured;
 pub mod normal;
 pub mod outliers;
 pub mod plausible;
+pub mod position_fit;
 pub mod predict;
 pub mod press;
 pub mod prior;
@@ -68,5 +72,4 @@ pub use accumulator::position_errors;
 pub use calibrate::{calibrate, default_selection, CalibrateOptions, Method, Outcome};
 pub use error::CalibError;
 pub use measured::MeasuredSet;
-pub use problem::Poses;
 pub use stats::Stats;

@@ -7,7 +7,7 @@
 //! is obtained from the symmetric eigen-decomposition of `Js^T Js = D^-1 J^T J D^-1`
 //! (`s_i = sqrt(eig_i)`, `U^T r = S^-1 V^T Js^T r`). Squaring the Jacobian squares its condition
 //! number, so singular values below [`NORMAL_EIG_FLOOR`]`^(1/2)` of the largest are round-off
-//! and are dropped like the ones below `rank_rtol`; [`super::fit::fit_parameters`] uses this path
+//! and are dropped like the ones below `rank_rtol`; [`super::position_fit::fit_parameters`] uses this path
 //! only when the identifiability threshold keeps the condition number far from that floor and
 //! falls back to the tall QR path otherwise (never silently: see [`use_normal_equations`]).
 

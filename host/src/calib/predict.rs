@@ -8,8 +8,9 @@ use nalgebra::{DMatrix, DVector};
 
 use super::error::CalibError;
 use super::fit::Fit;
+use super::measured::PosePoints;
 use super::prior::{scaled_normal_inverse, Prior};
-use super::problem::{stacked_jacobian, Poses};
+use super::problem::stacked_jacobian;
 
 /// One standard deviation per coordinate (mm) of `fit`'s prediction at every pose of `at`: the
 /// square root of a third of the trace of the pose's prediction covariance, with the
@@ -17,8 +18,8 @@ use super::problem::{stacked_jacobian, Poses};
 /// coordinate and the prior `prior` (on `fit.fitted`) of the fit.
 pub fn prediction_sd_mm(
     fit: &Fit,
-    cal: &Poses,
-    at: &Poses,
+    cal: &PosePoints,
+    at: &PosePoints,
     tilt: bool,
     sigma_mm: f64,
     prior: Option<&Prior>,
@@ -46,8 +47,8 @@ pub fn prediction_sd_mm(
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::calib::fit::fit_parameters;
     use crate::calib::lm::LmConfig;
+    use crate::calib::position_fit::fit_parameters;
     use nalgebra::Vector3;
 
     /// Poses far from the calibration poses are predicted less well than poses among them.
@@ -55,13 +56,13 @@ mod tests {
     fn far_poses_have_larger_prediction_uncertainty() {
         let m = crate::model::katana450(0.0).unwrap();
         let pose = |a: f64| vec![10.0, a, -40.0 + 0.3 * a, 20.0, 10.0];
-        let make = |angles: &[f64]| -> Poses {
+        let make = |angles: &[f64]| -> PosePoints {
             let q: Vec<Vec<f64>> = angles.iter().map(|&a| pose(a)).collect();
             let xyz: Vec<Vector3<f64>> = q
                 .iter()
                 .map(|q| m.position_mm(q, crate::model::Tilt::Off).unwrap())
                 .collect();
-            Poses {
+            PosePoints {
                 q_deg: q,
                 xyz_mm: xyz,
             }
@@ -72,7 +73,7 @@ mod tests {
             .iter()
             .filter_map(|n| m.param_index(n))
             .collect();
-        let fit = fit_parameters(&m, &cal, &sel, false, &LmConfig::default(), 1e-4).unwrap();
+        let fit = fit_parameters(&m, &cal, &sel, false, &LmConfig::default(), 1e-4, None).unwrap();
         let sd = prediction_sd_mm(&fit, &cal, &at, false, 0.1, None).unwrap();
         assert!(sd[0] > 0.0 && sd[1] > 2.0 * sd[0], "{sd:?}");
         let none = Fit {

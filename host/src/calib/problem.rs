@@ -1,80 +1,11 @@
-//! Measured poses, position errors of a model, and the geometric identification as a
-//! least-squares [`Problem`].
+//! Position errors of a model, and the geometric identification as a least-squares
+//! [`Problem`].
 
 use nalgebra::{DMatrix, DVector, Vector3};
 
 use super::lm::Problem;
+use super::measured::PosePoints;
 use crate::model::{Data, Model, ModelError, Tilt, Wrt};
-
-/// Measured poses: joint readings (deg, one vector per pose) and the measured tool point
-/// (mm, frame R). The core of the one measurement set ([`super::MeasuredSet::poses`], which adds
-/// the further points, measured directions, times, ids, lines, approach directions and inertial
-/// moments): what the identification on full positions reads pose by pose (the accumulation of
-/// [`super::accumulate`] and its helper thread, which copies its half), and the one-pose-per-point
-/// view of a set ([`super::MeasuredSet::as_poses`]) for error statistics. Readers of data build a
-/// [`super::MeasuredSet`] ([`super::MeasuredSet::from_poses`] wraps a `Poses`).
-#[derive(Debug, Clone, Default, PartialEq)]
-pub struct Poses {
-    /// Joint readings `q1..qN` of every pose (deg).
-    pub q_deg: Vec<Vec<f64>>,
-    /// Measured tool point of every pose (mm).
-    pub xyz_mm: Vec<Vector3<f64>>,
-}
-
-impl Poses {
-    /// Number of poses.
-    pub fn len(&self) -> usize {
-        self.xyz_mm.len().min(self.q_deg.len())
-    }
-
-    /// Whether there is no pose.
-    pub fn is_empty(&self) -> bool {
-        self.len() == 0
-    }
-
-    /// The poses of a pose file read with `x, y, z` required (`None` if the file has no
-    /// positions).
-    pub fn from_pose_file(file: &crate::io::pose_csv::PoseFile) -> Option<Self> {
-        let xyz = file.positions_mm()?;
-        Some(Poses {
-            q_deg: file.joints(),
-            xyz_mm: xyz.into_iter().map(Vector3::from).collect(),
-        })
-    }
-
-    /// Reads a pose file with measured positions for `model` (joint count and limits checked).
-    pub fn read(
-        path: &std::path::Path,
-        model: &Model,
-    ) -> Result<Self, crate::io::pose_csv::PoseCsvError> {
-        use crate::io::pose_csv::{read_poses, PoseSpec};
-        let file = read_poses(path, &PoseSpec::for_model(model, true))?;
-        Ok(Self::from_pose_file(&file).unwrap_or_default())
-    }
-
-    /// The poses `keep` (indices, in that order).
-    pub fn subset(&self, keep: &[usize]) -> Poses {
-        Poses {
-            q_deg: keep.iter().map(|&k| self.q_deg[k].clone()).collect(),
-            xyz_mm: keep.iter().map(|&k| self.xyz_mm[k]).collect(),
-        }
-    }
-
-    /// The first `n` poses and the rest (for hold-out splits).
-    pub fn split_at(&self, n: usize) -> (Poses, Poses) {
-        let n = n.min(self.len());
-        (
-            Poses {
-                q_deg: self.q_deg[..n].to_vec(),
-                xyz_mm: self.xyz_mm[..n].to_vec(),
-            },
-            Poses {
-                q_deg: self.q_deg[n..].to_vec(),
-                xyz_mm: self.xyz_mm[n..].to_vec(),
-            },
-        )
-    }
-}
 
 /// The tilt mode used for the declared model: static gravity tilting when `tilt` is set.
 pub fn tilt_mode(tilt: bool) -> Tilt<'static> {
@@ -233,7 +164,7 @@ impl<S: SetUnknowns, F: Rows<S>> Problem for ModelProblem<S, F> {
 /// `model - measured` (x, y, z of every pose, mm).
 pub fn position_problem<'a>(
     model: &Model,
-    poses: &'a Poses,
+    poses: &'a PosePoints,
     cols: Vec<usize>,
     tilt: bool,
 ) -> ModelProblem<Unknowns, impl Rows<Unknowns> + 'a> {
@@ -266,7 +197,7 @@ pub fn put_position_rows(
 /// their Jacobian wrt the parameters `cols` (`r` and `jac` have `3 * poses.len()` rows).
 fn position_rows(
     model: &Model,
-    poses: &Poses,
+    poses: &PosePoints,
     cols: &[usize],
     tilt: bool,
     r: &mut DVector<f64>,
@@ -301,7 +232,7 @@ fn position_rows(
 /// The stacked identification Jacobian (3 rows per pose) of `model` wrt `cols`.
 pub fn stacked_jacobian(
     model: &Model,
-    poses: &Poses,
+    poses: &PosePoints,
     cols: &[usize],
     tilt: bool,
 ) -> Result<DMatrix<f64>, ModelError> {

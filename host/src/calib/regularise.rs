@@ -5,11 +5,13 @@ use serde::Serialize;
 
 use super::accumulator::position_errors;
 use super::error::CalibError;
-use super::fit::{fit_parameters_with, Fit, PriorAt};
+use super::fit::{Fit, PriorAt};
 use super::identifiability::analyse;
 use super::lm::LmConfig;
+use super::measured::PosePoints;
+use super::position_fit::fit_parameters;
 use super::prior::{choose_weight, ill_posed, ridge_press, PriorMode, PriorScales};
-use super::problem::{stacked_jacobian, Poses};
+use super::problem::stacked_jacobian;
 use crate::model::Model;
 use nalgebra::DVector;
 
@@ -69,7 +71,7 @@ impl PriorChoice {
 #[allow(clippy::too_many_arguments)]
 pub fn choose_prior(
     nominal: &Model,
-    poses: &Poses,
+    poses: &PosePoints,
     selection: &[usize],
     tilt: bool,
     lm: &LmConfig,
@@ -110,7 +112,7 @@ pub fn choose_prior(
             scales,
             center: nominal,
         };
-        let fit = match fit_parameters_with(nominal, poses, selection, tilt, lm, rtol, Some(at)) {
+        let fit = match fit_parameters(nominal, poses, selection, tilt, lm, rtol, Some(at)) {
             Ok(f) => f,
             Err(CalibError::NothingToFit) => return Ok(None),
             Err(e) => return Err(e),
@@ -123,7 +125,7 @@ pub fn choose_prior(
 /// Block PRESS of `fit`'s linearisation at its solution with the prior `at`.
 fn score(
     fit: &Fit,
-    poses: &Poses,
+    poses: &PosePoints,
     tilt: bool,
     at: &PriorAt<'_>,
     blocks: &[usize],

@@ -125,10 +125,10 @@ pub struct CalibrateReport {
     #[serde(skip_serializing_if = "Option::is_none")]
     pub outlier_note: Option<String>,
     /// Parameters of the robot's geometry moved further than a real arm's errors
-    /// ([`super::plausible::large_changes`]); `calibrate` exits 1 and writes no model unless
+    /// ([`super::large_changes::large_changes`]); `calibrate` exits 1 and writes no model unless
     /// `--allow-large-changes`. Absent when empty.
     #[serde(skip_serializing_if = "Vec::is_empty")]
-    pub large_changes: Vec<super::plausible::LargeChange>,
+    pub large_changes: Vec<super::large_changes::LargeChange>,
     /// Statistics over every held-out pose, the listed gross errors included (FORMATS.md "Gross
     /// errors in measured poses"; with validation poses only).
     #[serde(skip_serializing_if = "Option::is_none")]

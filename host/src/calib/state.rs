@@ -23,7 +23,7 @@ use nalgebra::{DMatrix, DVector, Vector3};
 use super::measured::MeasuredSet;
 use super::normal::Normal;
 pub use super::unknown::{Unknown, Values};
-use crate::model::changes::{StepKind, TOOL_PARAMS};
+use crate::model::changes::TOOL_PARAMS;
 use crate::model::gravity::GravityModel;
 use crate::model::time_terms::TimeTerms;
 use crate::model::transmission::{compliance_regressor, JointTerms};
@@ -388,112 +388,12 @@ impl ExtModel {
     }
 }
 
-impl Values for ExtModel {
-    fn value(&self, u: Unknown) -> f64 {
-        let (t, time) = (self.model.transmission(), self.model.time_terms());
-        let at = |v: &[f64], j: usize| v.get(j).copied().unwrap_or(0.0);
-        match u {
-            // a parameter the model lacks is no value (NaN, refused by `set_value`)
-            Unknown::Param(i) => self.model.params().get(i).map_or(f64::NAN, |p| p.value),
-            Unknown::PositionDrift(a) => time.drift_mm_per_h[a.min(2)],
-            Unknown::JointDrift(j) => at(&time.joint_drift_deg_per_h, j),
-            Unknown::Compliance(j) => at(&t.compliance_deg_per_kgfm, j),
-            Unknown::JointScale(j) => at(&t.scale, j),
-            Unknown::Coupling(i, k) => t.coupling_at(i, k),
-            Unknown::Hysteresis(j) => at(&t.hysteresis_deg, j),
-            Unknown::ThermalPpm => time.thermal_ppm,
-            Unknown::ThermalTauMin => time.thermal_tau_min,
-            Unknown::Offset { slot, axis } => self
-                .offsets_mm
-                .get(slot)
-                .map_or(f64::NAN, |o| o[axis.min(2)]),
-            Unknown::ToolStep { slot, axis } => match time.changes.get(slot).map(|s| s.kind) {
-                Some(StepKind::Tool(d)) => d[axis.min(2)],
-                _ => 0.0,
-            },
-            Unknown::PayloadStep(slot) => match time.changes.get(slot).map(|s| s.kind) {
-                Some(StepKind::Payload(kg)) => kg,
-                _ => 0.0,
-            },
-        }
-    }
-
-    fn set_value(&mut self, u: Unknown, v: f64) -> Result<(), ModelError> {
-        if !v.is_finite() {
-            return Err(ModelError::NonFinite {
-                name: u.name(&self.model),
-                value: v,
-            });
-        }
-        let set = |slot: Option<&mut f64>| {
-            if let Some(x) = slot {
-                *x = v;
-            }
-        };
-        match u {
-            Unknown::Param(i) => self.model.set_param_at(i, v)?,
-            Unknown::PositionDrift(a) => self.model.time_terms_mut().drift_mm_per_h[a.min(2)] = v,
-            Unknown::JointDrift(j) => {
-                set(self.model.time_terms_mut().joint_drift_deg_per_h.get_mut(j));
-            }
-            Unknown::Compliance(j) => {
-                set(self
-                    .model
-                    .transmission_mut()
-                    .compliance_deg_per_kgfm
-                    .get_mut(j));
-            }
-            Unknown::JointScale(j) => set(self.model.transmission_mut().scale.get_mut(j)),
-            Unknown::Coupling(i, k) => set(self
-                .model
-                .transmission_mut()
-                .coupling
-                .get_mut(i)
-                .and_then(|r| r.get_mut(k))),
-            Unknown::Hysteresis(j) => {
-                set(self.model.transmission_mut().hysteresis_deg.get_mut(j));
-            }
-            Unknown::ThermalPpm => self.model.time_terms_mut().thermal_ppm = v,
-            Unknown::ThermalTauMin => {
-                // a time constant is positive: the fit's step is kept within the bound
-                let v = crate::model::effect::bound(u, &self.model).map_or(v, |b| b.clamp(v));
-                self.model.time_terms_mut().thermal_tau_min = v;
-            }
-            Unknown::Offset { slot, axis } => match self.offsets_mm.get_mut(slot) {
-                Some(o) => o[axis.min(2)] = v,
-                None => return Err(offsets_elsewhere(u, &self.model)),
-            },
-            Unknown::ToolStep { slot, axis } => {
-                if let Some(StepKind::Tool(d)) = self
-                    .model
-                    .time_terms_mut()
-                    .changes
-                    .get_mut(slot)
-                    .map(|s| &mut s.kind)
-                {
-                    d[axis.min(2)] = v;
-                }
-            }
-            Unknown::PayloadStep(slot) => {
-                if let Some(StepKind::Payload(kg)) = self
-                    .model
-                    .time_terms_mut()
-                    .changes
-                    .get_mut(slot)
-                    .map(|s| &mut s.kind)
-                {
-                    *kg = v;
-                }
-            }
-        }
-        Ok(())
-    }
-}
+mod values;
 
 #[cfg(test)]
 mod transmission_tests {
     use super::*;
-    use crate::calib::Poses;
+    use crate::calib::measured::PosePoints;
     use crate::model::katana450;
 
     /// The analytic columns of the transmission unknowns match central differences.
@@ -505,7 +405,7 @@ mod transmission_tests {
             vec![-20.0, 95.0, -80.0, -10.0, 60.0],
             vec![35.0, 70.0, -40.0, 40.0, -30.0],
         ];
-        let data = MeasuredSet::from_poses(Poses {
+        let data = MeasuredSet::from_poses(PosePoints {
             xyz_mm: vec![Vector3::zeros(); q.len()],
             q_deg: q,
         })

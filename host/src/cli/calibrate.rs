@@ -15,7 +15,7 @@ use std::fmt::Write as _;
 use std::path::PathBuf;
 
 use rigctl::calib::calibrate_general::{calibrate_poses, GeneralOptions, Select};
-use rigctl::calib::plausible::{large_changes, large_changes_line};
+use rigctl::calib::large_changes::{large_changes, large_changes_line};
 use rigctl::calib::MeasuredSet;
 use rigctl::calib::{CalibrateOptions, Method};
 use rigctl::io::atomic::write_text_atomic;

@@ -288,7 +288,7 @@ fn is_fused(path: &Path) -> bool {
         .and_then(|f| f.take(4096).read_to_end(&mut head))
         .map(|_| {
             let first = head.split(|&b| b == b'\n').next().unwrap_or(&[]);
-            String::from_utf8_lossy(first).contains(rigctl::fusion::fuse::FUSED_FORMAT)
+            String::from_utf8_lossy(first).contains(rigctl::fusion::fused_file::FUSED_FORMAT)
         })
         .unwrap_or(false)
 }

@@ -16,7 +16,7 @@
 //! | [`rec_file`] | where `record` writes: an exclusive lock, `--overwrite` through a temporary file renamed over the old recording once the run holds frames |
 //! | [`salvage`] | reading a damaged recording: skip damaged records (CRC), resynchronise, report what was lost |
 //! | [`link`] | opening/listing serial ports; cutting the byte stream into frames, keeping each frame's raw bytes |
-//! | [`session`] | a `record` session: handshake (`GetInfo`/`Hello`, version check), `Start`, run, `Stop`, drain |
+//! | [`session`] | a `record` session: handshake (`GetInfo`/`Hello`, version check), `Start`, run, `Stop`, drain; what it is asked and how it fails in `session/config.rs` |
 //! | [`tally`] | the counts `frames`, `samples`, `dropped`, `crc_errors` and their exact definitions |
 //! | [`wire_check`] | frames checked against the board's announced configuration (period, 12-bit raw, sensor count, monotone time) |
 //! | [`export`] | recording -> `pot.csv`, `tilt.csv`, `status.csv` |

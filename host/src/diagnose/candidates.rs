@@ -162,14 +162,14 @@ pub fn effect_values(
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::calib::Poses;
+    use crate::calib::measured::PosePoints;
     use crate::model::katana450;
 
     #[test]
     fn katana_library_has_every_formats_family() {
         let ext = ExtModel::new(katana450(200.0).unwrap());
         let data = MeasuredSet {
-            poses: Poses::default(),
+            poses: PosePoints::default(),
             t_s: Some(vec![0.0, 10.0]),
             ..MeasuredSet::default()
         };

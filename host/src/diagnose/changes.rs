@@ -223,15 +223,27 @@ pub fn scan_change(
     };
     ext.model.time_terms_mut().changes.push(step);
     let step_unknowns: Vec<Unknown> = effect.unknowns(&ext.model).into_iter().flatten().collect();
-    if step_unknowns.is_empty() {
+    scan_steps(&cur.fitted, &ext, &step_unknowns, data)
+}
+
+/// The best split for a step in the unknowns `step` of `ext` (a fit's state with the step's
+/// slot open, no size), with the fit's unknowns `fitted` projected out; `None` without a step
+/// unknown.
+fn scan_steps(
+    fitted: &[Unknown],
+    ext: &ExtModel,
+    step: &[Unknown],
+    data: &MeasuredSet,
+) -> Result<Option<ChangePoint>, CalibError> {
+    if step.is_empty() {
         return Ok(None);
     }
-    let mut all = cur.fitted.clone();
-    all.extend(step_unknowns.iter().copied());
+    let mut all = fitted.to_vec();
+    all.extend(step.iter().copied());
     let (jac, e) = ext.stacked(data, &all)?;
-    let p = cur.fitted.len();
+    let p = fitted.len();
     let l = jac.columns(0, p).into_owned();
-    let x = jac.columns(p, step_unknowns.len()).into_owned();
+    let x = jac.columns(p, step.len()).into_owned();
     Ok(scan(data, &x, &orthonormal_basis(&l), &e))
 }
 
@@ -302,16 +314,7 @@ pub fn residual_change_point(
                 .flatten(),
         );
     }
-    if step_unknowns.is_empty() {
-        return Ok(None);
-    }
-    let mut all = last.fitted.clone();
-    all.extend(step_unknowns.iter().copied());
-    let (jac, e) = ext.stacked(data, &all)?;
-    let p = last.fitted.len();
-    let l = jac.columns(0, p).into_owned();
-    let x = jac.columns(p, step_unknowns.len()).into_owned();
-    Ok(scan(data, &x, &orthonormal_basis(&l), &e).filter(|cp| cp.p_value < alpha))
+    Ok(scan_steps(&last.fitted, &ext, &step_unknowns, data)?.filter(|cp| cp.p_value < alpha))
 }
 
 impl ChangePoint {
@@ -368,13 +371,7 @@ fn rescan_slot(
         Some(step) => step.t_s = f64::NEG_INFINITY,
         None => return Ok(None),
     }
-    let mut all = others.clone();
-    all.extend(own.iter().copied());
-    let (jac, e) = ext.stacked(data, &all)?;
-    let p = others.len();
-    let l = jac.columns(0, p).into_owned();
-    let x = jac.columns(p, own.len()).into_owned();
-    Ok(scan(data, &x, &orthonormal_basis(&l), &e))
+    scan_steps(&others, &ext, &own, data)
 }
 
 /// Most re-scans of a change's time at the refitted values ([`refine`]).

@@ -82,7 +82,7 @@ pub fn stacked_or_compressed(
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::calib::Poses;
+    use crate::calib::measured::PosePoints;
     use crate::model::katana450;
     use nalgebra::Vector3;
 
@@ -105,7 +105,7 @@ mod tests {
             xyz.push(p + Vector3::new(rnd() - 0.5, rnd() - 0.5, rnd() - 0.5) * 4.0);
             q.push(qk);
         }
-        MeasuredSet::from_poses(Poses {
+        MeasuredSet::from_poses(PosePoints {
             q_deg: q,
             xyz_mm: xyz,
         })

@@ -147,7 +147,7 @@ mod tests {
     /// Jacobian columns of norms 2 and 10 on one pose, the steps are 3 s / 2 and 3 s / 10.
     #[test]
     fn steps_are_three_standard_deviations() {
-        let set = MeasuredSet::from_poses(crate::calib::Poses {
+        let set = MeasuredSet::from_poses(crate::calib::measured::PosePoints {
             q_deg: vec![vec![0.0, 30.0, -30.0, 10.0, 0.0]],
             xyz_mm: vec![nalgebra::Vector3::zeros()],
         });

@@ -26,7 +26,7 @@
 //! The measurements are a [`crate::calib::MeasuredSet`] (full positions, fused samples, or both).
 //!
 //! The starting point is the declared model (MODEL.md) fitted exactly as `calibrate --method
-//! tilting`: [`crate::calib::fit::fit_parameters`] on [`crate::calib::default_selection`] (the
+//! tilting`: [`crate::calib::position_fit::fit_parameters`] on [`crate::calib::default_selection`] (the
 //! thesis's 12 for the Katana; offsets, twists, lengths and tool point for other models) with
 //! the declared tilting when the model has tilting data.
 //!
@@ -63,7 +63,7 @@ use crate::calib::outliers::{self, OutlierReport};
 use crate::calib::problem::norms_mm;
 use nalgebra::Vector3;
 
-use crate::calib::fit::fit_parameters;
+use crate::calib::position_fit::fit_parameters;
 use crate::calib::MeasuredSet;
 use crate::calib::{default_selection, CalibError, Stats};
 use crate::error::{Classify, ErrorKind};
@@ -177,7 +177,7 @@ pub fn declared_fit(
         )?;
         return Ok((fit, requested));
     }
-    let f = fit_parameters(model, &cal.poses, &selection, tilt, &cfg.lm, cfg.rtol)?;
+    let f = fit_parameters(model, &cal.poses, &selection, tilt, &cfg.lm, cfg.rtol, None)?;
     let mut ext = ExtModel::new(f.model.clone());
     ext.tilt = tilt;
     // the residual of the extended model (its own evaluation of every pose)

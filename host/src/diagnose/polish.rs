@@ -307,7 +307,7 @@ pub fn polish(
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::calib::Poses;
+    use crate::calib::measured::PosePoints;
     use crate::model::katana450;
     use crate::sim::simulate::{simulate, SimConfig};
 
@@ -319,7 +319,7 @@ mod tests {
         let declared = katana450(200.0).expect("preset");
         let out = simulate(&declared, &SimConfig::default()).expect("simulate");
         let data = MeasuredSet {
-            poses: Poses {
+            poses: PosePoints {
                 q_deg: out.cal.iter().map(|p| p.q_deg.clone()).collect(),
                 xyz_mm: out.cal.iter().map(|p| p.measured_mm).collect(),
             },

@@ -1,12 +1,13 @@
 //! Errors of the fusion and of the potentiometer calibration.
 
-use std::path::PathBuf;
+use std::path::{Path, PathBuf};
 
 use crate::daq::export::ExportError;
 use crate::daq::recording::RecordingError;
 use crate::error::{Classify, ErrorKind};
 use crate::io::atomic::AtomicWriteError;
 use crate::io::pose_csv::PoseCsvError;
+use crate::io::table::TableError;
 use crate::model::ModelError;
 
 /// Everything that can stop `rigctl fuse` or `rigctl potcal`.
@@ -70,6 +71,56 @@ impl Classify for FusionError {
             | Self::Invalid(_)
             | Self::Alignment(_)
             | Self::NoSamples(_) => ErrorKind::BadInput,
+        }
+    }
+}
+
+impl FusionError {
+    /// A [`FusionError::Csv`] at `line` of `path`.
+    pub(crate) fn csv(path: &Path, line: usize, column: &str, reason: impl Into<String>) -> Self {
+        Self::Csv {
+            path: path.to_path_buf(),
+            line,
+            column: column.into(),
+            reason: reason.into(),
+        }
+    }
+
+    /// The fusion's form of a problem the table reader found in the CSV file `path`;
+    /// `no_rows` says what a file with a header and no data row lacks.
+    pub(crate) fn from_table(e: TableError, path: &Path, no_rows: &str) -> Self {
+        let csv = |line, column: &str, reason: String| Self::csv(path, line, column, reason);
+        match e {
+            TableError::Read { source, .. } => Self::Read {
+                path: path.to_path_buf(),
+                source,
+            },
+            TableError::NoHeader { .. } => csv(1, "header", "no header row".into()),
+            TableError::Dialect { line, hint, .. } => csv(line, "header", hint),
+            TableError::NoRows { line, .. } => csv(line, "rows", no_rows.into()),
+            TableError::MissingColumn { line, column, .. } => {
+                csv(line, &column, "column missing from the header".into())
+            }
+            TableError::DuplicateColumn { line, column, .. } => {
+                csv(line, &column, "column appears twice in the header".into())
+            }
+            TableError::FieldCount {
+                line,
+                expected,
+                found,
+                ..
+            } => csv(
+                line,
+                "row",
+                format!("{found} fields, the header has {expected}"),
+            ),
+            TableError::BadValue {
+                line,
+                column,
+                value,
+                problem,
+                ..
+            } => csv(line, &column, format!("{problem} (`{value}`)")),
         }
     }
 }

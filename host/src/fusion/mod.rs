@@ -11,7 +11,8 @@
 //! | [`pot`] | the potentiometer samples of a board recording |
 //! | [`align`] | clock alignment of the board (pot) and the robot (joints) by the dip markers |
 //! | [`curve`] | the traced curve: closest point and local in-plane normal |
-//! | [`fuse`] | the fusion itself and the fused-samples file `FUSED.csv` |
+//! | [`fuse`] | the fusion itself: joint readings + pot recording + trace -> fused samples |
+//! | [`fused_file`] | the fused-samples file `FUSED.csv`: its columns, writer and reader |
 //! | [`error`] | [`FusionError`] |
 //!
 //! # What is measured, and what is not
@@ -28,11 +29,13 @@ pub mod align;
 pub mod curve;
 pub mod error;
 pub mod fuse;
+pub mod fused_file;
 pub mod placement;
 pub mod pot;
 pub mod potcal;
 
 pub use error::FusionError;
-pub use fuse::{fuse, read_fused, write_fused, FuseOptions, Fused, FusedSample, JointSamples};
+pub use fuse::{fuse, FuseOptions, Fused, FusedSample, JointSamples};
+pub use fused_file::{read_fused, write_fused};
 pub use placement::SheetPlacement;
 pub use potcal::{JigPoint, PotCalibration};

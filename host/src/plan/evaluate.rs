@@ -8,9 +8,9 @@ use rand_distr::{Distribution, Normal};
 
 use super::candidates::{draw_candidates, CandidatePose};
 use super::{plan, PlanConfig, PlanError};
-use crate::calib::fit::fit_parameters;
 use crate::calib::identifiability::DEFAULT_RTOL;
 use crate::calib::lm::LmConfig;
+use crate::calib::position_fit::fit_parameters;
 use crate::calib::{default_selection, position_errors, MeasuredSet, Stats};
 use crate::model::{Model, Tilt};
 
@@ -63,6 +63,7 @@ pub fn held_out(
         tilt,
         &LmConfig::default(),
         DEFAULT_RTOL,
+        None,
     )
     .map_err(|e| PlanError::Config(format!("calibration failed: {e}")))?;
     let mean = |m: &Model| -> Result<f64, PlanError> {

@@ -3,7 +3,7 @@
 
 use serde_json::Value;
 
-use super::summary::found_effects;
+use super::diagnosis_words::found_effects;
 use super::table::{Column, ErrorTable};
 use super::{DiagnoseSection, EffectRow, ParamRow, ParamTable};
 use crate::model::Model;

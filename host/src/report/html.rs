@@ -306,7 +306,7 @@ pub fn render_html(r: &Report) -> String {
          <h1>Calibration report: <code>{dir}</code></h1>",
         dir = escape(&r.run_dir),
     );
-    super::first_screen::render(&mut s, &r.summary);
+    super::first_screen_html::render(&mut s, &r.summary);
     let secs = sections(r);
     toc(&mut s, &secs);
     for (id, heading) in &secs {

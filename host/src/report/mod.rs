@@ -4,9 +4,11 @@
 //! | module | holds |
 //! |---|---|
 //! | [`run_dir`] | the files understood (`cal.csv`, `val.csv`, `truth.json`, `truth.toml`, `calibrate*.json`, `diagnose*.json`, `path_errors.csv`, `plan.csv`, `plan.json`, `*overlay*.png`, other `*.toml` = calibrated models, `commands.txt` / `*.cmd`) and their SHA-256 |
-//! | [`summary`] | the first screen as data: error at each stage per set, effects found in words, floor verdict, aliased pairs (every newer diagnose key optional) |
+//! | [`summary`] | the first screen as data: error at each stage per set (every newer diagnose key optional) |
+//! | [`diagnosis_words`] | a diagnose document in words: effects found with their evidence, floor verdict, aliased pairs |
 //! | [`answer`] | the top of the first screen: the one sentence, the verdict in one line, "N of M parameters identified", the held-out error through the exported URDF beside the best model's |
-//! | [`first_screen`] | builds the [`Summary`] (robot, data, next steps, the stage bar chart) and renders it |
+//! | [`first_screen`] | builds the [`Summary`] (robot, data, next steps, the stage bar chart) |
+//! | [`first_screen_html`] | renders the [`Summary`] as the page's first screen |
 //! | [`table`] | thesis table 4.5 (min / max / average of abs(dX) abs(dY) abs(dZ) abs(dP)) from JSON stats or error vectors; tables of one set merged, each model once |
 //! | `docs`, `pose_sets` | parameters, diagnosis and simulation facts from the JSON documents; the pose files recomputed with every model, before / after figures |
 //! | [`extras`] | the plan section (`plan.csv` poses in the workspace, `plan.json` expected vs achieved sigma) and the trace overlays (PNG embedded, downscaled) |
@@ -24,9 +26,11 @@ pub mod analysis;
 pub mod answer;
 pub mod build;
 pub mod captions;
+pub mod diagnosis_words;
 mod docs;
 pub mod extras;
 pub mod first_screen;
+pub mod first_screen_html;
 pub mod html;
 mod markup;
 pub mod path_errors;

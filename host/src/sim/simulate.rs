@@ -295,7 +295,7 @@ impl crate::calib::MeasuredSet {
     /// the robot visited them.
     pub fn from_sim_poses(poses: &[SimPose]) -> Self {
         Self {
-            poses: crate::calib::Poses {
+            poses: crate::calib::measured::PosePoints {
                 q_deg: poses.iter().map(|p| p.q_deg.clone()).collect(),
                 xyz_mm: poses.iter().map(|p| p.measured_mm).collect(),
             },

@@ -10,8 +10,9 @@ use crate::common::record::record;
 use nalgebra::Vector3;
 use rand::{Rng, SeedableRng};
 use rigctl::calib::calibrate::{calibrate, default_selection, CalibrateOptions, Method};
+use rigctl::calib::measured::PosePoints;
 use rigctl::calib::prior::PriorMode;
-use rigctl::calib::Poses;
+use rigctl::calib::MeasuredSet;
 use rigctl::model::{Model, Tilt, Unit};
 use rigctl::urdf::{import_chain, ImportOptions, Urdf};
 
@@ -58,7 +59,7 @@ fn nine_joint_urdf(rng: &mut impl Rng) -> String {
     s
 }
 
-fn training_rms(model: &Model, poses: &Poses) -> f64 {
+fn training_rms(model: &Model, poses: &PosePoints) -> f64 {
     let ss: f64 = poses
         .q_deg
         .iter()
@@ -98,7 +99,7 @@ fn nine_joint_arms_converge_in_one_run() {
                 .unwrap();
         }
         let mut draw = |n: usize| {
-            let mut poses = Poses {
+            let mut poses = PosePoints {
                 q_deg: Vec::new(),
                 xyz_mm: Vec::new(),
             };
@@ -128,7 +129,7 @@ fn nine_joint_arms_converge_in_one_run() {
         // prior by cross-validation; it must predict the held-out poses no worse
         let with_prior = calibrate(
             &nominal,
-            &poses,
+            &MeasuredSet::from_poses(poses.clone()),
             None,
             &CalibrateOptions {
                 prior: PriorMode::Auto,
@@ -136,7 +137,13 @@ fn nine_joint_arms_converge_in_one_run() {
             },
         )
         .unwrap();
-        let first = calibrate(&nominal, &poses, None, &opts).unwrap();
+        let first = calibrate(
+            &nominal,
+            &MeasuredSet::from_poses(poses.clone()),
+            None,
+            &opts,
+        )
+        .unwrap();
         for fit in [&first, &with_prior] {
             for name in &fit.report.fixed {
                 assert_eq!(
@@ -165,7 +172,13 @@ fn nine_joint_arms_converge_in_one_run() {
             "seed {seed}: not converged after {} iterations",
             first.report.iterations
         );
-        let second = calibrate(&first.model, &poses, None, &opts).unwrap();
+        let second = calibrate(
+            &first.model,
+            &MeasuredSet::from_poses(poses.clone()),
+            None,
+            &opts,
+        )
+        .unwrap();
         let (r0, r1, r2) = (
             training_rms(&nominal, &poses),
             training_rms(&first.model, &poses),

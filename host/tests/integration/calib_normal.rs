@@ -11,16 +11,18 @@ use nalgebra::Vector3;
 use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
 use rigctl::calib::accumulate::Accumulator;
-use rigctl::calib::fit::{fit_parameters_normal, fit_problem, Fit, PositionFit};
+use rigctl::calib::default_selection;
+use rigctl::calib::fit::{fit_problem, Fit};
 use rigctl::calib::identifiability::DEFAULT_RTOL;
 use rigctl::calib::lm::LmConfig;
+use rigctl::calib::measured::PosePoints;
 use rigctl::calib::normal::Normal;
+use rigctl::calib::position_fit::{fit_parameters_normal, PositionFit};
 use rigctl::calib::problem::{position_problem, stacked_jacobian};
-use rigctl::calib::{default_selection, Poses};
 use rigctl::model::{katana450, Model, Tilt};
 
 /// The tall-Jacobian path (QR of the stacked Jacobian), as `fit_parameters` did before.
-fn tall_fit(start: &Model, poses: &Poses, sel: &[usize], tilt: bool) -> Fit {
+fn tall_fit(start: &Model, poses: &PosePoints, sel: &[usize], tilt: bool) -> Fit {
     let jac0 = stacked_jacobian(start, poses, sel, tilt).unwrap();
     let lm = LmConfig::default();
     let make = |cols| position_problem(start, poses, cols, tilt);
@@ -33,7 +35,7 @@ const SIGMA_REL_TOL: f64 = 1e-6;
 const FIXED_POINT_TOL: f64 = 1e-10;
 
 /// The path on normal equations.
-fn normal_fit(start: &Model, poses: &Poses, sel: &[usize], tilt: bool) -> Fit {
+fn normal_fit(start: &Model, poses: &PosePoints, sel: &[usize], tilt: bool) -> Fit {
     let lm = LmConfig::default();
     let on = PositionFit {
         poses,
@@ -79,7 +81,7 @@ fn assert_same(a: &Fit, b: &Fit, what: &str) -> f64 {
     worst
 }
 
-fn katana_poses(n: usize, seed: u64) -> (Model, Poses) {
+fn katana_poses(n: usize, seed: u64) -> (Model, PosePoints) {
     let nominal = katana450(200.0).unwrap();
     let mut truth = nominal.clone();
     for (p, v) in [
@@ -91,7 +93,7 @@ fn katana_poses(n: usize, seed: u64) -> (Model, Poses) {
         truth.set_param(p, v).unwrap();
     }
     let mut rng = ChaCha8Rng::seed_from_u64(seed);
-    let mut poses = Poses::default();
+    let mut poses = PosePoints::default();
     for _ in 0..n {
         let q: Vec<f64> = truth
             .joint_limits()
@@ -127,8 +129,8 @@ fn ur5_normal_equations_match_the_tall_solver() {
         return;
     };
     let sel = default_selection(&model, true);
-    let tall = tall_fit(&model, &grid, &sel, false);
-    let normal = normal_fit(&model, &grid, &sel, false);
+    let tall = tall_fit(&model, &grid.poses, &sel, false);
+    let normal = normal_fit(&model, &grid.poses, &sel, false);
     let worst = assert_same(&tall, &normal, "ur5 grid");
     record("ur5_worst_difference", worst);
     record("ur5_parameters", normal.fitted.len());
@@ -176,10 +178,10 @@ fn ur5_fit_is_a_gauss_newton_fixed_point() {
         return;
     };
     let sel = default_selection(&model, true);
-    let fit = normal_fit(&model, &grid, &sel, false);
-    let jac = stacked_jacobian(&fit.model, &grid, &fit.fitted, false).unwrap();
+    let fit = normal_fit(&model, &grid.poses, &sel, false);
+    let jac = stacked_jacobian(&fit.model, &grid.poses, &fit.fitted, false).unwrap();
     let mut r = nalgebra::DVector::zeros(3 * grid.len());
-    for (i, (q, xyz)) in grid.q_deg.iter().zip(&grid.xyz_mm).enumerate() {
+    for (i, (q, xyz)) in grid.poses.q_deg.iter().zip(&grid.poses.xyz_mm).enumerate() {
         let p = fit.model.position_mm(q, Tilt::Off).unwrap();
         r.rows_mut(3 * i, 3).copy_from(&(p - xyz));
     }

@@ -5,7 +5,8 @@ use nalgebra::Vector3;
 use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
 use rand_distr::{Distribution, Normal};
-use rigctl::calib::{calibrate, position_errors, CalibrateOptions, Method, Poses, Stats};
+use rigctl::calib::measured::PosePoints;
+use rigctl::calib::{calibrate, position_errors, CalibrateOptions, MeasuredSet, Method, Stats};
 use rigctl::model::{katana450, Model, Tilt};
 
 use crate::common::record::record;
@@ -36,11 +37,11 @@ fn truth() -> Model {
     m
 }
 
-fn poses_with(model: &Model, n: usize, seed: u64, tilt: Tilt<'static>) -> Poses {
+fn poses_with(model: &Model, n: usize, seed: u64, tilt: Tilt<'static>) -> PosePoints {
     let mut rng = ChaCha8Rng::seed_from_u64(seed);
     let noise = Normal::new(0.0, NOISE_MM).unwrap();
     let limits = model.joint_limits();
-    let mut p = Poses::default();
+    let mut p = PosePoints::default();
     for _ in 0..n {
         let q: Vec<f64> = limits.iter().map(|l| rng.gen_range(l[0]..l[1])).collect();
         let x = model.position_mm(&q, tilt).unwrap();
@@ -55,16 +56,20 @@ fn poses_with(model: &Model, n: usize, seed: u64, tilt: Tilt<'static>) -> Poses 
     p
 }
 
-fn poses(model: &Model, n: usize, seed: u64) -> Poses {
+fn poses(model: &Model, n: usize, seed: u64) -> PosePoints {
     poses_with(model, n, seed, Tilt::Static)
 }
 
-fn run(method: Method, cal: &Poses, val: &Poses) -> rigctl::calib::Outcome {
+fn run(method: Method, cal: &PosePoints, val: &PosePoints) -> rigctl::calib::Outcome {
     let opts = CalibrateOptions {
         method,
         ..CalibrateOptions::default()
     };
-    calibrate(&katana450(200.0).unwrap(), cal, Some(val), &opts).unwrap()
+    let (cal, val) = (
+        MeasuredSet::from_poses(cal.clone()),
+        MeasuredSet::from_poses(val.clone()),
+    );
+    calibrate(&katana450(200.0).unwrap(), &cal, Some(&val), &opts).unwrap()
 }
 
 #[test]

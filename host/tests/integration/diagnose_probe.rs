@@ -10,8 +10,8 @@ use nalgebra::Vector3;
 use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
 use rand_distr::{Distribution, Normal};
+use rigctl::calib::measured::PosePoints;
 use rigctl::calib::MeasuredSet;
-use rigctl::calib::Poses;
 use rigctl::diagnose::probe::{hybrid_report, jacobians, probe_dataset, ProbeConfig, ProbeResult};
 use rigctl::diagnose::{diagnose, DiagnoseOptions, Diagnosis};
 use rigctl::model::katana450;
@@ -38,7 +38,7 @@ fn noise(n: usize, seed: u64) -> Vec<Vector3<f64>> {
 
 fn run_probe(q: Vec<Vec<f64>>, residual: &[Vector3<f64>]) -> ProbeResult {
     let n = q.len();
-    let data = MeasuredSet::from_poses(Poses {
+    let data = MeasuredSet::from_poses(PosePoints {
         q_deg: q,
         xyz_mm: vec![Vector3::zeros(); n],
     });
@@ -151,7 +151,7 @@ fn time_is_a_variable_when_the_poses_carry_it() {
         e.z += 0.04 * (t / 3600.0) * rad(q[1]).sin();
     }
     let data = MeasuredSet {
-        poses: Poses {
+        poses: PosePoints {
             q_deg: q.clone(),
             xyz_mm: vec![Vector3::zeros(); n],
         },
@@ -275,7 +275,7 @@ fn partial_measurements_along_a_path() {
         red[k] = red[k - 1] * 0.9 + white[k] * 0.44;
     }
     let data = MeasuredSet {
-        poses: Poses {
+        poses: PosePoints {
             q_deg: q.clone(),
             xyz_mm: vec![Vector3::zeros(); n],
         },
@@ -295,7 +295,7 @@ fn partial_measurements_along_a_path() {
 
 fn dataset(poses: &[SimPose], extra: &dyn Fn(&[f64]) -> Vector3<f64>) -> MeasuredSet {
     MeasuredSet {
-        poses: Poses {
+        poses: PosePoints {
             q_deg: poses.iter().map(|p| p.q_deg.clone()).collect(),
             xyz_mm: poses
                 .iter()

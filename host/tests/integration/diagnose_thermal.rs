@@ -14,8 +14,8 @@ use rand::seq::SliceRandom;
 use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
 use rand_distr::{Distribution, Normal};
+use rigctl::calib::measured::PosePoints;
 use rigctl::calib::MeasuredSet;
-use rigctl::calib::Poses;
 use rigctl::diagnose::{diagnose, DiagnoseOptions, Diagnosis};
 use rigctl::model::katana450;
 use rigctl::sim::effects::parse_effect;
@@ -95,7 +95,7 @@ fn independent(ppm: f64, tau_min: f64, seed: u64, session_min: f64) -> Case {
             .filter(|(i, _)| keep(*i))
             .map(|(_, p)| p)
             .collect();
-        let mut d = MeasuredSet::from_poses(Poses {
+        let mut d = MeasuredSet::from_poses(PosePoints {
             q_deg: chosen.iter().map(|p| p.1.q_deg.clone()).collect(),
             xyz_mm: chosen.iter().map(|p| p.2).collect(),
         });

@@ -67,7 +67,7 @@ fn kind(d: &Diagnosis) -> String {
         );
     }
     let doc: serde_json::Value = serde_json::from_str(&json).unwrap();
-    let v = rigctl::report::summary::verdict(&doc).unwrap_or_default();
+    let v = rigctl::report::diagnosis_words::verdict(&doc).unwrap_or_default();
     assert!(
         !(v.contains("At the") && v.contains("lacks something")),
         "{v}"

@@ -13,7 +13,6 @@ use nalgebra::Vector3;
 use rand::{Rng, SeedableRng};
 use rigctl::calib::calibrate::{calibrate, CalibrateOptions, Method};
 use rigctl::calib::MeasuredSet;
-use rigctl::calib::Poses;
 use rigctl::diagnose::{diagnose, DiagnoseOptions};
 use rigctl::model::katana450;
 use rigctl::sim::effects::parse_effect;
@@ -173,9 +172,9 @@ fn calibrate_flags_the_gross_errors_of_the_real_ur5_set() {
         clean.validation.unwrap().after.mean_mm,
     );
     let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(5);
-    let (mut g, mut r): (Poses, Poses) = (grid.clone(), random.clone());
-    let bad_cal = corrupt(&mut g.xyz_mm, 0.02, &mut rng);
-    let bad_val = corrupt(&mut r.xyz_mm, 0.05, &mut rng);
+    let (mut g, mut r): (MeasuredSet, MeasuredSet) = (grid.clone(), random.clone());
+    let bad_cal = corrupt(&mut g.poses.xyz_mm, 0.02, &mut rng);
+    let bad_val = corrupt(&mut r.poses.xyz_mm, 0.05, &mut rng);
     let dirty = calibrate(&model, &g, Some(&r), &opts).unwrap().report;
     let cal_flags = flagged(&dirty.outliers, "cal");
     let val_flags = flagged(&dirty.outliers, "val");
@@ -220,9 +219,11 @@ fn clean_sets_flag_almost_nothing() {
     let mut flagged_cal_mm = Vec::new();
     for seed in 0..50_u64 {
         let (cal, val) = sim(1000 + seed, &["encoder_harmonic:j3:h2=0.02,10"]);
-        let to_poses = |p: &[SimPose]| Poses {
-            q_deg: p.iter().map(|x| x.q_deg.clone()).collect(),
-            xyz_mm: p.iter().map(|x| x.measured_mm).collect(),
+        let to_poses = |p: &[SimPose]| {
+            MeasuredSet::from_points(
+                p.iter().map(|x| x.q_deg.clone()).collect(),
+                p.iter().map(|x| x.measured_mm).collect(),
+            )
         };
         let rep = calibrate(
             &declared,

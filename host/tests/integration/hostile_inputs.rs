@@ -599,8 +599,8 @@ fn item8_inputs_that_must_be_refused() {
     let fused = d.join("fused.csv");
     let mut text = format!(
         "# {}\n{}\n",
-        rigctl::fusion::fuse::FUSED_FORMAT,
-        rigctl::fusion::fuse::fused_header(5)
+        rigctl::fusion::fused_file::FUSED_FORMAT,
+        rigctl::fusion::fused_file::fused_header(5)
     );
     for k in 0..40 {
         let q = 5.0 * k as f64;

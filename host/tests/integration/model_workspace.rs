@@ -8,9 +8,10 @@ use std::cell::Cell;
 
 use nalgebra::DVector;
 use rigctl::calib::accumulate::PositionNormalProblem;
+use rigctl::calib::default_selection;
 use rigctl::calib::lm::LmConfig;
+use rigctl::calib::measured::PosePoints;
 use rigctl::calib::normal::{solve_normal, Normal, NormalProblem};
-use rigctl::calib::{default_selection, Poses};
 use rigctl::model::{katana450, ur5, Data, Model, Tilt, Wrt};
 
 use crate::common::record::record;
@@ -182,7 +183,7 @@ fn warm_workspace_does_not_allocate() {
     record("ur5_warm_allocations", n);
 }
 
-fn measured(model: &Model, n: usize) -> Poses {
+fn measured(model: &Model, n: usize) -> PosePoints {
     let mut truth = model.clone();
     truth.set_param("dth3", 0.05).unwrap();
     let q_deg = poses(model, n);
@@ -190,7 +191,7 @@ fn measured(model: &Model, n: usize) -> Poses {
         .iter()
         .map(|q| truth.position_mm(q, Tilt::Static).unwrap())
         .collect();
-    Poses { q_deg, xyz_mm }
+    PosePoints { q_deg, xyz_mm }
 }
 
 /// One LM iteration's per-pose work (normal equations + a trial residual sum) allocates nothing

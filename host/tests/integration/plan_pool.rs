@@ -118,7 +118,7 @@ fn ur5_grid_as_the_pool() {
         return;
     };
     let mut cfg = PlanConfig::new(&model, 20);
-    cfg.pool_q = Some(cal.q_deg.clone());
+    cfg.pool_q = Some(cal.poses.q_deg.clone());
     cfg.base = true;
     let p = plan(&model, &cfg, None).unwrap();
     let idx = p.pool_index.clone().unwrap();
@@ -127,7 +127,7 @@ fn ur5_grid_as_the_pool() {
     sorted.dedup();
     assert_eq!(sorted.len(), 20, "distinct poses");
     for (k, &i) in idx.iter().enumerate() {
-        assert_eq!(p.poses[k].q_deg, cal.q_deg[i]);
+        assert_eq!(p.poses[k].q_deg, cal.poses.q_deg[i]);
     }
     assert!(
         p.parameters.iter().any(|n| n == "base_x"),

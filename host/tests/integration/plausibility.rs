@@ -227,9 +227,9 @@ fn ur5_frees_the_tool_point_not_joint_6s_offset() {
         model.param("tool_dx"),
         "the tool point fitted"
     );
-    assert!(rigctl::calib::plausible::large_changes(&model, fitted).is_empty());
+    assert!(rigctl::calib::large_changes::large_changes(&model, fitted).is_empty());
     let mut worst_deg: f64 = 0.0;
-    for q in &val.q_deg {
+    for q in &val.poses.q_deg {
         let a = model.fk(q, rigctl::model::Tilt::Off).unwrap().rotation;
         let b = fitted.fk(q, rigctl::model::Tilt::Off).unwrap().rotation;
         let r = nalgebra::Rotation3::from_matrix_unchecked(a.transpose() * b);

@@ -46,7 +46,7 @@ fn defect4_absurd_finite_values_are_refused_with_the_line() {
         "{FUSED_HEADER}\n{FUSED_ROW}\n{}\n",
         FUSED_ROW.replacen("1.5", "1e300", 1)
     );
-    let e = rigctl::fusion::fuse::parse_fused(&fused, Path::new("f.csv"), 5).unwrap_err();
+    let e = rigctl::fusion::fused_file::parse_fused(&fused, Path::new("f.csv"), 5).unwrap_err();
     assert!(e.to_string().contains("f.csv:3"), "{e}");
 
     // The limits themselves: a century of seconds, 100 m, 10 000 deg.

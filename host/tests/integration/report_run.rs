@@ -1,7 +1,8 @@
 //! `rigctl report` on a run directory made in the test: simulate + calibrate through the
 //! library, then the page is checked against the calibrate numbers.
 
-use rigctl::calib::{calibrate, CalibrateOptions, Method, Poses};
+use rigctl::calib::MeasuredSet;
+use rigctl::calib::{calibrate, CalibrateOptions, Method};
 use rigctl::model::katana450;
 use rigctl::report::{build_report, render_html, write_report, ReportError, ReportOptions};
 use rigctl::sim::output::write_outputs;
@@ -17,8 +18,8 @@ fn run_dir() -> (tempfile::TempDir, rigctl::calib::Outcome) {
     };
     let out = simulate(&declared, &cfg).unwrap();
     write_outputs(dir.path(), &out, &cfg).unwrap();
-    let cal = Poses::read(&dir.path().join("cal.csv"), &declared).unwrap();
-    let val = Poses::read(&dir.path().join("val.csv"), &declared).unwrap();
+    let cal = MeasuredSet::read(&dir.path().join("cal.csv"), &declared).unwrap();
+    let val = MeasuredSet::read(&dir.path().join("val.csv"), &declared).unwrap();
     let opts = CalibrateOptions {
         method: Method::Tilting,
         ..Default::default()

@@ -39,7 +39,7 @@ fn partial_measurements_project_out_the_path_direction() {
     assert!(d.measured_part(0, &along).norm() < 1e-12);
     let j = DMatrix::from_row_slice(3, 1, &[0.0, 0.8, -0.6]);
     assert!(d.jacobian_rows(0, &j).norm() < 1e-12);
-    let full = MeasuredSet::from_poses(Poses {
+    let full = MeasuredSet::from_poses(PosePoints {
         q_deg: vec![vec![0.0; 5]],
         xyz_mm: vec![Vector3::new(1.0, 2.0, 3.0)],
     });
@@ -63,7 +63,7 @@ fn partial_measurements_project_out_the_path_direction() {
 #[test]
 fn points_components_and_residuals() {
     let p = |x: f64| Vector3::new(x, 0.0, 0.0);
-    let mut set = MeasuredSet::from_poses(Poses {
+    let mut set = MeasuredSet::from_poses(PosePoints {
         q_deg: vec![vec![0.0], vec![1.0]],
         xyz_mm: vec![p(1.0), p(2.0)],
     });

@@ -49,13 +49,13 @@ pub fn ur5_tracker(
     test: &str,
 ) -> Option<(
     rigctl::model::Model,
-    rigctl::calib::Poses,
-    rigctl::calib::Poses,
+    rigctl::calib::MeasuredSet,
+    rigctl::calib::MeasuredSet,
 )> {
     let dir = shared_file(test, "data/real/ur5_laser_tracker")?;
     let model = ur5_with_smr_tool();
     let read = |name: &str| {
-        rigctl::calib::Poses::read(&dir.join(name), &model)
+        rigctl::calib::MeasuredSet::read(&dir.join(name), &model)
             .unwrap_or_else(|e| panic!("{name}: {e}"))
     };
     let (grid, random) = (read("grid.csv"), read("random.csv"));
