@@ -81,13 +81,25 @@ fn torques_kgfm(q: &[f64]) -> Vec<f64> {
 
 /// Pose rows `q1..q6,x,y,z` with joint `joint` (0-based) compliant by `c` deg per kgf.m.
 fn poses(n: usize, joint: usize, c: f64, rng: &mut ChaCha8Rng) -> String {
+    pose_rows(n, rng, |q| {
+        let mut bent = q.to_vec();
+        bent[joint] += c * torques_kgfm(q)[joint];
+        origin(&frames(&bent)[6])
+    })
+}
+
+/// `n` pose rows `q1..q6,x,y,z`: joints uniform in [-170, 170] deg, the point `point(q)` plus
+/// Gaussian noise of [`NOISE_MM`] per coordinate.
+pub(super) fn pose_rows(
+    n: usize,
+    rng: &mut ChaCha8Rng,
+    point: impl Fn(&[f64]) -> Vector3<f64>,
+) -> String {
     let noise = Normal::new(0.0, NOISE_MM).unwrap();
     let mut out = String::from("q1,q2,q3,q4,q5,q6,x,y,z\n");
     for _ in 0..n {
         let q: Vec<f64> = (0..6).map(|_| rng.gen_range(-170.0..170.0)).collect();
-        let mut bent = q.clone();
-        bent[joint] += c * torques_kgfm(&q)[joint];
-        let p = origin(&frames(&bent)[6]);
+        let p = point(&q);
         let row: Vec<String> = q
             .iter()
             .map(|v| format!("{v:.9}"))

@@ -16,13 +16,12 @@
 //! (1.15 x the floor and no sigma at 0.025; unconverged, exit 1, at 0.03). A known limit.
 
 use nalgebra::{Rotation3, Unit, Vector3, Vector4};
-use rand::{Rng, SeedableRng};
+use rand::SeedableRng;
 use rand_chacha::ChaCha8Rng;
-use rand_distr::{Distribution, Normal};
 
 use super::common::record::record_push;
 use super::common::spawn::{output, text};
-use super::diagnose_assumed_masses::{frames, origin, COM_MM, MASS_KG, NOISE_MM};
+use super::diagnose_assumed_masses::{frames, origin, pose_rows, COM_MM, MASS_KG, NOISE_MM};
 
 /// The tool point at `q` (deg) with the arm beyond joint 2's origin turned about the axis
 /// perpendicular to the arm's plane by `c` deg per kgf.m of the gravity moment about it.
@@ -47,19 +46,7 @@ fn tilted_point(q: &[f64], c_deg_per_kgfm: f64) -> Vector3<f64> {
 }
 
 fn poses(n: usize, c: f64, rng: &mut ChaCha8Rng) -> String {
-    let noise = Normal::new(0.0, NOISE_MM).unwrap();
-    let mut out = String::from("q1,q2,q3,q4,q5,q6,x,y,z\n");
-    for _ in 0..n {
-        let q: Vec<f64> = (0..6).map(|_| rng.gen_range(-170.0..170.0)).collect();
-        let p = tilted_point(&q, c);
-        let row: Vec<String> = q
-            .iter()
-            .map(|v| format!("{v:.9}"))
-            .chain((0..3).map(|k| format!("{:.6}", p[k] + noise.sample(rng))))
-            .collect();
-        out += &(row.join(",") + "\n");
-    }
-    out
+    pose_rows(n, rng, |q| tilted_point(q, c))
 }
 
 /// `diagnose --robot ur5` on poses of the tilt `c` (seed `seed`): exit code, JSON, stdout.

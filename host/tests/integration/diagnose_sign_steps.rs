@@ -123,7 +123,8 @@ fn add_blunders(path: &std::path::Path, lines: &[usize], mm: f64) {
     std::fs::write(path, out.join("\n") + "\n").unwrap();
 }
 
-fn diagnose(dir: &std::path::Path, val: &str) -> serde_json::Value {
+/// `diagnose --tool-mm 200 --instrument-mm 0.01` of `cal.csv` in `dir` against `val`: the JSON.
+pub(super) fn diagnose(dir: &std::path::Path, val: &str) -> serde_json::Value {
     let json = dir.join(format!("{val}.json"));
     let out = output(&[
         "diagnose".as_ref(),

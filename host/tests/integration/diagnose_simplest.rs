@@ -18,7 +18,7 @@ use rand_distr::{Distribution, Normal};
 use rigctl::model::{katana450, Model, Tilt};
 
 use super::common::record::{record, record_push};
-use super::common::spawn::{output, text};
+use super::diagnose_sign_steps::diagnose;
 
 const NOISE_MM: f64 = 0.01;
 const N_CAL: usize = 120;
@@ -64,32 +64,6 @@ fn write_set(dir: &std::path::Path, truth: &Model, tilt: Tilt, rng: &mut ChaCha2
     std::fs::write(dir.join("val.csv"), &files[1]).unwrap();
 }
 
-fn diagnose(dir: &std::path::Path, robot: &[&str]) -> serde_json::Value {
-    let json = dir.join("d.json");
-    let mut args: Vec<std::ffi::OsString> = vec!["diagnose".into()];
-    args.extend(robot.iter().map(Into::into));
-    for (flag, v) in [
-        ("--poses", dir.join("cal.csv")),
-        ("--validate", dir.join("val.csv")),
-        ("--json", json.clone()),
-    ] {
-        args.push(flag.into());
-        args.push(v.into_os_string());
-    }
-    args.push("--instrument-mm".into());
-    args.push(NOISE_MM.to_string().into());
-    let refs: Vec<&std::ffi::OsStr> = args.iter().map(|a| a.as_os_str()).collect();
-    let out = output(&refs);
-    assert_eq!(
-        out.status.code(),
-        Some(0),
-        "{}\n{}",
-        text(&out.stdout),
-        text(&out.stderr)
-    );
-    serde_json::from_str(&std::fs::read_to_string(&json).unwrap()).unwrap()
-}
-
 fn effect<'a>(d: &'a serde_json::Value, id: &str) -> Option<&'a serde_json::Value> {
     d["effects"].as_array()?.iter().find(|e| e["id"] == id)
 }
@@ -105,7 +79,7 @@ fn check(seed: u64) -> bool {
     let robot = "katana";
     let mut rng = ChaCha20Rng::seed_from_u64(seed ^ 0x51_3e57);
     let mut truth = katana450(200.0).unwrap();
-    let (tilt, args) = (Tilt::Static, ["--tool-mm", "200"]);
+    let tilt = Tilt::Static;
     // both lengths change by 0.15-0.35 mm; their signs vary with the seed
     let mut size = || {
         let s = if rng.gen::<bool>() { 1.0 } else { -1.0 };
@@ -118,7 +92,8 @@ fn check(seed: u64) -> bool {
     }
     let dir = tempfile::tempdir().unwrap();
     write_set(dir.path(), &truth, tilt, &mut rng);
-    let d = diagnose(dir.path(), &args);
+    // the sign-step test's run: --tool-mm 200, --instrument-mm 0.01 (NOISE_MM)
+    let d = diagnose(dir.path(), "val.csv");
     let ids: Vec<&str> = d["effects"]
         .as_array()
         .unwrap()
