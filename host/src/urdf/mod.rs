@@ -6,12 +6,15 @@
 //!   `file:line:column`.
 //! * [`import_chain`]`(&urdf, &ImportOptions) -> Imported { model, joint_names }`: the chain as
 //!   elementary transforms; the structure and parameter names are documented in [`import`].
+//! * [`import_tree`]`(&urdf, base_link, &[TipLink])`: several chains sharing joints as a
+//!   [`crate::model::Tree`] ([`import_tree`](mod@import_tree)).
 
 pub mod collision;
 pub mod error;
 pub mod export;
 mod frame;
 pub mod import;
+pub mod import_tree;
 pub mod parse;
 pub mod rewrite;
 
@@ -21,5 +24,6 @@ pub use import::{
     import_chain, import_chain_with_masses, param_stem, rpy_matrix, rpy_of, widen_limits,
     ImportOptions, Imported,
 };
+pub use import_tree::{import_tree, TipLink};
 pub use parse::{JointType, LinkInertial, Urdf, UrdfJoint};
 pub use rewrite::model_into_urdf;
