@@ -102,8 +102,8 @@ pub use jacobian::Wrt;
 pub use kinematics::*;
 pub use param::*;
 pub use presets::*;
-pub use tree::{Tip, Tree, TreeElem, TreeJoint, TreeMass, TREE_SHARED_PARAMS};
 pub use tilt::{sign_1e9, tilt_from_moment};
+pub use tree::{Tip, Tree, TreeElem, TreeJoint, TreeMass, TREE_SHARED_PARAMS};
 
 /// Amplitude `A` and phase `phi` (deg) of the encoder harmonic `s sin(nq) + c cos(nq)` written
 /// as `A sin(n q + phi)` (FORMATS.md effect `encoder_harmonic:j<i>:h<n>`).

@@ -118,16 +118,19 @@ impl Tree {
 
     /// The index of the tip named `name`.
     pub fn tip_index(&self, name: &str) -> Result<usize, ModelError> {
-        self.tips.iter().position(|t| t.name == name).ok_or_else(|| {
-            invalid(format!(
-                "no tip `{name}`; the tree's tips: {}",
-                self.tips
-                    .iter()
-                    .map(|t| t.name.as_str())
-                    .collect::<Vec<_>>()
-                    .join(", ")
-            ))
-        })
+        self.tips
+            .iter()
+            .position(|t| t.name == name)
+            .ok_or_else(|| {
+                invalid(format!(
+                    "no tip `{name}`; the tree's tips: {}",
+                    self.tips
+                        .iter()
+                        .map(|t| t.name.as_str())
+                        .collect::<Vec<_>>()
+                        .join(", ")
+                ))
+            })
     }
 
     /// The tree joints of tip `tip`'s chain, root first.
@@ -362,11 +365,9 @@ fn split_chain(tip: &str, m: &Model) -> Result<Split, ModelError> {
     if m.time_terms().is_active() {
         return Err(refuse("time terms"));
     }
-    if m
-        .params()
-        .iter()
-        .any(|p| matches!(p.kind, ParamKind::EncoderHarmonic | ParamKind::Payload) && p.value != 0.0)
-    {
+    if m.params().iter().any(|p| {
+        matches!(p.kind, ParamKind::EncoderHarmonic | ParamKind::Payload) && p.value != 0.0
+    }) {
         return Err(refuse("encoder harmonics or a payload"));
     }
     if m.masses().iter().any(|p| p.after != 0) {

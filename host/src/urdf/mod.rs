@@ -12,6 +12,7 @@
 pub mod collision;
 pub mod error;
 pub mod export;
+pub mod export_tree;
 mod frame;
 pub mod import;
 pub mod import_tree;
@@ -20,6 +21,7 @@ pub mod rewrite;
 
 pub use error::UrdfError;
 pub use export::{model_to_urdf, Exported, Origin, OriginChange};
+pub use export_tree::tree_to_urdf;
 pub use import::{
     import_chain, import_chain_with_masses, param_stem, rpy_matrix, rpy_of, widen_limits,
     ImportOptions, Imported,

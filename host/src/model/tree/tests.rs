@@ -121,7 +121,9 @@ fn file_round_trip() {
     assert_eq!(back, t);
     assert_eq!(back.to_toml_string(), text);
     // a chain reader names the tree
-    let e = Model::from_toml_str(&text, "t.toml").unwrap_err().to_string();
+    let e = Model::from_toml_str(&text, "t.toml")
+        .unwrap_err()
+        .to_string();
     assert!(e.contains("tree model"), "{e}");
 }
 
@@ -133,7 +135,11 @@ fn bad_tree_files_are_refused() {
         ("name = \"l2\"", "name = \"l1\"", "twice"),
         ("joint = 4\ntool_mm", "joint = 9\ntool_mm", "does not exist"),
         ("name = \"r2_x\"", "name = \"l2_x\"", "twice"),
-        ("[params]\nbase_z", "[params]\npayload_kg = 1.0\nbase_z", "payload_kg"),
+        (
+            "[params]\nbase_z",
+            "[params]\npayload_kg = 1.0\nbase_z",
+            "payload_kg",
+        ),
     ] {
         assert!(text.contains(from), "{from}");
         let bad = text.replacen(from, to, 1);
