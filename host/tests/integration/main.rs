@@ -79,3 +79,4 @@ mod trace_photos;
 mod trace_scan;
 mod urdf_export;
 mod urdf_import;
+mod urdf_tree;
