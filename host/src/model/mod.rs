@@ -93,6 +93,7 @@ mod toml_write;
 pub mod transmission;
 mod tree;
 pub mod tree_file;
+mod tree_params;
 pub mod unknown;
 
 pub use chain::*;
