@@ -227,3 +227,59 @@ pub fn fit_tree(
         tree,
     })
 }
+
+/// Every parameter of `tree` a geometric fit may free: the root's and the joints' constants,
+/// the joint offsets, each tip's own constants and tool point (`NAME@TIP`).
+pub fn tree_candidates(tree: &Tree) -> Vec<String> {
+    let mut out: Vec<String> = tree.root.iter().map(|e| e.name.clone()).collect();
+    for j in &tree.joints {
+        out.extend(j.before.iter().map(|e| e.name.clone()));
+        out.push(j.offset_name.clone());
+    }
+    for t in &tree.tips {
+        out.extend(t.after.iter().map(|e| format!("{}@{}", e.name, t.name)));
+        out.extend(["tool_dx", "tool_dy", "tool_dz"].map(|n| format!("{n}@{}", t.name)));
+    }
+    out
+}
+
+/// The unknowns of `candidates` the poses identify, in candidate order: a rank-revealing QR
+/// (column pivoting) of the scaled Jacobian at `tree` keeps the columns whose pivot is above
+/// `1e-6` of the largest; the others are (nearly) combinations of the kept ones and stay at
+/// their values.
+pub fn identifiable(
+    tree: &Tree,
+    poses: &[TreePose],
+    candidates: &[String],
+) -> Result<Vec<String>, TreeFitError> {
+    let (_, mut j) = residuals(tree, poses, candidates, true)?;
+    let n = candidates.len();
+    let mut used = vec![false; n];
+    for c in 0..n {
+        let norm = j.column(c).norm();
+        if norm > 0.0 {
+            j.column_mut(c).scale_mut(1.0 / norm);
+            used[c] = true;
+        }
+    }
+    let qr = j.col_piv_qr();
+    let r = qr.r();
+    let mut order = DMatrix::from_fn(1, n, |_, c| c as f64);
+    qr.p().permute_columns(&mut order);
+    let d_max = (0..r.nrows().min(n))
+        .map(|k| r[(k, k)].abs())
+        .fold(0.0, f64::max);
+    let mut keep = vec![false; n];
+    for k in 0..r.nrows().min(n) {
+        let c = order[(0, k)] as usize;
+        if r[(k, k)].abs() > 1e-6 * d_max && used[c] {
+            keep[c] = true;
+        }
+    }
+    Ok(candidates
+        .iter()
+        .zip(keep)
+        .filter(|(_, k)| *k)
+        .map(|(c, _)| c.clone())
+        .collect())
+}

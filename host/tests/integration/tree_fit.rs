@@ -227,3 +227,88 @@ fn one_fit_over_a_dual_arm_tree_shares_the_torso() {
         torso.len()
     );
 }
+
+/// A pose file of a tree: the joints by name, `x<k>,y<k>,z<k>` per tip.
+fn pose_csv(tree: &Tree, poses: &[TreePose]) -> String {
+    let mut header = tree.joint_names();
+    for k in 1..=tree.tips.len() {
+        header.extend([format!("x{k}"), format!("y{k}"), format!("z{k}")]);
+    }
+    let mut text = header.join(",") + "\n";
+    for p in poses {
+        let mut cells: Vec<String> = p.q.iter().map(|v| format!("{v:e}")).collect();
+        for point in &p.points_mm {
+            cells.extend(point.unwrap().iter().map(|v| format!("{v:e}")));
+        }
+        text += &(cells.join(",") + "\n");
+    }
+    text
+}
+
+#[test]
+fn calibrate_takes_a_tree_model_and_its_pose_files() {
+    let mut rng = rand::rngs::StdRng::seed_from_u64(5253);
+    let nominal = nominal();
+    let mut truth = nominal.clone();
+    for u in unknowns(&nominal, &[0, 1]) {
+        let err = rng.gen_range(-0.3..0.3);
+        truth
+            .set_param(&u, nominal.param(&u).unwrap() + err)
+            .unwrap();
+    }
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    let (model, cal, val, out) = (
+        d.join("tree.toml"),
+        d.join("cal.csv"),
+        d.join("val.csv"),
+        d.join("fitted.toml"),
+    );
+    nominal.write_file(&model).unwrap();
+    std::fs::write(&cal, pose_csv(&truth, &poses(&truth, 300, &mut rng))).unwrap();
+    std::fs::write(&val, pose_csv(&truth, &poses(&truth, 150, &mut rng))).unwrap();
+    let s = |p: &std::path::Path| p.to_str().unwrap().to_string();
+    let run = crate::common::spawn::output(&[
+        "calibrate".to_string(),
+        "--model".into(),
+        s(&model),
+        "--poses".into(),
+        s(&cal),
+        "--validate".into(),
+        s(&val),
+        "--out".into(),
+        s(&out),
+    ]);
+    let stdout = String::from_utf8_lossy(&run.stdout);
+    assert!(
+        run.status.success(),
+        "{stdout}\n{}",
+        String::from_utf8_lossy(&run.stderr)
+    );
+    eprintln!("{stdout}");
+    let line = stdout
+        .lines()
+        .find(|l| l.starts_with("validation rms"))
+        .expect("a validation line");
+    let after: f64 = line
+        .split("-> ")
+        .nth(1)
+        .and_then(|v| v.trim_end_matches(" mm").parse().ok())
+        .expect("a number");
+    assert!(after <= 1.1 * NOISE_MM, "{line}");
+    // one unknown per torso parameter
+    assert_eq!(stdout.lines().filter(|l| l.starts_with("a_t1,")).count(), 1);
+    let fitted = Tree::from_file(&out).unwrap();
+    let d_t2 = fitted.param("d_t2").unwrap() - truth.param("d_t2").unwrap();
+    assert!(d_t2.abs() < 0.1, "d_t2 off by {d_t2} mm");
+    // a pose file with one point per pose for a tree of two tips is refused
+    std::fs::write(&cal, "t1,x,y,z\n0,0,0,0\n").unwrap();
+    let bad = crate::common::spawn::output(&[
+        "calibrate".to_string(),
+        "--model".into(),
+        s(&model),
+        "--poses".into(),
+        s(&cal),
+    ]);
+    assert_eq!(bad.status.code(), Some(2));
+}
