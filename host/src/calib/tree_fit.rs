@@ -179,7 +179,7 @@ pub fn fit_tree(
         let svd = j.svd(true, true);
         let smax = svd.singular_values.max();
         let (kmin, smin) = svd.singular_values.argmin();
-        if !(smax > 0.0) || smin < 1e-9 * smax {
+        if smax.is_nan() || smax <= 0.0 || smin < 1e-9 * smax {
             let v_t = svd.v_t.as_ref().ok_or(TreeFitError::Diverged)?;
             let worst = (0..n)
                 .max_by(|&a, &b| v_t[(kmin, a)].abs().total_cmp(&v_t[(kmin, b)].abs()))
@@ -255,11 +255,11 @@ pub fn identifiable(
     let (_, mut j) = residuals(tree, poses, candidates, true)?;
     let n = candidates.len();
     let mut used = vec![false; n];
-    for c in 0..n {
+    for (c, used) in used.iter_mut().enumerate() {
         let norm = j.column(c).norm();
         if norm > 0.0 {
             j.column_mut(c).scale_mut(1.0 / norm);
-            used[c] = true;
+            *used = true;
         }
     }
     let qr = j.col_piv_qr();
