@@ -290,10 +290,17 @@ fn one_tip_of_the_tree_is_the_chain_imported_alone() {
         assert_eq!(ka[2..], kb[2..], "{tip}: the arm's own masses");
     }
     // a tree given to a chain command is named as such
-    let poses = d.join("poses.csv");
-    std::fs::write(&poses, "q1,x,y,z\n0,0,0,0\n").unwrap();
-    let out = output(&["calibrate", "--model", s(&tree_path), "--poses", s(&poses)]);
-    assert!(!out.status.success());
+    let plan = d.join("plan.csv");
+    let out = output(&[
+        "plan",
+        "--model",
+        s(&tree_path),
+        "--n",
+        "5",
+        "--out",
+        s(&plan),
+    ]);
+    assert_eq!(out.status.code(), Some(2));
     let err = String::from_utf8_lossy(&out.stderr);
     assert!(err.contains("tree model"), "{err}");
 }
