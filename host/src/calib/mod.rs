@@ -66,6 +66,7 @@ pub mod report;
 pub mod samples;
 pub mod state;
 pub mod stats;
+pub mod tree_fit;
 pub mod unknown;
 
 pub use accumulator::position_errors;

@@ -149,6 +149,9 @@ pub fn run(args: Args) -> Result<(), CliError> {
     if let Some(samples) = &args.samples {
         return run_samples(&args, samples);
     }
+    if let Some(tree) = super::calibrate_tree::tree_model(&args.model)? {
+        return super::calibrate_tree::run(&args, tree);
+    }
     let poses = args
         .poses
         .as_deref()

@@ -8,12 +8,18 @@
 //! `--joints` (`.mcap` or rosbag2 directory; `--joint-topic`, `--joint-names`) is streamed:
 //! each message's row is written as it is read (all rows are gathered first only when the
 //! model's hysteresis needs the pose order).
+//!
+//! A tree model file (`[[tip]]` tables, docs/model-files.md "Tree models"): the pose file holds
+//! the joints of the whole tree, and each row gives `x<k>,y<k>,z<k>,phi<k>,theta<k>,psi<k>` for
+//! every tip k = 1.. in the file's tip order (the columns a tree's pose file measures the tips
+//! in).
 
 use std::fmt::Write as _;
 use std::path::PathBuf;
 
 use rigctl::io::pose_csv::read_poses;
-use rigctl::model::{ModelError, Tilt};
+use rigctl::model::tree_file::is_tree_text;
+use rigctl::model::{parse_set, ModelError, Tilt, Tree};
 
 use super::joint_log::JointLogArgs;
 use super::model_args::ModelArgs;
@@ -112,6 +118,17 @@ pub fn run(args: Args) -> Result<(), CliError> {
         .input("--joints", Some(&args.joints))
         .input("--model", args.model.model.as_deref())
         .check()?;
+    if let Some(path) = &args.model.model {
+        let text = rigctl::io::read::read_text_capped(path, rigctl::io::read::CAP_SMALL_TEXT)
+            .map_err(|source| ModelError::Read {
+                path: path.clone(),
+                source,
+            })?;
+        if is_tree_text(&text) {
+            let tree = Tree::from_toml_str(&text, &path.display().to_string())?;
+            return run_tree(&args, &tree);
+        }
+    }
     let model = args.model.choose()?;
     if args.tilt && !model.has_tilt() {
         return Err(ModelError::NoTiltData {
@@ -151,4 +168,65 @@ pub fn run(args: Args) -> Result<(), CliError> {
 /// The pose times when every pose has one (the pose order is then by `t`), else `None`.
 pub(crate) fn pose_times(file: &rigctl::io::pose_csv::PoseFile) -> Option<Vec<f64>> {
     file.poses.iter().map(|p| p.t_s).collect()
+}
+
+/// `fk` of a tree model: every tip's pose per row (see the module doc).
+fn run_tree(args: &Args, tree: &Tree) -> Result<(), CliError> {
+    if args.tilt || args.model.tool_mm.is_some() {
+        return Err(CliError::bad_input(
+            "a tree model has no tilting data and no --tool-mm (its tips' tool points are in \
+             its [[tip]] tables)",
+        ));
+    }
+    if args.joint_log.check_for(&args.joints)? {
+        return Err(CliError::bad_input(format!(
+            "{}: a tree model's fk reads pose files (CSV), not bags",
+            args.joints.display()
+        )));
+    }
+    let mut chains = tree.chains()?;
+    for set in &args.model.sets {
+        let (name, value) = parse_set(set)?;
+        let mut found = false;
+        for m in chains.iter_mut().filter(|m| m.param_index(name).is_some()) {
+            m.set_param(name, value)?;
+            found = true;
+        }
+        if !found {
+            return Err(CliError::bad_input(format!(
+                "--set {set}: no tip's chain has a parameter `{name}`"
+            )));
+        }
+    }
+    let paths: Vec<Vec<usize>> = (0..tree.tips.len()).map(|t| tree.path(t)).collect();
+    let spec = rigctl::io::pose_csv::PoseSpec {
+        n_joints: tree.n_joints(),
+        limits: tree.joint_limits(),
+        require_xyz: false,
+        joint_names: tree.joint_names(),
+        prismatic: tree.prismatic(),
+        units: args.pose.units,
+        marker: 0,
+        dialect: args.pose.dialect(),
+    };
+    let poses = read_poses(&args.joints, &spec)?;
+    let mut out = String::new();
+    let header: Vec<String> = (1..=tree.tips.len())
+        .map(|k| format!("x{k},y{k},z{k},phi{k},theta{k},psi{k}"))
+        .collect();
+    let _ = writeln!(out, "{}", header.join(","));
+    for (row, q) in poses.joints().iter().enumerate() {
+        for (k, (model, path)) in chains.iter().zip(&paths).enumerate() {
+            let qc: Vec<f64> = path.iter().map(|&j| q[j]).collect();
+            let mut cell = String::new();
+            fk_row(&mut cell, model, &qc, 0.0, Tilt::Off)
+                .map_err(|e| e.in_file(&args.joints).with_row(row + 1))?;
+            if k > 0 {
+                out.push(',');
+            }
+            out.push_str(cell.trim_end());
+        }
+        out.push('\n');
+    }
+    super::out::stdout_bytes(out.as_bytes())
 }

@@ -5,6 +5,7 @@ use rigctl::error::{Classify, ErrorKind};
 mod board_sim;
 mod calibrate;
 mod calibrate_text;
+mod calibrate_tree;
 mod compensate;
 mod diagnose;
 mod export;

@@ -4,12 +4,17 @@
 //! original is kept whole and only the chain's joint origins change
 //! (`rigctl::urdf::export`). What a URDF cannot hold is named on stderr; the joint origins
 //! before and after are printed on stdout.
+//!
+//! A tree model file (`[[tip]]` tables) becomes a new URDF with every joint once and a link per
+//! tip at its tool point (`rigctl::urdf::export_tree`); `--urdf` is for chains.
 
 use std::path::PathBuf;
 
 use rigctl::io::atomic::write_text_atomic;
 use rigctl::io::finite::TextFormat;
-use rigctl::urdf::{model_into_urdf, model_to_urdf, Origin, UrdfError};
+use rigctl::model::tree_file::is_tree_text;
+use rigctl::model::{ModelError, Tree};
+use rigctl::urdf::{model_into_urdf, model_to_urdf, tree_to_urdf, Origin, UrdfError};
 
 use super::model_args::ModelArgs;
 use super::out::{errln, outln};
@@ -45,8 +50,39 @@ pub fn run(args: Args) -> Result<(), CliError> {
         .input("--urdf", args.urdf.as_deref())
         .output("--out", Some(&args.out))
         .check()?;
+    let tree = match &args.model.model {
+        Some(path) => {
+            let text = rigctl::io::read::read_text_capped(path, rigctl::io::read::CAP_SMALL_TEXT)
+                .map_err(|source| ModelError::Read {
+                path: path.clone(),
+                source,
+            })?;
+            if is_tree_text(&text) {
+                Some(Tree::from_toml_str(&text, &path.display().to_string())?)
+            } else {
+                None
+            }
+        }
+        None => None,
+    };
+    let exported = match tree {
+        Some(tree) => {
+            if args.urdf.is_some() || args.model.tool_mm.is_some() || !args.model.sets.is_empty() {
+                return Err(CliError::bad_input(
+                    "a tree model is written as a new URDF: --urdf, --tool-mm and --set are for \
+                     chains",
+                ));
+            }
+            tree_to_urdf(&tree)?
+        }
+        None => chain_urdf(&args)?,
+    };
+    finish(&args, &exported)
+}
+
+fn chain_urdf(args: &Args) -> Result<rigctl::urdf::Exported, CliError> {
     let model = args.model.choose()?;
-    let exported = match &args.urdf {
+    Ok(match &args.urdf {
         None => model_to_urdf(&model),
         Some(path) => {
             let text = rigctl::io::read::read_text_capped(path, rigctl::io::read::CAP_URDF)
@@ -61,7 +97,10 @@ pub fn run(args: Args) -> Result<(), CliError> {
                 args.base_link.as_deref(),
             )?
         }
-    };
+    })
+}
+
+fn finish(args: &Args, exported: &rigctl::urdf::Exported) -> Result<(), CliError> {
     write_text_atomic(&args.out, TextFormat::Xml, &exported.text)?;
     for line in &exported.not_representable {
         errln!("rigctl model2urdf: not in the URDF: {line}");

@@ -60,6 +60,11 @@
 //! angles, and the direction of approach from the pose order), [`ik`] (inverse kinematics of
 //! the 5-DOF Katana on any model's FK).
 //!
+//! # Trees
+//! [`Tree`]: several tips from one root, every joint once (a parent index per joint, named
+//! tips); [`Tree::chain`] is one tip's chain as a [`Model`], [`Tree::from_chains`] joins chains
+//! at their shared joints; files in [`tree_file`].
+//!
 //! # Model files
 //! [`Model::from_toml_str`], [`Model::from_file`], [`Model::to_toml_string`],
 //! [`Model::write_file`]; the format is documented in [`toml_file`].
@@ -86,6 +91,9 @@ pub mod time_terms;
 pub mod toml_file;
 mod toml_write;
 pub mod transmission;
+mod tree;
+pub mod tree_file;
+mod tree_params;
 pub mod unknown;
 
 pub use chain::*;
@@ -96,6 +104,7 @@ pub use kinematics::*;
 pub use param::*;
 pub use presets::*;
 pub use tilt::{sign_1e9, tilt_from_moment};
+pub use tree::{Tip, Tree, TreeElem, TreeJoint, TreeMass, TREE_SHARED_PARAMS};
 
 /// Amplitude `A` and phase `phi` (deg) of the encoder harmonic `s sin(nq) + c cos(nq)` written
 /// as `A sin(n q + phi)` (FORMATS.md effect `encoder_harmonic:j<i>:h<n>`).

@@ -488,6 +488,14 @@ impl Model {
             file: source.to_string(),
             message,
         };
+        if super::tree_file::is_tree_text(text) {
+            return Err(file_err(
+                "a tree model ([[tip]] tables): this command takes one chain; `rigctl fk`, \
+                 `calibrate` and `model2urdf` take trees, `rigctl urdf2model --tree FILE --tip NAME` \
+                 writes one tip's chain"
+                    .into(),
+            ));
+        }
         let file: ModelFile = toml::from_str(text).map_err(|e| file_err(e.to_string()))?;
         build(file).map_err(|message| match locate(text, &message) {
             Some(line) => ModelError::File {

@@ -235,6 +235,45 @@ fn joint_names(model: &Model) -> Vec<String> {
     }
 }
 
+/// A movable joint of `model_to_urdf`: its child link and the joint element (axis `0 0 1`).
+pub(super) fn movable_joint_xml(
+    name: &str,
+    j: &crate::model::Joint,
+    parent: &str,
+    child: &str,
+    o: &Origin,
+) -> String {
+    let [lo, hi] = j.limits;
+    let (kind, limit) = if j.prismatic {
+        (
+            "prismatic",
+            format!(
+                "\n    <limit lower=\"{}\" upper=\"{}\" effort=\"0\" velocity=\"0\"/>",
+                num(lo * 1e-3),
+                num(hi * 1e-3)
+            ),
+        )
+    } else if lo <= -360.0 && hi >= 360.0 {
+        ("continuous", String::new())
+    } else {
+        (
+            "revolute",
+            format!(
+                "\n    <limit lower=\"{}\" upper=\"{}\" effort=\"0\" velocity=\"0\"/>",
+                num(lo.to_radians()),
+                num(hi.to_radians())
+            ),
+        )
+    };
+    format!(
+        "  <link name=\"{child}\"/>\n  <joint name=\"{}\" type=\"{kind}\">\n    <parent \
+         link=\"{parent}\"/>\n    <child link=\"{child}\"/>\n    {}\n    <axis xyz=\"0 0 \
+         1\"/>{limit}\n  </joint>\n",
+        xml_escape(name),
+        origin_xml(o)
+    )
+}
+
 /// The model as a new URDF (see the module doc).
 pub fn model_to_urdf(model: &Model) -> Exported {
     let scale = model.scale_factor();
@@ -253,35 +292,7 @@ pub fn model_to_urdf(model: &Model) -> Exported {
         let here = frames[j.elem];
         let o = origin_of(&prev.inverse().then(&here));
         let child = format!("link_{}", i + 1);
-        let [lo, hi] = j.limits;
-        let (kind, limit) = if j.prismatic {
-            (
-                "prismatic",
-                format!(
-                    "\n    <limit lower=\"{}\" upper=\"{}\" effort=\"0\" velocity=\"0\"/>",
-                    num(lo * 1e-3),
-                    num(hi * 1e-3)
-                ),
-            )
-        } else if lo <= -360.0 && hi >= 360.0 {
-            ("continuous", String::new())
-        } else {
-            (
-                "revolute",
-                format!(
-                    "\n    <limit lower=\"{}\" upper=\"{}\" effort=\"0\" velocity=\"0\"/>",
-                    num(lo.to_radians()),
-                    num(hi.to_radians())
-                ),
-            )
-        };
-        text.push_str(&format!(
-            "  <link name=\"{child}\"/>\n  <joint name=\"{}\" type=\"{kind}\">\n    <parent \
-             link=\"{parent}\"/>\n    <child link=\"{child}\"/>\n    {}\n    <axis xyz=\"0 0 \
-             1\"/>{limit}\n  </joint>\n",
-            xml_escape(&names[i]),
-            origin_xml(&o)
-        ));
+        text.push_str(&movable_joint_xml(&names[i], j, &parent, &child, &o));
         origins.push(OriginChange {
             joint: names[i].clone(),
             before: None,

@@ -217,7 +217,7 @@ impl Emitter<'_> {
 /// Imports the chain `opts.base_link` .. `opts.tip_link` of `urdf` (see the module doc for the
 /// structure and the parameter names).
 pub fn import_chain(urdf: &Urdf, opts: &ImportOptions) -> Result<Imported, UrdfError> {
-    import(urdf, opts, false)
+    import(urdf, opts, false, &[])
 }
 
 /// As [`import_chain`], and every movable joint of the chain carries, as one point mass in its
@@ -227,7 +227,17 @@ pub fn import_chain(urdf: &Urdf, opts: &ImportOptions) -> Result<Imported, UrdfE
 /// first movable joint are not carried. Used for gravity torques
 /// ([`crate::model::gravity::GravityModel::for_model`]).
 pub fn import_chain_with_masses(urdf: &Urdf, opts: &ImportOptions) -> Result<Imported, UrdfError> {
-    import(urdf, opts, true)
+    import(urdf, opts, true, &[])
+}
+
+/// As [`import_chain_with_masses`], and a rigid body also stops at the joints `stop` (a tree's
+/// other movable joints: each carries its own links).
+pub(super) fn import_chain_stopping_at(
+    urdf: &Urdf,
+    opts: &ImportOptions,
+    stop: &[&str],
+) -> Result<Imported, UrdfError> {
+    import(urdf, opts, true, stop)
 }
 
 /// The URDF's links by name for [`rigid_mass`]: inertials and child joints of every link, and
@@ -295,7 +305,12 @@ fn rigid_mass(tree: &Tree, urdf: &Urdf, link: &str) -> (f64, Vector3<f64>) {
     (mass_kg, com)
 }
 
-fn import(urdf: &Urdf, opts: &ImportOptions, masses: bool) -> Result<Imported, UrdfError> {
+fn import(
+    urdf: &Urdf,
+    opts: &ImportOptions,
+    masses: bool,
+    extra_stop: &[&str],
+) -> Result<Imported, UrdfError> {
     let chain = urdf.chain(opts.base_link, opts.tip_link)?;
     let base = match opts.base_link {
         Some(b) => b.to_string(),
@@ -319,6 +334,7 @@ fn import(urdf: &Urdf, opts: &ImportOptions, masses: bool) -> Result<Imported, U
         .iter()
         .filter(|j| j.joint_type != JointType::Fixed)
         .map(|j| j.name.as_str())
+        .chain(extra_stop.iter().copied())
         .collect();
     let tree = Tree::new(urdf, &movable);
     for j in &chain {

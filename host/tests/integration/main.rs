@@ -79,5 +79,7 @@ mod trace_hard;
 mod trace_independent;
 mod trace_photos;
 mod trace_scan;
+mod tree_fit;
 mod urdf_export;
 mod urdf_import;
+mod urdf_tree;
