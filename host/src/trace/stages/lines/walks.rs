@@ -2,10 +2,10 @@
 //! ([`duplicate_of`]); walks that continue each other, walked from two seeds that met, are
 //! joined ([`join_continuing`]).
 
-use super::super::band::{Walk, BAND_DEG, BAND_HALF_MM};
 use super::super::link::Gap;
-use super::super::plane::{dist, sub};
 use super::{abs_cos, arc, chord_dir, directions, unit, END_CHORD_MM};
+use crate::trace::band::{Walk, BAND_DEG, BAND_HALF_MM};
+use crate::trace::plane::{dist, sub};
 use std::collections::HashSet;
 
 /// A walk whose centres lie within this of another line's (running its way) for half its

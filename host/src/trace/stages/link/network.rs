@@ -8,6 +8,7 @@ use super::continuity::{candidates, continuity};
 use super::crossings::CROSS_TOUCH_MM;
 use super::end::{ends, End};
 use super::kinks::split_kinks;
+use super::strokes::Strokes;
 use super::{mean_from, relink, Gap};
 use crate::sheet::ReferencePath;
 use crate::trace::chain::{polyline_length, PieceMm, Stroke};
@@ -33,18 +34,6 @@ pub(in crate::trace) struct Network {
     pub(super) points: Grid<(usize, usize)>,
     pub(super) max_gap_mm: f64,
     pub(super) strokes: Strokes,
-}
-
-/// What drew the strokes a [`Network`] links.
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
-pub(in crate::trace) enum Strokes {
-    /// The rig's pencil, one path: an end is read to its last point and a bridge starts there
-    /// (the bridge refit gets the graphite next to the skip); the written centres are smoothed.
-    OnePath,
-    /// A plotter's passes (`--paths`): backlash saws and passes cross near the ends, so the last
-    /// [`END_SKIP_MM`] of an end are left out of its reading and bridged over; centres as
-    /// tracked.
-    Passes,
 }
 
 impl Network {
@@ -89,10 +78,16 @@ impl Network {
             partner[c.b] = Some(c.a);
         }
         let first = walk_chains(&pieces, &piece_ends, &partner);
-        // The rig's one path only: a plotter's lines meet at corners and crossings, where a
-        // chain's end read through its bridges would turn onto the crossing line.
-        if strokes == Strokes::OnePath {
-            relink::relink(&first, &pieces, &piece_ends, &mut partner, max_gap_mm);
+        // The rig's one path only ([`Strokes::relink`]).
+        if strokes.relink {
+            relink::relink(
+                &first,
+                &pieces,
+                &piece_ends,
+                &mut partner,
+                max_gap_mm,
+                strokes,
+            );
         }
         let chains = walk_chains(&pieces, &piece_ends, &partner);
         let built: Vec<(Stroke, Vec<Gap>, Vec<bool>)> = chains

@@ -4,10 +4,10 @@
 //! line's: it is cut off, and the end is then carried to the other line's centreline like any
 //! end that stops at a line across ([`super::meet::meet_lines_across`]).
 
-use super::super::band::{arc_of, Walk, BAND_HALF_MM};
-use super::super::plane::{dist, sub, unit, Grid};
 use super::meet::{extend_to, STEP_OFF_MM};
 use super::{abs_cos, arc, chord_dir_on, ACROSS_DEG, DIR_HALF_MM};
+use crate::trace::band::{arc_of, Walk, BAND_HALF_MM};
+use crate::trace::plane::{dist, sub, unit, Grid};
 
 /// At most this much of a line's end is another line's, mm.
 const OVERRUN_MAX_MM: f64 = 20.0;

@@ -2,11 +2,11 @@
 //! band line ([`judge_ends`]), and whether a mark beyond a pass's free end counts against the
 //! line ([`counts`]).
 
-use super::super::band::{Cloud, Source, BAND_DEG};
 use super::super::link::{LeftOut, LeftOutKind};
-use super::super::paths::DrawnPath;
-use super::super::plane::{dist, sub};
 use super::{abs_cos, arc, directions, DrawnLine, Loose, ACROSS_DEG, ALONGSIDE_MM};
+use crate::trace::band::{Cloud, Source, BAND_DEG};
+use crate::trace::paths::DrawnPath;
+use crate::trace::plane::{dist, sub};
 use std::collections::HashSet;
 
 /// What may continue an open band line at its ends: a path (its points not in the line's band,

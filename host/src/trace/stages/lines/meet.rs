@@ -1,11 +1,11 @@
 //! Lines that end on a line across them, or meet another at a corner, carried on to its
 //! centreline or to the corner ([`meet_lines_across`]).
 
-use super::super::band::{Cloud, Walk, BAND_HALF_MM};
 use super::super::link::Gap;
-use super::super::plane::{dist, sub};
 use super::LINE_SPACING_MM;
 use super::{abs_cos, arc, chord_dir, chord_dir_on, ACROSS_DEG, DIR_HALF_MM, END_CHORD_MM};
+use crate::trace::band::{Cloud, Walk, BAND_HALF_MM};
+use crate::trace::plane::{dist, sub};
 
 /// A line ends on a line across it whose centreline lies within this ahead of its end, mm.
 const MEET_MM: f64 = BAND_HALF_MM + 1.5;

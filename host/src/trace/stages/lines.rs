@@ -1,7 +1,7 @@
 //! Drawn lines of a drawing (`rigctl trace --paths DIR`): a plotter may draw a line several
 //! times, each pass beside the last and crossing it, and the tracker breaks each pass where it
 //! loses it. A drawn line is followed through the band of ink all its passes leave
-//! ([`super::band`]): from the longest path not yet in a line, through every written point
+//! ([`crate::trace::band`]): from the longest path not yet in a line, through every written point
 //! running its way, bridging gaps up to `--max-gap-mm` (a longer one, up to
 //! [`band::reach_mm`], is missing). The paths with [`PASS_MM`] (or half their length) in its
 //! band are its passes; its centreline is the band's (written as a file of its own). A path
@@ -20,11 +20,11 @@
 //! (ends carried on to a line across or a corner), `ends.rs` (what may continue a line); here
 //! the lines put together from them ([`lines`]).
 
-use super::band::{self, Source, Walk, BAND_HALF_MM};
-use super::chain::resample;
 use super::link::{Gap, LeftOut, MIN_MARK_MM};
-use super::paths::DrawnPath;
-use super::plane::{self, dist, sub};
+use crate::trace::band::{self, Source, Walk, BAND_HALF_MM};
+use crate::trace::chain::resample;
+use crate::trace::paths::DrawnPath;
+use crate::trace::plane::{self, dist, sub};
 use cloud::cloud;
 use ends::{counts, judge_ends};
 use meet::meet_lines_across;

@@ -4,10 +4,10 @@
 
 mod identify;
 
-use super::paper::PaperMap;
-use super::plane::dist;
-use super::raster::{components, CoarseMap};
-use super::TraceError;
+use crate::trace::paper::PaperMap;
+use crate::trace::plane::dist;
+use crate::trace::raster::{components, CoarseMap};
+use crate::trace::TraceError;
 use image::RgbImage;
 
 /// A block is "black" when its darkest red value is below this fraction of the paper level

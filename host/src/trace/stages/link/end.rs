@@ -3,14 +3,14 @@
 //! its last [`TANGENT_SPAN_MM`]; a short end's own tangent where its last millimetre holds no
 //! hook), and the point an end's osculating arc reaches when carried over a gap.
 
-use super::Strokes;
+use super::strokes::Strokes;
 use crate::trace::chain::{polyline_length, PieceMm};
 use crate::trace::plane::{dist, norm, sub};
 
 /// Length of an end used for its tangent and curvature, mm.
 const END_SPAN_MM: f64 = 8.0;
 /// The part of an end left out of its reading and bridged over where it may be pulled aside:
-/// next to a crossing the path is cut at, and on a plotter's passes ([`Strokes::Passes`]), mm.
+/// next to a crossing the path is cut at, and on a plotter's passes ([`Strokes::PASSES`]), mm.
 pub(super) const END_SKIP_MM: f64 = 1.5;
 /// An end's curvature is read only from a span of at least this (shorter ones cannot tell it
 /// from the centreline's noise), mm, and is at most this, 1/mm.
@@ -129,7 +129,7 @@ fn three_point(pts: &[[f64; 2]], from: f64, to: f64) -> Option<([f64; 2], f64, f
 /// [`MAX_K`] (a crest within the span), the tangent is read again from the circle through the
 /// last [`TANGENT_SPAN_MM`] before the anchor, unclamped: the span's chord, turned by the
 /// clamped curvature, would point the end tens of degrees off across the crest. (A plotter's
-/// passes, [`Strokes::Passes`], saw at their ends: the last millimetres would turn it.)
+/// passes, [`Strokes::PASSES`], saw at their ends: the last millimetres would turn it.)
 pub(super) fn end_with(pts: &[[f64; 2]], skip: f64, strokes: Strokes) -> Option<End> {
     let len = polyline_length(pts, false);
     if len <= 0.0 {
@@ -148,7 +148,7 @@ pub(super) fn end_with(pts: &[[f64; 2]], skip: f64, strokes: Strokes) -> Option<
         0.0
     };
     // The chord's direction is the tangent at its middle; turn it on to the anchor and the end.
-    let near = (strokes == Strokes::OnePath && span >= K_SPAN_MM && k_raw.abs() > MAX_K)
+    let near = (strokes.crest_tangent && span >= K_SPAN_MM && k_raw.abs() > MAX_K)
         .then(|| three_point(pts, skip, skip + TANGENT_SPAN_MM))
         .flatten();
     let ta = match near {
@@ -156,7 +156,7 @@ pub(super) fn end_with(pts: &[[f64; 2]], skip: f64, strokes: Strokes) -> Option<
         None => rot(chord, k * 0.5 * n),
     };
     let t = rot(ta, k * dist(q1, p0));
-    let t_own = (strokes == Strokes::OnePath && span < K_SPAN_MM)
+    let t_own = (strokes.own_short_tangent && span < K_SPAN_MM)
         .then(|| own_tangent(pts, skip, span, ta, k_raw))
         .flatten();
     Some(End {
@@ -223,16 +223,13 @@ pub(super) fn with_curvature(e: &End, k: f64) -> End {
     }
 }
 
-/// Piece ends, read as `strokes` are (on a plotter's passes from [`END_SKIP_MM`] back); `None`
+/// Piece ends, read as `strokes` are (from [`Strokes::end_skip_mm`] back); `None`
 /// for closed pieces.
 pub(super) fn ends(piece: &PieceMm, strokes: Strokes) -> Option<[End; 2]> {
     if piece.closed || piece.pts.len() < 2 {
         return None;
     }
-    let skip = match strokes {
-        Strokes::OnePath => 0.0,
-        Strokes::Passes => END_SKIP_MM,
-    };
+    let skip = strokes.end_skip_mm;
     let tail = end_with(&piece.pts, skip, strokes)?;
     let rev: Vec<[f64; 2]> = piece.pts.iter().rev().copied().collect();
     let head = end_with(&rev, skip, strokes)?;

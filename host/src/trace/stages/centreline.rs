@@ -4,10 +4,10 @@
 //! stroke's mass per unit length falls to half, then pulled back by half the stroke width (a
 //! round pencil tip leaves a round cap). Work is confined to windows around the stroke.
 
-use super::ink::InkModel;
-use super::paper::PaperMap;
-use super::plane::dist;
-use super::raster::CoarseMap;
+use crate::trace::ink::InkModel;
+use crate::trace::paper::PaperMap;
+use crate::trace::plane::dist;
+use crate::trace::raster::CoarseMap;
 use image::RgbImage;
 use indicatif::ProgressBar;
 use own_track::{Retrace, Verdict};
@@ -130,7 +130,7 @@ pub(crate) fn track_all(
     pieces.into_iter().flatten().collect()
 }
 
-pub(super) struct Tracker<'a> {
+pub(in crate::trace) struct Tracker<'a> {
     img: &'a RgbImage,
     ink: &'a InkModel,
     paper: &'a PaperMap,

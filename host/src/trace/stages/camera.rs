@@ -14,7 +14,7 @@
 //! holds the centre near the image centre where little determines it (standard deviation a
 //! quarter of the half diagonal, against a mark located to [`MARK_SIGMA_PX`]).
 
-use super::Homography;
+use crate::trace::Homography;
 use nalgebra::{Matrix3, SMatrix, SVector};
 
 /// Number of parameters: eight of the homography (h22 = 1), k1, k2, the distortion centre.

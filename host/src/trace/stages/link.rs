@@ -5,7 +5,7 @@
 //!
 //! Open pieces are first cut where they turn sharply (a corner, or the tracker turning onto a
 //! stroke that crosses the path). Every end of an open piece gets its outward tangent and
-//! curvature from its last 8 mm (on a plotter's passes, [`Strokes::Passes`], from the 6.5 mm
+//! curvature from its last 8 mm (on a plotter's passes, [`Strokes::PASSES`], from the 6.5 mm
 //! before its last 1.5 mm); on the rig's one path, where a crest within them bends it harder
 //! than the curvature is clamped to, its tangent from its last 3 mm. A link
 //! between two ends is admissible when each end's arc, extrapolated over the gap, lands on the
@@ -23,7 +23,7 @@
 //! between two skips gets the bend of the stroke it is linked to) and links what it then
 //! admits. Gaps up to `max_gap_mm` are bridged: a cubic
 //! Hermite curve through both ends' positions and tangents as a first guess, then refitted
-//! from the written points on both sides ([`super::bridge_fit`]).
+//! from the written points on both sides ([`crate::trace::bridge_fit`]).
 //!
 //! The longest chain is the drawn path. What is left out is listed: specks (shorter than
 //! [`MIN_MARK_MM`]), marks, and marks that could be part of the path: a link from one of the
@@ -48,14 +48,16 @@ mod kinks;
 mod network;
 mod relink;
 mod runs;
+mod strokes;
 #[cfg(test)]
 mod tests;
 
-pub(super) use network::{Network, Strokes};
+pub(in crate::trace) use network::Network;
+pub(in crate::trace) use strokes::Strokes;
 
-use super::chain::{PieceMm, Stroke};
-use super::plane::dist;
 use crate::sheet::ReferencePath;
+use crate::trace::chain::{PieceMm, Stroke};
+use crate::trace::plane::dist;
 
 /// Marks shorter than this are specks (dust, grain), mm.
 pub const MIN_MARK_MM: f64 = 5.0;
@@ -152,7 +154,7 @@ pub(crate) fn link(
     max_gap_mm: f64,
     hint: Option<ReferencePath>,
 ) -> Option<Linking> {
-    let net = Network::build(pieces, max_gap_mm, Strokes::OnePath)?;
+    let net = Network::build(pieces, max_gap_mm, Strokes::ONE_PATH)?;
     let main = net.choose_main(hint)?;
     let judged = net.judge(main);
     // Another run crossing the path is named as such, whatever its length.
@@ -210,7 +212,7 @@ fn mean_from(pts: &[[f64; 2]], h: ReferencePath) -> f64 {
 
 /// A fixed order: a closed path counter-clockwise from its point at the smallest polar angle
 /// about its centroid; an open path from its end with the smaller x (then y).
-pub(super) fn orient(mut s: Stroke) -> Stroke {
+pub(in crate::trace) fn orient(mut s: Stroke) -> Stroke {
     let pts = &mut s.points_mm;
     if pts.len() < 2 {
         return s;

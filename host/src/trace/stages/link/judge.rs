@@ -6,7 +6,7 @@ use super::bridge::bridge;
 use super::continuity::continuity;
 use super::crossings::{cut_crossings, CROSS_TOUCH_MM};
 use super::end::End;
-use super::network::{Network, Strokes};
+use super::network::Network;
 use super::{orient, Gap, LeftOut, LeftOutKind, MIN_MARK_MM};
 use crate::trace::chain::Stroke;
 use crate::trace::plane::{dist, norm, sub};
@@ -36,7 +36,7 @@ impl Judged {
 
 impl Network {
     /// Chain `main` as a drawn line: bridged across the marks that touch it, its bridges
-    /// refitted, its written centres smoothed along it on one path ([`Strokes::OnePath`]; the
+    /// refitted, its written centres smoothed along it on one path ([`super::Strokes::smooth_centres`]; the
     /// lines of `--paths` are smoothed across the band of their passes instead), its free ends
     /// and the gaps beyond them that are too long to bridge.
     pub(in crate::trace) fn judge(&self, main: usize) -> Judged {
@@ -59,7 +59,7 @@ impl Network {
         let (path, mask) =
             cut_crossings(path, mask, &[touching.as_slice()], &mut gaps, self.strokes);
         let (points_mm, mask, bridged_mm) = bridge_fit::refine(&path.points_mm, &mask, path.closed);
-        let points_mm = if matches!(self.strokes, Strokes::OnePath) {
+        let points_mm = if self.strokes.smooth_centres {
             smooth::smooth_written(&points_mm, &mask, path.closed)
         } else {
             points_mm

@@ -3,7 +3,7 @@
 
 use super::bridge::bridge;
 use super::end::{end_with, END_SKIP_MM};
-use super::network::Strokes;
+use super::strokes::Strokes;
 use super::Gap;
 use crate::trace::chain::{polyline_length, Stroke};
 use crate::trace::plane::dist;

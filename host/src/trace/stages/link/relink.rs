@@ -7,7 +7,8 @@
 use super::bridge::build;
 use super::continuity::{candidates, continuity};
 use super::end::{ends, End};
-use super::network::{Chain, Strokes};
+use super::network::Chain;
+use super::strokes::Strokes;
 use crate::trace::chain::{polyline_length, PieceMm};
 use crate::trace::plane::dist;
 
@@ -31,6 +32,7 @@ pub(super) fn relink(
     piece_ends: &[Option<[End; 2]>],
     partner: &mut [Option<usize>],
     max_gap_mm: f64,
+    strokes: Strokes,
 ) {
     // Per piece: the re-read ends of the chain it ends, at its free end indices; `None` where
     // the piece ends no open chain of two pieces or more.
@@ -48,13 +50,13 @@ pub(super) fn relink(
         let piece_end = |k: usize| piece_ends[k / 2].map(|e| e[k % 2]);
         let mut read = [piece_end(head), piece_end(tail)];
         if c.order.len() >= 2 {
-            let (stroke, ..) = build(c, pieces, piece_ends, Strokes::OnePath);
+            let (stroke, ..) = build(c, pieces, piece_ends, strokes);
             chain_len[ci] = stroke.length_mm();
             let whole = PieceMm {
                 pts: stroke.points_mm,
                 closed: false,
             };
-            if let Some([h, t]) = ends(&whole, Strokes::OnePath) {
+            if let Some([h, t]) = ends(&whole, strokes) {
                 read = [Some(h), Some(t)];
                 any = true;
             }

@@ -1,10 +1,10 @@
 //! The written points a band is followed through: every point of every path and of the strays
 //! with its direction over a zigzag pass's teeth, none where the path turns a corner.
 
-use super::super::band::{Cloud, Dot, Source};
-use super::super::paths::DrawnPath;
-use super::super::plane::sub;
 use super::{arc, unit};
+use crate::trace::band::{Cloud, Dot, Source};
+use crate::trace::paths::DrawnPath;
+use crate::trace::plane::sub;
 
 /// Marks shorter than this are not followed (dust), mm.
 const MIN_DOT_MARK_MM: f64 = 1.0;

@@ -1,16 +1,16 @@
 //! The whole-image passes (the local paper level and the coarse map of darkest red values),
 //! computed band by band: a band is a run of image rows that holds whole blocks of both maps,
 //! so bands are independent. They run on several threads over a decoded image, or on a worker
-//! thread while a PNG is still being decoded ([`super::load`]). Every band's result depends on
+//! thread while a PNG is still being decoded ([`crate::trace::load`]). Every band's result depends on
 //! its rows alone and the bands are put together in order, so the maps are the same whatever
 //! the number of threads.
 
-use super::paper::PaperMap;
-use super::raster::CoarseMap;
-use super::tone::Tone;
+use crate::trace::paper::PaperMap;
+use crate::trace::raster::CoarseMap;
+use crate::trace::tone::Tone;
 use image::RgbImage;
 
-/// The whole-image maps of one image, ready for [`super::trace_prepared`].
+/// The whole-image maps of one image, ready for [`crate::trace::trace_prepared`].
 #[derive(Debug, Clone)]
 pub struct Prepared {
     pub(crate) paper: PaperMap,
@@ -18,7 +18,7 @@ pub struct Prepared {
     /// Width and height of the image the maps were built from, pixels.
     size: [usize; 2],
     /// The tone curve the image was linearised through while it was read (the file said so),
-    /// or [`Tone::assumed`] (left to [`super::trace_prepared`] to measure).
+    /// or [`Tone::assumed`] (left to [`crate::trace::trace_prepared`] to measure).
     pub(crate) tone: Tone,
 }
 

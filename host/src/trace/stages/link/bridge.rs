@@ -4,7 +4,8 @@
 //! ([`build`]).
 
 use super::end::{end_with, point_back, End};
-use super::network::{Chain, Strokes};
+use super::network::Chain;
+use super::strokes::Strokes;
 use super::Gap;
 use crate::trace::chain::{polyline_length, PieceMm, Stroke};
 use crate::trace::plane::dist;

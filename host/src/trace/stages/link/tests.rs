@@ -52,7 +52,7 @@ fn line(from: [f64; 2], dir_deg: f64, len: f64) -> Vec<[f64; 2]> {
 
 /// The end at the last point of `v`, read as on the rig's one path (to the last point).
 fn end_of(v: &[[f64; 2]]) -> Option<End> {
-    end_with(v, 0.0, Strokes::OnePath)
+    end_with(v, 0.0, Strokes::ONE_PATH)
 }
 
 /// The end at the first point of `v`.
@@ -181,7 +181,7 @@ fn a_skip_on_a_wave_is_bridged_from_the_ends_themselves() {
         }
         let one = linked_with_one_skip(&parts, 5.5);
         one_mm += worst_near(&one.path.points_mm, &truth, centre, 5.0) / rounds as f64;
-        let net = Network::build(&parts, 10.0, Strokes::Passes).expect("network");
+        let net = Network::build(&parts, 10.0, Strokes::PASSES).expect("network");
         let main = net.choose_main(None).expect("a chain");
         passes_mm +=
             worst_near(&net.judge(main).path.points_mm, &truth, centre, 5.0) / rounds as f64;
