@@ -46,6 +46,7 @@ mod end;
 mod judge;
 mod kinks;
 mod network;
+mod params;
 mod relink;
 mod runs;
 mod strokes;
@@ -58,9 +59,11 @@ pub(in crate::trace) use strokes::Strokes;
 use crate::sheet::ReferencePath;
 use crate::trace::chain::{PieceMm, Stroke};
 use crate::trace::plane::dist;
+use params::LINK;
 
-/// Marks shorter than this are specks (dust, grain), mm.
-pub const MIN_MARK_MM: f64 = 5.0;
+/// Marks shorter than this are specks (dust, grain), mm: `LINK.min_mark_mm`
+/// ([`params::LinkParams`]) by the name the rest of `trace` and the tests read.
+pub const MIN_MARK_MM: f64 = LINK.min_mark_mm;
 
 /// A gap between two linked pieces of the drawn path.
 #[derive(Debug, Clone, PartialEq)]

@@ -5,13 +5,11 @@
 
 use super::end::{end_with, point_back, End};
 use super::network::Chain;
+use super::params::LINK;
 use super::strokes::Strokes;
 use super::Gap;
 use crate::trace::chain::{polyline_length, PieceMm, Stroke};
 use crate::trace::plane::dist;
-
-/// Spacing of bridge points, mm.
-const BRIDGE_STEP_MM: f64 = 0.2;
 
 /// Cubic Hermite bridge from end `a` to end `b` (inner points only), and its length.
 pub(super) fn bridge(a: &End, b: &End) -> (Vec<[f64; 2]>, f64) {
@@ -19,7 +17,7 @@ pub(super) fn bridge(a: &End, b: &End) -> (Vec<[f64; 2]>, f64) {
 }
 
 /// Cubic Hermite curve from `pa` (tangent `ta`) to `pb` (arriving along `tb`): its inner points
-/// every [`BRIDGE_STEP_MM`] and its length.
+/// every `LINK.bridge_step_mm` and its length.
 fn hermite(pa: [f64; 2], ta: [f64; 2], pb: [f64; 2], tb: [f64; 2]) -> (Vec<[f64; 2]>, f64) {
     let a = End {
         p: pa,
@@ -52,7 +50,7 @@ fn hermite(pa: [f64; 2], ta: [f64; 2], pb: [f64; 2], tb: [f64; 2]) -> (Vec<[f64;
     };
     let fine: Vec<[f64; 2]> = (0..=64).map(|i| at(i as f64 / 64.0)).collect();
     let len = polyline_length(&fine, false);
-    let n = (len / BRIDGE_STEP_MM).ceil().max(1.0) as usize;
+    let n = (len / LINK.bridge_step_mm).ceil().max(1.0) as usize;
     let inner = (1..n).map(|i| at(i as f64 / n as f64)).collect();
     (inner, len)
 }

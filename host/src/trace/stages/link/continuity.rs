@@ -3,14 +3,9 @@
 //! miss on a tight crest, the path bends one way through the gap and each end with it
 //! ([`bends_through`]); the candidate links within reach ([`candidates`]).
 
-use super::end::{arc_point, k_noise, reads_own_bend, rot, with_curvature, End, K_SPAN_MM, MAX_K};
+use super::end::{arc_point, k_noise, reads_own_bend, rot, with_curvature, End};
+use super::params::LINK;
 use crate::trace::plane::dist;
-
-/// Where the ends' arcs miss each other, the mean curvature a link may bend by from the middle
-/// of one end's span to the other's (a pencil crest of 3 mm radius), 1/mm, and the least share
-/// of the turn each end takes from the chord between them ([`bends_through`]).
-const MAX_JOINT_K: f64 = 0.35;
-const JOINT_SHARE: f64 = 0.25;
 
 /// A candidate link between end `a` and end `b` (end index = 2 * piece + side; side 0 head,
 /// 1 tail).
@@ -54,7 +49,8 @@ pub(super) fn continuity(a: &End, b: &End, reach: f64) -> Option<f64> {
             let k = if own.is_empty() {
                 0.0
             } else {
-                (own.iter().sum::<f64>() / own.len() as f64).clamp(-MAX_K, MAX_K)
+                (own.iter().sum::<f64>() / own.len() as f64)
+                    .clamp(-LINK.max_k_per_mm, LINK.max_k_per_mm)
             };
             bent_a = with_curvature(a, k);
             bent_b = with_curvature(b, -k);
@@ -101,8 +97,8 @@ pub(super) fn continuity(a: &End, b: &End, reach: f64) -> Option<f64> {
 
 /// Two ends whose arcs miss each other across a gap of `g` mm (unit `chord` from `a` to `b`)
 /// continue each other when the path can bend one way through it, as at a crest: the chord
-/// splits the turn from `a`'s direction into `b`'s, each side taking at least [`JOINT_SHARE`] of
-/// it in the same sense, the turn is at most [`MAX_JOINT_K`] times the length from the middle of
+/// splits the turn from `a`'s direction into `b`'s, each side taking at least `LINK.joint_share` of
+/// it in the same sense, the turn is at most `LINK.max_joint_k_per_mm` times the length from the middle of
 /// one end's span to the other's, and each end bends with it. A stroke crossing the path meets
 /// it with the turn on one side only. `None` when not; else how far the chord's split is from
 /// even, rad.
@@ -114,8 +110,8 @@ pub(super) fn bends_through(a: &End, b: &End, chord: [f64; 2], g: f64) -> Option
     let turn = alpha + beta;
     let len = a.mid_span() + g + b.mid_span();
     // Each side's share is read through its own end's tangent.
-    let share = JOINT_SHARE * turn.abs();
-    let ok = turn.abs() <= MAX_JOINT_K * len
+    let share = LINK.joint_share * turn.abs();
+    let ok = turn.abs() <= LINK.max_joint_k_per_mm * len
         && alpha * turn > 0.0
         && beta * turn > 0.0
         && alpha.abs() >= share - a.sigma
@@ -127,10 +123,14 @@ pub(super) fn bends_through(a: &End, b: &End, chord: [f64; 2], g: f64) -> Option
     let bends_too = |e: &End, k_out: f64| {
         // (curvature, span it was read over, what it must reach)
         let reads = if e.k_read() {
-            let need = k_out.abs().min(MAX_K);
+            let need = k_out.abs().min(LINK.max_k_per_mm);
             [
                 (e.k, e.span, need),
-                (e.k_near.clamp(-MAX_K, MAX_K), K_SPAN_MM, need),
+                (
+                    e.k_near.clamp(-LINK.max_k_per_mm, LINK.max_k_per_mm),
+                    LINK.k_span_mm,
+                    need,
+                ),
             ]
         } else {
             [(e.k_raw, e.span, k_out.abs()); 2]

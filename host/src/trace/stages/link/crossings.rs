@@ -2,22 +2,17 @@
 //! is replaced by a bridge between the undisturbed sides ([`cut_crossings`]).
 
 use super::bridge::bridge;
-use super::end::{end_with, END_SKIP_MM};
+use super::end::end_with;
+use super::params::LINK;
 use super::strokes::Strokes;
 use super::Gap;
 use crate::trace::chain::{polyline_length, Stroke};
 use crate::trace::plane::dist;
 
-/// A mark ending this close to the path touches it; the path is bridged over this radius
-/// around the place, mm.
-pub(super) const CROSS_TOUCH_MM: f64 = 1.5;
-const CROSS_CUT_MM: f64 = 3.0;
-const CROSS_MAX_MM: f64 = 15.0;
-
 /// Where another mark touches the path (a stroke crossing it, whether the tracker cut it or the
-/// path there), the path's centroids were pulled towards it: the path within [`CROSS_CUT_MM`]
-/// of every place where another mark comes within [`CROSS_TOUCH_MM`] is replaced by a bridge
-/// between the undisturbed sides (a stretch longer than [`CROSS_MAX_MM`], a mark running along
+/// path there), the path's centroids were pulled towards it: the path within `LINK.cross_cut_mm`
+/// of every place where another mark comes within `LINK.cross_touch_mm` is replaced by a bridge
+/// between the undisturbed sides (a stretch longer than `LINK.cross_max_mm`, a mark running along
 /// the path, is kept).
 pub(super) fn cut_crossings(
     path: Stroke,
@@ -31,7 +26,7 @@ pub(super) fn cut_crossings(
     if n < 8 {
         return (path, mask);
     }
-    let cell = CROSS_CUT_MM;
+    let cell = LINK.cross_cut_mm;
     let key = |p: [f64; 2]| ((p[0] / cell).floor() as i64, (p[1] / cell).floor() as i64);
     let mut grid: std::collections::HashMap<(i64, i64), Vec<usize>> = Default::default();
     for (i, p) in pts.iter().enumerate() {
@@ -46,7 +41,7 @@ pub(super) fn cut_crossings(
                 for dy in -1..=1 {
                     for &i in grid.get(&(kx + dx, ky + dy)).into_iter().flatten() {
                         let d = dist(pts[i], *q);
-                        if d <= CROSS_TOUCH_MM && best.is_none_or(|(_, bd)| d < bd) {
+                        if d <= LINK.cross_touch_mm && best.is_none_or(|(_, bd)| d < bd) {
                             best = Some((i, d));
                         }
                     }
@@ -58,7 +53,7 @@ pub(super) fn cut_crossings(
             for dx in -2..=2 {
                 for dy in -2..=2 {
                     for &k in grid.get(&(kx + dx, ky + dy)).into_iter().flatten() {
-                        if dist(pts[k], c) <= CROSS_CUT_MM {
+                        if dist(pts[k], c) <= LINK.cross_cut_mm {
                             cut[k] = true;
                         }
                     }
@@ -77,7 +72,7 @@ pub(super) fn cut_crossings(
         while j + 1 < n && cut[j + 1] {
             j += 1;
         }
-        if polyline_length(&pts[i..=j], false) > CROSS_MAX_MM {
+        if polyline_length(&pts[i..=j], false) > LINK.cross_max_mm {
             cut[i..=j].iter_mut().for_each(|c| *c = false);
         }
         i = j + 1;
@@ -123,8 +118,8 @@ pub(super) fn cut_crossings(
             pts[j + 1..].iter().rev().copied().collect()
         };
         if let (Some(a), Some(b), false) = (
-            end_with(&out, END_SKIP_MM, strokes),
-            end_with(&after, END_SKIP_MM, strokes),
+            end_with(&out, LINK.pulled_end_mm, strokes),
+            end_with(&after, LINK.pulled_end_mm, strokes),
             after.is_empty(),
         ) {
             let (inner, len) = bridge(&a, &b);

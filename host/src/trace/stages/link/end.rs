@@ -1,30 +1,12 @@
 //! The ends of open pieces: where each leaves off, its outward tangent and curvature read from
-//! the circle through three points of its last [`END_SPAN_MM`] (on a crest the tangent again from
-//! its last [`TANGENT_SPAN_MM`]; a short end's own tangent where its last millimetre holds no
+//! the circle through three points of its last `LINK.end_span_mm` (on a crest the tangent again from
+//! its last `LINK.tangent_span_mm`; a short end's own tangent where its last millimetre holds no
 //! hook), and the point an end's osculating arc reaches when carried over a gap.
 
+use super::params::LINK;
 use super::strokes::Strokes;
 use crate::trace::chain::{polyline_length, PieceMm};
 use crate::trace::plane::{dist, norm, sub};
-
-/// Length of an end used for its tangent and curvature, mm.
-const END_SPAN_MM: f64 = 8.0;
-/// The part of an end left out of its reading and bridged over where it may be pulled aside:
-/// next to a crossing the path is cut at, and on a plotter's passes ([`Strokes::PASSES`]), mm.
-pub(super) const END_SKIP_MM: f64 = 1.5;
-/// An end's curvature is read only from a span of at least this (shorter ones cannot tell it
-/// from the centreline's noise), mm, and is at most this, 1/mm.
-pub(super) const K_SPAN_MM: f64 = 5.0;
-pub(super) const MAX_K: f64 = 0.1;
-/// Length of an end a crest's tangent is read over, mm: short against a crest of 3 mm radius,
-/// long enough that the centres' scatter turns it by a few degrees at most.
-const TANGENT_SPAN_MM: f64 = 3.0;
-/// A short end's last chord, mm, and how far it may turn off its span's circle, deg, for the
-/// span's own tangent to hold (a hook turns it).
-const HOOK_CHORD_MM: f64 = 1.0;
-const HOOK_DEG: f64 = 8.0;
-/// Scatter of a centre about the stroke's true centreline, mm, read into a short span's sag.
-const SAG_NOISE_MM: f64 = 0.03;
 
 /// The end of an open piece: position, outward unit tangent, signed curvature (1/mm, positive
 /// turning left when moving outward).
@@ -44,7 +26,7 @@ pub(super) struct End {
     pub(super) span: f64,
     /// The curvature through the span's ends and middle however short the span, 1/mm.
     pub(super) k_raw: f64,
-    /// The curvature over the span's last [`K_SPAN_MM`] (the whole span when shorter),
+    /// The curvature over the span's last `LINK.k_span_mm` (the whole span when shorter),
     /// unclamped, 1/mm: where the path bends harder towards the end than over the span.
     pub(super) k_near: f64,
     /// A short span's own tangent at the end, from the circle through its three points, where
@@ -54,7 +36,7 @@ pub(super) struct End {
 
 impl End {
     pub(super) fn k_read(&self) -> bool {
-        self.span >= K_SPAN_MM
+        self.span >= LINK.k_span_mm
     }
 
     /// How far back from the end the middle of its span lies, mm.
@@ -100,10 +82,10 @@ pub(super) fn point_back(pts: &[[f64; 2]], l: f64) -> [f64; 2] {
     pts[0]
 }
 
-/// The curvature the centres' scatter ([`SAG_NOISE_MM`], twice over) reads through three
+/// The curvature the centres' scatter (`LINK.sag_noise_mm`, twice over) reads through three
 /// points spanning `span` mm, 1/mm: a span's sag is `k span^2 / 8`.
 pub(super) fn k_noise(span: f64) -> f64 {
-    2.0 * 8.0 * SAG_NOISE_MM / (span * span)
+    2.0 * 8.0 * LINK.sag_noise_mm / (span * span)
 }
 
 /// The circle through the points `from`, halfway and `to` mm back from the end of `pts`: the
@@ -124,10 +106,10 @@ fn three_point(pts: &[[f64; 2]], from: f64, to: f64) -> Option<([f64; 2], f64, f
 }
 
 /// The end at the last point of `pts`: tangent and curvature from the circle through the points
-/// `skip` mm, halfway and [`END_SPAN_MM`] back, carried to the end point; the bridge anchor
+/// `skip` mm, halfway and `LINK.end_span_mm` back, carried to the end point; the bridge anchor
 /// `skip` mm back (0: the last point). On the rig's one path, where that curvature is over
-/// [`MAX_K`] (a crest within the span), the tangent is read again from the circle through the
-/// last [`TANGENT_SPAN_MM`] before the anchor, unclamped: the span's chord, turned by the
+/// `LINK.max_k_per_mm` (a crest within the span), the tangent is read again from the circle through the
+/// last `LINK.tangent_span_mm` before the anchor, unclamped: the span's chord, turned by the
 /// clamped curvature, would point the end tens of degrees off across the crest. (A plotter's
 /// passes, [`Strokes::PASSES`], saw at their ends: the last millimetres would turn it.)
 pub(super) fn end_with(pts: &[[f64; 2]], skip: f64, strokes: Strokes) -> Option<End> {
@@ -135,28 +117,29 @@ pub(super) fn end_with(pts: &[[f64; 2]], skip: f64, strokes: Strokes) -> Option<
     if len <= 0.0 {
         return None;
     }
-    let span = END_SPAN_MM.min(0.7 * len);
+    let span = LINK.end_span_mm.min(0.7 * len);
     let skip = skip.min(0.2 * span);
     let p0 = pts[pts.len() - 1];
     let q1 = point_back(pts, skip);
     let (chord, n, k_raw) = three_point(pts, skip, span)?;
-    let k_near = three_point(pts, skip, skip + K_SPAN_MM.min(span - skip)).map_or(k_raw, |v| v.2);
+    let k_near =
+        three_point(pts, skip, skip + LINK.k_span_mm.min(span - skip)).map_or(k_raw, |v| v.2);
     // Curvature only from a span long enough to tell it from the centreline's noise.
-    let k = if span >= K_SPAN_MM {
-        k_raw.clamp(-MAX_K, MAX_K)
+    let k = if span >= LINK.k_span_mm {
+        k_raw.clamp(-LINK.max_k_per_mm, LINK.max_k_per_mm)
     } else {
         0.0
     };
     // The chord's direction is the tangent at its middle; turn it on to the anchor and the end.
-    let near = (strokes.crest_tangent && span >= K_SPAN_MM && k_raw.abs() > MAX_K)
-        .then(|| three_point(pts, skip, skip + TANGENT_SPAN_MM))
+    let near = (strokes.crest_tangent && span >= LINK.k_span_mm && k_raw.abs() > LINK.max_k_per_mm)
+        .then(|| three_point(pts, skip, skip + LINK.tangent_span_mm))
         .flatten();
     let ta = match near {
         Some((c, m, k_near)) => rot(c, k_near * 0.5 * m),
         None => rot(chord, k * 0.5 * n),
     };
     let t = rot(ta, k * dist(q1, p0));
-    let t_own = (strokes.own_short_tangent && span < K_SPAN_MM)
+    let t_own = (strokes.own_short_tangent && span < LINK.k_span_mm)
         .then(|| own_tangent(pts, skip, span, ta, k_raw))
         .flatten();
     Some(End {
@@ -176,7 +159,7 @@ pub(super) fn end_with(pts: &[[f64; 2]], skip: f64, strokes: Strokes) -> Option<
 
 /// The tangent at the end of a span too short to read a curvature to carry across a gap,
 /// from its own circle (`ta`, the chord's direction at the span's middle, turned by `k_raw`),
-/// where the last [`HOOK_CHORD_MM`] follow that circle within [`HOOK_DEG`]; `None` otherwise
+/// where the last `LINK.hook_chord_mm` follow that circle within `LINK.hook_deg`; `None` otherwise
 /// (a hook: the chord then stands for the tangent). Whether it is taken is
 /// [`with_curvature`]'s choice.
 fn own_tangent(
@@ -186,18 +169,21 @@ fn own_tangent(
     ta: [f64; 2],
     k_raw: f64,
 ) -> Option<[f64; 2]> {
-    if span < 2.0 * HOOK_CHORD_MM {
+    if span < 2.0 * LINK.hook_chord_mm {
         return None;
     }
     let mid = 0.5 * (skip + span);
-    let last = sub(point_back(pts, skip), point_back(pts, skip + HOOK_CHORD_MM));
+    let last = sub(
+        point_back(pts, skip),
+        point_back(pts, skip + LINK.hook_chord_mm),
+    );
     let n = norm(last);
     if n <= 1e-9 {
         return None;
     }
-    let along = rot(ta, k_raw * (mid - skip - 0.5 * HOOK_CHORD_MM));
+    let along = rot(ta, k_raw * (mid - skip - 0.5 * LINK.hook_chord_mm));
     let c = (last[0] * along[0] + last[1] * along[1]) / n;
-    (c >= HOOK_DEG.to_radians().cos()).then(|| rot(ta, k_raw * (mid - skip)))
+    (c >= LINK.hook_deg.to_radians().cos()).then(|| rot(ta, k_raw * (mid - skip)))
 }
 
 /// Whether a short end's own three points bend beyond twice the scatter's curvature, with no
@@ -207,7 +193,7 @@ pub(super) fn reads_own_bend(e: &End) -> bool {
 }
 
 /// `e` bent by the curvature `k` it could not read itself (a short piece), `k` read by the other
-/// end (so within [`MAX_K`]): the chord's direction is the tangent at its middle, turned on to
+/// end (so within `LINK.max_k_per_mm`): the chord's direction is the tangent at its middle, turned on to
 /// the end. Where its own points tell a bend ([`reads_own_bend`]), or tell that it does not
 /// bend as much as `k` (they differ from `k` by more than twice the scatter's curvature: a
 /// nearly straight piece past a crest the other end reads), it takes its own tangent

@@ -4,16 +4,14 @@
 
 use super::bridge::bridge;
 use super::continuity::continuity;
-use super::crossings::{cut_crossings, CROSS_TOUCH_MM};
+use super::crossings::cut_crossings;
 use super::end::End;
 use super::network::Network;
-use super::{orient, Gap, LeftOut, LeftOutKind, MIN_MARK_MM};
+use super::params::LINK;
+use super::{orient, Gap, LeftOut, LeftOutKind};
 use crate::trace::chain::Stroke;
 use crate::trace::plane::{dist, norm, sub};
 use crate::trace::{bridge_fit, smooth};
-
-/// A left-out line at least this share of the path's length is a drawn line of its own.
-const SEPARATE_SHARE: f64 = 0.3;
 
 /// One chain judged as a drawn line: its refined polyline, its gaps (bridged in order along
 /// it, then the missing ones), its free ends, and which other chains may continue it.
@@ -46,7 +44,7 @@ impl Network {
         let mut touching: Vec<(usize, usize)> = path
             .points_mm
             .iter()
-            .flat_map(|p| self.points.within(*p, CROSS_TOUCH_MM))
+            .flat_map(|p| self.points.within(*p, LINK.cross_touch_mm))
             .map(|(_, ck)| *ck)
             .filter(|(ci, _)| *ci != main)
             .collect();
@@ -171,7 +169,7 @@ impl Network {
             }
             let len = self.lengths[ci];
             let pts = &s.points_mm;
-            let ahead = len >= MIN_MARK_MM
+            let ahead = len >= LINK.min_mark_mm
                 && judged.free.iter().any(|f| {
                     pts.iter().any(|q| {
                         let d = sub(*q, f.p);
@@ -182,9 +180,9 @@ impl Network {
                 });
             let kind = if judged.continues[ci] || ahead {
                 LeftOutKind::Continues
-            } else if len >= MIN_MARK_MM.max(SEPARATE_SHARE * main_len) {
+            } else if len >= LINK.min_mark_mm.max(LINK.separate_share * main_len) {
                 LeftOutKind::Separate
-            } else if len < MIN_MARK_MM {
+            } else if len < LINK.min_mark_mm {
                 LeftOutKind::Speck
             } else {
                 LeftOutKind::Mark

@@ -1,15 +1,12 @@
 //! Open pieces cut where they turn sharply (a corner, or the tracker turning onto a stroke that
 //! crosses the path), before their ends are read: the linker decides which way the path goes on.
 
+use super::params::LINK;
 use crate::trace::chain::PieceMm;
 use crate::trace::plane::{dist, norm, sub};
 
-/// A piece turning by more than this between its chords of [`KINK_CHORD_MM`] is cut there.
-const KINK_DEG: f64 = 25.0;
-const KINK_CHORD_MM: f64 = 1.0;
-
-/// Open pieces cut where they turn by more than [`KINK_DEG`] between the chords of the
-/// [`KINK_CHORD_MM`] before and after a point (a corner, or the tracker turning onto a stroke
+/// Open pieces cut where they turn by more than `LINK.kink_deg` between the chords of the
+/// `LINK.kink_chord_mm` before and after a point (a corner, or the tracker turning onto a stroke
 /// that crosses the path): the linker decides which way the path goes on.
 pub(super) fn split_kinks(pieces: &[PieceMm]) -> Vec<PieceMm> {
     let mut out = Vec::with_capacity(pieces.len());
@@ -19,15 +16,15 @@ pub(super) fn split_kinks(pieces: &[PieceMm]) -> Vec<PieceMm> {
             out.push(p.clone());
             continue;
         }
-        // Chord ends by arc length: for each point the indices ~KINK_CHORD_MM back and ahead.
+        // Chord ends by arc length: for each point the indices ~LINK.kink_chord_mm back and ahead.
         let mut s = vec![0.0; n];
         for i in 1..n {
             s[i] = s[i - 1] + dist(p.pts[i - 1], p.pts[i]);
         }
         let turn_at = |i: usize| -> f64 {
-            let back = s[..i].partition_point(|&v| v < s[i] - KINK_CHORD_MM);
-            let ahead = i + s[i..].partition_point(|&v| v < s[i] + KINK_CHORD_MM);
-            if back >= i || ahead >= n || s[i] - s[back] < 0.8 * KINK_CHORD_MM {
+            let back = s[..i].partition_point(|&v| v < s[i] - LINK.kink_chord_mm);
+            let ahead = i + s[i..].partition_point(|&v| v < s[i] + LINK.kink_chord_mm);
+            if back >= i || ahead >= n || s[i] - s[back] < 0.8 * LINK.kink_chord_mm {
                 return 0.0;
             }
             let (u, v) = (sub(p.pts[i], p.pts[back]), sub(p.pts[ahead], p.pts[i]));
@@ -40,7 +37,7 @@ pub(super) fn split_kinks(pieces: &[PieceMm]) -> Vec<PieceMm> {
                 .acos()
         };
         let turns: Vec<f64> = (0..n).map(turn_at).collect();
-        let limit = KINK_DEG.to_radians();
+        let limit = LINK.kink_deg.to_radians();
         let mut cuts = Vec::new();
         let mut i = 0;
         while i < n {

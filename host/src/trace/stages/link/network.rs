@@ -5,9 +5,9 @@
 
 use super::bridge::build;
 use super::continuity::{candidates, continuity};
-use super::crossings::CROSS_TOUCH_MM;
 use super::end::{ends, End};
 use super::kinks::split_kinks;
+use super::params::LINK;
 use super::strokes::Strokes;
 use super::{mean_from, relink, Gap};
 use crate::sheet::ReferencePath;
@@ -95,7 +95,7 @@ impl Network {
             .map(|c| build(c, &pieces, &piece_ends, strokes))
             .collect();
         let lengths: Vec<f64> = built.iter().map(|(s, ..)| s.length_mm()).collect();
-        let mut points = Grid::new(CROSS_TOUCH_MM);
+        let mut points = Grid::new(LINK.cross_touch_mm);
         for (ci, (s, ..)) in built.iter().enumerate() {
             if s.points_mm.len() >= 2 {
                 for (k, p) in s.points_mm.iter().enumerate() {

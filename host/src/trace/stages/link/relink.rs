@@ -8,13 +8,10 @@ use super::bridge::build;
 use super::continuity::{candidates, continuity};
 use super::end::{ends, End};
 use super::network::Chain;
+use super::params::LINK;
 use super::strokes::Strokes;
 use crate::trace::chain::{polyline_length, PieceMm};
 use crate::trace::plane::dist;
-
-/// Ends nearer than this were linked or not in the first round on their turn alone (see
-/// [`continuity`]), mm.
-const NEAR_MM: f64 = 1.0;
 
 /// The end indices (2 * piece + side) by which open `chain` leaves its first and last piece.
 fn free_ends(chain: &Chain) -> [usize; 2] {
@@ -90,7 +87,7 @@ pub(super) fn relink(
             return None;
         }
         // Ends that nearly touch were judged in the first round on their turn alone.
-        if g < NEAR_MM || g > max_gap_mm {
+        if g < LINK.relink_near_mm || g > max_gap_mm {
             return None;
         }
         continuity(a, b, reach)

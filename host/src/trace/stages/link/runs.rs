@@ -3,27 +3,17 @@
 //! and the run says so by where they cross ([`crossings`]) rather than calling the other run a
 //! gap or a mark that may continue the path.
 
-use super::{Crossing, LeftOut, LeftOutKind, MIN_MARK_MM};
+use super::params::LINK;
+use super::{Crossing, LeftOut, LeftOutKind};
 use crate::trace::chain::Stroke;
 use crate::trace::plane::{dist, Grid};
 
-/// Another run's end this close to the path (the tracker stopped it where it met the path's
-/// graphite) meets the path there, mm.
-const MEET_MM: f64 = 3.0;
-/// A mark's centre this close to the path touches it, mm.
-const TOUCH_MM: f64 = 0.75;
-/// Crossings closer than this along the sheet are one, mm.
-const SAME_MM: f64 = 3.0;
-/// A mark meeting the path at two places at least this far apart runs from one to the other
-/// (a second run's arc between two crossings, or a branch the path might have taken), mm.
-const APART_MM: f64 = 10.0;
-
 /// Where the left-out chains cross or meet `path` (`left_out`: each mark with its chain's
 /// stroke, in the order of [`super::Linking::left_out`]): a mark that could be part of the
-/// path crossing or meeting it, or a mark of [`MIN_MARK_MM`] or more meeting it at two places
-/// [`APART_MM`] apart, is a second drawn path (its kind raised to
+/// path crossing or meeting it, or a mark of `LINK.min_mark_mm` or more meeting it at two places
+/// `LINK.run_apart_mm` apart, is a second drawn path (its kind raised to
 /// [`LeftOutKind::Separate`]). Meeting: the polylines intersect, a centre of the mark lies
-/// within [`TOUCH_MM`] of the path, or an end of it within [`MEET_MM`]. Each mark's places once (two parts of one run may meet the
+/// within `LINK.run_touch_mm` of the path, or an end of it within `LINK.run_meet_mm`. Each mark's places once (two parts of one run may meet the
 /// path at the same place); sorted along x.
 pub(super) fn crossings(path: &Stroke, left_out: &mut [(&Stroke, LeftOut)]) -> Vec<Crossing> {
     let pts = &path.points_mm;
@@ -32,7 +22,7 @@ pub(super) fn crossings(path: &Stroke, left_out: &mut [(&Stroke, LeftOut)]) -> V
         return Vec::new();
     }
     let segs = if path.closed { n } else { n - 1 };
-    let mut grid: Grid<usize> = Grid::new(MEET_MM);
+    let mut grid: Grid<usize> = Grid::new(LINK.run_meet_mm);
     for i in 0..segs {
         let (a, b) = (pts[i], pts[(i + 1) % n]);
         grid.insert([0.5 * (a[0] + b[0]), 0.5 * (a[1] + b[1])], i);
@@ -40,12 +30,12 @@ pub(super) fn crossings(path: &Stroke, left_out: &mut [(&Stroke, LeftOut)]) -> V
     let seg = |i: usize| (pts[i], pts[(i + 1) % n]);
     let mut out: Vec<Crossing> = Vec::new();
     for (k, (s, o)) in left_out.iter_mut().enumerate() {
-        if o.length_mm < MIN_MARK_MM {
+        if o.length_mm < LINK.min_mark_mm {
             continue;
         }
         let mut meets: Vec<[f64; 2]> = Vec::new();
         let mut add = |at: [f64; 2]| {
-            if meets.iter().all(|c| dist(*c, at) > SAME_MM) {
+            if meets.iter().all(|c| dist(*c, at) > LINK.run_same_mm) {
                 meets.push(at);
             }
         };
@@ -72,27 +62,27 @@ pub(super) fn crossings(path: &Stroke, left_out: &mut [(&Stroke, LeftOut)]) -> V
             }
             // Touching without crossing: where the tracker joined a half of each run at their
             // crossing, the rest of the two runs touches the path there.
-            if let Some(f) = nearest.filter(|f| dist(c, *f) <= TOUCH_MM) {
+            if let Some(f) = nearest.filter(|f| dist(c, *f) <= LINK.run_touch_mm) {
                 add(f);
             }
         }
         if !s.closed {
             for e in [q[0], q[m - 1]] {
                 let near = grid
-                    .around(e, MEET_MM + 1.0)
+                    .around(e, LINK.run_meet_mm + 1.0)
                     .map(|(_, i)| {
                         let (a, b) = seg(*i);
                         foot(e, a, b)
                     })
                     .min_by(|x, y| dist(e, *x).total_cmp(&dist(e, *y)));
-                if let Some(f) = near.filter(|f| dist(e, *f) <= MEET_MM) {
+                if let Some(f) = near.filter(|f| dist(e, *f) <= LINK.run_meet_mm) {
                     add(f);
                 }
             }
         }
         let apart = meets
             .iter()
-            .any(|a| meets.iter().any(|b| dist(*a, *b) >= APART_MM));
+            .any(|a| meets.iter().any(|b| dist(*a, *b) >= LINK.run_apart_mm));
         if meets.is_empty() || !(o.could_be_path() || apart) {
             continue;
         }

@@ -3,7 +3,7 @@
 //! `rigctl trace`) and [`Strokes::PASSES`] (a plotter's passes, `rigctl trace --paths`). The
 //! code reads the fields; nowhere does it ask which preset it runs.
 
-use super::end::END_SKIP_MM;
+use super::params::LINK;
 
 /// How the ends of pieces are read, chains are linked and a path is written, for one kind of
 /// drawing.
@@ -40,9 +40,9 @@ impl Strokes {
         relink: true,
         smooth_centres: true,
     };
-    /// A plotter's passes (`--paths`): ends read from [`END_SKIP_MM`] back, centres as tracked.
+    /// A plotter's passes (`--paths`): ends read from `LINK.pulled_end_mm` back, centres as tracked.
     pub(in crate::trace) const PASSES: Self = Self {
-        end_skip_mm: END_SKIP_MM,
+        end_skip_mm: LINK.pulled_end_mm,
         crest_tangent: false,
         own_short_tangent: false,
         relink: false,
