@@ -3,7 +3,7 @@
 //! loses it. A drawn line is followed through the band of ink all its passes leave
 //! ([`crate::trace::band`]): from the longest path not yet in a line, through every written point
 //! running its way, bridging gaps up to `--max-gap-mm` (a longer one, up to
-//! [`band::reach_mm`], is missing). The paths with [`PASS_MM`] (or half their length) in its
+//! [`band::reach_mm`], is missing). The paths with `LINES.pass_mm` (or half their length) in its
 //! band are its passes; its centreline is the band's (written as a file of its own). A path
 //! that is the only pass of every line it is in is one line (a box drawn round in one go,
 //! turning its corners).
@@ -12,7 +12,7 @@
 //! way within `max(2 x --max-gap-mm, 15 mm)` ahead of one of its ends (within 45 degrees of
 //! its direction), or a mark that may continue one of its passes at one of the line's ends
 //! (or a gap too long to bridge to it), unless that mark is a pass of the same line, lies off
-//! the line's axis, or runs across it (more than [`ACROSS_DEG`] to it) within `--max-gap-mm`
+//! the line's axis, or runs across it (more than `LINES.across_deg` to it) within `--max-gap-mm`
 //! of the pass's end: a line ending on another one.
 //!
 //! Files: `cloud.rs` (the written points and their directions), `walks.rs` (walks that are one
@@ -28,6 +28,7 @@ use crate::trace::plane::{self, dist, sub};
 use cloud::cloud;
 use ends::{counts, judge_ends};
 use meet::meet_lines_across;
+use params::LINES;
 use std::collections::HashSet;
 use walks::{duplicate_of, join_continuing};
 
@@ -35,25 +36,10 @@ mod cloud;
 mod ends;
 mod meet;
 mod overrun;
+mod params;
 #[cfg(test)]
 mod tests;
 mod walks;
-
-/// Passes of one line lie within this of its centre, mm.
-pub const ALONGSIDE_MM: f64 = BAND_HALF_MM;
-/// A path is a pass of a line with this much of it in the line's band (or half of it), mm.
-pub const PASS_MM: f64 = 5.0;
-/// Direction of a path at a point: the chord over this arc length either side of it, mm.
-const DIR_HALF_MM: f64 = 4.0;
-/// A mark meeting a pass's end at more than this to it runs across the line, degrees.
-pub const ACROSS_DEG: f64 = 45.0;
-/// Direction of a line's end (to carry it on past the end, and to tell whether another line
-/// continues it): the chord over this length, mm (a zigzag pass turns often within a few mm).
-const END_CHORD_MM: f64 = 12.0;
-/// A walk starts the way its seed path runs over this either side of the seed, mm.
-const SEED_HALF_MM: f64 = 8.0;
-/// Spacing of a line's centreline, mm.
-const LINE_SPACING_MM: f64 = 0.25;
 
 /// Why a path may not be the whole of its drawn line: a mark beyond one of its free ends.
 #[derive(Debug, Clone)]
@@ -126,13 +112,13 @@ fn arc(pts: &[[f64; 2]]) -> Vec<f64> {
     s
 }
 
-/// Unit directions along `pts` (an open polyline): the chord over [`DIR_HALF_MM`] either side.
+/// Unit directions along `pts` (an open polyline): the chord over `LINES.dir_half_mm` either side.
 fn directions(pts: &[[f64; 2]], s: &[f64]) -> Vec<[f64; 2]> {
     let n = pts.len();
     (0..n)
         .map(|i| {
-            let a = s[..i].partition_point(|&v| v < s[i] - DIR_HALF_MM);
-            let b = (i + s[i..].partition_point(|&v| v <= s[i] + DIR_HALF_MM)).min(n - 1);
+            let a = s[..i].partition_point(|&v| v < s[i] - LINES.dir_half_mm);
+            let b = (i + s[i..].partition_point(|&v| v <= s[i] + LINES.dir_half_mm)).min(n - 1);
             unit(sub(pts[b], pts[a.min(n - 1)]))
         })
         .collect()
@@ -198,7 +184,7 @@ pub(crate) fn lines(
     for (pi, p) in paths.iter().enumerate() {
         let (a, b) = (first[pi], first[pi + 1]);
         while let Some((r0, r1, len)) = longest_free_run(&free[a..b], &p.stroke.points_mm) {
-            if len < PASS_MM {
+            if len < LINES.pass_mm {
                 break;
             }
             let mid = a + (r0 + r1) / 2;
@@ -206,7 +192,7 @@ pub(crate) fn lines(
                 free[mid] = false;
                 continue;
             }
-            let seed_dir = chord_dir(&p.stroke.points_mm, mid - a, SEED_HALF_MM);
+            let seed_dir = chord_dir(&p.stroke.points_mm, mid - a, LINES.seed_half_mm);
             let w = band::walk(&cloud, cloud.dots[mid].p, seed_dir, max_gap_mm);
             if w.length_mm() < MIN_MARK_MM || !w.taken.contains(&mid) {
                 // Not a line: its dots are not seeds again.
@@ -235,7 +221,7 @@ pub(crate) fn lines(
     let (mut walks, taken) = join_continuing(kept, taken);
     overrun::cut_overruns(&mut walks);
     meet_lines_across(&mut walks, &cloud);
-    // The passes of each line: the paths with PASS_MM (or half their length) in its band.
+    // The passes of each line: the paths with LINES.pass_mm (or half their length) in its band.
     let spacing =
         |p: &DrawnPath| p.stroke.length_mm() / (p.stroke.points_mm.len().max(2) - 1) as f64;
     let passes: Vec<Vec<usize>> = taken
@@ -250,7 +236,7 @@ pub(crate) fn lines(
             let mut v: Vec<usize> = (0..paths.len())
                 .filter(|&p| {
                     let len = count[p] as f64 * spacing(&paths[p]);
-                    count[p] > 0 && len >= PASS_MM.min(0.5 * paths[p].stroke.length_mm())
+                    count[p] > 0 && len >= LINES.pass_mm.min(0.5 * paths[p].stroke.length_mm())
                 })
                 .collect();
             v.sort_by(|&x, &y| {
@@ -292,8 +278,8 @@ pub(crate) fn lines(
                         .filter(|(_, x)| dist(**x, q) <= BAND_HALF_MM)
                         .min_by(|x, y| dist(*x.1, q).total_cmp(&dist(*y.1, q)))
                         .is_some_and(|(k, _)| {
-                            abs_cos(chord_dir_on(c, &arcs[o], k, DIR_HALF_MM), t)
-                                < ACROSS_DEG.to_radians().cos()
+                            abs_cos(chord_dir_on(c, &arcs[o], k, LINES.dir_half_mm), t)
+                                < LINES.across_deg.to_radians().cos()
                         })
                 }
             })
@@ -318,8 +304,8 @@ fn path_line(paths: &[DrawnPath], p: usize, loose: &[Vec<Loose>], max_gap_mm: f6
     let pts = &path.stroke.points_mm;
     let len = path.stroke.length_mm();
     let s = arc(pts);
-    let head = point_at(pts, &s, END_CHORD_MM.min(len));
-    let tail = point_at(pts, &s, (len - END_CHORD_MM).max(0.0));
+    let head = point_at(pts, &s, LINES.end_chord_mm.min(len));
+    let tail = point_at(pts, &s, (len - LINES.end_chord_mm).max(0.0));
     let mut line = DrawnLine {
         out_dir: [unit(sub(pts[0], head)), unit(sub(pts[pts.len() - 1], tail))],
         passes: vec![p],
@@ -350,9 +336,9 @@ fn path_line(paths: &[DrawnPath], p: usize, loose: &[Vec<Loose>], max_gap_mm: f6
     line
 }
 
-/// The line of walk `w` (passes `passes`): its centreline smoothed over [`DIR_HALF_MM`].
+/// The line of walk `w` (passes `passes`): its centreline smoothed over `LINES.dir_half_mm`.
 fn band_line(w: &Walk, passes: Vec<usize>) -> DrawnLine {
-    let pts = resample(&smoothed(&w.centres), w.closed, LINE_SPACING_MM);
+    let pts = resample(&smoothed(&w.centres), w.closed, LINES.line_spacing_mm);
     let pts = if pts.len() >= 2 {
         pts
     } else {
@@ -360,8 +346,8 @@ fn band_line(w: &Walk, passes: Vec<usize>) -> DrawnLine {
     };
     let s = arc(&pts);
     let total = s.last().copied().unwrap_or(0.0);
-    let head = point_at(&pts, &s, END_CHORD_MM.min(total));
-    let tail = point_at(&pts, &s, (total - END_CHORD_MM).max(0.0));
+    let head = point_at(&pts, &s, LINES.end_chord_mm.min(total));
+    let tail = point_at(&pts, &s, (total - LINES.end_chord_mm).max(0.0));
     let length_mm = w.length_mm();
     let gaps_mm: f64 = w.gaps.iter().map(|g| g.length_mm).sum();
     DrawnLine {
@@ -378,14 +364,14 @@ fn band_line(w: &Walk, passes: Vec<usize>) -> DrawnLine {
     }
 }
 
-/// `pts` with each point the mean of those within [`DIR_HALF_MM`] of arc length either side
+/// `pts` with each point the mean of those within `LINES.dir_half_mm` of arc length either side
 /// (the window shrunk near the ends, which stay in place).
 fn smoothed(pts: &[[f64; 2]]) -> Vec<[f64; 2]> {
     let s = arc(pts);
     let total = s.last().copied().unwrap_or(0.0);
     (0..pts.len())
         .map(|i| {
-            let half = DIR_HALF_MM.min(s[i]).min(total - s[i]);
+            let half = LINES.dir_half_mm.min(s[i]).min(total - s[i]);
             let a = s.partition_point(|&v| v < s[i] - half);
             let b = s.partition_point(|&v| v <= s[i] + half);
             let n = (b - a).max(1) as f64;

@@ -1,27 +1,20 @@
 //! The written points a band is followed through: every point of every path and of the strays
 //! with its direction over a zigzag pass's teeth, none where the path turns a corner.
 
+use super::params::LINES;
 use super::{arc, unit};
 use crate::trace::band::{Cloud, Dot, Source};
 use crate::trace::paths::DrawnPath;
 use crate::trace::plane::sub;
 
-/// Marks shorter than this are not followed (dust), mm.
-const MIN_DOT_MARK_MM: f64 = 1.0;
-/// A path turning by more than this between the chords of [`super::DIR_HALF_MM`] before and after a
-/// point turns a corner there, degrees.
-const CORNER_DEG: f64 = 50.0;
-/// Direction of a path's point for following a band: the chord over this either side, mm.
-const BAND_DIR_HALF_MM: f64 = 4.0;
-
-/// Directions along `pts` for following a band: the chord over [`BAND_DIR_HALF_MM`] either
+/// Directions along `pts` for following a band: the chord over `LINES.band_dir_half_mm` either
 /// side (over a zigzag pass's teeth), none (zero) where the path turns a corner (by more than
-/// [`CORNER_DEG`] between the chords before and after a point): a band is not followed round
+/// `LINES.corner_deg` between the chords before and after a point): a band is not followed round
 /// a pass's corner into the line it turns into.
 fn band_directions(pts: &[[f64; 2]], s: &[f64]) -> Vec<[f64; 2]> {
     let n = pts.len();
-    let cos_corner = CORNER_DEG.to_radians().cos();
-    let h = BAND_DIR_HALF_MM;
+    let cos_corner = LINES.corner_deg.to_radians().cos();
+    let h = LINES.band_dir_half_mm;
     (0..n)
         .map(|i| {
             let a = s[..i].partition_point(|&v| v < s[i] - h).min(n - 1);
@@ -60,7 +53,7 @@ pub(super) fn cloud(paths: &[DrawnPath], strays: &[Vec<[f64; 2]>]) -> (Cloud, Ve
     }
     first.push(dots.len());
     for s in strays {
-        if arc(s).last().copied().unwrap_or(0.0) >= MIN_DOT_MARK_MM {
+        if arc(s).last().copied().unwrap_or(0.0) >= LINES.min_dot_mark_mm {
             add(s, Source::Stray, &mut dots);
         }
     }

@@ -2,27 +2,18 @@
 //! centreline or to the corner ([`meet_lines_across`]).
 
 use super::super::link::Gap;
-use super::LINE_SPACING_MM;
-use super::{abs_cos, arc, chord_dir, chord_dir_on, ACROSS_DEG, DIR_HALF_MM, END_CHORD_MM};
-use crate::trace::band::{Cloud, Walk, BAND_HALF_MM};
+use super::params::LINES;
+use super::{abs_cos, arc, chord_dir, chord_dir_on};
+use crate::trace::band::{Cloud, Walk};
 use crate::trace::plane::{dist, sub};
 
-/// A line ends on a line across it whose centreline lies within this ahead of its end, mm.
-const MEET_MM: f64 = BAND_HALF_MM + 1.5;
-/// ... or within this, where the stretch beyond the other's band is drawn (no stretch longer
-/// than [`INKLESS_OK_MM`] without a written point within 1 mm) or else a skip (bridged), mm.
-const MEET_INKED_MM: f64 = 2.0 * BAND_HALF_MM;
-const INKLESS_OK_MM: f64 = 1.0;
-/// ... within this of the end's direction, mm.
-pub(super) const STEP_OFF_MM: f64 = 1.0;
-
-/// A line ending within [`MEET_MM`] of the centreline of a line across it (more than
-/// [`ACROSS_DEG`] to it), ahead of its end (or within [`MEET_INKED_MM`] with ink all the way),
+/// A line ending within `LINES.meet_mm` of the centreline of a line across it (more than
+/// `LINES.across_deg` to it), ahead of its end (or within `LINES.meet_inked_mm` with ink all the way),
 /// ends on that line: the passes of a line stop at the
 /// edge of the other's band (where the tracker met the other's ink), so the line is carried on
 /// straight through that band to the other's centreline.
 pub(super) fn meet_lines_across(walks: &mut [Walk], cloud: &Cloud) {
-    let cos_across = ACROSS_DEG.to_radians().cos();
+    let cos_across = LINES.across_deg.to_radians().cos();
     let arcs: Vec<Vec<f64>> = walks.iter().map(|w| arc(&w.centres)).collect();
     let mut ext: Vec<(usize, bool, [f64; 2], bool)> = Vec::new();
     for (i, w) in walks.iter().enumerate() {
@@ -33,7 +24,7 @@ pub(super) fn meet_lines_across(walks: &mut [Walk], cloud: &Cloud) {
         for tail in [false, true] {
             let ei = if tail { c.len() - 1 } else { 0 };
             let e = c[ei];
-            let t = chord_dir(c, ei, END_CHORD_MM);
+            let t = chord_dir(c, ei, LINES.end_chord_mm);
             let t = if tail { t } else { [-t[0], -t[1]] };
             let mut best: Option<(f64, [f64; 2], bool)> = None;
             for (j, o) in walks.iter().enumerate() {
@@ -44,13 +35,15 @@ pub(super) fn meet_lines_across(walks: &mut [Walk], cloud: &Cloud) {
                     let v = sub(*q, e);
                     let along = v[0] * t[0] + v[1] * t[1];
                     let off = (v[0] * t[1] - v[1] * t[0]).abs();
-                    if along <= 0.0 || along > MEET_INKED_MM || off > STEP_OFF_MM {
+                    if along <= 0.0 || along > LINES.meet_inked_mm || off > LINES.step_off_mm {
                         continue;
                     }
                     let foot = [e[0] + along * t[0], e[1] + along * t[1]];
                     // Beyond the line's band with no ink: a skip, bridged.
-                    let skip = along > MEET_MM && cloud.inkless_mm(e, foot) > INKLESS_OK_MM;
-                    if abs_cos(chord_dir_on(&o.centres, &arcs[j], k, DIR_HALF_MM), t) >= cos_across
+                    let skip =
+                        along > LINES.meet_mm && cloud.inkless_mm(e, foot) > LINES.inkless_ok_mm;
+                    if abs_cos(chord_dir_on(&o.centres, &arcs[j], k, LINES.dir_half_mm), t)
+                        >= cos_across
                     {
                         continue;
                     }
@@ -64,7 +57,7 @@ pub(super) fn meet_lines_across(walks: &mut [Walk], cloud: &Cloud) {
             }
         }
     }
-    // Two lines ending at a corner (their ends' rays meeting within MEET_MM ahead of both,
+    // Two lines ending at a corner (their ends' rays meeting within LINES.meet_mm ahead of both,
     // across each other): both carried on to where they meet.
     let has = |ext: &[(usize, bool, [f64; 2], bool)], i: usize, tail: bool| {
         ext.iter().any(|e| e.0 == i && e.1 == tail)
@@ -76,8 +69,8 @@ pub(super) fn meet_lines_across(walks: &mut [Walk], cloud: &Cloud) {
         .flat_map(|(i, w)| {
             let c = &w.centres;
             let (h, t) = (
-                chord_dir(c, 0, END_CHORD_MM),
-                chord_dir(c, c.len() - 1, END_CHORD_MM),
+                chord_dir(c, 0, LINES.end_chord_mm),
+                chord_dir(c, c.len() - 1, LINES.end_chord_mm),
             );
             [
                 (i, false, c[0], [-h[0], -h[1]]),
@@ -103,8 +96,10 @@ pub(super) fn meet_lines_across(walks: &mut [Walk], cloud: &Cloud) {
             let a = (r[0] * dj[1] - r[1] * dj[0]) / den;
             let bb = (r[0] * di[1] - r[1] * di[0]) / den;
             let x = [ei[0] + a * di[0], ei[1] + a * di[1]];
-            let reach = |v: f64| (-0.5..=MEET_INKED_MM).contains(&v);
-            let skip = |v: f64, e: [f64; 2]| v > MEET_MM && cloud.inkless_mm(e, x) > INKLESS_OK_MM;
+            let reach = |v: f64| (-0.5..=LINES.meet_inked_mm).contains(&v);
+            let skip = |v: f64, e: [f64; 2]| {
+                v > LINES.meet_mm && cloud.inkless_mm(e, x) > LINES.inkless_ok_mm
+            };
             if reach(a) && reach(bb) {
                 if a > 0.05 {
                     corners.push((i, ti, x, skip(a, ei)));
@@ -141,13 +136,13 @@ pub(super) fn meet_lines_across(walks: &mut [Walk], cloud: &Cloud) {
     }
 }
 
-/// `w` carried straight on from its tail (or head) to `foot`, in steps of [`LINE_SPACING_MM`].
+/// `w` carried straight on from its tail (or head) to `foot`, in steps of `LINES.line_spacing_mm`.
 pub(super) fn extend_to(w: &mut Walk, tail: bool, foot: [f64; 2]) {
     let c = &mut w.centres;
     let Some(&e) = (if tail { c.last() } else { c.first() }) else {
         return;
     };
-    let n = (dist(e, foot) / LINE_SPACING_MM).ceil() as usize;
+    let n = (dist(e, foot) / LINES.line_spacing_mm).ceil() as usize;
     let pts: Vec<[f64; 2]> = (1..=n)
         .map(|k| {
             let f = k as f64 / n as f64;

@@ -4,23 +4,11 @@
 //! line's: it is cut off, and the end is then carried to the other line's centreline like any
 //! end that stops at a line across ([`super::meet::meet_lines_across`]).
 
-use super::meet::{extend_to, STEP_OFF_MM};
-use super::{abs_cos, arc, chord_dir_on, ACROSS_DEG, DIR_HALF_MM};
+use super::meet::extend_to;
+use super::params::LINES;
+use super::{abs_cos, arc, chord_dir_on};
 use crate::trace::band::{arc_of, Walk, BAND_HALF_MM};
 use crate::trace::plane::{dist, sub, unit, Grid};
-
-/// At most this much of a line's end is another line's, mm.
-const OVERRUN_MAX_MM: f64 = 20.0;
-/// The line's own direction at an end: the chord over this much before the stretch that may
-/// be another line's, mm.
-const OWN_DIR_MM: f64 = 15.0;
-/// The end ran along the other line, inside its band, at least this far, mm.
-const ALONG_OTHER_MM: f64 = 2.0;
-/// A centre whose direction is off the line's own by more than this has left the line,
-/// degrees.
-const TURNED_DEG: f64 = 20.0;
-/// Less than this is not cut (a centre wobbling in the other line's band), mm.
-const OVERRUN_MIN_MM: f64 = 1.0;
 
 /// What is kept of a walk: centres `first..last`, carried on at its head and tail to `feet`.
 struct Kept {
@@ -31,12 +19,12 @@ struct Kept {
 }
 
 /// Cuts from every open walk's ends the stretch that has turned off the line's own direction
-/// (the chord over [`OWN_DIR_MM`] before the last [`OVERRUN_MAX_MM`]) by more than
-/// [`TURNED_DEG`] inside the band of another walk running across the line (more than
-/// [`ACROSS_DEG`] to its own direction), when it ran at least [`ALONG_OTHER_MM`] along that
+/// (the chord over `LINES.own_dir_mm` before the last `LINES.overrun_max_mm`) by more than
+/// `LINES.turned_deg` inside the band of another walk running across the line (more than
+/// `LINES.across_deg` to its own direction), when it ran at least `LINES.along_other_mm` along that
 /// walk inside its band (a curve that merely begins on a line does not), and carries the end
 /// straight on to that walk's centreline (an end with no centreline ahead is kept). Walks
-/// shorter than twice [`OVERRUN_MAX_MM`] plus [`OWN_DIR_MM`] are left as they are.
+/// shorter than twice `LINES.overrun_max_mm` plus `LINES.own_dir_mm` are left as they are.
 pub(super) fn cut_overruns(walks: &mut [Walk]) {
     let arcs: Vec<Vec<f64>> = walks.iter().map(|w| arc(&w.centres)).collect();
     let dirs: Vec<Vec<[f64; 2]>> = walks
@@ -44,7 +32,7 @@ pub(super) fn cut_overruns(walks: &mut [Walk]) {
         .zip(&arcs)
         .map(|(w, s)| {
             (0..w.centres.len())
-                .map(|k| chord_dir_on(&w.centres, s, k, DIR_HALF_MM))
+                .map(|k| chord_dir_on(&w.centres, s, k, LINES.dir_half_mm))
                 .collect()
         })
         .collect();
@@ -54,14 +42,14 @@ pub(super) fn cut_overruns(walks: &mut [Walk]) {
             centres.insert(*c, (j, m));
         }
     }
-    let cos_across = ACROSS_DEG.to_radians().cos();
-    let cos_turned = TURNED_DEG.to_radians().cos();
+    let cos_across = LINES.across_deg.to_radians().cos();
+    let cos_turned = LINES.turned_deg.to_radians().cos();
     let mut keep: Vec<Kept> = Vec::new();
     for (i, w) in walks.iter().enumerate() {
         let (c, s) = (&w.centres, &arcs[i]);
         let n = c.len();
         let total = s.last().copied().unwrap_or(0.0);
-        if w.closed || n < 2 || total < 2.0 * OVERRUN_MAX_MM + OWN_DIR_MM {
+        if w.closed || n < 2 || total < 2.0 * LINES.overrun_max_mm + LINES.own_dir_mm {
             continue;
         }
         let (mut first, mut last) = (0, n);
@@ -71,7 +59,10 @@ pub(super) fn cut_overruns(walks: &mut [Walk]) {
             let idx = |k: usize| if tail { n - 1 - k } else { k };
             let from_end = |k: usize| if tail { total - s[idx(k)] } else { s[idx(k)] };
             let at = |d: f64| (0..n).find(|&k| from_end(k) >= d).unwrap_or(n - 1);
-            let (a, b) = (at(OVERRUN_MAX_MM), at(OVERRUN_MAX_MM + OWN_DIR_MM));
+            let (a, b) = (
+                at(LINES.overrun_max_mm),
+                at(LINES.overrun_max_mm + LINES.own_dir_mm),
+            );
             let Some(own) = unit(sub(c[idx(a)], c[idx(b)])) else {
                 continue;
             };
@@ -102,7 +93,7 @@ pub(super) fn cut_overruns(walks: &mut [Walk]) {
                     (v[0] * d[0] + v[1] * d[1]).abs()
                 }
             };
-            if ran < ALONG_OTHER_MM {
+            if ran < LINES.along_other_mm {
                 continue;
             }
             // ... and back from there as long as it is still turned off the line (the line
@@ -112,19 +103,19 @@ pub(super) fn cut_overruns(walks: &mut [Walk]) {
                     k += 1;
                 }
             }
-            if k == 0 || from_end(k) < OVERRUN_MIN_MM {
+            if k == 0 || from_end(k) < LINES.overrun_min_mm {
                 continue;
             }
             // Carried straight on to the centreline of the line across ahead (none: kept).
             let e = c[idx(k)];
             let foot = centres
-                .within(e, OVERRUN_MAX_MM + BAND_HALF_MM)
+                .within(e, LINES.overrun_max_mm + BAND_HALF_MM)
                 .filter(across)
                 .filter_map(|(q, _)| {
                     let v = sub(*q, e);
                     let along = v[0] * own[0] + v[1] * own[1];
                     let off = (v[0] * own[1] - v[1] * own[0]).abs();
-                    (along > 0.0 && off <= STEP_OFF_MM).then_some(along)
+                    (along > 0.0 && off <= LINES.step_off_mm).then_some(along)
                 })
                 .min_by(f64::total_cmp)
                 .map(|along| [e[0] + along * own[0], e[1] + along * own[1]]);

@@ -3,23 +3,14 @@
 //! joined ([`join_continuing`]).
 
 use super::super::link::Gap;
-use super::{abs_cos, arc, chord_dir, directions, unit, END_CHORD_MM};
-use crate::trace::band::{Walk, BAND_DEG, BAND_HALF_MM};
+use super::params::LINES;
+use super::{abs_cos, arc, chord_dir, directions, unit};
+use crate::trace::band::{Walk, BAND_DEG};
 use crate::trace::plane::{dist, sub};
 use std::collections::HashSet;
 
-/// A walk whose centres lie within this of another line's (running its way) for half its
-/// length is that line, mm.
-const DUPLICATE_MM: f64 = 1.5 * BAND_HALF_MM;
-/// A walk whose end lies within this of another's centres may be continued by it, mm (the
-/// band's width: passes drawn apart).
-const JOIN_MM: f64 = 2.0 * BAND_HALF_MM;
-/// Walks continue each other only where their directions (over [`END_CHORD_MM`]) agree within
-/// this, degrees.
-const JOIN_DEG: f64 = 40.0;
-
 /// The walk among `walks` that `w` runs along for half its length or more (its centres within
-/// [`BAND_HALF_MM`] of that walk's).
+/// [`crate::trace::band::BAND_HALF_MM`] of that walk's).
 pub(super) fn duplicate_of(w: &Walk, walks: &[Walk]) -> Option<usize> {
     let probe: Vec<[f64; 2]> = w.centres.iter().step_by(4).copied().collect();
     if probe.is_empty() {
@@ -34,17 +25,16 @@ pub(super) fn duplicate_of(w: &Walk, walks: &[Walk]) -> Option<usize> {
             .iter()
             .zip(&wd)
             .filter(|(p, d)| {
-                o.centres
-                    .iter()
-                    .zip(&od)
-                    .any(|(c, e)| dist(*c, **p) <= DUPLICATE_MM && abs_cos(*e, **d) >= cos_along)
+                o.centres.iter().zip(&od).any(|(c, e)| {
+                    dist(*c, **p) <= LINES.duplicate_mm && abs_cos(*e, **d) >= cos_along
+                })
             })
             .count();
         2 * near >= probe.len()
     })
 }
 
-/// Joins walks that continue each other: an end of one lies within [`JOIN_MM`] of the
+/// Joins walks that continue each other: an end of one lies within `LINES.join_mm` of the
 /// other's centres (running its way) and the other goes on past it (a line whose band was
 /// walked from two seeds that met where it splits or thins).
 pub(super) fn join_continuing(
@@ -79,23 +69,23 @@ fn continued(a: &Walk, b: &Walk) -> Option<Walk> {
     if ac.len() < 2 || bc.len() < 2 {
         return None;
     }
-    let cos_join = JOIN_DEG.to_radians().cos();
+    let cos_join = LINES.join_deg.to_radians().cos();
     for tail in [true, false] {
         let (ei, e) = if tail {
             (ac.len() - 1, ac[ac.len() - 1])
         } else {
             (0, ac[0])
         };
-        let ta = chord_dir(ac, ei, END_CHORD_MM);
+        let ta = chord_dir(ac, ei, LINES.end_chord_mm);
         let Some((l, _)) = bc
             .iter()
             .enumerate()
-            .filter(|(_, c)| dist(**c, e) <= JOIN_MM)
+            .filter(|(_, c)| dist(**c, e) <= LINES.join_mm)
             .min_by(|x, y| dist(*x.1, e).total_cmp(&dist(*y.1, e)))
         else {
             continue;
         };
-        let tb = chord_dir(bc, l, END_CHORD_MM);
+        let tb = chord_dir(bc, l, LINES.end_chord_mm);
         if abs_cos(ta, tb) < cos_join {
             continue;
         }
@@ -118,7 +108,7 @@ fn continued(a: &Walk, b: &Walk) -> Option<Walk> {
             past.iter().rev().copied().collect()
         };
         let k = arc(&on)
-            .partition_point(|&v| v < END_CHORD_MM)
+            .partition_point(|&v| v < LINES.end_chord_mm)
             .min(on.len() - 1);
         let way = unit(sub(on[k], e));
         if (way[0] * ta[0] + way[1] * ta[1]) * if tail { 1.0 } else { -1.0 } < cos_join {
