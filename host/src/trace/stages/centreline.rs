@@ -11,8 +11,10 @@ use crate::trace::raster::CoarseMap;
 use image::RgbImage;
 use indicatif::ProgressBar;
 use own_track::{Retrace, Verdict};
+use params::CENTRELINE;
 
 mod own_track;
+mod params;
 mod section;
 
 pub(crate) use section::Occluders;
@@ -20,19 +22,6 @@ pub(crate) use section::Occluders;
 /// The owner of blocks around a seed too faint to begin a piece: not seeded again, but free
 /// to walk.
 const TRIED: u32 = u32::MAX;
-
-/// In faint graphite (a running mass under [`FAINT_MASS`] times [`TrackParams::min_mass`]), a
-/// window under half the running mass ends the piece only if the stroke does not go on: back at
-/// half the stroke's level within [`BACK_WITHIN`] more steps, or the next [`FAINT_RUN`] steps
-/// (2 mm) holding half of it on average, with at most one window under [`FAINT_SHARE`] of it on
-/// the way. The pencil's pressure drops, the paper's tooth breaks faint graphite up, a skip
-/// leaves none. The level is the running mass, but at most what begins a piece and at least
-/// [`FAINT_FLOOR`] of that (the paper's noise).
-const FAINT_MASS: f64 = 2.0;
-const FAINT_SHARE: f64 = 0.2;
-const BACK_WITHIN: usize = 2;
-const FAINT_RUN: usize = 8;
-const FAINT_FLOOR: f64 = 0.25;
 
 /// Why a seed began no piece.
 enum Unbegun {
@@ -284,11 +273,12 @@ impl Tracker<'_> {
             let (run, single);
             let steps: &[([f64; 2], f64)] = if mass < 0.5 * ema {
                 // In faint graphite, gone fainter or broken up by the paper's tooth, not a
-                // skip: where the stroke goes on (back within BACK_WITHIN steps, or FAINT_RUN
+                // skip: where the stroke goes on (back within CENTRELINE.back_within_steps steps, or CENTRELINE.faint_run_steps
                 // steps holding half its level on average), walk through to there.
-                run = (ema < FAINT_MASS * self.p.min_mass)
+                run = (ema < CENTRELINE.faint_mass * self.p.min_mass)
                     .then(|| {
-                        let level = ema.clamp(FAINT_FLOOR * self.p.min_mass, self.p.min_mass);
+                        let level =
+                            ema.clamp(CENTRELINE.faint_floor * self.p.min_mass, self.p.min_mass);
                         self.faint_run(pts, t, half_w, id, level)
                     })
                     .flatten();
@@ -324,9 +314,9 @@ impl Tracker<'_> {
     }
 
     /// The centres on from the last of `pts` (heading `t`), each with its window's mass, up to
-    /// where the stroke goes on: back at half of `level` within [`BACK_WITHIN`] more steps
-    /// (after a hole, for two steps running), or [`FAINT_RUN`] steps holding half of `level` on
-    /// average. At most one window holds under [`FAINT_SHARE`] of `level` (a grain hole: its
+    /// where the stroke goes on: back at half of `level` within `CENTRELINE.back_within_steps` more steps
+    /// (after a hole, for two steps running), or `CENTRELINE.faint_run_steps` steps holding half of `level` on
+    /// average. At most one window holds under `CENTRELINE.faint_share` of `level` (a grain hole: its
     /// centre is the step's prediction); every step is inside the area and not on another
     /// piece.
     fn faint_run(
@@ -340,8 +330,8 @@ impl Tracker<'_> {
         let step = self.p.step_px;
         let mut trail = pts[pts.len().saturating_sub(4)..].to_vec();
         let (mut t, mut holes, mut sum) = (t, 0, 0.0);
-        let mut run: Vec<([f64; 2], f64)> = Vec::with_capacity(FAINT_RUN);
-        for j in 1..=FAINT_RUN {
+        let mut run: Vec<([f64; 2], f64)> = Vec::with_capacity(CENTRELINE.faint_run_steps);
+        for j in 1..=CENTRELINE.faint_run_steps {
             let c = *trail.last()?;
             let pred = [c[0] + step * t[0], c[1] + step * t[1]];
             if !self.free_at(pred, id) {
@@ -350,7 +340,7 @@ impl Tracker<'_> {
             let found = self.centre_at(pred, t, 0.5 * step, half_w);
             let m = found.as_ref().map_or(0.0, |(_, s)| s.mass);
             let p = match found {
-                Some((p, _)) if m >= FAINT_SHARE * level => p,
+                Some((p, _)) if m >= CENTRELINE.faint_share * level => p,
                 _ => {
                     holes += 1;
                     if holes > 1 {
@@ -363,14 +353,14 @@ impl Tracker<'_> {
             t = heading(&trail, p, t);
             trail.push(p);
             let back = m >= 0.5 * level
-                && (2..=BACK_WITHIN + 1).contains(&j)
+                && (2..=CENTRELINE.back_within_steps + 1).contains(&j)
                 && (holes == 0 || run.last().is_some_and(|r| r.1 >= 0.5 * level));
             run.push((p, m));
             if back {
                 return Some(run);
             }
         }
-        (sum >= 0.5 * level * FAINT_RUN as f64).then_some(run)
+        (sum >= 0.5 * level * CENTRELINE.faint_run_steps as f64).then_some(run)
     }
 
     /// Whether piece `id` may walk onto `p`: inside the area and not on another piece.

@@ -4,12 +4,8 @@
 //! it had where it marked the track, and, where that angle is in between, by what follows: a
 //! retrace comes into line with the track, a crossing leaves the track again at its angle.
 
+use super::params::CENTRELINE;
 use super::{dist, Tracker};
-
-/// Onto its track at more than 45 deg: a crossing, the walk stops at once.
-const CROSS_COS: f64 = 0.707;
-/// Along its track within 15 deg (either way along it): the same line again.
-const ALIGNED_COS: f64 = 0.966;
 
 /// What the walk does at its next step.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -81,7 +77,9 @@ impl Retrace {
                     Verdict::Go
                 }
             }
-            Some(c) if c >= ALIGNED_COS || (self.along > 0 && c >= CROSS_COS) => {
+            Some(c)
+                if c >= CENTRELINE.aligned_cos || (self.along > 0 && c >= CENTRELINE.cross_cos) =>
+            {
                 self.pending = None;
                 self.along += 1;
                 if self.along > marks {
@@ -90,7 +88,7 @@ impl Retrace {
                     Verdict::Go
                 }
             }
-            Some(c) if c < CROSS_COS => self.pending.map_or(stop_here, cut_back),
+            Some(c) if c < CENTRELINE.cross_cos => self.pending.map_or(stop_here, cut_back),
             Some(_) => {
                 self.off = 0;
                 self.pending.get_or_insert((walked, clock));
