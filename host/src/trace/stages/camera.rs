@@ -9,30 +9,20 @@
 //! has its lens's axis far from the image centre, and distortion taken about the wrong centre fits
 //! the ring of marks while bending the inside of the ring by a tenth of a millimetre. The model is
 //! fitted with the centre held at the image centre and with it free; the free centre is kept when
-//! its two parameters explain far more than noise (an F test on the marks' residuals, [`CENTRE_F`]),
+//! its two parameters explain far more than noise (an F test on the marks' residuals, `CAMERA.centre_f`),
 //! otherwise two more parameters would only fit the marks' noise. While fitted, a weak prior
 //! holds the centre near the image centre where little determines it (standard deviation a
-//! quarter of the half diagonal, against a mark located to [`MARK_SIGMA_PX`]).
+//! quarter of the half diagonal, against a mark located to `CAMERA.mark_sigma_px`).
 
 use crate::trace::Homography;
 use nalgebra::{Matrix3, SMatrix, SVector};
+use params::CAMERA;
 
 /// Number of parameters: eight of the homography (h22 = 1), k1, k2, the distortion centre.
 const NP: usize = 12;
 
 /// Index of the distortion centre's first parameter (x, then y).
 const CENTRE_AT: usize = 10;
-
-/// How well a printed mark is located, pixels: the scale of the residuals the prior on the
-/// distortion centre is weighed against.
-const MARK_SIGMA_PX: f64 = 0.3;
-
-/// The prior's standard deviation for the distortion centre, in half diagonals.
-const CENTRE_SIGMA: f64 = 0.25;
-
-/// The F statistic (reduction of the squared residuals per added parameter, over the residual
-/// variance) above which the fitted distortion centre is kept: F(2, 90) is 7.4 at p = 0.001.
-const CENTRE_F: f64 = 10.0;
 
 /// A fitted camera.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -269,7 +259,7 @@ impl CentrePrior {
     fn at_image_centre(start: &CameraModel) -> Self {
         Self {
             centre_px: start.centre_px,
-            weight: MARK_SIGMA_PX / (CENTRE_SIGMA * start.radius_px),
+            weight: CAMERA.mark_sigma_px / (CAMERA.centre_sigma_half_diagonals * start.radius_px),
         }
     }
 
@@ -324,7 +314,7 @@ fn select(
     let (c_held, c_free) = (marks_cost(&held, s, p, idx), marks_cost(&free, s, p, idx));
     let variance = (c_free / dof as f64).max(1e-12);
     let f = 0.5 * (c_held - c_free) / variance;
-    Some(if f > CENTRE_F { free } else { held })
+    Some(if f > CAMERA.centre_f { free } else { held })
 }
 
 /// Levenberg-Marquardt on the pixel residuals of the marks `idx` (Marquardt's diagonal scaling),
@@ -399,5 +389,6 @@ fn lm(
     Some(m)
 }
 
+mod params;
 #[cfg(test)]
 mod tests;
