@@ -3,16 +3,14 @@
 //! square + the orientation dot near the top-left corner).
 
 mod identify;
+mod params;
 
 use crate::trace::paper::PaperMap;
 use crate::trace::plane::dist;
 use crate::trace::raster::{components, CoarseMap};
 use crate::trace::TraceError;
 use image::RgbImage;
-
-/// A block is "black" when its darkest red value is below this fraction of the paper level
-/// (black print reflects < 10 %; graphite 30-60 %).
-const BLACK_FRACTION: f32 = 0.22;
+use params::FIDUCIALS;
 
 /// A dark disc found in the scan.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -58,14 +56,9 @@ pub(crate) fn find(
     paper: &PaperMap,
     spacing_mm: f64,
 ) -> Result<Fiducials, TraceError> {
-    let discs = candidate_discs(img, map, paper, BLACK_FRACTION);
+    let discs = candidate_discs(img, map, paper, FIDUCIALS.black_fraction);
     identify::identify(&discs, spacing_mm)
 }
-
-/// A block under this fraction of the paper level is dark enough to be print through any tone
-/// curve the tracer undoes (black at 0.03-0.08 of the paper is 0.2-0.35 through sRGB or a gamma
-/// of 1/2.2); used only to find the marks whose black measures the curve.
-const ENCODED_BLACK_FRACTION: f32 = 0.5;
 
 /// The print's black relative to the paper around it, as the image holds it: the median over
 /// the four corner discs of the median red value within a quarter of each disc's diameter of
@@ -84,7 +77,7 @@ pub(crate) fn black_of_paper(
             // Against the paper around the marks: inside a disc several blocks wide the paper
             // map holds the disc, which a black lifted by a tone curve is not far below.
             let ceiling = paper.ceiling(3);
-            let discs = candidate_discs(img, map, &ceiling, ENCODED_BLACK_FRACTION);
+            let discs = candidate_discs(img, map, &ceiling, FIDUCIALS.encoded_black_fraction);
             identify::corner_discs(&discs, spacing_mm)?
         }
     };

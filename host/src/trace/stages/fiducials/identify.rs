@@ -5,6 +5,7 @@
 //! printed. Among those, the one that also explains the most sheet-v2 ring dots wins; a mirrored
 //! winner is refused.
 
+use super::params::FIDUCIALS;
 use super::{Disc, Fiducials};
 use crate::sheet::{
     fiducial_centres_mm, orientation_dot_mm, ring_dots_mm, FIDUCIAL_DIAMETER_MM,
@@ -12,12 +13,6 @@ use crate::sheet::{
 };
 use crate::trace::plane::dist;
 use crate::trace::{Homography, TraceError};
-
-/// How many of the largest discs are tried as corners.
-const MAX_CORNER_CANDIDATES: usize = 16;
-/// A mark matches its printed place when the corner homography puts it this close, mm (at the
-/// nominal print scale; generous: the lens may bend the sheet's edges by a millimetre or two).
-const MATCH_TOL_MM: f64 = 3.0;
 
 struct Labelling {
     corners: [Disc; 4],
@@ -51,7 +46,7 @@ pub(crate) fn corner_discs(discs: &[Disc], spacing_mm: f64) -> Option<[Disc; 4]>
 
 /// The best labelling of `discs`, and whether any four of them made a plausible square.
 fn best_labelling(discs: &[Disc], spacing_mm: f64) -> (Option<Labelling>, bool) {
-    let cand = &discs[..discs.len().min(MAX_CORNER_CANDIDATES)];
+    let cand = &discs[..discs.len().min(FIDUCIALS.max_corner_candidates)];
     let n = cand.len();
     let mut best: Option<Labelling> = None;
     let mut any_quad = false;
@@ -169,7 +164,7 @@ fn label(
     spacing_mm: f64,
 ) -> Option<Labelling> {
     let f = spacing_mm / FIDUCIAL_SPACING_MM;
-    let tol = MATCH_TOL_MM * f;
+    let tol = FIDUCIALS.match_tol_mm * f;
     let dot_mm = orientation_dot_mm(spacing_mm);
     let corner_d = q[0].diameter_px;
     let is_corner = |d: &Disc| q.iter().any(|c| c.centre_px == d.centre_px);
