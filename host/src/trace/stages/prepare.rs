@@ -5,10 +5,13 @@
 //! its rows alone and the bands are put together in order, so the maps are the same whatever
 //! the number of threads.
 
+mod params;
+
 use crate::trace::paper::PaperMap;
 use crate::trace::raster::CoarseMap;
 use crate::trace::tone::Tone;
 use image::RgbImage;
+use params::PREPARE;
 
 /// The whole-image maps of one image, ready for [`crate::trace::trace_prepared`].
 #[derive(Debug, Clone)]
@@ -42,7 +45,7 @@ impl Prepared {
         let bands: Vec<&[u8]> = raw.chunks(band_bytes.max(1)).collect();
         let threads = std::thread::available_parallelism()
             .map_or(1, |n| n.get())
-            .clamp(1, 8)
+            .clamp(1, PREPARE.max_threads)
             .min(bands.len().max(1));
         let per = bands.len().div_ceil(threads.max(1)).max(1);
         let geometry = acc.geometry();
@@ -116,10 +119,10 @@ pub(crate) struct Bands {
 
 impl Bands {
     pub(crate) fn new(iw: usize, ih: usize) -> Self {
-        let paper_block = PaperMap::block_size_for_dims(iw, ih).max(4);
+        let paper_block = PaperMap::block_size_for_dims(iw, ih).max(PREPARE.min_paper_block_px);
         let coarse_k = CoarseMap::block_size_for_dims(iw, ih);
         let l = lcm(paper_block, coarse_k);
-        let band_rows = l * 128usize.div_ceil(l);
+        let band_rows = l * PREPARE.min_band_rows.div_ceil(l);
         Self {
             iw,
             ih,
