@@ -6,13 +6,15 @@ use crate::trace::band::BAND_HALF_MM;
 /// The numbers of the drawn-lines stage: which paths are passes of a line, how a line's ends are read, carried on and met.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub(in crate::trace) struct LinesParams {
-    /// Passes of one line lie within this of its centre, mm.
+    /// Passes of one line lie within this of its centre, mm. Wider: passes drawn further apart
+    /// are one line, and two close parallel lines become one.
     pub(in crate::trace) alongside_mm: f64,
     /// A path is a pass of a line with this much of it in the line's band (or half of it), mm.
     pub(in crate::trace) pass_mm: f64,
     /// Direction of a path at a point: the chord over this arc length either side of it, mm.
     pub(in crate::trace) dir_half_mm: f64,
-    /// A mark meeting a pass's end at more than this to it runs across the line, degrees.
+    /// A mark meeting a pass's end at more than this to it runs across the line, degrees. Lower:
+    /// more marks read as across (ending a line) rather than continuing it.
     pub(in crate::trace) across_deg: f64,
     /// Direction of a line's end (to carry it on past the end, and to tell whether another line
     /// continues it): the chord over this length, mm (a zigzag pass turns often within a few mm).
@@ -23,7 +25,7 @@ pub(in crate::trace) struct LinesParams {
     pub(in crate::trace) line_spacing_mm: f64,
     /// Marks shorter than this are not followed (dust), mm.
     pub(in crate::trace) min_dot_mark_mm: f64,
-    /// A path turning by more than this between the chords of [`super::DIR_HALF_MM`] before and after a
+    /// A path turning by more than this between the chords of `dir_half_mm` before and after a
     /// point turns a corner there, degrees.
     pub(in crate::trace) corner_deg: f64,
     /// Direction of a path's point for following a band: the chord over this either side, mm.
@@ -35,14 +37,15 @@ pub(in crate::trace) struct LinesParams {
     /// band's width: passes drawn apart).
     pub(in crate::trace) join_mm: f64,
     /// Walks continue each other only where their directions (over `end_chord_mm`) agree within
-    /// this, degrees.
+    /// this, degrees. Wider: lines joined round sharper corners.
     pub(in crate::trace) join_deg: f64,
     /// A line ends on a line across it whose centreline lies within this ahead of its end, mm.
     pub(in crate::trace) meet_mm: f64,
     /// ... or within this, where the stretch beyond the other's band is drawn (no stretch longer
     /// than `inkless_ok_mm` without a written point within 1 mm) or else a skip (bridged), mm.
     pub(in crate::trace) meet_inked_mm: f64,
-    /// (With the field above.)
+    /// The longest stretch without a written point within 1 mm that still counts as drawn
+    /// (for `meet_inked_mm`), mm. Longer: a skip just before the line across reads as drawn.
     pub(in crate::trace) inkless_ok_mm: f64,
     /// ... within this of the end's direction, mm.
     pub(in crate::trace) step_off_mm: f64,

@@ -4,17 +4,20 @@
 /// The numbers of the link stage: how ends are read, which links are admissible, how bridges and crossings are built and what left out is judged.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub(in crate::trace) struct LinkParams {
-    /// Marks shorter than this are specks (dust, grain), mm.
+    /// Marks shorter than this are specks (dust, grain), mm. Longer: more dust ignored, and a
+    /// short piece of the path between two skips listed as a speck, not a part.
     pub(in crate::trace) min_mark_mm: f64,
-    /// Length of an end used for its tangent and curvature, mm.
+    /// Length of an end used for its tangent and curvature, mm. Longer: steadier against the
+    /// centres' scatter, blinder to a bend near the end.
     pub(in crate::trace) end_span_mm: f64,
     /// The part of an end left out of its reading and bridged over where it may be pulled aside:
     /// next to a crossing the path is cut at, and on a plotter's passes ([`super::Strokes::PASSES`]), mm.
     pub(in crate::trace) pulled_end_mm: f64,
     /// An end's curvature is read only from a span of at least this (shorter ones cannot tell it
-    /// from the centreline's noise), mm, and is at most this, 1/mm.
+    /// from the centreline's noise), mm, and is at most this, 1/mm. A shorter span or a higher
+    /// clamp carries tighter bends across a gap, and noise with them.
     pub(in crate::trace) k_span_mm: f64,
-    /// (With the field above.)
+    /// The clamp on an end's curvature (see `k_span_mm`), 1/mm.
     pub(in crate::trace) max_k_per_mm: f64,
     /// Length of an end a crest's tangent is read over, mm: short against a crest of 3 mm radius,
     /// long enough that the centres' scatter turns it by a few degrees at most.
@@ -22,19 +25,21 @@ pub(in crate::trace) struct LinkParams {
     /// A short end's last chord, mm, and how far it may turn off its span's circle, deg, for the
     /// span's own tangent to hold (a hook turns it).
     pub(in crate::trace) hook_chord_mm: f64,
-    /// (With the field above.)
+    /// How far a short end's last chord may turn off its span's circle (see `hook_chord_mm`),
+    /// degrees. Wider: more short ends keep their own tangent, hooks included.
     pub(in crate::trace) hook_deg: f64,
     /// Scatter of a centre about the stroke's true centreline, mm, read into a short span's sag.
     pub(in crate::trace) sag_noise_mm: f64,
-    /// A piece turning by more than this between its chords of `kink_chord_mm` is cut there.
+    /// A piece turning by more than this between its chords of `kink_chord_mm` is cut there. Lower: gentler
+    /// corners cut (more links to make), fewer strokes crossing the path followed onto.
     pub(in crate::trace) kink_deg: f64,
-    /// (With the field above.)
+    /// The chord length a kink's turn is measured between (see `kink_deg`), mm.
     pub(in crate::trace) kink_chord_mm: f64,
     /// Where the ends' arcs miss each other, the mean curvature a link may bend by from the middle
     /// of one end's span to the other's (a pencil crest of 3 mm radius), 1/mm, and the least share
     /// of the turn each end takes from the chord between them ([`super::continuity::bends_through`]).
     pub(in crate::trace) max_joint_k_per_mm: f64,
-    /// (With the field above.)
+    /// The least share of the turn each end takes from the chord (see `max_joint_k_per_mm`).
     pub(in crate::trace) joint_share: f64,
     /// Ends nearer than this were linked or not in the first round on their turn alone (see
     /// [`super::continuity`]), mm.
@@ -44,9 +49,11 @@ pub(in crate::trace) struct LinkParams {
     /// A mark ending this close to the path touches it; the path is bridged over this radius
     /// around the place, mm.
     pub(in crate::trace) cross_touch_mm: f64,
-    /// (With the field above.)
+    /// The radius the path is bridged over around a touching mark (see `cross_touch_mm`), mm.
+    /// Larger: the other mark's graphite kept off the path, at the cost of more bridged length.
     pub(in crate::trace) cross_cut_mm: f64,
-    /// (With the field above.)
+    /// A cut stretch longer than this along the path is kept (a mark running along the path,
+    /// not across it), mm. Longer: marks along the path cut out too, as long bridges.
     pub(in crate::trace) cross_max_mm: f64,
     /// Another run's end this close to the path (the tracker stopped it where it met the path's
     /// graphite) meets the path there, mm.
@@ -58,7 +65,8 @@ pub(in crate::trace) struct LinkParams {
     /// A mark meeting the path at two places at least this far apart runs from one to the other
     /// (a second run's arc between two crossings, or a branch the path might have taken), mm.
     pub(in crate::trace) run_apart_mm: f64,
-    /// A left-out line at least this share of the path's length is a drawn line of its own.
+    /// A left-out line at least this share of the path's length is a drawn line of its own. Lower:
+    /// more left-out lines make the trace incomplete (exit 1).
     pub(in crate::trace) separate_share: f64,
 }
 

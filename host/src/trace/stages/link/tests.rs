@@ -4,7 +4,7 @@ use super::continuity::continuity;
 use super::end::{end_with, reads_own_bend, End};
 use super::{link, Linking, Network, Strokes};
 use crate::trace::chain::PieceMm;
-use crate::trace::plane::dist;
+use crate::trace::plane::{dist, farthest_from};
 use rand::SeedableRng;
 use rand_chacha::ChaCha8Rng;
 use rand_distr::{Distribution, Normal};
@@ -147,15 +147,7 @@ fn a_skip_on_a_crest_between_long_pieces_is_bridged() {
 /// The farthest any point of `pts` within `reach` mm of `centre` lies from the dense polyline
 /// `truth`, mm.
 fn worst_near(pts: &[[f64; 2]], truth: &[[f64; 2]], centre: [f64; 2], reach: f64) -> f64 {
-    pts.iter()
-        .filter(|p| dist(**p, centre) <= reach)
-        .map(|p| {
-            truth
-                .iter()
-                .map(|q| dist(*p, *q))
-                .fold(f64::INFINITY, f64::min)
-        })
-        .fold(0.0, f64::max)
+    farthest_from(pts.iter().filter(|p| dist(**p, centre) <= reach), truth)
 }
 
 /// A wave (curvature up to 0.15/mm, changing sign every 25 mm) with a 5.5 mm skip across a
