@@ -2,7 +2,8 @@
 //! unit and what it trades off; the per-image numbers (scale, step, width, least mass) are
 //! [`super::TrackParams`], from the options.
 
-/// The numbers of the centreline stage: when faint graphite ends a piece, and how a walk meets its own track.
+/// The numbers of the centreline stage: when faint graphite ends a piece, and how a walk meets its
+/// own track.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub(in crate::trace) struct CentrelineParams {
     /// Faint graphite is a running mass under this many times [`super::TrackParams::min_mass`]:

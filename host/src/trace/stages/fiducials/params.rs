@@ -1,7 +1,8 @@
 //! The fiducial stage's tuned numbers ([`super::fiducials`]) in one place, each with its unit and
 //! what it trades off.
 
-/// The numbers of the fiducial search: what is black print, how many corners are tried, how close a mark must match.
+/// The numbers of the fiducial search: what is black print, how many corners are tried, how close a
+/// mark must match.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub(in crate::trace) struct FiducialParams {
     /// A block is "black" when its darkest red value is below this fraction of the paper level

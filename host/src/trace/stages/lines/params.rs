@@ -3,7 +3,8 @@
 
 use crate::trace::band::BAND_HALF_MM;
 
-/// The numbers of the drawn-lines stage: which paths are passes of a line, how a line's ends are read, carried on and met.
+/// The numbers of the drawn-lines stage: which paths are passes of a line, how a line's ends are
+/// read, carried on and met.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub(in crate::trace) struct LinesParams {
     /// Passes of one line lie within this of its centre, mm. Wider: passes drawn further apart

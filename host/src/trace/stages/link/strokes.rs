@@ -40,7 +40,8 @@ impl Strokes {
         relink: true,
         smooth_centres: true,
     };
-    /// A plotter's passes (`--paths`): ends read from `LINK.pulled_end_mm` back, centres as tracked.
+    /// A plotter's passes (`--paths`): ends read from `LINK.pulled_end_mm` back, centres as
+    /// tracked.
     pub(in crate::trace) const PASSES: Self = Self {
         end_skip_mm: LINK.pulled_end_mm,
         crest_tangent: false,
