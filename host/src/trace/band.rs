@@ -9,8 +9,8 @@
 //! farther (up to [`reach_mm`], to a path only) it is missing; nothing ahead ends the line.
 //! The points in every window are the line's: the paths they belong to are its passes.
 
-use super::link::Gap;
 use super::plane::{dist, sub, unit, Grid};
+use super::stages::link::Gap;
 
 /// A line's band reaches this far either side of its centre, mm.
 pub const BAND_HALF_MM: f64 = 3.0;

@@ -3,7 +3,7 @@
 //! the whole-image maps ([`super::png_read`]). Other images (JPEG, interlaced PNG) are decoded
 //! by the `image` crate and their maps built on all cores. The trace is written as CSV.
 
-use super::prepare::Prepared;
+use super::stages::prepare::Prepared;
 use super::TraceError;
 use crate::io::atomic::write_text_atomic;
 use crate::io::finite::TextFormat;

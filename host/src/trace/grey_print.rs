@@ -8,7 +8,7 @@
 //! run says so.
 
 use super::chain::{polyline_length, PieceMm, Stroke};
-use super::link::length_near;
+use super::stages::link::length_near;
 use crate::sheet::ReferencePath;
 
 /// Centres within this of a printed path are seen on it, mm (the mapping's error and the

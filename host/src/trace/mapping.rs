@@ -1,9 +1,9 @@
 //! How pixels become sheet mm: the camera fitted on the printed marks (fiducial mapping) or a
 //! plain scale about the image centre.
 
-use super::centreline::Occluders;
 use super::paper::PaperMap;
 use super::raster::CoarseMap;
+use super::stages::centreline::Occluders;
 use super::{
     fiducials, flatness, CameraModel, Fiducials, FitQuality, Homography, Mapping, TraceError,
     TraceOptions,

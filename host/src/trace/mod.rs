@@ -30,18 +30,13 @@
 mod area;
 mod band;
 mod bridge_fit;
-pub mod camera;
-mod centreline;
 pub mod chain;
 mod error;
-pub mod fiducials;
 mod files;
 pub mod flatness;
 pub mod grey_print;
 pub mod homography;
 mod ink;
-mod lines;
-pub mod link;
 mod mapping;
 mod options;
 pub mod overlay;
@@ -49,12 +44,15 @@ mod paper;
 mod paths;
 mod plane;
 mod png_read;
-mod prepare;
 mod probe;
 mod raster;
 mod smooth;
+pub mod stages;
 pub mod synth;
 pub mod tone;
+
+pub use stages::{camera, fiducials, link};
+use stages::{centreline, lines, prepare};
 
 pub use camera::{CameraModel, FitQuality};
 pub use chain::{polyline_length, resample, Stroke};

@@ -26,7 +26,7 @@ const PAPER_PERCENTILE: f64 = 0.8;
 
 impl PaperMap {
     /// Builds the map with blocks of `block` pixels in one pass (the reference for the banded
-    /// build of [`super::prepare`]).
+    /// build of [`super::stages::prepare`]).
     #[cfg(test)]
     pub fn build(img: &RgbImage, block: usize) -> Self {
         let block = block.max(4);

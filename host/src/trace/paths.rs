@@ -1,13 +1,13 @@
 //! Every drawn line of a drawing as a path of its own (`rigctl trace --paths DIR`): the chains
-//! of linked pieces ([`super::link`]) of at least [`MIN_MARK_MM`] are each judged as the drawn
+//! of linked pieces ([`super::stages::link`]) of at least [`MIN_MARK_MM`] are each judged as the drawn
 //! path is in the single-path mode (bridged across the marks that touch it, its bridges
 //! refitted, the gaps beyond its free ends and the marks that may continue it listed); shorter
 //! chains are strays (dust, flicks), listed apart. Written as one CSV `x,y` per path and a JSON
 //! summary.
 
 use super::chain::{resample, PieceMm, Stroke};
-use super::lines::{self, DrawnLine, Loose, LooseWhat};
-use super::link::{orient, Gap, LeftOut, LeftOutKind, Network, Strokes, MIN_MARK_MM};
+use super::stages::lines::{self, DrawnLine, Loose, LooseWhat};
+use super::stages::link::{orient, Gap, LeftOut, LeftOutKind, Network, Strokes, MIN_MARK_MM};
 use super::{write_csv, CameraModel, Fiducials, TraceError, TraceOptions};
 use crate::io::atomic::write_bytes_atomic;
 use serde_json::{json, Value};
@@ -57,7 +57,7 @@ pub struct Drawing {
     /// The paths, longest first.
     pub paths: Vec<DrawnPath>,
     /// The drawn lines: the paths that run alongside each other grouped as the passes of one
-    /// line ([`super::lines`]), longest first.
+    /// line ([`super::stages::lines`]), longest first.
     pub lines: Vec<DrawnLine>,
     /// Marks shorter than a path (dust, fibres, flicks), longest first.
     pub strays: Vec<LeftOut>,
@@ -80,7 +80,7 @@ impl Drawing {
 
 /// Links `pieces` and judges every chain of path size. `None` without pieces.
 pub(super) fn drawing(pieces: &[PieceMm], opts: &TraceOptions, px_per_mm: f64) -> Option<Drawing> {
-    let net = Network::build(pieces, opts.max_gap_mm, Strokes::Passes)?;
+    let net = Network::build(pieces, opts.max_gap_mm, Strokes::PASSES)?;
     let min_len_mm = MIN_MARK_MM.max(opts.min_stroke_mm);
     let mut paths = Vec::new();
     let mut strays = Vec::new();

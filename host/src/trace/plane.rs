@@ -16,6 +16,23 @@ pub(crate) fn dist(a: [f64; 2], b: [f64; 2]) -> f64 {
 }
 
 /// `d` scaled to unit length; `None` for a zero vector.
+/// The farthest any of `pts` lies from the nearest of the dense points `truth`, mm (0 without
+/// points): how far a written polyline strays from a known curve, in tests.
+#[cfg(test)]
+pub(crate) fn farthest_from<'a>(
+    pts: impl IntoIterator<Item = &'a [f64; 2]>,
+    truth: &[[f64; 2]],
+) -> f64 {
+    pts.into_iter()
+        .map(|p| {
+            truth
+                .iter()
+                .map(|q| dist(*p, *q))
+                .fold(f64::INFINITY, f64::min)
+        })
+        .fold(0.0, f64::max)
+}
+
 pub(crate) fn unit(d: [f64; 2]) -> Option<[f64; 2]> {
     let n = norm(d);
     (n > 1e-12).then(|| [d[0] / n, d[1] / n])

@@ -2,7 +2,7 @@
 //! the `png` crate (the chunks, every CRC checked, inflated and unfiltered, palette and 1-4 bit
 //! samples expanded, `tRNS` turned to alpha); a second thread turns each batch of rows into the
 //! RGB image and reduces every finished band of rows to the whole-image maps
-//! ([`super::prepare`]). Inflating one zlib stream is sequential and is most of the time a large
+//! ([`super::stages::prepare`]). Inflating one zlib stream is sequential and is most of the time a large
 //! scan takes to read, so on two cores the RGB image and the maps come almost free. Interlaced
 //! PNGs (their rows come pass by pass), rows over 16 MB and a malformed header are left to the
 //! `image` crate, which also words their errors.
@@ -12,7 +12,7 @@
 //! rounded to 8 bits; a file that names its tone curve (`sRGB`, `iCCP`, `gAMA`) is then
 //! linearised through it row by row, before the maps are built ([`super::tone`]).
 
-use super::prepare::{BandMaps, Bands, Geometry, Prepared};
+use super::stages::prepare::{BandMaps, Bands, Geometry, Prepared};
 use image::error::{
     DecodingError, ImageFormatHint, LimitError, LimitErrorKind, ParameterError, ParameterErrorKind,
 };

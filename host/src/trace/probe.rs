@@ -9,11 +9,11 @@
 //! [`HOLE_MM`] between them (a line drawn in loops crosses the probe again and again), the
 //! first within `--max-gap-mm` of the end, mean the line may go on: it is not whole.
 
-use super::link::{LeftOut, LeftOutKind};
 use super::mapping::SheetToPx;
 use super::paper::PaperMap;
 use super::paths::Drawing;
 use super::plane::{unit, Grid};
+use super::stages::link::{LeftOut, LeftOutKind};
 use image::RgbImage;
 
 /// Darkness (1 - the lightest of the channels relative to the paper's) of a pixel that is ink.
@@ -150,8 +150,8 @@ pub(super) fn mark_untraced_ink(
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::trace::lines::DrawnLine;
     use crate::trace::paths::open_path;
+    use crate::trace::stages::lines::DrawnLine;
     use image::Rgb;
 
     /// A line written from (-20, 0) to (0, 0) mm and inked there, with `ahead(x, y)` inked

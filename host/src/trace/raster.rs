@@ -60,7 +60,7 @@ impl CoarseMap {
         (w.min(h) / 1240).max(1)
     }
 
-    /// The map in one pass (the reference for the banded build of [`super::prepare`]).
+    /// The map in one pass (the reference for the banded build of [`super::stages::prepare`]).
     #[cfg(test)]
     pub fn build(img: &RgbImage, k: usize) -> Self {
         let (iw, ih) = (img.width() as usize, img.height() as usize);

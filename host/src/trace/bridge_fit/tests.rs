@@ -2,6 +2,7 @@
 //! least-squares pieces.
 
 use super::*;
+use crate::trace::plane::farthest_from;
 
 /// Written points of `f` at 0.25 mm steps of `u` outside the gap, a straight first guess
 /// inside it.
@@ -34,14 +35,7 @@ fn worst_off(pts: &[[f64; 2]], f: impl Fn(f64) -> [f64; 2], len: f64) -> f64 {
     let truth: Vec<[f64; 2]> = (0..=(len * 100.0) as usize)
         .map(|k| f(k as f64 * 0.01))
         .collect();
-    pts.iter()
-        .map(|p| {
-            truth
-                .iter()
-                .map(|q| dist(*p, *q))
-                .fold(f64::INFINITY, f64::min)
-        })
-        .fold(0.0, f64::max)
+    farthest_from(pts, &truth)
 }
 
 #[test]

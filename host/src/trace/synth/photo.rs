@@ -175,6 +175,7 @@ impl Camera {
             d = [dd[0] / g, dd[1] / g];
         }
         let ray_c = [d[0] / self.f, d[1] / self.f, 1.0];
+        // world ray = R^T ray_c
         let ray = [
             self.rot[0][0] * ray_c[0] + self.rot[1][0] * ray_c[1] + self.rot[2][0] * ray_c[2],
             self.rot[0][1] * ray_c[0] + self.rot[1][1] * ray_c[1] + self.rot[2][1] * ray_c[2],
@@ -185,23 +186,7 @@ impl Camera {
 
     /// Pixel -> sheet mm (the ray's intersection with the sheet plane).
     pub fn unproject(&self, p: [f64; 2]) -> Option<[f64; 2]> {
-        let dd = [p[0] - self.c[0], p[1] - self.c[1]];
-        let mut d = dd;
-        for _ in 0..30 {
-            let r2 = (d[0] * d[0] + d[1] * d[1]) / (self.f * self.f);
-            let g = 1.0 + self.k[0] * r2 + self.k[1] * r2 * r2;
-            d = [dd[0] / g, dd[1] / g];
-        }
-        let ray_c = [d[0] / self.f, d[1] / self.f, 1.0];
-        // world ray = R^T ray_c
-        let ray = [
-            self.rot[0][0] * ray_c[0] + self.rot[1][0] * ray_c[1] + self.rot[2][0] * ray_c[2],
-            self.rot[0][1] * ray_c[0] + self.rot[1][1] * ray_c[1] + self.rot[2][1] * ray_c[2],
-            self.rot[0][2] * ray_c[0] + self.rot[1][2] * ray_c[1] + self.rot[2][2] * ray_c[2],
-        ];
-        if ray[2] >= -1e-12 {
-            return None;
-        }
+        let ray = self.ray(p)?;
         let l = -self.centre[2] / ray[2];
         Some([self.centre[0] + l * ray[0], self.centre[1] + l * ray[1]])
     }
