@@ -172,7 +172,7 @@ struct MassEntry {
     com_mm: [f64; 3],
 }
 
-fn parse_axis_op(op: &str) -> Option<(Motion, Axis)> {
+pub(super) fn parse_axis_op(op: &str) -> Option<(Motion, Axis)> {
     let motion = match op.as_bytes().first()? {
         b'r' => Motion::Rot,
         b't' => Motion::Trans,

@@ -13,7 +13,7 @@ use super::time_terms::TimeTerms;
 use super::transmission::JointTerms;
 
 /// The `op` of an elementary transform.
-fn op_name(motion: Motion, axis: Axis) -> &'static str {
+pub(super) fn op_name(motion: Motion, axis: Axis) -> &'static str {
     match (motion, axis) {
         (Motion::Rot, Axis::X) => "rx",
         (Motion::Rot, Axis::Y) => "ry",
@@ -47,7 +47,7 @@ pub fn toml_string(s: &str) -> String {
 }
 
 /// Round-trip-exact decimal form of a finite f64 that TOML reads as a float.
-fn fmt_f64(v: f64) -> String {
+pub(super) fn fmt_f64(v: f64) -> String {
     format!("{v:?}")
 }
 

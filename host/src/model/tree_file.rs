@@ -54,7 +54,8 @@ use std::path::Path;
 
 use super::chain::{Axis, Motion};
 use super::error::ModelError;
-use super::toml_write::toml_string;
+use super::toml_file::parse_axis_op;
+use super::toml_write::{fmt_f64, op_name, toml_string};
 use super::tree::{Tip, Tree, TreeElem, TreeJoint, TreeMass, TREE_SHARED_PARAMS};
 
 #[derive(Debug, Deserialize)]
@@ -121,40 +122,12 @@ pub fn is_tree_text(text: &str) -> bool {
         .is_ok_and(|t| t.contains_key("tip"))
 }
 
-fn op(op: &str) -> Option<(Motion, Axis)> {
-    let motion = match op.as_bytes().first()? {
-        b'r' => Motion::Rot,
-        b't' => Motion::Trans,
-        _ => return None,
-    };
-    let axis = match op.get(1..)? {
-        "x" => Axis::X,
-        "y" => Axis::Y,
-        "z" => Axis::Z,
-        _ => return None,
-    };
-    Some((motion, axis))
-}
-
-fn op_name(motion: Motion, axis: Axis) -> String {
-    let m = match motion {
-        Motion::Rot => 'r',
-        Motion::Trans => 't',
-    };
-    let a = match axis {
-        Axis::X => 'x',
-        Axis::Y => 'y',
-        Axis::Z => 'z',
-    };
-    format!("{m}{a}")
-}
-
 fn constant(e: &ElemEntry, at: &str) -> Result<TreeElem, String> {
     if e.joint.is_some() {
         return Err(format!("{at}: a joint belongs in [[chain]]"));
     }
-    let (motion, axis) =
-        op(&e.op).ok_or_else(|| format!("{at}: op \"{}\": use rx ry rz tx ty tz", e.op))?;
+    let (motion, axis) = parse_axis_op(&e.op)
+        .ok_or_else(|| format!("{at}: op \"{}\": use rx ry rz tx ty tz", e.op))?;
     if !e.value.is_finite() {
         return Err(format!("{at}: value = {} is not finite", e.value));
     }
@@ -187,7 +160,7 @@ fn build(f: TreeFile) -> Result<Tree, String> {
                 "{at}: joint {j}: joints must come in order, expected {expected}"
             ));
         }
-        let prismatic = match op(&e.op) {
+        let prismatic = match parse_axis_op(&e.op) {
             Some((Motion::Rot, Axis::Z)) => false,
             Some((Motion::Trans, Axis::Z)) => true,
             _ => return Err(format!("{at}: a joint is rz (revolute) or tz (prismatic)")),
@@ -292,10 +265,6 @@ fn build(f: TreeFile) -> Result<Tree, String> {
     };
     tree.validate().map_err(|e| e.to_string())?;
     Ok(tree)
-}
-
-fn fmt_f64(v: f64) -> String {
-    format!("{v:?}")
 }
 
 fn write_elem(s: &mut String, table: &str, e: &TreeElem) {

@@ -9,7 +9,7 @@
 //! configurations (it can fail). On the Katana without a URDF: keep-out boxes are kept and the
 //! output says that no collision check was made.
 
-use std::path::{Path, PathBuf};
+use std::path::Path;
 use std::process::Command;
 
 use rand::seq::SliceRandom;
@@ -17,43 +17,10 @@ use rand::{Rng, SeedableRng};
 
 use super::common::record::record;
 use super::common::spawn::rigctl;
-use super::common::{py_script, python_env};
+use super::common::{py_script, python_env, robots_share};
 
 const JOINTS: &str =
     "panda_joint1,panda_joint2,panda_joint3,panda_joint4,panda_joint5,panda_joint6,panda_joint7";
-
-/// The installed `example-robot-data` share folder (installed into the venv when absent).
-fn robots_share(py: &Path) -> Option<PathBuf> {
-    let find = || {
-        let o = Command::new(py)
-            .args([
-                "-c",
-                "import sysconfig, pathlib; print(pathlib.Path(sysconfig.get_paths()['purelib']) / 'cmeel.prefix' / 'share')",
-            ])
-            .output()
-            .ok()?;
-        let share = PathBuf::from(String::from_utf8_lossy(&o.stdout).trim());
-        share
-            .join("example-robot-data/robots/panda_description/urdf/panda.urdf")
-            .is_file()
-            .then_some(share)
-    };
-    if let Some(s) = find() {
-        return Some(s);
-    }
-    let _ = Command::new(py)
-        .args(["-m", "pip", "install", "-q", super::common::PY_ROBOTS])
-        .output();
-    let found = find();
-    if found.is_none() {
-        assert!(
-            !rigctl::in_ci(),
-            "example-robot-data cannot be installed in the venv"
-        );
-        eprintln!("SKIPPED plan_safety: example-robot-data not installed");
-    }
-    found
-}
 
 fn rows(path: &Path) -> Vec<Vec<f64>> {
     std::fs::read_to_string(path)
@@ -97,7 +64,11 @@ fn panda_plans_have_no_collision_and_keep_the_margins() {
     let Some(py) = python_env("plan_safety") else {
         return;
     };
-    let Some(share) = robots_share(&py) else {
+    let Some(share) = robots_share(
+        &py,
+        "example-robot-data/robots/panda_description/urdf/panda.urdf",
+        "plan_safety",
+    ) else {
         return;
     };
     let panda = share.join("example-robot-data/robots/panda_description");

@@ -8,24 +8,9 @@ use crate::common;
 use crate::common::record::record;
 use crate::common::spawn::{self, output};
 
+use crate::common::spawn::{output_ok as ok, path_arg as s};
 use std::path::Path;
-use std::process::{Command, Output};
-
-fn ok(args: &[&str]) -> Output {
-    let out = output(args);
-    assert!(
-        out.status.success(),
-        "rigctl {}: {}\n{}",
-        args.join(" "),
-        String::from_utf8_lossy(&out.stdout),
-        String::from_utf8_lossy(&out.stderr)
-    );
-    out
-}
-
-fn s(p: &Path) -> &str {
-    p.to_str().expect("utf-8 path")
-}
+use std::process::Command;
 
 fn write_bag(py: &Path, args: &[&str]) {
     let out = Command::new(py)

@@ -6,28 +6,13 @@
 
 use crate::common;
 use crate::common::record::record;
-use crate::common::spawn::{self, output};
+use crate::common::spawn;
 
+use crate::common::spawn::{output_ok as rigctl, path_arg as s};
 use std::path::{Path, PathBuf};
-use std::process::{Command, Output};
+use std::process::Command;
 
 use rigctl::model::{Model, Tilt};
-
-fn rigctl(args: &[&str]) -> Output {
-    let out = output(args);
-    assert!(
-        out.status.success(),
-        "rigctl {}: {}\n{}",
-        args.join(" "),
-        String::from_utf8_lossy(&out.stdout),
-        String::from_utf8_lossy(&out.stderr)
-    );
-    out
-}
-
-fn s(p: &Path) -> &str {
-    p.to_str().expect("utf-8 path")
-}
 
 /// Reads a CSV of numbers with a header (comment lines `#` skipped): (header, rows).
 fn read_csv(path: &Path) -> (Vec<String>, Vec<Vec<String>>) {

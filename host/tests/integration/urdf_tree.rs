@@ -9,64 +9,23 @@
 //! elements, parameters, joints and limits; the masses differ where the lone chain carries the
 //! other arm as a rigid lump).
 
+use crate::common::spawn::{output_ok as run, path_arg as s};
 use std::path::{Path, PathBuf};
-use std::process::{Command, Output};
+use std::process::Command;
 
 use rand::{Rng, SeedableRng};
 
 use crate::common::record::record;
 use crate::common::spawn::output;
-use crate::common::{py_script, python_env};
+use crate::common::{py_script, python_env, robots_share};
 use rigctl::model::{Model, Tilt, Tree};
 
 const TIPS: [&str; 2] = ["gripper_left_base_link", "gripper_right_base_link"];
 
-fn run(args: &[&str]) -> Output {
-    let out = output(args);
-    assert!(
-        out.status.success(),
-        "rigctl {}: {}\n{}",
-        args.join(" "),
-        String::from_utf8_lossy(&out.stdout),
-        String::from_utf8_lossy(&out.stderr)
-    );
-    out
-}
-
-fn s(p: &Path) -> &str {
-    p.to_str().expect("utf-8 path")
-}
-
-/// TALOS's URDF in the installed `example-robot-data` (installed into the venv when absent, as
-/// `plan_safety` does); `None` after a SKIPPED message when it cannot be had.
+/// TALOS's URDF in the installed `example-robot-data` ([`robots_share`]).
 fn talos_urdf(test: &str, py: &Path) -> Option<PathBuf> {
-    let find = || {
-        let o = Command::new(py)
-            .args([
-                "-c",
-                "import sysconfig, pathlib; print(pathlib.Path(sysconfig.get_paths()['purelib']) / 'cmeel.prefix' / 'share')",
-            ])
-            .output()
-            .ok()?;
-        let urdf = PathBuf::from(String::from_utf8_lossy(&o.stdout).trim())
-            .join("example-robot-data/robots/talos_data/robots/talos_reduced.urdf");
-        urdf.is_file().then_some(urdf)
-    };
-    if let Some(u) = find() {
-        return Some(u);
-    }
-    let _ = Command::new(py)
-        .args(["-m", "pip", "install", "-q", crate::common::PY_ROBOTS])
-        .output();
-    let found = find();
-    if found.is_none() {
-        assert!(
-            !rigctl::in_ci(),
-            "example-robot-data cannot be installed in the venv"
-        );
-        eprintln!("SKIPPED {test}: example-robot-data (talos_reduced.urdf) not installed");
-    }
-    found
+    const TALOS: &str = "example-robot-data/robots/talos_data/robots/talos_reduced.urdf";
+    robots_share(py, TALOS, test).map(|share| share.join(TALOS))
 }
 
 /// CSV of numbers with a header: (header, rows).

@@ -77,6 +77,38 @@ pub const PY_PACKAGES: [&str; 2] = ["pin==4.1.0", "rosbags==0.11.9"];
 /// in the same venv by `.ci/run` (and by the tests that need it when absent).
 pub const PY_ROBOTS: &str = "example-robot-data==6.0.0";
 
+/// The `share` folder of [`PY_ROBOTS`] in the venv of `py` when `file` (relative to it) is there,
+/// the package installed first when absent; `None` after a `SKIPPED test` message when it cannot
+/// be had (never in CI: there it is a failure).
+pub fn robots_share(py: &std::path::Path, file: &str, test: &str) -> Option<std::path::PathBuf> {
+    let find = || {
+        let o = std::process::Command::new(py)
+            .args([
+                "-c",
+                "import sysconfig, pathlib; print(pathlib.Path(sysconfig.get_paths()['purelib']) / 'cmeel.prefix' / 'share')",
+            ])
+            .output()
+            .ok()?;
+        let share = std::path::PathBuf::from(String::from_utf8_lossy(&o.stdout).trim());
+        share.join(file).is_file().then_some(share)
+    };
+    if let Some(s) = find() {
+        return Some(s);
+    }
+    let _ = std::process::Command::new(py)
+        .args(["-m", "pip", "install", "-q", PY_ROBOTS])
+        .output();
+    let found = find();
+    if found.is_none() {
+        assert!(
+            !rigctl::in_ci(),
+            "example-robot-data cannot be installed in the venv"
+        );
+        eprintln!("SKIPPED {test}: example-robot-data ({file}) not installed");
+    }
+    found
+}
+
 /// The Python interpreter of a virtual environment with [`PY_PACKAGES`] (pinocchio, rosbags),
 /// `target/pyenv` (`.ci/run` makes it; made here when absent: `python3 -m venv` and `pip
 /// install` into a temporary folder, renamed into place). `None` after a `SKIPPED` message when

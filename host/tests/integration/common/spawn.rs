@@ -53,6 +53,25 @@ pub fn output<S: AsRef<OsStr>>(args: &[S]) -> Output {
 }
 
 /// A captured stream as text (invalid UTF-8 replaced).
+/// [`output`] of a run that must succeed: panics naming the arguments, stdout and stderr
+/// otherwise.
+pub fn output_ok(args: &[&str]) -> Output {
+    let out = output(args);
+    assert!(
+        out.status.success(),
+        "rigctl {}: {}\n{}",
+        args.join(" "),
+        String::from_utf8_lossy(&out.stdout),
+        String::from_utf8_lossy(&out.stderr)
+    );
+    out
+}
+
+/// A path as an argument (test paths are UTF-8).
+pub fn path_arg(p: &std::path::Path) -> &str {
+    p.to_str().expect("utf-8 path")
+}
+
 pub fn text(bytes: &[u8]) -> String {
     String::from_utf8_lossy(bytes).into_owned()
 }
