@@ -75,31 +75,6 @@ fn row_offsets(data: &MeasuredSet) -> Vec<usize> {
     off
 }
 
-/// An orthonormal basis of the column space of `l` (columns scaled to unit norm first; singular
-/// values below `1e-10` of the largest dropped).
-pub fn orthonormal_basis(l: &DMatrix<f64>) -> DMatrix<f64> {
-    let (m, n) = l.shape();
-    if n == 0 || m == 0 {
-        return DMatrix::zeros(m, 0);
-    }
-    let mut s = l.clone();
-    for mut c in s.column_iter_mut() {
-        let norm = c.norm();
-        if norm > 0.0 {
-            c /= norm;
-        }
-    }
-    let svd = s.svd(true, false);
-    let smax = svd.singular_values.iter().copied().fold(0.0, f64::max);
-    let Some(u) = svd.u else {
-        return DMatrix::zeros(m, 0);
-    };
-    let keep: Vec<usize> = (0..svd.singular_values.len())
-        .filter(|&i| smax > 0.0 && svd.singular_values[i] > 1e-10 * smax)
-        .collect();
-    DMatrix::from_fn(m, keep.len(), |i, j| u[(i, keep[j])])
-}
-
 /// `b^T A^+ b` and the rank of `A` (symmetric, pseudo-inverse by eigen-decomposition).
 fn explained(a: &DMatrix<f64>, b: &DVector<f64>) -> (f64, usize) {
     let eig = a.clone().symmetric_eigen();
@@ -244,7 +219,12 @@ fn scan_steps(
     let p = fitted.len();
     let l = jac.columns(0, p).into_owned();
     let x = jac.columns(p, step.len()).into_owned();
-    Ok(scan(data, &x, &orthonormal_basis(&l), &e))
+    Ok(scan(
+        data,
+        &x,
+        &super::residual::column_basis(&l, 1e-10),
+        &e,
+    ))
 }
 
 /// Opens a change slot of each kind whose best split on `cur` passes `alpha` (Bonferroni over

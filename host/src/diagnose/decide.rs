@@ -47,6 +47,7 @@ use crate::calib::stats::autocorrelation_time;
 use crate::calib::CalibError;
 use crate::calib::MeasuredSet;
 use crate::model::effect::Tie;
+use crate::model::ModelError;
 
 /// Settings of the selection.
 #[derive(Debug, Clone, PartialEq)]
@@ -359,23 +360,23 @@ fn simplicity(c: &Candidate) -> (usize, u32) {
 /// tried for them.
 const ONSET_LADDER: [f64; 4] = [1.0, 10.0, 100.0, 1000.0];
 
-/// Indices of the candidates whose small move ([`DecideConfig::onset_probe`] on each of their
-/// unknowns) flips a sign of the joint moments at some pose: where the tilting law's sign steps
+/// Indices of the candidates whose small move (`onset_probe`, [`DecideConfig::onset_probe`], on
+/// each of their unknowns) flips a sign of the joint moments at some pose: where the tilting law's sign steps
 /// sit exactly at zero in the current fit, the linear screen cannot see what the candidate would
 /// switch on, so these are always refitted.
 pub fn onset_candidates(
-    cur: &Fit<ExtModel, Unknown>,
+    model: &ExtModel,
     cands: &[Candidate],
     data: &MeasuredSet,
-    cfg: &DecideConfig,
+    onset_probe: f64,
     ladder: bool,
-) -> Result<Vec<usize>, CalibError> {
-    let base = cur.model.moment_signs(data).map_err(CalibError::Model)?;
-    if base.is_empty() || cfg.onset_probe <= 0.0 {
+) -> Result<Vec<usize>, ModelError> {
+    let base = model.moment_signs(data)?;
+    if base.is_empty() || onset_probe <= 0.0 {
         return Ok(Vec::new());
     }
     let flips = |cand: &Candidate, size: f64| -> bool {
-        let mut probe = cur.model.clone();
+        let mut probe = model.clone();
         for &u in &cand.unknowns {
             if probe.set_value(u, probe.value(u) + size).is_err() {
                 return false;
@@ -389,12 +390,12 @@ pub fn onset_candidates(
         .iter()
         .enumerate()
         .filter(|(_, cand)| {
-            flips(cand, cfg.onset_probe)
+            flips(cand, onset_probe)
                 || (ladder
                     && cand.effect.row().kind.changes_loads()
-                    && ONSET_LADDER.iter().any(|m| {
-                        flips(cand, m * cfg.onset_probe) || flips(cand, -m * cfg.onset_probe)
-                    }))
+                    && ONSET_LADDER
+                        .iter()
+                        .any(|m| flips(cand, m * onset_probe) || flips(cand, -m * onset_probe)))
         })
         .map(|(ci, _)| ci)
         .collect())

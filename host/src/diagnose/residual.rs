@@ -226,8 +226,8 @@ pub struct Screen {
 
 /// Orthonormal basis of the column space of `a` (columns scaled to unit norm first; singular
 /// values below `rtol` times the largest are dropped).
-fn column_basis(a: &DMatrix<f64>, rtol: f64) -> DMatrix<f64> {
-    if a.ncols() == 0 {
+pub fn column_basis(a: &DMatrix<f64>, rtol: f64) -> DMatrix<f64> {
+    if a.ncols() == 0 || a.nrows() == 0 {
         return DMatrix::zeros(a.nrows(), 0);
     }
     let mut s = a.clone();

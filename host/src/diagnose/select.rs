@@ -149,7 +149,7 @@ pub fn shortlist(
     ranked.sort_by(|a, b| a.1.total_cmp(&b.1));
     ranked.truncate(cfg.refit_top);
     let mut out: Vec<usize> = ranked.into_iter().map(|r| r.0).collect();
-    for ci in onset_candidates(cur, cands, data, cfg, ladder)? {
+    for ci in onset_candidates(&cur.model, cands, data, cfg.onset_probe, ladder)? {
         if !out.contains(&ci) {
             out.push(ci);
         }

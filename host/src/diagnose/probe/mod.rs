@@ -27,6 +27,7 @@
 pub mod basis;
 pub mod design;
 pub mod model;
+mod physical;
 pub mod plot;
 pub mod select;
 
