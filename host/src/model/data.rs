@@ -73,6 +73,9 @@ pub struct Data {
     pub(crate) moments_kgfm: Vec<Vector3<f64>>,
     pub(crate) tilts_deg: Vec<Vector3<f64>>,
     pub(crate) tilted: bool,
+    /// Whether the sweep inserted tilts: the declared tilting, a lateral compliance, or a
+    /// Jacobian with respect to one ([`super::Wrt::Lateral`]).
+    pub(crate) bent: bool,
     pub(crate) position_mm: Vector3<f64>,
     // --- Jacobian ---
     pub(crate) jac: Vec<Vector3<f64>>,
@@ -202,6 +205,7 @@ impl Data {
             moments_kgfm: Vec::new(),
             tilts_deg: Vec::new(),
             tilted: false,
+            bent: false,
             position_mm: Vector3::zeros(),
             jac: Vec::new(),
             sums: Vec::new(),
@@ -252,18 +256,20 @@ impl Data {
         self.rot.last().copied().unwrap_or_else(Matrix3::identity)
     }
 
-    /// Moments used for tilting (kgf.m, joint frame i); empty without tilting.
+    /// Moments used for tilting and lateral compliance (kgf.m, joint frame i); empty when no
+    /// joint tilts.
     pub fn moments_kgfm(&self) -> &[Vector3<f64>] {
-        if self.tilted {
+        if self.bent {
             &self.moments_kgfm
         } else {
             &[]
         }
     }
 
-    /// Tilts per joint (deg); empty without tilting.
+    /// Tilts per joint (deg: the declared tilting plus the lateral compliance's bend); empty
+    /// when no joint tilts.
     pub fn tilts_deg(&self) -> &[Vector3<f64>] {
-        if self.tilted {
+        if self.bent {
             &self.tilts_deg
         } else {
             &[]

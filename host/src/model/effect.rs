@@ -13,6 +13,7 @@
 //! | payload | `payload` | `payload_kg` | `mass_kg` | kg | models with tilting |
 //! | stiffness, backlash, clearance | `stiffness:j<i>` ... | that tilting value | value and `delta_*` | delta | models with tilting |
 //! | compliance | `compliance:j<i>` | deflection per gravity torque | `deg_per_kgfm` | deg per kgf.m | link masses, no tilting |
+//! | lateral compliance | `lateral_compliance:j<i>` | bend about the joint frame's x and y per gravity moment about them | `deg_per_kgfm` | deg per kgf.m | link masses, no tilting |
 //! | scale | `scale` | `scale_ppm` | `ppm` | ppm | always |
 //! | joint scale | `joint_scale:j<i>` | `q_i += s q_i` | `s` | `s` | always |
 //! | joint coupling | `joint_coupling:j<i>:j<k>` | `q_i += c q_k` | `c` deg/deg | `c` | always (i != k) |
@@ -46,6 +47,7 @@ pub enum Kind {
     Backlash,
     Clearance,
     Compliance,
+    LateralCompliance,
     Scale,
     JointScale,
     JointCoupling,
@@ -139,7 +141,7 @@ pub struct Row {
 }
 
 /// The effect table, in the order the candidate library lists the kinds.
-pub const TABLE: [Row; 20] = [
+pub const TABLE: [Row; 21] = [
     Row {
         kind: Kind::LinkLength,
         family: "link_length",
@@ -275,6 +277,19 @@ pub const TABLE: [Row; 20] = [
         family: "compliance",
         grammar: "compliance:j<i>",
         what: "joint deflection per gravity torque",
+        labels: &["deg_per_kgfm"],
+        report: Report::Delta,
+        sim_values: (&[1], "deg per kgf.m"),
+        offered: Offered::WithGravity,
+        tie: Tie::Named,
+        path: Path::Pose,
+        urdf_holds: false,
+    },
+    Row {
+        kind: Kind::LateralCompliance,
+        family: "lateral_compliance",
+        grammar: "lateral_compliance:j<i>",
+        what: "joint bend about the two axes across it per gravity moment about them",
         labels: &["deg_per_kgfm"],
         report: Report::Delta,
         sim_values: (&[1], "deg per kgf.m"),

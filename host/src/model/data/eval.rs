@@ -8,6 +8,7 @@ use nalgebra::{Matrix3, Vector3};
 use super::Data;
 use crate::model::chain::{Model, Motion};
 use crate::model::error::ModelError;
+use crate::model::lateral::lateral_tilt_deg;
 use crate::model::tilt::tilt_from_moment;
 use crate::model::tilt::{Tilt, GRAVITY_KGF_PER_KG};
 
@@ -142,6 +143,7 @@ impl Model {
         self.static_moments(d);
         d.has_untilted = true;
         d.tilted = false;
+        d.bent = false;
         Ok(())
     }
 
@@ -187,6 +189,18 @@ impl Model {
         q_deg: &[f64],
         tilt: Tilt<'_>,
     ) -> Result<(), ModelError> {
+        self.fk_bent(d, q_deg, tilt, false)
+    }
+
+    /// [`Model::fk_synced`]; with `bend_always` the static moments and the tilt axes are
+    /// evaluated even where nothing tilts (the Jacobian wrt a lateral compliance at zero).
+    pub(crate) fn fk_bent(
+        &self,
+        d: &mut Data,
+        q_deg: &[f64],
+        tilt: Tilt<'_>,
+        bend_always: bool,
+    ) -> Result<(), ModelError> {
         // Given sines and cosines are for this evaluation only, even one that fails.
         let given = std::mem::replace(&mut d.q_sc_given, false);
         self.check_joints(q_deg)?;
@@ -194,7 +208,14 @@ impl Model {
         self.load_joints(d, q_deg, given);
         d.has_untilted = false;
         d.tilted = !matches!(tilt, Tilt::Off);
+        let lateral = self.has_lateral_compliance();
+        d.bent = d.tilted || lateral || bend_always;
         match tilt {
+            Tilt::Off if d.bent => {
+                self.sweep(d, false, true);
+                self.static_moments(d);
+                d.has_untilted = true;
+            }
             Tilt::Off => {}
             Tilt::Static | Tilt::StaticPlus(_) => {
                 self.sweep(d, false, true);
@@ -208,13 +229,21 @@ impl Model {
             }
             Tilt::Moments(m) => d.moments_kgfm.copy_from_slice(m),
         }
-        if d.tilted {
+        if d.bent {
             for j in 0..self.joints.len() {
-                d.tilts_deg[j] =
-                    tilt_from_moment(&d.moments_kgfm[j], &d.tilt_values[j], self.gamma_law);
+                let eta = &d.moments_kgfm[j];
+                let mut t = if d.tilted {
+                    tilt_from_moment(eta, &d.tilt_values[j], self.gamma_law)
+                } else {
+                    Vector3::zeros()
+                };
+                if lateral {
+                    t += lateral_tilt_deg(self.lateral_compliance_at(j), eta);
+                }
+                d.tilts_deg[j] = t;
             }
         }
-        self.sweep(d, d.tilted, false);
+        self.sweep(d, d.bent, false);
         d.position_mm = d.tool_unscaled() * d.scale;
         Ok(())
     }

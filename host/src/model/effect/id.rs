@@ -19,6 +19,7 @@ pub enum EffectId {
     Backlash(usize),
     Clearance(usize),
     Compliance(usize),
+    LateralCompliance(usize),
     Scale,
     JointScale(usize),
     JointCoupling(usize, usize),
@@ -69,6 +70,7 @@ impl std::str::FromStr for EffectId {
                 Kind::Backlash => EffectId::Backlash(j),
                 Kind::Clearance => EffectId::Clearance(j),
                 Kind::Compliance => EffectId::Compliance(j),
+                Kind::LateralCompliance => EffectId::LateralCompliance(j),
                 Kind::JointScale => EffectId::JointScale(j),
                 Kind::Hysteresis => EffectId::Hysteresis(j),
                 Kind::JointDrift => EffectId::JointDrift(j),
@@ -143,6 +145,7 @@ impl fmt::Display for EffectId {
             | EffectId::Backlash(j)
             | EffectId::Clearance(j)
             | EffectId::Compliance(j)
+            | EffectId::LateralCompliance(j)
             | EffectId::JointScale(j)
             | EffectId::Hysteresis(j)
             | EffectId::JointDrift(j) => write!(f, "{family}:j{}", j + 1),
@@ -175,6 +178,7 @@ impl EffectId {
             EffectId::Backlash(_) => Kind::Backlash,
             EffectId::Clearance(_) => Kind::Clearance,
             EffectId::Compliance(_) => Kind::Compliance,
+            EffectId::LateralCompliance(_) => Kind::LateralCompliance,
             EffectId::Scale => Kind::Scale,
             EffectId::JointScale(_) => Kind::JointScale,
             EffectId::JointCoupling(..) => Kind::JointCoupling,
@@ -201,6 +205,7 @@ impl EffectId {
             | EffectId::Backlash(j)
             | EffectId::Clearance(j)
             | EffectId::Compliance(j)
+            | EffectId::LateralCompliance(j)
             | EffectId::JointScale(j)
             | EffectId::Hysteresis(j)
             | EffectId::JointDrift(j) => Some(j),

@@ -43,6 +43,7 @@ impl EffectId {
             EffectId::Backlash(j) => vec![tilt(*j, |t| t.backlash)],
             EffectId::Clearance(j) => vec![tilt(*j, |t| t.clearance)],
             EffectId::Compliance(j) => vec![joint(*j, Unknown::Compliance(*j))],
+            EffectId::LateralCompliance(j) => vec![joint(*j, Unknown::LateralCompliance(*j))],
             EffectId::Scale => vec![Some(Unknown::Param(model.scale_param()))],
             EffectId::JointScale(j) => vec![joint(*j, Unknown::JointScale(*j))],
             EffectId::JointCoupling(i, k) => {
@@ -133,6 +134,7 @@ pub fn library(model: &Model, offers: Offers) -> Vec<EffectId> {
             }
             Kind::Backlash | Kind::Clearance => {}
             Kind::Compliance => out.extend((0..n).map(EffectId::Compliance)),
+            Kind::LateralCompliance => out.extend((0..n).map(EffectId::LateralCompliance)),
             Kind::JointScale => out.extend((0..n).map(EffectId::JointScale)),
             Kind::JointCoupling => {
                 for i in 0..n {
