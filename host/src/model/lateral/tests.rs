@@ -129,3 +129,28 @@ fn a_joint_beyond_the_chain_or_a_non_finite_value_is_refused() {
         .position_jacobian(&Q_UR5, Tilt::Off, &[Wrt::Lateral(6)])
         .is_err());
 }
+
+/// A model file holds the values (`[[joint]] lateral_compliance_deg_per_kgfm`) and reads back
+/// the identical model; without link masses the key is refused.
+#[test]
+fn model_files_hold_lateral_compliance_and_need_masses() {
+    let m = with_lateral(ur5().unwrap(), &[(2, 0.05)]);
+    let text = m.to_toml_string();
+    assert!(
+        text.contains("lateral_compliance_deg_per_kgfm = 0.05"),
+        "{text}"
+    );
+    let back = Model::from_toml_str(&text, "t").unwrap();
+    assert_eq!(back.lateral_compliance(), m.lateral_compliance());
+    assert_eq!(
+        back.position_mm(&Q_UR5, Tilt::Off).unwrap(),
+        m.position_mm(&Q_UR5, Tilt::Off).unwrap()
+    );
+    let rigid = ur5().unwrap().to_toml_string();
+    assert!(!rigid.contains("lateral"), "{rigid}");
+    let no_masses: String = text.split("\n[[mass]]").next().unwrap().to_string();
+    let err = Model::from_toml_str(&no_masses, "t")
+        .unwrap_err()
+        .to_string();
+    assert!(err.contains("link masses"), "{err}");
+}
