@@ -91,6 +91,7 @@ TESTS = [
             "diagnose_sign_steps::sets_without_a_payload_flag_no_pose",
             "diagnose_simplest::two_lengths_changed_together_are_named_as_the_pair_not_stand_ins",
             "diagnose_elastic_tilt::an_elastic_tilt_of_joint_1_in_the_arms_plane_is_named_as_the_compliance_of_joint_2",
+            "diagnose_lateral::lateral_compliance_of_joint_3_is_named_and_axial_compliance_is_not_taken_for_it",
             "model_reference::katana_fk_reference_rows",
             "model_reference::katana_fk_reference_tilt_increments",
             "model_reference::katana_tilt_reference_rows",

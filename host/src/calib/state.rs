@@ -82,6 +82,7 @@ impl ExtModel {
         if self.gravity.is_none() {
             m.transmission_mut().compliance_deg_per_kgfm.clear();
         }
+        m.clear_zero_lateral_compliance();
         if !m.transmission().is_active() {
             m.set_transmission(JointTerms::default());
         }
@@ -201,6 +202,7 @@ impl ExtModel {
                     step_param(slot, Some(TOOL_PARAMS[axis.min(2)]))
                 }
                 Unknown::PayloadStep(slot) => step_param(slot, None),
+                Unknown::LateralCompliance(j) => Some(Wrt::Lateral(j)),
                 Unknown::JointDrift(j)
                 | Unknown::Compliance(j)
                 | Unknown::JointScale(j)

@@ -62,7 +62,10 @@ pub fn library_for(
     effect::library(&ext.model, Offers { approach, time })
         .into_iter()
         // the extended model decides whether gravity torques can be evaluated
-        .filter(|e| ext.gravity.is_some() || !matches!(e, EffectId::Compliance(_)))
+        .filter(|e| {
+            ext.gravity.is_some()
+                || !matches!(e, EffectId::Compliance(_) | EffectId::LateralCompliance(_))
+        })
         .filter_map(|e| Candidate::new(e, ext, current))
         .collect()
 }

@@ -142,6 +142,8 @@ pub struct Model {
     pub(crate) transmission: super::transmission::JointTerms,
     /// Terms that depend on the pose time ([`super::time_terms`]).
     pub(crate) time_terms: super::time_terms::TimeTerms,
+    /// Lateral compliance per joint, deg per kgf.m (empty: none; [`super::lateral`]).
+    pub(crate) lateral_deg_per_kgfm: Vec<f64>,
 }
 
 impl Model {
@@ -588,6 +590,7 @@ impl ModelBuilder {
             joint_names: Vec::new(),
             transmission: Default::default(),
             time_terms: Default::default(),
+            lateral_deg_per_kgfm: Vec::new(),
         })
     }
 

@@ -13,6 +13,7 @@
 //! | payload | `payload` | `payload_kg` | `mass_kg` | kg | models with tilting |
 //! | stiffness, backlash, clearance | `stiffness:j<i>` ... | that tilting value | value and `delta_*` | delta | models with tilting |
 //! | compliance | `compliance:j<i>` | deflection per gravity torque | `deg_per_kgfm` | deg per kgf.m | link masses, no tilting |
+//! | lateral compliance | `lateral_compliance:j<i>` | bend about the joint frame's x and y per gravity moment about them | `deg_per_kgfm` | deg per kgf.m | link masses, no tilting |
 //! | scale | `scale` | `scale_ppm` | `ppm` | ppm | always |
 //! | joint scale | `joint_scale:j<i>` | `q_i += s q_i` | `s` | `s` | always |
 //! | joint coupling | `joint_coupling:j<i>:j<k>` | `q_i += c q_k` | `c` deg/deg | `c` | always (i != k) |
@@ -32,12 +33,6 @@
 //! hold it (`urdf_holds`), the change it makes to a simulated truth ([`EffectId::change`],
 //! [`Change`]), and the physical bound of every value an identification frees ([`bound`]).
 
-use std::fmt;
-
-use super::changes::{StepKind, TOOL_PARAMS};
-use super::unknown::Unknown;
-use super::{Model, ParamKind};
-
 /// An effect kind: one row of [`TABLE`].
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
 pub enum Kind {
@@ -52,6 +47,7 @@ pub enum Kind {
     Backlash,
     Clearance,
     Compliance,
+    LateralCompliance,
     Scale,
     JointScale,
     JointCoupling,
@@ -145,7 +141,7 @@ pub struct Row {
 }
 
 /// The effect table, in the order the candidate library lists the kinds.
-pub const TABLE: [Row; 20] = [
+pub const TABLE: [Row; 21] = [
     Row {
         kind: Kind::LinkLength,
         family: "link_length",
@@ -281,6 +277,19 @@ pub const TABLE: [Row; 20] = [
         family: "compliance",
         grammar: "compliance:j<i>",
         what: "joint deflection per gravity torque",
+        labels: &["deg_per_kgfm"],
+        report: Report::Delta,
+        sim_values: (&[1], "deg per kgf.m"),
+        offered: Offered::WithGravity,
+        tie: Tie::Named,
+        path: Path::Pose,
+        urdf_holds: false,
+    },
+    Row {
+        kind: Kind::LateralCompliance,
+        family: "lateral_compliance",
+        grammar: "lateral_compliance:j<i>",
+        what: "joint bend about the two axes across it per gravity moment about them",
         labels: &["deg_per_kgfm"],
         report: Report::Delta,
         sim_values: (&[1], "deg per kgf.m"),
@@ -437,389 +446,15 @@ pub fn grammars() -> String {
         .join(", ")
 }
 
-/// A parsed effect id. Joints are 0-based here and 1-based in the text (`j1`).
-#[derive(Debug, Clone, PartialEq, Eq, Hash)]
-pub enum EffectId {
-    LinkLength(String),
-    EncoderHarmonic { joint: usize, order: u32 },
-    ToolOffset,
-    ToolLength,
-    BaseOffset,
-    BaseTilt,
-    Payload,
-    Stiffness(usize),
-    Backlash(usize),
-    Clearance(usize),
-    Compliance(usize),
-    Scale,
-    JointScale(usize),
-    JointCoupling(usize, usize),
-    Hysteresis(usize),
-    TimeDrift,
-    JointDrift(usize),
-    Thermal,
-    ToolChange,
-    PayloadChange,
-}
-
-/// An id that is not in the table's grammar.
-#[derive(Debug, Clone, PartialEq, Eq, thiserror::Error)]
-#[error("unknown effect id `{id}`; known: {known}", known = grammars())]
-pub struct UnknownEffectId {
-    /// The text given.
-    pub id: String,
-}
-
-/// `j<i>` (i >= 1, digits only) as a 0-based joint.
-fn joint_of(s: &str) -> Option<usize> {
-    let n = s.strip_prefix('j')?;
-    if n.is_empty() || !n.bytes().all(|b| b.is_ascii_digit()) {
-        return None;
-    }
-    n.parse::<usize>().ok().filter(|&n| n >= 1).map(|n| n - 1)
-}
-
-/// Whether `name` is a link length's name: `a` or `d` and digits.
-pub fn is_link_length_name(name: &str) -> bool {
-    let mut c = name.chars();
-    matches!(c.next(), Some('a' | 'd')) && {
-        let rest = c.as_str();
-        !rest.is_empty() && rest.bytes().all(|b| b.is_ascii_digit())
-    }
-}
-
-impl std::str::FromStr for EffectId {
-    type Err = UnknownEffectId;
-
-    fn from_str(id: &str) -> Result<Self, Self::Err> {
-        let bad = || UnknownEffectId { id: id.to_string() };
-        let parts: Vec<&str> = id.split(':').collect();
-        let per_joint = |kind: Kind, j: &str| -> Option<EffectId> {
-            let j = joint_of(j)?;
-            Some(match kind {
-                Kind::Stiffness => EffectId::Stiffness(j),
-                Kind::Backlash => EffectId::Backlash(j),
-                Kind::Clearance => EffectId::Clearance(j),
-                Kind::Compliance => EffectId::Compliance(j),
-                Kind::JointScale => EffectId::JointScale(j),
-                Kind::Hysteresis => EffectId::Hysteresis(j),
-                Kind::JointDrift => EffectId::JointDrift(j),
-                _ => return None,
-            })
-        };
-        // the row whose grammar is `family` alone, or `family:j<i>`
-        let row_of = |family: &str, with_joint: bool| {
-            TABLE
-                .iter()
-                .find(|r| {
-                    r.family == family
-                        && if with_joint {
-                            r.grammar.strip_prefix(family) == Some(":j<i>")
-                        } else {
-                            r.grammar == family
-                        }
-                })
-                .map(|r| r.kind)
-        };
-        let parsed = match parts.as_slice() {
-            [family] => match row_of(family, false) {
-                Some(Kind::ToolOffset) => Some(EffectId::ToolOffset),
-                Some(Kind::ToolLength) => Some(EffectId::ToolLength),
-                Some(Kind::BaseOffset) => Some(EffectId::BaseOffset),
-                Some(Kind::BaseTilt) => Some(EffectId::BaseTilt),
-                Some(Kind::Payload) => Some(EffectId::Payload),
-                Some(Kind::Scale) => Some(EffectId::Scale),
-                Some(Kind::TimeDrift) => Some(EffectId::TimeDrift),
-                Some(Kind::Thermal) => Some(EffectId::Thermal),
-                Some(Kind::ToolChange) => Some(EffectId::ToolChange),
-                Some(Kind::PayloadChange) => Some(EffectId::PayloadChange),
-                _ => None,
-            },
-            [family, name] if *family == Kind::LinkLength.family() => {
-                is_link_length_name(name).then(|| EffectId::LinkLength(name.to_string()))
-            }
-            [family, j] => row_of(family, true).and_then(|k| per_joint(k, j)),
-            [family, j, h] if *family == Kind::EncoderHarmonic.family() => {
-                let order = h
-                    .strip_prefix('h')
-                    .filter(|n| n.len() == 1)
-                    .and_then(|n| n.parse::<u32>().ok())
-                    .filter(|n| (1..=3).contains(n));
-                match (joint_of(j), order) {
-                    (Some(joint), Some(order)) => Some(EffectId::EncoderHarmonic { joint, order }),
-                    _ => None,
-                }
-            }
-            [family, i, k] if *family == Kind::JointCoupling.family() => {
-                match (joint_of(i), joint_of(k)) {
-                    (Some(i), Some(k)) if i != k => Some(EffectId::JointCoupling(i, k)),
-                    _ => None,
-                }
-            }
-            _ => None,
-        };
-        parsed.ok_or_else(bad)
-    }
-}
-
-impl fmt::Display for EffectId {
-    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
-        let family = self.kind().family();
-        match self {
-            EffectId::LinkLength(name) => write!(f, "{family}:{name}"),
-            EffectId::EncoderHarmonic { joint, order } => {
-                write!(f, "{family}:j{}:h{order}", joint + 1)
-            }
-            EffectId::JointCoupling(i, k) => write!(f, "{family}:j{}:j{}", i + 1, k + 1),
-            EffectId::Stiffness(j)
-            | EffectId::Backlash(j)
-            | EffectId::Clearance(j)
-            | EffectId::Compliance(j)
-            | EffectId::JointScale(j)
-            | EffectId::Hysteresis(j)
-            | EffectId::JointDrift(j) => write!(f, "{family}:j{}", j + 1),
-            EffectId::ToolOffset
-            | EffectId::ToolLength
-            | EffectId::BaseOffset
-            | EffectId::BaseTilt
-            | EffectId::Payload
-            | EffectId::Scale
-            | EffectId::TimeDrift
-            | EffectId::Thermal
-            | EffectId::ToolChange
-            | EffectId::PayloadChange => f.write_str(family),
-        }
-    }
-}
-
-impl EffectId {
-    /// Its kind.
-    pub fn kind(&self) -> Kind {
-        match self {
-            EffectId::LinkLength(_) => Kind::LinkLength,
-            EffectId::EncoderHarmonic { .. } => Kind::EncoderHarmonic,
-            EffectId::ToolOffset => Kind::ToolOffset,
-            EffectId::ToolLength => Kind::ToolLength,
-            EffectId::BaseOffset => Kind::BaseOffset,
-            EffectId::BaseTilt => Kind::BaseTilt,
-            EffectId::Payload => Kind::Payload,
-            EffectId::Stiffness(_) => Kind::Stiffness,
-            EffectId::Backlash(_) => Kind::Backlash,
-            EffectId::Clearance(_) => Kind::Clearance,
-            EffectId::Compliance(_) => Kind::Compliance,
-            EffectId::Scale => Kind::Scale,
-            EffectId::JointScale(_) => Kind::JointScale,
-            EffectId::JointCoupling(..) => Kind::JointCoupling,
-            EffectId::Hysteresis(_) => Kind::Hysteresis,
-            EffectId::TimeDrift => Kind::TimeDrift,
-            EffectId::JointDrift(_) => Kind::JointDrift,
-            EffectId::Thermal => Kind::Thermal,
-            EffectId::ToolChange => Kind::ToolChange,
-            EffectId::PayloadChange => Kind::PayloadChange,
-        }
-    }
-
-    /// Its row of [`TABLE`].
-    pub fn row(&self) -> &'static Row {
-        self.kind().row()
-    }
-
-    /// The joint (0-based) whose angle plots show it against: the joint it acts on, for a
-    /// coupling the commanding joint `k`.
-    pub fn joint(&self) -> Option<usize> {
-        match *self {
-            EffectId::EncoderHarmonic { joint, .. } => Some(joint),
-            EffectId::Stiffness(j)
-            | EffectId::Backlash(j)
-            | EffectId::Clearance(j)
-            | EffectId::Compliance(j)
-            | EffectId::JointScale(j)
-            | EffectId::Hysteresis(j)
-            | EffectId::JointDrift(j) => Some(j),
-            EffectId::JointCoupling(_, k) => Some(k),
-            _ => None,
-        }
-    }
-
-    /// Every joint it names (0-based).
-    pub fn joints(&self) -> Vec<usize> {
-        match *self {
-            EffectId::JointCoupling(i, k) => vec![i, k],
-            _ => self.joint().into_iter().collect(),
-        }
-    }
-
-    /// Whether it is a change within the session at a time (`tool_change`, `payload_change`).
-    pub fn is_change(&self) -> bool {
-        self.row().report == Report::Step
-    }
-
-    /// The harmonic order (0 for an effect that is not a harmonic).
-    pub fn harmonic_order(&self) -> u32 {
-        match self {
-            EffectId::EncoderHarmonic { order, .. } => *order,
-            _ => 0,
-        }
-    }
-
-    /// The unknowns it frees on `model`, in the order of its row's labels; `None` for a value
-    /// the model does not have (a parameter it lacks, a joint beyond its chain).
-    pub fn unknowns(&self, model: &Model) -> Vec<Option<Unknown>> {
-        let idx = |name: &str| model.param_index(name).map(Unknown::Param);
-        let n = model.n_joints();
-        let joint = |j: usize, u: Unknown| (j < n).then_some(u);
-        let tilt = |j: usize, pick: fn(&super::TiltParams) -> usize| {
-            model
-                .tilt_params()
-                .and_then(|tp| tp.get(j))
-                .map(|t| Unknown::Param(pick(t)))
-        };
-        match self {
-            EffectId::LinkLength(name) => vec![idx(name)],
-            EffectId::EncoderHarmonic { joint, order } => {
-                match model
-                    .joints()
-                    .get(*joint)
-                    .and_then(|jt| jt.harmonics.iter().find(|h| h.order == *order))
-                {
-                    Some(h) => vec![
-                        Some(Unknown::Param(h.sin_param)),
-                        Some(Unknown::Param(h.cos_param)),
-                    ],
-                    None => vec![None, None],
-                }
-            }
-            EffectId::ToolOffset => vec![idx("tool_dx"), idx("tool_dy"), idx("tool_dz")],
-            EffectId::ToolLength => vec![idx("tool_dz")],
-            EffectId::BaseOffset => vec![idx("base_x"), idx("base_y"), idx("base_z")],
-            EffectId::BaseTilt => vec![idx("base_rx"), idx("base_ry")],
-            EffectId::Payload => vec![Some(Unknown::Param(model.payload_param()))],
-            EffectId::Stiffness(j) => vec![tilt(*j, |t| t.stiffness)],
-            EffectId::Backlash(j) => vec![tilt(*j, |t| t.backlash)],
-            EffectId::Clearance(j) => vec![tilt(*j, |t| t.clearance)],
-            EffectId::Compliance(j) => vec![joint(*j, Unknown::Compliance(*j))],
-            EffectId::Scale => vec![Some(Unknown::Param(model.scale_param()))],
-            EffectId::JointScale(j) => vec![joint(*j, Unknown::JointScale(*j))],
-            EffectId::JointCoupling(i, k) => {
-                vec![(*i < n && *k < n).then_some(Unknown::Coupling(*i, *k))]
-            }
-            EffectId::Hysteresis(j) => vec![joint(*j, Unknown::Hysteresis(*j))],
-            EffectId::TimeDrift => (0..3).map(|a| Some(Unknown::PositionDrift(a))).collect(),
-            EffectId::JointDrift(j) => vec![joint(*j, Unknown::JointDrift(*j))],
-            EffectId::Thermal => vec![Some(Unknown::ThermalPpm), Some(Unknown::ThermalTauMin)],
-            // the model's last change slot of the kind (`diagnose` opens one at its scanned time)
-            EffectId::ToolChange => {
-                let slot = last_slot(model, |k| matches!(k, StepKind::Tool(_)));
-                let tool = TOOL_PARAMS.iter().all(|n| model.param_index(n).is_some());
-                (0..3)
-                    .map(|axis| {
-                        slot.filter(|_| tool)
-                            .map(|slot| Unknown::ToolStep { slot, axis })
-                    })
-                    .collect()
-            }
-            EffectId::PayloadChange => {
-                vec![last_slot(model, |k| matches!(k, StepKind::Payload(_)))
-                    .map(Unknown::PayloadStep)]
-            }
-        }
-    }
-}
-
-/// The index of the model's last change of a kind.
-fn last_slot(model: &Model, is: fn(&StepKind) -> bool) -> Option<usize> {
-    model.steps().iter().rposition(|s| is(&s.kind))
-}
-
-/// What the data offers the library: joints that move between poses, pose times.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
-pub struct Offers {
-    /// Directions of approach (the joints move between poses).
-    pub approach: bool,
-    /// Pose times (`t`).
-    pub time: bool,
-}
-
-/// Every effect the library offers on `model` with data that `offers`, in the table's order
-/// (within a kind: by parameter, joint, harmonic, joint pair).
-pub fn library(model: &Model, offers: Offers) -> Vec<EffectId> {
-    let n = model.n_joints();
-    let tilting = model.tilt_params().is_some();
-    let gravity = !model.masses().is_empty();
-    let mut out = Vec::new();
-    for row in &TABLE {
-        let on = match row.offered {
-            Offered::Always => true,
-            Offered::WithTilting => tilting,
-            Offered::WithGravity => gravity && !tilting,
-            Offered::WithApproach => offers.approach,
-            Offered::WithTime => offers.time,
-            Offered::WithTimeAndTilting => offers.time && tilting,
-        };
-        if !on {
-            continue;
-        }
-        match row.kind {
-            Kind::LinkLength => out.extend(
-                model
-                    .params()
-                    .iter()
-                    .filter(|p| p.kind == ParamKind::Length && is_link_length_name(&p.name))
-                    .map(|p| EffectId::LinkLength(p.name.clone())),
-            ),
-            Kind::EncoderHarmonic => {
-                for (joint, jt) in model.joints().iter().enumerate() {
-                    out.extend(jt.harmonics.iter().map(|h| EffectId::EncoderHarmonic {
-                        joint,
-                        order: h.order,
-                    }));
-                }
-            }
-            // the tilting values of a joint are listed together, joint by joint
-            Kind::Stiffness => {
-                let joints = model.tilt_params().map_or(0, <[_]>::len);
-                for j in 0..joints {
-                    out.extend([
-                        EffectId::Stiffness(j),
-                        EffectId::Backlash(j),
-                        EffectId::Clearance(j),
-                    ]);
-                }
-            }
-            Kind::Backlash | Kind::Clearance => {}
-            Kind::Compliance => out.extend((0..n).map(EffectId::Compliance)),
-            Kind::JointScale => out.extend((0..n).map(EffectId::JointScale)),
-            Kind::JointCoupling => {
-                for i in 0..n {
-                    out.extend(
-                        (0..n)
-                            .filter(|&k| k != i)
-                            .map(|k| EffectId::JointCoupling(i, k)),
-                    );
-                }
-            }
-            Kind::Hysteresis => out.extend((0..n).map(EffectId::Hysteresis)),
-            Kind::JointDrift => out.extend((0..n).map(EffectId::JointDrift)),
-            Kind::ToolOffset => out.push(EffectId::ToolOffset),
-            Kind::ToolLength => out.push(EffectId::ToolLength),
-            Kind::BaseOffset => out.push(EffectId::BaseOffset),
-            Kind::BaseTilt => out.push(EffectId::BaseTilt),
-            Kind::Payload => out.push(EffectId::Payload),
-            Kind::Scale => out.push(EffectId::Scale),
-            Kind::TimeDrift => out.push(EffectId::TimeDrift),
-            Kind::Thermal => out.push(EffectId::Thermal),
-            Kind::ToolChange => out.push(EffectId::ToolChange),
-            Kind::PayloadChange => out.push(EffectId::PayloadChange),
-        }
-    }
-    out
-}
-
 mod bounds;
 mod change;
+mod id;
+mod library;
 
 pub use bounds::{bound, Bound, RIGID_STIFFNESS_KGFM_PER_DEG};
 pub use change::{Change, ChangeError, JointTerm};
+pub use id::{is_link_length_name, EffectId, UnknownEffectId};
+pub use library::{library, Offers};
 
 #[cfg(test)]
 mod tests;

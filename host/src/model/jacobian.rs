@@ -20,7 +20,8 @@ use super::chain::{Model, Motion};
 use super::data::{Data, ParamEffect};
 use super::error::ModelError;
 use super::kinematics::{with_workspace, Fk, Tilt, GRAVITY_KGF_PER_KG};
-use super::tilt::tilt_partials;
+use super::lateral::lateral_regressor;
+use super::tilt::{tilt_partials, TiltPartials};
 
 const DEG: f64 = PI / 180.0;
 
@@ -31,6 +32,9 @@ pub enum Wrt {
     Joint(usize),
     /// Parameter by index ([`Model::param_index`]); column in mm per parameter unit.
     Param(usize),
+    /// Lateral compliance of joint j (0-based, [`super::lateral`]); column in mm per (deg per
+    /// kgf.m): `G_j (eta_x, eta_y, 0)`, evaluated at any value, zero included.
+    Lateral(usize),
 }
 
 /// The axis (unit, R) of element `e` and a point on it (mm): the frame before the element.
@@ -93,6 +97,7 @@ impl Model {
     fn direct_effect(&self, d: &Data, wrt: Wrt, q_deg: &[f64]) -> Option<(usize, f64)> {
         match wrt {
             Wrt::Joint(j) => Some((self.joints[j].elem, d.joint_dv[j])),
+            Wrt::Lateral(_) => None,
             Wrt::Param(i) => match d.effects[i] {
                 ParamEffect::None => None,
                 ParamEffect::Elem(e) => Some((e, 1.0)),
@@ -107,7 +112,7 @@ impl Model {
     fn check_wrt(&self, wrt: &[Wrt]) -> Result<(), ModelError> {
         for w in wrt {
             match *w {
-                Wrt::Joint(j) if j >= self.joints.len() => {
+                Wrt::Joint(j) | Wrt::Lateral(j) if j >= self.joints.len() => {
                     return Err(ModelError::JointIndex {
                         index: j,
                         count: self.joints.len(),
@@ -137,9 +142,20 @@ impl Model {
                 a1.cross(&arm) * DEG,
                 a2.cross(&arm) * DEG,
             ]);
-            let mut tp = tilt_partials(&d.moments_kgfm[i], &d.tilt_values[i], self.gamma_law);
-            if self.tilt_direction_frozen {
-                tp.freeze_direction();
+            let mut tp = if d.tilted {
+                let mut tp = tilt_partials(&d.moments_kgfm[i], &d.tilt_values[i], self.gamma_law);
+                if self.tilt_direction_frozen {
+                    tp.freeze_direction();
+                }
+                tp
+            } else {
+                TiltPartials::none()
+            };
+            // the lateral bend's slope: c on the x and y diagonal (kept with a frozen direction)
+            let c = self.lateral_compliance_at(i);
+            if c != 0.0 {
+                tp.wrt_eta[(0, 0)] += c;
+                tp.wrt_eta[(1, 1)] += c;
             }
             d.tilt_partials.push(tp);
         }
@@ -182,8 +198,11 @@ impl Model {
             Some((e, rate)) => elem_point_velocity(self, &d.rot, &d.pos_mm, e, rate, &p),
             None => Vector3::zeros(),
         };
-        if !d.tilted {
+        if !d.bent {
             return col;
+        }
+        if let Wrt::Lateral(j) = w {
+            col += d.tilt_g[j] * lateral_regressor(&d.moments_kgfm[j]);
         }
         if d.has_untilted {
             if w == Wrt::Param(self.payload_param) {
@@ -243,8 +262,9 @@ impl Model {
             d.q_sc_given = false;
             return Err(e);
         }
-        self.fk_synced(d, q_deg, tilt)?;
-        if d.tilted {
+        let lateral_wrt = wrt.iter().any(|w| matches!(w, Wrt::Lateral(_)));
+        self.fk_bent(d, q_deg, tilt, lateral_wrt)?;
+        if d.bent {
             self.tilt_sensitivities(d);
         }
         let p = d.tool_unscaled();
@@ -254,7 +274,7 @@ impl Model {
         for &w in wrt {
             if w == Wrt::Param(self.scale_param) {
                 jac.push(p * 1e-6);
-            } else if d.tilted {
+            } else if d.bent {
                 jac.push(self.jacobian_column(d, w, q_deg) * sf);
             } else {
                 // Untilted: the direct effect only (inlined; the common identification case).

@@ -80,6 +80,7 @@ pub mod gravity;
 pub mod ik;
 pub mod jacobian;
 mod kinematics;
+pub mod lateral;
 pub mod motion;
 mod param;
 mod pose_spec;

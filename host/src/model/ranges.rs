@@ -14,6 +14,7 @@
 //! | `joint_coupling` (deg/deg) | +-10 |
 //! | `hysteresis_deg` | +-360 |
 //! | `compliance_deg_per_kgfm` | +-1000 |
+//! | `lateral_compliance_deg_per_kgfm` | +-1000 |
 //! | `thermal_ppm` | +-1e5 (10 %) |
 //! | `thermal_tau_min` | (0, 1e6] |
 //! | `drift_mm_per_h`, `joint_drift_deg_per_h` | +-100 m/h, +-10 000 deg/h |
@@ -86,6 +87,13 @@ impl Model {
             for v in m.com_mm.iter() {
                 within(&format!("mass {} com_mm", k + 1), *v, MAX_POSITION_MM)?;
             }
+        }
+        for (i, v) in self.lateral_deg_per_kgfm.iter().enumerate() {
+            within(
+                &format!("joint {} lateral_compliance_deg_per_kgfm", i + 1),
+                *v,
+                MAX_COMPLIANCE,
+            )?;
         }
         let t = &self.transmission;
         for (i, v) in t.scale.iter().enumerate() {

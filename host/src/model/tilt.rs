@@ -95,6 +95,16 @@ pub(crate) struct TiltPartials {
 }
 
 impl TiltPartials {
+    /// No slope: a joint without declared tilting.
+    pub(crate) fn none() -> Self {
+        Self {
+            wrt_eta: Matrix3::zeros(),
+            wrt_clearance: Vector3::zeros(),
+            wrt_backlash: Vector3::zeros(),
+            wrt_stiffness: Vector3::zeros(),
+        }
+    }
+
     /// Drops the slope of the contact direction gamma (the `da`, `db` rows wrt `eta_x`,
     /// `eta_y`), keeping the compliance slope `1 / k` ([`crate::model::Model::set_tilt_direction_frozen`]).
     pub(crate) fn freeze_direction(&mut self) {

@@ -46,6 +46,7 @@
 //! joint_coupling = { j2 = 0.002 } # this joint's angle += c x joint 2's reading (deg/deg)
 //! hysteresis_deg = 0.03           # += b x direction of approach (pose order)
 //! compliance_deg_per_kgfm = 0.01  # += g x gravity torque about the axis (needs [[mass]])
+//! lateral_compliance_deg_per_kgfm = 0.02  # bend Rx(c eta_x) Ry(c eta_y) at joint frame i (needs [[mass]])
 //!
 //! [[mass]]                        # a link mass carried by `joint`, in the frame `after`
 //! joint = 2                       # elements past the joint's element (0 = joint frame;
@@ -160,6 +161,7 @@ struct JointEntry {
     joint_coupling: BTreeMap<String, f64>,
     hysteresis_deg: Option<f64>,
     compliance_deg_per_kgfm: Option<f64>,
+    lateral_compliance_deg_per_kgfm: Option<f64>,
 }
 
 #[derive(Debug, Deserialize)]
@@ -235,6 +237,29 @@ fn build(file: ModelFile) -> Result<Model, String> {
     // no term: the same (empty) terms as a built-in model, so reading back is exact
     if terms.is_active() {
         model.set_transmission(terms);
+    }
+    for (j, e) in file.joint.iter().enumerate() {
+        match e.lateral_compliance_deg_per_kgfm {
+            Some(c) if !c.is_finite() => {
+                return Err(format!(
+                    "[[joint]] entry {}: `lateral_compliance_deg_per_kgfm` = {c} is not finite",
+                    j + 1
+                ))
+            }
+            Some(c) if c != 0.0 => {
+                if GravityModel::for_model(&model).is_none() {
+                    return Err(
+                        "lateral_compliance_deg_per_kgfm needs link masses ([[mass]] \
+                                rows) for the gravity moments"
+                            .into(),
+                    );
+                }
+                model
+                    .set_lateral_compliance(j, c)
+                    .map_err(|e| e.to_string())?;
+            }
+            _ => {}
+        }
     }
     if let Some(t) = &file.time {
         model.set_time_terms(time_terms(t, model.n_joints())?);

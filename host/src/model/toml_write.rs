@@ -127,6 +127,10 @@ impl Model {
                 );
             }
             write_joint_terms(&mut s, &self.transmission, j);
+            let lateral = self.lateral_compliance_at(j);
+            if lateral != 0.0 {
+                let _ = writeln!(s, "lateral_compliance_deg_per_kgfm = {}", fmt_f64(lateral));
+            }
         }
         if self.masses_assumed && !self.masses.is_empty() {
             s.push_str(

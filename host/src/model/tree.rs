@@ -362,6 +362,9 @@ fn split_chain(tip: &str, m: &Model) -> Result<Split, ModelError> {
     if m.transmission.is_active() {
         return Err(refuse("transmission terms"));
     }
+    if m.has_lateral_compliance() {
+        return Err(refuse("lateral compliance"));
+    }
     if m.time_terms().is_active() {
         return Err(refuse("time terms"));
     }

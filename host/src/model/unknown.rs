@@ -18,6 +18,9 @@ pub enum Unknown {
     JointDrift(usize),
     /// Compliance of joint j (0-based): deflection per gravity torque, deg per kgf.m.
     Compliance(usize),
+    /// Lateral compliance of joint j (0-based): bend about the joint frame's x and y per gravity
+    /// moment about them, deg per kgf.m ([`super::lateral`]).
+    LateralCompliance(usize),
     /// Transmission-ratio error of joint j (0-based): `q_j += s q_j` (dimensionless).
     JointScale(usize),
     /// Coupling of joint i's angle to joint k's command (0-based `(i, k)`): `q_i += c q_k`
@@ -57,6 +60,7 @@ impl Unknown {
             Unknown::PositionDrift(a) => format!("drift_{}_mm_per_h", ["x", "y", "z"][a.min(2)]),
             Unknown::JointDrift(j) => format!("drift_j{}_deg_per_h", j + 1),
             Unknown::Compliance(j) => format!("compliance_j{}_deg_per_kgfm", j + 1),
+            Unknown::LateralCompliance(j) => format!("lateral_compliance_j{}_deg_per_kgfm", j + 1),
             Unknown::JointScale(j) => format!("joint_scale_j{}", j + 1),
             Unknown::Coupling(i, k) => format!("coupling_j{}_j{}_deg_per_deg", i + 1, k + 1),
             Unknown::Hysteresis(j) => format!("hysteresis_j{}_deg", j + 1),
@@ -86,6 +90,7 @@ impl Unknown {
             | Unknown::Coupling(j, _)
             | Unknown::Hysteresis(j) => Some(j),
             Unknown::Param(_)
+            | Unknown::LateralCompliance(_)
             | Unknown::PositionDrift(_)
             | Unknown::ThermalPpm
             | Unknown::ThermalTauMin

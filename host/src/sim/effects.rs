@@ -149,6 +149,18 @@ impl Effect {
                 model.set_transmission(terms);
                 Ok(())
             }
+            Change::LateralCompliance(j, v) => {
+                if crate::model::gravity::GravityModel::for_model(model).is_none() {
+                    return Err(EffectError::BadValue {
+                        id: self.id.clone(),
+                        value: format!("{:?}", self.values),
+                        reason: "the model has no link masses ([[mass]] rows) for gravity moments"
+                            .into(),
+                    });
+                }
+                let c = model.lateral_compliance_at(*j) + v;
+                model.set_lateral_compliance(*j, c).map_err(err)
+            }
             Change::Step(step) => {
                 let mut m = model.clone();
                 m.time_terms_mut().changes.push(*step);

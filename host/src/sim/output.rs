@@ -88,6 +88,11 @@ pub fn truth_json(out: &SimOutput, cfg: &SimConfig) -> Value {
                     };
                     std::iter::once((name, json!(v))).collect()
                 }
+                Change::LateralCompliance(j, v) => std::iter::once((
+                    format!("lateral_compliance_j{}_deg_per_kgfm", j + 1),
+                    json!(v),
+                ))
+                .collect(),
                 _ => Map::new(),
             };
             json!({"id": e.id, "values": e.values, "parameters": params})

@@ -132,6 +132,18 @@ pub(super) fn not_representable(model: &Model, scale_written: bool) -> Vec<Strin
             terms.join(", ")
         ));
     }
+    if model.has_lateral_compliance() {
+        let joints: Vec<String> = (0..model.n_joints())
+            .filter(|&j| model.lateral_compliance_at(j) != 0.0)
+            .map(|j| format!("j{}", j + 1))
+            .collect();
+        out.push(format!(
+            "{} ({}): a bend under the gravity moments of the pose, which a URDF's fixed joint \
+             origins cannot hold",
+            Kind::LateralCompliance.family(),
+            joints.join(", ")
+        ));
+    }
     let harmonics: Vec<&str> = model
         .params()
         .iter()

@@ -16,6 +16,7 @@ mod daq_session;
 mod diagnose_assumed_masses;
 mod diagnose_changes;
 mod diagnose_elastic_tilt;
+mod diagnose_lateral;
 mod diagnose_partial;
 mod diagnose_probe;
 mod diagnose_sign_steps;

@@ -64,6 +64,10 @@ fn fd_column(m: &Model, q: &[f64], tilt: Tilt<'_>, wrt: Wrt) -> Vector3<f64> {
                 let v = m2.params()[i].value;
                 m2.set_param_at(i, v + delta).unwrap();
             }
+            Wrt::Lateral(j) => {
+                let c = m2.lateral_compliance_at(j);
+                m2.set_lateral_compliance(j, c + delta).unwrap();
+            }
         }
         m2.fk(&q2, tilt).unwrap().position_mm
     };
@@ -91,6 +95,7 @@ fn check(m: &Model, q: &[f64], tilt: Tilt<'_>, what: &str) -> usize {
         let name = match w {
             Wrt::Joint(j) => format!("q{}", j + 1),
             Wrt::Param(i) => m.params()[i].name.clone(),
+            Wrt::Lateral(j) => format!("lateral_j{}", j + 1),
         };
         assert!(
             (an - fd).norm() <= REL * fd.norm() + ABS,

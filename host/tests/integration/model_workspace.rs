@@ -116,6 +116,10 @@ fn workspace_matches_wrappers_and_finite_differences() {
                             m.set_param_at(i, v + delta).unwrap();
                         }
                         Wrt::Joint(j) => qq[j] += delta,
+                        Wrt::Lateral(j) => {
+                            let c = m.lateral_compliance_at(j);
+                            m.set_lateral_compliance(j, c + delta).unwrap();
+                        }
                     }
                     let mut dd = Data::new(&m);
                     m.fk_with(&mut dd, &qq, tilt).unwrap();

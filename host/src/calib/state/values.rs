@@ -17,6 +17,7 @@ impl Values for ExtModel {
             Unknown::PositionDrift(a) => time.drift_mm_per_h[a.min(2)],
             Unknown::JointDrift(j) => at(&time.joint_drift_deg_per_h, j),
             Unknown::Compliance(j) => at(&t.compliance_deg_per_kgfm, j),
+            Unknown::LateralCompliance(j) => self.model.lateral_compliance_at(j),
             Unknown::JointScale(j) => at(&t.scale, j),
             Unknown::Coupling(i, k) => t.coupling_at(i, k),
             Unknown::Hysteresis(j) => at(&t.hysteresis_deg, j),
@@ -61,6 +62,12 @@ impl Values for ExtModel {
                     .transmission_mut()
                     .compliance_deg_per_kgfm
                     .get_mut(j));
+            }
+            // a joint beyond the chain is no value (as a missing term above)
+            Unknown::LateralCompliance(j) => {
+                if j < self.model.n_joints() {
+                    self.model.set_lateral_compliance(j, v)?;
+                }
             }
             Unknown::JointScale(j) => set(self.model.transmission_mut().scale.get_mut(j)),
             Unknown::Coupling(i, k) => set(self

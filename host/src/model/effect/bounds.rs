@@ -1,4 +1,5 @@
-//! The one table of physical bounds on the values an identification frees: a compliance, a
+//! The one table of physical bounds on the values an identification frees: a compliance (axial
+//! or lateral), a
 //! stiffness, a backlash, a clearance and a payload mass cannot be negative, a thermal time
 //! constant is positive. `diagnose` holds a fitted value outside its bound at the bound
 //! (`hold`) and refits the others; `plan --from-diagnose` sizes and moves values only within
@@ -58,7 +59,7 @@ impl Bound {
 /// The physical bound of `u` on `model`, when it has one.
 pub fn bound(u: Unknown, model: &Model) -> Option<Bound> {
     match u {
-        Unknown::Compliance(_) => Some(Bound::NON_NEGATIVE),
+        Unknown::Compliance(_) | Unknown::LateralCompliance(_) => Some(Bound::NON_NEGATIVE),
         Unknown::ThermalTauMin => Some(Bound {
             min: THERMAL_TAU_RANGE_MIN.0,
             min_excluded: false,

@@ -21,6 +21,8 @@ pub enum Change {
     JointDrift(usize, f64),
     /// A term on the joint angles before the chain (transmission, hysteresis, compliance).
     Joint(JointTerm),
+    /// Lateral compliance of joint index (0-based), deg per kgf.m, added to the model's.
+    LateralCompliance(usize, f64),
     /// Warm-up growth: ppm at saturation, time constant in min.
     Thermal { ppm: f64, tau_min: f64 },
     /// A change within the session at a time.
@@ -105,6 +107,7 @@ impl EffectId {
             EffectId::JointCoupling(i, k) => Change::Joint(JointTerm::Coupling(*i, *k, v0)),
             EffectId::Hysteresis(j) => Change::Joint(JointTerm::Hysteresis(*j, v0)),
             EffectId::Compliance(j) => Change::Joint(JointTerm::Compliance(*j, v0)),
+            EffectId::LateralCompliance(j) => Change::LateralCompliance(*j, v0),
             EffectId::Thermal => {
                 let tau_min = values[1];
                 if tau_min.is_nan() || tau_min <= 0.0 {
@@ -138,7 +141,9 @@ impl Change {
             Change::Joint(JointTerm::Scale(_, v)) => (vec![*v], r::MAX_JOINT_SCALE),
             Change::Joint(JointTerm::Coupling(_, _, v)) => (vec![*v], r::MAX_COUPLING),
             Change::Joint(JointTerm::Hysteresis(_, v)) => (vec![*v], r::MAX_HYSTERESIS_DEG),
-            Change::Joint(JointTerm::Compliance(_, v)) => (vec![*v], r::MAX_COMPLIANCE),
+            Change::Joint(JointTerm::Compliance(_, v)) | Change::LateralCompliance(_, v) => {
+                (vec![*v], r::MAX_COMPLIANCE)
+            }
             Change::Thermal { ppm, tau_min } => {
                 if *tau_min > r::MAX_THERMAL_TAU_MIN {
                     return Err(ChangeError(format!(

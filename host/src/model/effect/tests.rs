@@ -1,4 +1,5 @@
 use super::*;
+use crate::model::unknown::Unknown;
 use crate::model::{katana450, ur5, KATANA_TOOL_MM};
 
 const ALL: Offers = Offers {
