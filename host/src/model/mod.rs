@@ -70,6 +70,7 @@
 //! [`Model::write_file`]; the format is documented in [`toml_file`].
 
 mod assumed_masses;
+mod builder;
 mod chain;
 pub mod changes;
 mod data;
@@ -97,6 +98,7 @@ pub mod tree_file;
 mod tree_params;
 pub mod unknown;
 
+pub use builder::ModelBuilder;
 pub use chain::*;
 pub use data::Data;
 pub use error::ModelError;

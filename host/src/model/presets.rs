@@ -1,6 +1,7 @@
 //! Built-in robots: the Katana 450 of the thesis (MODEL.md) and the UR5 of the laser-tracker data.
 
-use super::chain::{Axis, Model, ModelBuilder, Motion, TiltValues};
+use super::builder::ModelBuilder;
+use super::chain::{Axis, Model, Motion, TiltValues};
 use super::error::ModelError;
 
 /// Tool length d5 of the bare Katana 450 (mm).

@@ -86,7 +86,8 @@ use serde::Deserialize;
 use std::collections::BTreeMap;
 use std::path::Path;
 
-use super::chain::{Axis, GammaLaw, Model, ModelBuilder, Motion, TiltValues};
+use super::builder::ModelBuilder;
+use super::chain::{Axis, GammaLaw, Model, Motion, TiltValues};
 use super::changes::{Step, StepKind};
 use super::error::ModelError;
 use super::gravity::GravityModel;

@@ -13,7 +13,8 @@
 
 use std::collections::{BTreeMap, HashMap, HashSet};
 
-use super::chain::{Axis, Model, ModelBuilder, Motion};
+use super::builder::ModelBuilder;
+use super::chain::{Axis, Model, Motion};
 use super::error::ModelError;
 use super::param::ParamKind;
 
