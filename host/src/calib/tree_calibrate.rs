@@ -9,7 +9,7 @@ use super::calibrate::{default_selection, param_group, CalibrateOptions, Method}
 use super::error::CalibError;
 use super::fit::Fit;
 use super::large_changes::{large_changes, LargeChange};
-use super::prior::PriorMode;
+use super::registered::{registered_summary, registration_options};
 use super::report::{unknowns_report, CalibrateReport, StandardSummary};
 use super::tree_fit::{fit_tree, tree_errors, TreePose};
 use crate::model::{Model, ParamKind, Tree};
@@ -159,21 +159,8 @@ pub fn tree_registration_only(
     val: Option<&[TreePose]>,
     with_tool: bool,
 ) -> Result<StandardSummary, CalibError> {
-    let mut groups = vec!["@base".to_string()];
-    if with_tool {
-        groups.push("@tool".to_string());
-    }
-    let opts = CalibrateOptions {
-        method: Method::Standard,
-        params: Some(groups),
-        base: true,
-        keep_outliers: true,
-        prior: PriorMode::Off,
-        ..Default::default()
-    };
-    let r = calibrate_tree(nominal, cal, val, &opts)?.report;
-    Ok(StandardSummary {
-        calibration: r.calibration.after,
-        validation: r.validation.as_ref().map(|v| v.after),
-    })
+    let opts = registration_options(with_tool);
+    Ok(registered_summary(
+        &calibrate_tree(nominal, cal, val, &opts)?.report,
+    ))
 }
