@@ -163,6 +163,21 @@ fn one_fit_over_a_dual_arm_tree_shares_the_torso() {
     assert_eq!(fit.fitted, all);
     assert!(fit.fixed.is_empty() && fit.unidentifiable.is_empty());
     assert!(fit.converged && fit.rank == all.len());
+    // a selection the poses cannot identify, as on a chain: the left arm's last `d` moves the
+    // hand point along the same axis as the tool point's z; listed last, it is the one kept at
+    // its value, named in the combination, its sigma infinite, and the rest fitted as before
+    let mut confounded = all.clone();
+    confounded.push("d_l6".into());
+    let pinned = fit_tree(&nominal, &train, &confounded, &lm, DEFAULT_RTOL).unwrap();
+    assert_eq!(pinned.fixed, ["d_l6"]);
+    assert_eq!(pinned.fitted, all);
+    let combination = pinned.unidentifiable.join(" ");
+    assert!(
+        combination.contains("d_l6") && combination.contains("tool_dz@left_hand"),
+        "{combination}"
+    );
+    assert_eq!(pinned.model.param("d_l6"), nominal.param("d_l6"));
+    assert!(pinned.sigma_of("d_l6".to_string()).is_infinite());
     let held_before = tree_rms_mm(&nominal, &held_out).unwrap();
     let held_after = tree_rms_mm(&fit.model, &held_out).unwrap();
     eprintln!(
