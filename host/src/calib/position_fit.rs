@@ -1,7 +1,8 @@
 //! The identification of model parameters on full positions ([`fit_parameters`]): the
 //! analysis at the start, the solve on the tall Jacobian or on normal equations accumulated per
 //! pose, the rank analysed again at the solution, and what the fit does not determine kept at
-//! its input.
+//! its input. That loop ([`refine`]) is written once for every [`Identification`]: the fit on
+//! full positions ([`PositionFit`]) and the fit over a tree ([`super::tree_fit`]).
 
 use super::accumulate::{normal_equations_with, JointTrig, PositionNormalProblem};
 use super::error::CalibError;

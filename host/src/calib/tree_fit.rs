@@ -101,8 +101,8 @@ impl TreeUnknowns {
     }
 
     /// Residuals `predicted - measured` (3 rows per measured tip point, mm) into `r` and, with
-    /// `jac`, their Jacobian wrt the unknowns (poses checked by [`check_poses`]).
-    pub fn rows(
+    /// `jac`, their Jacobian wrt the unknowns (`poses` checked by [`check_poses`]).
+    fn rows(
         &self,
         poses: &[TreePose],
         r: &mut DVector<f64>,
