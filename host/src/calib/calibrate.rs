@@ -18,8 +18,8 @@ use super::predict::prediction_sd_mm;
 use super::prior::{PriorMode, PriorScales};
 use super::problem::norms_mm;
 use super::regularise::choose_prior;
-use super::report::{BeforeAfter, CalibrateReport, NamedValues, StandardSummary};
-use super::stats::Stats;
+pub(super) use super::report::fit_report;
+use super::report::CalibrateReport;
 use crate::model::{Model, ParamKind, KATANA_GEOMETRIC_PARAMS};
 
 /// Identification method (FORMATS.md `--method`).
@@ -200,81 +200,6 @@ pub struct Outcome {
     pub calibration_errors: [Vec<Vector3<f64>>; 3],
     /// Same for the validation poses (empty without them).
     pub validation_errors: [Vec<Vector3<f64>>; 3],
-}
-
-/// The `calibrate --json` document of the chosen `fit`: its parameters (fitted and fixed, in
-/// `selection` order), sigmas and identifiability, with the error statistics of the error
-/// vectors `[before, standard, chosen]` of the calibration poses `cal` and, with validation
-/// poses, of those ([`error_summary`]).
-pub(super) fn fit_report(
-    fit: &Fit,
-    selection: &[usize],
-    method: &str,
-    cal: &[Vec<Vector3<f64>>; 3],
-    val: Option<&[Vec<Vector3<f64>>; 3]>,
-    tilting_applied: bool,
-) -> CalibrateReport {
-    let (calibration, validation, standard) = error_summary(cal, val);
-    let params = fit.model.params();
-    let name = |c: usize| params.get(c).map_or_else(String::new, |p| p.name.clone());
-    let mut reported: Vec<usize> = fit.fitted.iter().chain(&fit.fixed).copied().collect();
-    reported.sort_unstable_by_key(|c| selection.iter().position(|s| s == c));
-    CalibrateReport {
-        method: method.to_string(),
-        calibration,
-        validation,
-        parameters: NamedValues(
-            reported
-                .iter()
-                .filter_map(|&c| params.get(c).map(|p| (p.name.clone(), p.value)))
-                .collect(),
-        ),
-        unidentifiable: fit.unidentifiable.clone(),
-        condition_number: fit.condition_number,
-        standard,
-        // the kept parameters' sigma is `null` (FORMATS.md): NaN here
-        sigma: NamedValues(
-            reported
-                .iter()
-                .map(|&c| (name(c), fit.sigma_of(c)))
-                .map(|(n, s)| (n, if s.is_finite() { s } else { f64::NAN }))
-                .collect(),
-        ),
-        fixed: fit.fixed.iter().map(|&c| name(c)).collect(),
-        rank: fit.rank,
-        iterations: fit.iterations,
-        converged: fit.converged,
-        tilting_applied,
-        terms: NamedValues::default(),
-        unphysical: Vec::new(),
-        outliers: Vec::new(),
-        outlier_note: None,
-        large_changes: Vec::new(),
-        validation_all: None,
-        extrapolated: Vec::new(),
-        prior: None,
-        registered: None,
-    }
-}
-
-/// The error statistics of `calibrate --json` from the error vectors `[before, standard,
-/// chosen]` of the calibration poses and, with validation poses, of those.
-fn error_summary(
-    cal: &[Vec<Vector3<f64>>; 3],
-    val: Option<&[Vec<Vector3<f64>>; 3]>,
-) -> (BeforeAfter, Option<BeforeAfter>, StandardSummary) {
-    let before_after = |e: &[Vec<Vector3<f64>>; 3]| BeforeAfter {
-        before: Stats::from_errors(&e[0]),
-        after: Stats::from_errors(&e[2]),
-    };
-    (
-        before_after(cal),
-        val.map(before_after),
-        StandardSummary {
-            calibration: Stats::from_errors(&cal[1]),
-            validation: val.map(|e| Stats::from_errors(&e[1])),
-        },
-    )
 }
 
 /// Fewest calibration poses on which the gross-error rule is applied.

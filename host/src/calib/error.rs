@@ -31,6 +31,15 @@ pub enum CalibError {
     /// A combination of options that the identification does not support.
     #[error("{0}")]
     Unsupported(String),
+    /// A pose of a tree model with the wrong number of joint values or points.
+    #[error("pose {pose}: {found} joint values for a tree of {expected} joints, or {points} points for {tips} tips")]
+    TreePoseShape {
+        pose: usize,
+        expected: usize,
+        found: usize,
+        points: usize,
+        tips: usize,
+    },
     /// Measurements that cannot be of this model as given (units, joint order, another robot):
     /// [`super::plausible`].
     #[error("{0}")]
@@ -61,6 +70,7 @@ impl Classify for CalibError {
             | CalibError::EmptySelection
             | CalibError::NoMasses
             | CalibError::Unsupported(_)
+            | CalibError::TreePoseShape { .. }
             | CalibError::Implausible(_) => ErrorKind::BadInput,
         }
     }

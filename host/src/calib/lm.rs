@@ -140,41 +140,23 @@ pub fn solve<P: Problem>(
 mod tests {
     use super::*;
 
-    /// A test problem of `n` unknowns and `m` residuals whose closure writes `r` and, when asked,
-    /// the Jacobian.
-    struct Fns<F> {
+    use crate::calib::problem::{ModelProblem, Rows};
+
+    /// A problem of `n` unknowns (a plain vector, the state) and `m` residuals whose closure
+    /// writes `r` and, when asked, the Jacobian.
+    fn problem<F>(
         n: usize,
         m: usize,
-        f: F,
-    }
-
-    impl<F> Problem for Fns<F>
+        mut f: F,
+    ) -> ModelProblem<DVector<f64>, impl Rows<DVector<f64>>>
     where
         F: FnMut(&DVector<f64>, &mut DVector<f64>, Option<&mut DMatrix<f64>>),
     {
-        type Error = std::convert::Infallible;
-        fn n_params(&self) -> usize {
-            self.n
-        }
-        fn n_residuals(&self) -> usize {
-            self.m
-        }
-        fn evaluate(
-            &mut self,
-            x: &DVector<f64>,
-            r: &mut DVector<f64>,
-            jac: Option<&mut DMatrix<f64>>,
-        ) -> Result<(), Self::Error> {
-            (self.f)(x, r, jac);
+        let rows = move |x: &DVector<f64>, r: &mut DVector<f64>, jac: Option<&mut DMatrix<f64>>| {
+            f(x, r, jac);
             Ok(())
-        }
-    }
-
-    fn problem<F>(n: usize, m: usize, f: F) -> Fns<F>
-    where
-        F: FnMut(&DVector<f64>, &mut DVector<f64>, Option<&mut DMatrix<f64>>),
-    {
-        Fns { n, m, f }
+        };
+        ModelProblem::new(DVector::zeros(n), m, rows)
     }
 
     /// Rosenbrock as least squares: r = (10 (x2 - x1^2), 1 - x1); minimum (1, 1).

@@ -33,6 +33,8 @@
 //! | [`predict`] | the prediction uncertainty of a fit at poses it was not fitted on (held-out gross errors vs extrapolation) |
 //! | [`calibrate_general`] | `calibrate_poses`, the one library entry of `calibrate` on a [`MeasuredSet`]: the model's terms applied, then partial measurements, one point per pose, or several points, `--compliance`, `--select press` |
 //! | [`registered`] | the input model with only the instrument's frame fitted (registration only): the report's "before" with `--base` |
+//! | [`tree_fit`] | one identification over a tree model: its unknowns as a state (`TreeUnknowns`), the rows of every measured tip point, [`position_fit::refine`] on them (`fit_tree`) |
+//! | [`tree_calibrate`] | `calibrate` on a tree: the selection on every tip's chain, the fit, the same `calibrate --json` document |
 //! | [`samples`] | the pencil rig's partial measurement: a fused sample (`FUSED.csv` row) |
 
 pub mod accumulate;
@@ -66,6 +68,7 @@ pub mod report;
 pub mod samples;
 pub mod state;
 pub mod stats;
+pub mod tree_calibrate;
 pub mod tree_fit;
 pub mod unknown;
 

@@ -1,7 +1,8 @@
 //! The identification of model parameters on full positions ([`fit_parameters`]): the
 //! analysis at the start, the solve on the tall Jacobian or on normal equations accumulated per
 //! pose, the rank analysed again at the solution, and what the fit does not determine kept at
-//! its input.
+//! its input. That loop ([`refine`]) is written once for every [`Identification`]: the fit on
+//! full positions ([`PositionFit`]) and the fit over a tree ([`super::tree_fit`]).
 
 use super::accumulate::{normal_equations_with, JointTrig, PositionNormalProblem};
 use super::error::CalibError;
@@ -17,13 +18,8 @@ use crate::model::Model;
 const MAX_RANK_REFITS: usize = 3;
 
 /// Identifies the parameters `selection` (model indices; put the ones you would rather fit
-/// first) of `start` from `poses`, with or without the declared tilting.
-///
-/// The identifiability analysis is that of the Jacobian at the start; a nominal model with
-/// exact right angles can hide directions that the fitted model shows (the rank at the solution
-/// is larger). The analysis is then repeated at the solution and the fit goes on from there with
-/// the larger set (at most [`MAX_RANK_REFITS`] times), so that a second run from the result
-/// cannot improve on it; the iterations add up.
+/// first) of `start` from `poses`, with or without the declared tilting: [`refine`] on a
+/// [`PositionFit`] (the rank analysed again at the solution).
 ///
 /// With `prior`, a prior toward the values of `prior.center` ([`super::prior`]); `None`, or a
 /// weight of 0, is the plain fit.
@@ -47,66 +43,100 @@ pub fn fit_parameters(
     if poses.is_empty() {
         return Err(CalibError::NoPoses);
     }
-    let mut fit = on.once(start)?;
+    refine(&on, start)
+}
+
+/// An identification that [`refine`] runs: one analysis-and-solve from any start on any part
+/// of its selection, the rank of its whole selection anywhere, and the values of its unknowns
+/// (indices, in the selection's preference order). The fit of a model's parameters on full
+/// positions ([`PositionFit`]) and the fit over a tree ([`super::tree_fit`]) are two.
+pub trait Identification {
+    /// The state whose values the unknowns are.
+    type State: Clone;
+    /// The selected unknowns, in preference order.
+    fn selection(&self) -> &[usize];
+    /// One identification of `selection` (part of [`Self::selection`], same order) from
+    /// `start`: the identifiability analysis there ([`super::fit::Split`]), then the solve.
+    fn once(
+        &self,
+        start: &Self::State,
+        selection: &[usize],
+    ) -> Result<Fit<Self::State, usize>, CalibError>;
+    /// The rank of the whole selection's Jacobian at `state`.
+    fn rank_at(&self, state: &Self::State) -> Result<usize, CalibError>;
+    /// The value of unknown `u` in `state` (NaN when it has none).
+    fn value(&self, state: &Self::State, u: usize) -> f64;
+    /// Sets unknown `u` of `state` to `v`.
+    fn set_value(&self, state: &mut Self::State, u: usize, v: f64) -> Result<(), CalibError>;
+}
+
+/// The identification `on` from `start`, its rank analysed again at the solution.
+///
+/// The identifiability analysis is that of the Jacobian at the start; a nominal model with
+/// exact right angles can hide directions that the fitted model shows (the rank at the solution
+/// is larger). The analysis is then repeated at the solution and the fit goes on from there with
+/// the larger set (at most [`MAX_RANK_REFITS`] times), so that a second run from the result
+/// cannot improve on it; the iterations add up. What the fit does not determine is then kept at
+/// its input ([`keep_what_is_not_determined`]).
+pub fn refine<I: Identification>(
+    on: &I,
+    start: &I::State,
+) -> Result<Fit<I::State, usize>, CalibError> {
+    let mut fit = on.once(start, on.selection())?;
     for _ in 0..MAX_RANK_REFITS {
         if on.rank_at(&fit.model)? <= fit.rank {
             break;
         }
-        let next = on.once(&fit.model)?;
+        let next = on.once(&fit.model, on.selection())?;
         fit = Fit {
             iterations: fit.iterations + next.iterations,
             converged: fit.converged && next.converged,
             ..next
         };
     }
-    keep_what_is_not_determined(start, fit, &on)
+    keep_what_is_not_determined(start, fit, on)
 }
 
-/// What a fit does not determine keeps its input value: a parameter fixed by a later analysis
+/// What a fit does not determine keeps its input value: an unknown fixed by a later analysis
 /// than the one that first moved it is put back to its value in `start`, and where a fitted
-/// parameter's sigma is infinite at the solution (a direction the start did not show as null)
+/// unknown's sigma is infinite at the solution (a direction the start did not show as null)
 /// the analysis there fixes the ones that direction needs (the later in preference order);
 /// the others are refitted from there, until nothing moves.
-fn keep_what_is_not_determined(
-    start: &Model,
-    mut fit: Fit,
-    on: &PositionFit<'_>,
-) -> Result<Fit, CalibError> {
+fn keep_what_is_not_determined<I: Identification>(
+    start: &I::State,
+    mut fit: Fit<I::State, usize>,
+    on: &I,
+) -> Result<Fit<I::State, usize>, CalibError> {
     for _ in 0..MAX_RANK_REFITS {
         let undetermined = fit.sigma.iter().any(|s| !s.is_finite());
         let moved: Vec<usize> = fit
             .fixed
             .iter()
             .copied()
-            .filter(|&p| fit.model.params()[p].value != start.params()[p].value)
+            .filter(|&p| on.value(&fit.model, p) != on.value(start, p))
             .collect();
         if !undetermined && moved.is_empty() {
             break;
         }
         let mut from = fit.model.clone();
         for &p in &moved {
-            from.set_param_at(p, start.params()[p].value)?;
+            on.set_value(&mut from, p, on.value(start, p))?;
         }
         // the fitted ones in preference order, analysed again where the fit stands
         let keep: Vec<usize> = on
-            .selection
+            .selection()
             .iter()
             .copied()
             .filter(|p| fit.fitted.contains(p))
             .collect();
-        let next = match (PositionFit {
-            selection: &keep,
-            ..*on
-        })
-        .once(&from)
-        {
+        let next = match on.once(&from, &keep) {
             Ok(next) => next,
             Err(CalibError::NothingToFit) => break,
             Err(e) => return Err(e),
         };
         let mut fixed: Vec<usize> = fit.fixed.clone();
         fixed.extend(&next.fixed);
-        fixed.sort_by_key(|p| on.selection.iter().position(|s| s == p));
+        fixed.sort_by_key(|p| on.selection().iter().position(|s| s == p));
         fixed.dedup();
         let mut unidentifiable = fit.unidentifiable.clone();
         unidentifiable.extend(next.unidentifiable.iter().cloned());
@@ -136,27 +166,32 @@ pub struct PositionFit<'a> {
     pub prior: Option<PriorAt<'a>>,
 }
 
-impl PositionFit<'_> {
-    /// One identification from `start`: the analysis there, then the solve.
-    fn once(&self, start: &Model) -> Result<Fit, CalibError> {
-        if use_normal_equations(self.rtol) && self.prior.is_none() {
-            return fit_parameters_normal(start, self);
+impl Identification for PositionFit<'_> {
+    type State = Model;
+
+    fn selection(&self) -> &[usize] {
+        self.selection
+    }
+
+    fn once(&self, start: &Model, selection: &[usize]) -> Result<Fit, CalibError> {
+        let on = PositionFit { selection, ..*self };
+        if use_normal_equations(on.rtol) && on.prior.is_none() {
+            return fit_parameters_normal(start, &on);
         }
-        let (poses, tilt) = (self.poses, self.tilt);
-        let jac0 = stacked_jacobian(start, poses, self.selection, tilt)?;
+        let (poses, tilt) = (on.poses, on.tilt);
+        let jac0 = stacked_jacobian(start, poses, on.selection, tilt)?;
         let make = |cols| position_problem(start, poses, cols, tilt);
         fit_problem(
             start,
-            self.selection,
+            on.selection,
             &jac0,
             make,
-            self.lm,
-            self.rtol,
-            self.prior.as_ref(),
+            on.lm,
+            on.rtol,
+            on.prior.as_ref(),
         )
     }
 
-    /// The rank of the selection's Jacobian at `model`.
     fn rank_at(&self, model: &Model) -> Result<usize, CalibError> {
         let (poses, selection, tilt, rtol) = (self.poses, self.selection, self.tilt, self.rtol);
         Ok(if use_normal_equations(rtol) {
@@ -165,6 +200,14 @@ impl PositionFit<'_> {
         } else {
             analyse(&stacked_jacobian(model, poses, selection, tilt)?, rtol).rank
         })
+    }
+
+    fn value(&self, model: &Model, p: usize) -> f64 {
+        model.params().get(p).map_or(f64::NAN, |x| x.value)
+    }
+
+    fn set_value(&self, model: &mut Model, p: usize, v: f64) -> Result<(), CalibError> {
+        Ok(model.set_param_at(p, v)?)
     }
 }
 

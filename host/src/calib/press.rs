@@ -95,8 +95,28 @@ pub fn forward_select(
 }
 
 #[cfg(test)]
-mod tests {
+pub(crate) mod tests {
     use super::*;
+
+    /// Brute-force leave-one-out of a fit of `y` on the first two columns of `jac` (`fit`
+    /// solves one): the sum of the squared errors of every row predicted by the fit without it,
+    /// the reference of a PRESS.
+    pub(crate) fn leave_one_out(
+        jac: &DMatrix<f64>,
+        y: &DVector<f64>,
+        fit: impl Fn(&DMatrix<f64>, &DVector<f64>) -> DVector<f64>,
+    ) -> f64 {
+        let n = y.len();
+        let mut brute = 0.0;
+        for out in 0..n {
+            let keep: Vec<usize> = (0..n).filter(|&i| i != out).collect();
+            let a = DMatrix::from_fn(n - 1, 2, |k, c| jac[(keep[k], c)]);
+            let b = DVector::from_fn(n - 1, |k, _| y[keep[k]]);
+            let x = fit(&a, &b);
+            brute += (y[out] - jac[(out, 0)] * x[0] - jac[(out, 1)] * x[1]).powi(2);
+        }
+        brute
+    }
 
     /// y = 2 t + noise-free: the slope column is added, a column of pure noise is not, and the
     /// block PRESS of a straight-line fit equals the brute-force leave-one-out error.
@@ -114,15 +134,9 @@ mod tests {
         let blocks = vec![1; n];
         assert_eq!(forward_select(&jac, &r, &blocks, &[0], &[1, 2]), vec![1]);
         // Brute force leave-one-out of the line fit.
-        let mut brute = 0.0;
-        for out in 0..n {
-            let keep: Vec<usize> = (0..n).filter(|&i| i != out).collect();
-            let a = DMatrix::from_fn(n - 1, 2, |k, c| jac[(keep[k], c)]);
-            let b = DVector::from_fn(n - 1, |k, _| r[keep[k]]);
-            let x = a.clone().svd(true, true).solve(&b, 1e-12).unwrap();
-            let pred = jac[(out, 0)] * x[0] + jac[(out, 1)] * x[1];
-            brute += (r[out] - pred).powi(2);
-        }
+        let brute = leave_one_out(&jac, &r, |a, b| {
+            a.clone().svd(true, true).solve(b, 1e-12).unwrap()
+        });
         let press = block_press(&jac, &r, &[0, 1], &blocks).unwrap();
         assert!(
             (press - brute).abs() < 1e-9 * brute.max(1.0),

@@ -321,6 +321,7 @@ pub fn choose_weight<E>(
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::calib::press::tests::leave_one_out;
 
     /// The ridge PRESS of the residuals at a solution equals brute-force leave-one-out of the
     /// same ridge fit (weight 0: plain least squares).
@@ -336,14 +337,7 @@ mod tests {
             ata.try_inverse().unwrap() * a.transpose() * b
         };
         for w in [0.0, 0.5, 4.0] {
-            let mut brute = 0.0;
-            for out in 0..n {
-                let keep: Vec<usize> = (0..n).filter(|&i| i != out).collect();
-                let a = DMatrix::from_fn(n - 1, 2, |k, c| jac[(keep[k], c)]);
-                let b = DVector::from_fn(n - 1, |k, _| y[keep[k]]);
-                let x = ridge(&a, &b, w);
-                brute += (y[out] - jac[(out, 0)] * x[0] - jac[(out, 1)] * x[1]).powi(2);
-            }
+            let brute = leave_one_out(&jac, &y, |a, b| ridge(a, b, w));
             let e = &y - &jac * ridge(&jac, &y, w);
             let p = DVector::from_vec(vec![0.0, w]);
             let press = ridge_press(&jac, &e, &p, &vec![1; n]).unwrap();

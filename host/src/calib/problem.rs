@@ -84,12 +84,24 @@ impl SetUnknowns for Unknowns {
 }
 
 /// What a solver's vector is written into: the unknowns of a model state, in order
-/// ([`Unknowns`], [`super::unknown::Freed`]).
+/// ([`Unknowns`], [`super::unknown::Freed`], [`super::tree_fit::TreeUnknowns`]; a plain vector
+/// is the state of a problem written directly in its unknowns).
 pub trait SetUnknowns {
     /// Number of unknowns.
     fn n_unknowns(&self) -> usize;
     /// Writes `x` into the state.
     fn set(&mut self, x: &DVector<f64>) -> Result<(), ModelError>;
+}
+
+impl SetUnknowns for DVector<f64> {
+    fn n_unknowns(&self) -> usize {
+        self.len()
+    }
+
+    fn set(&mut self, x: &DVector<f64>) -> Result<(), ModelError> {
+        self.copy_from(x);
+        Ok(())
+    }
 }
 
 /// The residual rows of a set of measurements as a function of a state `S`: writes

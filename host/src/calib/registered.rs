@@ -7,7 +7,7 @@
 use super::calibrate::{CalibrateOptions, Method};
 use super::calibrate_general::{calibrate_poses, GeneralOptions};
 use super::prior::PriorMode;
-use super::report::StandardSummary;
+use super::report::{CalibrateReport, StandardSummary};
 use super::{CalibError, MeasuredSet};
 use crate::model::Model;
 
@@ -21,22 +21,32 @@ pub fn registration_only(
     val: Option<&MeasuredSet>,
     with_tool: bool,
 ) -> Result<StandardSummary, CalibError> {
+    let opts = registration_options(with_tool);
+    let g = calibrate_poses(nominal, cal, val, &opts, &GeneralOptions::default())?;
+    Ok(registered_summary(&g.outcome.report))
+}
+
+/// The options of a registration (see [`registration_only`]): `@base` (and `@tool`), the
+/// standard method, every pose kept, no prior.
+pub fn registration_options(with_tool: bool) -> CalibrateOptions {
     let mut groups = vec!["@base".to_string()];
     if with_tool {
         groups.push("@tool".to_string());
     }
-    let opts = CalibrateOptions {
+    CalibrateOptions {
         method: Method::Standard,
         params: Some(groups),
         base: true,
         keep_outliers: true,
         prior: PriorMode::Off,
         ..Default::default()
-    };
-    let g = calibrate_poses(nominal, cal, val, &opts, &GeneralOptions::default())?;
-    let r = &g.outcome.report;
-    Ok(StandardSummary {
+    }
+}
+
+/// The report's `registered`: the errors after a registration's fit (its report `r`).
+pub fn registered_summary(r: &CalibrateReport) -> StandardSummary {
+    StandardSummary {
         calibration: r.calibration.after,
         validation: r.validation.as_ref().map(|v| v.after),
-    })
+    }
 }

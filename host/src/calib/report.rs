@@ -11,7 +11,11 @@
 use serde::ser::SerializeMap;
 use serde::{Serialize, Serializer};
 
+use nalgebra::Vector3;
+
+use super::fit::Fit;
 use super::stats::Stats;
+use crate::model::Model;
 
 /// Error statistics before (nominal model without tilting) and after calibration.
 #[derive(Debug, Clone, Copy, PartialEq, Serialize)]
@@ -148,44 +152,126 @@ pub struct CalibrateReport {
     pub registered: Option<StandardSummary>,
 }
 
+/// The `calibrate --json` document of the chosen `fit` of a model's parameters (model
+/// indices): [`unknowns_report`] with the parameters' names and values.
+pub fn fit_report(
+    fit: &Fit,
+    selection: &[usize],
+    method: &str,
+    cal: &[Vec<Vector3<f64>>; 3],
+    val: Option<&[Vec<Vector3<f64>>; 3]>,
+    tilting_applied: bool,
+) -> CalibrateReport {
+    let entry = |m: &Model, c: &usize| m.params().get(*c).map(|p| (p.name.clone(), p.value));
+    unknowns_report(fit, selection, entry, method, cal, val, tilting_applied)
+}
+
+/// The `calibrate --json` document of the chosen `fit`: its unknowns (fitted and fixed, in
+/// `selection` order) by `entry` (an unknown's name and value in the fitted state), their
+/// sigmas and identifiability, with the error statistics of the error vectors `[before,
+/// standard, chosen]` of the calibration measurements `cal` and, with validation measurements,
+/// of those ([`error_summary`]).
+pub fn unknowns_report<M, U: Clone + PartialEq>(
+    fit: &Fit<M, U>,
+    selection: &[U],
+    entry: impl Fn(&M, &U) -> Option<(String, f64)>,
+    method: &str,
+    cal: &[Vec<Vector3<f64>>; 3],
+    val: Option<&[Vec<Vector3<f64>>; 3]>,
+    tilting_applied: bool,
+) -> CalibrateReport {
+    let (calibration, validation, standard) = error_summary(cal, val);
+    let name = |c: &U| entry(&fit.model, c).map_or_else(String::new, |(n, _)| n);
+    let mut reported: Vec<U> = fit.fitted.iter().chain(&fit.fixed).cloned().collect();
+    reported.sort_unstable_by_key(|c| selection.iter().position(|s| s == c));
+    CalibrateReport {
+        method: method.to_string(),
+        calibration,
+        validation,
+        parameters: NamedValues(
+            reported
+                .iter()
+                .filter_map(|c| entry(&fit.model, c))
+                .collect(),
+        ),
+        unidentifiable: fit.unidentifiable.clone(),
+        condition_number: fit.condition_number,
+        standard,
+        // the kept parameters' sigma is `null` (FORMATS.md): NaN here
+        sigma: NamedValues(
+            reported
+                .iter()
+                .map(|c| (name(c), fit.sigma_of(c.clone())))
+                .map(|(n, s)| (n, if s.is_finite() { s } else { f64::NAN }))
+                .collect(),
+        ),
+        fixed: fit.fixed.iter().map(name).collect(),
+        rank: fit.rank,
+        iterations: fit.iterations,
+        converged: fit.converged,
+        tilting_applied,
+        terms: NamedValues::default(),
+        unphysical: Vec::new(),
+        outliers: Vec::new(),
+        outlier_note: None,
+        large_changes: Vec::new(),
+        validation_all: None,
+        extrapolated: Vec::new(),
+        prior: None,
+        registered: None,
+    }
+}
+
+/// The error statistics of `calibrate --json` from the error vectors `[before, standard,
+/// chosen]` of the calibration poses and, with validation poses, of those.
+fn error_summary(
+    cal: &[Vec<Vector3<f64>>; 3],
+    val: Option<&[Vec<Vector3<f64>>; 3]>,
+) -> (BeforeAfter, Option<BeforeAfter>, StandardSummary) {
+    let before_after = |e: &[Vec<Vector3<f64>>; 3]| BeforeAfter {
+        before: Stats::from_errors(&e[0]),
+        after: Stats::from_errors(&e[2]),
+    };
+    (
+        before_after(cal),
+        val.map(before_after),
+        StandardSummary {
+            calibration: Stats::from_errors(&cal[1]),
+            validation: val.map(|e| Stats::from_errors(&e[1])),
+        },
+    )
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
-    use nalgebra::Vector3;
 
     #[test]
     fn contract_keys_and_order() {
-        let st = Stats::from_errors(&[Vector3::new(0.1, 0.0, 0.0)]);
-        let r = CalibrateReport {
-            method: "tilting".into(),
-            calibration: BeforeAfter {
-                before: st,
-                after: st,
-            },
-            validation: None,
-            parameters: NamedValues(vec![("dth2".into(), 0.03), ("al2".into(), 90.01)]),
+        let e = vec![Vector3::new(0.1, 0.0, 0.0)];
+        let errors = [e.clone(), e.clone(), e];
+        // a state of named values; unknowns 0 and 1 fitted, 2 and 3 fixed
+        let state = vec![
+            ("dth2".to_string(), 0.03),
+            ("al2".to_string(), 90.01),
+            ("be4".to_string(), 0.0),
+            ("be5".to_string(), 0.0),
+        ];
+        let fit = Fit {
+            model: state,
+            fitted: vec![0usize, 1],
+            fixed: vec![2, 3],
             unidentifiable: vec!["be5".into(), "dth5+be4".into()],
+            sigma: vec![0.001, 0.002],
             condition_number: 12.5,
-            standard: StandardSummary {
-                calibration: st,
-                validation: None,
-            },
-            sigma: NamedValues(vec![("dth2".into(), 0.001)]),
-            fixed: vec!["be4".into(), "be5".into()],
             rank: 10,
             iterations: 4,
             converged: true,
-            tilting_applied: true,
-            terms: NamedValues::default(),
-            unphysical: Vec::new(),
-            outliers: Vec::new(),
-            outlier_note: None,
-            large_changes: Vec::new(),
-            validation_all: None,
-            extrapolated: Vec::new(),
-            prior: None,
-            registered: None,
+            rss_mm2: 0.01,
+            n_residuals: 3,
         };
+        let entry = |s: &Vec<(String, f64)>, c: &usize| s.get(*c).cloned();
+        let r = unknowns_report(&fit, &[0, 1, 2, 3], entry, "tilting", &errors, None, true);
         let text = serde_json::to_string(&r).unwrap();
         let v: serde_json::Value = serde_json::from_str(&text).unwrap();
         for key in [
@@ -206,11 +292,13 @@ mod tests {
         // Model order is kept.
         assert!(text.find("\"dth2\"").unwrap() < text.find("\"al2\"").unwrap());
         assert_eq!(v["parameters"]["al2"], 90.01);
-        assert!(r.sigma.not_finite().is_empty());
+        assert_eq!(v["fixed"], serde_json::json!(["be4", "be5"]));
+        // the fixed ones' sigma is null
+        assert_eq!(r.sigma.not_finite(), ["be4", "be5"]);
         // a sigma the poses do not determine is null, and the document is still written
         let mut r = r;
-        r.sigma.0.push(("al2".into(), f64::INFINITY));
-        assert_eq!(r.sigma.not_finite(), ["al2"]);
+        r.sigma.0[1].1 = f64::INFINITY;
+        assert_eq!(r.sigma.not_finite(), ["al2", "be4", "be5"]);
         let v: serde_json::Value = serde_json::to_value(&r).unwrap();
         assert!(v["sigma"]["al2"].is_null() && v["sigma"]["dth2"] == 0.001);
         crate::io::finite_json::check_json(&r).unwrap();

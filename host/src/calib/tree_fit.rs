@@ -1,17 +1,26 @@
-//! One least-squares fit over a tree model ([`crate::model::Tree`]): the joints of the whole
-//! tree in every pose, a measured point on any of its tips, and every parameter once, however
-//! many tips it moves (a torso's constants are one unknown for both arms, not one per chain).
+//! One identification over a tree model ([`crate::model::Tree`]): the joints of the whole tree
+//! in every pose, a measured point on any of its tips, and every parameter once, however many
+//! tips it moves (a torso's constants are one unknown for both arms, not one per chain).
 //!
-//! Gauss-Newton on the analytic position Jacobians of the tips' chains
-//! ([`crate::model::Model::param_jacobian`]), columns scaled to unit norm and solved by SVD;
-//! the unknowns are named as [`Tree::set_param`] names them (`NAME@TIP` for a tip's own
-//! values). A selection the poses cannot identify (a singular value below 1e-9 of the largest)
-//! is refused, naming the worst-determined unknown. Sigmas: `s^2 (J^T J)^-1`,
-//! `s^2 = RSS / (m - n)`.
+//! It is an identification like a chain's, not a solver of its own: the unknowns (tree
+//! parameters named as [`Tree::set_param`] names them, `NAME@TIP` for a tip's own values) are a
+//! state ([`TreeUnknowns`], written into the tree and every tip's chain), the residual rows are
+//! `predicted - measured` of every measured tip point (3 rows each, the rows of a full position,
+//! [`put_position_rows`], on the analytic position Jacobian of the tip's chain), and the fit is
+//! [`refine`] on it: the identifiability analysis and split of [`super::fit::Split`] (what the
+//! poses do not identify is kept at its value and reported, with its combination's name), the
+//! solve of [`solve_split`] (Levenberg-Marquardt, sigmas `s^2 (J^T J)^-1`), the rank analysed
+//! again at the solution. The result is the one [`Fit`], here `Fit<Tree, String>`.
 
 use nalgebra::{DMatrix, DVector, Vector3};
 
-use crate::model::{Model, ModelError, Tilt, Tree};
+use super::error::CalibError;
+use super::fit::{solve_split, Fit, Split};
+use super::identifiability::analyse;
+use super::lm::LmConfig;
+use super::position_fit::{refine, Identification};
+use super::problem::{put_position_rows, ModelProblem, SetUnknowns};
+use crate::model::{Data, Model, ModelError, Tilt, Tree, Wrt};
 
 /// A pose of the whole tree: its joints (tree order; deg, mm for prismatic joints) and the
 /// measured point of each tip (mm in frame R), `None` where a tip was not measured.
@@ -21,90 +30,174 @@ pub struct TreePose {
     pub points_mm: Vec<Option<[f64; 3]>>,
 }
 
-/// The result of [`fit_tree`].
-#[derive(Debug, Clone, PartialEq)]
-pub struct TreeFit {
-    /// The tree with the fitted values.
-    pub tree: Tree,
-    /// The unknowns, their fitted values and one-sigma uncertainties (their units: deg / mm).
-    pub names: Vec<String>,
-    pub values: Vec<f64>,
-    pub sigmas: Vec<f64>,
-    /// RMS of the residual coordinates before and after (mm).
-    pub rms_before_mm: f64,
-    pub rms_after_mm: f64,
-    /// Number of residual coordinates.
-    pub n_residuals: usize,
+/// The unknowns of a tree identification: a copy of the tree and of every tip's chain, whose
+/// parameters `names` (tree names) are the unknowns; all others stay at their values.
+#[derive(Debug, Clone)]
+pub struct TreeUnknowns {
+    tree: Tree,
+    chains: Vec<Model>,
+    /// The tree joints of every tip's chain ([`Tree::path`]).
+    paths: Vec<Vec<usize>>,
+    names: Vec<String>,
+    /// Per tip: the chain parameter index of every unknown its chain has (`None`: the unknown
+    /// does not move this tip).
+    slots: Vec<Vec<Option<usize>>>,
 }
 
-/// Why a tree fit did not run.
-#[derive(Debug, thiserror::Error)]
-pub enum TreeFitError {
-    #[error(transparent)]
-    Model(#[from] ModelError),
-    #[error("pose {pose}: {found} joint values for a tree of {expected} joints, or {points} points for {tips} tips")]
-    Shape {
-        pose: usize,
-        expected: usize,
-        found: usize,
-        points: usize,
-        tips: usize,
-    },
-    #[error("{residuals} measured coordinates for {unknowns} unknowns: more measurements needed")]
-    TooFew { residuals: usize, unknowns: usize },
-    #[error("the poses do not identify the unknowns: `{worst}` is (nearly) a combination of the others (singular value ratio {ratio:.1e})")]
-    NotIdentified { worst: String, ratio: f64 },
-    #[error("the fit diverged (a non-finite value)")]
-    Diverged,
-}
-
-impl crate::error::Classify for TreeFitError {
-    fn kind(&self) -> crate::error::ErrorKind {
-        match self {
-            TreeFitError::Model(e) => e.kind(),
-            TreeFitError::Diverged => crate::error::ErrorKind::Failure,
-            _ => crate::error::ErrorKind::BadInput,
+impl TreeUnknowns {
+    /// The parameters `names` of a copy of `tree` ([`ModelError::UnknownParam`] for a name
+    /// the tree does not have).
+    pub fn new(tree: &Tree, names: Vec<String>) -> Result<Self, ModelError> {
+        if let Some(bad) = names.iter().find(|n| tree.param(n).is_none()) {
+            return Err(ModelError::UnknownParam {
+                name: bad.clone(),
+                valid: "the tree's constants and joint offsets, base_x .. base_ry, scale_ppm, \
+                        NAME@TIP (tool_dx@TIP ..)"
+                    .into(),
+            });
         }
+        let chains = tree.chains()?;
+        let slots = chains
+            .iter()
+            .enumerate()
+            .map(|(t, m)| {
+                let chain_names: Vec<String> = m
+                    .param_names()
+                    .map(|n| tree.tree_param_name(t, n))
+                    .collect();
+                names
+                    .iter()
+                    .map(|u| chain_names.iter().position(|n| n == u))
+                    .collect()
+            })
+            .collect();
+        Ok(Self {
+            paths: (0..tree.tips.len()).map(|t| tree.path(t)).collect(),
+            tree: tree.clone(),
+            chains,
+            names,
+            slots,
+        })
+    }
+
+    /// The tree with the unknowns last set.
+    pub fn tree(&self) -> &Tree {
+        &self.tree
+    }
+
+    /// The tree with the unknowns last set.
+    pub fn into_tree(self) -> Tree {
+        self.tree
+    }
+
+    /// The unknowns' current values (a solver's start).
+    pub fn values(&self) -> DVector<f64> {
+        DVector::from_iterator(
+            self.names.len(),
+            self.names
+                .iter()
+                .map(|n| self.tree.param(n).unwrap_or(f64::NAN)),
+        )
+    }
+
+    /// Residuals `predicted - measured` (3 rows per measured tip point, mm) into `r` and, with
+    /// `jac`, their Jacobian wrt the unknowns (`poses` checked by [`check_poses`]).
+    fn rows(
+        &self,
+        poses: &[TreePose],
+        r: &mut DVector<f64>,
+        mut jac: Option<&mut DMatrix<f64>>,
+    ) -> Result<(), ModelError> {
+        let n = self.names.len();
+        let mut data: Vec<Data> = self.chains.iter().map(Data::new).collect();
+        let wrt: Vec<Vec<Wrt>> = self
+            .slots
+            .iter()
+            .map(|s| s.iter().flatten().map(|&i| Wrt::Param(i)).collect())
+            .collect();
+        // per tip, the position of every unknown in its `wrt`
+        let column: Vec<Vec<Option<usize>>> = self
+            .slots
+            .iter()
+            .map(|s| {
+                let mut k = 0;
+                s.iter()
+                    .map(|i| {
+                        i.map(|_| {
+                            k += 1;
+                            k - 1
+                        })
+                    })
+                    .collect()
+            })
+            .collect();
+        let mut row = 0;
+        for pose in poses {
+            for (t, point) in pose.points_mm.iter().enumerate() {
+                let Some(p) = point else { continue };
+                let q: Vec<f64> = self.paths[t].iter().map(|&i| pose.q[i]).collect();
+                let (chain, d) = (&self.chains[t], &mut data[t]);
+                let measured = Vector3::from(*p);
+                match jac.as_deref_mut() {
+                    Some(jac) => {
+                        chain.jacobian_with(d, &q, Tilt::Off, &wrt[t])?;
+                        let mut columns = (0..n)
+                            .map(|c| column[t][c].map_or_else(Vector3::zeros, |k| d.jacobian()[k]));
+                        let jac =
+                            Some((jac, &mut columns as &mut dyn Iterator<Item = Vector3<f64>>));
+                        put_position_rows(row, &d.position_mm(), &measured, r, jac);
+                    }
+                    None => {
+                        chain.fk_with(d, &q, Tilt::Off)?;
+                        put_position_rows(row, &d.position_mm(), &measured, r, None);
+                    }
+                }
+                row += 3;
+            }
+        }
+        Ok(())
+    }
+
+    /// The stacked Jacobian of the rows of `poses` wrt the unknowns.
+    fn jacobian(&self, poses: &[TreePose]) -> Result<DMatrix<f64>, ModelError> {
+        let m = n_rows(poses);
+        let mut jac = DMatrix::zeros(m, self.names.len());
+        self.rows(poses, &mut DVector::zeros(m), Some(&mut jac))?;
+        Ok(jac)
     }
 }
 
-/// Every measured coordinate's residual (measured - model, mm), and with `unknowns` the
-/// Jacobian of the model's points (mm per unit) for the unknowns.
-fn residuals(
-    tree: &Tree,
-    poses: &[TreePose],
-    unknowns: &[String],
-    jacobian: bool,
-) -> Result<(DVector<f64>, DMatrix<f64>), TreeFitError> {
-    let chains: Vec<Model> = tree.chains()?;
-    let paths: Vec<Vec<usize>> = (0..tree.tips.len()).map(|t| tree.path(t)).collect();
-    // per tip: (column, chain parameter index) of the unknowns its chain has
-    let cols: Vec<Vec<(usize, usize)>> = chains
-        .iter()
-        .enumerate()
-        .map(|(t, m)| {
-            m.param_names()
-                .enumerate()
-                .filter_map(|(i, n)| {
-                    let tree_name = tree.tree_param_name(t, n);
-                    unknowns
-                        .iter()
-                        .position(|u| *u == tree_name)
-                        .map(|c| (c, i))
-                })
-                .collect()
-        })
-        .collect();
-    let n_rows: usize = poses
+impl SetUnknowns for TreeUnknowns {
+    fn n_unknowns(&self) -> usize {
+        self.names.len()
+    }
+
+    fn set(&mut self, x: &DVector<f64>) -> Result<(), ModelError> {
+        for (k, (name, &v)) in self.names.iter().zip(x.iter()).enumerate() {
+            self.tree.set_param(name, v)?;
+            for (chain, slots) in self.chains.iter_mut().zip(&self.slots) {
+                if let Some(i) = slots[k] {
+                    chain.set_param_at(i, v)?;
+                }
+            }
+        }
+        Ok(())
+    }
+}
+
+/// Number of residual rows of `poses` (3 per measured tip point).
+fn n_rows(poses: &[TreePose]) -> usize {
+    poses
         .iter()
         .map(|p| 3 * p.points_mm.iter().flatten().count())
-        .sum();
-    let mut r = DVector::zeros(n_rows);
-    let mut j = DMatrix::zeros(if jacobian { n_rows } else { 0 }, unknowns.len());
-    let mut row = 0;
+        .sum()
+}
+
+/// Checks that every pose has the tree's joints and one (possibly absent) point per tip.
+pub fn check_poses(tree: &Tree, poses: &[TreePose]) -> Result<(), CalibError> {
     for (k, pose) in poses.iter().enumerate() {
         if pose.q.len() != tree.n_joints() || pose.points_mm.len() != tree.tips.len() {
-            return Err(TreeFitError::Shape {
+            return Err(CalibError::TreePoseShape {
                 pose: k + 1,
                 expected: tree.n_joints(),
                 found: pose.q.len(),
@@ -112,174 +205,106 @@ fn residuals(
                 tips: tree.tips.len(),
             });
         }
-        for (t, point) in pose.points_mm.iter().enumerate() {
-            let Some(p) = point else { continue };
-            let q: Vec<f64> = paths[t].iter().map(|&i| pose.q[i]).collect();
-            let idx: Vec<usize> = cols[t].iter().map(|(_, i)| *i).collect();
-            let (fk, jac) = chains[t].param_jacobian(&q, Tilt::Off, &idx)?;
-            let model_mm = chains[t].measured_mm(&fk.position_mm, 0.0);
-            let d = Vector3::from(*p) - model_mm;
-            for c in 0..3 {
-                r[row + c] = d[c];
-                if jacobian {
-                    for (n, (col, _)) in cols[t].iter().enumerate() {
-                        j[(row + c, *col)] = jac[(c, n)];
-                    }
-                }
-            }
-            row += 3;
-        }
     }
-    Ok((r, j))
+    Ok(())
 }
 
-/// RMS (mm) of the residual coordinates of `poses` on `tree` (e.g. held-out poses).
-pub fn tree_rms_mm(tree: &Tree, poses: &[TreePose]) -> Result<f64, TreeFitError> {
-    let (r, _) = residuals(tree, poses, &[], false)?;
-    Ok((r.norm_squared() / r.len().max(1) as f64).sqrt())
+/// The tree identification: the poses, the candidate unknowns (tree names, preference order:
+/// of a combination the poses cannot tell apart, the later ones are kept at their values), the
+/// solver's settings and the identifiability threshold.
+struct TreeIdentification<'a> {
+    poses: &'a [TreePose],
+    names: &'a [String],
+    selection: Vec<usize>,
+    lm: &'a LmConfig,
+    rtol: f64,
 }
 
-/// Fits `unknowns` (tree parameter names) of `tree` to `poses` (see the module doc).
+impl TreeIdentification<'_> {
+    fn unknowns(&self, tree: &Tree, selection: &[usize]) -> Result<TreeUnknowns, ModelError> {
+        let names = selection.iter().map(|&u| self.names[u].clone()).collect();
+        TreeUnknowns::new(tree, names)
+    }
+}
+
+impl Identification for TreeIdentification<'_> {
+    type State = Tree;
+
+    fn selection(&self) -> &[usize] {
+        &self.selection
+    }
+
+    fn once(&self, start: &Tree, selection: &[usize]) -> Result<Fit<Tree, usize>, CalibError> {
+        let jac0 = self.unknowns(start, selection)?.jacobian(self.poses)?;
+        let names: Vec<&str> = selection.iter().map(|&u| self.names[u].as_str()).collect();
+        let split = Split::of(selection, &names, &analyse(&jac0, self.rtol)).nonempty()?;
+        let state = self.unknowns(start, &split.fitted)?;
+        let x0 = state.values();
+        let poses = self.poses;
+        let rows = move |s: &TreeUnknowns, r: &mut DVector<f64>, jac: Option<&mut DMatrix<f64>>| {
+            s.rows(poses, r, jac)
+        };
+        let problem = ModelProblem::new(state, n_rows(poses), rows);
+        Ok(solve_split(split, problem, x0, self.lm, self.rtol)?.map_model(TreeUnknowns::into_tree))
+    }
+
+    fn rank_at(&self, tree: &Tree) -> Result<usize, CalibError> {
+        let jac = self.unknowns(tree, &self.selection)?.jacobian(self.poses)?;
+        Ok(analyse(&jac, self.rtol).rank)
+    }
+
+    fn value(&self, tree: &Tree, u: usize) -> f64 {
+        tree.param(&self.names[u]).unwrap_or(f64::NAN)
+    }
+
+    fn set_value(&self, tree: &mut Tree, u: usize, v: f64) -> Result<(), CalibError> {
+        Ok(tree.set_param(&self.names[u], v)?)
+    }
+}
+
+/// Identifies the parameters `selection` (tree names, preference order) of `tree` from `poses`
+/// (see the module doc): the fitted tree, the fitted and fixed unknowns by name, their sigmas,
+/// the unidentifiable combinations, the rank.
 pub fn fit_tree(
     tree: &Tree,
     poses: &[TreePose],
-    unknowns: &[String],
-) -> Result<TreeFit, TreeFitError> {
-    let mut tree = tree.clone();
-    for u in unknowns {
-        let v = tree.param(u).ok_or_else(|| ModelError::UnknownParam {
-            name: u.clone(),
-            valid: "the tree's constants and joint offsets, base_x .. base_ry, scale_ppm, \
-                        NAME@TIP (tool_dx@TIP ..)"
-                .into(),
-        })?;
-        tree.set_param(u, v)?;
+    selection: &[String],
+    lm: &LmConfig,
+    rtol: f64,
+) -> Result<Fit<Tree, String>, CalibError> {
+    if poses.is_empty() {
+        return Err(CalibError::NoPoses);
     }
-    let n = unknowns.len();
-    let (r0, _) = residuals(&tree, poses, unknowns, false)?;
-    let m = r0.len();
-    if m <= n {
-        return Err(TreeFitError::TooFew {
-            residuals: m,
-            unknowns: n,
-        });
+    if selection.is_empty() {
+        return Err(CalibError::EmptySelection);
     }
-    let rms = |r: &DVector<f64>| (r.norm_squared() / m as f64).sqrt();
-    let rms_before_mm = rms(&r0);
-    let mut last = f64::INFINITY;
-    let mut cov_scaled = DMatrix::zeros(n, n);
-    let mut scale = DVector::from_element(n, 1.0);
-    for _ in 0..30 {
-        let (r, mut j) = residuals(&tree, poses, unknowns, true)?;
-        for c in 0..n {
-            let norm = j.column(c).norm();
-            scale[c] = if norm > 0.0 { 1.0 / norm } else { 1.0 };
-            j.column_mut(c).scale_mut(scale[c]);
-        }
-        let svd = j.svd(true, true);
-        let smax = svd.singular_values.max();
-        let (kmin, smin) = svd.singular_values.argmin();
-        if smax.is_nan() || smax <= 0.0 || smin < 1e-9 * smax {
-            let v_t = svd.v_t.as_ref().ok_or(TreeFitError::Diverged)?;
-            let worst = (0..n)
-                .max_by(|&a, &b| v_t[(kmin, a)].abs().total_cmp(&v_t[(kmin, b)].abs()))
-                .unwrap_or(0);
-            return Err(TreeFitError::NotIdentified {
-                worst: unknowns[worst].clone(),
-                ratio: smin / smax,
-            });
-        }
-        let step = svd.solve(&r, 0.0).map_err(|_| TreeFitError::Diverged)?;
-        let v_t = svd.v_t.as_ref().ok_or(TreeFitError::Diverged)?;
-        let inv_s2 = svd.singular_values.map(|s| 1.0 / (s * s));
-        cov_scaled = v_t.transpose() * DMatrix::from_diagonal(&inv_s2) * v_t;
-        for (c, u) in unknowns.iter().enumerate() {
-            let v = tree.param(u).unwrap_or(0.0) + step[c] * scale[c];
-            if !v.is_finite() {
-                return Err(TreeFitError::Diverged);
-            }
-            tree.set_param(u, v)?;
-        }
-        let now = rms(&r);
-        if (last - now).abs() <= 1e-12 * now.max(1e-9) && step.norm() < 1e-10 {
-            break;
-        }
-        last = now;
-        if step.norm() < 1e-12 {
-            break;
-        }
-    }
-    let (r, _) = residuals(&tree, poses, unknowns, false)?;
-    let s2 = r.norm_squared() / (m - n) as f64;
-    let sigmas = (0..n)
-        .map(|c| (s2 * cov_scaled[(c, c)]).sqrt() * scale[c])
-        .collect();
-    Ok(TreeFit {
-        values: unknowns
-            .iter()
-            .map(|u| tree.param(u).unwrap_or(0.0))
-            .collect(),
-        names: unknowns.to_vec(),
-        sigmas,
-        rms_before_mm,
-        rms_after_mm: rms(&r),
-        n_residuals: m,
-        tree,
-    })
+    check_poses(tree, poses)?;
+    TreeUnknowns::new(tree, selection.to_vec())?;
+    let on = TreeIdentification {
+        poses,
+        names: selection,
+        selection: (0..selection.len()).collect(),
+        lm,
+        rtol,
+    };
+    Ok(refine(&on, tree)?.map_unknowns(|u| selection[u].clone()))
 }
 
-/// Every parameter of `tree` a geometric fit may free: the root's and the joints' constants,
-/// the joint offsets, each tip's own constants and tool point (`NAME@TIP`).
-pub fn tree_candidates(tree: &Tree) -> Vec<String> {
-    let mut out: Vec<String> = tree.root.iter().map(|e| e.name.clone()).collect();
-    for j in &tree.joints {
-        out.extend(j.before.iter().map(|e| e.name.clone()));
-        out.push(j.offset_name.clone());
-    }
-    for t in &tree.tips {
-        out.extend(t.after.iter().map(|e| format!("{}@{}", e.name, t.name)));
-        out.extend(["tool_dx", "tool_dy", "tool_dz"].map(|n| format!("{n}@{}", t.name)));
-    }
-    out
-}
-
-/// The unknowns of `candidates` the poses identify, in candidate order: a rank-revealing QR
-/// (column pivoting) of the scaled Jacobian at `tree` keeps the columns whose pivot is above
-/// `1e-6` of the largest; the others are (nearly) combinations of the kept ones and stay at
-/// their values.
-pub fn identifiable(
-    tree: &Tree,
-    poses: &[TreePose],
-    candidates: &[String],
-) -> Result<Vec<String>, TreeFitError> {
-    let (_, mut j) = residuals(tree, poses, candidates, true)?;
-    let n = candidates.len();
-    let mut used = vec![false; n];
-    for (c, used) in used.iter_mut().enumerate() {
-        let norm = j.column(c).norm();
-        if norm > 0.0 {
-            j.column_mut(c).scale_mut(1.0 / norm);
-            *used = true;
-        }
-    }
-    let qr = j.col_piv_qr();
-    let r = qr.r();
-    let mut order = DMatrix::from_fn(1, n, |_, c| c as f64);
-    qr.p().permute_columns(&mut order);
-    let d_max = (0..r.nrows().min(n))
-        .map(|k| r[(k, k)].abs())
-        .fold(0.0, f64::max);
-    let mut keep = vec![false; n];
-    for k in 0..r.nrows().min(n) {
-        let c = order[(0, k)] as usize;
-        if r[(k, k)].abs() > 1e-6 * d_max && used[c] {
-            keep[c] = true;
-        }
-    }
-    Ok(candidates
-        .iter()
-        .zip(keep)
-        .filter(|(_, k)| *k)
-        .map(|(c, _)| c.clone())
+/// Error vectors `measured - model` (mm) of every measured tip point of `poses` on `tree`, in
+/// pose order, tips in tree order.
+pub fn tree_errors(tree: &Tree, poses: &[TreePose]) -> Result<Vec<Vector3<f64>>, CalibError> {
+    check_poses(tree, poses)?;
+    let m = n_rows(poses);
+    let mut r = DVector::zeros(m);
+    TreeUnknowns::new(tree, Vec::new())?.rows(poses, &mut r, None)?;
+    Ok((0..m / 3)
+        .map(|k| -Vector3::new(r[3 * k], r[3 * k + 1], r[3 * k + 2]))
         .collect())
+}
+
+/// RMS (mm) of the residual coordinates of `poses` on `tree` (e.g. held-out poses).
+pub fn tree_rms_mm(tree: &Tree, poses: &[TreePose]) -> Result<f64, CalibError> {
+    let e = tree_errors(tree, poses)?;
+    let ss: f64 = e.iter().map(|v| v.norm_squared()).sum();
+    Ok((ss / (3 * e.len()).max(1) as f64).sqrt())
 }

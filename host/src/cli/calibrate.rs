@@ -223,22 +223,13 @@ pub fn run(args: Args) -> Result<(), CliError> {
         args.validate.as_deref(),
     ));
     outcome.report.large_changes = large_changes(&model, &outcome.model);
-    let group = |g: &str| {
-        args.params
-            .as_ref()
-            .is_some_and(|p| p.iter().any(|x| x == g))
-    };
-    if args.base || group("@base") {
+    if let Some(with_tool) = registers(&args) {
         // the report's "before": the input model with only the instrument frame (and the tool
         // point when the run frees @tool) fitted; a registration that fails leaves the key out
         // (the run's own fit stands)
-        outcome.report.registered = rigctl::calib::registered::registration_only(
-            &model,
-            &cal,
-            val.as_ref(),
-            group("@tool"),
-        )
-        .ok();
+        outcome.report.registered =
+            rigctl::calib::registered::registration_only(&model, &cal, val.as_ref(), with_tool)
+                .ok();
     }
     let write_model = writes_model(&outcome.report, &args);
     if let Some(path) = &args.json {
@@ -252,9 +243,20 @@ pub fn run(args: Args) -> Result<(), CliError> {
     not_converged(&outcome.report)
 }
 
+/// Whether the report's `registered` is computed (`--base` or `@base`), and then whether with
+/// the tool point (`@tool` freed too).
+pub(super) fn registers(args: &Args) -> Option<bool> {
+    let group = |g: &str| {
+        args.params
+            .as_ref()
+            .is_some_and(|p| p.iter().any(|x| x == g))
+    };
+    (args.base || group("@base")).then(|| group("@tool"))
+}
+
 /// Exit 1 when the fit stopped on its iteration budget: the outputs are written (with
 /// `"converged": false`), but they are not the optimum.
-fn not_converged(r: &rigctl::calib::report::CalibrateReport) -> Result<(), CliError> {
+pub(super) fn not_converged(r: &rigctl::calib::report::CalibrateReport) -> Result<(), CliError> {
     if r.converged {
         return Ok(());
     }
@@ -336,14 +338,14 @@ fn run_samples(args: &Args, samples: &std::path::Path) -> Result<(), CliError> {
 /// Whether `--out` is written: not when a fitted parameter is not determined (an infinite
 /// sigma), nor when the robot's geometry moved beyond a real arm's errors without
 /// `--allow-large-changes`.
-fn writes_model(r: &rigctl::calib::report::CalibrateReport, args: &Args) -> bool {
+pub(super) fn writes_model(r: &rigctl::calib::report::CalibrateReport, args: &Args) -> bool {
     fitted_not_finite(r).is_empty() && (r.large_changes.is_empty() || args.allow_large_changes)
 }
 
 /// Exit 1 when a fitted parameter is not determined (its sigma infinite: the JSON has `null`),
 /// or when the calibration moved the robot's geometry further than a real arm's errors, unless
 /// `--allow-large-changes` (then said on stderr); in both cases no model was written.
-fn plausible_changes(
+pub(super) fn plausible_changes(
     r: &rigctl::calib::report::CalibrateReport,
     args: &Args,
 ) -> Result<(), CliError> {
@@ -372,7 +374,11 @@ fn plausible_changes(
 
 /// Refuses a fit with no measured coordinate left over its rank: the residual is then zero
 /// whatever the errors, and the sigmas (0) would claim a perfect calibration.
-fn no_redundancy(file: &std::path::Path, measured: usize, rank: usize) -> Result<(), CliError> {
+pub(super) fn no_redundancy(
+    file: &std::path::Path,
+    measured: usize,
+    rank: usize,
+) -> Result<(), CliError> {
     if measured <= rank {
         return Err(CliError::bad_input(format!(
             "{}: {measured} measured coordinates for {rank} identifiable directions: nothing left to estimate the errors; measure more poses",

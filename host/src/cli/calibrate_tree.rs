@@ -1,20 +1,31 @@
-//! `rigctl calibrate --model TREE.toml --poses CAL.csv [--validate VAL.csv] [--params a,b,..]
-//! [--out FITTED.toml]`: one geometric fit over a tree model (`rigctl::calib::tree_fit`). The
-//! pose files hold the joints of the whole tree (`q1..qN` in tree order, or the joint names) and
-//! one measured point per tip: `x1,y1,z1` on the first `[[tip]]`, `x2,y2,z2` on the second, ..
-//! A parameter shared by several tips is one unknown. Without `--params` the unknowns are the
-//! identifiable ones of every constant, joint offset and tip tool point (`NAME@TIP`).
+//! `rigctl calibrate --model TREE.toml --poses CAL.csv [--validate VAL.csv] [--params a,b,@group]
+//! [--base] [--rtol R] [--method standard|tilting] [--json OUT.json] [--out FITTED.toml]`: one
+//! geometric fit over a tree model (`rigctl::calib::tree_calibrate`, the chain's identification
+//! on the tree's unknowns). The pose files hold the joints of the whole tree (`q1..qN` in tree
+//! order, or the joint names) and one measured point per tip: `x1,y1,z1` on the first `[[tip]]`,
+//! `x2,y2,z2` on the second, .. A parameter shared by several tips is one unknown (`NAME@TIP`
+//! for a tip's own). The selection, `--json` keys, sigmas, `fixed` / `unidentifiable`, exit codes
+//! and the summary are a chain's; the statistics are over every measured tip point.
 
 use std::path::Path;
 
-use rigctl::calib::tree_fit::{fit_tree, identifiable, tree_candidates, tree_rms_mm, TreePose};
+use std::fmt::Write as _;
+
+use rigctl::calib::calibrate_general::Select;
+use rigctl::calib::prior::PriorMode;
+use rigctl::calib::tree_calibrate::{calibrate_tree, tree_registration_only};
+use rigctl::calib::tree_fit::TreePose;
+use rigctl::calib::CalibrateOptions;
 use rigctl::io::pose_csv::{read_poses, PoseSpec};
 use rigctl::model::tree_file::is_tree_text;
 use rigctl::model::{ModelError, Tree};
 
-use super::calibrate::Args;
+use super::calibrate::{
+    no_redundancy, not_converged, plausible_changes, registers, writes_model, Args,
+};
+use super::calibrate_text::{report_tail, table};
 use super::model_args::ModelArgs;
-use super::out::{errln, outln};
+use super::out::{errln, out};
 use super::CliError;
 
 /// The tree model `--model` names, `None` for a chain (or a preset).
@@ -70,51 +81,94 @@ fn read(args: &Args, tree: &Tree, path: &Path) -> Result<Vec<TreePose>, CliError
 }
 
 pub fn run(args: &Args, tree: Tree) -> Result<(), CliError> {
-    if args.json.is_some() || args.markers.is_some() || args.base || args.compliance {
+    if args.markers.is_some() || args.compliance || args.select != Select::All {
         return Err(CliError::bad_input(
-            "a tree model's calibration takes --poses, --validate, --params, --out and --units \
-             (not --json, --markers, --base, --compliance yet)",
+            "a tree model's calibration measures one point per tip (x1,y1,z1 on the first \
+             [[tip]] ..): --markers, --compliance and --select press are for a single chain",
+        ));
+    }
+    if args.prior != PriorMode::default() {
+        return Err(CliError::bad_input(
+            "--prior: a tree model's calibration has no prior yet (leave --prior at auto)",
         ));
     }
     let Some(poses_path) = args.poses.as_deref() else {
         return Err(CliError::bad_input("--poses is required"));
     };
     let poses = read(args, &tree, poses_path)?;
-    let unknowns = match &args.params {
-        Some(p) => p.clone(),
-        None => identifiable(&tree, &poses, &tree_candidates(&tree))?,
+    let val = args
+        .validate
+        .as_deref()
+        .map(|v| read(args, &tree, v))
+        .transpose()?;
+    let opts = CalibrateOptions {
+        method: args.method,
+        params: args.params.clone(),
+        base: args.base,
+        rtol: args.rtol,
+        ..Default::default()
     };
-    let fit = fit_tree(&tree, &poses, &unknowns)?;
-    outln!(
-        "tree `{}`: {} joints, {} tips; {} poses, {} coordinates; {} unknowns",
+    let mut o = calibrate_tree(&tree, &poses, val.as_deref(), &opts)?;
+    if let Some(with_tool) = registers(args) {
+        // as on a chain: a registration that fails leaves the key out
+        o.report.registered = tree_registration_only(&tree, &poses, val.as_deref(), with_tool).ok();
+    }
+    let n_points = o.calibration_errors[0].len();
+    no_redundancy(poses_path, 3 * n_points, o.report.rank)?;
+    let write_model = writes_model(&o.report, args);
+    if let Some(path) = &args.json {
+        rigctl::io::atomic::write_json_atomic(path, &o.report)?;
+    }
+    if let (Some(out), true) = (&args.out, write_model) {
+        o.fit.model.write_file(out)?;
+        errln!("fitted tree -> {}", out.display());
+    }
+    let mut s = format!(
+        "tree `{}`: {} joints, {} tips; {} poses, {} coordinates; {} unknowns\n",
         tree.name,
         tree.n_joints(),
         tree.tips.len(),
         poses.len(),
-        fit.n_residuals,
-        fit.names.len()
-    )?;
-    outln!("parameter,value,sigma,change")?;
-    for ((name, v), s) in fit.names.iter().zip(&fit.values).zip(&fit.sigmas) {
-        let before = tree.param(name).unwrap_or(0.0);
-        outln!("{name},{v:.6},{s:.6},{:+.6}", v - before)?;
+        3 * n_points,
+        o.report.parameters.0.len()
+    );
+    s.push_str(&table(
+        "Calibration points (every tip)",
+        "points",
+        &o.calibration_errors,
+        &o.report.method,
+    ));
+    if val.is_some() {
+        s.push('\n');
+        s.push_str(&table(
+            "Validation points (every tip)",
+            "points",
+            &o.validation_errors,
+            &o.report.method,
+        ));
     }
-    outln!(
+    s.push_str(&report_tail(&o.report));
+    let _ = writeln!(
+        s,
         "calibration rms {:.4} mm -> {:.4} mm",
-        fit.rms_before_mm,
-        fit.rms_after_mm
-    )?;
-    if let Some(v) = &args.validate {
-        let val = read(args, &tree, v)?;
-        outln!(
+        rms_mm(&o.calibration_errors[0]),
+        rms_mm(&o.calibration_errors[2])
+    );
+    if val.is_some() {
+        let _ = writeln!(
+            s,
             "validation rms {:.4} mm -> {:.4} mm",
-            tree_rms_mm(&tree, &val)?,
-            tree_rms_mm(&fit.tree, &val)?
-        )?;
+            rms_mm(&o.validation_errors[0]),
+            rms_mm(&o.validation_errors[2])
+        );
     }
-    if let Some(out) = &args.out {
-        fit.tree.write_file(out)?;
-        errln!("fitted tree -> {}", out.display());
-    }
-    Ok(())
+    out!("{s}")?;
+    plausible_changes(&o.report, args)?;
+    not_converged(&o.report)
+}
+
+/// RMS (mm) of the coordinates of error vectors.
+fn rms_mm(errors: &[nalgebra::Vector3<f64>]) -> f64 {
+    let ss: f64 = errors.iter().map(|e| e.norm_squared()).sum();
+    (ss / (3 * errors.len()).max(1) as f64).sqrt()
 }

@@ -1,4 +1,5 @@
-//! One fit over a tree (`rigctl::calib::tree_fit`) on an independent generator: a dual-arm
+//! One fit over a tree (`rigctl::calib::tree_fit`, the chains' identification on the tree's
+//! unknowns) on an independent generator: a dual-arm
 //! upper body (a torso of 2 joints, two 6-joint arms, modified-DH segments), geometric errors of
 //! up to 1 mm and 0.2 deg on every segment, 300 poses measured at both hands with 0.3 mm noise
 //! per coordinate, 150 held-out poses. The tree fit (every torso parameter one unknown) recovers
@@ -9,6 +10,9 @@
 use rand::{Rng, SeedableRng};
 use rand_distr::{Distribution, Normal};
 
+use rigctl::calib::fit::Fit;
+use rigctl::calib::identifiability::DEFAULT_RTOL;
+use rigctl::calib::lm::LmConfig;
 use rigctl::calib::tree_fit::{fit_tree, tree_rms_mm, TreePose};
 use rigctl::model::{Axis, Motion, Tilt, Tip, Tree, TreeElem, TreeJoint, TreeMass};
 
@@ -153,16 +157,36 @@ fn one_fit_over_a_dual_arm_tree_shares_the_torso() {
     let train = poses(&truth, 300, &mut rng);
     let held_out = poses(&truth, 150, &mut rng);
 
-    let fit = fit_tree(&nominal, &train, &all).unwrap();
+    let lm = LmConfig::default();
+    let fit = fit_tree(&nominal, &train, &all, &lm, DEFAULT_RTOL).unwrap();
+    // every unknown the generator perturbs is identified (none fixed), each once
+    assert_eq!(fit.fitted, all);
+    assert!(fit.fixed.is_empty() && fit.unidentifiable.is_empty());
+    assert!(fit.converged && fit.rank == all.len());
+    // a selection the poses cannot identify, as on a chain: the left arm's last `d` moves the
+    // hand point along the same axis as the tool point's z; listed last, it is the one kept at
+    // its value, named in the combination, its sigma infinite, and the rest fitted as before
+    let mut confounded = all.clone();
+    confounded.push("d_l6".into());
+    let pinned = fit_tree(&nominal, &train, &confounded, &lm, DEFAULT_RTOL).unwrap();
+    assert_eq!(pinned.fixed, ["d_l6"]);
+    assert_eq!(pinned.fitted, all);
+    let combination = pinned.unidentifiable.join(" ");
+    assert!(
+        combination.contains("d_l6") && combination.contains("tool_dz@left_hand"),
+        "{combination}"
+    );
+    assert_eq!(pinned.model.param("d_l6"), nominal.param("d_l6"));
+    assert!(pinned.sigma_of("d_l6".to_string()).is_infinite());
     let held_before = tree_rms_mm(&nominal, &held_out).unwrap();
-    let held_after = tree_rms_mm(&fit.tree, &held_out).unwrap();
+    let held_after = tree_rms_mm(&fit.model, &held_out).unwrap();
     eprintln!(
         "tree fit: {} unknowns, {} coordinates; rms {:.3} -> {:.3} mm; held out {held_before:.3} \
          -> {held_after:.4} mm (noise {NOISE_MM} mm)",
         all.len(),
         fit.n_residuals,
-        fit.rms_before_mm,
-        fit.rms_after_mm
+        tree_rms_mm(&nominal, &train).unwrap(),
+        (fit.rss_mm2 / fit.n_residuals as f64).sqrt()
     );
     assert!(
         held_before > 5.0 * NOISE_MM,
@@ -173,7 +197,8 @@ fn one_fit_over_a_dual_arm_tree_shares_the_torso() {
         "held out {held_after} mm against the noise {NOISE_MM} mm"
     );
     let mut worst_z = 0.0f64;
-    for ((name, v), s) in fit.names.iter().zip(&fit.values).zip(&fit.sigmas) {
+    for (name, s) in fit.fitted.iter().zip(&fit.sigma) {
+        let v = fit.model.param(name).unwrap();
         let z = (v - truth.param(name).unwrap()).abs() / s;
         worst_z = worst_z.max(z);
         assert!(
@@ -200,11 +225,12 @@ fn one_fit_over_a_dual_arm_tree_shares_the_torso() {
                     .collect(),
             })
             .collect();
-        alone.push(fit_tree(&nominal, &only, &unknowns(&nominal, &[tip])).unwrap());
+        let selection = unknowns(&nominal, &[tip]);
+        alone.push(fit_tree(&nominal, &only, &selection, &lm, DEFAULT_RTOL).unwrap());
     }
-    let value = |f: &rigctl::calib::tree_fit::TreeFit, n: &str| {
-        let k = f.names.iter().position(|m| m == n).unwrap();
-        (f.values[k], f.sigmas[k])
+    let value = |f: &Fit<Tree, String>, n: &str| {
+        let k = f.fitted.iter().position(|m| m == n).unwrap();
+        (f.model.param(n).unwrap(), f.sigma[k])
     };
     let mut differ = 0;
     for n in &torso {
@@ -245,6 +271,15 @@ fn pose_csv(tree: &Tree, poses: &[TreePose]) -> String {
     text
 }
 
+/// The top-level keys of a `calibrate --json` document.
+fn json_keys(path: &std::path::Path) -> Vec<String> {
+    let v: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(path).unwrap()).unwrap();
+    let mut keys: Vec<String> = v.as_object().unwrap().keys().cloned().collect();
+    keys.sort();
+    keys
+}
+
 #[test]
 fn calibrate_takes_a_tree_model_and_its_pose_files() {
     let mut rng = rand::rngs::StdRng::seed_from_u64(5253);
@@ -258,16 +293,27 @@ fn calibrate_takes_a_tree_model_and_its_pose_files() {
     }
     let dir = tempfile::tempdir().unwrap();
     let d = dir.path();
-    let (model, cal, val, out) = (
+    let (model, cal, val, out, json) = (
         d.join("tree.toml"),
         d.join("cal.csv"),
         d.join("val.csv"),
         d.join("fitted.toml"),
+        d.join("tree.json"),
     );
     nominal.write_file(&model).unwrap();
-    std::fs::write(&cal, pose_csv(&truth, &poses(&truth, 300, &mut rng))).unwrap();
-    std::fs::write(&val, pose_csv(&truth, &poses(&truth, 150, &mut rng))).unwrap();
+    let (cal_poses, val_poses) = (poses(&truth, 300, &mut rng), poses(&truth, 150, &mut rng));
+    std::fs::write(&cal, pose_csv(&truth, &cal_poses)).unwrap();
+    std::fs::write(&val, pose_csv(&truth, &val_poses)).unwrap();
     let s = |p: &std::path::Path| p.to_str().unwrap().to_string();
+    let calibrate =
+        |model: &std::path::Path, cal: &std::path::Path, val: &std::path::Path, json| {
+            let mut args: Vec<String> = ["calibrate", "--model", &s(model), "--poses", &s(cal)]
+                .map(String::from)
+                .to_vec();
+            args.extend(["--validate".into(), s(val), "--json".into(), s(json)]);
+            args.extend(["--base".into(), "--rtol".into(), "1e-5".into()]);
+            crate::common::spawn::output(&args)
+        };
     let run = crate::common::spawn::output(&[
         "calibrate".to_string(),
         "--model".into(),
@@ -276,6 +322,8 @@ fn calibrate_takes_a_tree_model_and_its_pose_files() {
         s(&cal),
         "--validate".into(),
         s(&val),
+        "--json".into(),
+        s(&json),
         "--out".into(),
         s(&out),
     ]);
@@ -296,11 +344,60 @@ fn calibrate_takes_a_tree_model_and_its_pose_files() {
         .and_then(|v| v.trim_end_matches(" mm").parse().ok())
         .expect("a number");
     assert!(after <= 1.1 * NOISE_MM, "{line}");
-    // one unknown per torso parameter
-    assert_eq!(stdout.lines().filter(|l| l.starts_with("a_t1,")).count(), 1);
+    // one unknown per torso parameter, with its sigma; the JSON's statistics are the text's
+    let report: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(&json).unwrap()).unwrap();
+    let names: Vec<&String> = report["parameters"].as_object().unwrap().keys().collect();
+    assert_eq!(names.iter().filter(|n| n.as_str() == "a_t1").count(), 1);
+    assert!(report["sigma"]["a_t1"].as_f64().unwrap() > 0.0);
+    assert!(names.iter().any(|n| n.as_str() == "tool_dz@left_hand"));
+    let rms_after = report["validation"]["after"]["rms_mm"].as_f64().unwrap();
+    assert!(
+        (rms_after / 3f64.sqrt() - after).abs() < 1e-3,
+        "{rms_after} vs {after}"
+    );
     let fitted = Tree::from_file(&out).unwrap();
     let d_t2 = fitted.param("d_t2").unwrap() - truth.param("d_t2").unwrap();
     assert!(d_t2.abs() < 0.1, "d_t2 off by {d_t2} mm");
+
+    // the same flags and the same JSON keys as a chain's calibration: the left hand's chain
+    // alone, and the tree with --base and --rtol
+    let chain = nominal.chain(0).unwrap();
+    let (chain_model, chain_cal, chain_val, chain_json, tree_json) = (
+        d.join("left.toml"),
+        d.join("left_cal.csv"),
+        d.join("left_val.csv"),
+        d.join("left.json"),
+        d.join("tree_base.json"),
+    );
+    chain.write_file(&chain_model).unwrap();
+    let left_csv = |poses: &[TreePose]| {
+        let path = nominal.path(0);
+        let mut text: Vec<String> = (1..=path.len()).map(|k| format!("q{k}")).collect();
+        text.extend(["x", "y", "z"].map(String::from));
+        let mut text = text.join(",") + "\n";
+        for p in poses {
+            let mut cells: Vec<String> = path.iter().map(|&j| format!("{:e}", p.q[j])).collect();
+            cells.extend(p.points_mm[0].unwrap().iter().map(|v| format!("{v:e}")));
+            text += &(cells.join(",") + "\n");
+        }
+        text
+    };
+    std::fs::write(&chain_cal, left_csv(&cal_poses)).unwrap();
+    std::fs::write(&chain_val, left_csv(&val_poses)).unwrap();
+    let chain_run = calibrate(&chain_model, &chain_cal, &chain_val, &chain_json);
+    let tree_run = calibrate(&model, &cal, &val, &tree_json);
+    for r in [&chain_run, &tree_run] {
+        assert!(r.status.success(), "{}", String::from_utf8_lossy(&r.stderr));
+    }
+    assert_eq!(json_keys(&tree_json), json_keys(&chain_json));
+    let with_base: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(&tree_json).unwrap()).unwrap();
+    assert!(
+        with_base["parameters"].get("base_x").is_some(),
+        "--base frees the base frame"
+    );
+
     // a pose file with one point per pose for a tree of two tips is refused
     std::fs::write(&cal, "t1,x,y,z\n0,0,0,0\n").unwrap();
     let bad = crate::common::spawn::output(&[

@@ -1,0 +1,166 @@
+//! `rigctl calibrate` on a tree model as a library call: the selection (the chain's rules on
+//! every tip's chain, each shared parameter once), the one fit over the tree
+//! ([`super::tree_fit::fit_tree`]) and the same `calibrate --json` document as a chain's
+//! ([`super::report::unknowns_report`]), over every measured tip point.
+
+use nalgebra::Vector3;
+
+use super::calibrate::{default_selection, param_group, CalibrateOptions, Method};
+use super::error::CalibError;
+use super::fit::Fit;
+use super::large_changes::{large_changes, LargeChange};
+use super::registered::{registered_summary, registration_options};
+use super::report::{unknowns_report, CalibrateReport, StandardSummary};
+use super::tree_fit::{fit_tree, tree_errors, TreePose};
+use crate::model::{Model, ParamKind, Tree};
+
+/// The unknowns of a tree's calibration by tree name, in preference order: `opts.params`
+/// (names, or `@group`s taken on every tip's chain as [`param_group`] takes them on a chain), or
+/// by default every tip chain's [`default_selection`], each shared parameter once, ordered by
+/// kind as a chain's (the base frame with `opts.base`, the tool points, the joint offsets, then
+/// the constants).
+pub fn tree_selection(tree: &Tree, opts: &CalibrateOptions) -> Result<Vec<String>, CalibError> {
+    let chains = tree.chains()?;
+    let mut out: Vec<String> = Vec::new();
+    let mut add = |name: String| {
+        if !out.contains(&name) {
+            out.push(name);
+        }
+    };
+    let on_chains = |pick: &dyn Fn(&Model) -> Result<Vec<usize>, CalibError>| {
+        let mut named: Vec<(String, usize)> = Vec::new();
+        for (t, chain) in chains.iter().enumerate() {
+            for i in pick(chain)? {
+                let p = &chain.params()[i];
+                named.push((tree.tree_param_name(t, &p.name), kind_rank(p.kind)));
+            }
+        }
+        Ok::<_, CalibError>(named)
+    };
+    match &opts.params {
+        None => {
+            let mut named = on_chains(&|c| Ok(default_selection(c, opts.base)))?;
+            named.sort_by_key(|(_, rank)| *rank);
+            named.into_iter().for_each(|(n, _)| add(n));
+        }
+        Some(names) => {
+            for n in names.iter().map(|n| n.trim()).filter(|n| !n.is_empty()) {
+                match n.strip_prefix('@') {
+                    Some(g) => on_chains(&|c| param_group(c, g))?
+                        .into_iter()
+                        .for_each(|(n, _)| add(n)),
+                    None => add(n.to_string()),
+                }
+            }
+        }
+    }
+    if out.is_empty() {
+        return Err(CalibError::EmptySelection);
+    }
+    Ok(out)
+}
+
+/// The preference of a parameter kind in a default selection (a chain's order).
+fn kind_rank(kind: ParamKind) -> usize {
+    match kind {
+        ParamKind::Base => 0,
+        ParamKind::Tool => 1,
+        ParamKind::JointOffset => 2,
+        _ => 3,
+    }
+}
+
+/// Result of [`calibrate_tree`].
+#[derive(Debug, Clone)]
+pub struct TreeOutcome {
+    /// The fit: the calibrated tree, the unknowns by tree name, sigmas, identifiability.
+    pub fit: Fit<Tree, String>,
+    /// The `calibrate --json` document.
+    pub report: CalibrateReport,
+    /// Error vectors (measured - model, mm) of every measured tip point of the calibration
+    /// poses: before, standard, chosen (the standard fit is the chosen one: a tree has no
+    /// tilting).
+    pub calibration_errors: [Vec<Vector3<f64>>; 3],
+    /// Same for the validation poses (empty without them).
+    pub validation_errors: [Vec<Vector3<f64>>; 3],
+}
+
+/// Calibrates `nominal` on `cal` (and evaluates on `val`) with the options of a chain's
+/// calibration: the selection ([`tree_selection`]), `rtol`, the solver's settings. `tilting`
+/// is `standard` here (a tree declares no tilting), as on a chain without tilting data;
+/// `influence` is refused. Every measured tip point is a full position; the statistics are
+/// over all of them.
+pub fn calibrate_tree(
+    nominal: &Tree,
+    cal: &[TreePose],
+    val: Option<&[TreePose]>,
+    opts: &CalibrateOptions,
+) -> Result<TreeOutcome, CalibError> {
+    if opts.method == Method::Influence {
+        return Err(CalibError::Unsupported(
+            "--method influence is not available on a tree model (standard or tilting, which \
+             is standard on a tree)"
+                .into(),
+        ));
+    }
+    let selection = tree_selection(nominal, opts)?;
+    let fit = fit_tree(nominal, cal, &selection, &opts.lm, opts.rtol)?;
+    let errors = |poses: &[TreePose]| -> Result<[Vec<Vector3<f64>>; 3], CalibError> {
+        let after = tree_errors(&fit.model, poses)?;
+        Ok([tree_errors(nominal, poses)?, after.clone(), after])
+    };
+    let calibration_errors = errors(cal)?;
+    let validation_errors = match val {
+        Some(v) => errors(v)?,
+        None => [Vec::new(), Vec::new(), Vec::new()],
+    };
+    let entry = |t: &Tree, n: &String| t.param(n).map(|v| (n.clone(), v));
+    let mut report = unknowns_report(
+        &fit,
+        &selection,
+        entry,
+        opts.method.as_str(),
+        &calibration_errors,
+        val.map(|_| &validation_errors),
+        false,
+    );
+    report.large_changes = tree_large_changes(nominal, &fit.model)?;
+    // no pose is left out of a tree's fit: every held-out pose is in `validation`
+    report.validation_all = report.validation;
+    Ok(TreeOutcome {
+        fit,
+        report,
+        calibration_errors,
+        validation_errors,
+    })
+}
+
+/// The robot's geometry moved beyond a real arm's errors ([`large_changes`]) on any tip's
+/// chain, each tree parameter once.
+pub fn tree_large_changes(nominal: &Tree, fitted: &Tree) -> Result<Vec<LargeChange>, CalibError> {
+    let mut out: Vec<LargeChange> = Vec::new();
+    for (t, (a, b)) in nominal.chains()?.iter().zip(fitted.chains()?).enumerate() {
+        for mut c in large_changes(a, &b) {
+            c.parameter = nominal.tree_param_name(t, &c.parameter);
+            if !out.iter().any(|o| o.parameter == c.parameter) {
+                out.push(c);
+            }
+        }
+    }
+    Ok(out)
+}
+
+/// The tree with only the instrument's frame fitted (and, with `with_tool`, every tip's tool
+/// point): a chain's [`super::registered::registration_only`] on a tree, the report's
+/// `registered`.
+pub fn tree_registration_only(
+    nominal: &Tree,
+    cal: &[TreePose],
+    val: Option<&[TreePose]>,
+    with_tool: bool,
+) -> Result<StandardSummary, CalibError> {
+    let opts = registration_options(with_tool);
+    Ok(registered_summary(
+        &calibrate_tree(nominal, cal, val, &opts)?.report,
+    ))
+}
