@@ -5,10 +5,13 @@
 
 use nalgebra::Vector3;
 
-use super::calibrate::{default_selection, param_group, CalibrateOptions, Method};
+use super::calibrate::{
+    default_selection, param_group, CalibrateOptions, Method, MIN_POSES_FOR_OUTLIERS,
+};
 use super::error::CalibError;
 use super::fit::Fit;
 use super::large_changes::{large_changes, LargeChange};
+use super::outliers;
 use super::registered::{registered_summary, registration_options};
 use super::report::{unknowns_report, CalibrateReport, StandardSummary};
 use super::tree_fit::{fit_tree, tree_errors, TreePose};
@@ -104,6 +107,26 @@ pub fn calibrate_tree(
         ));
     }
     let selection = tree_selection(nominal, opts)?;
+    // gross errors: the chain's fit-and-flag rule, on the error norm of every pose over its tips
+    let trimmed = if opts.keep_outliers || cal.len() < MIN_POSES_FOR_OUTLIERS {
+        None
+    } else {
+        let dims = 3 * nominal.tips.len().max(1);
+        Some(outliers::trim(cal.len(), dims, None, |keep| {
+            let kept: Vec<TreePose> = keep.iter().map(|&k| cal[k].clone()).collect();
+            let f = fit_tree(nominal, &kept, &selection, &opts.lm, opts.rtol)?;
+            pose_norms_mm(&f.model, cal)
+        })?)
+    };
+    let flagged: Vec<usize> = trimmed
+        .as_ref()
+        .map_or_else(Vec::new, |t| t.flagged.clone());
+    let cal_all = cal;
+    let kept_cal: Vec<TreePose> = outliers::kept(cal.len(), &flagged)
+        .iter()
+        .map(|&k| cal[k].clone())
+        .collect();
+    let cal: &[TreePose] = &kept_cal;
     let fit = fit_tree(nominal, cal, &selection, &opts.lm, opts.rtol)?;
     let errors = |poses: &[TreePose]| -> Result<[Vec<Vector3<f64>>; 3], CalibError> {
         let after = tree_errors(&fit.model, poses)?;
@@ -125,6 +148,11 @@ pub fn calibrate_tree(
         false,
     );
     report.large_changes = tree_large_changes(nominal, &fit.model)?;
+    if let Some(t) = &trimmed {
+        let all = pose_norms_mm(&fit.model, cal_all)?;
+        report.outliers = outliers::reports("cal", &flagged, &all, &all, t.threshold_mm);
+        report.outlier_note = t.note.clone();
+    }
     // no pose is left out of a tree's fit: every held-out pose is in `validation`
     report.validation_all = report.validation;
     Ok(TreeOutcome {
@@ -163,4 +191,16 @@ pub fn tree_registration_only(
     Ok(registered_summary(
         &calibrate_tree(nominal, cal, val, &opts)?.report,
     ))
+}
+
+/// The error norm (mm) of every pose on `tree`: the root of the sum of squares over its measured
+/// tips.
+fn pose_norms_mm(tree: &Tree, poses: &[TreePose]) -> Result<Vec<f64>, CalibError> {
+    poses
+        .iter()
+        .map(|p| {
+            let e = tree_errors(tree, std::slice::from_ref(p))?;
+            Ok(e.iter().map(|v| v.norm_squared()).sum::<f64>().sqrt())
+        })
+        .collect()
 }
