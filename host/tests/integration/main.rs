@@ -15,6 +15,7 @@ mod compensate_transmission;
 mod daq_session;
 mod diagnose_assumed_masses;
 mod diagnose_changes;
+mod diagnose_changes_independent;
 mod diagnose_elastic_tilt;
 mod diagnose_lateral;
 mod diagnose_partial;
