@@ -48,7 +48,8 @@ pub fn tree_model(model: &ModelArgs) -> Result<Option<Tree>, CliError> {
     )?))
 }
 
-fn read(args: &Args, tree: &Tree, path: &Path) -> Result<Vec<TreePose>, CliError> {
+/// The poses of a tree's pose file and the line of each.
+fn read(args: &Args, tree: &Tree, path: &Path) -> Result<(Vec<TreePose>, Vec<usize>), CliError> {
     let spec = PoseSpec {
         n_joints: tree.n_joints(),
         limits: tree.joint_limits(),
@@ -73,11 +74,14 @@ fn read(args: &Args, tree: &Tree, path: &Path) -> Result<Vec<TreePose>, CliError
     Ok(file
         .poses
         .iter()
-        .map(|p| TreePose {
-            q: p.q.clone(),
-            points_mm: p.markers_mm.iter().map(|m| Some(*m)).collect(),
+        .map(|p| {
+            let pose = TreePose {
+                q: p.q.clone(),
+                points_mm: p.markers_mm.iter().map(|m| Some(*m)).collect(),
+            };
+            (pose, p.line)
         })
-        .collect())
+        .unzip())
 }
 
 pub fn run(args: &Args, tree: Tree) -> Result<(), CliError> {
@@ -95,20 +99,25 @@ pub fn run(args: &Args, tree: Tree) -> Result<(), CliError> {
     let Some(poses_path) = args.poses.as_deref() else {
         return Err(CliError::bad_input("--poses is required"));
     };
-    let poses = read(args, &tree, poses_path)?;
+    let (poses, cal_lines) = read(args, &tree, poses_path)?;
     let val = args
         .validate
         .as_deref()
-        .map(|v| read(args, &tree, v))
+        .map(|v| read(args, &tree, v).map(|(p, _)| p))
         .transpose()?;
     let opts = CalibrateOptions {
         method: args.method,
         params: args.params.clone(),
         base: args.base,
         rtol: args.rtol,
+        keep_outliers: args.keep_outliers,
         ..Default::default()
     };
     let mut o = calibrate_tree(&tree, &poses, val.as_deref(), &opts)?;
+    // the gross errors named by the line of their pose, as on a chain
+    for r in &mut o.report.outliers {
+        r.line = cal_lines.get(r.index).copied();
+    }
     if let Some(with_tool) = registers(args) {
         // as on a chain: a registration that fails leaves the key out
         o.report.registered = tree_registration_only(&tree, &poses, val.as_deref(), with_tool).ok();

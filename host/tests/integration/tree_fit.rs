@@ -409,3 +409,64 @@ fn calibrate_takes_a_tree_model_and_its_pose_files() {
     ]);
     assert_eq!(bad.status.code(), Some(2));
 }
+
+/// A tree's calibration leaves gross errors out as a chain's does: two poses with one tip
+/// measured 5 mm off are listed in `outliers` with their lines and left out of the fit (held
+/// out at the noise); `--keep-outliers` keeps them (none listed, the fit pulled off).
+#[test]
+fn gross_errors_on_a_tree_are_left_out_and_named() {
+    let mut rng = rand::rngs::StdRng::seed_from_u64(91);
+    let nominal = nominal();
+    let mut truth = nominal.clone();
+    for u in unknowns(&nominal, &[0, 1]) {
+        let err = rng.gen_range(-0.3..0.3);
+        truth
+            .set_param(&u, nominal.param(&u).unwrap() + err)
+            .unwrap();
+    }
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    let (model, cal, val) = (d.join("tree.toml"), d.join("cal.csv"), d.join("val.csv"));
+    nominal.write_file(&model).unwrap();
+    let mut cal_poses = poses(&truth, 200, &mut rng);
+    let val_poses = poses(&truth, 100, &mut rng);
+    // pose 7: the right hand 5 mm off in z; pose 120: the left hand 5 mm off in x
+    for (k, tip, axis) in [(7, 1, 2), (120, 0, 0)] {
+        if let Some(p) = cal_poses[k].points_mm[tip].as_mut() {
+            p[axis] += 5.0;
+        }
+    }
+    std::fs::write(&cal, pose_csv(&truth, &cal_poses)).unwrap();
+    std::fs::write(&val, pose_csv(&truth, &val_poses)).unwrap();
+    let run = |extra: &[&str]| -> serde_json::Value {
+        let json = d.join("t.json");
+        let mut args: Vec<String> = ["calibrate", "--model"].map(String::from).to_vec();
+        args.push(model.to_str().unwrap().to_string());
+        args.extend(["--poses".into(), cal.to_str().unwrap().into()]);
+        args.extend(["--validate".into(), val.to_str().unwrap().into()]);
+        args.extend(["--json".into(), json.to_str().unwrap().into()]);
+        args.extend(extra.iter().map(|s| s.to_string()));
+        let r = crate::common::spawn::output(&args);
+        assert!(r.status.success(), "{}", String::from_utf8_lossy(&r.stderr));
+        serde_json::from_str(&std::fs::read_to_string(&json).unwrap()).unwrap()
+    };
+    let trimmed = run(&[]);
+    let lines: Vec<u64> = trimmed["outliers"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|o| o["line"].as_u64().unwrap())
+        .collect();
+    // the header is line 1: pose k is on line k + 2
+    assert_eq!(lines, vec![9, 122], "{}", trimmed["outliers"]);
+    let held_trimmed = trimmed["validation"]["after"]["rms_mm"].as_f64().unwrap() / 3f64.sqrt();
+    assert!(held_trimmed <= 1.1 * NOISE_MM, "held out {held_trimmed}");
+    let kept = run(&["--keep-outliers"]);
+    assert!(kept["outliers"].as_array().unwrap().is_empty());
+    let cal_kept = kept["calibration"]["after"]["rms_mm"].as_f64().unwrap();
+    let cal_trimmed = trimmed["calibration"]["after"]["rms_mm"].as_f64().unwrap();
+    assert!(
+        cal_kept > 1.1 * cal_trimmed,
+        "the two gross errors stay in the kept fit's statistics: {cal_kept} vs {cal_trimmed}"
+    );
+}
