@@ -280,9 +280,10 @@ fn json_keys(path: &std::path::Path) -> Vec<String> {
     keys
 }
 
-#[test]
-fn calibrate_takes_a_tree_model_and_its_pose_files() {
-    let mut rng = rand::rngs::StdRng::seed_from_u64(5253);
+/// The nominal tree, a truth with every unknown of both tips off by up to 0.3 (mm or deg), and
+/// the generator that drew it (seeded).
+fn perturbed(seed: u64) -> (Tree, Tree, rand::rngs::StdRng) {
+    let mut rng = rand::rngs::StdRng::seed_from_u64(seed);
     let nominal = nominal();
     let mut truth = nominal.clone();
     for u in unknowns(&nominal, &[0, 1]) {
@@ -291,6 +292,12 @@ fn calibrate_takes_a_tree_model_and_its_pose_files() {
             .set_param(&u, nominal.param(&u).unwrap() + err)
             .unwrap();
     }
+    (nominal, truth, rng)
+}
+
+#[test]
+fn calibrate_takes_a_tree_model_and_its_pose_files() {
+    let (nominal, truth, mut rng) = perturbed(5253);
     let dir = tempfile::tempdir().unwrap();
     let d = dir.path();
     let (model, cal, val, out, json) = (
@@ -415,15 +422,7 @@ fn calibrate_takes_a_tree_model_and_its_pose_files() {
 /// out at the noise); `--keep-outliers` keeps them (none listed, the fit pulled off).
 #[test]
 fn gross_errors_on_a_tree_are_left_out_and_named() {
-    let mut rng = rand::rngs::StdRng::seed_from_u64(91);
-    let nominal = nominal();
-    let mut truth = nominal.clone();
-    for u in unknowns(&nominal, &[0, 1]) {
-        let err = rng.gen_range(-0.3..0.3);
-        truth
-            .set_param(&u, nominal.param(&u).unwrap() + err)
-            .unwrap();
-    }
+    let (nominal, truth, mut rng) = perturbed(91);
     let dir = tempfile::tempdir().unwrap();
     let d = dir.path();
     let (model, cal, val) = (d.join("tree.toml"), d.join("cal.csv"), d.join("val.csv"));
