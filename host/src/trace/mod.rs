@@ -48,6 +48,7 @@ mod probe;
 mod raster;
 mod smooth;
 pub mod stages;
+#[cfg(feature = "synth")]
 pub mod synth;
 pub mod tone;
 
