@@ -11,7 +11,7 @@ use indicatif::{ProgressBar, ProgressDrawTarget, ProgressStyle};
 use rigctl::sheet::ReferencePath;
 use rigctl::trace::overlay::{render_drawing_overlay, render_overlay, write_overlay};
 use rigctl::trace::{
-    load_prepared, trace_paths, trace_prepared, write_csv, LeftOut, LeftOutKind, Mapping,
+    load_prepared_with, trace_paths, trace_prepared, write_csv, LeftOut, LeftOutKind, Mapping,
     PathChoice, Trace, TraceOptions,
 };
 use std::path::PathBuf;
@@ -107,7 +107,7 @@ pub fn run(args: Args) -> Result<(), CliError> {
         );
     }
     // A PNG's whole-image maps are built while it is decoded.
-    let (img, prepared) = load_prepared(&args.scan)?;
+    let (img, prepared) = load_prepared_with(&args.scan, &opts.params.prepare)?;
     let progress = if u64::from(img.width()) * u64::from(img.height()) > 4_000_000 {
         let bar = ProgressBar::with_draw_target(None, ProgressDrawTarget::stderr());
         bar.set_style(

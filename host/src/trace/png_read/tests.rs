@@ -76,9 +76,14 @@ fn encode(
 }
 
 fn read_both(bytes: &[u8], batch_bytes: usize) -> (RgbImage, Prepared) {
-    read_batched(Cursor::new(bytes), batch_bytes, MAX)
-        .expect("read")
-        .expect("a kind read here")
+    read_batched(
+        Cursor::new(bytes),
+        batch_bytes,
+        MAX,
+        &PrepareParams::default(),
+    )
+    .expect("read")
+    .expect("a kind read here")
 }
 
 #[test]
@@ -166,7 +171,12 @@ fn by_hand(w: u32, h: u32, colour: u8, interlace: u8, raw: &[u8]) -> Vec<u8> {
 }
 
 fn message(bytes: &[u8]) -> String {
-    match read_batched(Cursor::new(bytes), BATCH_BYTES, MAX) {
+    match read_batched(
+        Cursor::new(bytes),
+        BATCH_BYTES,
+        MAX,
+        &PrepareParams::default(),
+    ) {
         Err(e) => e.to_string(),
         Ok(_) => "read without an error".into(),
     }
@@ -212,7 +222,8 @@ fn damaged_files_are_errors_that_say_what_is_wrong() {
         read_batched(
             Cursor::new(by_hand(60_000, 60_000, 2, 0, &[])),
             BATCH_BYTES,
-            MAX
+            MAX,
+            &PrepareParams::default()
         ),
         Err(ImageError::Limits(_))
     ));
@@ -292,14 +303,24 @@ fn palette_low_bit_grey_and_transparency_read_as_the_image_crate_does() {
 fn interlaced_and_endless_row_files_are_left_to_the_image_crate() {
     // 6 M pixels in one row: 18 MB a row.
     let wide = by_hand(6_000_000, 1, 2, 0, &[]);
-    assert!(read_batched(Cursor::new(&wide), BATCH_BYTES, MAX)
-        .expect("no error")
-        .is_none());
+    assert!(read_batched(
+        Cursor::new(&wide),
+        BATCH_BYTES,
+        MAX,
+        &PrepareParams::default()
+    )
+    .expect("no error")
+    .is_none());
     let raw = [0u8, 0, 1, 1, 0, 0, 1, 0, 1, 0];
     let interlaced = by_hand(4, 2, 0, 1, &raw);
-    assert!(read_batched(Cursor::new(&interlaced), BATCH_BYTES, MAX)
-        .expect("no error")
-        .is_none());
+    assert!(read_batched(
+        Cursor::new(&interlaced),
+        BATCH_BYTES,
+        MAX,
+        &PrepareParams::default()
+    )
+    .expect("no error")
+    .is_none());
 }
 
 #[test]
@@ -328,6 +349,6 @@ fn no_damage_to_a_file_makes_reading_panic() {
             bytes.truncate(state as usize % bytes.len());
         }
         // An error or an image, never a panic (a panic fails the test).
-        let _ = read_batched(Cursor::new(&bytes), 1, MAX);
+        let _ = read_batched(Cursor::new(&bytes), 1, MAX, &PrepareParams::default());
     }
 }
