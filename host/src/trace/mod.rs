@@ -69,6 +69,7 @@ pub use options::{Mapping, PathChoice, TraceOptions};
 pub use paths::{line_file_name, path_file_name, write_drawing, Drawing, DrawnPath, SUMMARY_FILE};
 pub use png_read::read_png;
 pub use prepare::Prepared;
+pub use stages::params_file::ParamsFileError;
 pub use stages::{
     CameraParams, CentrelineParams, FiducialParams, LinesParams, LinkParams, PrepareParams,
     TraceParams,

@@ -1,6 +1,8 @@
 //! The tracer's stage parameters are passed per call (`TraceOptions::params`), not read from
-//! constants: a scan traced with other numbers changes the way the numbers' docs say.
+//! constants: a scan traced with other numbers changes the way the numbers' docs say; `rigctl
+//! trace --params FILE` reads them from TOML and refuses a bad file naming its line and field.
 
+use super::common::spawn::{output, path_arg, text};
 use indicatif::ProgressBar;
 use rigctl::sheet::ReferencePath;
 use rigctl::trace::synth::{render_scan, RenderSpec};
@@ -89,4 +91,58 @@ fn fewer_corner_candidates_than_corners_find_no_fiducials() {
     assert!(matches!(err, TraceError::NoFiducials { .. }), "{err}");
     opts.params.fiducials.max_corner_candidates = 4;
     assert!(trace_image(&img, &opts, &ProgressBar::hidden()).is_ok());
+}
+
+/// `trace --params FILE`: a file's numbers reach the tracer (3 corner candidates: no
+/// fiducials, exit 2); a number out of range, an unknown key or a value of the wrong type is
+/// exit 2 naming the file, its line and the field, with nothing written.
+#[test]
+fn a_params_file_is_applied_or_refused_naming_line_and_field() {
+    let dir = tempfile::tempdir().expect("tempdir");
+    let scan = dir.path().join("scan.png");
+    render_scan(&sheet()).save(&scan).expect("save png");
+    let out = dir.path().join("trace.csv");
+    let params = dir.path().join("params.toml");
+    let run = |toml: &str| {
+        std::fs::write(&params, toml).expect("write params");
+        output(&[
+            "trace",
+            path_arg(&scan),
+            "--out",
+            path_arg(&out),
+            "--params",
+            path_arg(&params),
+        ])
+    };
+    let ok = run("[link]\nmin_mark_mm = 12.0\n");
+    assert_eq!(ok.status.code(), Some(0), "{}", text(&ok.stderr));
+    assert!(out.exists());
+    std::fs::remove_file(&out).expect("rm");
+
+    let few = run("# too few to make a square\n[fiducials]\nmax_corner_candidates = 3\n");
+    assert_eq!(few.status.code(), Some(2), "{}", text(&few.stderr));
+    assert!(
+        text(&few.stderr).contains("fiducial"),
+        "{}",
+        text(&few.stderr)
+    );
+    assert!(!out.exists());
+
+    for (toml, line, field) in [
+        (
+            "[link]\nmin_mark_mm = 5.0\nbridge_step_mm = 0\n",
+            3,
+            "link.bridge_step_mm",
+        ),
+        ("[lines]\npass_mm = -4.0\n", 2, "lines.pass_mm"),
+        ("[centreline]\nfaint_run_step = 8\n", 2, "faint_run_step"),
+        ("[camera]\n\ncentre_f = \"ten\"\n", 3, "centre_f"),
+    ] {
+        let bad = run(toml);
+        let err = text(&bad.stderr);
+        assert_eq!(bad.status.code(), Some(2), "{toml}: {err}");
+        let at = format!("{}:{line}", params.display());
+        assert!(err.contains(&at) && err.contains(field), "{toml}: {err}");
+        assert!(!out.exists(), "{toml}: written");
+    }
 }

@@ -23,7 +23,8 @@ macro_rules! stage_params {
         }
     ) => {
         $(#[doc = $doc])*
-        #[derive(Debug, Clone, Copy, PartialEq)]
+        #[derive(Debug, Clone, Copy, PartialEq, serde::Deserialize)]
+        #[serde(default, deny_unknown_fields)]
         pub struct $name {
             $(
                 $(#[doc = $fdoc])*
@@ -41,6 +42,19 @@ macro_rules! stage_params {
                 }
             }
         }
+
+        impl $name {
+            /// The first number out of [`params_file::Bounded`]'s range, by name.
+            pub(crate) fn out_of_range(&self) -> Option<&'static str> {
+                use $crate::trace::stages::params_file::Bounded as _;
+                $(
+                    if !self.$field.in_range() {
+                        return Some(stringify!($field));
+                    }
+                )*
+                None
+            }
+        }
     };
 }
 
@@ -49,6 +63,7 @@ pub(super) mod centreline;
 pub mod fiducials;
 pub(super) mod lines;
 pub mod link;
+pub(crate) mod params_file;
 pub(super) mod prepare;
 
 pub use camera::CameraParams;
@@ -60,7 +75,8 @@ pub use prepare::PrepareParams;
 
 /// Every stage's numbers, carried by [`crate::trace::TraceOptions::params`] into each stage
 /// (`&params.link`, ...). `Default`: the tuned values, written once in each stage's `params.rs`.
-#[derive(Debug, Clone, Copy, PartialEq, Default)]
+#[derive(Debug, Clone, Copy, PartialEq, Default, serde::Deserialize)]
+#[serde(default, deny_unknown_fields)]
 pub struct TraceParams {
     pub prepare: PrepareParams,
     pub fiducials: FiducialParams,
