@@ -315,6 +315,22 @@ fn round4(v: f64) -> f64 {
     (v * 1e4).round() / 1e4
 }
 
+/// `v` (a line's or a path's object) with its gaps, bridged and missing, and the marks that may
+/// continue it (the keys are written sorted, wherever they are put in).
+fn with_gaps(mut v: Value, gaps: &[Gap], continued_by: &[LeftOut]) -> Value {
+    if let Value::Object(m) = &mut v {
+        let (bridged, missing): (Vec<&Gap>, Vec<&Gap>) = gaps.iter().partition(|g| g.bridged);
+        let list = |gs: Vec<&Gap>| gs.into_iter().map(gap_json).collect::<Value>();
+        m.insert("gaps_bridged".into(), list(bridged));
+        m.insert("gaps_missing".into(), list(missing));
+        m.insert(
+            "continued_by".into(),
+            continued_by.iter().map(mark_json).collect::<Value>(),
+        );
+    }
+    v
+}
+
 fn mark_json(o: &LeftOut) -> Value {
     json!({
         "from_mm": point(o.from_mm),
@@ -345,7 +361,7 @@ fn summary_json(d: &Drawing) -> Value {
         .iter()
         .enumerate()
         .map(|(i, l)| {
-            json!({
+            let line = json!({
                 "file": line_file_name(i),
                 "passes": files(&l.passes),
                 "closed": l.closed,
@@ -353,11 +369,9 @@ fn summary_json(d: &Drawing) -> Value {
                 "to_mm": point(l.to_mm),
                 "length_mm": round4(l.length_mm),
                 "covered_mm": round4(l.covered_mm),
-                "gaps_bridged": l.gaps.iter().filter(|g| g.bridged).map(gap_json).collect::<Vec<_>>(),
-                "gaps_missing": l.gaps.iter().filter(|g| !g.bridged).map(gap_json).collect::<Vec<_>>(),
-                "continued_by": l.continued_by.iter().map(mark_json).collect::<Vec<_>>(),
                 "whole": l.is_whole(),
-            })
+            });
+            with_gaps(line, &l.gaps, &l.continued_by)
         })
         .collect();
     let paths: Vec<Value> = d
@@ -367,7 +381,7 @@ fn summary_json(d: &Drawing) -> Value {
         .map(|(i, p)| {
             let pts = &p.stroke.points_mm;
             let ends = |k: usize| pts.get(k).copied().map(point).unwrap_or(Value::Null);
-            json!({
+            let path = json!({
                 "file": path_file_name(i),
                 "length_mm": round4(p.stroke.length_mm()),
                 "closed": p.stroke.closed,
@@ -377,11 +391,9 @@ fn summary_json(d: &Drawing) -> Value {
                 // + 0.0 writes a bridge sum of -0 as 0
                 "bridged_mm": round4(p.stroke.bridged_mm) + 0.0,
                 "overshoot_mm": round4(p.overshoot_mm),
-                "gaps_bridged": p.gaps.iter().filter(|g| g.bridged).map(gap_json).collect::<Vec<_>>(),
-                "gaps_missing": p.gaps.iter().filter(|g| !g.bridged).map(gap_json).collect::<Vec<_>>(),
-                "continued_by": p.continued_by.iter().map(mark_json).collect::<Vec<_>>(),
                 "whole": p.is_whole(),
-            })
+            });
+            with_gaps(path, &p.gaps, &p.continued_by)
         })
         .collect();
     json!({

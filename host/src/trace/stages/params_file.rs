@@ -170,33 +170,30 @@ mod tests {
 
     #[test]
     fn bad_files_name_their_line_and_field() {
-        let (line, msg) =
-            TraceParams::from_toml("[link]\nmin_mark_mm = 5.0\nbridge_step_mm = 0.0\n")
-                .expect_err("zero step");
-        assert_eq!(line, Some(3));
-        assert!(msg.contains("link.bridge_step_mm"), "{msg}");
-        let (line, msg) =
-            TraceParams::from_toml("lines.line_spacing_mm = -1\n").expect_err("negative");
-        assert_eq!(line, Some(1));
-        assert!(msg.contains("lines.line_spacing_mm"), "{msg}");
-        let (line, msg) = TraceParams::from_toml("[centreline]\n\nfaint_run_steps = 100000\n")
-            .expect_err("too many steps");
-        assert_eq!(line, Some(3));
-        assert!(msg.contains("centreline.faint_run_steps"), "{msg}");
-        let (line, msg) =
-            TraceParams::from_toml("[link]\nmin_mark = 5.0\n").expect_err("unknown key");
-        assert_eq!(line, Some(2));
-        assert!(msg.contains("min_mark"), "{msg}");
-        let (line, msg) =
-            TraceParams::from_toml("[camera]\ncentre_f = \"ten\"\n").expect_err("a string");
-        assert_eq!(line, Some(2));
-        assert!(
-            msg.contains("camera.centre_f") && msg.contains("f64"),
-            "{msg}"
-        );
-        let (_, msg) = TraceParams::from_toml("[linking]\n").expect_err("unknown table");
-        assert!(msg.contains("linking"), "{msg}");
-        let (line, _) = TraceParams::from_toml("[camera]\ncentre_f = nan\n").expect_err("NaN");
-        assert_eq!(line, Some(2));
+        for (text, line, names) in [
+            (
+                "[link]\nmin_mark_mm = 5.0\nbridge_step_mm = 0.0\n",
+                Some(3),
+                "link.bridge_step_mm",
+            ),
+            (
+                "lines.line_spacing_mm = -1\n",
+                Some(1),
+                "lines.line_spacing_mm",
+            ),
+            (
+                "[centreline]\n\nfaint_run_steps = 100000\n",
+                Some(3),
+                "centreline.faint_run_steps",
+            ),
+            ("[link]\nmin_mark = 5.0\n", Some(2), "link.min_mark"),
+            ("[camera]\ncentre_f = \"ten\"\n", Some(2), "camera.centre_f"),
+            ("[camera]\ncentre_f = nan\n", Some(2), "camera.centre_f"),
+            ("[linking]\n", Some(1), "linking"),
+        ] {
+            let (at, msg) = TraceParams::from_toml(text).expect_err(text);
+            assert_eq!(at, line, "{text}: {msg}");
+            assert!(msg.contains(names), "{text}: {msg}");
+        }
     }
 }

@@ -61,6 +61,14 @@ fn head(mut v: Vec<[f64; 2]>) -> End {
     end_of(&v).expect("end")
 }
 
+/// Three pieces linked into one whole path, across their two gaps.
+fn linked_whole_in_three(pieces: &[PieceMm]) {
+    let l = link(pieces, 10.0, None, &LinkParams::default()).expect("linked");
+    assert_eq!(l.pieces, 3, "{:?}", l.left_out);
+    assert!(l.is_whole(), "{:?}", l.left_out);
+    assert_eq!(l.gaps.len(), 2, "{:?}", l.gaps);
+}
+
 /// `pieces` linked into one whole path with one skip (a gap over 1.5 mm) of about `skip_mm`.
 fn linked_with_one_skip(pieces: &[PieceMm], skip_mm: f64) -> Linking {
     let l = link(pieces, 10.0, None, &LinkParams::default()).expect("linked");
@@ -231,10 +239,7 @@ fn a_short_piece_on_a_crest_takes_its_own_tangent() {
     let own = short.t_own.expect("the short piece's own tangent");
     let off_deg = (own[1].atan2(own[0]) - heading).to_degrees().abs();
     assert!(off_deg < 3.0, "own tangent {off_deg:.1} deg off");
-    let l = link(&parts, 10.0, None, &LinkParams::default()).expect("linked");
-    assert_eq!(l.pieces, 3, "{:?}", l.left_out);
-    assert!(l.is_whole(), "{:?}", l.left_out);
-    assert_eq!(l.gaps.len(), 2, "{:?}", l.gaps);
+    linked_whole_in_three(&parts);
 }
 
 /// A short straight piece, scattered by 0.03 mm, does not show a bend of its own (its three
@@ -283,10 +288,7 @@ fn a_short_piece_past_a_crest_is_not_bent_by_it() {
         "k_raw {}",
         short.k_raw
     );
-    let l = link(&parts, 10.0, None, &LinkParams::default()).expect("linked");
-    assert_eq!(l.pieces, 3, "{:?}", l.left_out);
-    assert!(l.is_whole(), "{:?}", l.left_out);
-    assert_eq!(l.gaps.len(), 2, "{:?}", l.gaps);
+    linked_whole_in_three(&parts);
 }
 
 /// A crest of radius 3.6 mm (curvature 0.28/mm) with a 5.5 mm skip just past its top, and the
