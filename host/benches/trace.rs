@@ -13,7 +13,7 @@ use criterion::{criterion_group, criterion_main, Criterion};
 use indicatif::ProgressBar;
 use rigctl::trace::synth::{jpeg_bytes, render_photo, render_scan, PhotoSpec, RenderSpec};
 use rigctl::trace::{
-    load_prepared, load_scan, trace_image, trace_prepared, Prepared, TraceOptions,
+    load_prepared, load_scan, trace_image, trace_prepared, PrepareParams, Prepared, TraceOptions,
 };
 use std::io::Write;
 use std::path::Path;
@@ -80,7 +80,7 @@ fn trace_a4_600dpi(c: &mut Criterion) {
     });
     // The same in turn: the whole image decoded, then its maps.
     g.bench_function("decode_png_then_maps_a4_600dpi", |b| {
-        b.iter(|| load_scan(&png).map(|i| Prepared::build(&i).fits(&i)))
+        b.iter(|| load_scan(&png).map(|i| Prepared::build(&i).fits(&i, &PrepareParams::default())))
     });
     let opts = TraceOptions::default();
     g.bench_function("trace_a4_600dpi", |b| {

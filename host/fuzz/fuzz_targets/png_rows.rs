@@ -7,14 +7,14 @@
 
 use image::ImageFormat;
 use libfuzzer_sys::fuzz_target;
-use rigctl::trace::read_png;
+use rigctl::trace::{read_png, PrepareParams};
 use std::io::Cursor;
 
 /// Largest image read, bytes of RGB (64 x 64 pixels).
 const MAX_RGB_BYTES: usize = 64 * 64 * 3;
 
 fuzz_target!(|data: &[u8]| {
-    let Ok(Some((ours, _maps))) = read_png(Cursor::new(data), MAX_RGB_BYTES) else {
+    let Ok(Some((ours, _maps))) = read_png(Cursor::new(data), MAX_RGB_BYTES, &PrepareParams::default()) else {
         return;
     };
     if let Ok(theirs) = image::load_from_memory_with_format(data, ImageFormat::Png) {

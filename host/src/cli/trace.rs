@@ -11,8 +11,8 @@ use indicatif::{ProgressBar, ProgressDrawTarget, ProgressStyle};
 use rigctl::sheet::ReferencePath;
 use rigctl::trace::overlay::{render_drawing_overlay, render_overlay, write_overlay};
 use rigctl::trace::{
-    load_prepared, trace_paths, trace_prepared, write_csv, LeftOut, LeftOutKind, Mapping,
-    PathChoice, Trace, TraceOptions,
+    load_prepared_with, trace_paths, trace_prepared, write_csv, LeftOut, LeftOutKind, Mapping,
+    PathChoice, Trace, TraceOptions, TraceParams,
 };
 use std::path::PathBuf;
 
@@ -49,6 +49,11 @@ pub struct Args {
     /// Also write the overlay (trace and fitted marks drawn on the input) as PNG.
     #[arg(long)]
     pub overlay: Option<PathBuf>,
+    /// The stages' numbers from this TOML file over the tuned values: a table per stage
+    /// (`[link]`, `[lines]`, `[centreline]`, `[camera]`, `[fiducials]`, `[prepare]`), a key per
+    /// number (docs/trace.md "Stages and their numbers").
+    #[arg(long, value_name = "FILE")]
+    pub params: Option<PathBuf>,
 }
 
 #[derive(clap::ValueEnum, Clone, Copy, Debug, PartialEq, Eq)]
@@ -72,6 +77,7 @@ fn writes_in_paths_dir(name: &str) -> bool {
 pub fn run(args: Args) -> Result<(), CliError> {
     super::files()
         .input("SCAN", Some(&args.scan))
+        .input("--params", args.params.as_deref())
         .output("--out", args.out.as_deref())
         .output("--overlay", args.overlay.as_deref())
         .output_dir("--paths", args.paths.as_deref(), writes_in_paths_dir)
@@ -89,7 +95,13 @@ pub fn run(args: Args) -> Result<(), CliError> {
             args.max_gap_mm
         )));
     }
+    let params = match &args.params {
+        Some(path) => TraceParams::read_toml(path)
+            .map_err(|e| CliError::bad_input(format!("invalid --params {e}")))?,
+        None => TraceParams::default(),
+    };
     let opts = TraceOptions {
+        params,
         mapping,
         max_gap_mm: args.max_gap_mm,
         path: match args.path {
@@ -107,7 +119,7 @@ pub fn run(args: Args) -> Result<(), CliError> {
         );
     }
     // A PNG's whole-image maps are built while it is decoded.
-    let (img, prepared) = load_prepared(&args.scan)?;
+    let (img, prepared) = load_prepared_with(&args.scan, &opts.params.prepare)?;
     let progress = if u64::from(img.width()) * u64::from(img.height()) > 4_000_000 {
         let bar = ProgressBar::with_draw_target(None, ProgressDrawTarget::stderr());
         bar.set_style(

@@ -3,7 +3,7 @@
 //! the whole-image maps ([`super::png_read`]). Other images (JPEG, interlaced PNG) are decoded
 //! by the `image` crate and their maps built on all cores. The trace is written as CSV.
 
-use super::stages::prepare::Prepared;
+use super::stages::prepare::{PrepareParams, Prepared};
 use super::TraceError;
 use crate::io::atomic::write_text_atomic;
 use crate::io::finite::TextFormat;
@@ -35,6 +35,14 @@ pub fn load_scan(path: &Path) -> Result<RgbImage, TraceError> {
 /// is copied to the three channels; alpha is dropped), linearised when a PNG names its tone
 /// curve (its `sRGB`, `iCCP` or `gAMA` chunk: [`super::tone`]).
 pub fn load_prepared(path: &Path) -> Result<(RgbImage, Prepared), TraceError> {
+    load_prepared_with(path, &PrepareParams::default())
+}
+
+/// [`load_prepared`] with the maps built with `params`.
+pub fn load_prepared_with(
+    path: &Path,
+    params: &PrepareParams,
+) -> Result<(RgbImage, Prepared), TraceError> {
     let read = |source| TraceError::Read {
         path: path.to_path_buf(),
         source,
@@ -42,13 +50,13 @@ pub fn load_prepared(path: &Path) -> Result<(RgbImage, Prepared), TraceError> {
     let file = std::fs::File::open(path).map_err(|e| read(ImageError::IoError(e)))?;
     // Not a PNG (a JPEG), or a kind of PNG left to the `image` crate: `None`.
     let reader = BufReader::with_capacity(1 << 16, file);
-    if let Some(done) = super::png_read::read_png(reader, MAX_RGB_BYTES).map_err(read)? {
+    if let Some(done) = super::png_read::read_png(reader, MAX_RGB_BYTES, params).map_err(read)? {
         return Ok(done);
     }
     // JPEG (or a PNG left to the `image` crate): its tone curve is measured on the print
     // ([`super::trace_prepared`]); a JPEG's ICC profile is not read.
     let img = load_scan(path)?;
-    let prepared = Prepared::build(&img);
+    let prepared = Prepared::build_with(&img, params);
     Ok((img, prepared))
 }
 

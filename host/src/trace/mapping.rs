@@ -44,7 +44,8 @@ pub(crate) fn fit_camera(
             mm.push(*m);
             px.push(d.centre_px);
         }
-        let (cam, q) = CameraModel::fit(&mm, &px, size).ok_or(TraceError::DegenerateFiducials)?;
+        let (cam, q) = CameraModel::fit(&mm, &px, size, &opts.params.camera)
+            .ok_or(TraceError::DegenerateFiducials)?;
         let flat = flatness_of(&cam, &mm, &px);
         let limit_mm = opts.max_camera_rms_mm * spacing_mm / FIDUCIAL_SPACING_MM;
         if !(q.rms_mm <= limit_mm && q.max_mm <= 4.0 * limit_mm) {
@@ -183,7 +184,7 @@ pub(crate) fn map_pixels(
     let mut occluders = Occluders::default();
     match opts.mapping {
         Mapping::Fiducials { spacing_mm } => {
-            let fid = fiducials::find(img, map, paper, spacing_mm)?;
+            let fid = fiducials::find(img, map, paper, spacing_mm, &opts.params.fiducials)?;
             let (cam, fit, residual, flat) = fit_camera(img, &fid, spacing_mm, opts)?;
             let ppmm = fid.side_px() / spacing_mm;
             for (d, _) in &fid.ring {

@@ -48,6 +48,7 @@ mod probe;
 mod raster;
 mod smooth;
 pub mod stages;
+#[cfg(feature = "synth")]
 pub mod synth;
 pub mod tone;
 
@@ -58,7 +59,7 @@ pub use camera::{CameraModel, FitQuality};
 pub use chain::{polyline_length, resample, Stroke};
 pub use error::TraceError;
 pub use fiducials::{Disc, Fiducials};
-pub use files::{load_prepared, load_scan, write_csv, MAX_RGB_BYTES};
+pub use files::{load_prepared, load_prepared_with, load_scan, write_csv, MAX_RGB_BYTES};
 pub use flatness::Flatness;
 pub use grey_print::GreyPrint;
 pub use homography::Homography;
@@ -68,6 +69,11 @@ pub use options::{Mapping, PathChoice, TraceOptions};
 pub use paths::{line_file_name, path_file_name, write_drawing, Drawing, DrawnPath, SUMMARY_FILE};
 pub use png_read::read_png;
 pub use prepare::Prepared;
+pub use stages::params_file::ParamsFileError;
+pub use stages::{
+    CameraParams, CentrelineParams, FiducialParams, LinesParams, LinkParams, PrepareParams,
+    TraceParams,
+};
 pub use tone::{Tone, ToneCurve, ToneSource};
 
 use crate::sheet::ReferencePath;
@@ -124,7 +130,12 @@ pub fn trace_image(
     progress: &ProgressBar,
 ) -> Result<Trace, TraceError> {
     area::check_options(opts)?;
-    trace_prepared(img, &Prepared::build(img), opts, progress)
+    trace_prepared(
+        img,
+        &Prepared::build_with(img, &opts.params.prepare),
+        opts,
+        progress,
+    )
 }
 
 /// [`trace_image`] with the whole-image maps already built (by [`load_prepared`] while
@@ -166,7 +177,8 @@ pub fn trace_prepared(
     let no_trace = || TraceError::NoTrace {
         min_length_mm: opts.min_stroke_mm,
     };
-    let linking = link::link(&pieces_mm, opts.max_gap_mm, hint).ok_or_else(no_trace)?;
+    let linking =
+        link::link(&pieces_mm, opts.max_gap_mm, hint, &opts.params.link).ok_or_else(no_trace)?;
     if linking.path.length_mm() < opts.min_stroke_mm {
         return Err(no_trace());
     }
@@ -271,13 +283,19 @@ fn settle_tone(
     if given.from_file() {
         return (given, None);
     }
-    let black = fiducials::black_of_paper(img, &prepared.map, &prepared.paper, spacing_mm);
+    let black = fiducials::black_of_paper(
+        img,
+        &prepared.map,
+        &prepared.paper,
+        spacing_mm,
+        &opts.params.fiducials,
+    );
     match black.and_then(tone::estimate) {
         None => (given, None),
         Some(t) => {
             let mut lin = img.clone();
             tone::apply(&mut lin, &t.curve);
-            let mut p = Prepared::build(&lin);
+            let mut p = Prepared::build_with(&lin, &opts.params.prepare);
             p.tone = t.clone();
             (t, Some((lin, p)))
         }
@@ -292,10 +310,10 @@ fn track(
 ) -> Result<Tracked, TraceError> {
     area::check_options(opts)?;
     let rebuilt;
-    let prepared = if prepared.fits(img) {
+    let prepared = if prepared.fits(img, &opts.params.prepare) {
         prepared
     } else {
-        rebuilt = Prepared::build(img);
+        rebuilt = Prepared::build_with(img, &opts.params.prepare);
         &rebuilt
     };
     // The device's tone curve undone before darkness is measured (a file that names its curve
@@ -341,6 +359,7 @@ fn track(
         step_px: 0.25 * px_per_mm,
         max_width_px: opts.max_width_mm * px_per_mm,
         min_mass: 0.03 * px_per_mm,
+        centreline: opts.params.centreline,
     };
     let pieces = centreline::track_all(
         img, &ink, paper, &occluders, map, &seeds, &roi, &params, progress,

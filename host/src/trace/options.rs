@@ -2,6 +2,7 @@
 //! pencil was meant to follow (a hint for choosing between chains of graphite, never a mask), and
 //! the thresholds of the stroke search.
 
+use super::stages::TraceParams;
 use crate::sheet::{ReferencePath, FIDUCIAL_SPACING_MM};
 
 /// Which printed path the pencil followed.
@@ -48,6 +49,8 @@ pub struct TraceOptions {
     /// Largest smooth pattern the camera model may leave on the printed marks (a sheet not
     /// lying flat), RMS mm ([`super::flatness`]); `f64::INFINITY`: not checked.
     pub max_bend_pattern_mm: f64,
+    /// Every stage's tuned numbers (default: the tuned values), carried into each stage.
+    pub params: TraceParams,
 }
 
 impl Default for TraceOptions {
@@ -65,6 +68,7 @@ impl Default for TraceOptions {
             band_mm: 6.0,
             max_camera_rms_mm: 0.08,
             max_bend_pattern_mm: 0.006,
+            params: TraceParams::default(),
         }
     }
 }

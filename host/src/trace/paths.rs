@@ -1,5 +1,5 @@
 //! Every drawn line of a drawing as a path of its own (`rigctl trace --paths DIR`): the chains
-//! of linked pieces ([`super::stages::link`]) of at least [`MIN_MARK_MM`] are each judged as the drawn
+//! of linked pieces ([`super::stages::link`]) of at least [`LinkParams::min_mark_mm`] are each judged as the drawn
 //! path is in the single-path mode (bridged across the marks that touch it, its bridges
 //! refitted, the gaps beyond its free ends and the marks that may continue it listed); shorter
 //! chains are strays (dust, flicks), listed apart. Written as one CSV `x,y` per path and a JSON
@@ -7,7 +7,7 @@
 
 use super::chain::{resample, PieceMm, Stroke};
 use super::stages::lines::{self, DrawnLine, Loose, LooseWhat};
-use super::stages::link::{orient, Gap, LeftOut, LeftOutKind, Network, Strokes, MIN_MARK_MM};
+use super::stages::link::{orient, Gap, LeftOut, LeftOutKind, Network, Strokes};
 use super::{write_csv, CameraModel, Fiducials, TraceError, TraceOptions};
 use crate::io::atomic::write_bytes_atomic;
 use serde_json::{json, Value};
@@ -80,8 +80,8 @@ impl Drawing {
 
 /// Links `pieces` and judges every chain of path size. `None` without pieces.
 pub(super) fn drawing(pieces: &[PieceMm], opts: &TraceOptions, px_per_mm: f64) -> Option<Drawing> {
-    let net = Network::build(pieces, opts.max_gap_mm, Strokes::PASSES)?;
-    let min_len_mm = MIN_MARK_MM.max(opts.min_stroke_mm);
+    let net = Network::build(pieces, opts.max_gap_mm, Strokes::PASSES, &opts.params.link)?;
+    let min_len_mm = opts.params.link.min_mark_mm.max(opts.min_stroke_mm);
     let mut paths = Vec::new();
     let mut strays = Vec::new();
     let mut stray_pts = Vec::new();
@@ -99,7 +99,7 @@ pub(super) fn drawing(pieces: &[PieceMm], opts: &TraceOptions, px_per_mm: f64) -
                         from_mm,
                         to_mm,
                         length_mm,
-                        kind: if length_mm < MIN_MARK_MM {
+                        kind: if length_mm < opts.params.link.min_mark_mm {
                             LeftOutKind::Speck
                         } else {
                             LeftOutKind::Mark
@@ -133,7 +133,14 @@ pub(super) fn drawing(pieces: &[PieceMm], opts: &TraceOptions, px_per_mm: f64) -
                 .collect()
         })
         .collect();
-    let lines = lines::lines(&paths, &stray_pts, &loose, opts.max_gap_mm);
+    let lines = lines::lines(
+        &paths,
+        &stray_pts,
+        &loose,
+        opts.max_gap_mm,
+        opts.params.link.min_mark_mm,
+        &opts.params.lines,
+    );
     Some(Drawing {
         paths,
         lines,
@@ -147,10 +154,10 @@ pub(super) fn drawing(pieces: &[PieceMm], opts: &TraceOptions, px_per_mm: f64) -
 
 /// Chain `ci` judged as a drawn line, closed where it ends on itself, resampled.
 fn judged_path(net: &Network, ci: usize, opts: &TraceOptions) -> DrawnPath {
-    let judged = net.judge(ci);
+    let judged = net.judge(ci, &opts.params.link);
     let free = judged.free_ends();
     let marks: Vec<(usize, LeftOut)> = net
-        .left_out_indexed(ci, &judged)
+        .left_out_indexed(ci, &judged, &opts.params.link)
         .into_iter()
         .filter(|(_, o)| o.kind == LeftOutKind::Continues)
         .collect();
@@ -308,6 +315,22 @@ fn round4(v: f64) -> f64 {
     (v * 1e4).round() / 1e4
 }
 
+/// `v` (a line's or a path's object) with its gaps, bridged and missing, and the marks that may
+/// continue it (the keys are written sorted, wherever they are put in).
+fn with_gaps(mut v: Value, gaps: &[Gap], continued_by: &[LeftOut]) -> Value {
+    if let Value::Object(m) = &mut v {
+        let (bridged, missing): (Vec<&Gap>, Vec<&Gap>) = gaps.iter().partition(|g| g.bridged);
+        let list = |gs: Vec<&Gap>| gs.into_iter().map(gap_json).collect::<Value>();
+        m.insert("gaps_bridged".into(), list(bridged));
+        m.insert("gaps_missing".into(), list(missing));
+        m.insert(
+            "continued_by".into(),
+            continued_by.iter().map(mark_json).collect::<Value>(),
+        );
+    }
+    v
+}
+
 fn mark_json(o: &LeftOut) -> Value {
     json!({
         "from_mm": point(o.from_mm),
@@ -338,7 +361,7 @@ fn summary_json(d: &Drawing) -> Value {
         .iter()
         .enumerate()
         .map(|(i, l)| {
-            json!({
+            let line = json!({
                 "file": line_file_name(i),
                 "passes": files(&l.passes),
                 "closed": l.closed,
@@ -346,11 +369,9 @@ fn summary_json(d: &Drawing) -> Value {
                 "to_mm": point(l.to_mm),
                 "length_mm": round4(l.length_mm),
                 "covered_mm": round4(l.covered_mm),
-                "gaps_bridged": l.gaps.iter().filter(|g| g.bridged).map(gap_json).collect::<Vec<_>>(),
-                "gaps_missing": l.gaps.iter().filter(|g| !g.bridged).map(gap_json).collect::<Vec<_>>(),
-                "continued_by": l.continued_by.iter().map(mark_json).collect::<Vec<_>>(),
                 "whole": l.is_whole(),
-            })
+            });
+            with_gaps(line, &l.gaps, &l.continued_by)
         })
         .collect();
     let paths: Vec<Value> = d
@@ -360,7 +381,7 @@ fn summary_json(d: &Drawing) -> Value {
         .map(|(i, p)| {
             let pts = &p.stroke.points_mm;
             let ends = |k: usize| pts.get(k).copied().map(point).unwrap_or(Value::Null);
-            json!({
+            let path = json!({
                 "file": path_file_name(i),
                 "length_mm": round4(p.stroke.length_mm()),
                 "closed": p.stroke.closed,
@@ -370,11 +391,9 @@ fn summary_json(d: &Drawing) -> Value {
                 // + 0.0 writes a bridge sum of -0 as 0
                 "bridged_mm": round4(p.stroke.bridged_mm) + 0.0,
                 "overshoot_mm": round4(p.overshoot_mm),
-                "gaps_bridged": p.gaps.iter().filter(|g| g.bridged).map(gap_json).collect::<Vec<_>>(),
-                "gaps_missing": p.gaps.iter().filter(|g| !g.bridged).map(gap_json).collect::<Vec<_>>(),
-                "continued_by": p.continued_by.iter().map(mark_json).collect::<Vec<_>>(),
                 "whole": p.is_whole(),
-            })
+            });
+            with_gaps(path, &p.gaps, &p.continued_by)
         })
         .collect();
     json!({

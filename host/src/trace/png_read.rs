@@ -12,7 +12,7 @@
 //! rounded to 8 bits; a file that names its tone curve (`sRGB`, `iCCP`, `gAMA`) is then
 //! linearised through it row by row, before the maps are built ([`super::tone`]).
 
-use super::stages::prepare::{BandMaps, Bands, Geometry, Prepared};
+use super::stages::prepare::{BandMaps, Bands, Geometry, PrepareParams, Prepared};
 use image::error::{
     DecodingError, ImageFormatHint, LimitError, LimitErrorKind, ParameterError, ParameterErrorKind,
 };
@@ -66,14 +66,16 @@ fn from_png(err: png::DecodingError) -> ImageError {
 pub fn read_png<R: BufRead + Seek>(
     input: R,
     max_rgb_bytes: usize,
+    params: &PrepareParams,
 ) -> Result<Option<(RgbImage, Prepared)>, ImageError> {
-    read_batched(input, BATCH_BYTES, max_rgb_bytes)
+    read_batched(input, BATCH_BYTES, max_rgb_bytes, params)
 }
 
 fn read_batched<R: BufRead + Seek>(
     mut input: R,
     batch_bytes: usize,
     max_rgb_bytes: usize,
+    params: &PrepareParams,
 ) -> Result<Option<(RgbImage, Prepared)>, ImageError> {
     if !is_png(&mut input)? {
         return Ok(None);
@@ -105,7 +107,7 @@ fn read_batched<R: BufRead + Seek>(
     let layout = Layout::of(reader.output_color_type(), width)?;
     let batch_rows = (batch_bytes / layout.row_bytes.max(1)).max(2);
     let mut rgb = vec![0u8; rgb_bytes];
-    let mut bands = Bands::new(width, height);
+    let mut bands = Bands::new(width, height, params);
     let geometry = bands.geometry();
     let band_rows = bands.band_rows;
 

@@ -79,6 +79,7 @@ mod trace_cli;
 mod trace_faint;
 mod trace_hard;
 mod trace_independent;
+mod trace_params;
 mod trace_photos;
 mod trace_scan;
 mod tree_fit;

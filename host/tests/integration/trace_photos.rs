@@ -8,7 +8,7 @@ use crate::common;
 use crate::common::spawn::rigctl;
 
 use indicatif::ProgressBar;
-use rigctl::trace::link::MIN_MARK_MM;
+use rigctl::trace::LinkParams;
 use rigctl::trace::{
     line_file_name, load_scan, path_file_name, polyline_length, trace_image, trace_paths, Drawing,
     Mapping, Prepared, TraceError, TraceOptions, SUMMARY_FILE,
@@ -269,7 +269,7 @@ fn drawings_give_every_line_once_and_never_exit_0_on_a_part() {
             if peg && pts.iter().filter(|q| q[0] < -60.0).count() * 2 > pts.len() {
                 continue;
             }
-            assert!(p.stroke.length_mm() >= MIN_MARK_MM - 1e-9);
+            assert!(p.stroke.length_mm() >= LinkParams::default().min_mark_mm - 1e-9);
             let others: Vec<[f64; 2]> = d
                 .paths
                 .iter()
@@ -294,7 +294,10 @@ fn drawings_give_every_line_once_and_never_exit_0_on_a_part() {
             );
         }
         eprintln!("  largest share of a path along others: {most_shared:.2}");
-        assert!(d.strays.iter().all(|o| o.length_mm < MIN_MARK_MM));
+        assert!(d
+            .strays
+            .iter()
+            .all(|o| o.length_mm < LinkParams::default().min_mark_mm));
         // The command: exit 0 only when every drawn line is whole; otherwise exit 1 naming
         // each line that is not, with every path written and the summary saying which.
         let out = dir.path().join(f.file_stem().expect("stem"));

@@ -123,6 +123,12 @@ pub enum SessionError {
     /// The scan could not be encoded.
     #[error("cannot encode the scan: {0}")]
     Image(String),
+    /// This build has no sheet renderer (the host crate's `synth` feature is off).
+    #[error(
+        "this rigctl was built without the sheet renderer (cargo feature `synth`): a session's \
+         scan.png cannot be drawn; nothing written (build with default features)"
+    )]
+    NoRenderer,
     /// The recording could not be written.
     #[error(transparent)]
     Recording(#[from] RecordingError),
@@ -145,7 +151,7 @@ impl crate::error::Classify for SessionError {
     fn kind(&self) -> crate::error::ErrorKind {
         use crate::error::ErrorKind;
         match self {
-            Self::Config(_) => ErrorKind::BadInput,
+            Self::Config(_) | Self::NoRenderer => ErrorKind::BadInput,
             Self::Ik(e) => e.kind(),
             Self::Model(e) => e.kind(),
             Self::Sim(e) => e.kind(),

@@ -8,7 +8,7 @@ use image::RgbImage;
 
 use crate::daq::recording::{RecordingMeta, RecordingWriter};
 use crate::io::atomic::write_bytes_atomic;
-use crate::sheet::drawn::SessionPath;
+#[cfg(feature = "synth")]
 use crate::trace::synth::{render_scan, RenderSpec};
 
 use image::ImageEncoder as _;
@@ -29,22 +29,32 @@ impl Session {
     }
 }
 
-/// The simulated scan of the session's sheet.
-pub fn render_session_scan(s: &Session, cfg: &SessionConfig) -> RgbImage {
-    render_scan(&RenderSpec {
+/// The simulated scan of the session's sheet (without the `synth` feature: no renderer, an
+/// error).
+#[cfg(feature = "synth")]
+pub fn render_session_scan(s: &Session, cfg: &SessionConfig) -> Result<RgbImage, SessionError> {
+    Ok(render_scan(&RenderSpec {
         dpi: cfg.dpi,
         pencil_mm: s.pencil_mm.clone(),
-        pencil_closed: cfg.path == SessionPath::Circle,
+        pencil_closed: cfg.path == crate::sheet::drawn::SessionPath::Circle,
         reference: Some(cfg.path.reference()),
         rotation_deg: cfg.scan_rotation_deg,
         shift_mm: [1.5, -2.0],
         seed: cfg.seed.wrapping_add(17),
         ..RenderSpec::default()
-    })
+    }))
+}
+
+/// See the `synth` build: this one has no sheet renderer.
+#[cfg(not(feature = "synth"))]
+pub fn render_session_scan(_s: &Session, _cfg: &SessionConfig) -> Result<RgbImage, SessionError> {
+    Err(SessionError::NoRenderer)
 }
 
 /// Writes the session's files into `dir` (created if missing); see the module documentation.
 pub fn write_session(dir: &Path, s: &Session, cfg: &SessionConfig) -> Result<(), SessionError> {
+    // The scan first: without a renderer (no `synth` feature) nothing is written.
+    let img = render_session_scan(s, cfg)?;
     let io = |path: &Path| {
         let path = path.to_path_buf();
         move |source| SessionError::Write { path, source }
@@ -104,7 +114,6 @@ pub fn write_session(dir: &Path, s: &Session, cfg: &SessionConfig) -> Result<(),
         crate::io::interrupt::unregister_temp(&tmp);
     }
     // the scan
-    let img = render_session_scan(s, cfg);
     let mut png = Vec::new();
     image::codecs::png::PngEncoder::new(&mut png)
         .write_image(

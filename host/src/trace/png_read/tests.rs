@@ -75,8 +75,16 @@ fn encode(
     out
 }
 
+/// [`read_batched`] at the test's limit with the tuned prepare numbers.
+fn read<R: BufRead + Seek>(
+    input: R,
+    batch_bytes: usize,
+) -> Result<Option<(RgbImage, Prepared)>, ImageError> {
+    read_batched(input, batch_bytes, MAX, &PrepareParams::default())
+}
+
 fn read_both(bytes: &[u8], batch_bytes: usize) -> (RgbImage, Prepared) {
-    read_batched(Cursor::new(bytes), batch_bytes, MAX)
+    read(Cursor::new(bytes), batch_bytes)
         .expect("read")
         .expect("a kind read here")
 }
@@ -166,7 +174,7 @@ fn by_hand(w: u32, h: u32, colour: u8, interlace: u8, raw: &[u8]) -> Vec<u8> {
 }
 
 fn message(bytes: &[u8]) -> String {
-    match read_batched(Cursor::new(bytes), BATCH_BYTES, MAX) {
+    match read(Cursor::new(bytes), BATCH_BYTES) {
         Err(e) => e.to_string(),
         Ok(_) => "read without an error".into(),
     }
@@ -209,11 +217,7 @@ fn damaged_files_are_errors_that_say_what_is_wrong() {
 
     // 60 000 x 60 000 RGB is 10.8 GB: refused from the header, before anything is allocated.
     assert!(matches!(
-        read_batched(
-            Cursor::new(by_hand(60_000, 60_000, 2, 0, &[])),
-            BATCH_BYTES,
-            MAX
-        ),
+        read(Cursor::new(by_hand(60_000, 60_000, 2, 0, &[])), BATCH_BYTES),
         Err(ImageError::Limits(_))
     ));
 }
@@ -292,12 +296,12 @@ fn palette_low_bit_grey_and_transparency_read_as_the_image_crate_does() {
 fn interlaced_and_endless_row_files_are_left_to_the_image_crate() {
     // 6 M pixels in one row: 18 MB a row.
     let wide = by_hand(6_000_000, 1, 2, 0, &[]);
-    assert!(read_batched(Cursor::new(&wide), BATCH_BYTES, MAX)
+    assert!(read(Cursor::new(&wide), BATCH_BYTES)
         .expect("no error")
         .is_none());
     let raw = [0u8, 0, 1, 1, 0, 0, 1, 0, 1, 0];
     let interlaced = by_hand(4, 2, 0, 1, &raw);
-    assert!(read_batched(Cursor::new(&interlaced), BATCH_BYTES, MAX)
+    assert!(read(Cursor::new(&interlaced), BATCH_BYTES)
         .expect("no error")
         .is_none());
 }
@@ -328,6 +332,6 @@ fn no_damage_to_a_file_makes_reading_panic() {
             bytes.truncate(state as usize % bytes.len());
         }
         // An error or an image, never a panic (a panic fails the test).
-        let _ = read_batched(Cursor::new(&bytes), 1, MAX);
+        let _ = read(Cursor::new(&bytes), 1);
     }
 }

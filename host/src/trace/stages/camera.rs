@@ -9,14 +9,13 @@
 //! has its lens's axis far from the image centre, and distortion taken about the wrong centre fits
 //! the ring of marks while bending the inside of the ring by a tenth of a millimetre. The model is
 //! fitted with the centre held at the image centre and with it free; the free centre is kept when
-//! its two parameters explain far more than noise (an F test on the marks' residuals, `CAMERA.centre_f`),
+//! its two parameters explain far more than noise (an F test on the marks' residuals, `CameraParams::centre_f`),
 //! otherwise two more parameters would only fit the marks' noise. While fitted, a weak prior
 //! holds the centre near the image centre where little determines it (standard deviation a
-//! quarter of the half diagonal, against a mark located to `CAMERA.mark_sigma_px`).
+//! quarter of the half diagonal, against a mark located to `CameraParams::mark_sigma_px`).
 
 use crate::trace::Homography;
 use nalgebra::{Matrix3, SMatrix, SVector};
-use params::CAMERA;
 
 /// Number of parameters: eight of the homography (h22 = 1), k1, k2, the distortion centre.
 const NP: usize = 12;
@@ -108,11 +107,12 @@ impl CameraModel {
 
     /// Fits homography + k1, k2 + distortion centre to `sheet_mm[i] -> px[i]` (at least 12
     /// marks), starting from the homography through all marks with the centre at the image
-    /// centre. Returns the model and its quality.
+    /// centre, the numbers of the fit from `params`. Returns the model and its quality.
     pub fn fit(
         sheet_mm: &[[f64; 2]],
         px: &[[f64; 2]],
         size_px: [f64; 2],
+        params: &CameraParams,
     ) -> Option<(Self, FitQuality)> {
         if sheet_mm.len() != px.len() || sheet_mm.len() < 12 {
             return None;
@@ -125,7 +125,7 @@ impl CameraModel {
             image_centre(size_px),
             half_diagonal(size_px),
         )?;
-        let prior = CentrePrior::at_image_centre(&start);
+        let prior = CentrePrior::at_image_centre(&start, params);
         let all: Vec<usize> = (0..px.len()).collect();
         let first = select(start, sheet_mm, px, &all, &prior)?;
         // Drop marks far off the first fit (robust scale from the median) and refit.
@@ -253,13 +253,16 @@ fn half_diagonal(size_px: [f64; 2]) -> f64 {
 struct CentrePrior {
     centre_px: [f64; 2],
     weight: f64,
+    /// The F statistic above which the fitted centre is kept ([`CameraParams::centre_f`]).
+    keep_f: f64,
 }
 
 impl CentrePrior {
-    fn at_image_centre(start: &CameraModel) -> Self {
+    fn at_image_centre(start: &CameraModel, params: &CameraParams) -> Self {
         Self {
             centre_px: start.centre_px,
-            weight: CAMERA.mark_sigma_px / (CAMERA.centre_sigma_half_diagonals * start.radius_px),
+            weight: params.mark_sigma_px / (params.centre_sigma_half_diagonals * start.radius_px),
+            keep_f: params.centre_f,
         }
     }
 
@@ -314,7 +317,7 @@ fn select(
     let (c_held, c_free) = (marks_cost(&held, s, p, idx), marks_cost(&free, s, p, idx));
     let variance = (c_free / dof as f64).max(1e-12);
     let f = 0.5 * (c_held - c_free) / variance;
-    Some(if f > CAMERA.centre_f { free } else { held })
+    Some(if f > prior.keep_f { free } else { held })
 }
 
 /// Levenberg-Marquardt on the pixel residuals of the marks `idx` (Marquardt's diagonal scaling),
@@ -390,5 +393,6 @@ fn lm(
 }
 
 mod params;
+pub use params::CameraParams;
 #[cfg(test)]
 mod tests;

@@ -11,11 +11,12 @@ use crate::trace::raster::CoarseMap;
 use image::RgbImage;
 use indicatif::ProgressBar;
 use own_track::{Retrace, Verdict};
-use params::CENTRELINE;
 
 mod own_track;
 mod params;
 mod section;
+
+pub use params::CentrelineParams;
 
 pub(crate) use section::Occluders;
 
@@ -47,6 +48,8 @@ pub(crate) struct TrackParams {
     pub max_width_px: f64,
     /// Smallest accepted mass per unit length (weight x pixels).
     pub min_mass: f64,
+    /// The stage's tuned numbers (faint graphite, own track).
+    pub centreline: CentrelineParams,
 }
 
 /// Window geometry and reference mass of one piece.
@@ -248,7 +251,7 @@ impl Tracker<'_> {
         let mut ema = mass0;
         let mut last_mass = mass0;
         let start = pts[0];
-        let mut retrace = Retrace::new(self.retrace_patience(half_w));
+        let mut retrace = Retrace::new(self.retrace_patience(half_w), &self.p.centreline);
         let max_steps = 4 * (self.img.width() as usize + self.img.height() as usize) * 4;
         for _ in 0..max_steps {
             let Some(&c) = pts.last() else {
@@ -273,12 +276,14 @@ impl Tracker<'_> {
             let (run, single);
             let steps: &[([f64; 2], f64)] = if mass < 0.5 * ema {
                 // In faint graphite, gone fainter or broken up by the paper's tooth, not a
-                // skip: where the stroke goes on (back within CENTRELINE.back_within_steps steps, or CENTRELINE.faint_run_steps
-                // steps holding half its level on average), walk through to there.
-                run = (ema < CENTRELINE.faint_mass * self.p.min_mass)
+                // skip: where the stroke goes on (back within `back_within_steps` steps, or
+                // `faint_run_steps` steps holding half its level on average), walk through to there.
+                run = (ema < self.p.centreline.faint_mass * self.p.min_mass)
                     .then(|| {
-                        let level =
-                            ema.clamp(CENTRELINE.faint_floor * self.p.min_mass, self.p.min_mass);
+                        let level = ema.clamp(
+                            self.p.centreline.faint_floor * self.p.min_mass,
+                            self.p.min_mass,
+                        );
                         self.faint_run(pts, t, half_w, id, level)
                     })
                     .flatten();
@@ -314,9 +319,9 @@ impl Tracker<'_> {
     }
 
     /// The centres on from the last of `pts` (heading `t`), each with its window's mass, up to
-    /// where the stroke goes on: back at half of `level` within `CENTRELINE.back_within_steps` more steps
-    /// (after a hole, for two steps running), or `CENTRELINE.faint_run_steps` steps holding half of `level` on
-    /// average. At most one window holds under `CENTRELINE.faint_share` of `level` (a grain hole: its
+    /// where the stroke goes on: back at half of `level` within `CentrelineParams::back_within_steps` more steps
+    /// (after a hole, for two steps running), or `CentrelineParams::faint_run_steps` steps holding half of `level` on
+    /// average. At most one window holds under `CentrelineParams::faint_share` of `level` (a grain hole: its
     /// centre is the step's prediction); every step is inside the area and not on another
     /// piece.
     fn faint_run(
@@ -330,8 +335,8 @@ impl Tracker<'_> {
         let step = self.p.step_px;
         let mut trail = pts[pts.len().saturating_sub(4)..].to_vec();
         let (mut t, mut holes, mut sum) = (t, 0, 0.0);
-        let mut run: Vec<([f64; 2], f64)> = Vec::with_capacity(CENTRELINE.faint_run_steps);
-        for j in 1..=CENTRELINE.faint_run_steps {
+        let mut run: Vec<([f64; 2], f64)> = Vec::with_capacity(self.p.centreline.faint_run_steps);
+        for j in 1..=self.p.centreline.faint_run_steps {
             let c = *trail.last()?;
             let pred = [c[0] + step * t[0], c[1] + step * t[1]];
             if !self.free_at(pred, id) {
@@ -340,7 +345,7 @@ impl Tracker<'_> {
             let found = self.centre_at(pred, t, 0.5 * step, half_w);
             let m = found.as_ref().map_or(0.0, |(_, s)| s.mass);
             let p = match found {
-                Some((p, _)) if m >= CENTRELINE.faint_share * level => p,
+                Some((p, _)) if m >= self.p.centreline.faint_share * level => p,
                 _ => {
                     holes += 1;
                     if holes > 1 {
@@ -353,14 +358,14 @@ impl Tracker<'_> {
             t = heading(&trail, p, t);
             trail.push(p);
             let back = m >= 0.5 * level
-                && (2..=CENTRELINE.back_within_steps + 1).contains(&j)
+                && (2..=self.p.centreline.back_within_steps + 1).contains(&j)
                 && (holes == 0 || run.last().is_some_and(|r| r.1 >= 0.5 * level));
             run.push((p, m));
             if back {
                 return Some(run);
             }
         }
-        (sum >= 0.5 * level * CENTRELINE.faint_run_steps as f64).then_some(run)
+        (sum >= 0.5 * level * self.p.centreline.faint_run_steps as f64).then_some(run)
     }
 
     /// Whether piece `id` may walk onto `p`: inside the area and not on another piece.

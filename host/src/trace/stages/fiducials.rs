@@ -5,12 +5,13 @@
 mod identify;
 mod params;
 
+pub use params::FiducialParams;
+
 use crate::trace::paper::PaperMap;
 use crate::trace::plane::dist;
 use crate::trace::raster::{components, CoarseMap};
 use crate::trace::TraceError;
 use image::RgbImage;
-use params::FIDUCIALS;
 
 /// A dark disc found in the scan.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -55,9 +56,10 @@ pub(crate) fn find(
     map: &CoarseMap,
     paper: &PaperMap,
     spacing_mm: f64,
+    params: &FiducialParams,
 ) -> Result<Fiducials, TraceError> {
-    let discs = candidate_discs(img, map, paper, FIDUCIALS.black_fraction);
-    identify::identify(&discs, spacing_mm)
+    let discs = candidate_discs(img, map, paper, params.black_fraction);
+    identify::identify(&discs, spacing_mm, params)
 }
 
 /// The print's black relative to the paper around it, as the image holds it: the median over
@@ -70,15 +72,16 @@ pub(crate) fn black_of_paper(
     map: &CoarseMap,
     paper: &PaperMap,
     spacing_mm: f64,
+    params: &FiducialParams,
 ) -> Option<f64> {
-    let corners = match find(img, map, paper, spacing_mm) {
+    let corners = match find(img, map, paper, spacing_mm, params) {
         Ok(f) => f.corners,
         Err(_) => {
             // Against the paper around the marks: inside a disc several blocks wide the paper
             // map holds the disc, which a black lifted by a tone curve is not far below.
             let ceiling = paper.ceiling(3);
-            let discs = candidate_discs(img, map, &ceiling, FIDUCIALS.encoded_black_fraction);
-            identify::corner_discs(&discs, spacing_mm)?
+            let discs = candidate_discs(img, map, &ceiling, params.encoded_black_fraction);
+            identify::corner_discs(&discs, spacing_mm, params)?
         }
     };
     let raw = img.as_raw();

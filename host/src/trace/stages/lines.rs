@@ -3,7 +3,7 @@
 //! loses it. A drawn line is followed through the band of ink all its passes leave
 //! ([`crate::trace::band`]): from the longest path not yet in a line, through every written point
 //! running its way, bridging gaps up to `--max-gap-mm` (a longer one, up to
-//! [`band::reach_mm`], is missing). The paths with `LINES.pass_mm` (or half their length) in its
+//! [`band::reach_mm`], is missing). The paths with `LinesParams::pass_mm` (or half their length) in its
 //! band are its passes; its centreline is the band's (written as a file of its own). A path
 //! that is the only pass of every line it is in is one line (a box drawn round in one go,
 //! turning its corners).
@@ -12,7 +12,7 @@
 //! way within `max(2 x --max-gap-mm, 15 mm)` ahead of one of its ends (within 45 degrees of
 //! its direction), or a mark that may continue one of its passes at one of the line's ends
 //! (or a gap too long to bridge to it), unless that mark is a pass of the same line, lies off
-//! the line's axis, or runs across it (more than `LINES.across_deg` to it) within `--max-gap-mm`
+//! the line's axis, or runs across it (more than `LinesParams::across_deg` to it) within `--max-gap-mm`
 //! of the pass's end: a line ending on another one.
 //!
 //! Files: `cloud.rs` (the written points and their directions), `walks.rs` (walks that are one
@@ -20,7 +20,7 @@
 //! (ends carried on to a line across or a corner), `ends.rs` (what may continue a line); here
 //! the lines put together from them ([`lines`]).
 
-use super::link::{Gap, LeftOut, MIN_MARK_MM};
+use super::link::{Gap, LeftOut};
 use crate::trace::band::{self, Source, Walk, BAND_HALF_MM};
 use crate::trace::chain::resample;
 use crate::trace::paths::DrawnPath;
@@ -28,7 +28,7 @@ use crate::trace::plane::{self, dist, sub};
 use cloud::cloud;
 use ends::{counts, judge_ends};
 use meet::meet_lines_across;
-use params::LINES;
+pub use params::LinesParams;
 use std::collections::HashSet;
 use walks::{duplicate_of, join_continuing};
 
@@ -112,13 +112,13 @@ fn arc(pts: &[[f64; 2]]) -> Vec<f64> {
     s
 }
 
-/// Unit directions along `pts` (an open polyline): the chord over `LINES.dir_half_mm` either side.
-fn directions(pts: &[[f64; 2]], s: &[f64]) -> Vec<[f64; 2]> {
+/// Unit directions along `pts` (an open polyline): the chord over `LinesParams::dir_half_mm` either side.
+fn directions(pts: &[[f64; 2]], s: &[f64], lp: &LinesParams) -> Vec<[f64; 2]> {
     let n = pts.len();
     (0..n)
         .map(|i| {
-            let a = s[..i].partition_point(|&v| v < s[i] - LINES.dir_half_mm);
-            let b = (i + s[i..].partition_point(|&v| v <= s[i] + LINES.dir_half_mm)).min(n - 1);
+            let a = s[..i].partition_point(|&v| v < s[i] - lp.dir_half_mm);
+            let b = (i + s[i..].partition_point(|&v| v <= s[i] + lp.dir_half_mm)).min(n - 1);
             unit(sub(pts[b], pts[a.min(n - 1)]))
         })
         .collect()
@@ -169,14 +169,17 @@ fn longest_free_run(free: &[bool], pts: &[[f64; 2]]) -> Option<(usize, usize, f6
 }
 
 /// The drawn lines of `paths` (with the points of the strays, and the marks beyond each
-/// path's free ends, `loose[i]` for path `i`), longest first.
+/// path's free ends, `loose[i]` for path `i`), longest first. Walks shorter than `min_mark_mm`
+/// (the link stage's speck length) are no line.
 pub(crate) fn lines(
     paths: &[DrawnPath],
     strays: &[Vec<[f64; 2]>],
     loose: &[Vec<Loose>],
     max_gap_mm: f64,
+    min_mark_mm: f64,
+    lp: &LinesParams,
 ) -> Vec<DrawnLine> {
-    let (cloud, first) = cloud(paths, strays);
+    let (cloud, first) = cloud(paths, strays, lp);
     // Walk from the middle of the longest stretch of each path not yet in a line, longest
     // path first.
     let mut free = vec![true; cloud.dots.len()];
@@ -184,7 +187,7 @@ pub(crate) fn lines(
     for (pi, p) in paths.iter().enumerate() {
         let (a, b) = (first[pi], first[pi + 1]);
         while let Some((r0, r1, len)) = longest_free_run(&free[a..b], &p.stroke.points_mm) {
-            if len < LINES.pass_mm {
+            if len < lp.pass_mm {
                 break;
             }
             let mid = a + (r0 + r1) / 2;
@@ -192,9 +195,9 @@ pub(crate) fn lines(
                 free[mid] = false;
                 continue;
             }
-            let seed_dir = chord_dir(&p.stroke.points_mm, mid - a, LINES.seed_half_mm);
+            let seed_dir = chord_dir(&p.stroke.points_mm, mid - a, lp.seed_half_mm);
             let w = band::walk(&cloud, cloud.dots[mid].p, seed_dir, max_gap_mm);
-            if w.length_mm() < MIN_MARK_MM || !w.taken.contains(&mid) {
+            if w.length_mm() < min_mark_mm || !w.taken.contains(&mid) {
                 // Not a line: its dots are not seeds again.
                 free[a + r0..a + r1].iter_mut().for_each(|f| *f = false);
                 continue;
@@ -210,7 +213,7 @@ pub(crate) fn lines(
     let mut kept: Vec<Walk> = Vec::new();
     let mut taken: Vec<HashSet<usize>> = Vec::new();
     for w in walks {
-        match duplicate_of(&w, &kept) {
+        match duplicate_of(&w, &kept, lp) {
             Some(d) => taken[d].extend(w.taken.iter().copied()),
             None => {
                 taken.push(w.taken.iter().copied().collect());
@@ -218,10 +221,10 @@ pub(crate) fn lines(
             }
         }
     }
-    let (mut walks, taken) = join_continuing(kept, taken);
-    overrun::cut_overruns(&mut walks);
-    meet_lines_across(&mut walks, &cloud);
-    // The passes of each line: the paths with LINES.pass_mm (or half their length) in its band.
+    let (mut walks, taken) = join_continuing(kept, taken, lp);
+    overrun::cut_overruns(&mut walks, lp);
+    meet_lines_across(&mut walks, &cloud, lp);
+    // The passes of each line: the paths with LinesParams::pass_mm (or half their length) in its band.
     let spacing =
         |p: &DrawnPath| p.stroke.length_mm() / (p.stroke.points_mm.len().max(2) - 1) as f64;
     let passes: Vec<Vec<usize>> = taken
@@ -236,7 +239,7 @@ pub(crate) fn lines(
             let mut v: Vec<usize> = (0..paths.len())
                 .filter(|&p| {
                     let len = count[p] as f64 * spacing(&paths[p]);
-                    count[p] > 0 && len >= LINES.pass_mm.min(0.5 * paths[p].stroke.length_mm())
+                    count[p] > 0 && len >= lp.pass_mm.min(0.5 * paths[p].stroke.length_mm())
                 })
                 .collect();
             v.sort_by(|&x, &y| {
@@ -261,13 +264,13 @@ pub(crate) fn lines(
     let arcs: Vec<Vec<f64>> = walks.iter().map(|w| arc(&w.centres)).collect();
     let mut out: Vec<DrawnLine> = Vec::new();
     for p in (0..paths.len()).filter(|&p| alone(p)) {
-        out.push(path_line(paths, p, loose, max_gap_mm));
+        out.push(path_line(paths, p, loose, max_gap_mm, lp));
     }
     for (l, w) in walks.iter().enumerate() {
         if passes[l].is_empty() || (passes[l].len() == 1 && alone(passes[l][0])) {
             continue;
         }
-        let mut line = band_line(w, passes[l].clone());
+        let mut line = band_line(w, passes[l].clone(), lp);
         // A pass of another line running across this one there is that line's.
         let across_here = |p: usize, q: [f64; 2], t: [f64; 2]| {
             lines_of_path[p].iter().any(|&o| {
@@ -278,8 +281,8 @@ pub(crate) fn lines(
                         .filter(|(_, x)| dist(**x, q) <= BAND_HALF_MM)
                         .min_by(|x, y| dist(*x.1, q).total_cmp(&dist(*y.1, q)))
                         .is_some_and(|(k, _)| {
-                            abs_cos(chord_dir_on(c, &arcs[o], k, LINES.dir_half_mm), t)
-                                < LINES.across_deg.to_radians().cos()
+                            abs_cos(chord_dir_on(c, &arcs[o], k, lp.dir_half_mm), t)
+                                < lp.across_deg.to_radians().cos()
                         })
                 }
             })
@@ -291,6 +294,7 @@ pub(crate) fn lines(
             paths,
             max_gap_mm,
             &across_here,
+            lp,
         );
         out.push(line);
     }
@@ -299,13 +303,19 @@ pub(crate) fn lines(
 }
 
 /// The line that is path `p`, judged by what lies beyond its free ends.
-fn path_line(paths: &[DrawnPath], p: usize, loose: &[Vec<Loose>], max_gap_mm: f64) -> DrawnLine {
+fn path_line(
+    paths: &[DrawnPath],
+    p: usize,
+    loose: &[Vec<Loose>],
+    max_gap_mm: f64,
+    lp: &LinesParams,
+) -> DrawnLine {
     let path = &paths[p];
     let pts = &path.stroke.points_mm;
     let len = path.stroke.length_mm();
     let s = arc(pts);
-    let head = point_at(pts, &s, LINES.end_chord_mm.min(len));
-    let tail = point_at(pts, &s, (len - LINES.end_chord_mm).max(0.0));
+    let head = point_at(pts, &s, lp.end_chord_mm.min(len));
+    let tail = point_at(pts, &s, (len - lp.end_chord_mm).max(0.0));
     let mut line = DrawnLine {
         out_dir: [unit(sub(pts[0], head)), unit(sub(pts[pts.len() - 1], tail))],
         passes: vec![p],
@@ -319,7 +329,7 @@ fn path_line(paths: &[DrawnPath], p: usize, loose: &[Vec<Loose>], max_gap_mm: f6
         continued_by: Vec::new(),
     };
     for l in &loose[p] {
-        if !counts(l, &line.passes, None, max_gap_mm) {
+        if !counts(l, &line.passes, None, max_gap_mm, lp) {
             continue;
         }
         match l.what {
@@ -336,9 +346,9 @@ fn path_line(paths: &[DrawnPath], p: usize, loose: &[Vec<Loose>], max_gap_mm: f6
     line
 }
 
-/// The line of walk `w` (passes `passes`): its centreline smoothed over `LINES.dir_half_mm`.
-fn band_line(w: &Walk, passes: Vec<usize>) -> DrawnLine {
-    let pts = resample(&smoothed(&w.centres), w.closed, LINES.line_spacing_mm);
+/// The line of walk `w` (passes `passes`): its centreline smoothed over `LinesParams::dir_half_mm`.
+fn band_line(w: &Walk, passes: Vec<usize>, lp: &LinesParams) -> DrawnLine {
+    let pts = resample(&smoothed(&w.centres, lp), w.closed, lp.line_spacing_mm);
     let pts = if pts.len() >= 2 {
         pts
     } else {
@@ -346,8 +356,8 @@ fn band_line(w: &Walk, passes: Vec<usize>) -> DrawnLine {
     };
     let s = arc(&pts);
     let total = s.last().copied().unwrap_or(0.0);
-    let head = point_at(&pts, &s, LINES.end_chord_mm.min(total));
-    let tail = point_at(&pts, &s, (total - LINES.end_chord_mm).max(0.0));
+    let head = point_at(&pts, &s, lp.end_chord_mm.min(total));
+    let tail = point_at(&pts, &s, (total - lp.end_chord_mm).max(0.0));
     let length_mm = w.length_mm();
     let gaps_mm: f64 = w.gaps.iter().map(|g| g.length_mm).sum();
     DrawnLine {
@@ -364,14 +374,14 @@ fn band_line(w: &Walk, passes: Vec<usize>) -> DrawnLine {
     }
 }
 
-/// `pts` with each point the mean of those within `LINES.dir_half_mm` of arc length either side
+/// `pts` with each point the mean of those within `LinesParams::dir_half_mm` of arc length either side
 /// (the window shrunk near the ends, which stay in place).
-fn smoothed(pts: &[[f64; 2]]) -> Vec<[f64; 2]> {
+fn smoothed(pts: &[[f64; 2]], lp: &LinesParams) -> Vec<[f64; 2]> {
     let s = arc(pts);
     let total = s.last().copied().unwrap_or(0.0);
     (0..pts.len())
         .map(|i| {
-            let half = LINES.dir_half_mm.min(s[i]).min(total - s[i]);
+            let half = lp.dir_half_mm.min(s[i]).min(total - s[i]);
             let a = s.partition_point(|&v| v < s[i] - half);
             let b = s.partition_point(|&v| v <= s[i] + half);
             let n = (b - a).max(1) as f64;

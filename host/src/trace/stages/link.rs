@@ -26,10 +26,10 @@
 //! from the written points on both sides ([`crate::trace::bridge_fit`]).
 //!
 //! The longest chain is the drawn path. What is left out is listed: specks (shorter than
-//! [`MIN_MARK_MM`]), marks, and marks that could be part of the path: a link from one of the
+//! [`LinkParams::min_mark_mm`]), marks, and marks that could be part of the path: a link from one of the
 //! path's free ends that would be admissible but longer than `max_gap_mm` (a gap not bridged,
 //! including an open path whose ends continue into each other), or a mark of at least
-//! [`MIN_MARK_MM`] ahead of a free end within reach, or a separate line nearly as long as the
+//! [`LinkParams::min_mark_mm`] ahead of a free end within reach, or a separate line nearly as long as the
 //! path. Those make the trace incomplete.
 //!
 //! Files, in the order of the work: `kinks.rs` (pieces cut at sharp turns), `end.rs` (each end's
@@ -59,11 +59,7 @@ pub(in crate::trace) use strokes::Strokes;
 use crate::sheet::ReferencePath;
 use crate::trace::chain::{PieceMm, Stroke};
 use crate::trace::plane::dist;
-use params::LINK;
-
-/// Marks shorter than this are specks (dust, grain), mm: `LINK.min_mark_mm`
-/// ([`params::LinkParams`]) by the name the rest of `trace` and the tests read.
-pub const MIN_MARK_MM: f64 = LINK.min_mark_mm;
+pub use params::LinkParams;
 
 /// A gap between two linked pieces of the drawn path.
 #[derive(Debug, Clone, PartialEq)]
@@ -80,7 +76,7 @@ pub struct Gap {
 /// Why a mark was not written.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub enum LeftOutKind {
-    /// Shorter than [`MIN_MARK_MM`]: dust, a fibre, a flick.
+    /// Shorter than [`LinkParams::min_mark_mm`]: dust, a fibre, a flick.
     Speck,
     /// A mark apart from the path (a stroke across it, a stray line).
     Mark,
@@ -156,18 +152,19 @@ pub(crate) fn link(
     pieces: &[PieceMm],
     max_gap_mm: f64,
     hint: Option<ReferencePath>,
+    lk: &LinkParams,
 ) -> Option<Linking> {
-    let net = Network::build(pieces, max_gap_mm, Strokes::ONE_PATH)?;
+    let net = Network::build(pieces, max_gap_mm, Strokes::ONE_PATH, lk)?;
     let main = net.choose_main(hint)?;
-    let judged = net.judge(main);
+    let judged = net.judge(main, lk);
     // Another run crossing the path is named as such, whatever its length.
-    let indexed = net.left_out_indexed(main, &judged);
+    let indexed = net.left_out_indexed(main, &judged, lk);
     let chain_of: Vec<usize> = indexed.iter().map(|(ci, _)| *ci).collect();
     let mut marks: Vec<(&Stroke, LeftOut)> = indexed
         .into_iter()
         .map(|(ci, o)| (net.chain_stroke(ci), o))
         .collect();
-    let crossings = runs::crossings(&judged.path, &mut marks);
+    let crossings = runs::crossings(&judged.path, &mut marks, lk);
     let left_out: Vec<LeftOut> = marks.into_iter().map(|(_, o)| o).collect();
     let crossing_chains: Vec<usize> = crossings.iter().map(|c| chain_of[c.other]).collect();
     let gaps_to_crossing: Vec<usize> = (0..judged.gaps.len())

@@ -7,11 +7,12 @@
 
 mod params;
 
+pub use params::PrepareParams;
+
 use crate::trace::paper::PaperMap;
 use crate::trace::raster::CoarseMap;
 use crate::trace::tone::Tone;
 use image::RgbImage;
-use params::PREPARE;
 
 /// The whole-image maps of one image, ready for [`crate::trace::trace_prepared`].
 #[derive(Debug, Clone)]
@@ -23,6 +24,8 @@ pub struct Prepared {
     /// The tone curve the image was linearised through while it was read (the file said so),
     /// or [`Tone::assumed`] (left to [`crate::trace::trace_prepared`] to measure).
     pub(crate) tone: Tone,
+    /// The numbers the maps were built with.
+    params: PrepareParams,
 }
 
 impl Prepared {
@@ -31,21 +34,26 @@ impl Prepared {
         &self.tone
     }
 
-    /// Whether these are the maps of an image of `img`'s size.
-    pub fn fits(&self, img: &RgbImage) -> bool {
-        self.size == [img.width() as usize, img.height() as usize]
+    /// Whether these are the maps of an image of `img`'s size, built with `params`.
+    pub fn fits(&self, img: &RgbImage, params: &PrepareParams) -> bool {
+        self.size == [img.width() as usize, img.height() as usize] && self.params == *params
+    }
+
+    /// Builds the maps of `img` with the tuned numbers ([`Self::build_with`]).
+    pub fn build(img: &RgbImage) -> Self {
+        Self::build_with(img, &PrepareParams::default())
     }
 
     /// Builds the maps of `img`, with the bands shared among the available cores.
-    pub fn build(img: &RgbImage) -> Self {
-        let mut acc = Bands::new(img.width() as usize, img.height() as usize);
+    pub fn build_with(img: &RgbImage, params: &PrepareParams) -> Self {
+        let mut acc = Bands::new(img.width() as usize, img.height() as usize, params);
         let rows = acc.band_rows;
         let raw = img.as_raw();
         let band_bytes = 3 * acc.iw * rows;
         let bands: Vec<&[u8]> = raw.chunks(band_bytes.max(1)).collect();
         let threads = std::thread::available_parallelism()
             .map_or(1, |n| n.get())
-            .clamp(1, PREPARE.max_threads)
+            .clamp(1, params.max_threads)
             .min(bands.len().max(1));
         let per = bands.len().div_ceil(threads.max(1)).max(1);
         let geometry = acc.geometry();
@@ -115,14 +123,15 @@ pub(crate) struct Bands {
     coarse_k: usize,
     min_red: Vec<u8>,
     level: Vec<[f32; 3]>,
+    params: PrepareParams,
 }
 
 impl Bands {
-    pub(crate) fn new(iw: usize, ih: usize) -> Self {
-        let paper_block = PaperMap::block_size_for_dims(iw, ih).max(PREPARE.min_paper_block_px);
+    pub(crate) fn new(iw: usize, ih: usize, params: &PrepareParams) -> Self {
+        let paper_block = PaperMap::block_size_for_dims(iw, ih).max(params.min_paper_block_px);
         let coarse_k = CoarseMap::block_size_for_dims(iw, ih);
         let l = lcm(paper_block, coarse_k);
-        let band_rows = l * PREPARE.min_band_rows.div_ceil(l);
+        let band_rows = l * params.min_band_rows.div_ceil(l);
         Self {
             iw,
             ih,
@@ -131,6 +140,7 @@ impl Bands {
             coarse_k,
             min_red: Vec::new(),
             level: Vec::new(),
+            params: *params,
         }
     }
 
@@ -168,6 +178,7 @@ impl Bands {
             },
             size: [self.iw, self.ih],
             tone: Tone::assumed(),
+            params: self.params,
         }
     }
 }
@@ -206,7 +217,7 @@ mod tests {
         assert_eq!(prepared.paper.level, paper.level);
         assert_eq!((prepared.paper.w, prepared.paper.h), (paper.w, paper.h));
         // Band by band in one thread, as while decoding.
-        let mut acc = Bands::new(w as usize, h as usize);
+        let mut acc = Bands::new(w as usize, h as usize, &PrepareParams::default());
         let g = acc.geometry();
         let rows = acc.band_rows;
         for (i, band) in img.as_raw().chunks(3 * w as usize * rows).enumerate() {

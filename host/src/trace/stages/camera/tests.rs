@@ -38,7 +38,8 @@ fn jacobian_matches_finite_differences() {
 fn fit_recovers_distortion_and_inverts() {
     let m = truth();
     let (marks, px) = marks_seen_by(&m, |_| 0.0);
-    let (fit, q) = CameraModel::fit(&marks, &px, [4000.0, 3000.0]).expect("fit");
+    let (fit, q) =
+        CameraModel::fit(&marks, &px, [4000.0, 3000.0], &CameraParams::default()).expect("fit");
     // Exact marks: what is left is the prior's pull on the centre (475 px off the image
     // centre here), a thousandth of a pixel at the marks.
     assert!(q.rms_mm < 2e-4, "{q:?} {fit:?}");
@@ -102,7 +103,8 @@ fn fit_finds_an_off_centre_distortion_centre() {
     for (k1, c) in [(-0.08, [2450.0, 1100.0]), (0.06, [1480.0, 1750.0])] {
         let m = CameraModel::new(h, k1, 0.0, c, 2500.0).expect("invertible");
         let (marks, px) = marks_seen_by(&m, |_| 0.2);
-        let (fit, _) = CameraModel::fit(&marks, &px, [4000.0, 3000.0]).expect("fit");
+        let (fit, _) =
+            CameraModel::fit(&marks, &px, [4000.0, 3000.0], &CameraParams::default()).expect("fit");
         let worst = worst_inside_mm(&fit, &m);
         assert!(worst < 0.02, "k1 {k1}: {worst} mm inside the ring, {fit:?}");
         // The same marks fitted about the image centre (the model before) bend the inside.
@@ -126,7 +128,8 @@ fn centre_is_held_when_the_marks_do_not_ask_for_it() {
     let h = Matrix3::new(9.5, 2.1, 2000.0, -1.8, 10.2, 1500.0, 0.0011, -0.0007, 1.0);
     let m = CameraModel::new(h, -0.06, 0.0, [2000.0, 1500.0], 2500.0).expect("invertible");
     let (marks, px) = marks_seen_by(&m, |i| 0.2 * (0.5 + (0.618 * i as f64).fract()));
-    let (fit, _) = CameraModel::fit(&marks, &px, [4000.0, 3000.0]).expect("fit");
+    let (fit, _) =
+        CameraModel::fit(&marks, &px, [4000.0, 3000.0], &CameraParams::default()).expect("fit");
     assert_eq!(fit.centre_px, [2000.0, 1500.0], "{fit:?}");
     assert!(worst_inside_mm(&fit, &m) < 0.02);
 }
@@ -138,7 +141,8 @@ fn scan_keeps_the_centre_at_the_image_centre() {
     let h = Matrix3::new(23.6, 0.4, 2480.0, 0.4, -23.6, 3500.0, 0.0, 0.0, 1.0);
     let m = CameraModel::new(h, 0.0, 0.0, [2480.0, 3508.0], 4300.0).expect("invertible");
     let (marks, px) = marks_seen_by(&m, |_| 0.0);
-    let (fit, q) = CameraModel::fit(&marks, &px, [4960.0, 7016.0]).expect("fit");
+    let (fit, q) =
+        CameraModel::fit(&marks, &px, [4960.0, 7016.0], &CameraParams::default()).expect("fit");
     assert!(q.rms_mm < 1e-6, "{q:?}");
     assert!(fit.k1.abs() < 1e-9 && fit.k2.abs() < 1e-9, "{fit:?}");
     assert!(

@@ -4,7 +4,7 @@
 //! it had where it marked the track, and, where that angle is in between, by what follows: a
 //! retrace comes into line with the track, a crossing leaves the track again at its angle.
 
-use super::params::CENTRELINE;
+use super::params::CentrelineParams;
 use super::{dist, Tracker};
 
 /// What the walk does at its next step.
@@ -31,15 +31,20 @@ pub(super) struct Retrace {
     patience: usize,
     /// Steps in a row along its own track, once told a retrace.
     along: usize,
+    /// [`CentrelineParams::cross_cos`], [`CentrelineParams::aligned_cos`].
+    cross_cos: f64,
+    aligned_cos: f64,
 }
 
 impl Retrace {
-    pub(super) fn new(patience: usize) -> Self {
+    pub(super) fn new(patience: usize, params: &CentrelineParams) -> Self {
         Retrace {
             pending: None,
             off: 0,
             patience,
             along: 0,
+            cross_cos: params.cross_cos,
+            aligned_cos: params.aligned_cos,
         }
     }
 
@@ -77,9 +82,7 @@ impl Retrace {
                     Verdict::Go
                 }
             }
-            Some(c)
-                if c >= CENTRELINE.aligned_cos || (self.along > 0 && c >= CENTRELINE.cross_cos) =>
-            {
+            Some(c) if c >= self.aligned_cos || (self.along > 0 && c >= self.cross_cos) => {
                 self.pending = None;
                 self.along += 1;
                 if self.along > marks {
@@ -88,7 +91,7 @@ impl Retrace {
                     Verdict::Go
                 }
             }
-            Some(c) if c < CENTRELINE.cross_cos => self.pending.map_or(stop_here, cut_back),
+            Some(c) if c < self.cross_cos => self.pending.map_or(stop_here, cut_back),
             Some(_) => {
                 self.off = 0;
                 self.pending.get_or_insert((walked, clock));
@@ -160,7 +163,7 @@ mod tests {
 
     #[test]
     fn a_crossing_stops_where_it_met_the_track() {
-        let mut r = Retrace::new(2);
+        let mut r = Retrace::new(2, &CentrelineParams::default());
         assert_eq!(r.step(None, 10, 10, 110), Verdict::Go);
         // Onto the track at 35 deg: not yet told.
         assert_eq!(r.step(Some(0.82), 11, 11, 111), Verdict::Go);
@@ -171,7 +174,7 @@ mod tests {
         assert_eq!(r.step(None, 14, 14, 114), Verdict::Go);
         assert_eq!(r.step(None, 15, 15, 115), cut(11, 111));
         // At 60 deg: at once.
-        let mut r = Retrace::new(2);
+        let mut r = Retrace::new(2, &CentrelineParams::default());
         let here = Verdict::StopAt {
             keep: 20,
             since: None,
@@ -181,7 +184,7 @@ mod tests {
 
     #[test]
     fn a_retrace_goes_on_and_not_past_the_piece() {
-        let mut r = Retrace::new(2);
+        let mut r = Retrace::new(2, &CentrelineParams::default());
         assert_eq!(r.step(Some(0.83), 40, 40, 40), Verdict::Go);
         // Touches the track and comes off it for a step, then in line with it.
         assert_eq!(r.step(None, 41, 41, 41), Verdict::Go);
@@ -192,11 +195,11 @@ mod tests {
             assert_eq!(r.step(None, i, i, i as u32), Verdict::Go);
         }
         // Along the track for longer than the piece: round a closed stroke again.
-        let mut r = Retrace::new(2);
+        let mut r = Retrace::new(2, &CentrelineParams::default());
         for i in 0..30 {
             assert_eq!(r.step(Some(1.0), 20 + i, 20 + i, 0), Verdict::Go);
         }
-        let mut r = Retrace::new(2);
+        let mut r = Retrace::new(2, &CentrelineParams::default());
         for _ in 0..5 {
             assert_eq!(r.step(Some(1.0), 5, 5, 0), Verdict::Go);
         }

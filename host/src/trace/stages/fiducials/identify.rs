@@ -5,7 +5,7 @@
 //! printed. Among those, the one that also explains the most sheet-v2 ring dots wins; a mirrored
 //! winner is refused.
 
-use super::params::FIDUCIALS;
+use super::params::FiducialParams;
 use super::{Disc, Fiducials};
 use crate::sheet::{
     fiducial_centres_mm, orientation_dot_mm, ring_dots_mm, FIDUCIAL_DIAMETER_MM,
@@ -24,8 +24,12 @@ struct Labelling {
 
 /// Finds the corner fiducials, the orientation dot and the ring dots among `discs` (largest
 /// first).
-pub(crate) fn identify(discs: &[Disc], spacing_mm: f64) -> Result<Fiducials, TraceError> {
-    let (best, any_quad) = best_labelling(discs, spacing_mm);
+pub(crate) fn identify(
+    discs: &[Disc],
+    spacing_mm: f64,
+    params: &FiducialParams,
+) -> Result<Fiducials, TraceError> {
+    let (best, any_quad) = best_labelling(discs, spacing_mm, params);
     match best {
         Some(l) if l.mirrored => Err(TraceError::Mirrored),
         Some(l) => Ok(Fiducials {
@@ -40,13 +44,23 @@ pub(crate) fn identify(discs: &[Disc], spacing_mm: f64) -> Result<Fiducials, Tra
 
 /// The four corner discs of the best labelling, mirrored or not (for measuring the print's
 /// black, where the sheet's sense does not matter).
-pub(crate) fn corner_discs(discs: &[Disc], spacing_mm: f64) -> Option<[Disc; 4]> {
-    best_labelling(discs, spacing_mm).0.map(|l| l.corners)
+pub(crate) fn corner_discs(
+    discs: &[Disc],
+    spacing_mm: f64,
+    params: &FiducialParams,
+) -> Option<[Disc; 4]> {
+    best_labelling(discs, spacing_mm, params)
+        .0
+        .map(|l| l.corners)
 }
 
 /// The best labelling of `discs`, and whether any four of them made a plausible square.
-fn best_labelling(discs: &[Disc], spacing_mm: f64) -> (Option<Labelling>, bool) {
-    let cand = &discs[..discs.len().min(FIDUCIALS.max_corner_candidates)];
+fn best_labelling(
+    discs: &[Disc],
+    spacing_mm: f64,
+    params: &FiducialParams,
+) -> (Option<Labelling>, bool) {
+    let cand = &discs[..discs.len().min(params.max_corner_candidates)];
     let n = cand.len();
     let mut best: Option<Labelling> = None;
     let mut any_quad = false;
@@ -82,7 +96,7 @@ fn best_labelling(discs: &[Disc], spacing_mm: f64) -> (Option<Labelling>, bool) 
                                 .iter()
                                 .map(|p| [m[0] * p[0] + m[1] * p[1], m[2] * p[0] + m[3] * p[1]])
                                 .collect();
-                            if let Some(l) = label(q, mirrored, discs, &sheet, spacing_mm) {
+                            if let Some(l) = label(q, mirrored, discs, &sheet, spacing_mm, params) {
                                 if best.as_ref().is_none_or(|b| better(&l, b)) {
                                     best = Some(l);
                                 }
@@ -162,9 +176,10 @@ fn label(
     discs: &[Disc],
     sheet: &[[f64; 2]],
     spacing_mm: f64,
+    params: &FiducialParams,
 ) -> Option<Labelling> {
     let f = spacing_mm / FIDUCIAL_SPACING_MM;
-    let tol = FIDUCIALS.match_tol_mm * f;
+    let tol = params.match_tol_mm * f;
     let dot_mm = orientation_dot_mm(spacing_mm);
     let corner_d = q[0].diameter_px;
     let is_corner = |d: &Disc| q.iter().any(|c| c.centre_px == d.centre_px);

@@ -1,20 +1,20 @@
 //! The written points a band is followed through: every point of every path and of the strays
 //! with its direction over a zigzag pass's teeth, none where the path turns a corner.
 
-use super::params::LINES;
+use super::params::LinesParams;
 use super::{arc, unit};
 use crate::trace::band::{Cloud, Dot, Source};
 use crate::trace::paths::DrawnPath;
 use crate::trace::plane::sub;
 
-/// Directions along `pts` for following a band: the chord over `LINES.band_dir_half_mm` either
+/// Directions along `pts` for following a band: the chord over `LinesParams::band_dir_half_mm` either
 /// side (over a zigzag pass's teeth), none (zero) where the path turns a corner (by more than
-/// `LINES.corner_deg` between the chords before and after a point): a band is not followed round
+/// `LinesParams::corner_deg` between the chords before and after a point): a band is not followed round
 /// a pass's corner into the line it turns into.
-fn band_directions(pts: &[[f64; 2]], s: &[f64]) -> Vec<[f64; 2]> {
+fn band_directions(pts: &[[f64; 2]], s: &[f64], lp: &LinesParams) -> Vec<[f64; 2]> {
     let n = pts.len();
-    let cos_corner = LINES.corner_deg.to_radians().cos();
-    let h = LINES.band_dir_half_mm;
+    let cos_corner = lp.corner_deg.to_radians().cos();
+    let h = lp.band_dir_half_mm;
     (0..n)
         .map(|i| {
             let a = s[..i].partition_point(|&v| v < s[i] - h).min(n - 1);
@@ -35,7 +35,11 @@ fn band_directions(pts: &[[f64; 2]], s: &[f64]) -> Vec<[f64; 2]> {
 
 /// The written points of the paths and of the strays (`strays`: their points, mm), with
 /// their directions; `first[i]..first[i + 1]` are path `i`'s.
-pub(super) fn cloud(paths: &[DrawnPath], strays: &[Vec<[f64; 2]>]) -> (Cloud, Vec<usize>) {
+pub(super) fn cloud(
+    paths: &[DrawnPath],
+    strays: &[Vec<[f64; 2]>],
+    lp: &LinesParams,
+) -> (Cloud, Vec<usize>) {
     let mut dots = Vec::new();
     let mut first = Vec::with_capacity(paths.len() + 1);
     let add = |pts: &[[f64; 2]], src: Source, dots: &mut Vec<Dot>| {
@@ -43,7 +47,7 @@ pub(super) fn cloud(paths: &[DrawnPath], strays: &[Vec<[f64; 2]>]) -> (Cloud, Ve
             return;
         }
         let s = arc(pts);
-        for (p, dir) in pts.iter().zip(band_directions(pts, &s)) {
+        for (p, dir) in pts.iter().zip(band_directions(pts, &s, lp)) {
             dots.push(Dot { p: *p, dir, src });
         }
     };
@@ -53,7 +57,7 @@ pub(super) fn cloud(paths: &[DrawnPath], strays: &[Vec<[f64; 2]>]) -> (Cloud, Ve
     }
     first.push(dots.len());
     for s in strays {
-        if arc(s).last().copied().unwrap_or(0.0) >= LINES.min_dot_mark_mm {
+        if arc(s).last().copied().unwrap_or(0.0) >= lp.min_dot_mark_mm {
             add(s, Source::Stray, &mut dots);
         }
     }

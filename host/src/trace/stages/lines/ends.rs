@@ -3,7 +3,7 @@
 //! line ([`counts`]).
 
 use super::super::link::{LeftOut, LeftOutKind};
-use super::params::LINES;
+use super::params::LinesParams;
 use super::{abs_cos, arc, directions, DrawnLine, Loose};
 use crate::trace::band::{Cloud, Source, BAND_DEG};
 use crate::trace::paths::DrawnPath;
@@ -12,7 +12,7 @@ use std::collections::HashSet;
 
 /// What may continue an open band line at its ends: a path (its points not in the line's band,
 /// nor where it is a pass of a line running across, `across_here(path, point, direction)`)
-/// running its way ahead of an end, within `max(2 x max_gap_mm, 15 mm)` and `LINES.across_deg` of the
+/// running its way ahead of an end, within `max(2 x max_gap_mm, 15 mm)` and `LinesParams::across_deg` of the
 /// end's direction (anything running its way nearer, within `--max-gap-mm` and the band, the
 /// walk has taken; farther, to a path, it is a missing gap).
 pub(super) fn judge_ends(
@@ -22,13 +22,14 @@ pub(super) fn judge_ends(
     paths: &[DrawnPath],
     max_gap_mm: f64,
     across_here: &dyn Fn(usize, [f64; 2], [f64; 2]) -> bool,
+    lp: &LinesParams,
 ) {
     if line.closed {
         return;
     }
     let reach = (2.0 * max_gap_mm).max(15.0);
     let cos_along = BAND_DEG.to_radians().cos();
-    let cos_cone = LINES.across_deg.to_radians().cos();
+    let cos_cone = lp.across_deg.to_radians().cos();
     let ends = [
         (line.from_mm, line.out_dir[0]),
         (line.to_mm, line.out_dir[1]),
@@ -74,10 +75,16 @@ pub(super) fn judge_ends(
 /// Whether a mark beyond a free end of one of a line's `passes` counts against the line
 /// (`axis`: the line's direction, `None` for a line of one path: the end's own): a mark that
 /// is not a path (or the path's own other end) always; a pass of the line never; another path
-/// only when it lies ahead on the line's axis (off it by at most `LINES.alongside_mm` + 10 % of
+/// only when it lies ahead on the line's axis (off it by at most `LinesParams::alongside_mm` + 10 % of
 /// the distance), and not when it runs across the line within `max_gap_mm` of the end (the
 /// line ends on another line).
-pub(super) fn counts(l: &Loose, passes: &[usize], axis: Option<[f64; 2]>, max_gap_mm: f64) -> bool {
+pub(super) fn counts(
+    l: &Loose,
+    passes: &[usize],
+    axis: Option<[f64; 2]>,
+    max_gap_mm: f64,
+    lp: &LinesParams,
+) -> bool {
     if l.path.is_some_and(|p| passes.contains(&p)) {
         return false;
     }
@@ -94,13 +101,13 @@ pub(super) fn counts(l: &Loose, passes: &[usize], axis: Option<[f64; 2]>, max_ga
     let u = axis.unwrap_or(l.dir);
     let v = sub(l.mark[k], l.end_mm);
     let off_axis = (v[0] * u[1] - v[1] * u[0]).abs();
-    if off_axis > LINES.alongside_mm + 0.1 * d {
+    if off_axis > lp.alongside_mm + 0.1 * d {
         return false;
     }
     if l.path.is_none() || l.mark.len() < 2 {
         return true;
     }
-    let dirs = directions(&l.mark, &arc(&l.mark));
-    let across = abs_cos(dirs[k], u) < LINES.across_deg.to_radians().cos();
-    !(across && d <= max_gap_mm.max(LINES.alongside_mm))
+    let dirs = directions(&l.mark, &arc(&l.mark), lp);
+    let across = abs_cos(dirs[k], u) < lp.across_deg.to_radians().cos();
+    !(across && d <= max_gap_mm.max(lp.alongside_mm))
 }

@@ -2,18 +2,18 @@
 //! centreline or to the corner ([`meet_lines_across`]).
 
 use super::super::link::Gap;
-use super::params::LINES;
+use super::params::LinesParams;
 use super::{abs_cos, arc, chord_dir, chord_dir_on};
 use crate::trace::band::{Cloud, Walk};
 use crate::trace::plane::{dist, sub};
 
-/// A line ending within `LINES.meet_mm` of the centreline of a line across it (more than
-/// `LINES.across_deg` to it), ahead of its end (or within `LINES.meet_inked_mm` with ink all the way),
+/// A line ending within `LinesParams::meet_mm` of the centreline of a line across it (more than
+/// `LinesParams::across_deg` to it), ahead of its end (or within `LinesParams::meet_inked_mm` with ink all the way),
 /// ends on that line: the passes of a line stop at the
 /// edge of the other's band (where the tracker met the other's ink), so the line is carried on
 /// straight through that band to the other's centreline.
-pub(super) fn meet_lines_across(walks: &mut [Walk], cloud: &Cloud) {
-    let cos_across = LINES.across_deg.to_radians().cos();
+pub(super) fn meet_lines_across(walks: &mut [Walk], cloud: &Cloud, lp: &LinesParams) {
+    let cos_across = lp.across_deg.to_radians().cos();
     let arcs: Vec<Vec<f64>> = walks.iter().map(|w| arc(&w.centres)).collect();
     let mut ext: Vec<(usize, bool, [f64; 2], bool)> = Vec::new();
     for (i, w) in walks.iter().enumerate() {
@@ -24,7 +24,7 @@ pub(super) fn meet_lines_across(walks: &mut [Walk], cloud: &Cloud) {
         for tail in [false, true] {
             let ei = if tail { c.len() - 1 } else { 0 };
             let e = c[ei];
-            let t = chord_dir(c, ei, LINES.end_chord_mm);
+            let t = chord_dir(c, ei, lp.end_chord_mm);
             let t = if tail { t } else { [-t[0], -t[1]] };
             let mut best: Option<(f64, [f64; 2], bool)> = None;
             for (j, o) in walks.iter().enumerate() {
@@ -35,14 +35,13 @@ pub(super) fn meet_lines_across(walks: &mut [Walk], cloud: &Cloud) {
                     let v = sub(*q, e);
                     let along = v[0] * t[0] + v[1] * t[1];
                     let off = (v[0] * t[1] - v[1] * t[0]).abs();
-                    if along <= 0.0 || along > LINES.meet_inked_mm || off > LINES.step_off_mm {
+                    if along <= 0.0 || along > lp.meet_inked_mm || off > lp.step_off_mm {
                         continue;
                     }
                     let foot = [e[0] + along * t[0], e[1] + along * t[1]];
                     // Beyond the line's band with no ink: a skip, bridged.
-                    let skip =
-                        along > LINES.meet_mm && cloud.inkless_mm(e, foot) > LINES.inkless_ok_mm;
-                    if abs_cos(chord_dir_on(&o.centres, &arcs[j], k, LINES.dir_half_mm), t)
+                    let skip = along > lp.meet_mm && cloud.inkless_mm(e, foot) > lp.inkless_ok_mm;
+                    if abs_cos(chord_dir_on(&o.centres, &arcs[j], k, lp.dir_half_mm), t)
                         >= cos_across
                     {
                         continue;
@@ -57,7 +56,7 @@ pub(super) fn meet_lines_across(walks: &mut [Walk], cloud: &Cloud) {
             }
         }
     }
-    // Two lines ending at a corner (their ends' rays meeting within LINES.meet_mm ahead of both,
+    // Two lines ending at a corner (their ends' rays meeting within LinesParams::meet_mm ahead of both,
     // across each other): both carried on to where they meet.
     let has = |ext: &[(usize, bool, [f64; 2], bool)], i: usize, tail: bool| {
         ext.iter().any(|e| e.0 == i && e.1 == tail)
@@ -69,8 +68,8 @@ pub(super) fn meet_lines_across(walks: &mut [Walk], cloud: &Cloud) {
         .flat_map(|(i, w)| {
             let c = &w.centres;
             let (h, t) = (
-                chord_dir(c, 0, LINES.end_chord_mm),
-                chord_dir(c, c.len() - 1, LINES.end_chord_mm),
+                chord_dir(c, 0, lp.end_chord_mm),
+                chord_dir(c, c.len() - 1, lp.end_chord_mm),
             );
             [
                 (i, false, c[0], [-h[0], -h[1]]),
@@ -96,10 +95,9 @@ pub(super) fn meet_lines_across(walks: &mut [Walk], cloud: &Cloud) {
             let a = (r[0] * dj[1] - r[1] * dj[0]) / den;
             let bb = (r[0] * di[1] - r[1] * di[0]) / den;
             let x = [ei[0] + a * di[0], ei[1] + a * di[1]];
-            let reach = |v: f64| (-0.5..=LINES.meet_inked_mm).contains(&v);
-            let skip = |v: f64, e: [f64; 2]| {
-                v > LINES.meet_mm && cloud.inkless_mm(e, x) > LINES.inkless_ok_mm
-            };
+            let reach = |v: f64| (-0.5..=lp.meet_inked_mm).contains(&v);
+            let skip =
+                |v: f64, e: [f64; 2]| v > lp.meet_mm && cloud.inkless_mm(e, x) > lp.inkless_ok_mm;
             if reach(a) && reach(bb) {
                 if a > 0.05 {
                     corners.push((i, ti, x, skip(a, ei)));
@@ -132,17 +130,17 @@ pub(super) fn meet_lines_across(walks: &mut [Walk], cloud: &Cloud) {
                 w.gaps.insert(0, g);
             }
         }
-        extend_to(w, tail, foot);
+        extend_to(w, tail, foot, lp);
     }
 }
 
-/// `w` carried straight on from its tail (or head) to `foot`, in steps of `LINES.line_spacing_mm`.
-pub(super) fn extend_to(w: &mut Walk, tail: bool, foot: [f64; 2]) {
+/// `w` carried straight on from its tail (or head) to `foot`, in steps of `LinesParams::line_spacing_mm`.
+pub(super) fn extend_to(w: &mut Walk, tail: bool, foot: [f64; 2], lp: &LinesParams) {
     let c = &mut w.centres;
     let Some(&e) = (if tail { c.last() } else { c.first() }) else {
         return;
     };
-    let n = (dist(e, foot) / LINES.line_spacing_mm).ceil() as usize;
+    let n = (dist(e, foot) / lp.line_spacing_mm).ceil() as usize;
     let pts: Vec<[f64; 2]> = (1..=n)
         .map(|k| {
             let f = k as f64 / n as f64;

@@ -5,7 +5,7 @@
 //! end that stops at a line across ([`super::meet::meet_lines_across`]).
 
 use super::meet::extend_to;
-use super::params::LINES;
+use super::params::LinesParams;
 use super::{abs_cos, arc, chord_dir_on};
 use crate::trace::band::{arc_of, Walk, BAND_HALF_MM};
 use crate::trace::plane::{dist, sub, unit, Grid};
@@ -19,20 +19,20 @@ struct Kept {
 }
 
 /// Cuts from every open walk's ends the stretch that has turned off the line's own direction
-/// (the chord over `LINES.own_dir_mm` before the last `LINES.overrun_max_mm`) by more than
-/// `LINES.turned_deg` inside the band of another walk running across the line (more than
-/// `LINES.across_deg` to its own direction), when it ran at least `LINES.along_other_mm` along that
+/// (the chord over `LinesParams::own_dir_mm` before the last `LinesParams::overrun_max_mm`) by more than
+/// `LinesParams::turned_deg` inside the band of another walk running across the line (more than
+/// `LinesParams::across_deg` to its own direction), when it ran at least `LinesParams::along_other_mm` along that
 /// walk inside its band (a curve that merely begins on a line does not), and carries the end
 /// straight on to that walk's centreline (an end with no centreline ahead is kept). Walks
-/// shorter than twice `LINES.overrun_max_mm` plus `LINES.own_dir_mm` are left as they are.
-pub(super) fn cut_overruns(walks: &mut [Walk]) {
+/// shorter than twice `LinesParams::overrun_max_mm` plus `LinesParams::own_dir_mm` are left as they are.
+pub(super) fn cut_overruns(walks: &mut [Walk], lp: &LinesParams) {
     let arcs: Vec<Vec<f64>> = walks.iter().map(|w| arc(&w.centres)).collect();
     let dirs: Vec<Vec<[f64; 2]>> = walks
         .iter()
         .zip(&arcs)
         .map(|(w, s)| {
             (0..w.centres.len())
-                .map(|k| chord_dir_on(&w.centres, s, k, LINES.dir_half_mm))
+                .map(|k| chord_dir_on(&w.centres, s, k, lp.dir_half_mm))
                 .collect()
         })
         .collect();
@@ -42,14 +42,14 @@ pub(super) fn cut_overruns(walks: &mut [Walk]) {
             centres.insert(*c, (j, m));
         }
     }
-    let cos_across = LINES.across_deg.to_radians().cos();
-    let cos_turned = LINES.turned_deg.to_radians().cos();
+    let cos_across = lp.across_deg.to_radians().cos();
+    let cos_turned = lp.turned_deg.to_radians().cos();
     let mut keep: Vec<Kept> = Vec::new();
     for (i, w) in walks.iter().enumerate() {
         let (c, s) = (&w.centres, &arcs[i]);
         let n = c.len();
         let total = s.last().copied().unwrap_or(0.0);
-        if w.closed || n < 2 || total < 2.0 * LINES.overrun_max_mm + LINES.own_dir_mm {
+        if w.closed || n < 2 || total < 2.0 * lp.overrun_max_mm + lp.own_dir_mm {
             continue;
         }
         let (mut first, mut last) = (0, n);
@@ -59,10 +59,7 @@ pub(super) fn cut_overruns(walks: &mut [Walk]) {
             let idx = |k: usize| if tail { n - 1 - k } else { k };
             let from_end = |k: usize| if tail { total - s[idx(k)] } else { s[idx(k)] };
             let at = |d: f64| (0..n).find(|&k| from_end(k) >= d).unwrap_or(n - 1);
-            let (a, b) = (
-                at(LINES.overrun_max_mm),
-                at(LINES.overrun_max_mm + LINES.own_dir_mm),
-            );
+            let (a, b) = (at(lp.overrun_max_mm), at(lp.overrun_max_mm + lp.own_dir_mm));
             let Some(own) = unit(sub(c[idx(a)], c[idx(b)])) else {
                 continue;
             };
@@ -93,7 +90,7 @@ pub(super) fn cut_overruns(walks: &mut [Walk]) {
                     (v[0] * d[0] + v[1] * d[1]).abs()
                 }
             };
-            if ran < LINES.along_other_mm {
+            if ran < lp.along_other_mm {
                 continue;
             }
             // ... and back from there as long as it is still turned off the line (the line
@@ -103,19 +100,19 @@ pub(super) fn cut_overruns(walks: &mut [Walk]) {
                     k += 1;
                 }
             }
-            if k == 0 || from_end(k) < LINES.overrun_min_mm {
+            if k == 0 || from_end(k) < lp.overrun_min_mm {
                 continue;
             }
             // Carried straight on to the centreline of the line across ahead (none: kept).
             let e = c[idx(k)];
             let foot = centres
-                .within(e, LINES.overrun_max_mm + BAND_HALF_MM)
+                .within(e, lp.overrun_max_mm + BAND_HALF_MM)
                 .filter(across)
                 .filter_map(|(q, _)| {
                     let v = sub(*q, e);
                     let along = v[0] * own[0] + v[1] * own[1];
                     let off = (v[0] * own[1] - v[1] * own[0]).abs();
-                    (along > 0.0 && off <= LINES.step_off_mm).then_some(along)
+                    (along > 0.0 && off <= lp.step_off_mm).then_some(along)
                 })
                 .min_by(f64::total_cmp)
                 .map(|along| [e[0] + along * own[0], e[1] + along * own[1]]);
@@ -151,7 +148,7 @@ pub(super) fn cut_overruns(walks: &mut [Walk]) {
             .retain(|g| arc_of(kept, g.from_mm) && arc_of(kept, g.to_mm));
         for (tail, foot) in [(false, feet[0]), (true, feet[1])] {
             if let Some(foot) = foot {
-                extend_to(w, tail, foot);
+                extend_to(w, tail, foot, lp);
             }
         }
     }
@@ -186,13 +183,14 @@ mod tests {
 
     #[test]
     fn an_end_followed_round_into_a_line_across_is_cut_and_carried_to_it() {
+        let lp = &LinesParams::default();
         // Along y = 0, bending down from x = 38 and then running down the other line.
         let mut c = run([-60.0, 0.0], [38.0, 0.0]);
         c.extend(run([38.0, 0.0], [43.0, -3.0]));
         c.extend(run([43.0, -3.0], [45.0, -12.0]));
         c.push([45.0, -12.0]);
         let mut walks = vec![walk(c), across()];
-        cut_overruns(&mut walks);
+        cut_overruns(&mut walks, lp);
         let c = &walks[0].centres;
         let end = c[c.len() - 1];
         assert!(dist(end, [45.0, 0.0]) < 0.6, "end {end:?}");
@@ -206,6 +204,7 @@ mod tests {
 
     #[test]
     fn a_line_crossing_another_or_curving_freely_is_kept() {
+        let lp = &LinesParams::default();
         let straight = run([-60.0, 0.0], [80.0, 0.0]);
         let arc: Vec<[f64; 2]> = (0..=300)
             .map(|k| {
@@ -214,7 +213,7 @@ mod tests {
             })
             .collect();
         let mut walks = vec![walk(straight.clone()), walk(arc.clone()), across()];
-        cut_overruns(&mut walks);
+        cut_overruns(&mut walks, lp);
         assert_eq!(walks[0].centres, straight);
         assert_eq!(walks[1].centres, arc);
     }

@@ -1,6 +1,7 @@
 //! Drawn lines from synthetic passes: side by side, across each other, round a box, with gaps.
 
 use super::*;
+use crate::trace::stages::link::LinkParams;
 
 /// An open path along `corners`, a point every 0.25 mm, with a zigzag of `zig` mm across.
 fn pass(corners: &[[f64; 2]], zig: f64) -> DrawnPath {
@@ -25,7 +26,14 @@ fn pass(corners: &[[f64; 2]], zig: f64) -> DrawnPath {
 
 fn lines_of(paths: &[DrawnPath]) -> Vec<DrawnLine> {
     let loose = vec![Vec::new(); paths.len()];
-    lines(paths, &[], &loose, 10.0)
+    lines(
+        paths,
+        &[],
+        &loose,
+        10.0,
+        LinkParams::default().min_mark_mm,
+        &LinesParams::default(),
+    )
 }
 
 #[test]

@@ -3,7 +3,7 @@
 //! joined ([`join_continuing`]).
 
 use super::super::link::Gap;
-use super::params::LINES;
+use super::params::LinesParams;
 use super::{abs_cos, arc, chord_dir, directions, unit};
 use crate::trace::band::{Walk, BAND_DEG};
 use crate::trace::plane::{dist, sub};
@@ -11,12 +11,12 @@ use std::collections::HashSet;
 
 /// The walk among `walks` that `w` runs along for half its length or more (its centres within
 /// [`crate::trace::band::BAND_HALF_MM`] of that walk's).
-pub(super) fn duplicate_of(w: &Walk, walks: &[Walk]) -> Option<usize> {
+pub(super) fn duplicate_of(w: &Walk, walks: &[Walk], lp: &LinesParams) -> Option<usize> {
     let probe: Vec<[f64; 2]> = w.centres.iter().step_by(4).copied().collect();
     if probe.is_empty() {
         return None;
     }
-    let dirs = |c: &[[f64; 2]]| directions(c, &arc(c));
+    let dirs = |c: &[[f64; 2]]| directions(c, &arc(c), lp);
     let wd: Vec<[f64; 2]> = dirs(&w.centres).into_iter().step_by(4).collect();
     let cos_along = BAND_DEG.to_radians().cos();
     walks.iter().position(|o| {
@@ -25,21 +25,23 @@ pub(super) fn duplicate_of(w: &Walk, walks: &[Walk]) -> Option<usize> {
             .iter()
             .zip(&wd)
             .filter(|(p, d)| {
-                o.centres.iter().zip(&od).any(|(c, e)| {
-                    dist(*c, **p) <= LINES.duplicate_mm && abs_cos(*e, **d) >= cos_along
-                })
+                o.centres
+                    .iter()
+                    .zip(&od)
+                    .any(|(c, e)| dist(*c, **p) <= lp.duplicate_mm && abs_cos(*e, **d) >= cos_along)
             })
             .count();
         2 * near >= probe.len()
     })
 }
 
-/// Joins walks that continue each other: an end of one lies within `LINES.join_mm` of the
+/// Joins walks that continue each other: an end of one lies within `LinesParams::join_mm` of the
 /// other's centres (running its way) and the other goes on past it (a line whose band was
 /// walked from two seeds that met where it splits or thins).
 pub(super) fn join_continuing(
     mut walks: Vec<Walk>,
     mut taken: Vec<HashSet<usize>>,
+    lp: &LinesParams,
 ) -> (Vec<Walk>, Vec<HashSet<usize>>) {
     'again: loop {
         for i in 0..walks.len() {
@@ -47,7 +49,7 @@ pub(super) fn join_continuing(
                 if i == j || walks[i].closed || walks[j].closed {
                     continue;
                 }
-                let Some(joined) = continued(&walks[i], &walks[j]) else {
+                let Some(joined) = continued(&walks[i], &walks[j], lp) else {
                     continue;
                 };
                 let tj = std::mem::take(&mut taken[j]);
@@ -64,28 +66,28 @@ pub(super) fn join_continuing(
 }
 
 /// `a` carried on by `b` past its tail (or head), when that end of `a` lies on `b`.
-fn continued(a: &Walk, b: &Walk) -> Option<Walk> {
+fn continued(a: &Walk, b: &Walk, lp: &LinesParams) -> Option<Walk> {
     let (ac, bc) = (&a.centres, &b.centres);
     if ac.len() < 2 || bc.len() < 2 {
         return None;
     }
-    let cos_join = LINES.join_deg.to_radians().cos();
+    let cos_join = lp.join_deg.to_radians().cos();
     for tail in [true, false] {
         let (ei, e) = if tail {
             (ac.len() - 1, ac[ac.len() - 1])
         } else {
             (0, ac[0])
         };
-        let ta = chord_dir(ac, ei, LINES.end_chord_mm);
+        let ta = chord_dir(ac, ei, lp.end_chord_mm);
         let Some((l, _)) = bc
             .iter()
             .enumerate()
-            .filter(|(_, c)| dist(**c, e) <= LINES.join_mm)
+            .filter(|(_, c)| dist(**c, e) <= lp.join_mm)
             .min_by(|x, y| dist(*x.1, e).total_cmp(&dist(*y.1, e)))
         else {
             continue;
         };
-        let tb = chord_dir(bc, l, LINES.end_chord_mm);
+        let tb = chord_dir(bc, l, lp.end_chord_mm);
         if abs_cos(ta, tb) < cos_join {
             continue;
         }
@@ -108,7 +110,7 @@ fn continued(a: &Walk, b: &Walk) -> Option<Walk> {
             past.iter().rev().copied().collect()
         };
         let k = arc(&on)
-            .partition_point(|&v| v < LINES.end_chord_mm)
+            .partition_point(|&v| v < lp.end_chord_mm)
             .min(on.len() - 1);
         let way = unit(sub(on[k], e));
         if (way[0] * ta[0] + way[1] * ta[1]) * if tail { 1.0 } else { -1.0 } < cos_join {

@@ -5,20 +5,26 @@
 
 use super::end::{end_with, point_back, End};
 use super::network::Chain;
-use super::params::LINK;
+use super::params::LinkParams;
 use super::strokes::Strokes;
 use super::Gap;
 use crate::trace::chain::{polyline_length, PieceMm, Stroke};
 use crate::trace::plane::dist;
 
 /// Cubic Hermite bridge from end `a` to end `b` (inner points only), and its length.
-pub(super) fn bridge(a: &End, b: &End) -> (Vec<[f64; 2]>, f64) {
-    hermite(a.p, a.t, b.p, [-b.t[0], -b.t[1]])
+pub(super) fn bridge(a: &End, b: &End, lk: &LinkParams) -> (Vec<[f64; 2]>, f64) {
+    hermite(a.p, a.t, b.p, [-b.t[0], -b.t[1]], lk)
 }
 
 /// Cubic Hermite curve from `pa` (tangent `ta`) to `pb` (arriving along `tb`): its inner points
-/// every `LINK.bridge_step_mm` and its length.
-fn hermite(pa: [f64; 2], ta: [f64; 2], pb: [f64; 2], tb: [f64; 2]) -> (Vec<[f64; 2]>, f64) {
+/// every `LinkParams::bridge_step_mm` and its length.
+fn hermite(
+    pa: [f64; 2],
+    ta: [f64; 2],
+    pb: [f64; 2],
+    tb: [f64; 2],
+    lk: &LinkParams,
+) -> (Vec<[f64; 2]>, f64) {
     let a = End {
         p: pa,
         t: ta,
@@ -50,7 +56,7 @@ fn hermite(pa: [f64; 2], ta: [f64; 2], pb: [f64; 2], tb: [f64; 2]) -> (Vec<[f64;
     };
     let fine: Vec<[f64; 2]> = (0..=64).map(|i| at(i as f64 / 64.0)).collect();
     let len = polyline_length(&fine, false);
-    let n = (len / LINK.bridge_step_mm).ceil().max(1.0) as usize;
+    let n = (len / lk.bridge_step_mm).ceil().max(1.0) as usize;
     let inner = (1..n).map(|i| at(i as f64 / n as f64)).collect();
     (inner, len)
 }
@@ -62,6 +68,7 @@ pub(super) fn build(
     pieces: &[PieceMm],
     piece_ends: &[Option<[End; 2]>],
     strokes: Strokes,
+    lk: &LinkParams,
 ) -> (Stroke, Vec<Gap>, Vec<bool>) {
     let mut pts: Vec<[f64; 2]> = Vec::new();
     let mut mask: Vec<bool> = Vec::new();
@@ -98,11 +105,11 @@ pub(super) fn build(
     // The side already written gives its direction from the chain so far (a short piece alone
     // gives a poor one).
     let mut link = |a: End, b: End, pts: &mut Vec<[f64; 2]>, mask: &mut Vec<bool>| {
-        let (from, ta) = match end_with(pts, 0.0, strokes) {
+        let (from, ta) = match end_with(pts, 0.0, strokes, lk) {
             Some(e) if pts.len() >= 2 => (e.p, e.t),
             _ => (a.anchor, a.ta),
         };
-        let (inner, len) = hermite(from, ta, b.anchor, [-b.ta[0], -b.ta[1]]);
+        let (inner, len) = hermite(from, ta, b.anchor, [-b.ta[0], -b.ta[1]], lk);
         let gap = dist(a.p, b.p);
         if gap > 1e-9 {
             gaps.push(Gap {

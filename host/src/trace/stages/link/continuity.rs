@@ -4,7 +4,7 @@
 //! ([`bends_through`]); the candidate links within reach ([`candidates`]).
 
 use super::end::{arc_point, k_noise, reads_own_bend, rot, with_curvature, End};
-use super::params::LINK;
+use super::params::LinkParams;
 use crate::trace::plane::dist;
 
 /// A candidate link between end `a` and end `b` (end index = 2 * piece + side; side 0 head,
@@ -19,7 +19,7 @@ pub(super) struct Cand {
 
 /// Continuity of `a` into `b` across their gap: `None` when not admissible, else the cost.
 /// `reach` bounds the gap.
-pub(super) fn continuity(a: &End, b: &End, reach: f64) -> Option<f64> {
+pub(super) fn continuity(a: &End, b: &End, reach: f64, lk: &LinkParams) -> Option<f64> {
     let g = dist(a.p, b.p);
     if g > reach {
         return None;
@@ -27,21 +27,21 @@ pub(super) fn continuity(a: &End, b: &End, reach: f64) -> Option<f64> {
     // An end too short to read its curvature bends as the other end does: across a short gap
     // the curve turns the same way on both sides (a wiggle's crest with a skip on it).
     let (bent_a, bent_b);
-    let (a, b) = match (a.k_read(), b.k_read()) {
+    let (a, b) = match (a.k_read(lk), b.k_read(lk)) {
         (false, true) => {
-            bent_a = with_curvature(a, -b.k);
+            bent_a = with_curvature(a, -b.k, lk);
             (&bent_a, b)
         }
         (true, false) => {
-            bent_b = with_curvature(b, -a.k);
+            bent_b = with_curvature(b, -a.k, lk);
             (a, &bent_b)
         }
         // Both short: they bend alike by what those that read their own bend read (a crest
         // between skips), else not at all.
         (false, false) => {
             let own: Vec<f64> = [
-                reads_own_bend(a).then_some(a.k_raw),
-                reads_own_bend(b).then_some(-b.k_raw),
+                reads_own_bend(a, lk).then_some(a.k_raw),
+                reads_own_bend(b, lk).then_some(-b.k_raw),
             ]
             .into_iter()
             .flatten()
@@ -50,10 +50,10 @@ pub(super) fn continuity(a: &End, b: &End, reach: f64) -> Option<f64> {
                 0.0
             } else {
                 (own.iter().sum::<f64>() / own.len() as f64)
-                    .clamp(-LINK.max_k_per_mm, LINK.max_k_per_mm)
+                    .clamp(-lk.max_k_per_mm, lk.max_k_per_mm)
             };
-            bent_a = with_curvature(a, k);
-            bent_b = with_curvature(b, -k);
+            bent_a = with_curvature(a, k, lk);
+            bent_b = with_curvature(b, -k, lk);
             (&bent_a, &bent_b)
         }
         _ => (a, b),
@@ -89,7 +89,7 @@ pub(super) fn continuity(a: &End, b: &End, reach: f64) -> Option<f64> {
         // The arcs miss where the path bends harder in the gap than its ends read (a crest: a
         // short end reads no curvature, a long one its span's mean, clamped); the ends continue
         // each other when the path can bend one way through the gap.
-        return bends_through(a, b, chord, g)
+        return bends_through(a, b, chord, g, lk)
             .map(|odd| g + 2.0 * lat + 10.0 * turn_ab + 10.0 * odd);
     }
     Some(g + 2.0 * lat + 10.0 * turn_ab)
@@ -97,12 +97,18 @@ pub(super) fn continuity(a: &End, b: &End, reach: f64) -> Option<f64> {
 
 /// Two ends whose arcs miss each other across a gap of `g` mm (unit `chord` from `a` to `b`)
 /// continue each other when the path can bend one way through it, as at a crest: the chord
-/// splits the turn from `a`'s direction into `b`'s, each side taking at least `LINK.joint_share` of
-/// it in the same sense, the turn is at most `LINK.max_joint_k_per_mm` times the length from the middle of
+/// splits the turn from `a`'s direction into `b`'s, each side taking at least `LinkParams::joint_share` of
+/// it in the same sense, the turn is at most `LinkParams::max_joint_k_per_mm` times the length from the middle of
 /// one end's span to the other's, and each end bends with it. A stroke crossing the path meets
 /// it with the turn on one side only. `None` when not; else how far the chord's split is from
 /// even, rad.
-pub(super) fn bends_through(a: &End, b: &End, chord: [f64; 2], g: f64) -> Option<f64> {
+pub(super) fn bends_through(
+    a: &End,
+    b: &End,
+    chord: [f64; 2],
+    g: f64,
+    lk: &LinkParams,
+) -> Option<f64> {
     let into_b = [-b.t[0], -b.t[1]];
     let angle =
         |u: [f64; 2], v: [f64; 2]| (u[0] * v[1] - u[1] * v[0]).atan2(u[0] * v[0] + u[1] * v[1]);
@@ -110,8 +116,8 @@ pub(super) fn bends_through(a: &End, b: &End, chord: [f64; 2], g: f64) -> Option
     let turn = alpha + beta;
     let len = a.mid_span() + g + b.mid_span();
     // Each side's share is read through its own end's tangent.
-    let share = LINK.joint_share * turn.abs();
-    let ok = turn.abs() <= LINK.max_joint_k_per_mm * len
+    let share = lk.joint_share * turn.abs();
+    let ok = turn.abs() <= lk.max_joint_k_per_mm * len
         && alpha * turn > 0.0
         && beta * turn > 0.0
         && alpha.abs() >= share - a.sigma
@@ -122,13 +128,13 @@ pub(super) fn bends_through(a: &End, b: &End, chord: [f64; 2], g: f64) -> Option
     // or a plotter's sawtooth, turns across the gap but not along its ends.
     let bends_too = |e: &End, k_out: f64| {
         // (curvature, span it was read over, what it must reach)
-        let reads = if e.k_read() {
-            let need = k_out.abs().min(LINK.max_k_per_mm);
+        let reads = if e.k_read(lk) {
+            let need = k_out.abs().min(lk.max_k_per_mm);
             [
                 (e.k, e.span, need),
                 (
-                    e.k_near.clamp(-LINK.max_k_per_mm, LINK.max_k_per_mm),
-                    LINK.k_span_mm,
+                    e.k_near.clamp(-lk.max_k_per_mm, lk.max_k_per_mm),
+                    lk.k_span_mm,
                     need,
                 ),
             ]
@@ -137,7 +143,7 @@ pub(super) fn bends_through(a: &End, b: &End, chord: [f64; 2], g: f64) -> Option
         };
         // The span must be long enough to tell a bend of half the mean from a straight one.
         reads.iter().any(|&(own, span, need)| {
-            let noise = k_noise(span);
+            let noise = k_noise(span, lk);
             noise <= 0.5 * need && own * k_out.signum() >= 0.5 * need - noise
         })
     };

@@ -3,16 +3,16 @@
 
 use super::bridge::bridge;
 use super::end::end_with;
-use super::params::LINK;
+use super::params::LinkParams;
 use super::strokes::Strokes;
 use super::Gap;
 use crate::trace::chain::{polyline_length, Stroke};
 use crate::trace::plane::dist;
 
 /// Where another mark touches the path (a stroke crossing it, whether the tracker cut it or the
-/// path there), the path's centroids were pulled towards it: the path within `LINK.cross_cut_mm`
-/// of every place where another mark comes within `LINK.cross_touch_mm` is replaced by a bridge
-/// between the undisturbed sides (a stretch longer than `LINK.cross_max_mm`, a mark running along
+/// path there), the path's centroids were pulled towards it: the path within `LinkParams::cross_cut_mm`
+/// of every place where another mark comes within `LinkParams::cross_touch_mm` is replaced by a bridge
+/// between the undisturbed sides (a stretch longer than `LinkParams::cross_max_mm`, a mark running along
 /// the path, is kept).
 pub(super) fn cut_crossings(
     path: Stroke,
@@ -20,13 +20,14 @@ pub(super) fn cut_crossings(
     marks: &[&[[f64; 2]]],
     gaps: &mut Vec<Gap>,
     strokes: Strokes,
+    lk: &LinkParams,
 ) -> (Stroke, Vec<bool>) {
     let pts = &path.points_mm;
     let n = pts.len();
     if n < 8 {
         return (path, mask);
     }
-    let cell = LINK.cross_cut_mm;
+    let cell = lk.cross_cut_mm;
     let key = |p: [f64; 2]| ((p[0] / cell).floor() as i64, (p[1] / cell).floor() as i64);
     let mut grid: std::collections::HashMap<(i64, i64), Vec<usize>> = Default::default();
     for (i, p) in pts.iter().enumerate() {
@@ -41,7 +42,7 @@ pub(super) fn cut_crossings(
                 for dy in -1..=1 {
                     for &i in grid.get(&(kx + dx, ky + dy)).into_iter().flatten() {
                         let d = dist(pts[i], *q);
-                        if d <= LINK.cross_touch_mm && best.is_none_or(|(_, bd)| d < bd) {
+                        if d <= lk.cross_touch_mm && best.is_none_or(|(_, bd)| d < bd) {
                             best = Some((i, d));
                         }
                     }
@@ -53,7 +54,7 @@ pub(super) fn cut_crossings(
             for dx in -2..=2 {
                 for dy in -2..=2 {
                     for &k in grid.get(&(kx + dx, ky + dy)).into_iter().flatten() {
-                        if dist(pts[k], c) <= LINK.cross_cut_mm {
+                        if dist(pts[k], c) <= lk.cross_cut_mm {
                             cut[k] = true;
                         }
                     }
@@ -72,7 +73,7 @@ pub(super) fn cut_crossings(
         while j + 1 < n && cut[j + 1] {
             j += 1;
         }
-        if polyline_length(&pts[i..=j], false) > LINK.cross_max_mm {
+        if polyline_length(&pts[i..=j], false) > lk.cross_max_mm {
             cut[i..=j].iter_mut().for_each(|c| *c = false);
         }
         i = j + 1;
@@ -118,11 +119,11 @@ pub(super) fn cut_crossings(
             pts[j + 1..].iter().rev().copied().collect()
         };
         if let (Some(a), Some(b), false) = (
-            end_with(&out, LINK.pulled_end_mm, strokes),
-            end_with(&after, LINK.pulled_end_mm, strokes),
+            end_with(&out, lk.pulled_end_mm, strokes, lk),
+            end_with(&after, lk.pulled_end_mm, strokes, lk),
             after.is_empty(),
         ) {
-            let (inner, len) = bridge(&a, &b);
+            let (inner, len) = bridge(&a, &b, lk);
             gaps.push(Gap {
                 from_mm: a.p,
                 to_mm: b.p,

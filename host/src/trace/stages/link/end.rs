@@ -1,9 +1,9 @@
 //! The ends of open pieces: where each leaves off, its outward tangent and curvature read from
-//! the circle through three points of its last `LINK.end_span_mm` (on a crest the tangent again from
-//! its last `LINK.tangent_span_mm`; a short end's own tangent where its last millimetre holds no
+//! the circle through three points of its last `LinkParams::end_span_mm` (on a crest the tangent again from
+//! its last `LinkParams::tangent_span_mm`; a short end's own tangent where its last millimetre holds no
 //! hook), and the point an end's osculating arc reaches when carried over a gap.
 
-use super::params::LINK;
+use super::params::LinkParams;
 use super::strokes::Strokes;
 use crate::trace::chain::{polyline_length, PieceMm};
 use crate::trace::plane::{dist, norm, sub};
@@ -26,7 +26,7 @@ pub(super) struct End {
     pub(super) span: f64,
     /// The curvature through the span's ends and middle however short the span, 1/mm.
     pub(super) k_raw: f64,
-    /// The curvature over the span's last `LINK.k_span_mm` (the whole span when shorter),
+    /// The curvature over the span's last `LinkParams::k_span_mm` (the whole span when shorter),
     /// unclamped, 1/mm: where the path bends harder towards the end than over the span.
     pub(super) k_near: f64,
     /// A short span's own tangent at the end, from the circle through its three points, where
@@ -35,8 +35,8 @@ pub(super) struct End {
 }
 
 impl End {
-    pub(super) fn k_read(&self) -> bool {
-        self.span >= LINK.k_span_mm
+    pub(super) fn k_read(&self, lk: &LinkParams) -> bool {
+        self.span >= lk.k_span_mm
     }
 
     /// How far back from the end the middle of its span lies, mm.
@@ -82,10 +82,10 @@ pub(super) fn point_back(pts: &[[f64; 2]], l: f64) -> [f64; 2] {
     pts[0]
 }
 
-/// The curvature the centres' scatter (`LINK.sag_noise_mm`, twice over) reads through three
+/// The curvature the centres' scatter (`LinkParams::sag_noise_mm`, twice over) reads through three
 /// points spanning `span` mm, 1/mm: a span's sag is `k span^2 / 8`.
-pub(super) fn k_noise(span: f64) -> f64 {
-    2.0 * 8.0 * LINK.sag_noise_mm / (span * span)
+pub(super) fn k_noise(span: f64, lk: &LinkParams) -> f64 {
+    2.0 * 8.0 * lk.sag_noise_mm / (span * span)
 }
 
 /// The circle through the points `from`, halfway and `to` mm back from the end of `pts`: the
@@ -106,41 +106,46 @@ fn three_point(pts: &[[f64; 2]], from: f64, to: f64) -> Option<([f64; 2], f64, f
 }
 
 /// The end at the last point of `pts`: tangent and curvature from the circle through the points
-/// `skip` mm, halfway and `LINK.end_span_mm` back, carried to the end point; the bridge anchor
+/// `skip` mm, halfway and `LinkParams::end_span_mm` back, carried to the end point; the bridge anchor
 /// `skip` mm back (0: the last point). On the rig's one path, where that curvature is over
-/// `LINK.max_k_per_mm` (a crest within the span), the tangent is read again from the circle through the
-/// last `LINK.tangent_span_mm` before the anchor, unclamped: the span's chord, turned by the
+/// `LinkParams::max_k_per_mm` (a crest within the span), the tangent is read again from the circle through the
+/// last `LinkParams::tangent_span_mm` before the anchor, unclamped: the span's chord, turned by the
 /// clamped curvature, would point the end tens of degrees off across the crest. (A plotter's
 /// passes, [`Strokes::PASSES`], saw at their ends: the last millimetres would turn it.)
-pub(super) fn end_with(pts: &[[f64; 2]], skip: f64, strokes: Strokes) -> Option<End> {
+pub(super) fn end_with(
+    pts: &[[f64; 2]],
+    skip: f64,
+    strokes: Strokes,
+    lk: &LinkParams,
+) -> Option<End> {
     let len = polyline_length(pts, false);
     if len <= 0.0 {
         return None;
     }
-    let span = LINK.end_span_mm.min(0.7 * len);
+    let span = lk.end_span_mm.min(0.7 * len);
     let skip = skip.min(0.2 * span);
     let p0 = pts[pts.len() - 1];
     let q1 = point_back(pts, skip);
     let (chord, n, k_raw) = three_point(pts, skip, span)?;
     let k_near =
-        three_point(pts, skip, skip + LINK.k_span_mm.min(span - skip)).map_or(k_raw, |v| v.2);
+        three_point(pts, skip, skip + lk.k_span_mm.min(span - skip)).map_or(k_raw, |v| v.2);
     // Curvature only from a span long enough to tell it from the centreline's noise.
-    let k = if span >= LINK.k_span_mm {
-        k_raw.clamp(-LINK.max_k_per_mm, LINK.max_k_per_mm)
+    let k = if span >= lk.k_span_mm {
+        k_raw.clamp(-lk.max_k_per_mm, lk.max_k_per_mm)
     } else {
         0.0
     };
     // The chord's direction is the tangent at its middle; turn it on to the anchor and the end.
-    let near = (strokes.crest_tangent && span >= LINK.k_span_mm && k_raw.abs() > LINK.max_k_per_mm)
-        .then(|| three_point(pts, skip, skip + LINK.tangent_span_mm))
+    let near = (strokes.crest_tangent && span >= lk.k_span_mm && k_raw.abs() > lk.max_k_per_mm)
+        .then(|| three_point(pts, skip, skip + lk.tangent_span_mm))
         .flatten();
     let ta = match near {
         Some((c, m, k_near)) => rot(c, k_near * 0.5 * m),
         None => rot(chord, k * 0.5 * n),
     };
     let t = rot(ta, k * dist(q1, p0));
-    let t_own = (strokes.own_short_tangent && span < LINK.k_span_mm)
-        .then(|| own_tangent(pts, skip, span, ta, k_raw))
+    let t_own = (strokes.own_short_tangent && span < lk.k_span_mm)
+        .then(|| own_tangent(pts, skip, span, ta, k_raw, lk))
         .flatten();
     Some(End {
         p: p0,
@@ -159,7 +164,7 @@ pub(super) fn end_with(pts: &[[f64; 2]], skip: f64, strokes: Strokes) -> Option<
 
 /// The tangent at the end of a span too short to read a curvature to carry across a gap,
 /// from its own circle (`ta`, the chord's direction at the span's middle, turned by `k_raw`),
-/// where the last `LINK.hook_chord_mm` follow that circle within `LINK.hook_deg`; `None` otherwise
+/// where the last `LinkParams::hook_chord_mm` follow that circle within `LinkParams::hook_deg`; `None` otherwise
 /// (a hook: the chord then stands for the tangent). Whether it is taken is
 /// [`with_curvature`]'s choice.
 fn own_tangent(
@@ -168,40 +173,41 @@ fn own_tangent(
     span: f64,
     ta: [f64; 2],
     k_raw: f64,
+    lk: &LinkParams,
 ) -> Option<[f64; 2]> {
-    if span < 2.0 * LINK.hook_chord_mm {
+    if span < 2.0 * lk.hook_chord_mm {
         return None;
     }
     let mid = 0.5 * (skip + span);
     let last = sub(
         point_back(pts, skip),
-        point_back(pts, skip + LINK.hook_chord_mm),
+        point_back(pts, skip + lk.hook_chord_mm),
     );
     let n = norm(last);
     if n <= 1e-9 {
         return None;
     }
-    let along = rot(ta, k_raw * (mid - skip - 0.5 * LINK.hook_chord_mm));
+    let along = rot(ta, k_raw * (mid - skip - 0.5 * lk.hook_chord_mm));
     let c = (last[0] * along[0] + last[1] * along[1]) / n;
-    (c >= LINK.hook_deg.to_radians().cos()).then(|| rot(ta, k_raw * (mid - skip)))
+    (c >= lk.hook_deg.to_radians().cos()).then(|| rot(ta, k_raw * (mid - skip)))
 }
 
 /// Whether a short end's own three points bend beyond twice the scatter's curvature, with no
 /// hook at its end: it shows its own bend.
-pub(super) fn reads_own_bend(e: &End) -> bool {
-    e.t_own.is_some() && e.k_raw.abs() > 2.0 * k_noise(e.span)
+pub(super) fn reads_own_bend(e: &End, lk: &LinkParams) -> bool {
+    e.t_own.is_some() && e.k_raw.abs() > 2.0 * k_noise(e.span, lk)
 }
 
 /// `e` bent by the curvature `k` it could not read itself (a short piece), `k` read by the other
-/// end (so within `LINK.max_k_per_mm`): the chord's direction is the tangent at its middle, turned on to
+/// end (so within `LinkParams::max_k_per_mm`): the chord's direction is the tangent at its middle, turned on to
 /// the end. Where its own points tell a bend ([`reads_own_bend`]), or tell that it does not
 /// bend as much as `k` (they differ from `k` by more than twice the scatter's curvature: a
 /// nearly straight piece past a crest the other end reads), it takes its own tangent
 /// ([`own_tangent`]) instead.
-pub(super) fn with_curvature(e: &End, k: f64) -> End {
+pub(super) fn with_curvature(e: &End, k: f64, lk: &LinkParams) -> End {
     let own = e
         .t_own
-        .filter(|_| reads_own_bend(e) || (e.k_raw - k).abs() > 2.0 * k_noise(e.span));
+        .filter(|_| reads_own_bend(e, lk) || (e.k_raw - k).abs() > 2.0 * k_noise(e.span, lk));
     End {
         t: own.unwrap_or_else(|| rot(e.ta, k * e.mid_span())),
         k,
@@ -211,13 +217,13 @@ pub(super) fn with_curvature(e: &End, k: f64) -> End {
 
 /// Piece ends, read as `strokes` are (from [`Strokes::end_skip_mm`] back); `None`
 /// for closed pieces.
-pub(super) fn ends(piece: &PieceMm, strokes: Strokes) -> Option<[End; 2]> {
+pub(super) fn ends(piece: &PieceMm, strokes: Strokes, lk: &LinkParams) -> Option<[End; 2]> {
     if piece.closed || piece.pts.len() < 2 {
         return None;
     }
-    let skip = strokes.end_skip_mm;
-    let tail = end_with(&piece.pts, skip, strokes)?;
+    let skip = strokes.end_skip_mm(lk);
+    let tail = end_with(&piece.pts, skip, strokes, lk)?;
     let rev: Vec<[f64; 2]> = piece.pts.iter().rev().copied().collect();
-    let head = end_with(&rev, skip, strokes)?;
+    let head = end_with(&rev, skip, strokes, lk)?;
     Some([head, tail])
 }

@@ -7,7 +7,7 @@ use super::continuity::continuity;
 use super::crossings::cut_crossings;
 use super::end::End;
 use super::network::Network;
-use super::params::LINK;
+use super::params::LinkParams;
 use super::{orient, Gap, LeftOut, LeftOutKind};
 use crate::trace::chain::Stroke;
 use crate::trace::plane::{dist, norm, sub};
@@ -37,14 +37,14 @@ impl Network {
     /// refitted, its written centres smoothed along it on one path ([`super::Strokes::smooth_centres`]; the
     /// lines of `--paths` are smoothed across the band of their passes instead), its free ends
     /// and the gaps beyond them that are too long to bridge.
-    pub(in crate::trace) fn judge(&self, main: usize) -> Judged {
+    pub(in crate::trace) fn judge(&self, main: usize, lk: &LinkParams) -> Judged {
         let max_gap_mm = self.max_gap_mm;
         let (path, mut gaps, mask) = self.built[main].clone();
         // The points of other chains that touch this one (the rest cannot cut it).
         let mut touching: Vec<(usize, usize)> = path
             .points_mm
             .iter()
-            .flat_map(|p| self.points.within(*p, LINK.cross_touch_mm))
+            .flat_map(|p| self.points.within(*p, lk.cross_touch_mm))
             .map(|(_, ck)| *ck)
             .filter(|(ci, _)| *ci != main)
             .collect();
@@ -54,8 +54,14 @@ impl Network {
             .into_iter()
             .map(|(ci, k)| self.built[ci].0.points_mm[k])
             .collect();
-        let (path, mask) =
-            cut_crossings(path, mask, &[touching.as_slice()], &mut gaps, self.strokes);
+        let (path, mask) = cut_crossings(
+            path,
+            mask,
+            &[touching.as_slice()],
+            &mut gaps,
+            self.strokes,
+            lk,
+        );
         let (points_mm, mask, bridged_mm) = bridge_fit::refine(&path.points_mm, &mask, path.closed);
         let points_mm = if self.strokes.smooth_centres {
             smooth::smooth_written(&points_mm, &mask, path.closed)
@@ -89,10 +95,10 @@ impl Network {
         if free.len() == 2 {
             // The path's ends continuing into each other across a gap too long to bridge.
             if dist(free[0].p, free[1].p) > max_gap_mm {
-                if let Some(_c) = continuity(&free[0], &free[1], far)
+                if let Some(_c) = continuity(&free[0], &free[1], far, lk)
                     .filter(|_| path.length_mm() > 2.0 * dist(free[0].p, free[1].p))
                 {
-                    let (_, len) = bridge(&free[0], &free[1]);
+                    let (_, len) = bridge(&free[0], &free[1], lk);
                     gaps.push(Gap {
                         from_mm: free[1].p,
                         to_mm: free[0].p,
@@ -125,7 +131,7 @@ impl Network {
                     if dist(f.p, x.p) <= max_gap_mm {
                         continue; // was admissible and not taken: not a continuation
                     }
-                    if let Some(c) = continuity(f, &x, far) {
+                    if let Some(c) = continuity(f, &x, far, lk) {
                         if best.is_none_or(|(bc, ..)| c < bc) {
                             best = Some((c, ci, x));
                         }
@@ -133,7 +139,7 @@ impl Network {
                 }
             }
             if let Some((_, ci, x)) = best {
-                let (_, len) = bridge(f, &x);
+                let (_, len) = bridge(f, &x, lk);
                 gaps.push(Gap {
                     from_mm: f.p,
                     to_mm: x.p,
@@ -159,6 +165,7 @@ impl Network {
         &self,
         main: usize,
         judged: &Judged,
+        lk: &LinkParams,
     ) -> Vec<(usize, LeftOut)> {
         let reach_ahead = (2.0 * self.max_gap_mm).max(15.0);
         let main_len = self.lengths[main];
@@ -169,7 +176,7 @@ impl Network {
             }
             let len = self.lengths[ci];
             let pts = &s.points_mm;
-            let ahead = len >= LINK.min_mark_mm
+            let ahead = len >= lk.min_mark_mm
                 && judged.free.iter().any(|f| {
                     pts.iter().any(|q| {
                         let d = sub(*q, f.p);
@@ -180,9 +187,9 @@ impl Network {
                 });
             let kind = if judged.continues[ci] || ahead {
                 LeftOutKind::Continues
-            } else if len >= LINK.min_mark_mm.max(LINK.separate_share * main_len) {
+            } else if len >= lk.min_mark_mm.max(lk.separate_share * main_len) {
                 LeftOutKind::Separate
-            } else if len < LINK.min_mark_mm {
+            } else if len < lk.min_mark_mm {
                 LeftOutKind::Speck
             } else {
                 LeftOutKind::Mark

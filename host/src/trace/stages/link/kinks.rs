@@ -1,14 +1,14 @@
 //! Open pieces cut where they turn sharply (a corner, or the tracker turning onto a stroke that
 //! crosses the path), before their ends are read: the linker decides which way the path goes on.
 
-use super::params::LINK;
+use super::params::LinkParams;
 use crate::trace::chain::PieceMm;
 use crate::trace::plane::{dist, norm, sub};
 
-/// Open pieces cut where they turn by more than `LINK.kink_deg` between the chords of the
-/// `LINK.kink_chord_mm` before and after a point (a corner, or the tracker turning onto a stroke
+/// Open pieces cut where they turn by more than `LinkParams::kink_deg` between the chords of the
+/// `LinkParams::kink_chord_mm` before and after a point (a corner, or the tracker turning onto a stroke
 /// that crosses the path): the linker decides which way the path goes on.
-pub(super) fn split_kinks(pieces: &[PieceMm]) -> Vec<PieceMm> {
+pub(super) fn split_kinks(pieces: &[PieceMm], lk: &LinkParams) -> Vec<PieceMm> {
     let mut out = Vec::with_capacity(pieces.len());
     for p in pieces {
         let n = p.pts.len();
@@ -16,15 +16,15 @@ pub(super) fn split_kinks(pieces: &[PieceMm]) -> Vec<PieceMm> {
             out.push(p.clone());
             continue;
         }
-        // Chord ends by arc length: for each point the indices ~LINK.kink_chord_mm back and ahead.
+        // Chord ends by arc length: for each point the indices ~LinkParams::kink_chord_mm back and ahead.
         let mut s = vec![0.0; n];
         for i in 1..n {
             s[i] = s[i - 1] + dist(p.pts[i - 1], p.pts[i]);
         }
         let turn_at = |i: usize| -> f64 {
-            let back = s[..i].partition_point(|&v| v < s[i] - LINK.kink_chord_mm);
-            let ahead = i + s[i..].partition_point(|&v| v < s[i] + LINK.kink_chord_mm);
-            if back >= i || ahead >= n || s[i] - s[back] < 0.8 * LINK.kink_chord_mm {
+            let back = s[..i].partition_point(|&v| v < s[i] - lk.kink_chord_mm);
+            let ahead = i + s[i..].partition_point(|&v| v < s[i] + lk.kink_chord_mm);
+            if back >= i || ahead >= n || s[i] - s[back] < 0.8 * lk.kink_chord_mm {
                 return 0.0;
             }
             let (u, v) = (sub(p.pts[i], p.pts[back]), sub(p.pts[ahead], p.pts[i]));
@@ -37,7 +37,7 @@ pub(super) fn split_kinks(pieces: &[PieceMm]) -> Vec<PieceMm> {
                 .acos()
         };
         let turns: Vec<f64> = (0..n).map(turn_at).collect();
-        let limit = LINK.kink_deg.to_radians();
+        let limit = lk.kink_deg.to_radians();
         let mut cuts = Vec::new();
         let mut i = 0;
         while i < n {

@@ -7,7 +7,7 @@ use super::bridge::build;
 use super::continuity::{candidates, continuity};
 use super::end::{ends, End};
 use super::kinks::split_kinks;
-use super::params::LINK;
+use super::params::LinkParams;
 use super::strokes::Strokes;
 use super::{mean_from, relink, Gap};
 use crate::sheet::ReferencePath;
@@ -42,15 +42,17 @@ impl Network {
         pieces: &[PieceMm],
         max_gap_mm: f64,
         strokes: Strokes,
+        lk: &LinkParams,
     ) -> Option<Self> {
-        let pieces: Vec<PieceMm> = split_kinks(pieces)
+        let pieces: Vec<PieceMm> = split_kinks(pieces, lk)
             .into_iter()
             .filter(|p| p.pts.len() >= 2)
             .collect();
         if pieces.is_empty() {
             return None;
         }
-        let piece_ends: Vec<Option<[End; 2]>> = pieces.iter().map(|p| ends(p, strokes)).collect();
+        let piece_ends: Vec<Option<[End; 2]>> =
+            pieces.iter().map(|p| ends(p, strokes, lk)).collect();
         let n_ends = 2 * pieces.len();
         // Candidate links within the bridging reach, over a coarse grid of end positions.
         let reach = max_gap_mm.max(1.0);
@@ -64,7 +66,7 @@ impl Network {
             if ea / 2 == eb / 2 && piece_len[ea / 2] < 3.0 * g + 10.0 {
                 return None;
             }
-            continuity(a, b, reach).filter(|_| g <= max_gap_mm || g < 1.0)
+            continuity(a, b, reach, lk).filter(|_| g <= max_gap_mm || g < 1.0)
         });
         cands.sort_by(|x, y| x.cost.total_cmp(&y.cost));
         // Greedy: cheapest first, each end once. Every chain has exactly two free ends, so a
@@ -87,15 +89,16 @@ impl Network {
                 &mut partner,
                 max_gap_mm,
                 strokes,
+                lk,
             );
         }
         let chains = walk_chains(&pieces, &piece_ends, &partner);
         let built: Vec<(Stroke, Vec<Gap>, Vec<bool>)> = chains
             .iter()
-            .map(|c| build(c, &pieces, &piece_ends, strokes))
+            .map(|c| build(c, &pieces, &piece_ends, strokes, lk))
             .collect();
         let lengths: Vec<f64> = built.iter().map(|(s, ..)| s.length_mm()).collect();
-        let mut points = Grid::new(LINK.cross_touch_mm);
+        let mut points = Grid::new(lk.cross_touch_mm);
         for (ci, (s, ..)) in built.iter().enumerate() {
             if s.points_mm.len() >= 2 {
                 for (k, p) in s.points_mm.iter().enumerate() {

@@ -8,7 +8,7 @@ use super::bridge::build;
 use super::continuity::{candidates, continuity};
 use super::end::{ends, End};
 use super::network::Chain;
-use super::params::LINK;
+use super::params::LinkParams;
 use super::strokes::Strokes;
 use crate::trace::chain::{polyline_length, PieceMm};
 use crate::trace::plane::dist;
@@ -30,6 +30,7 @@ pub(super) fn relink(
     partner: &mut [Option<usize>],
     max_gap_mm: f64,
     strokes: Strokes,
+    lk: &LinkParams,
 ) {
     // Per piece: the re-read ends of the chain it ends, at its free end indices; `None` where
     // the piece ends no open chain of two pieces or more.
@@ -47,13 +48,13 @@ pub(super) fn relink(
         let piece_end = |k: usize| piece_ends[k / 2].map(|e| e[k % 2]);
         let mut read = [piece_end(head), piece_end(tail)];
         if c.order.len() >= 2 {
-            let (stroke, ..) = build(c, pieces, piece_ends, strokes);
+            let (stroke, ..) = build(c, pieces, piece_ends, strokes, lk);
             chain_len[ci] = stroke.length_mm();
             let whole = PieceMm {
                 pts: stroke.points_mm,
                 closed: false,
             };
-            if let Some([h, t]) = ends(&whole, strokes) {
+            if let Some([h, t]) = ends(&whole, strokes, lk) {
                 read = [Some(h), Some(t)];
                 any = true;
             }
@@ -87,10 +88,10 @@ pub(super) fn relink(
             return None;
         }
         // Ends that nearly touch were judged in the first round on their turn alone.
-        if g < LINK.relink_near_mm || g > max_gap_mm {
+        if g < lk.relink_near_mm || g > max_gap_mm {
             return None;
         }
-        continuity(a, b, reach)
+        continuity(a, b, reach, lk)
     });
     cands.sort_by(|x, y| x.cost.total_cmp(&y.cost));
     for c in &cands {

@@ -3,26 +3,30 @@
 //! and the run says so by where they cross ([`crossings`]) rather than calling the other run a
 //! gap or a mark that may continue the path.
 
-use super::params::LINK;
+use super::params::LinkParams;
 use super::{Crossing, LeftOut, LeftOutKind};
 use crate::trace::chain::Stroke;
 use crate::trace::plane::{dist, Grid};
 
 /// Where the left-out chains cross or meet `path` (`left_out`: each mark with its chain's
 /// stroke, in the order of [`super::Linking::left_out`]): a mark that could be part of the
-/// path crossing or meeting it, or a mark of `LINK.min_mark_mm` or more meeting it at two places
-/// `LINK.run_apart_mm` apart, is a second drawn path (its kind raised to
+/// path crossing or meeting it, or a mark of `LinkParams::min_mark_mm` or more meeting it at two places
+/// `LinkParams::run_apart_mm` apart, is a second drawn path (its kind raised to
 /// [`LeftOutKind::Separate`]). Meeting: the polylines intersect, a centre of the mark lies
-/// within `LINK.run_touch_mm` of the path, or an end of it within `LINK.run_meet_mm`. Each mark's places once (two parts of one run may meet the
+/// within `LinkParams::run_touch_mm` of the path, or an end of it within `LinkParams::run_meet_mm`. Each mark's places once (two parts of one run may meet the
 /// path at the same place); sorted along x.
-pub(super) fn crossings(path: &Stroke, left_out: &mut [(&Stroke, LeftOut)]) -> Vec<Crossing> {
+pub(super) fn crossings(
+    path: &Stroke,
+    left_out: &mut [(&Stroke, LeftOut)],
+    lk: &LinkParams,
+) -> Vec<Crossing> {
     let pts = &path.points_mm;
     let n = pts.len();
     if n < 2 {
         return Vec::new();
     }
     let segs = if path.closed { n } else { n - 1 };
-    let mut grid: Grid<usize> = Grid::new(LINK.run_meet_mm);
+    let mut grid: Grid<usize> = Grid::new(lk.run_meet_mm);
     for i in 0..segs {
         let (a, b) = (pts[i], pts[(i + 1) % n]);
         grid.insert([0.5 * (a[0] + b[0]), 0.5 * (a[1] + b[1])], i);
@@ -30,12 +34,12 @@ pub(super) fn crossings(path: &Stroke, left_out: &mut [(&Stroke, LeftOut)]) -> V
     let seg = |i: usize| (pts[i], pts[(i + 1) % n]);
     let mut out: Vec<Crossing> = Vec::new();
     for (k, (s, o)) in left_out.iter_mut().enumerate() {
-        if o.length_mm < LINK.min_mark_mm {
+        if o.length_mm < lk.min_mark_mm {
             continue;
         }
         let mut meets: Vec<[f64; 2]> = Vec::new();
         let mut add = |at: [f64; 2]| {
-            if meets.iter().all(|c| dist(*c, at) > LINK.run_same_mm) {
+            if meets.iter().all(|c| dist(*c, at) > lk.run_same_mm) {
                 meets.push(at);
             }
         };
@@ -62,27 +66,27 @@ pub(super) fn crossings(path: &Stroke, left_out: &mut [(&Stroke, LeftOut)]) -> V
             }
             // Touching without crossing: where the tracker joined a half of each run at their
             // crossing, the rest of the two runs touches the path there.
-            if let Some(f) = nearest.filter(|f| dist(c, *f) <= LINK.run_touch_mm) {
+            if let Some(f) = nearest.filter(|f| dist(c, *f) <= lk.run_touch_mm) {
                 add(f);
             }
         }
         if !s.closed {
             for e in [q[0], q[m - 1]] {
                 let near = grid
-                    .around(e, LINK.run_meet_mm + 1.0)
+                    .around(e, lk.run_meet_mm + 1.0)
                     .map(|(_, i)| {
                         let (a, b) = seg(*i);
                         foot(e, a, b)
                     })
                     .min_by(|x, y| dist(e, *x).total_cmp(&dist(e, *y)));
-                if let Some(f) = near.filter(|f| dist(e, *f) <= LINK.run_meet_mm) {
+                if let Some(f) = near.filter(|f| dist(e, *f) <= lk.run_meet_mm) {
                     add(f);
                 }
             }
         }
         let apart = meets
             .iter()
-            .any(|a| meets.iter().any(|b| dist(*a, *b) >= LINK.run_apart_mm));
+            .any(|a| meets.iter().any(|b| dist(*a, *b) >= lk.run_apart_mm));
         if meets.is_empty() || !(o.could_be_path() || apart) {
             continue;
         }
@@ -139,6 +143,7 @@ mod tests {
 
     #[test]
     fn a_second_run_across_the_path_crosses_it_where_it_does() {
+        let lk = &LinkParams::default();
         let path = stroke((0..=100).map(|i| [i as f64, 0.0]).collect(), false);
         let other = stroke((0..=40).map(|i| [30.0, i as f64 - 20.5]).collect(), false);
         let o = LeftOut {
@@ -147,7 +152,7 @@ mod tests {
             length_mm: 40.0,
             kind: LeftOutKind::Separate,
         };
-        let x = crossings(&path, &mut [(&other, o.clone())]);
+        let x = crossings(&path, &mut [(&other, o.clone())], lk);
         assert_eq!(x.len(), 1, "{x:?}");
         assert!(dist(x[0].at_mm, [30.0, 0.0]) < 1e-9, "{x:?}");
         // A mark across the path once (a pencil stroke across it) is not a second run.
@@ -156,7 +161,7 @@ mod tests {
             ..o.clone()
         };
         let mut marks = [(&other, mark.clone())];
-        assert!(crossings(&path, &mut marks).is_empty());
+        assert!(crossings(&path, &mut marks, lk).is_empty());
         assert_eq!(marks[0].1.kind, LeftOutKind::Mark);
         // An arc from one place on the path to another, stopped by the tracker 1 mm short of
         // it at both ends: a second run, met at both places.
@@ -170,7 +175,7 @@ mod tests {
             false,
         );
         let mut arcs = [(&arc, mark)];
-        let x = crossings(&path, &mut arcs);
+        let x = crossings(&path, &mut arcs, lk);
         assert_eq!(x.len(), 2, "{x:?}");
         assert!(dist(x[0].at_mm, [30.0, 0.0]) < 1e-9, "{x:?}");
         assert!(dist(x[1].at_mm, [70.0, 0.0]) < 1e-9, "{x:?}");

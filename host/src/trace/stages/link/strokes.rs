@@ -3,17 +3,18 @@
 //! `rigctl trace`) and [`Strokes::PASSES`] (a plotter's passes, `rigctl trace --paths`). The
 //! code reads the fields; nowhere does it ask which preset it runs.
 
-use super::params::LINK;
+use super::params::LinkParams;
 
 /// How the ends of pieces are read, chains are linked and a path is written, for one kind of
 /// drawing.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub(in crate::trace) struct Strokes {
-    /// The last part of every end left out of its reading (tangent, curvature) and bridged
-    /// over, mm. 0 reads an end to its last point, so a bridge starts there and its refit gets
-    /// the graphite next to the skip; more keeps a pass's backlash saw and the crossings near
-    /// a plotter's line ends out of the tangent, at the cost of that much of the end.
-    pub(in crate::trace) end_skip_mm: f64,
+    /// The last [`LinkParams::pulled_end_mm`] of every end left out of its reading (tangent,
+    /// curvature) and bridged over ([`Self::end_skip_mm`]). Off reads an end to its last point,
+    /// so a bridge starts there and its refit gets the graphite next to the skip; on keeps a
+    /// pass's backlash saw and the crossings near a plotter's line ends out of the tangent, at
+    /// the cost of that much of the end.
+    pub(in crate::trace) skip_pulled_end: bool,
     /// Where an end's span holds a crest (its curvature over the clamp), read the tangent again
     /// from the last few millimetres before the anchor. Right for one smooth pencil path; on a
     /// plotter's passes the sawn last millimetres would turn it.
@@ -34,19 +35,28 @@ pub(in crate::trace) struct Strokes {
 impl Strokes {
     /// The rig's pencil: one path, read to its ends.
     pub(in crate::trace) const ONE_PATH: Self = Self {
-        end_skip_mm: 0.0,
+        skip_pulled_end: false,
         crest_tangent: true,
         own_short_tangent: true,
         relink: true,
         smooth_centres: true,
     };
-    /// A plotter's passes (`--paths`): ends read from `LINK.pulled_end_mm` back, centres as
-    /// tracked.
+    /// A plotter's passes (`--paths`): ends read from [`LinkParams::pulled_end_mm`] back,
+    /// centres as tracked.
     pub(in crate::trace) const PASSES: Self = Self {
-        end_skip_mm: LINK.pulled_end_mm,
+        skip_pulled_end: true,
         crest_tangent: false,
         own_short_tangent: false,
         relink: false,
         smooth_centres: false,
     };
+
+    /// The part of every end left out of its reading, mm: [`LinkParams::pulled_end_mm`] or 0.
+    pub(in crate::trace) fn end_skip_mm(&self, lk: &LinkParams) -> f64 {
+        if self.skip_pulled_end {
+            lk.pulled_end_mm
+        } else {
+            0.0
+        }
+    }
 }

@@ -2,7 +2,7 @@
 
 use super::continuity::continuity;
 use super::end::{end_with, reads_own_bend, End};
-use super::{link, Linking, Network, Strokes};
+use super::{link, LinkParams, Linking, Network, Strokes};
 use crate::trace::chain::PieceMm;
 use crate::trace::plane::{dist, farthest_from};
 use rand::SeedableRng;
@@ -52,7 +52,7 @@ fn line(from: [f64; 2], dir_deg: f64, len: f64) -> Vec<[f64; 2]> {
 
 /// The end at the last point of `v`, read as on the rig's one path (to the last point).
 fn end_of(v: &[[f64; 2]]) -> Option<End> {
-    end_with(v, 0.0, Strokes::ONE_PATH)
+    end_with(v, 0.0, Strokes::ONE_PATH, &LinkParams::default())
 }
 
 /// The end at the first point of `v`.
@@ -61,9 +61,17 @@ fn head(mut v: Vec<[f64; 2]>) -> End {
     end_of(&v).expect("end")
 }
 
+/// Three pieces linked into one whole path, across their two gaps.
+fn linked_whole_in_three(pieces: &[PieceMm]) {
+    let l = link(pieces, 10.0, None, &LinkParams::default()).expect("linked");
+    assert_eq!(l.pieces, 3, "{:?}", l.left_out);
+    assert!(l.is_whole(), "{:?}", l.left_out);
+    assert_eq!(l.gaps.len(), 2, "{:?}", l.gaps);
+}
+
 /// `pieces` linked into one whole path with one skip (a gap over 1.5 mm) of about `skip_mm`.
 fn linked_with_one_skip(pieces: &[PieceMm], skip_mm: f64) -> Linking {
-    let l = link(pieces, 10.0, None).expect("linked");
+    let l = link(pieces, 10.0, None, &LinkParams::default()).expect("linked");
     assert_eq!(l.pieces, pieces.len(), "{:?}", l.left_out);
     assert!(l.is_whole(), "{:?}", l.left_out);
     let skip: Vec<_> = l.gaps.iter().filter(|g| g.length_mm > 1.5).collect();
@@ -107,13 +115,15 @@ fn a_short_stroke_leaving_at_an_angle_does_not_bend_through() {
     // and leaves at 50 deg.
     let path_end = end_of(&line([-3.5, 0.0], 0.0, 3.5)).expect("end");
     let stroke_head = head(line([2.5, 0.0], 50.0, 3.5));
-    assert!(!path_end.k_read() && !stroke_head.k_read());
-    assert!(continuity(&path_end, &stroke_head, 10.0).is_none());
+    assert!(
+        !path_end.k_read(&LinkParams::default()) && !stroke_head.k_read(&LinkParams::default())
+    );
+    assert!(continuity(&path_end, &stroke_head, 10.0, &LinkParams::default()).is_none());
     // A corner: straight short strokes at +25 and -25 deg either side of a 2.5 mm gap.
     let (c, s) = (25f64.to_radians().cos(), 25f64.to_radians().sin());
     let up = end_of(&line([-3.5 * c, -3.5 * s], 25.0, 3.5)).expect("end");
     let down = head(line([2.5, 0.0], -25.0, 3.5));
-    assert!(continuity(&up, &down, 10.0).is_none());
+    assert!(continuity(&up, &down, 10.0, &LinkParams::default()).is_none());
     // A crest of radius 4 mm: 3.5 mm pieces either side of a 2.5 mm skip on its top.
     let k = |_: f64| -0.25;
     let crest = curve(k, -60.0, 200.0);
@@ -122,8 +132,8 @@ fn a_short_stroke_leaving_at_an_angle_does_not_bend_through() {
     let before = crest[at(s0 - 3.5)..=at(s0)].to_vec();
     let after = crest[at(s0 + gap)..=at(s0 + gap + 3.5)].to_vec();
     let (a, b) = (end_of(&before).expect("end"), head(after));
-    assert!(!a.k_read() && !b.k_read());
-    assert!(continuity(&a, &b, 10.0).is_some());
+    assert!(!a.k_read(&LinkParams::default()) && !b.k_read(&LinkParams::default()));
+    assert!(continuity(&a, &b, 10.0, &LinkParams::default()).is_some());
 }
 
 /// A crest of radius 5 mm (curvature 0.2/mm) with a 2 mm skip on its top, between long pieces:
@@ -140,8 +150,8 @@ fn a_skip_on_a_crest_between_long_pieces_is_bridged() {
     let (c, s) = (30f64.to_radians().cos(), 30f64.to_radians().sin());
     let up = end_of(&line([-20.0 * c - 1.0, -20.0 * s], 30.0, 20.0)).expect("end");
     let down = head(line([1.0, 0.0], -30.0, 20.0));
-    assert!(up.k_read() && down.k_read());
-    assert!(continuity(&up, &down, 10.0).is_none());
+    assert!(up.k_read(&LinkParams::default()) && down.k_read(&LinkParams::default()));
+    assert!(continuity(&up, &down, 10.0, &LinkParams::default()).is_none());
 }
 
 /// The farthest any point of `pts` within `reach` mm of `centre` lies from the dense polyline
@@ -173,10 +183,15 @@ fn a_skip_on_a_wave_is_bridged_from_the_ends_themselves() {
         }
         let one = linked_with_one_skip(&parts, 5.5);
         one_mm += worst_near(&one.path.points_mm, &truth, centre, 5.0) / rounds as f64;
-        let net = Network::build(&parts, 10.0, Strokes::PASSES).expect("network");
+        let net =
+            Network::build(&parts, 10.0, Strokes::PASSES, &LinkParams::default()).expect("network");
         let main = net.choose_main(None).expect("a chain");
-        passes_mm +=
-            worst_near(&net.judge(main).path.points_mm, &truth, centre, 5.0) / rounds as f64;
+        passes_mm += worst_near(
+            &net.judge(main, &LinkParams::default()).path.points_mm,
+            &truth,
+            centre,
+            5.0,
+        ) / rounds as f64;
     }
     eprintln!("one path {one_mm:.4} mm, passes {passes_mm:.4} mm");
     assert!(one_mm < 0.05, "{one_mm}");
@@ -217,17 +232,14 @@ fn a_short_piece_on_a_crest_takes_its_own_tangent() {
     let k = |s: f64| 0.2 * (-(s - 8.0).powi(2) / (2.0 * 3.0f64.powi(2))).exp();
     let parts = pieces(k, &[(-40.0, 0.0), (5.0, 11.0), (15.0, 50.0)]);
     let short = end_of(&parts[1].pts).expect("end");
-    assert!(!short.k_read(), "span {}", short.span);
+    assert!(!short.k_read(&LinkParams::default()), "span {}", short.span);
     let heading: f64 = (0..14_200)
         .map(|i| k(-60.0 + (i as f64 + 0.5) * 0.005) * 0.005)
         .sum();
     let own = short.t_own.expect("the short piece's own tangent");
     let off_deg = (own[1].atan2(own[0]) - heading).to_degrees().abs();
     assert!(off_deg < 3.0, "own tangent {off_deg:.1} deg off");
-    let l = link(&parts, 10.0, None).expect("linked");
-    assert_eq!(l.pieces, 3, "{:?}", l.left_out);
-    assert!(l.is_whole(), "{:?}", l.left_out);
-    assert_eq!(l.gaps.len(), 2, "{:?}", l.gaps);
+    linked_whole_in_three(&parts);
 }
 
 /// A short straight piece, scattered by 0.03 mm, does not show a bend of its own (its three
@@ -242,7 +254,10 @@ fn a_straight_or_hooked_short_piece_keeps_its_chord() {
         for p in v.iter_mut() {
             p[1] += scatter.sample(&mut rng);
         }
-        assert!(!reads_own_bend(&end_of(&v).expect("end")));
+        assert!(!reads_own_bend(
+            &end_of(&v).expect("end"),
+            &LinkParams::default()
+        ));
     }
     let k = |_: f64| 0.2;
     let mut bent = curve(k, 0.0, 5.0);
@@ -250,10 +265,10 @@ fn a_straight_or_hooked_short_piece_keeps_its_chord() {
     let hook = line(last, 0.2 * 65.0 * 180.0 / std::f64::consts::PI - 20.0, 1.0);
     bent.extend(hook.into_iter().skip(1));
     let e = end_of(&bent).expect("end");
-    assert!(!e.k_read(), "span {}", e.span);
+    assert!(!e.k_read(&LinkParams::default()), "span {}", e.span);
     assert!(e.t_own.is_none());
     let e = end_of(&curve(k, 0.0, 6.0)).expect("end");
-    assert!(reads_own_bend(&e));
+    assert!(reads_own_bend(&e, &LinkParams::default()));
 }
 
 /// A long piece ends on a crest's flank (0.14/mm 6 mm before its end, 0.07 at it: its 8 mm read
@@ -267,12 +282,13 @@ fn a_short_piece_past_a_crest_is_not_bent_by_it() {
     let k = |s: f64| 0.14 * (-(s + 6.0).powi(2) / (2.0 * 5.0f64.powi(2))).exp();
     let parts = pieces(k, &[(-40.0, 0.0), (5.7, 12.5), (15.5, 50.0)]);
     let short = head(parts[1].pts.clone());
-    assert!(!short.k_read(), "span {}", short.span);
-    assert!(!reads_own_bend(&short), "k_raw {}", short.k_raw);
-    let l = link(&parts, 10.0, None).expect("linked");
-    assert_eq!(l.pieces, 3, "{:?}", l.left_out);
-    assert!(l.is_whole(), "{:?}", l.left_out);
-    assert_eq!(l.gaps.len(), 2, "{:?}", l.gaps);
+    assert!(!short.k_read(&LinkParams::default()), "span {}", short.span);
+    assert!(
+        !reads_own_bend(&short, &LinkParams::default()),
+        "k_raw {}",
+        short.k_raw
+    );
+    linked_whole_in_three(&parts);
 }
 
 /// A crest of radius 3.6 mm (curvature 0.28/mm) with a 5.5 mm skip just past its top, and the
@@ -284,7 +300,7 @@ fn a_short_piece_past_a_crest_is_not_bent_by_it() {
 fn a_short_stroke_between_skips_on_a_crest_is_read_through_its_chain() {
     let k = |s: f64| -0.28 * (-(s * s) / (2.0 * 3.5f64.powi(2))).exp();
     let spans = [(-60.0, -7.5), (-6.3, -3.4), (2.1, 60.0)];
-    let l = link(&pieces(k, &spans), 10.0, None).expect("linked");
+    let l = link(&pieces(k, &spans), 10.0, None, &LinkParams::default()).expect("linked");
     assert_eq!(l.pieces, 3, "{:?}", l.left_out);
     assert!(l.is_whole(), "{:?}", l.left_out);
     let skips: Vec<f64> = l.gaps.iter().map(|g| g.length_mm).collect();
