@@ -48,6 +48,17 @@ struct Bar {
     bic_greedy: f64,
 }
 
+impl Bar {
+    /// Whether the linearised step `s` from `from` (its RSS lowered by `s.delta_rss_mm2` with
+    /// `s.added` more directions) may meet the greedy set's BIC: within [`LINEAR_RSS_RATIO`] of
+    /// the residual sum of squares at which it would.
+    fn may_match(&self, from: &Fit<ExtModel, Unknown>, s: &Screen) -> bool {
+        let rss = (from.rss_mm2 - s.delta_rss_mm2).max(self.rss0 * 1e-12);
+        let bic = delta_bic(self.m, self.rss0, rss, from.fitted.len() + s.added);
+        bic - self.bic_greedy <= self.m as f64 * LINEAR_RSS_RATIO.ln()
+    }
+}
+
 /// A smaller set that was refitted and compared.
 struct Contender {
     ids: Vec<String>,
@@ -236,11 +247,7 @@ fn smaller_sets(
             let onset = onset_candidates(&fa.model, &free, data, cfg.onset_probe, false)?;
             for (i, (b, _)) in partners.iter().enumerate() {
                 let s = &lin[i];
-                let rss = (fa.rss_mm2 - s.delta_rss_mm2).max(bar.rss0 * 1e-12);
-                let bic = delta_bic(bar.m, bar.rss0, rss, fa.fitted.len() + s.added);
-                if onset.contains(&i)
-                    || bic - bar.bic_greedy <= bar.m as f64 * LINEAR_RSS_RATIO.ln()
-                {
+                if onset.contains(&i) || bar.may_match(fa, s) {
                     pairs.push((a, *b));
                 }
             }
@@ -289,11 +296,7 @@ fn any_may_do_as_well(
     if !onset_candidates(&declared.model, &chosen, data, cfg.onset_probe, false)?.is_empty() {
         return Ok(true);
     }
-    let passes = |s: &Screen| {
-        let rss = (declared.rss_mm2 - s.delta_rss_mm2).max(bar.rss0 * 1e-12);
-        let bic = delta_bic(bar.m, bar.rss0, rss, declared.fitted.len() + s.added);
-        bic - bar.bic_greedy <= bar.m as f64 * LINEAR_RSS_RATIO.ln()
-    };
+    let passes = |s: &Screen| bar.may_match(declared, s);
     if screens
         .iter()
         .any(|s| picked.contains(&s.candidate) && passes(s))
