@@ -7,8 +7,9 @@
 //!   `--select press` and no `--params`, the default selection without the chain constants),
 //!   and the offsets of every point slot after the first;
 //! * with `--select press`, candidates added by forward selection at the fit of the always-set:
-//!   the chain constants (`@chain`: lengths, twists) not already selected and, with `--compliance`, the
-//!   compliance of every revolute joint; without it, all compliances are fitted.
+//!   the chain constants (`@chain`: lengths, twists) not already selected and, with
+//!   `--compliance`, the axial and the lateral compliance of every revolute joint; without
+//!   `--select press`, `--compliance` fits every axial compliance (no lateral ones).
 
 use std::str::FromStr;
 
@@ -116,6 +117,13 @@ fn unknown_sets(
         .filter(|u| !always.contains(u))
         .collect();
     candidates.extend(compliance);
+    if gen.compliance {
+        candidates.extend(
+            (0..nominal.n_joints())
+                .filter(|&j| !nominal.joints()[j].prismatic)
+                .map(Unknown::LateralCompliance),
+        );
+    }
     Ok((always, candidates))
 }
 

@@ -95,7 +95,8 @@ pub struct Args {
     #[arg(long, value_enum, default_value = "all", conflicts_with = "samples")]
     pub select: Select,
     /// Identify a compliance of every revolute joint (deg per kgf.m of gravity torque about its
-    /// axis, from the model's link masses; with --select press, only those chosen).
+    /// axis, from the model's link masses); with --select press, only those chosen, and the
+    /// joints' lateral compliances (bending across the axis) are candidates too.
     #[arg(long, conflicts_with = "samples")]
     pub compliance: bool,
     /// Keep every pose: no gross-error rule (poses whose error is inconsistent with the others
