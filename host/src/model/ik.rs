@@ -27,6 +27,7 @@
 
 use nalgebra::{DMatrix, DVector, Vector3};
 
+use super::lateral::lateral_tilt_deg;
 use super::{Model, ModelError, Tilt};
 
 /// Joints the Katana's IK starts its search from (arm forward over the ISO cube, tool down-ish).
@@ -231,18 +232,29 @@ fn fit_to_limits(
     Some(out)
 }
 
+/// The tilts the chain takes at `q_deg`: the declared tilting (with [`IkTilt::Static`]) plus
+/// the lateral compliance's bend, which is part of the chain whatever the tilting mode (as in
+/// [`Model::fk`]); `None` when nothing tilts.
 fn tilt_mode(
     model: &Model,
     q_deg: &[f64],
     tilt: IkTilt,
 ) -> Result<Option<Vec<Vector3<f64>>>, ModelError> {
-    match tilt {
-        IkTilt::Off => Ok(None),
-        IkTilt::Static => {
-            let m = model.moments_kgfm(q_deg)?;
-            Ok(Some(model.tilts_deg(&m)?))
+    let lateral = model.has_lateral_compliance();
+    if matches!(tilt, IkTilt::Off) && !lateral {
+        return Ok(None);
+    }
+    let m = model.moments_kgfm(q_deg)?;
+    let mut tilts = match tilt {
+        IkTilt::Static => model.tilts_deg(&m)?,
+        IkTilt::Off => vec![Vector3::zeros(); m.len()],
+    };
+    if lateral {
+        for (j, (t, eta)) in tilts.iter_mut().zip(&m).enumerate() {
+            *t += lateral_tilt_deg(model.lateral_compliance_at(j), eta);
         }
     }
+    Ok(Some(tilts))
 }
 
 /// Tool point (mm, R, scale included) and tool axis of `model` at `q_deg`.
