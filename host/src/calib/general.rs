@@ -249,6 +249,30 @@ mod tests {
     use crate::model::Tilt;
     use crate::urdf::{import_chain_with_masses, ImportOptions, Urdf};
 
+    /// The analytic Jacobian of [`stacked`] at `at` against central differences of its
+    /// residuals, column by column; returns the Jacobian.
+    fn columns_match_central_differences(
+        at: &ExtModel,
+        data: &MeasuredSet,
+        sel: &[Unknown],
+    ) -> DMatrix<f64> {
+        let (jac, r0) = stacked(at, data, sel).unwrap();
+        for (c, &u) in sel.iter().enumerate() {
+            let h = 1e-6;
+            let (mut p, mut m) = (at.clone(), at.clone());
+            p.set_value(u, at.value(u) + h).unwrap();
+            m.set_value(u, at.value(u) - h).unwrap();
+            let (_, rp) = stacked(&p, data, sel).unwrap();
+            let (_, rm) = stacked(&m, data, sel).unwrap();
+            let fd = (rp - rm) / (2.0 * h);
+            assert!(
+                (fd - jac.column(c)).amax() < 1e-5 * (1.0 + r0.amax()),
+                "column {c}"
+            );
+        }
+        jac
+    }
+
     /// Two joints about horizontal axes (y), a 2 kg link 0.4 m long and a 1 kg link: the
     /// gravity torques vary with the posture.
     const XML: &str = r#"<robot name="m">
@@ -298,20 +322,7 @@ mod tests {
         // Jacobian against central differences at a point off the solution.
         let mut at = start.clone();
         at.model.transmission_mut().compliance_deg_per_kgfm = vec![0.02, 0.1];
-        let (jac, r0) = stacked(&at, &data, &sel).unwrap();
-        for (c, &u) in sel.iter().enumerate() {
-            let h = 1e-6;
-            let (mut p, mut m) = (at.clone(), at.clone());
-            p.set_value(u, at.value(u) + h).unwrap();
-            m.set_value(u, at.value(u) - h).unwrap();
-            let (_, rp) = stacked(&p, &data, &sel).unwrap();
-            let (_, rm) = stacked(&m, &data, &sel).unwrap();
-            let fd = (rp - rm) / (2.0 * h);
-            assert!(
-                (fd - jac.column(c)).amax() < 1e-5 * (1.0 + r0.amax()),
-                "column {c}"
-            );
-        }
+        columns_match_central_differences(&at, &data, &sel);
         let fit = fit_general(&start, &data, &sel, &LmConfig::default(), 1e-6).unwrap();
         for (f, c) in fit.model.compliance_deg_per_kgfm().iter().zip(coef) {
             assert!((f - c).abs() < 1e-6, "{f} vs {c}");
@@ -370,21 +381,8 @@ mod tests {
         let mut at = start.clone();
         at.set_value(sel[0], 0.1).unwrap();
         at.set_value(sel[1], 0.02).unwrap();
-        let (jac, r0) = stacked(&at, &data, &sel).unwrap();
+        let jac = columns_match_central_differences(&at, &data, &sel);
         assert!(jac.column(0).amax() > 1e-3, "the bend is seen");
-        for (c, &u) in sel.iter().enumerate() {
-            let h = 1e-6;
-            let (mut p, mut m) = (at.clone(), at.clone());
-            p.set_value(u, at.value(u) + h).unwrap();
-            m.set_value(u, at.value(u) - h).unwrap();
-            let (_, rp) = stacked(&p, &data, &sel).unwrap();
-            let (_, rm) = stacked(&m, &data, &sel).unwrap();
-            let fd = (rp - rm) / (2.0 * h);
-            assert!(
-                (fd - jac.column(c)).amax() < 1e-5 * (1.0 + r0.amax()),
-                "column {c}"
-            );
-        }
         let fit = fit_general(&start, &data, &sel, &LmConfig::default(), 1e-6).unwrap();
         for (u, want) in sel.iter().zip([0.3, 0.05]) {
             let got = fit.model.value(*u);

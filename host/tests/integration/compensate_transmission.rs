@@ -57,16 +57,42 @@ fn rows(csv: &str) -> Vec<Vec<f64>> {
 }
 
 fn fk(model: &Path, joints: &Path) -> Vec<Vec<f64>> {
-    let o = output(&[
+    fk_tilt(model, joints, true)
+}
+
+/// `rigctl fk` of `joints` through `model`, with the declared tilting or without.
+fn fk_tilt(model: &Path, joints: &Path, tilt: bool) -> Vec<Vec<f64>> {
+    let mut args = vec![
         "fk".as_ref(),
-        "--tilt".as_ref(),
         "--model".as_ref(),
         model.as_os_str(),
         "--joints".as_ref(),
         joints.as_os_str(),
-    ]);
+    ];
+    if tilt {
+        args.push("--tilt".as_ref());
+    }
+    let o = output(&args);
     assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
     rows(&String::from_utf8_lossy(&o.stdout))
+}
+
+/// `rigctl compensate --path path --model model --no-nominal [extra] --out out`; its output.
+fn compensate(path: &Path, model: &Path, out: &Path, extra: &[&str]) -> std::process::Output {
+    let mut args = vec![
+        "compensate".as_ref(),
+        "--path".as_ref(),
+        path.as_os_str(),
+        "--model".as_ref(),
+        model.as_os_str(),
+        "--no-nominal".as_ref(),
+        "--out".as_ref(),
+        out.as_os_str(),
+    ];
+    args.extend(extra.iter().map(std::ffi::OsStr::new));
+    let o = output(&args);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    o
 }
 
 #[test]
@@ -81,17 +107,7 @@ fn compensated_joints_through_fk_recover_the_path() {
     let text = path_csv();
     let (path, out) = (dir.path().join("path.csv"), dir.path().join("joints.csv"));
     std::fs::write(&path, &text).unwrap();
-    let o = output(&[
-        "compensate".as_ref(),
-        "--path".as_ref(),
-        path.as_os_str(),
-        "--model".as_ref(),
-        model_file.as_os_str(),
-        "--no-nominal".as_ref(),
-        "--out".as_ref(),
-        out.as_os_str(),
-    ]);
-    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let o = compensate(&path, &model_file, &out, &[]);
     let stderr = String::from_utf8_lossy(&o.stderr);
     let want = rows(&text);
     let got = fk(&model_file, &out);
@@ -203,33 +219,8 @@ fn a_lateral_bend_is_compensated() {
     std::fs::write(&path, &text).unwrap();
     for tilt in ["--tilt", "--no-tilt"] {
         let out = dir.path().join(format!("joints{tilt}.csv"));
-        let o = output(&[
-            "compensate".as_ref(),
-            "--path".as_ref(),
-            path.as_os_str(),
-            "--model".as_ref(),
-            model_file.as_os_str(),
-            "--no-nominal".as_ref(),
-            tilt.as_ref(),
-            "--out".as_ref(),
-            out.as_os_str(),
-        ]);
-        assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
-        let through = |m: &Path| -> Vec<Vec<f64>> {
-            let mut args = vec![
-                "fk".as_ref(),
-                "--model".as_ref(),
-                m.as_os_str(),
-                "--joints".as_ref(),
-                out.as_os_str(),
-            ];
-            if tilt == "--tilt" {
-                args.push("--tilt".as_ref());
-            }
-            let o = output(&args);
-            assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
-            rows(&String::from_utf8_lossy(&o.stdout))
-        };
+        compensate(&path, &model_file, &out, &[tilt]);
+        let through = |m: &Path| fk_tilt(m, &out, tilt == "--tilt");
         let miss = |got: &[Vec<f64>]| {
             assert_eq!(got.len(), want.len());
             want.iter()
