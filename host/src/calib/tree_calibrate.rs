@@ -21,8 +21,21 @@ use crate::model::{Model, ParamKind, Tree};
 /// (names, or `@group`s taken on every tip's chain as [`param_group`] takes them on a chain), or
 /// by default every tip chain's [`default_selection`], each shared parameter once, ordered by
 /// kind as a chain's (the base frame with `opts.base`, the tool points, the joint offsets, then
-/// the constants).
-pub fn tree_selection(tree: &Tree, opts: &CalibrateOptions) -> Result<Vec<String>, CalibError> {
+/// the constants). With `compliance`, the compliance of every revolute tree joint follows
+/// ([`Tree::compliance_names`], last: kept at 0 where the poses do not identify them); the
+/// group `@compliance` in `opts.params` names the same.
+pub fn tree_selection(
+    tree: &Tree,
+    opts: &CalibrateOptions,
+    compliance: bool,
+) -> Result<Vec<String>, CalibError> {
+    if compliance && !tree.has_masses() {
+        return Err(CalibError::Unsupported(
+            "joint compliance on a tree needs link masses ([[mass]] rows in the tree model \
+             file): the gravity torques come from them"
+                .into(),
+        ));
+    }
     let chains = tree.chains()?;
     let mut out: Vec<String> = Vec::new();
     let mut add = |name: String| {
@@ -49,6 +62,7 @@ pub fn tree_selection(tree: &Tree, opts: &CalibrateOptions) -> Result<Vec<String
         Some(names) => {
             for n in names.iter().map(|n| n.trim()).filter(|n| !n.is_empty()) {
                 match n.strip_prefix('@') {
+                    Some("compliance") => tree.compliance_names().into_iter().for_each(&mut add),
                     Some(g) => on_chains(&|c| param_group(c, g))?
                         .into_iter()
                         .for_each(|(n, _)| add(n)),
@@ -56,6 +70,9 @@ pub fn tree_selection(tree: &Tree, opts: &CalibrateOptions) -> Result<Vec<String
                 }
             }
         }
+    }
+    if compliance {
+        tree.compliance_names().into_iter().for_each(&mut add);
     }
     if out.is_empty() {
         return Err(CalibError::EmptySelection);
@@ -89,7 +106,8 @@ pub struct TreeOutcome {
 }
 
 /// Calibrates `nominal` on `cal` (and evaluates on `val`) with the options of a chain's
-/// calibration: the selection ([`tree_selection`]), `rtol`, the solver's settings. `tilting`
+/// calibration: the selection ([`tree_selection`], with the joint compliances when
+/// `compliance`), `rtol`, the solver's settings. `tilting`
 /// is `standard` here (a tree declares no tilting), as on a chain without tilting data;
 /// `influence` is refused. Every measured tip point is a full position; the statistics are
 /// over all of them.
@@ -98,6 +116,7 @@ pub fn calibrate_tree(
     cal: &[TreePose],
     val: Option<&[TreePose]>,
     opts: &CalibrateOptions,
+    compliance: bool,
 ) -> Result<TreeOutcome, CalibError> {
     if opts.method == Method::Influence {
         return Err(CalibError::Unsupported(
@@ -106,7 +125,7 @@ pub fn calibrate_tree(
                 .into(),
         ));
     }
-    let selection = tree_selection(nominal, opts)?;
+    let selection = tree_selection(nominal, opts, compliance)?;
     // gross errors: the chain's fit-and-flag rule, on the error norm of every pose over its tips
     let trimmed = if opts.keep_outliers || cal.len() < MIN_POSES_FOR_OUTLIERS {
         None
@@ -189,7 +208,7 @@ pub fn tree_registration_only(
 ) -> Result<StandardSummary, CalibError> {
     let opts = registration_options(with_tool);
     Ok(registered_summary(
-        &calibrate_tree(nominal, cal, val, &opts)?.report,
+        &calibrate_tree(nominal, cal, val, &opts, false)?.report,
     ))
 }
 
