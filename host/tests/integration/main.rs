@@ -82,6 +82,7 @@ mod trace_independent;
 mod trace_params;
 mod trace_photos;
 mod trace_scan;
+mod tree_compliance;
 mod tree_fit;
 mod urdf_export;
 mod urdf_import;
