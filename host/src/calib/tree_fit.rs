@@ -14,7 +14,7 @@
 //!
 //! Joint compliance (`compliance_j<i>_deg_per_kgfm`, a chain's `compliance:j<i>` law on tree
 //! joint i) deflects joint i by `c_i tau_i` with `tau_i` the gravity torque of the **whole
-//! tree** about its axis ([`tree_moments_kgfm`]): a torso joint bends under both arms, and every
+//! tree** about its axis ([`compliant_joints`]): a torso joint bends under both arms, and every
 //! tip whose path holds it sees the bend.
 
 use nalgebra::{DMatrix, DVector, Vector3};
@@ -27,8 +27,8 @@ use super::measured::MeasuredSet;
 use super::plausible::check_set;
 use super::position_fit::{refine, Identification};
 use super::problem::{put_position_rows, ModelProblem, SetUnknowns};
-use crate::model::transmission::{compliance_deflection_deg, compliance_regressor};
-use crate::model::tree_gravity::tree_moments_kgfm;
+use crate::model::transmission::compliance_regressor;
+use crate::model::tree_gravity::compliant_joints;
 use crate::model::tree_params::compliance_joint;
 use crate::model::{Data, Model, ModelError, Tilt, Tree, Wrt};
 
@@ -114,30 +114,11 @@ impl TreeUnknowns {
     }
 
     /// The joints every pose's tips are evaluated at (tree order): the readings deflected by
-    /// the joints' compliances under the whole tree's gravity torques (`q_j + c_j tau_j`,
-    /// [`compliance_deflection_deg`]), and the torques (empty when no joint is compliant and no
-    /// compliance is an unknown).
+    /// the joints' compliances under the whole tree's gravity torques, and the torques (empty
+    /// when no joint is compliant and no compliance is an unknown).
     fn effective_joints(&self, q: &[f64]) -> Result<(Vec<f64>, Vec<f64>), ModelError> {
-        let needed = self.tree.has_compliance() || self.compliance.iter().any(Option::is_some);
-        if !needed {
-            return Ok((q.to_vec(), Vec::new()));
-        }
-        let tau: Vec<f64> = tree_moments_kgfm(&self.tree, &self.chains, q)?
-            .iter()
-            .map(|m| m.z)
-            .collect();
-        let c: Vec<f64> = self
-            .tree
-            .joints
-            .iter()
-            .map(|j| j.compliance_deg_per_kgfm)
-            .collect();
-        let q_eff = q
-            .iter()
-            .enumerate()
-            .map(|(j, q)| q + compliance_deflection_deg(&c, &tau, j))
-            .collect();
-        Ok((q_eff, tau))
+        let needed = self.compliance.iter().any(Option::is_some);
+        compliant_joints(&self.tree, &self.chains, q, needed)
     }
 
     /// Residuals `predicted - measured` (3 rows per measured tip point, mm) into `r` and, with

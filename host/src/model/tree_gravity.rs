@@ -23,6 +23,7 @@ use nalgebra::{Matrix3, Vector3};
 
 use super::error::ModelError;
 use super::tilt::GRAVITY_KGF_PER_KG;
+use super::transmission::compliance_deflection_deg;
 use super::tree::Tree;
 use super::Model;
 
@@ -96,6 +97,36 @@ pub fn tree_moments_kgfm(
         }
     }
     Ok(out)
+}
+
+/// The joints a tree really takes for the readings `q` (tree order): joint i deflected by its
+/// compliance under the whole tree's gravity torque, `q_i + c_i tau_i`
+/// ([`compliance_deflection_deg`], the chain's law), and the torques `tau` (kgf.m). Without a
+/// compliant joint and unless `torques_needed`, the readings as they are and no torques.
+pub fn compliant_joints(
+    tree: &Tree,
+    chains: &[Model],
+    q: &[f64],
+    torques_needed: bool,
+) -> Result<(Vec<f64>, Vec<f64>), ModelError> {
+    if !torques_needed && !tree.has_compliance() {
+        return Ok((q.to_vec(), Vec::new()));
+    }
+    let tau: Vec<f64> = tree_moments_kgfm(tree, chains, q)?
+        .iter()
+        .map(|m| m.z)
+        .collect();
+    let c: Vec<f64> = tree
+        .joints
+        .iter()
+        .map(|j| j.compliance_deg_per_kgfm)
+        .collect();
+    let q_eff = q
+        .iter()
+        .enumerate()
+        .map(|(j, q)| q + compliance_deflection_deg(&c, &tau, j))
+        .collect();
+    Ok((q_eff, tau))
 }
 
 impl Tree {

@@ -343,10 +343,41 @@ fn tree_compliance_reaches_the_floor_where_geometry_and_chains_do_not() {
     ];
 
     // the tree with the joints' compliances: the noise floor held out
+    let fitted = d.join("fitted.toml");
     let mut args = files.to_vec();
-    args.extend(["--compliance", "--json", path_arg(&json)]);
+    args.extend([
+        "--compliance",
+        "--json",
+        path_arg(&json),
+        "--out",
+        path_arg(&fitted),
+    ]);
     let (elastic, stdout) = calibrate(&args);
     eprintln!("{stdout}");
+    // the fitted tree file carries the compliances, and `fk` on it bends the joints: its tip
+    // points are the held-out measurements within the noise
+    let fk = output(&[
+        "fk",
+        "--model",
+        path_arg(&fitted),
+        "--joints",
+        path_arg(&val_csv),
+    ]);
+    assert!(fk.status.success(), "{}", text(&fk.stderr));
+    let (mut ss, mut n) = (0.0, 0);
+    for (line, (_, hands)) in text(&fk.stdout).lines().skip(1).zip(&val) {
+        let v: Vec<f64> = line.split(',').map(|c| c.parse().unwrap()).collect();
+        for (k, h) in hands.iter().enumerate() {
+            ss += (0..3).map(|a| (v[6 * k + a] - h[a]).powi(2)).sum::<f64>();
+            n += 3;
+        }
+    }
+    let fk_rms = (ss / n as f64).sqrt();
+    assert_eq!(n, 3 * 2 * val.len());
+    assert!(
+        (fk_rms - elastic).abs() < 1e-3,
+        "fk {fk_rms} vs calibrate {elastic}"
+    );
     // the geometric tree
     let (geometric, _) = calibrate(&files);
     // chain by chain: each hand's chain with its own compliances (its own arm's masses only)
