@@ -84,6 +84,7 @@ mod trace_photos;
 mod trace_scan;
 mod tree_compliance;
 mod tree_fit;
+mod tree_gravity;
 mod urdf_export;
 mod urdf_import;
 mod urdf_tree;

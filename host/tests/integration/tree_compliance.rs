@@ -22,24 +22,24 @@ const FLOOR_FACTOR: f64 = 1.2;
 
 /// One segment of the body: `Rx(al) Tx(a) Tz(d) Rz(q + off)` from its parent's joint frame.
 #[derive(Clone)]
-struct Seg {
-    name: String,
-    parent: Option<usize>,
-    al_deg: f64,
-    a_mm: f64,
-    d_mm: f64,
-    off_deg: f64,
+pub(crate) struct Seg {
+    pub(crate) name: String,
+    pub(crate) parent: Option<usize>,
+    pub(crate) al_deg: f64,
+    pub(crate) a_mm: f64,
+    pub(crate) d_mm: f64,
+    pub(crate) off_deg: f64,
     /// (kg, centre of mass in the joint frame, mm)
-    mass: (f64, [f64; 3]),
+    pub(crate) mass: (f64, [f64; 3]),
     /// deg per kgf.m about the axis
-    compliance: f64,
+    pub(crate) compliance: f64,
 }
 
 #[derive(Clone)]
-struct Body {
-    segs: Vec<Seg>,
+pub(crate) struct Body {
+    pub(crate) segs: Vec<Seg>,
     /// (tip name, last joint, tool point in its frame, mm)
-    tips: Vec<(String, usize, [f64; 3])>,
+    pub(crate) tips: Vec<(String, usize, [f64; 3])>,
 }
 
 fn rot_x(deg: f64) -> Matrix3<f64> {
@@ -51,7 +51,7 @@ fn rot_z(deg: f64) -> Matrix3<f64> {
 }
 
 impl Body {
-    fn nominal() -> Body {
+    pub(crate) fn nominal() -> Body {
         let seg = |name: &str, parent, al, a, d, kg, com: [f64; 3]| Seg {
             name: name.into(),
             parent,
@@ -113,7 +113,7 @@ impl Body {
     /// Gravity torque about every joint's axis (kgf.m): the moment about its origin of the
     /// weight (1 kgf per kg, -z of R) of every segment whose chain passes through it, in its
     /// frame, z component. Brute force over (joint, segment) pairs.
-    fn torques_kgfm(&self, q: &[f64]) -> Vec<f64> {
+    pub(crate) fn torques_kgfm(&self, q: &[f64]) -> Vec<f64> {
         let f = self.frames(q);
         (0..self.segs.len())
             .map(|i| {
@@ -153,7 +153,7 @@ impl Body {
     }
 
     /// The body as a tree model file (docs/model-files.md "Tree models").
-    fn model_toml(&self) -> String {
+    pub(crate) fn model_toml(&self) -> String {
         let mut s = String::from("name = \"upper_body\"\n");
         for (i, g) in self.segs.iter().enumerate() {
             let n = &g.name;
