@@ -170,3 +170,23 @@ fn a_compliant_tree_evaluates_at_the_deflected_joints() {
         assert!(tau[0].abs() > 1.0);
     }
 }
+
+/// `--compliance` frees every revolute joint's compliance after the geometry, and needs masses.
+#[test]
+fn compliance_selection_needs_masses() {
+    use crate::calib::tree_calibrate::tree_selection;
+    use crate::calib::CalibrateOptions;
+    let t = tree();
+    let opts = CalibrateOptions::default();
+    let sel = tree_selection(&t, &opts, true).unwrap();
+    let names = t.compliance_names();
+    assert_eq!(names.len(), 5);
+    assert_eq!(sel[sel.len() - 5..], names[..]);
+    let mut bare = t.clone();
+    bare.joints.iter_mut().for_each(|j| j.masses.clear());
+    assert!(matches!(
+        tree_selection(&bare, &opts, true),
+        Err(CalibError::Unsupported(_))
+    ));
+    assert!(tree_selection(&bare, &opts, false).is_ok());
+}
