@@ -14,15 +14,30 @@ use super::large_changes::{large_changes, LargeChange};
 use super::outliers;
 use super::registered::{registered_summary, registration_options};
 use super::report::{unknowns_report, CalibrateReport, StandardSummary};
-use super::tree_fit::{fit_tree, tree_errors, TreePose};
+use super::tree_fit::{check_poses, fit_tree, tree_errors, TreePose};
+use crate::model::tree_gravity::tree_moments_kgfm;
+use crate::model::tree_params::compliance_joint;
 use crate::model::{Model, ParamKind, Tree};
 
 /// The unknowns of a tree's calibration by tree name, in preference order: `opts.params`
 /// (names, or `@group`s taken on every tip's chain as [`param_group`] takes them on a chain), or
 /// by default every tip chain's [`default_selection`], each shared parameter once, ordered by
 /// kind as a chain's (the base frame with `opts.base`, the tool points, the joint offsets, then
-/// the constants).
-pub fn tree_selection(tree: &Tree, opts: &CalibrateOptions) -> Result<Vec<String>, CalibError> {
+/// the constants). With `compliance`, the compliance of every revolute tree joint follows
+/// ([`Tree::compliance_names`], last: kept at 0 where the poses do not identify them); the
+/// group `@compliance` in `opts.params` names the same.
+pub fn tree_selection(
+    tree: &Tree,
+    opts: &CalibrateOptions,
+    compliance: bool,
+) -> Result<Vec<String>, CalibError> {
+    if compliance && !tree.has_masses() {
+        return Err(CalibError::Unsupported(
+            "joint compliance on a tree needs link masses ([[mass]] rows in the tree model \
+             file): the gravity torques come from them"
+                .into(),
+        ));
+    }
     let chains = tree.chains()?;
     let mut out: Vec<String> = Vec::new();
     let mut add = |name: String| {
@@ -49,6 +64,7 @@ pub fn tree_selection(tree: &Tree, opts: &CalibrateOptions) -> Result<Vec<String
         Some(names) => {
             for n in names.iter().map(|n| n.trim()).filter(|n| !n.is_empty()) {
                 match n.strip_prefix('@') {
+                    Some("compliance") => tree.compliance_names().into_iter().for_each(&mut add),
                     Some(g) => on_chains(&|c| param_group(c, g))?
                         .into_iter()
                         .for_each(|(n, _)| add(n)),
@@ -56,6 +72,9 @@ pub fn tree_selection(tree: &Tree, opts: &CalibrateOptions) -> Result<Vec<String
                 }
             }
         }
+    }
+    if compliance {
+        tree.compliance_names().into_iter().for_each(&mut add);
     }
     if out.is_empty() {
         return Err(CalibError::EmptySelection);
@@ -89,7 +108,8 @@ pub struct TreeOutcome {
 }
 
 /// Calibrates `nominal` on `cal` (and evaluates on `val`) with the options of a chain's
-/// calibration: the selection ([`tree_selection`]), `rtol`, the solver's settings. `tilting`
+/// calibration: the selection ([`tree_selection`], with the joint compliances when
+/// `compliance`), `rtol`, the solver's settings. `tilting`
 /// is `standard` here (a tree declares no tilting), as on a chain without tilting data;
 /// `influence` is refused. Every measured tip point is a full position; the statistics are
 /// over all of them.
@@ -98,6 +118,7 @@ pub fn calibrate_tree(
     cal: &[TreePose],
     val: Option<&[TreePose]>,
     opts: &CalibrateOptions,
+    compliance: bool,
 ) -> Result<TreeOutcome, CalibError> {
     if opts.method == Method::Influence {
         return Err(CalibError::Unsupported(
@@ -106,7 +127,8 @@ pub fn calibrate_tree(
                 .into(),
         ));
     }
-    let selection = tree_selection(nominal, opts)?;
+    let mut selection = tree_selection(nominal, opts, compliance)?;
+    drop_unloaded(nominal, cal, &mut selection)?;
     // gross errors: the chain's fit-and-flag rule, on the error norm of every pose over its tips
     let trimmed = if opts.keep_outliers || cal.len() < MIN_POSES_FOR_OUTLIERS {
         None
@@ -127,7 +149,7 @@ pub fn calibrate_tree(
         .map(|&k| cal[k].clone())
         .collect();
     let cal: &[TreePose] = &kept_cal;
-    let fit = fit_tree(nominal, cal, &selection, &opts.lm, opts.rtol)?;
+    let (fit, held) = fit_bounded(nominal, cal, &mut selection, opts)?;
     let errors = |poses: &[TreePose]| -> Result<[Vec<Vector3<f64>>; 3], CalibError> {
         let after = tree_errors(&fit.model, poses)?;
         Ok([tree_errors(nominal, poses)?, after.clone(), after])
@@ -148,6 +170,7 @@ pub fn calibrate_tree(
         false,
     );
     report.large_changes = tree_large_changes(nominal, &fit.model)?;
+    report.unphysical.extend(held);
     if let Some(t) = &trimmed {
         let all = pose_norms_mm(&fit.model, cal_all)?;
         report.outliers = outliers::reports("cal", &flagged, &all, &all, t.threshold_mm);
@@ -161,6 +184,80 @@ pub fn calibrate_tree(
         calibration_errors,
         validation_errors,
     })
+}
+
+/// Gravity torques (kgf.m) under which, in every calibration pose, a joint's compliance has
+/// nothing to act on (a vertical axis on a level base carries none): not an unknown.
+const MIN_TORQUE_KGFM: f64 = 1e-6;
+
+/// Takes out of `selection` the compliances of joints without gravity torque in any pose of
+/// `cal` (their columns are rounding noise, not a term the poses can tell).
+fn drop_unloaded(
+    nominal: &Tree,
+    cal: &[TreePose],
+    selection: &mut Vec<String>,
+) -> Result<(), CalibError> {
+    if !selection.iter().any(|n| compliance_joint(n).is_some()) {
+        return Ok(());
+    }
+    check_poses(nominal, cal)?;
+    let chains = nominal.chains()?;
+    let mut loaded = vec![false; nominal.n_joints()];
+    for p in cal {
+        for (j, m) in tree_moments_kgfm(nominal, &chains, &p.q)?
+            .iter()
+            .enumerate()
+        {
+            loaded[j] |= m.z.abs() >= MIN_TORQUE_KGFM;
+        }
+    }
+    selection.retain(|n| compliance_joint(n).is_none_or(|j| loaded.get(j) == Some(&true)));
+    if selection.is_empty() {
+        return Err(CalibError::EmptySelection);
+    }
+    Ok(())
+}
+
+/// The fit of `selection` with the compliances bounded at 0, as on a chain: a compliance fitted
+/// negative (no joint has one) is held at 0 and left out of the selection, and the rest refitted;
+/// the held ones are described for the report's `unphysical`.
+fn fit_bounded(
+    nominal: &Tree,
+    cal: &[TreePose],
+    selection: &mut Vec<String>,
+    opts: &CalibrateOptions,
+) -> Result<(Fit<Tree, String>, Vec<String>), CalibError> {
+    let mut start = nominal.clone();
+    let mut held = Vec::new();
+    loop {
+        let fit = fit_tree(&start, cal, selection, &opts.lm, opts.rtol)?;
+        let negative: Vec<(String, f64, f64)> = fit
+            .fitted
+            .iter()
+            .zip(&fit.sigma)
+            .filter(|(n, _)| compliance_joint(n).is_some())
+            .filter_map(|(n, s)| {
+                let v = fit.model.param(n)?;
+                (v < 0.0).then(|| (n.clone(), v, *s))
+            })
+            .collect();
+        // each pass leaves at least one unknown out: it ends
+        if negative.is_empty() {
+            return Ok((fit, held));
+        }
+        for (n, v, s) in negative {
+            held.push(format!(
+                "{n} = {v:.4} +- {s:.4} fitted below its physical bound: held at 0 and left out \
+                 of the fit (the term stood in for something the model lacks, e.g. a length or \
+                 the link masses)"
+            ));
+            start.set_param(&n, 0.0)?;
+            selection.retain(|u| *u != n);
+        }
+        if selection.is_empty() {
+            return Err(CalibError::EmptySelection);
+        }
+    }
 }
 
 /// The robot's geometry moved beyond a real arm's errors ([`large_changes`]) on any tip's
@@ -189,7 +286,7 @@ pub fn tree_registration_only(
 ) -> Result<StandardSummary, CalibError> {
     let opts = registration_options(with_tool);
     Ok(registered_summary(
-        &calibrate_tree(nominal, cal, val, &opts)?.report,
+        &calibrate_tree(nominal, cal, val, &opts, false)?.report,
     ))
 }
 

@@ -11,6 +11,11 @@
 //! poses do not identify is kept at its value and reported, with its combination's name), the
 //! solve of [`solve_split`] (Levenberg-Marquardt, sigmas `s^2 (J^T J)^-1`), the rank analysed
 //! again at the solution. The result is the one [`Fit`], here `Fit<Tree, String>`.
+//!
+//! Joint compliance (`compliance_j<i>_deg_per_kgfm`, a chain's `compliance:j<i>` law on tree
+//! joint i) deflects joint i by `c_i tau_i` with `tau_i` the gravity torque of the **whole
+//! tree** about its axis ([`compliant_joints`]): a torso joint bends under both arms, and every
+//! tip whose path holds it sees the bend.
 
 use nalgebra::{DMatrix, DVector, Vector3};
 
@@ -18,8 +23,13 @@ use super::error::CalibError;
 use super::fit::{solve_split, Fit, Split};
 use super::identifiability::analyse;
 use super::lm::LmConfig;
+use super::measured::MeasuredSet;
+use super::plausible::check_set;
 use super::position_fit::{refine, Identification};
 use super::problem::{put_position_rows, ModelProblem, SetUnknowns};
+use crate::model::transmission::compliance_regressor;
+use crate::model::tree_gravity::compliant_joints;
+use crate::model::tree_params::compliance_joint;
 use crate::model::{Data, Model, ModelError, Tilt, Tree, Wrt};
 
 /// A pose of the whole tree: its joints (tree order; deg, mm for prismatic joints) and the
@@ -40,8 +50,10 @@ pub struct TreeUnknowns {
     paths: Vec<Vec<usize>>,
     names: Vec<String>,
     /// Per tip: the chain parameter index of every unknown its chain has (`None`: the unknown
-    /// does not move this tip).
+    /// does not move this tip, or is a compliance).
     slots: Vec<Vec<Option<usize>>>,
+    /// Per unknown: the tree joint (0-based) whose compliance it is, `None` for a parameter.
+    compliance: Vec<Option<usize>>,
 }
 
 impl TreeUnknowns {
@@ -72,6 +84,7 @@ impl TreeUnknowns {
             })
             .collect();
         Ok(Self {
+            compliance: names.iter().map(|n| compliance_joint(n)).collect(),
             paths: (0..tree.tips.len()).map(|t| tree.path(t)).collect(),
             tree: tree.clone(),
             chains,
@@ -100,8 +113,18 @@ impl TreeUnknowns {
         )
     }
 
+    /// The joints every pose's tips are evaluated at (tree order): the readings deflected by
+    /// the joints' compliances under the whole tree's gravity torques, and the torques (empty
+    /// when no joint is compliant and no compliance is an unknown).
+    fn effective_joints(&self, q: &[f64]) -> Result<(Vec<f64>, Vec<f64>), ModelError> {
+        let needed = self.compliance.iter().any(Option::is_some);
+        compliant_joints(&self.tree, &self.chains, q, needed)
+    }
+
     /// Residuals `predicted - measured` (3 rows per measured tip point, mm) into `r` and, with
-    /// `jac`, their Jacobian wrt the unknowns (`poses` checked by [`check_poses`]).
+    /// `jac`, their Jacobian wrt the unknowns (`poses` checked by [`check_poses`]). A
+    /// compliance's column is the tip's motion per joint angle times the joint's torque (the
+    /// torques are taken as given by the readings, as on a chain).
     fn rows(
         &self,
         poses: &[TreePose],
@@ -110,14 +133,29 @@ impl TreeUnknowns {
     ) -> Result<(), ModelError> {
         let n = self.names.len();
         let mut data: Vec<Data> = self.chains.iter().map(Data::new).collect();
-        let wrt: Vec<Vec<Wrt>> = self
+        // per tip, what every unknown is for its chain: a parameter, a joint (a compliance of a
+        // joint on its path, scaled by the torque), or nothing
+        let of_unknown: Vec<Vec<Option<Wrt>>> = self
             .slots
             .iter()
-            .map(|s| s.iter().flatten().map(|&i| Wrt::Param(i)).collect())
+            .zip(&self.paths)
+            .map(|(s, path)| {
+                s.iter()
+                    .zip(&self.compliance)
+                    .map(|(slot, joint)| match (slot, joint) {
+                        (Some(i), _) => Some(Wrt::Param(*i)),
+                        (None, Some(j)) => path.iter().position(|p| p == j).map(Wrt::Joint),
+                        (None, None) => None,
+                    })
+                    .collect()
+            })
+            .collect();
+        let wrt: Vec<Vec<Wrt>> = of_unknown
+            .iter()
+            .map(|u| u.iter().flatten().copied().collect())
             .collect();
         // per tip, the position of every unknown in its `wrt`
-        let column: Vec<Vec<Option<usize>>> = self
-            .slots
+        let column: Vec<Vec<Option<usize>>> = of_unknown
             .iter()
             .map(|s| {
                 let mut k = 0;
@@ -133,16 +171,20 @@ impl TreeUnknowns {
             .collect();
         let mut row = 0;
         for pose in poses {
+            let (q_eff, tau) = self.effective_joints(&pose.q)?;
             for (t, point) in pose.points_mm.iter().enumerate() {
                 let Some(p) = point else { continue };
-                let q: Vec<f64> = self.paths[t].iter().map(|&i| pose.q[i]).collect();
+                let q: Vec<f64> = self.paths[t].iter().map(|&i| q_eff[i]).collect();
                 let (chain, d) = (&self.chains[t], &mut data[t]);
                 let measured = Vector3::from(*p);
                 match jac.as_deref_mut() {
                     Some(jac) => {
                         chain.jacobian_with(d, &q, Tilt::Off, &wrt[t])?;
-                        let mut columns = (0..n)
-                            .map(|c| column[t][c].map_or_else(Vector3::zeros, |k| d.jacobian()[k]));
+                        let mut columns = (0..n).map(|c| {
+                            let scale =
+                                self.compliance[c].map_or(1.0, |j| compliance_regressor(&tau, j));
+                            column[t][c].map_or_else(Vector3::zeros, |k| d.jacobian()[k] * scale)
+                        });
                         let jac =
                             Some((jac, &mut columns as &mut dyn Iterator<Item = Vector3<f64>>));
                         put_position_rows(row, &d.position_mm(), &measured, r, jac);
@@ -205,6 +247,28 @@ pub fn check_poses(tree: &Tree, poses: &[TreePose]) -> Result<(), CalibError> {
                 tips: tree.tips.len(),
             });
         }
+    }
+    Ok(())
+}
+
+/// Refuses (`CalibError::Implausible`, exit 2) poses whose points on some tip cannot be of
+/// that tip's chain as given (a length unit, the angle unit, another robot): a chain's
+/// pre-fit check ([`super::plausible::check_set`]) on every tip's measured points; `what`
+/// names the file.
+pub fn check_tree_plausible(tree: &Tree, poses: &[TreePose], what: &str) -> Result<(), CalibError> {
+    check_poses(tree, poses)?;
+    for (t, chain) in tree.chains()?.iter().enumerate() {
+        let path = tree.path(t);
+        let (q, xyz): (Vec<Vec<f64>>, Vec<Vector3<f64>>) = poses
+            .iter()
+            .filter_map(|p| {
+                let point = p.points_mm[t]?;
+                Some((path.iter().map(|&j| p.q[j]).collect(), Vector3::from(point)))
+            })
+            .unzip();
+        let set = MeasuredSet::from_points(q, xyz);
+        let name = &tree.tips[t].name;
+        check_set(chain, &set, &format!("{what} (tip `{name}`)"))?;
     }
     Ok(())
 }
@@ -308,3 +372,6 @@ pub fn tree_rms_mm(tree: &Tree, poses: &[TreePose]) -> Result<f64, CalibError> {
     let ss: f64 = e.iter().map(|v| v.norm_squared()).sum();
     Ok((ss / (3 * e.len()).max(1) as f64).sqrt())
 }
+
+#[cfg(test)]
+mod tests;

@@ -14,7 +14,7 @@ use std::fmt::Write as _;
 use rigctl::calib::calibrate_general::Select;
 use rigctl::calib::prior::PriorMode;
 use rigctl::calib::tree_calibrate::{calibrate_tree, tree_registration_only};
-use rigctl::calib::tree_fit::TreePose;
+use rigctl::calib::tree_fit::{check_tree_plausible, TreePose};
 use rigctl::calib::CalibrateOptions;
 use rigctl::io::pose_csv::{read_poses, PoseSpec};
 use rigctl::model::tree_file::is_tree_text;
@@ -71,7 +71,7 @@ fn read(args: &Args, tree: &Tree, path: &Path) -> Result<(Vec<TreePose>, Vec<usi
             n = tree.tips.len()
         )));
     }
-    Ok(file
+    let (poses, lines): (Vec<TreePose>, Vec<usize>) = file
         .poses
         .iter()
         .map(|p| {
@@ -81,14 +81,17 @@ fn read(args: &Args, tree: &Tree, path: &Path) -> Result<(Vec<TreePose>, Vec<usi
             };
             (pose, p.line)
         })
-        .unzip())
+        .unzip();
+    // units and motion checked per tip before any fit, as a chain's pose file is
+    check_tree_plausible(tree, &poses, &path.display().to_string())?;
+    Ok((poses, lines))
 }
 
 pub fn run(args: &Args, tree: Tree) -> Result<(), CliError> {
-    if args.markers.is_some() || args.compliance || args.select != Select::All {
+    if args.markers.is_some() || args.select != Select::All {
         return Err(CliError::bad_input(
             "a tree model's calibration measures one point per tip (x1,y1,z1 on the first \
-             [[tip]] ..): --markers, --compliance and --select press are for a single chain",
+             [[tip]] ..): --markers and --select press are for a single chain",
         ));
     }
     if args.prior != PriorMode::default() {
@@ -113,7 +116,7 @@ pub fn run(args: &Args, tree: Tree) -> Result<(), CliError> {
         keep_outliers: args.keep_outliers,
         ..Default::default()
     };
-    let mut o = calibrate_tree(&tree, &poses, val.as_deref(), &opts)?;
+    let mut o = calibrate_tree(&tree, &poses, val.as_deref(), &opts, args.compliance)?;
     // the gross errors named by the line of their pose, as on a chain
     for r in &mut o.report.outliers {
         r.line = cal_lines.get(r.index).copied();

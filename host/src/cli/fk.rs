@@ -19,6 +19,7 @@ use std::path::PathBuf;
 
 use rigctl::io::pose_csv::read_poses;
 use rigctl::model::tree_file::is_tree_text;
+use rigctl::model::tree_gravity::compliant_joints;
 use rigctl::model::{parse_set, ModelError, Tilt, Tree};
 
 use super::joint_log::JointLogArgs;
@@ -216,6 +217,9 @@ fn run_tree(args: &Args, tree: &Tree) -> Result<(), CliError> {
         .collect();
     let _ = writeln!(out, "{}", header.join(","));
     for (row, q) in poses.joints().iter().enumerate() {
+        // compliant joints bend under the whole tree's gravity (docs/model-files.md)
+        let (q, _) = compliant_joints(tree, &chains, q, false)
+            .map_err(|e| CliError::from(e).in_file(&args.joints).with_row(row + 1))?;
         for (k, (model, path)) in chains.iter().zip(&paths).enumerate() {
             let qc: Vec<f64> = path.iter().map(|&j| q[j]).collect();
             let mut cell = String::new();

@@ -95,7 +95,8 @@ mod toml_write;
 pub mod transmission;
 mod tree;
 pub mod tree_file;
-mod tree_params;
+pub mod tree_gravity;
+pub mod tree_params;
 pub mod unknown;
 
 pub use builder::ModelBuilder;

@@ -54,6 +54,10 @@ pub struct TreeJoint {
     pub limits: [f64; 2],
     /// Link masses in the joint frame.
     pub masses: Vec<TreeMass>,
+    /// Axial compliance (deg per kgf.m, mm per kgf.m if prismatic) of the joint under the
+    /// gravity torque of the whole tree about its axis ([`Tree::axis_torques_kgfm`]); parameter
+    /// `compliance_j<i>_deg_per_kgfm` (i: tree joint number, 1-based). 0: rigid.
+    pub compliance_deg_per_kgfm: f64,
 }
 
 /// A tip: a frame after a joint, and the tool point in it.
@@ -416,6 +420,7 @@ fn split_chain(tip: &str, m: &Model) -> Result<Split, ModelError> {
                     com_mm: pm.com_mm.into(),
                 })
                 .collect(),
+            compliance_deg_per_kgfm: 0.0,
         });
     }
     Ok(Split {

@@ -24,6 +24,7 @@
 //! parent = 0               # 0: the constants start after the root's; k: after joint k's frame
 //! min = -75.0              # (default: the previous joint, as in a chain)
 //! max = 75.0
+//! compliance_deg_per_kgfm = 0.0  # optional: deflection per kgf.m of the whole tree's gravity
 //!
 //! [[mass]]                 # in the joint frame (after = 0 only)
 //! joint = 1
@@ -92,6 +93,8 @@ struct JointEntry {
     parent: Option<usize>,
     min: f64,
     max: f64,
+    #[serde(default)]
+    compliance_deg_per_kgfm: f64,
 }
 
 #[derive(Debug, Deserialize)]
@@ -183,6 +186,12 @@ fn build(f: TreeFile) -> Result<Tree, String> {
         if !e.value.is_finite() {
             return Err(format!("{at}: value = {} is not finite", e.value));
         }
+        if !info.compliance_deg_per_kgfm.is_finite() {
+            return Err(format!(
+                "[[joint]] {j} (`{}`): compliance_deg_per_kgfm is not finite",
+                info.name
+            ));
+        }
         joints.push(TreeJoint {
             name: info.name.clone(),
             parent,
@@ -192,6 +201,7 @@ fn build(f: TreeFile) -> Result<Tree, String> {
             offset: e.value,
             limits: [info.min, info.max],
             masses: Vec::new(),
+            compliance_deg_per_kgfm: info.compliance_deg_per_kgfm,
         });
     }
     if !pending.is_empty() {
@@ -329,6 +339,13 @@ impl Tree {
                 fmt_f64(j.limits[0]),
                 fmt_f64(j.limits[1])
             );
+            if j.compliance_deg_per_kgfm != 0.0 {
+                let _ = writeln!(
+                    s,
+                    "compliance_deg_per_kgfm = {}",
+                    fmt_f64(j.compliance_deg_per_kgfm)
+                );
+            }
         }
         for (i, j) in self.joints.iter().enumerate() {
             for m in &j.masses {

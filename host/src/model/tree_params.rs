@@ -1,6 +1,23 @@
 //! A tree's parameters by name, for a fit over the whole tree: shared constants and joint
 //! offsets by their names, the shared base and scale values (`base_x` .. `scale_ppm`), and a
-//! tip's own values as `NAME@TIP` (its constants, `tool_dx@TIP` .. `tool_dz@TIP`).
+//! tip's own values as `NAME@TIP` (its constants, `tool_dx@TIP` .. `tool_dz@TIP`), and the
+//! axial compliance of tree joint i as `compliance_j<i>_deg_per_kgfm` (i 1-based, tree order;
+//! a chain's name for the same law).
+
+/// The name of tree joint `j`'s compliance (0-based `j`).
+pub fn compliance_name(j: usize) -> String {
+    format!("compliance_j{}_deg_per_kgfm", j + 1)
+}
+
+/// The tree joint (0-based) whose compliance `name` is, if it is a compliance name.
+pub fn compliance_joint(name: &str) -> Option<usize> {
+    let i: usize = name
+        .strip_prefix("compliance_j")?
+        .strip_suffix("_deg_per_kgfm")?
+        .parse()
+        .ok()?;
+    i.checked_sub(1)
+}
 
 use super::error::ModelError;
 use super::tree::{Tree, TREE_SHARED_PARAMS};
@@ -23,7 +40,7 @@ impl Tree {
         let slot = self.slot(name).ok_or_else(|| ModelError::UnknownParam {
             name: name.to_string(),
             valid: "the tree's constants and joint offsets, base_x .. base_ry, scale_ppm, \
-                    NAME@TIP for a tip's own constants and tool_dx@TIP .. tool_dz@TIP"
+                    compliance_j<i>_deg_per_kgfm, NAME@TIP for a tip's own constants and tool_dx@TIP .. tool_dz@TIP"
                 .into(),
         })?;
         *slot = value;
@@ -47,6 +64,12 @@ impl Tree {
                     .map(|e| &mut e.value),
             };
         }
+        if let Some(j) = compliance_joint(name) {
+            return self
+                .joints
+                .get_mut(j)
+                .map(|j| &mut j.compliance_deg_per_kgfm);
+        }
         if TREE_SHARED_PARAMS.contains(&name) {
             return Some(self.params.entry(name.to_string()).or_insert(0.0));
         }
@@ -62,6 +85,20 @@ impl Tree {
             }
         }
         None
+    }
+
+    /// The compliance parameters of every revolute tree joint (`compliance_j<i>_deg_per_kgfm`,
+    /// tree order): what `calibrate --compliance` frees on a tree.
+    pub fn compliance_names(&self) -> Vec<String> {
+        (0..self.joints.len())
+            .filter(|&j| !self.joints[j].prismatic)
+            .map(compliance_name)
+            .collect()
+    }
+
+    /// Whether some tree joint has a non-zero compliance.
+    pub fn has_compliance(&self) -> bool {
+        self.joints.iter().any(|j| j.compliance_deg_per_kgfm != 0.0)
     }
 
     /// The name parameter `chain_param` of tip `tip`'s chain has in the tree: a tip's own

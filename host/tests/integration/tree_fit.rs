@@ -47,6 +47,7 @@ fn mdh(name: &str, parent: Option<usize>, al: f64, a: f64, d: f64) -> TreeJoint 
             mass_kg: 2.0,
             com_mm: [0.0, 0.0, 50.0],
         }],
+        compliance_deg_per_kgfm: 0.0,
     }
 }
 

@@ -23,6 +23,7 @@ fn joint(name: &str, parent: Option<usize>, before: Vec<TreeElem>) -> TreeJoint 
             mass_kg: 2.0,
             com_mm: [10.0, 0.0, 50.0],
         }],
+        compliance_deg_per_kgfm: 0.0,
     }
 }
 

@@ -1,0 +1,192 @@
+use nalgebra::DVector;
+
+use super::*;
+use crate::model::tree_params::compliance_name;
+use crate::model::{Axis, Motion, Tip, TreeElem, TreeJoint, TreeMass};
+
+fn c(motion: Motion, axis: Axis, name: &str, value: f64) -> TreeElem {
+    TreeElem {
+        motion,
+        axis,
+        name: name.into(),
+        value,
+    }
+}
+
+fn joint(name: &str, parent: Option<usize>, row: [f64; 3]) -> TreeJoint {
+    use Axis::{X, Z};
+    use Motion::{Rot, Trans};
+    TreeJoint {
+        name: name.into(),
+        parent,
+        before: vec![
+            c(Rot, X, &format!("al_{name}"), row[0]),
+            c(Trans, X, &format!("a_{name}"), row[1]),
+            c(Trans, Z, &format!("d_{name}"), row[2]),
+        ],
+        prismatic: false,
+        offset_name: format!("off_{name}"),
+        offset: 0.0,
+        limits: [-170.0, 170.0],
+        masses: vec![TreeMass {
+            mass_kg: 4.0,
+            com_mm: [40.0, 0.0, 60.0],
+        }],
+        compliance_deg_per_kgfm: 0.0,
+    }
+}
+
+/// A horizontal torso joint and two 2-joint arms.
+fn tree() -> Tree {
+    let joints = vec![
+        joint("t1", None, [-90.0, 0.0, 400.0]),
+        joint("l1", Some(0), [90.0, 300.0, 200.0]),
+        joint("l2", Some(1), [-90.0, 250.0, 0.0]),
+        joint("r1", Some(0), [90.0, 300.0, -200.0]),
+        joint("r2", Some(3), [-90.0, 250.0, 0.0]),
+    ];
+    let tip = |name: &str, joint| Tip {
+        name: name.into(),
+        joint,
+        after: vec![c(Motion::Trans, Axis::X, "hand_x", 100.0)],
+        tool_mm: [0.0, 0.0, 30.0],
+    };
+    Tree {
+        name: "dual".into(),
+        root: Vec::new(),
+        joints,
+        tips: vec![tip("left", 2), tip("right", 4)],
+        params: Default::default(),
+    }
+}
+
+fn poses(t: &Tree) -> Vec<TreePose> {
+    (0..6)
+        .map(|k| TreePose {
+            q: (0..t.n_joints())
+                .map(|j| 60.0 * ((j * 5 + k * 11) as f64 * 0.41).sin())
+                .collect(),
+            points_mm: vec![
+                Some([100.0, 0.0, 0.0]),
+                (k % 2 == 0).then_some([0.0, 50.0, 0.0]),
+            ],
+        })
+        .collect()
+}
+
+/// The analytic columns of the compliances (and of a shared length) equal central differences
+/// of the residuals, with the joints already compliant; a torso compliance moves both tips.
+#[test]
+fn compliance_columns_match_finite_differences() {
+    let mut t = tree();
+    for (j, c) in [0.02, 0.05, 0.0, 0.03, 0.01].iter().enumerate() {
+        t.set_param(&compliance_name(j), *c).unwrap();
+    }
+    let names: Vec<String> = t
+        .compliance_names()
+        .into_iter()
+        .chain(["a_l1".to_string()])
+        .collect();
+    let u = TreeUnknowns::new(&t, names.clone()).unwrap();
+    let p = poses(&t);
+    let m = n_rows(&p);
+    let jac = u.jacobian(&p).unwrap();
+    let x0 = u.values();
+    for k in 0..names.len() {
+        let h = if k < 5 { 1e-4 } else { 1e-3 };
+        let at = |dx: f64| -> DVector<f64> {
+            let mut s = u.clone();
+            let mut x = x0.clone();
+            x[k] += dx;
+            s.set(&x).unwrap();
+            let mut r = DVector::zeros(m);
+            s.rows(&p, &mut r, None).unwrap();
+            r
+        };
+        let fd: DVector<f64> = (at(h) - at(-h)) / (2.0 * h);
+        let col = jac.column(k);
+        let scale = fd.amax().max(1e-6);
+        // a geometric column takes the torques as given (as on a chain): it misses their
+        // change with the geometry, a share of the bend (here < 1 %)
+        let tol = if k < 5 { 1e-5 } else { 1e-2 };
+        assert!(
+            (col - &fd).amax() < tol * scale.max(1.0),
+            "{}: analytic {:?} fd {:?}",
+            names[k],
+            col.transpose(),
+            fd.transpose()
+        );
+        if k == 0 {
+            // the torso's compliance moves the points on both tips
+            let rows_of = |tip_rows: &dyn Fn(usize) -> bool| {
+                (0..m)
+                    .filter(|&r| tip_rows(r))
+                    .map(|r| col[r].abs())
+                    .sum::<f64>()
+            };
+            assert!(rows_of(&|r| r % 6 < 3) > 1e-3 && rows_of(&|r| r % 6 >= 3) > 1e-3);
+        }
+    }
+    // an arm's compliance does not move the other arm's tip
+    let right_rows: Vec<usize> = {
+        let mut rows = Vec::new();
+        let mut row = 0;
+        for pose in &p {
+            for (tip, point) in pose.points_mm.iter().enumerate() {
+                if point.is_some() {
+                    if tip == 1 {
+                        rows.extend(row..row + 3);
+                    }
+                    row += 3;
+                }
+            }
+        }
+        rows
+    };
+    assert!(right_rows
+        .iter()
+        .all(|&r| jac[(r, 1)] == 0.0 && jac[(r, 2)] == 0.0));
+}
+
+/// Compliance deflects the readings by the whole tree's torque: the errors of a compliant tree
+/// against its rigid copy are those of the rigid tree at `q + c tau`.
+#[test]
+fn a_compliant_tree_evaluates_at_the_deflected_joints() {
+    let rigid = tree();
+    let mut soft = rigid.clone();
+    soft.set_param("compliance_j1_deg_per_kgfm", 0.1).unwrap();
+    let p = poses(&rigid);
+    for pose in &p {
+        let tau = rigid.axis_torques_kgfm(&pose.q).unwrap();
+        let mut q = pose.q.clone();
+        q[0] += 0.1 * tau[0];
+        let shifted = TreePose {
+            q,
+            points_mm: pose.points_mm.clone(),
+        };
+        let a = tree_errors(&soft, std::slice::from_ref(pose)).unwrap();
+        let b = tree_errors(&rigid, std::slice::from_ref(&shifted)).unwrap();
+        assert!(a.iter().zip(&b).all(|(a, b)| (a - b).norm() < 1e-9));
+        assert!(tau[0].abs() > 1.0);
+    }
+}
+
+/// `--compliance` frees every revolute joint's compliance after the geometry, and needs masses.
+#[test]
+fn compliance_selection_needs_masses() {
+    use crate::calib::tree_calibrate::tree_selection;
+    use crate::calib::CalibrateOptions;
+    let t = tree();
+    let opts = CalibrateOptions::default();
+    let sel = tree_selection(&t, &opts, true).unwrap();
+    let names = t.compliance_names();
+    assert_eq!(names.len(), 5);
+    assert_eq!(sel[sel.len() - 5..], names[..]);
+    let mut bare = t.clone();
+    bare.joints.iter_mut().for_each(|j| j.masses.clear());
+    assert!(matches!(
+        tree_selection(&bare, &opts, true),
+        Err(CalibError::Unsupported(_))
+    ));
+    assert!(tree_selection(&bare, &opts, false).is_ok());
+}
