@@ -141,6 +141,7 @@ TESTS = [
             "urdf_export::ur5_tracker_after_calibrate_base_in_pinocchio",
             "urdf_export::calibrated_katana_in_pinocchio_names_the_tilting",
             "urdf_export::tiago_round_trip_keeps_the_urdf_and_matches_pinocchio",
+            "tree_compliance::tree_compliance_reaches_the_floor_where_geometry_and_chains_do_not",
             "report_first_screen::demo_first_screen_names_the_harmonic",
         ],
     ),

@@ -14,6 +14,7 @@ use nalgebra::{Matrix3, Rotation3, Vector3};
 use rand::{Rng, SeedableRng};
 use rand_distr::{Distribution, Normal};
 
+use crate::common::record::record;
 use crate::common::spawn::{output, path_arg, text};
 
 const NOISE_MM: f64 = 0.4;
@@ -414,6 +415,10 @@ fn tree_compliance_reaches_the_floor_where_geometry_and_chains_do_not() {
         geometric / NOISE_MM,
         chains / NOISE_MM
     );
+    record("noise_mm", NOISE_MM);
+    record("elastic_mm", elastic);
+    record("geometric_mm", geometric);
+    record("chains_mm", chains);
     assert!(elastic <= bar, "tree + compliance {elastic} mm > {bar} mm");
     assert!(
         geometric > bar,
