@@ -133,12 +133,12 @@ impl Classify for PlanError {
 }
 
 /// Refinement sweeps when [`PlanConfig::refine_sweeps`] is `None`: 3, with or without
-/// `--from-diagnose`. (With `--from-diagnose` it used to be 0: linearised at the declared model,
-/// where the payload is zero, the refinement drove poses to where a joint moment vanishes and
-/// the payload column at zero is unbounded, 40-200 mm/kg against 0.03-0.06 at 0.5 kg; expected
-/// payload sigma 8e-5 kg, true 0.024-0.039, and `diagnose` no longer named the payload. The
-/// linearity test of [`robust`] now keeps every chosen or refined pose where the effects to
-/// separate are linear over their plausible values, so both are on by default.)
+/// `--from-diagnose`. (Linearised at the declared model, where the payload is zero, refinement
+/// alone would drive poses to where a joint moment vanishes and the payload column at zero is
+/// unbounded, 40-200 mm/kg against 0.03-0.06 at 0.5 kg: an expected payload sigma of 8e-5 kg
+/// against a true 0.024-0.039, and `diagnose` not naming the payload. The linearity test of
+/// [`robust`] keeps every chosen or refined pose where the effects to separate are linear over
+/// their plausible values, so refinement is on with `--from-diagnose` too.)
 pub fn default_refine_sweeps(_from_diagnose: bool) -> usize {
     DEFAULT_REFINE_SWEEPS
 }

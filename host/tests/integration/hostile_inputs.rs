@@ -1,16 +1,19 @@
-//! Hostile inputs (docs/reliability.md): outputs that are inputs, finite absurd values, endless
-//! files, the diagnose -> plan loop, files that must read back, concurrent runs, inputs that must
-//! be refused. Every test spawns the CLI with a time bound and never accepts exit 101.
+//! Hostile inputs (docs/reliability.md): the diagnose -> plan loop, files that must read back,
+//! inputs that must be refused; the shared two-joint URDF and model template. Outputs that are
+//! inputs and concurrent runs are in `outputs`, finite absurd values, endless files and scaling
+//! in `extremes`. Every test spawns the CLI with a time bound and never accepts exit 101.
+
+mod extremes;
+mod outputs;
 
 use std::path::{Path, PathBuf};
-use std::process::Stdio;
-use std::time::{Duration, Instant};
+use std::time::Duration;
 
 use rand::{Rng, SeedableRng};
 
-use super::common::long_urdf::long_urdf;
-use super::common::spawn::{os, rig, rigctl, run_for, Run};
+use super::common::spawn::{os, rig, run_for, Run};
 
+/// `simulate --seed 3` into `dir/sim`.
 fn simulated(dir: &Path) -> PathBuf {
     let out = dir.join("sim");
     let r = rig!(120; "simulate", "--seed", "3", "--out", out);
@@ -39,96 +42,6 @@ pub(crate) const URDF: &str = r#"<robot name="two">
     <origin xyz="0.3 0 0" rpy="1.5707963 0 0"/><axis xyz="0 0 1"/><limit lower="-2" upper="2"/></joint>
 </robot>
 "#;
-
-// ---------------------------------------------------------------------------------------------
-// 1. An output that is an input is refused (exit 2), the input kept; all outputs checked first.
-
-#[test]
-fn item1_output_equal_to_an_input_is_refused_and_the_input_kept() {
-    let dir = tempfile::tempdir().unwrap();
-    let sim = simulated(dir.path());
-    let cal = sim.join("cal.csv");
-    let val = sim.join("val.csv");
-    let cal_bytes = std::fs::read(&cal).unwrap();
-    let val_bytes = std::fs::read(&val).unwrap();
-    let scan = dir.path().join("S.png");
-    std::fs::write(&scan, b"\x89PNG\r\n\x1a\nnot really").unwrap();
-    let scan_bytes = std::fs::read(&scan).unwrap();
-    let jig = dir.path().join("jig.csv");
-    std::fs::write(&jig, "raw,travel_mm\n1000,0\n2000,5\n3000,10\n").unwrap();
-    let jig_bytes = std::fs::read(&jig).unwrap();
-    let urdf = dir.path().join("u.urdf");
-    std::fs::write(&urdf, URDF).unwrap();
-    let link = dir.path().join("link.csv");
-    std::os::unix::fs::symlink(&cal, &link).unwrap();
-
-    let r = rig!(60; "trace", scan, "--out", scan);
-    refused_and_kept(&r, &scan, &scan_bytes, "trace --out SCAN");
-    let r = rig!(60; "trace", scan, "--out", dir.path().join("t.csv"), "--overlay", scan);
-    refused_and_kept(&r, &scan, &scan_bytes, "trace --overlay SCAN");
-    let r = rig!(60; "calibrate", "--poses", cal, "--json", cal);
-    refused_and_kept(&r, &cal, &cal_bytes, "calibrate --json CAL");
-    let r = rig!(60; "calibrate", "--poses", cal, "--validate", val, "--out", val);
-    refused_and_kept(&r, &val, &val_bytes, "calibrate --out VAL");
-    let r = rig!(60; "calibrate", "--poses", cal, "--out", link);
-    refused_and_kept(&r, &cal, &cal_bytes, "calibrate --out LINK-TO-CAL");
-    let r = rig!(60; "diagnose", "--poses", cal, "--validate", val, "--json", val);
-    refused_and_kept(&r, &val, &val_bytes, "diagnose --json VAL");
-    let r = rig!(60; "diagnose", "--poses", cal, "--validate", val, "--out", cal);
-    refused_and_kept(&r, &cal, &cal_bytes, "diagnose --out CAL");
-    let r = rig!(60; "plan", "--n", "8", "--candidates", "200", "--poses", cal, "--out", cal);
-    refused_and_kept(&r, &cal, &cal_bytes, "plan --out CAL");
-    let r = rig!(60; "plan", "--n", "8", "--candidates-from", cal, "--out",
-        dir.path().join("p.csv"), "--json", cal);
-    refused_and_kept(&r, &cal, &cal_bytes, "plan --json CAL");
-    let r = rig!(60; "potcal", "--points", jig, "--out", jig);
-    refused_and_kept(&r, &jig, &jig_bytes, "potcal --out JIG");
-    let r = rig!(60; "urdf2model", "--urdf", urdf, "--tip", "l2", "--out", urdf);
-    refused_and_kept(&r, &urdf, URDF.as_bytes(), "urdf2model --out URDF");
-    // the same new file as two outputs
-    let both = dir.path().join("both.json");
-    let r = rig!(60; "calibrate", "--poses", cal, "--json", both, "--out", both);
-    assert_eq!(r.code, Some(2), "{}", r.show());
-    assert!(!both.exists());
-}
-
-#[test]
-fn item1_every_output_is_checked_before_the_work() {
-    let dir = tempfile::tempdir().unwrap();
-    let sim = simulated(dir.path());
-    let keep = dir.path().join("keep.json");
-    std::fs::write(&keep, "old").unwrap();
-    let file = dir.path().join("a_file");
-    std::fs::write(&file, "x").unwrap();
-    let r = rig!(120; "diagnose", "--poses", sim.join("cal.csv"), "--validate",
-        sim.join("val.csv"), "--json", keep, "--plots", file);
-    refused_and_kept(&r, &keep, b"old", "diagnose --plots FILE");
-    // plots into the directory of the inputs would overwrite nothing; an input named as an
-    // output directory's file would be
-    let r = rig!(60; "simulate", "--model", sim.join("truth.toml"), "--out", sim);
-    refused_and_kept(
-        &r,
-        &sim.join("truth.toml"),
-        &std::fs::read(sim.join("truth.toml")).unwrap(),
-        "simulate --model DIR/truth.toml --out DIR",
-    );
-}
-
-// 9. An output that is a directory or under a missing parent is bad input.
-#[test]
-fn item9_unusable_output_paths_are_bad_input() {
-    let dir = tempfile::tempdir().unwrap();
-    let sim = simulated(dir.path());
-    let cal = sim.join("cal.csv");
-    let r = rig!(60; "calibrate", "--poses", cal, "--json", dir.path());
-    assert_eq!(r.code, Some(2), "{}", r.show());
-    let r = rig!(60; "calibrate", "--poses", cal, "--json", dir.path().join("no/such/x.json"));
-    assert_eq!(r.code, Some(2), "{}", r.show());
-    assert!(r.stderr.contains("does not exist"), "{}", r.show());
-}
-
-// ---------------------------------------------------------------------------------------------
-// 2. Finite extreme values: refused at the edge, never a panic, a hang or NaN with exit 0.
 
 pub(crate) const MODEL_TEMPLATE: &str = r#"name = "prop"
 [[chain]]
@@ -221,95 +134,6 @@ pub(crate) fn with(k: usize, v: f64) -> [f64; N_FIELDS] {
 
 pub(crate) const JOINTS_CSV: &str = "q1,q2,q3\n10,20,30\n-5,40,-60\n0,0,0\n";
 
-/// fk on a model: exit 0 with finite output, or 1 / 2; never 101, never longer than the bound.
-fn fk_is_sane(dir: &Path, model: &str, what: &str) -> Option<i32> {
-    let m = dir.join("m.toml");
-    let q = dir.join("q.csv");
-    std::fs::write(&m, model).unwrap();
-    std::fs::write(&q, JOINTS_CSV).unwrap();
-    let r = rig!(30; "fk", "--model", m, "--joints", q);
-    assert!(!r.timed_out, "{what}: fk hung: {}", r.show());
-    assert!(
-        matches!(r.code, Some(0..=2)),
-        "{what}: fk exit {:?}: {}",
-        r.code,
-        r.show()
-    );
-    if r.code == Some(0) {
-        let lower = r.stdout.to_ascii_lowercase();
-        assert!(
-            !lower.contains("nan") && !lower.contains("inf"),
-            "{what}: exit 0 with non-finite output: {}",
-            r.stdout
-        );
-    }
-    r.code
-}
-
-#[test]
-fn item2_extreme_model_values_are_refused_with_their_line() {
-    let dir = tempfile::tempdir().unwrap();
-    let m = dir.path().join("m.toml");
-    let q = dir.path().join("q.csv");
-    std::fs::write(&q, JOINTS_CSV).unwrap();
-    assert_eq!(
-        fk_is_sane(dir.path(), &model_text(&MODEL_DEFAULTS), "defaults"),
-        Some(0)
-    );
-    for (k, v, what) in [
-        (16, 1e308, "joint_scale = 1e308"),
-        (17, 1e308, "joint_coupling j2 = 1e308"),
-        (4, 1e308, "a chain value 1e308"),
-        (11, -1e308, "joint min -1e308"),
-        (12, 1e308, "joint max 1e308"),
-        (20, 1e308, "mass 1e308 kg"),
-    ] {
-        std::fs::write(&m, model_text(&with(k, v))).unwrap();
-        let r = rig!(30; "fk", "--model", m, "--joints", q);
-        assert_eq!(r.code, Some(2), "fk, {what}: {}", r.show());
-        let r = rig!(60; "plan", "--model", m, "--n", "8", "--candidates", "200", "--out",
-            dir.path().join("p.csv"));
-        assert_eq!(r.code, Some(2), "plan, {what}: {}", r.show());
-        let r = rig!(60; "calibrate", "--model", m, "--poses", q);
-        assert_eq!(r.code, Some(2), "calibrate, {what}: {}", r.show());
-    }
-    // the message names the file and the line of the value
-    std::fs::write(&m, model_text(&with(4, 1e308))).unwrap();
-    let r = rig!(30; "fk", "--model", m, "--joints", q);
-    let line = model_text(&with(4, 1e308))
-        .lines()
-        .position(|l| l == "a = 1e308")
-        .unwrap()
-        + 1;
-    assert!(
-        r.stderr.contains(&format!("m.toml:{line}")),
-        "no file:line in {}",
-        r.show()
-    );
-}
-
-#[test]
-fn item2_extreme_effects_and_noise_are_refused() {
-    let dir = tempfile::tempdir().unwrap();
-    for args in [
-        vec!["--effect", "joint_scale:j1=1e308"],
-        vec!["--effect", "joint_coupling:j2:j1=1e308"],
-        vec!["--effect", "link_length:a2=1e308"],
-        vec!["--effect", "time_drift=1e308,0,0"],
-        vec!["--noise-mm", "1e308"],
-    ] {
-        let out = dir.path().join("s");
-        let mut a: Vec<&std::ffi::OsStr> = vec![os("simulate"), os("--out"), os(&out)];
-        a.extend(args.iter().map(os));
-        let r = run_for(&a, Duration::from_secs(60));
-        assert_eq!(r.code, Some(2), "simulate {args:?}: {}", r.show());
-        assert!(
-            !out.join("cal.csv").exists(),
-            "simulate {args:?} wrote cal.csv"
-        );
-    }
-}
-
 // ---------------------------------------------------------------------------------------------
 // 3. diagnose -> plan --from-diagnose for the path-dependent effect ids.
 
@@ -343,88 +167,6 @@ fn item3_from_diagnose_takes_hysteresis_and_time_drift() {
             r.stdout
         );
     }
-}
-
-// ---------------------------------------------------------------------------------------------
-// 4. Endless inputs are refused at once.
-
-#[test]
-fn item4_dev_zero_is_refused_by_every_reader() {
-    if !Path::new("/dev/zero").exists() {
-        return;
-    }
-    let dir = tempfile::tempdir().unwrap();
-    let sim = simulated(dir.path());
-    let z = Path::new("/dev/zero");
-    let p = dir.path().join("p.csv");
-    let runs = [
-        (
-            "fk --model",
-            rig!(20; "fk", "--model", z, "--joints", sim.join("cal.csv")),
-        ),
-        ("calibrate --poses", rig!(20; "calibrate", "--poses", z)),
-        (
-            "plan --from-diagnose",
-            rig!(20; "plan", "--n", "8", "--from-diagnose", z, "--out", p),
-        ),
-        (
-            "urdf2model --urdf",
-            rig!(20; "urdf2model", "--urdf", z, "--tip", "x", "--out",
-            dir.path().join("m.toml")),
-        ),
-        (
-            "export",
-            rig!(20; "export", z, "--csv", dir.path().join("csv")),
-        ),
-        (
-            "diagnose --validate",
-            rig!(20; "diagnose", "--poses", sim.join("cal.csv"),
-            "--validate", z),
-        ),
-    ];
-    for (what, r) in runs {
-        assert!(!r.timed_out, "{what} /dev/zero: {}", r.show());
-        assert_eq!(r.code, Some(2), "{what} /dev/zero: {}", r.show());
-    }
-}
-
-// ---------------------------------------------------------------------------------------------
-// 5. Scaling: the header check is linear; urdf2model on a long chain; plan --n bounded.
-
-#[test]
-fn item5_a_header_of_200k_columns_is_checked_in_linear_time() {
-    let dir = tempfile::tempdir().unwrap();
-    let f = dir.path().join("wide.csv");
-    let mut head: Vec<String> = (1..=5).map(|j| format!("q{j}")).collect();
-    head.extend((0..200_000).map(|k| format!("c{k}")));
-    let row = vec!["0"; head.len()].join(",");
-    std::fs::write(&f, format!("{}\n{row}\n", head.join(","))).unwrap();
-    let t = Instant::now();
-    let r = rig!(60; "fk", "--joints", f);
-    assert_eq!(r.code, Some(0), "{}", r.show());
-    assert!(t.elapsed() < Duration::from_secs(20), "{:?}", t.elapsed());
-}
-
-#[test]
-fn item5_urdf2model_on_a_10k_joint_chain() {
-    let dir = tempfile::tempdir().unwrap();
-    let u = dir.path().join("long.urdf");
-    std::fs::write(&u, long_urdf(10_000)).unwrap();
-    let t = Instant::now();
-    let r = rig!(120; "urdf2model", "--urdf", u, "--tip", "l10000", "--out",
-        dir.path().join("m.toml"));
-    assert_eq!(r.code, Some(0), "{}", r.show());
-    assert!(t.elapsed() < Duration::from_secs(30), "{:?}", t.elapsed());
-}
-
-#[test]
-fn item5_plan_n_is_bounded_by_the_candidates() {
-    let dir = tempfile::tempdir().unwrap();
-    let r = rig!(30; "plan", "--n", "1000000", "--out", dir.path().join("p.csv"));
-    assert_eq!(r.code, Some(2), "{}", r.show());
-    let r = rig!(30; "plan", "--n", "8", "--candidates", "100000000", "--out",
-        dir.path().join("p.csv"));
-    assert_eq!(r.code, Some(2), "{}", r.show());
 }
 
 // ---------------------------------------------------------------------------------------------
@@ -501,46 +243,6 @@ fn item6_property_model_names_round_trip() {
         let again = rigctl::model::Model::from_toml_str(&m.to_toml_string(), "t").unwrap();
         assert_eq!(again.name(), name);
         assert_eq!(again.to_toml_string(), m.to_toml_string());
-    }
-}
-
-// ---------------------------------------------------------------------------------------------
-// 7. Concurrent runs into one directory leave the files of one run.
-
-#[test]
-fn item7_concurrent_simulate_runs_leave_one_consistent_set() {
-    let dir = tempfile::tempdir().unwrap();
-    // a mix needs the runs to interleave: 16 at once, three rounds
-    for round in 0..3 {
-        let out = dir.path().join(format!("shared{round}"));
-        let children: Vec<_> = (1..=16)
-            .map(|seed| {
-                rigctl()
-                    .args(["simulate", "--seed", &seed.to_string(), "--out"])
-                    .arg(&out)
-                    .stdout(Stdio::null())
-                    .stderr(Stdio::null())
-                    .spawn()
-                    .unwrap()
-            })
-            .collect();
-        for mut c in children {
-            assert!(c.wait().unwrap().success());
-        }
-        let truth: serde_json::Value =
-            serde_json::from_str(&std::fs::read_to_string(out.join("truth.json")).unwrap())
-                .unwrap();
-        let seed = truth["seed"].as_u64().expect("truth.json has the seed");
-        let single = dir.path().join(format!("single{round}"));
-        let r = rig!(120; "simulate", "--seed", seed.to_string(), "--out", single);
-        assert_eq!(r.code, Some(0), "{}", r.show());
-        for f in ["cal.csv", "val.csv", "truth.toml", "truth.json"] {
-            assert_eq!(
-                std::fs::read(out.join(f)).unwrap(),
-                std::fs::read(single.join(f)).unwrap(),
-                "round {round}: {f} is not from seed {seed}"
-            );
-        }
     }
 }
 

@@ -2,9 +2,15 @@
 //! printed reference, other radii and free curves (open and closed), 3-8 skips of 1-6 mm, dust,
 //! fibres, stray flicks and a second pencil stroke across the path; rendered by the project's
 //! renderer and by an independent one (`trace_independent/render2.rs`: another stroke, skip,
-//! dust, shading and camera model; also photos cropped off their centre). Measured by coverage (share of the true centreline within
-//! 0.1 mm of the trace) and RMS; the exit rule: exit 0 only with the whole drawn path written,
-//! so never exit 0 below 0.95 coverage, and an incomplete path exits 1 naming where.
+//! dust, shading and camera model; also photos cropped off their centre). Measured by coverage
+//! (share of the true centreline within 0.1 mm of the trace) and RMS; the exit rule: exit 0 only
+//! with the whole drawn path written, so never exit 0 below 0.95 coverage, and an incomplete
+//! path exits 1 naming where (`exit_rule`).
+//!
+//! Here: the sets of 20 seeds per renderer and image kind (`renderers` draws them) and a pencil
+//! line across ring dots. In the submodules: the exit rule (`exit_rule`), several drawn lines
+//! (`drawing`), sheets not lying flat (`bends`), device tone curves (`tone_curves`), two runs
+//! on one sheet (`two_runs`), six sheets as a new user would draw them (`reported`).
 
 #[path = "trace_independent/bends.rs"]
 mod bends;
@@ -12,8 +18,12 @@ mod bends;
 mod cases;
 #[path = "trace_independent/drawing.rs"]
 mod drawing;
+#[path = "trace_independent/exit_rule.rs"]
+mod exit_rule;
 #[path = "trace_independent/render2.rs"]
 mod render2;
+#[path = "trace_independent/renderers.rs"]
+mod renderers;
 #[path = "trace_independent/reported.rs"]
 mod reported;
 #[path = "trace_independent/tone_curves.rs"]
@@ -24,19 +34,12 @@ mod two_runs;
 use crate::trace_cli::trace_to;
 use cases::{case, measure, Case};
 use indicatif::ProgressBar;
-use rand::{Rng, SeedableRng};
-use rand_chacha::ChaCha8Rng;
-use render2::{photo_view, scan_view, Printed, Scene};
-use rigctl::sheet::ReferencePath;
-use rigctl::trace::synth::{render_photo, render_scan, Bend, DeviceTone, PhotoSpec, RenderSpec};
+use render2::Printed;
+use renderers::{
+    render_independent, render_independent_shot, render_independent_toned, render_independent_with,
+    render_project, render_project_toned, render_project_with, shot, Kind, Shot,
+};
 use rigctl::trace::{trace_image, TraceOptions};
-
-#[derive(Clone, Copy, Debug, PartialEq)]
-enum Kind {
-    Photo,
-    Scan300,
-    Scan600,
-}
 
 /// One traced image: coverage, RMS (mm), whether the tracer would exit 0, and its message.
 struct Outcome {
@@ -44,216 +47,6 @@ struct Outcome {
     rms: f64,
     exit0: bool,
     note: String,
-}
-
-fn printed(p: Printed) -> ReferencePath {
-    match p {
-        Printed::Circle => ReferencePath::Circle,
-        Printed::Line => ReferencePath::Line,
-    }
-}
-
-/// The camera and light of a photo or scan of `seed`, drawn independently of the path.
-struct Shot {
-    ppm: f64,
-    tilt: f64,
-    azimuth: f64,
-    roll: f64,
-    k1: f64,
-    rot_deg: f64,
-    jpeg: u8,
-    /// The principal point this far from the image centre, px (a photo cropped off its centre).
-    centre_off_px: f64,
-}
-
-fn shot(kind: Kind, seed: u64) -> Shot {
-    let mut rng = ChaCha8Rng::seed_from_u64(seed ^ 0x5407_0000);
-    Shot {
-        ppm: match kind {
-            Kind::Photo => rng.gen_range(200.0..300.0) / 25.4,
-            Kind::Scan300 => 300.0 / 25.4,
-            Kind::Scan600 => 600.0 / 25.4,
-        },
-        tilt: rng.gen_range(0.0f64..40.0).to_radians(),
-        azimuth: rng.gen_range(0.0..std::f64::consts::TAU),
-        roll: rng.gen_range(0.0..std::f64::consts::TAU),
-        k1: rng.gen_range(-0.08..0.08),
-        rot_deg: rng.gen_range(-4.0..4.0),
-        jpeg: rng.gen_range(85..96),
-        centre_off_px: 0.0,
-    }
-}
-
-fn render_independent(c: &Case, kind: Kind, seed: u64) -> image::RgbImage {
-    render_independent_shot(c, kind, &shot(kind, seed), seed)
-}
-
-/// [`render_independent`] with the camera and light of `s`.
-fn render_independent_shot(c: &Case, kind: Kind, s: &Shot, seed: u64) -> image::RgbImage {
-    render_independent_toned(c, kind, s, seed, None)
-}
-
-/// [`render_independent_shot`] written through the tone curve `tone` (`None`: linear).
-fn render_independent_toned(
-    c: &Case,
-    kind: Kind,
-    s: &Shot,
-    seed: u64,
-    tone: Option<fn(f64) -> f64>,
-) -> image::RgbImage {
-    render_independent_with(c, kind, s, seed, tone, None)
-}
-
-/// [`render_independent_toned`] with a photo's sheet sagging by `sag`.
-fn render_independent_with(
-    c: &Case,
-    kind: Kind,
-    s: &Shot,
-    seed: u64,
-    tone: Option<fn(f64) -> f64>,
-    sag: Option<render2::Sag>,
-) -> image::RgbImage {
-    let mut marks = vec![render2::Mark {
-        pts: c.truth.clone(),
-        width_mm: c.width_mm,
-        darkness: c.darkness,
-        skips: c.skips.clone(),
-    }];
-    if let Some((pts, closed)) = &c.second_run {
-        let mut pts = pts.clone();
-        if *closed {
-            pts.push(pts[0]);
-        }
-        marks.push(render2::Mark {
-            pts,
-            width_mm: c.width_mm,
-            darkness: c.darkness,
-            skips: Vec::new(),
-        });
-    }
-    for extra in c.crossing.iter().chain(&c.strays) {
-        marks.push(render2::Mark {
-            pts: extra.clone(),
-            width_mm: c.width_mm,
-            darkness: c.darkness,
-            skips: Vec::new(),
-        });
-    }
-    let mut rng = ChaCha8Rng::seed_from_u64(seed ^ 0x11_6417);
-    let (view, light, noise, jpeg) = match kind {
-        Kind::Photo => (
-            {
-                let view = photo_view(
-                    s.ppm,
-                    s.tilt,
-                    s.azimuth,
-                    s.roll,
-                    s.k1,
-                    [rng.gen_range(-8.0..8.0), rng.gen_range(-8.0..8.0)],
-                );
-                let a = seed as f64 * 2.399_963; // a direction per seed, outside `rng`'s stream
-                render2::off_centre(view, [s.centre_off_px * a.cos(), s.centre_off_px * a.sin()])
-            },
-            [
-                rng.gen_range(0.75..0.95),
-                rng.gen_range(-0.25..0.25),
-                rng.gen_range(-0.25..0.25),
-                rng.gen_range(0.0..0.3),
-            ],
-            rng.gen_range(2.0..5.0),
-            Some(s.jpeg),
-        ),
-        _ => (
-            scan_view(s.ppm * 25.4, s.rot_deg),
-            [
-                rng.gen_range(0.9..1.0),
-                rng.gen_range(-0.04..0.04),
-                rng.gen_range(-0.04..0.04),
-                0.0,
-            ],
-            rng.gen_range(1.0..3.0),
-            None,
-        ),
-    };
-    render2::render(&Scene {
-        printed: c.printed,
-        marks,
-        dust: c.dust.clone(),
-        fibres: c.fibres.clone(),
-        view,
-        light,
-        noise,
-        jpeg,
-        seed,
-        tone,
-        sag,
-    })
-}
-
-fn render_project(c: &Case, kind: Kind, seed: u64) -> image::RgbImage {
-    render_project_toned(c, kind, seed, DeviceTone::Linear)
-}
-
-/// [`render_project`] written through the device's tone curve `tone`.
-fn render_project_toned(c: &Case, kind: Kind, seed: u64, tone: DeviceTone) -> image::RgbImage {
-    render_project_with(c, kind, seed, tone, None)
-}
-
-/// [`render_project_toned`] with a photo's sheet bent by `bend`.
-fn render_project_with(
-    c: &Case,
-    kind: Kind,
-    seed: u64,
-    tone: DeviceTone,
-    bend: Option<Bend>,
-) -> image::RgbImage {
-    let s = shot(kind, seed);
-    let spec = RenderSpec {
-        dpi: if kind == Kind::Photo {
-            450.0
-        } else {
-            s.ppm * 25.4
-        },
-        pencil_mm: c.truth.clone(),
-        pencil_closed: c.closed,
-        more_pencil_mm: c.second_run.iter().cloned().collect(),
-        pencil_width_mm: c.width_mm,
-        pencil_darkness: c.darkness,
-        reference: Some(printed(c.printed)),
-        ring: true,
-        rotation_deg: s.rot_deg,
-        skips_mm: c.skips.clone(),
-        dust_mm: c.dust.iter().map(|d| [d[0], d[1], d[2]]).collect(),
-        fibres_mm: c.fibres.clone(),
-        seed,
-        device_tone: tone,
-        ..RenderSpec::default()
-    };
-    match kind {
-        Kind::Photo => {
-            let dist = 400.0;
-            let half = (s.ppm * 100.0 * 1.45) as u32;
-            render_photo(
-                &spec,
-                &PhotoSpec {
-                    width_px: 2 * half + 80,
-                    height_px: 2 * half + 80,
-                    focal_px: s.ppm * dist,
-                    distance_mm: dist,
-                    tilt_deg: s.tilt.to_degrees(),
-                    tilt_azimuth_deg: s.azimuth.to_degrees(),
-                    roll_deg: s.roll.to_degrees(),
-                    k1: s.k1,
-                    texture_dpi: 450.0,
-                    jpeg_quality: Some(s.jpeg),
-                    seed,
-                    bend,
-                    ..PhotoSpec::default()
-                },
-            )
-        }
-        _ => render_scan(&spec),
-    }
 }
 
 fn trace_outcome(img: &image::RgbImage, c: &Case) -> Outcome {
@@ -597,173 +390,4 @@ fn pencil_across_ring_dots() {
             assert!(d < 0.1, "{kind:?}: {d} mm off the pencil beside a ring dot");
         }
     }
-}
-
-/// The arc-length position `s` on the truth.
-fn truth_at(c: &Case, s: f64) -> [f64; 2] {
-    let mut acc = 0.0;
-    for w in c.truth.windows(2) {
-        acc += (w[1][0] - w[0][0]).hypot(w[1][1] - w[0][1]);
-        if acc >= s {
-            return w[1];
-        }
-    }
-    c.truth[c.truth.len() - 1]
-}
-
-/// A path that cannot be completed: one skip of 20-30 mm (beyond --max-gap-mm 10) besides the
-/// short ones. Never exit 0; the missing gap is named where it is; bridging it on purpose
-/// (a larger --max-gap-mm) gives the whole path.
-#[test]
-fn long_skip_is_never_exit_0_and_is_named() {
-    for seed in 101..109u64 {
-        let mut c = case(seed, true, false);
-        let total = cases::length(&c.truth);
-        let mut rng = ChaCha8Rng::seed_from_u64(seed);
-        let len = rng.gen_range(20.0..30.0);
-        let s0 = 0.5 * total - 0.5 * len;
-        c.skips.retain(|k| k[1] < s0 - 6.0 || k[0] > s0 + len + 6.0);
-        c.skips.push([s0, s0 + len]);
-        let img = render_independent(&c, Kind::Scan300, seed);
-        let t =
-            trace_image(&img, &TraceOptions::default(), &ProgressBar::hidden()).expect("traced");
-        let main = t.main_stroke().expect("a path");
-        let (coverage, _) = measure(&c.truth, c.closed, &main.points_mm, main.closed);
-        let missing: Vec<_> = t.linking.missing().collect();
-        eprintln!(
-            "seed {seed} {} skip {len:.1} mm: coverage of the longest chain {coverage:.3}, whole {}, missing {missing:?}",
-            c.shape,
-            t.is_whole()
-        );
-        assert!(!t.is_whole(), "seed {seed}: exit 0 with a {len:.1} mm skip");
-        // Named: a missing gap from one side of the skip to the other, or the mark beyond it
-        // (a part of the path that may continue it) starting at the skip's far side.
-        let (a, b) = (truth_at(&c, s0), truth_at(&c, s0 + len));
-        let near = |q: [f64; 2], p: [f64; 2]| (q[0] - p[0]).hypot(q[1] - p[1]) < 1.5;
-        let gap_named = missing.iter().any(|g| {
-            (near(g.from_mm, a) && near(g.to_mm, b)) || (near(g.from_mm, b) && near(g.to_mm, a))
-        });
-        let mark_named = t
-            .linking
-            .left_out
-            .iter()
-            .filter(|o| o.could_be_path())
-            .any(|o| {
-                [o.from_mm, o.to_mm]
-                    .iter()
-                    .any(|q| near(*q, a) || near(*q, b))
-            });
-        assert!(
-            gap_named || mark_named,
-            "seed {seed}: the missing stretch {a:?}..{b:?} is not named: {missing:?}, {:?}",
-            t.linking.left_out
-        );
-        // On purpose: a larger --max-gap-mm bridges it where the path is smooth at the gap's
-        // scale (circle, line); a wiggly curve may still not be extrapolated across 20-30 mm,
-        // but whenever the trace is then reported whole it covers the path.
-        let wide = TraceOptions {
-            max_gap_mm: 35.0,
-            ..TraceOptions::default()
-        };
-        let t = trace_image(&img, &wide, &ProgressBar::hidden()).expect("traced");
-        let main = t.main_stroke().expect("a path");
-        let (coverage, rms) = measure(&c.truth, c.closed, &main.points_mm, main.closed);
-        eprintln!(
-            "  --max-gap-mm 35: whole {}, coverage {coverage:.3}, rms {rms:.3} mm",
-            t.is_whole()
-        );
-        if c.shape == "circle" || c.shape == "line" {
-            assert!(t.is_whole(), "seed {seed}: not whole with --max-gap-mm 35");
-        }
-        if t.is_whole() {
-            assert!(coverage >= 0.9, "seed {seed}: coverage {coverage} bridged");
-            assert!(rms < 0.5, "seed {seed}: rms {rms} bridged");
-        }
-    }
-}
-
-/// Through the CLI: the gaps bridged are listed on exit 0; exit 1 naming the gap, and no CSV.
-#[test]
-fn cli_exit_codes_and_messages() {
-    let dir = tempfile::tempdir().expect("tempdir");
-    let mut c = case(7, true, false);
-    let scan = dir.path().join("whole.png");
-    render_independent(&c, Kind::Scan300, 7)
-        .save(&scan)
-        .expect("png");
-    let out = dir.path().join("whole.csv");
-    let o = trace_to(&scan, &out);
-    let err = String::from_utf8_lossy(&o.stderr);
-    assert_eq!(o.status.code(), Some(0), "{err}");
-    // Every skip is listed (besides any ring dot or speck of dust the pencil crossed).
-    assert!(
-        err.matches("gap bridged:").count() >= c.skips.len(),
-        "{err}"
-    );
-    assert!(out.exists());
-    let total = cases::length(&c.truth);
-    c.skips = vec![[0.5 * total, 0.5 * total + 25.0]];
-    let scan = dir.path().join("gap.png");
-    render_independent(&c, Kind::Scan300, 7)
-        .save(&scan)
-        .expect("png");
-    let out = dir.path().join("gap.csv");
-    let o = trace_to(&scan, &out);
-    let err = String::from_utf8_lossy(&o.stderr);
-    assert_eq!(o.status.code(), Some(1), "{err}");
-    assert!(
-        err.contains("not the whole drawn path") && err.contains("gap of"),
-        "{err}"
-    );
-    assert!(!out.exists());
-}
-
-/// A greyscale scan through the CLI: whole (seed 5, a line crossing the print) is exit 0 with
-/// the grey print named; a line running along the print (seed 17) is exit 1 naming the end at
-/// the print, nothing written.
-#[test]
-fn cli_greyscale_scans_name_the_grey_print() {
-    let dir = tempfile::tempdir().expect("tempdir");
-    for (seed, code) in [(5, 0), (17, 1)] {
-        let c = case(seed, true, false);
-        let scan = dir.path().join(format!("grey{seed}.png"));
-        grey(render_independent(&c, Kind::Scan300, seed))
-            .save(&scan)
-            .expect("png");
-        let out = dir.path().join(format!("grey{seed}.csv"));
-        let o = trace_to(&scan, &out);
-        let err = String::from_utf8_lossy(&o.stderr);
-        assert_eq!(o.status.code(), Some(code), "seed {seed}: {err}");
-        assert!(
-            err.contains("the printed line is as dark as the pencil"),
-            "seed {seed}: {err}"
-        );
-        assert_eq!(out.exists(), code == 0, "seed {seed}");
-        if code == 1 {
-            assert!(err.contains("under the printed path"), "{err}");
-        }
-    }
-}
-
-/// The overlay of a greyscale scan whose path ends at the print (render2 seed 17) marks that end
-/// with a red cross, 3 mm across: more red than the same trace without the end listed.
-#[test]
-fn overlay_marks_an_end_at_the_grey_print() {
-    let c = case(17, true, false);
-    let img = grey(render_independent(&c, Kind::Scan300, 17));
-    let t = trace_image(&img, &TraceOptions::default(), &ProgressBar::hidden()).expect("trace");
-    assert_eq!(t.ends_at_print_mm.len(), 1, "{:?}", t.ends_at_print_mm);
-    let red = |t: &rigctl::trace::Trace| {
-        rigctl::trace::overlay::render_overlay(&img, t, 180.0)
-            .pixels()
-            .filter(|p| p.0[0] > 200 && p.0[1] < 60 && p.0[2] < 60)
-            .count()
-    };
-    let without = rigctl::trace::Trace {
-        ends_at_print_mm: Vec::new(),
-        ..t.clone()
-    };
-    // Two strokes of 4.2 mm at 11.8 px/mm, 3 px wide: about 300 pixels.
-    let more = red(&t) as f64 - red(&without) as f64;
-    assert!(more > 150.0, "{more} more red pixels");
 }
