@@ -38,6 +38,13 @@ impl Bounded for usize {
     }
 }
 
+/// A list of stage numbers (candidates, or one number per case): every one in range.
+impl<T: Bounded, const N: usize> Bounded for [T; N] {
+    fn in_range(&self) -> bool {
+        self.iter().all(Bounded::in_range)
+    }
+}
+
 /// A parameter file that could not be used.
 #[derive(Debug, thiserror::Error)]
 #[error("{}{}: {message}", path.display(), line.map_or_else(String::new, |l| format!(":{l}")))]
