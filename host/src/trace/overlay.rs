@@ -59,7 +59,11 @@ macro_rules! frame_of {
     ($($result:ty),*) => {$(
         impl<'a> From<&'a $result> for Frame<'a> {
             fn from(x: &'a $result) -> Self {
-                Frame { camera: x.camera.as_ref(), fiducials: x.fiducials.as_ref(), px_per_mm: x.px_per_mm }
+                Frame {
+                    camera: x.camera.as_ref(),
+                    fiducials: x.fiducials.as_ref(),
+                    px_per_mm: x.px_per_mm,
+                }
             }
         }
     )*};

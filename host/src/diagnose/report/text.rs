@@ -163,9 +163,13 @@ impl DiagnoseReport {
                 let _ = writeln!(
                     s,
                     "{label}: {} line {}{}: {}",
-                    o.file,
-                    o.line.map_or_else(|| "?".to_string(), |l| l.to_string()),
-                    o.id.as_ref()
+                    o.pose.file,
+                    o.pose
+                        .line
+                        .map_or_else(|| "?".to_string(), |l| l.to_string()),
+                    o.pose
+                        .id
+                        .as_ref()
                         .map_or_else(String::new, |i| format!(" (id {i})")),
                     o.note
                 );
