@@ -57,6 +57,16 @@ impl PoseError {
             index,
         }
     }
+
+    /// The pose's line in its file (`?` when not read from one), then its id when it has one:
+    /// `6 (id D4_2_1)`, as the text outputs name it.
+    pub fn line_and_id(&self) -> String {
+        let line = self.line.map_or_else(|| "?".to_string(), |l| l.to_string());
+        match &self.id {
+            Some(id) => format!("{line} (id {id})"),
+            None => line,
+        }
+    }
 }
 
 /// A pose left out as a gross error (the `outliers` entries of the `calibrate` and `diagnose`

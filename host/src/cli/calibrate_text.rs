@@ -51,15 +51,9 @@ pub(super) fn outlier_lines(
         };
         let _ = writeln!(
             s,
-            "outlier: {}:{}{}: {}",
+            "outlier: {}:{}: {}",
             path.display(),
-            o.pose
-                .line
-                .map_or_else(|| "?".to_string(), |l| l.to_string()),
-            o.pose
-                .id
-                .as_ref()
-                .map_or_else(String::new, |i| format!(" (id {i})")),
+            o.pose.line_and_id(),
             o.note
         );
     }

@@ -162,15 +162,9 @@ impl DiagnoseReport {
             for o in list {
                 let _ = writeln!(
                     s,
-                    "{label}: {} line {}{}: {}",
+                    "{label}: {} line {}: {}",
                     o.pose.file,
-                    o.pose
-                        .line
-                        .map_or_else(|| "?".to_string(), |l| l.to_string()),
-                    o.pose
-                        .id
-                        .as_ref()
-                        .map_or_else(String::new, |i| format!(" (id {i})")),
+                    o.pose.line_and_id(),
                     o.note
                 );
             }
