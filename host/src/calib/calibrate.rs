@@ -374,13 +374,9 @@ pub fn calibrate(
                 .copied()
                 .filter(|k| vflag.binary_search(k).is_err())
                 .map(|k| outliers::Extrapolated {
-                    file: "val".into(),
-                    line: None,
-                    id: None,
-                    error_mm: final_norms[k],
+                    pose: outliers::PoseError::new("val", k, final_norms[k]),
                     prediction_sd_mm: sd[k],
                     outside_joints: outside[k].clone(),
-                    index: k,
                 })
                 .collect();
             if !vflag.is_empty() {

@@ -28,10 +28,10 @@ pub const GAP_RATIO: f64 = 2.0;
 /// Most fit-and-flag rounds of [`trim`].
 pub const MAX_ROUNDS: usize = 6;
 
-/// A pose left out as a gross error (the `outliers` entries of the `calibrate` and `diagnose`
-/// JSON, FORMATS.md).
+/// A pose a report names, with its error: the first keys of the `outliers` and `extrapolated`
+/// entries of the `calibrate` and `diagnose` JSON (FORMATS.md).
 #[derive(Debug, Clone, PartialEq, Serialize)]
-pub struct OutlierReport {
+pub struct PoseError {
     /// `"cal"` or `"val"`.
     pub file: String,
     /// Line of the pose in its file (as in error messages), when read from a file.
@@ -40,11 +40,44 @@ pub struct OutlierReport {
     pub id: Option<String>,
     /// The pose's error under the final model, mm.
     pub error_mm: f64,
-    /// Why it was flagged.
-    pub note: String,
     /// Index of the pose in its set.
     #[serde(skip)]
     pub index: usize,
+}
+
+impl PoseError {
+    /// Pose `index` of set `file` with its error; its line and id are filled by who read the
+    /// file.
+    pub fn new(file: &str, index: usize, error_mm: f64) -> Self {
+        Self {
+            file: file.to_string(),
+            line: None,
+            id: None,
+            error_mm,
+            index,
+        }
+    }
+
+    /// The pose's line in its file (`?` when not read from one), then its id when it has one:
+    /// `6 (id D4_2_1)`, as the text outputs name it.
+    pub fn line_and_id(&self) -> String {
+        let line = self.line.map_or_else(|| "?".to_string(), |l| l.to_string());
+        match &self.id {
+            Some(id) => format!("{line} (id {id})"),
+            None => line,
+        }
+    }
+}
+
+/// A pose left out as a gross error (the `outliers` entries of the `calibrate` and `diagnose`
+/// JSON, FORMATS.md).
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct OutlierReport {
+    /// The pose and its error.
+    #[serde(flatten)]
+    pub pose: PoseError,
+    /// Why it was flagged.
+    pub note: String,
 }
 
 /// Median of the chi distribution with `dims` degrees of freedom (1, 2 or 3 coordinates).
@@ -245,23 +278,15 @@ fn threshold_mm_of(errors_mm: &[f64]) -> f64 {
 /// left out.
 #[derive(Debug, Clone, PartialEq, Serialize)]
 pub struct Extrapolated {
-    /// `"val"`.
-    pub file: String,
-    /// Line of the pose in its file, when read from a file.
-    pub line: Option<usize>,
-    /// The pose's `id`, when the file has them.
-    pub id: Option<String>,
-    /// The pose's error under the final model, mm.
-    pub error_mm: f64,
+    /// The pose (of `"val"`) and its error.
+    #[serde(flatten)]
+    pub pose: PoseError,
     /// One standard deviation (per coordinate) of the model's prediction at the pose, from the
     /// fit's covariance, mm.
     pub prediction_sd_mm: f64,
     /// The joints (`q6`) whose reading lies outside the calibration poses' range (by more than
     /// [`RANGE_MARGIN`] of it): what the fit never saw, whatever its covariance says.
     pub outside_joints: Vec<String>,
-    /// Index of the pose in its set.
-    #[serde(skip)]
-    pub index: usize,
 }
 
 /// Share of a joint's calibration range by which a held-out reading may lie outside it before
@@ -343,17 +368,13 @@ pub fn held_out_reports(
     flagged
         .iter()
         .map(|&k| OutlierReport {
-            file: "val".to_string(),
-            line: None,
-            id: None,
-            error_mm: errors_mm[k],
+            pose: PoseError::new("val", k, errors_mm[k]),
             note: format!(
                 "error {:.4} mm > {:.4} mm ({OUTLIER_SIGMAS} sigmas of the calibration residual and \
                  of the model's prediction uncertainty at this pose, {:.4} mm) and apart from the \
                  other held-out poses' errors: a gross error",
                 judged_mm[k], thresholds_mm[k], prediction_sd_mm[k]
             ),
-            index: k,
         })
         .collect()
 }
@@ -370,16 +391,12 @@ pub fn reports(
     flagged
         .iter()
         .map(|&k| OutlierReport {
-            file: file.to_string(),
-            line: None,
-            id: None,
-            error_mm: errors_mm[k],
+            pose: PoseError::new(file, k, errors_mm[k]),
             note: format!(
                 "error {:.4} mm > {threshold_mm:.4} mm ({OUTLIER_SIGMAS} robust sigmas) and apart from the \
                  other poses' errors: a gross error, left out of every fit",
                 judged_mm[k]
             ),
-            index: k,
         })
         .collect()
 }

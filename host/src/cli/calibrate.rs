@@ -203,18 +203,18 @@ pub fn run(args: Args) -> Result<(), CliError> {
     no_redundancy(poses, 3 * cal.n_points(), outcome.report.rank)?;
     let mut outcome = outcome;
     for o in &mut outcome.report.outliers {
-        let labels = if o.file == "val" {
+        let labels = if o.pose.file == "val" {
             val_labels.as_ref()
         } else {
             Some(&cal_labels)
         };
         if let Some(l) = labels {
-            l.fill(o);
+            l.fill(&mut o.pose);
         }
     }
     for e in &mut outcome.report.extrapolated {
         if let Some(l) = val_labels.as_ref() {
-            (e.line, e.id) = l.at(e.index);
+            l.fill(&mut e.pose);
         }
     }
     notes.push_str(&held_out_lines(&outcome.report));

@@ -30,8 +30,9 @@ impl PoseLabels {
         )
     }
 
-    pub(super) fn fill(&self, o: &mut rigctl::calib::outliers::OutlierReport) {
-        (o.line, o.id) = self.at(o.index);
+    /// Names `pose` by its line and id.
+    pub(super) fn fill(&self, pose: &mut rigctl::calib::outliers::PoseError) {
+        (pose.line, pose.id) = self.at(pose.index);
     }
 }
 
@@ -43,18 +44,16 @@ pub(super) fn outlier_lines(
 ) -> String {
     let mut s = String::new();
     for o in &r.outliers {
-        let path = if o.file == "val" {
+        let path = if o.pose.file == "val" {
             val.unwrap_or(cal)
         } else {
             cal
         };
         let _ = writeln!(
             s,
-            "outlier: {}:{}{}: {}",
+            "outlier: {}:{}: {}",
             path.display(),
-            o.line.map_or_else(|| "?".to_string(), |l| l.to_string()),
-            o.id.as_ref()
-                .map_or_else(String::new, |i| format!(" (id {i})")),
+            o.pose.line_and_id(),
             o.note
         );
     }
@@ -81,7 +80,7 @@ pub(super) fn held_out_lines(r: &rigctl::calib::report::CalibrateReport) -> Stri
     if let Some(line) = r.prior.as_ref().and_then(|p| p.line()) {
         let _ = writeln!(s, "{line}");
     }
-    let listed = r.outliers.iter().filter(|o| o.file == "val").count();
+    let listed = r.outliers.iter().filter(|o| o.pose.file == "val").count();
     if let (Some(all), true) = (&r.validation_all, listed > 0) {
         let _ = writeln!(
             s,
@@ -116,8 +115,8 @@ pub(super) fn held_out_lines(r: &rigctl::calib::report::CalibrateReport) -> Stri
             let _ = writeln!(
                 s,
                 "  held-out line {}: error {:.3} mm, {} outside the calibration range",
-                e.line.map_or_else(|| "?".into(), |l| l.to_string()),
-                e.error_mm,
+                e.pose.line.map_or_else(|| "?".into(), |l| l.to_string()),
+                e.pose.error_mm,
                 e.outside_joints.join(", ")
             );
         }

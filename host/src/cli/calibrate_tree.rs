@@ -119,7 +119,7 @@ pub fn run(args: &Args, tree: Tree) -> Result<(), CliError> {
     let mut o = calibrate_tree(&tree, &poses, val.as_deref(), &opts, args.compliance)?;
     // the gross errors named by the line of their pose, as on a chain
     for r in &mut o.report.outliers {
-        r.line = cal_lines.get(r.index).copied();
+        r.pose.line = cal_lines.get(r.pose.index).copied();
     }
     if let Some(with_tool) = registers(args) {
         // as on a chain: a registration that fails leaves the key out

@@ -13,7 +13,7 @@ use nalgebra::{DMatrix, DVector, SymmetricEigen};
 
 use super::extended::{ExtModel, Unknown};
 use crate::calib::fit::Fit;
-use crate::calib::outliers::OutlierReport;
+use crate::calib::outliers::{OutlierReport, PoseError};
 use crate::calib::unknown::Values;
 use crate::calib::MeasuredSet;
 use crate::model::ModelError;
@@ -123,10 +123,7 @@ pub fn reports(
 ) -> Vec<OutlierReport> {
     kept.iter()
         .map(|&(k, best)| OutlierReport {
-            file: "val".to_string(),
-            line: None,
-            id: None,
-            error_mm: errors_mm[k],
+            pose: PoseError::new("val", k, errors_mm[k]),
             note: format!(
                 "error {:.4} mm > {:.4} mm, but the model moved by at most {ENVELOPE_SIGMAS} standard \
                  deviations of its fitted values predicts it to {best:.4} mm (a sign step of a law \
@@ -134,7 +131,6 @@ pub fn reports(
                  the statistics",
                 errors_mm[k], thresholds_mm[k]
             ),
-            index: k,
         })
         .collect()
 }

@@ -3,35 +3,17 @@
 //! to dust and pulled centroids (Tukey biweight), its window and degree chosen by the data
 //! (leave-one-out residuals), then sampled across the gap. The bridge lies in the interior of
 //! the fitted stretch, so its shape comes from both ends at once, not from two tangents
-//! extrapolated over the gap. The least squares themselves are in `bridge_fit/least_squares.rs`.
+//! extrapolated over the gap. The least squares themselves are in `bridge_fit/least_squares.rs`;
+//! the tuned numbers are [`LinkParams`]' `bridge_*`.
 
 use super::plane::dist;
+use super::stages::LinkParams;
 use least_squares::weighted_fit;
 
 mod least_squares;
 
-/// Spacing of bridge points, mm.
-const STEP_MM: f64 = 0.2;
-/// Data collected on each side of a gap, mm of written path (candidates, smallest first).
-const SIDE_MM: [f64; 3] = [3.5, 6.0, 9.0];
-/// Bridges longer than this keep their first guess (a gap bridged on purpose with a large
-/// `--max-gap-mm`): what the sides say about the middle of a long gap is no better than the
-/// first guess, mm.
-const MAX_REFIT_MM: f64 = 16.0;
-/// The walk outwards for data stops after this much path (bridges included) beyond the side's
-/// data length, mm.
-const WALK_EXTRA_MM: f64 = 12.0;
-/// Highest polynomial degree.
-const MAX_DEGREE: usize = 5;
-/// A larger window is taken while its leave-one-out residual stays within this factor of the
-/// smallest window's (no sign of the curve outgrowing the polynomial).
-const WIDER_OK: f64 = 1.25;
-/// Floor of the residual scale, mm (centroid noise is never below this).
-const MIN_SCALE_MM: f64 = 0.002;
-/// A fit whose leave-one-out residual exceeds this (a corner, not a smooth curve) leaves the
-/// first guess in place, mm.
-const MAX_RESIDUAL_MM: f64 = 0.05;
-/// Tukey biweight constant, in residual scales.
+/// Tukey biweight constant, in residual scales: the textbook value (95 % efficiency under
+/// normal errors), not a tuned number.
 const TUKEY_C: f64 = 4.685;
 
 /// A point of the unrolled path: position, arc length, whether it is a bridge point.
@@ -70,6 +52,7 @@ pub(crate) fn refine(
     pts: &[[f64; 2]],
     bridge: &[bool],
     closed: bool,
+    lk: &LinkParams,
 ) -> (Vec<[f64; 2]>, Vec<bool>, f64) {
     let n = pts.len();
     let unchanged = || {
@@ -134,7 +117,7 @@ pub(crate) fn refine(
         while j + 1 < n && nodes[j + 1].bridge {
             j += 1;
         }
-        let refit = run_fit(&at, i as isize, j as isize, n, total, closed);
+        let refit = run_fit(&at, (i as isize, j as isize), n, total, closed, lk);
         match refit {
             Some(points) => {
                 let (a, b) = (at(i as isize - 1), at(j as isize + 1));
@@ -188,6 +171,7 @@ fn side_points(
     dir: isize,
     side_mm: f64,
     limit: usize,
+    walk_extra_mm: f64,
 ) -> Vec<Node> {
     let mut got = Vec::new();
     let Some(first) = at(from) else {
@@ -198,7 +182,7 @@ fn side_points(
     let mut k = from;
     for _ in 0..limit {
         let Some(v) = at(k) else { break };
-        if (v.s - first.s).abs() > side_mm + WALK_EXTRA_MM {
+        if (v.s - first.s).abs() > side_mm + walk_extra_mm {
             break;
         }
         if !v.bridge {
@@ -220,11 +204,11 @@ fn side_points(
 /// around it do not support a fit.
 fn run_fit(
     at: &dyn Fn(isize) -> Option<Node>,
-    i: isize,
-    j: isize,
+    (i, j): (isize, isize),
     n: usize,
     total: f64,
     closed: bool,
+    lk: &LinkParams,
 ) -> Option<Vec<[f64; 2]>> {
     let (a, b) = (at(i - 1)?, at(j + 1)?);
     if a.bridge || b.bridge {
@@ -234,32 +218,33 @@ fn run_fit(
     let limit = if closed { n / 2 } else { n };
     let mut best: Option<(Fit, f64)> = None;
     let mut first_press = None;
-    if b.s - a.s > MAX_REFIT_MM {
+    if b.s - a.s > lk.bridge_max_refit_mm {
         return None;
     }
-    for side_mm in SIDE_MM {
-        if closed && 2.0 * (side_mm + WALK_EXTRA_MM) + (b.s - a.s) > total {
+    let extra_mm = lk.bridge_walk_extra_mm;
+    for side_mm in lk.bridge_side_mm {
+        if closed && 2.0 * (side_mm + extra_mm) + (b.s - a.s) > total {
             break;
         }
-        let before = side_points(at, i - 1, -1, side_mm, limit);
-        let after = side_points(at, j + 1, 1, side_mm, limit);
+        let before = side_points(at, i - 1, -1, side_mm, limit, extra_mm);
+        let after = side_points(at, j + 1, 1, side_mm, limit, extra_mm);
         if before.len() < 6 || after.len() < 6 {
             continue;
         }
         let data: Vec<Node> = before.iter().rev().chain(after.iter()).copied().collect();
-        let Some(fit) = best_degree(&data) else {
+        let Some(fit) = best_degree(&data, lk) else {
             continue;
         };
         let base = *first_press.get_or_insert(fit.press);
-        if fit.press > WIDER_OK * WIDER_OK * base {
+        if fit.press > lk.bridge_wider_ok * lk.bridge_wider_ok * base {
             break;
         }
         best = Some((fit, side_mm));
     }
-    let (fit, _) = best.filter(|(f, _)| f.press.sqrt() <= MAX_RESIDUAL_MM)?;
+    let (fit, _) = best.filter(|(f, _)| f.press.sqrt() <= lk.bridge_max_residual_mm)?;
     let (s_a, s_b) = (a.s, b.s);
     let len = curve_length(&fit, s_a, s_b);
-    let m = (len / STEP_MM).ceil().max(1.0) as usize;
+    let m = (len / lk.bridge_step_mm).ceil().max(1.0) as usize;
     let pts: Vec<[f64; 2]> = (1..m)
         .map(|k| fit.at(s_a + (s_b - s_a) * k as f64 / m as f64))
         .collect();
@@ -279,14 +264,15 @@ fn curve_length(fit: &Fit, s_a: f64, s_b: f64) -> f64 {
     len
 }
 
-/// The robust fit of the degree (1..=[`MAX_DEGREE`]) with the smallest leave-one-out residual.
-fn best_degree(data: &[Node]) -> Option<Fit> {
+/// The robust fit of the degree (1..=`bridge_max_degree`) with the smallest leave-one-out
+/// residual.
+fn best_degree(data: &[Node], lk: &LinkParams) -> Option<Fit> {
     let mut best: Option<Fit> = None;
-    for deg in 1..=MAX_DEGREE {
+    for deg in 1..=lk.bridge_max_degree {
         if data.len() < 3 * (deg + 1) {
             break;
         }
-        if let Some(f) = robust_fit(data, deg) {
+        if let Some(f) = robust_fit(data, deg, lk.bridge_min_scale_mm) {
             if best.as_ref().is_none_or(|b| f.press < b.press) {
                 best = Some(f);
             }
@@ -296,7 +282,7 @@ fn best_degree(data: &[Node]) -> Option<Fit> {
 }
 
 /// Iteratively reweighted least squares with Tukey's biweight on the 2-D residual.
-fn robust_fit(data: &[Node], deg: usize) -> Option<Fit> {
+fn robust_fit(data: &[Node], deg: usize, min_scale_mm: f64) -> Option<Fit> {
     let (lo, hi) = (data.first()?.s, data.last()?.s);
     let half = 0.5 * (hi - lo);
     if half <= 1e-9 {
@@ -316,7 +302,7 @@ fn robust_fit(data: &[Node], deg: usize) -> Option<Fit> {
         let mut sorted = r.clone();
         let mid = sorted.len() / 2;
         let (_, median, _) = sorted.select_nth_unstable_by(mid, f64::total_cmp);
-        let scale = (1.4826 * *median).max(MIN_SCALE_MM);
+        let scale = (1.4826 * *median).max(min_scale_mm);
         for (wi, ri) in w.iter_mut().zip(&r) {
             let u = ri / (TUKEY_C * scale);
             *wi = if u < 1.0 { (1.0 - u * u).powi(2) } else { 0.0 };

@@ -242,7 +242,8 @@ pub fn trace_paths(
         px_per_mm: drawing.px_per_mm,
         size_px: [f64::from(img.width()), f64::from(img.height())],
     };
-    probe::mark_untraced_ink(&mut drawing, img, &prepared.paper, &to_px, opts.max_gap_mm);
+    let (paper, lp) = (&prepared.paper, &opts.params.lines);
+    probe::mark_untraced_ink(&mut drawing, img, paper, &to_px, opts.max_gap_mm, lp);
     Ok(drawing)
 }
 

@@ -46,13 +46,36 @@ impl ToPx {
 }
 
 /// The reduced image and its mapping; the printed marks drawn (fiducial mapping only).
-fn base(
-    img: &RgbImage,
-    camera: Option<&CameraModel>,
-    fiducials: Option<&Fiducials>,
+/// How the sheet of a [`Trace`] or a [`Drawing`] maps onto its image: what an overlay's base
+/// is drawn from.
+struct Frame<'a> {
+    camera: Option<&'a CameraModel>,
+    fiducials: Option<&'a Fiducials>,
     px_per_mm: f64,
-    spacing_mm: f64,
-) -> (RgbImage, ToPx) {
+}
+
+/// [`Frame`] of each result that carries the three fields.
+macro_rules! frame_of {
+    ($($result:ty),*) => {$(
+        impl<'a> From<&'a $result> for Frame<'a> {
+            fn from(x: &'a $result) -> Self {
+                Frame {
+                    camera: x.camera.as_ref(),
+                    fiducials: x.fiducials.as_ref(),
+                    px_per_mm: x.px_per_mm,
+                }
+            }
+        }
+    )*};
+}
+frame_of!(Trace, Drawing);
+
+fn base(img: &RgbImage, frame: Frame<'_>, spacing_mm: f64) -> (RgbImage, ToPx) {
+    let Frame {
+        camera,
+        fiducials,
+        px_per_mm,
+    } = frame;
     let long = img.width().max(img.height()) as usize;
     let step = long.div_ceil(2400).max(1);
     let mut out = downsample(img, step);
@@ -114,13 +137,7 @@ fn base(
 /// Draws the overlay of `trace` on `img` (the traced image). `spacing_mm` is the fiducial
 /// spacing used.
 pub fn render_overlay(img: &RgbImage, trace: &Trace, spacing_mm: f64) -> RgbImage {
-    let (mut out, to) = base(
-        img,
-        trace.camera.as_ref(),
-        trace.fiducials.as_ref(),
-        trace.px_per_mm,
-        spacing_mm,
-    );
+    let (mut out, to) = base(img, trace.into(), spacing_mm);
     for s in &trace.strokes {
         polyline(&mut out, &to.polyline(&s.points_mm, s.closed), GREEN, 1);
     }
@@ -140,13 +157,7 @@ pub fn render_overlay(img: &RgbImage, trace: &Trace, spacing_mm: f64) -> RgbImag
 /// Draws the overlay of every drawn line of `drawing` on `img`: each path green when every line
 /// it runs along is whole, orange otherwise; each missing stretch red.
 pub fn render_drawing_overlay(img: &RgbImage, drawing: &Drawing, spacing_mm: f64) -> RgbImage {
-    let (mut out, to) = base(
-        img,
-        drawing.camera.as_ref(),
-        drawing.fiducials.as_ref(),
-        drawing.px_per_mm,
-        spacing_mm,
-    );
+    let (mut out, to) = base(img, drawing.into(), spacing_mm);
     let mut whole = vec![true; drawing.paths.len()];
     for l in &drawing.lines {
         for &p in &l.passes {

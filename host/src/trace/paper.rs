@@ -21,6 +21,33 @@ pub(crate) struct PaperMap {
     pub level: Vec<[f32; 3]>,
 }
 
+/// A whole-image map of square blocks whose side follows the image's short side: the paper
+/// level ([`PaperMap`]) and the coarse map of darkest values
+/// ([`super::raster::CoarseMap`]).
+pub(crate) trait BlockMap {
+    /// Blocks across the image's short side (about).
+    const BLOCKS_ACROSS: usize;
+    /// The smallest block side, pixels.
+    const MIN_BLOCK_PX: usize;
+
+    /// Block side for an image of `w` x `h` pixels.
+    fn block_size_for_dims(w: usize, h: usize) -> usize {
+        (w.min(h) / Self::BLOCKS_ACROSS).max(Self::MIN_BLOCK_PX)
+    }
+
+    /// [`Self::block_size_for_dims`] of `img`.
+    #[cfg(test)]
+    fn block_size_for(img: &RgbImage) -> usize {
+        Self::block_size_for_dims(img.width() as usize, img.height() as usize)
+    }
+}
+
+/// Blocks of about 1/150 of the short side (1.4 mm on an A4 scan), at least 8 pixels.
+impl BlockMap for PaperMap {
+    const BLOCKS_ACROSS: usize = 150;
+    const MIN_BLOCK_PX: usize = 8;
+}
+
 /// Percentile of a block's pixels taken as its paper level.
 const PAPER_PERCENTILE: f64 = 0.8;
 
@@ -96,18 +123,6 @@ impl PaperMap {
     pub(crate) fn from_block_levels(block: usize, w: usize, h: usize, raw: &[[f32; 3]]) -> Self {
         let level = smooth(&max_filter(raw, w, h), w, h);
         Self { block, w, h, level }
-    }
-
-    /// Block size for an image: about 1/150 of its short side (1.4 mm on an A4 scan), at least
-    /// 8 pixels.
-    #[cfg(test)]
-    pub fn block_size_for(img: &RgbImage) -> usize {
-        Self::block_size_for_dims(img.width() as usize, img.height() as usize)
-    }
-
-    /// [`Self::block_size_for`] from the image's width and height.
-    pub fn block_size_for_dims(w: usize, h: usize) -> usize {
-        (w.min(h) / 150).max(8)
     }
 
     /// Red paper level of the block holding pixel coordinates `(x, y)` (no interpolation: for

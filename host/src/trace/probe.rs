@@ -2,35 +2,25 @@
 //! tracker left a stretch of a line untraced (passes broken into dashes, a zigzag too fine for
 //! the resolution), the written points end early and the line would look whole. So the image
 //! itself is read ahead of every open line end: pixels darker than the paper by
-//! [`INK_DARKNESS`] in every channel (grey, as graphite and pen ink are), within
-//! [`PROBE_HALF_MM`] across the end's direction and `max(2 x --max-gap-mm, 15 mm)` ahead,
-//! farther than [`TRACED_MM`] from every written point and outside the band of a line running
-//! across (the line it ends on); [`RUN_MM`] of them along the way, with no hole longer than
-//! [`HOLE_MM`] between them (a line drawn in loops crosses the probe again and again), the
-//! first within `--max-gap-mm` of the end, mean the line may go on: it is not whole.
+//! `probe_ink_darkness` in every channel (grey, as graphite and pen ink are), within
+//! `probe_half_mm` across the end's direction and `max(2 x --max-gap-mm, 15 mm)` ahead,
+//! farther than `probe_traced_mm` from every written point and outside the band of a line
+//! running across (the line it ends on); `probe_run_mm` of them along the way, with no hole
+//! longer than `probe_hole_mm` between them (a line drawn in loops crosses the probe again and
+//! again), the first within `--max-gap-mm` of the end, mean the line may go on: it is not
+//! whole. The numbers are [`LinesParams`]' `probe_*`.
 
 use super::mapping::SheetToPx;
 use super::paper::PaperMap;
 use super::paths::Drawing;
 use super::plane::{unit, Grid};
 use super::stages::link::{LeftOut, LeftOutKind};
+use super::stages::LinesParams;
 use image::RgbImage;
 
-/// Darkness (1 - the lightest of the channels relative to the paper's) of a pixel that is ink.
-const INK_DARKNESS: f32 = 0.15;
-/// Reach across the end's direction, mm.
-const PROBE_HALF_MM: f64 = 2.0;
-/// A written point within this covers the ink, mm.
-const TRACED_MM: f64 = 1.2;
-/// Untraced ink this long along the end's direction may continue the line, mm ...
-const RUN_MM: f64 = 2.0;
-/// ... counted over holes up to this long, mm.
-const HOLE_MM: f64 = 3.0;
-/// The band of a line across reaches this far from its centreline, mm.
-const ACROSS_BAND_MM: f64 = 4.0;
-const STEP_MM: f64 = 0.25;
-
-/// Grid cell for the written points and the lines' centrelines, mm.
+/// Grid cell for the written points and the lines' centrelines, mm: how they are bucketed
+/// for neighbour queries (what a query finds does not depend on it, only the order and the
+/// speed), not a tuned number.
 const CELL_MM: f64 = 1.0;
 
 /// Marks every open line of `drawing` with untraced ink past one of its ends as not whole
@@ -41,7 +31,9 @@ pub(super) fn mark_untraced_ink(
     paper: &PaperMap,
     to_px: &SheetToPx,
     max_gap_mm: f64,
+    lp: &LinesParams,
 ) {
+    let step_mm = lp.probe_step_mm;
     let mut written = Grid::new(CELL_MM);
     for p in &drawing.paths {
         for q in &p.stroke.points_mm {
@@ -78,7 +70,7 @@ pub(super) fn mark_untraced_ink(
         let lightest = (0..3)
             .map(|c| f32::from(px[c]) / level[c].max(1.0))
             .fold(0.0f32, f32::max);
-        1.0 - lightest >= INK_DARKNESS
+        1.0 - lightest >= lp.probe_ink_darkness
     };
     let reach = (2.0 * max_gap_mm).max(15.0);
     let cos_across = 45f64.to_radians().cos();
@@ -92,38 +84,39 @@ pub(super) fn mark_untraced_ink(
             let across_line = |q: [f64; 2]| {
                 centres.iter().enumerate().any(|(k, c)| {
                     k != li
-                        && c.within(q, ACROSS_BAND_MM)
+                        && c.within(q, lp.probe_across_band_mm)
                             .any(|(_, d)| (d[0] * t[0] + d[1] * t[1]).abs() < cos_across)
                 })
             };
             // The steps ahead with untraced ink somewhere across.
-            let steps = (reach / STEP_MM) as usize;
-            let half = (PROBE_HALF_MM / STEP_MM) as i64;
+            let steps = (reach / step_mm) as usize;
+            let half = (lp.probe_half_mm / step_mm) as i64;
             let hits: Vec<(f64, [f64; 2])> = (2..=steps)
                 .filter_map(|k| {
-                    let s = k as f64 * STEP_MM;
+                    let s = k as f64 * step_mm;
                     (-half..=half)
-                        .map(|j| j as f64 * STEP_MM)
+                        .map(|j| j as f64 * step_mm)
                         .map(|c| [e[0] + s * t[0] + c * n[0], e[1] + s * t[1] + c * n[1]])
                         .find(|q| {
                             dark(*q)
-                                && written.within(*q, TRACED_MM).next().is_none()
+                                && written.within(*q, lp.probe_traced_mm).next().is_none()
                                 && !across_line(*q)
                         })
                         .map(|q| (s, q))
                 })
                 .collect();
-            // Runs of hits with holes up to HOLE_MM (a line drawn in loops or a zigzag crosses
-            // the probe again and again) holding RUN_MM of hits, the first within max_gap_mm.
+            // Runs of hits with holes up to `probe_hole_mm` (a line drawn in loops or a zigzag crosses
+            // the probe again and again) holding `probe_run_mm` of hits, the first within max_gap_mm.
             let mut hit = None;
             let mut i = 0;
-            while i < hits.len() && hits[i].0 <= max_gap_mm + STEP_MM {
-                let (mut j, mut inked) = (i, STEP_MM);
-                while j + 1 < hits.len() && hits[j + 1].0 - hits[j].0 <= HOLE_MM + STEP_MM {
+            while i < hits.len() && hits[i].0 <= max_gap_mm + step_mm {
+                let (mut j, mut inked) = (i, step_mm);
+                while j + 1 < hits.len() && hits[j + 1].0 - hits[j].0 <= lp.probe_hole_mm + step_mm
+                {
                     j += 1;
-                    inked += STEP_MM;
+                    inked += step_mm;
                 }
-                if inked > RUN_MM {
+                if inked > lp.probe_run_mm {
                     hit = Some((hits[i].0, hits[j].0, hits[i].1, hits[j].1));
                     break;
                 }
@@ -150,6 +143,7 @@ pub(super) fn mark_untraced_ink(
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::trace::paper::BlockMap;
     use crate::trace::paths::open_path;
     use crate::trace::stages::lines::DrawnLine;
     use image::Rgb;
@@ -199,7 +193,14 @@ mod tests {
             camera: None,
             fiducials: None,
         };
-        mark_untraced_ink(&mut drawing, &img, &paper, &to_px, 10.0);
+        mark_untraced_ink(
+            &mut drawing,
+            &img,
+            &paper,
+            &to_px,
+            10.0,
+            &LinesParams::default(),
+        );
         !drawing.lines[0].continued_by.is_empty()
     }
 

@@ -2,7 +2,7 @@
 //! and connected components on a coarse mask. These are the only passes that touch every pixel;
 //! everything after them works in small windows.
 
-use super::paper::PaperMap;
+use super::paper::{BlockMap, PaperMap};
 #[cfg(test)]
 use image::RgbImage;
 
@@ -48,18 +48,13 @@ pub(crate) struct CoarseMap {
     pub min_red: Vec<u8>,
 }
 
+/// A map about 1240 blocks wide (0.17 mm blocks on an A4 scan).
+impl BlockMap for CoarseMap {
+    const BLOCKS_ACROSS: usize = 1240;
+    const MIN_BLOCK_PX: usize = 1;
+}
+
 impl CoarseMap {
-    /// Block size giving a map about 1240 blocks wide (0.17 mm blocks on an A4 scan).
-    #[cfg(test)]
-    pub fn block_size_for(img: &RgbImage) -> usize {
-        Self::block_size_for_dims(img.width() as usize, img.height() as usize)
-    }
-
-    /// [`Self::block_size_for`] from the image's width and height.
-    pub fn block_size_for_dims(w: usize, h: usize) -> usize {
-        (w.min(h) / 1240).max(1)
-    }
-
     /// The map in one pass (the reference for the banded build of [`super::stages::prepare`]).
     #[cfg(test)]
     pub fn build(img: &RgbImage, k: usize) -> Self {

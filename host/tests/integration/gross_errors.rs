@@ -56,8 +56,8 @@ fn sim(seed: u64, effects: &[&str]) -> (Vec<SimPose>, Vec<SimPose>) {
 fn flagged(list: &[rigctl::calib::outliers::OutlierReport], file: &str) -> Vec<usize> {
     let mut v: Vec<usize> = list
         .iter()
-        .filter(|o| o.file == file)
-        .map(|o| o.index)
+        .filter(|o| o.pose.file == file)
+        .map(|o| o.pose.index)
         .collect();
     v.sort_unstable();
     v
@@ -162,7 +162,7 @@ fn calibrate_flags_the_gross_errors_of_the_real_ur5_set() {
         clean
             .outliers
             .iter()
-            .map(|o| (o.file.clone(), o.index, o.error_mm))
+            .map(|o| (o.pose.file.clone(), o.pose.index, o.pose.error_mm))
             .collect::<Vec<_>>(),
         clean.validation.unwrap().after.mean_mm
     );
@@ -234,11 +234,11 @@ fn clean_sets_flag_almost_nothing() {
         .unwrap()
         .report;
         flags_cal += rep.outliers.len();
-        flagged_cal_mm.extend(rep.outliers.iter().map(|o| o.error_mm));
+        flagged_cal_mm.extend(rep.outliers.iter().map(|o| o.pose.error_mm));
         for o in &rep.outliers {
             println!(
                 "seed {seed}: calibrate flagged {} pose {} at {:.4} mm: {}",
-                o.file, o.index, o.error_mm, o.note
+                o.pose.file, o.pose.index, o.pose.error_mm, o.note
             );
         }
         let d = diagnose(

@@ -162,11 +162,9 @@ impl DiagnoseReport {
             for o in list {
                 let _ = writeln!(
                     s,
-                    "{label}: {} line {}{}: {}",
-                    o.file,
-                    o.line.map_or_else(|| "?".to_string(), |l| l.to_string()),
-                    o.id.as_ref()
-                        .map_or_else(String::new, |i| format!(" (id {i})")),
+                    "{label}: {} line {}: {}",
+                    o.pose.file,
+                    o.pose.line_and_id(),
                     o.note
                 );
             }

@@ -36,7 +36,7 @@ fn a_band_of_broken_passes_is_walked_end_to_end() {
     v.extend(dots(&[[75.0, 2.0], [98.0, 2.0]], 1, 0.6));
     v.extend(dots(&[[20.0, -1.0], [102.0, -1.0]], 2, 0.5));
     v.extend(dots(&[[50.0, -40.0], [50.0, 40.0]], 3, 0.5));
-    let cloud = Cloud::new(v);
+    let cloud = Cloud::new(v, &LinesParams::default());
     let w = walk(&cloud, [30.0, 0.5], [1.0, 0.0], 10.0);
     let (a, b) = (w.centres[0], w.centres[w.centres.len() - 1]);
     assert!(!w.closed);
@@ -58,7 +58,12 @@ fn gaps_are_bridged_or_missing_and_a_loop_closes() {
     let mut v = dots(&[[0.0, 0.0], [40.0, 0.0]], 0, 0.0);
     v.extend(dots(&[[47.0, 0.2], [80.0, 0.2]], 1, 0.0));
     v.extend(dots(&[[110.0, 0.0], [150.0, 0.0]], 2, 0.0));
-    let w = walk(&Cloud::new(v), [10.0, 0.0], [1.0, 0.0], 10.0);
+    let w = walk(
+        &Cloud::new(v, &LinesParams::default()),
+        [10.0, 0.0],
+        [1.0, 0.0],
+        10.0,
+    );
     assert_eq!(w.gaps.len(), 2, "{:?}", w.gaps);
     assert!(w.gaps[0].bridged && (w.gaps[0].length_mm - 7.0).abs() < 1.0);
     assert!(!w.gaps[1].bridged && (w.gaps[1].length_mm - 30.0).abs() < 1.0);
@@ -71,7 +76,7 @@ fn gaps_are_bridged_or_missing_and_a_loop_closes() {
         })
         .collect();
     let w = walk(
-        &Cloud::new(dots(&circle, 0, 0.0)),
+        &Cloud::new(dots(&circle, 0, 0.0), &LinesParams::default()),
         [30.0, 0.0],
         [0.0, 1.0],
         10.0,

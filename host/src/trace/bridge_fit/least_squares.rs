@@ -1,10 +1,13 @@
 //! The weighted least squares of a bridge's polynomials: normal equations solved by Cholesky,
 //! with each point's leave-one-out residual from the same factor (the PRESS statistic).
 
-use super::{horner, Node, MAX_DEGREE};
+use super::{horner, Node};
 
+/// The highest degree the fixed-size normal equations have room for: a higher
+/// `LinkParams::bridge_max_degree` finds no fit of that degree.
+const ROOM_DEGREE: usize = 5;
 /// Room for the coefficients of the highest degree.
-const M: usize = MAX_DEGREE + 1;
+const M: usize = ROOM_DEGREE + 1;
 
 /// Weighted least squares of x and y on powers of `ts` up to `deg`: coefficients and the mean
 /// squared leave-one-out residual.

@@ -47,7 +47,7 @@ fn a_skip_on_an_arc_is_bridged_on_the_arc() {
         worst_off(&pts, f, 40.0) > 0.2,
         "the straight guess is off the arc"
     );
-    let (out, m, len) = refine(&pts, &mask, false);
+    let (out, m, len) = refine(&pts, &mask, false, &LinkParams::default());
     assert_eq!(out.len(), m.len());
     assert!(
         worst_off(&out, f, 40.0) < 0.002,
@@ -68,7 +68,7 @@ fn a_speck_beside_the_line_does_not_bend_the_bridge() {
         .expect("a point");
     pts[k][1] += 0.12;
     pts[k + 1][1] += 0.08;
-    let (out, _, _) = refine(&pts, &mask, false);
+    let (out, _, _) = refine(&pts, &mask, false, &LinkParams::default());
     let bridge_off = out
         .iter()
         .filter(|p| p[0] > 12.0 && p[0] < 18.0)
@@ -85,7 +85,7 @@ fn a_wiggle_is_followed_across_the_gap() {
         worst_off(&pts, f, 45.0) > 0.2,
         "the straight guess is off the wave"
     );
-    let (out, _, _) = refine(&pts, &mask, false);
+    let (out, _, _) = refine(&pts, &mask, false, &LinkParams::default());
     // A wave of 27 mm wavelength and 4 mm amplitude, 9.5 mm of it missing.
     let off = worst_off(&out, f, 45.0);
     assert!(off < 0.05, "{off}");

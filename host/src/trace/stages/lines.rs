@@ -21,7 +21,7 @@
 //! the lines put together from them ([`lines`]).
 
 use super::link::{Gap, LeftOut};
-use crate::trace::band::{self, Source, Walk, BAND_HALF_MM};
+use crate::trace::band::{self, Source, Walk};
 use crate::trace::chain::resample;
 use crate::trace::paths::DrawnPath;
 use crate::trace::plane::{self, dist, sub};
@@ -278,7 +278,7 @@ pub(crate) fn lines(
                     let c = &walks[o].centres;
                     c.iter()
                         .enumerate()
-                        .filter(|(_, x)| dist(**x, q) <= BAND_HALF_MM)
+                        .filter(|(_, x)| dist(**x, q) <= lp.band_half_mm)
                         .min_by(|x, y| dist(*x.1, q).total_cmp(&dist(*y.1, q)))
                         .is_some_and(|(k, _)| {
                             abs_cos(chord_dir_on(c, &arcs[o], k, lp.dir_half_mm), t)

@@ -38,6 +38,13 @@ impl Bounded for usize {
     }
 }
 
+/// A list of stage numbers (candidates, or one number per case): every one in range.
+impl<T: Bounded, const N: usize> Bounded for [T; N] {
+    fn in_range(&self) -> bool {
+        self.iter().all(Bounded::in_range)
+    }
+}
+
 /// A parameter file that could not be used.
 #[derive(Debug, thiserror::Error)]
 #[error("{}{}: {message}", path.display(), line.map_or_else(String::new, |l| format!(":{l}")))]
@@ -149,6 +156,7 @@ fn key_line(text: &str, table: &str, field: &str) -> Option<usize> {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::trace::stages::LinesParams;
 
     #[test]
     fn a_file_sets_what_it_names_and_keeps_the_rest() {
@@ -166,6 +174,16 @@ mod tests {
         );
         let dotted = TraceParams::from_toml("lines.pass_mm = 4.0\n").expect("dotted");
         assert_eq!(dotted.lines.pass_mm, 4.0);
+        let lists = TraceParams::from_toml(
+            "[link]\nbridge_side_mm = [4.0, 7.0, 10.0]\n[lines]\nband_turn_deg = [30.0, 50.0]\n",
+        )
+        .expect("lists");
+        assert_eq!(lists.link.bridge_side_mm, [4.0, 7.0, 10.0]);
+        assert_eq!(lists.lines.band_turn_deg, [30.0, 50.0]);
+        assert_eq!(
+            lists.lines.band_turn_over_mm,
+            LinesParams::default().band_turn_over_mm
+        );
     }
 
     #[test]
@@ -190,6 +208,16 @@ mod tests {
             ("[camera]\ncentre_f = \"ten\"\n", Some(2), "camera.centre_f"),
             ("[camera]\ncentre_f = nan\n", Some(2), "camera.centre_f"),
             ("[linking]\n", Some(1), "linking"),
+            (
+                "[lines]\nband_turn_deg = [45.0, 0.0]\n",
+                Some(2),
+                "lines.band_turn_deg",
+            ),
+            (
+                "[link]\nbridge_side_mm = [3.5, 6.0]\n",
+                Some(2),
+                "link.bridge_side_mm",
+            ),
         ] {
             let (at, msg) = TraceParams::from_toml(text).expect_err(text);
             assert_eq!(at, line, "{text}: {msg}");

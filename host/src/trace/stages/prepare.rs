@@ -9,7 +9,7 @@ mod params;
 
 pub use params::PrepareParams;
 
-use crate::trace::paper::PaperMap;
+use crate::trace::paper::{BlockMap, PaperMap};
 use crate::trace::raster::CoarseMap;
 use crate::trace::tone::Tone;
 use image::RgbImage;

@@ -61,5 +61,5 @@ pub(super) fn cloud(
             add(s, Source::Stray, &mut dots);
         }
     }
-    (Cloud::new(dots), first)
+    (Cloud::new(dots, lp), first)
 }

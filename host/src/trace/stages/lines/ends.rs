@@ -5,7 +5,7 @@
 use super::super::link::{LeftOut, LeftOutKind};
 use super::params::LinesParams;
 use super::{abs_cos, arc, directions, DrawnLine, Loose};
-use crate::trace::band::{Cloud, Source, BAND_DEG};
+use crate::trace::band::{Cloud, Source};
 use crate::trace::paths::DrawnPath;
 use crate::trace::plane::{dist, sub};
 use std::collections::HashSet;
@@ -28,7 +28,7 @@ pub(super) fn judge_ends(
         return;
     }
     let reach = (2.0 * max_gap_mm).max(15.0);
-    let cos_along = BAND_DEG.to_radians().cos();
+    let cos_along = lp.band_deg.to_radians().cos();
     let cos_cone = lp.across_deg.to_radians().cos();
     let ends = [
         (line.from_mm, line.out_dir[0]),

@@ -7,7 +7,7 @@
 use super::meet::extend_to;
 use super::params::LinesParams;
 use super::{abs_cos, arc, chord_dir_on};
-use crate::trace::band::{arc_of, Walk, BAND_HALF_MM};
+use crate::trace::band::{arc_of, Walk};
 use crate::trace::plane::{dist, sub, unit, Grid};
 
 /// What is kept of a walk: centres `first..last`, carried on at its head and tail to `feet`.
@@ -36,7 +36,7 @@ pub(super) fn cut_overruns(walks: &mut [Walk], lp: &LinesParams) {
                 .collect()
         })
         .collect();
-    let mut centres: Grid<(usize, usize)> = Grid::new(BAND_HALF_MM);
+    let mut centres: Grid<(usize, usize)> = Grid::new(lp.band_half_mm);
     for (j, w) in walks.iter().enumerate() {
         for (m, c) in w.centres.iter().enumerate() {
             centres.insert(*c, (j, m));
@@ -70,7 +70,8 @@ pub(super) fn cut_overruns(walks: &mut [Walk], lp: &LinesParams) {
             };
             let on_across = |k: usize| {
                 let (p, t) = (c[idx(k)], dirs[i][idx(k)]);
-                abs_cos(t, own) < cos_turned && centres.within(p, BAND_HALF_MM).any(|x| across(&x))
+                abs_cos(t, own) < cos_turned
+                    && centres.within(p, lp.band_half_mm).any(|x| across(&x))
             };
             let mut k = 0;
             while k < a && on_across(k) {
@@ -79,7 +80,7 @@ pub(super) fn cut_overruns(walks: &mut [Walk], lp: &LinesParams) {
             // How far it ran along the line across, inside its band.
             let end = c[idx(0)];
             let other = centres
-                .within(end, BAND_HALF_MM)
+                .within(end, lp.band_half_mm)
                 .filter(across)
                 .min_by(|x, y| dist(x.0, end).total_cmp(&dist(y.0, end)))
                 .map(|(_, (j, m))| dirs[*j][*m]);
@@ -106,7 +107,7 @@ pub(super) fn cut_overruns(walks: &mut [Walk], lp: &LinesParams) {
             // Carried straight on to the centreline of the line across ahead (none: kept).
             let e = c[idx(k)];
             let foot = centres
-                .within(e, lp.overrun_max_mm + BAND_HALF_MM)
+                .within(e, lp.overrun_max_mm + lp.band_half_mm)
                 .filter(across)
                 .filter_map(|(q, _)| {
                     let v = sub(*q, e);

@@ -85,17 +85,23 @@ fn passes_side_by_side_are_one_line_and_a_line_across_another() {
     assert_eq!(l.len(), 3, "{l:#?}");
 }
 
+/// Two passes of one line along x, both broken after `x_mm` (one ends 2 mm short of it) for
+/// `gap_mm`: the stretch no pass covers.
+fn broken_at(x_mm: f64, gap_mm: f64) -> Vec<DrawnPath> {
+    let on = x_mm + gap_mm;
+    vec![
+        pass(&[[0.0, 0.0], [x_mm, 0.0]], 0.5),
+        pass(&[[0.0, 1.0], [x_mm - 2.0, 1.0]], 0.5),
+        pass(&[[on, 0.5], [on + 44.0, 0.5]], 0.5),
+        pass(&[[on + 1.0, -0.5], [on + 43.0, -0.5]], 0.5),
+    ]
+}
+
 #[test]
 fn a_stretch_no_pass_covers_is_a_gap_of_the_line() {
     // Two passes of one line, both broken at the same place: 6 mm (bridged), then 25 mm
     // (missing).
-    let short = vec![
-        pass(&[[0.0, 0.0], [40.0, 0.0]], 0.5),
-        pass(&[[0.0, 1.0], [38.0, 1.0]], 0.5),
-        pass(&[[46.0, 0.5], [90.0, 0.5]], 0.5),
-        pass(&[[47.0, -0.5], [89.0, -0.5]], 0.5),
-    ];
-    let l = lines_of(&short);
+    let l = lines_of(&broken_at(40.0, 6.0));
     assert_eq!(l.len(), 1, "{l:#?}");
     assert_eq!(l[0].passes.len(), 4);
     assert!(l[0].is_whole());
@@ -105,13 +111,7 @@ fn a_stretch_no_pass_covers_is_a_gap_of_the_line() {
         "{:?}",
         l[0].gaps
     );
-    let far = vec![
-        pass(&[[0.0, 0.0], [40.0, 0.0]], 0.5),
-        pass(&[[0.0, 1.0], [38.0, 1.0]], 0.5),
-        pass(&[[65.0, 0.5], [110.0, 0.5]], 0.5),
-        pass(&[[66.0, -0.5], [109.0, -0.5]], 0.5),
-    ];
-    let l = lines_of(&far);
+    let l = lines_of(&broken_at(40.0, 25.0));
     // Farther apart than --max-gap-mm: one line with the stretch between missing.
     assert_eq!(l.len(), 1, "{l:#?}");
     assert!(!l[0].is_whole());

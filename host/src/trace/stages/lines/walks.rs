@@ -5,12 +5,12 @@
 use super::super::link::Gap;
 use super::params::LinesParams;
 use super::{abs_cos, arc, chord_dir, directions, unit};
-use crate::trace::band::{Walk, BAND_DEG};
+use crate::trace::band::Walk;
 use crate::trace::plane::{dist, sub};
 use std::collections::HashSet;
 
 /// The walk among `walks` that `w` runs along for half its length or more (its centres within
-/// [`crate::trace::band::BAND_HALF_MM`] of that walk's).
+/// `LinesParams::band_half_mm` of that walk's).
 pub(super) fn duplicate_of(w: &Walk, walks: &[Walk], lp: &LinesParams) -> Option<usize> {
     let probe: Vec<[f64; 2]> = w.centres.iter().step_by(4).copied().collect();
     if probe.is_empty() {
@@ -18,7 +18,7 @@ pub(super) fn duplicate_of(w: &Walk, walks: &[Walk], lp: &LinesParams) -> Option
     }
     let dirs = |c: &[[f64; 2]]| directions(c, &arc(c), lp);
     let wd: Vec<[f64; 2]> = dirs(&w.centres).into_iter().step_by(4).collect();
-    let cos_along = BAND_DEG.to_radians().cos();
+    let cos_along = lp.band_deg.to_radians().cos();
     walks.iter().position(|o| {
         let od = dirs(&o.centres);
         let near = probe

@@ -62,7 +62,8 @@ impl Network {
             self.strokes,
             lk,
         );
-        let (points_mm, mask, bridged_mm) = bridge_fit::refine(&path.points_mm, &mask, path.closed);
+        let (points_mm, mask, bridged_mm) =
+            bridge_fit::refine(&path.points_mm, &mask, path.closed, lk);
         let points_mm = if self.strokes.smooth_centres {
             smooth::smooth_written(&points_mm, &mask, path.closed)
         } else {

@@ -53,7 +53,8 @@ stage_params! {
         /// Ends nearer than this were linked or not in the first round on their turn alone (see
         /// [`super::continuity`]), mm: the second round leaves them as they are.
         relink_near_mm: f64 = 1.0,
-        /// Spacing of bridge points, mm. Finer: more points written, no better bridge.
+        /// Spacing of bridge points (the first guess and the refitted bridge), mm. Finer: more
+        /// points written, no better bridge.
         bridge_step_mm: f64 = 0.2,
         /// A mark ending this close to the path touches it (its centroids there are pulled), mm.
         /// Larger: more nearby marks make the path cut and bridged around them.
@@ -80,5 +81,30 @@ stage_params! {
         /// A left-out line at least this share of the path's length is a drawn line of its own.
         /// Lower: more left-out lines make the trace incomplete (exit 1).
         separate_share: f64 = 0.3,
+        /// The graphite collected on each side of a gap for its refitted bridge
+        /// ([`crate::trace::bridge_fit`]), mm of written path: candidates, smallest first, the
+        /// largest one whose fit stays within `bridge_wider_ok` of the smallest's taken. Longer:
+        /// smoother bridges over gentle curves, more chance to take in a corner.
+        bridge_side_mm: [f64; 3] = [3.5, 6.0, 9.0],
+        /// Bridges longer than this keep their first guess (a gap bridged on purpose with a large
+        /// `--max-gap-mm`): what the sides say about the middle of a long gap is no better than
+        /// the first guess, mm. Longer: longer bridges refitted.
+        bridge_max_refit_mm: f64 = 16.0,
+        /// The walk outwards for a side's data stops after this much path (bridges included)
+        /// beyond the side's data length, mm. Longer: sides read across more earlier bridges.
+        bridge_walk_extra_mm: f64 = 12.0,
+        /// Highest polynomial degree of a refitted bridge (at most 5 is tried, the solver's room).
+        /// Higher: tighter curves followed, and noise with them. Count.
+        bridge_max_degree: usize = 5,
+        /// A larger side is taken while its leave-one-out residual stays within this factor of
+        /// the smallest side's (no sign of the curve outgrowing the polynomial). Ratio. Larger:
+        /// wider sides taken, over curves the polynomial follows worse.
+        bridge_wider_ok: f64 = 1.25,
+        /// Floor of a bridge fit's residual scale (centroid noise is never below this), mm.
+        /// Larger: fewer points down-weighted as dust on a clean stroke.
+        bridge_min_scale_mm: f64 = 0.002,
+        /// A fit whose leave-one-out residual exceeds this (a corner, not a smooth curve) leaves
+        /// the first guess in place, mm. Larger: more bridges refitted, over corners too.
+        bridge_max_residual_mm: f64 = 0.05,
     }
 }
