@@ -93,7 +93,7 @@ pub mod time_terms;
 pub mod toml_file;
 mod toml_write;
 pub mod transmission;
-mod tree;
+pub(crate) mod tree;
 pub mod tree_file;
 pub mod tree_gravity;
 pub mod tree_params;

@@ -431,4 +431,6 @@ fn split_chain(tip: &str, m: &Model) -> Result<Split, ModelError> {
 }
 
 #[cfg(test)]
+pub(crate) mod test_support;
+#[cfg(test)]
 mod tests;

@@ -1,39 +1,12 @@
 use nalgebra::DVector;
 
 use super::*;
+use crate::model::tree::test_support::{dh_joint, elem as c};
 use crate::model::tree_params::compliance_name;
-use crate::model::{Axis, Motion, Tip, TreeElem, TreeJoint, TreeMass};
-
-fn c(motion: Motion, axis: Axis, name: &str, value: f64) -> TreeElem {
-    TreeElem {
-        motion,
-        axis,
-        name: name.into(),
-        value,
-    }
-}
+use crate::model::{Axis, Motion, Tip, TreeJoint};
 
 fn joint(name: &str, parent: Option<usize>, row: [f64; 3]) -> TreeJoint {
-    use Axis::{X, Z};
-    use Motion::{Rot, Trans};
-    TreeJoint {
-        name: name.into(),
-        parent,
-        before: vec![
-            c(Rot, X, &format!("al_{name}"), row[0]),
-            c(Trans, X, &format!("a_{name}"), row[1]),
-            c(Trans, Z, &format!("d_{name}"), row[2]),
-        ],
-        prismatic: false,
-        offset_name: format!("off_{name}"),
-        offset: 0.0,
-        limits: [-170.0, 170.0],
-        masses: vec![TreeMass {
-            mass_kg: 4.0,
-            com_mm: [40.0, 0.0, 60.0],
-        }],
-        compliance_deg_per_kgfm: 0.0,
-    }
+    dh_joint(name, parent, row, 0.0, 4.0, [40.0, 0.0, 60.0])
 }
 
 /// A horizontal torso joint and two 2-joint arms.

@@ -1,14 +1,6 @@
+use super::test_support::elem as c;
 use super::*;
 use crate::model::Tilt;
-
-fn c(motion: Motion, axis: Axis, name: &str, value: f64) -> TreeElem {
-    TreeElem {
-        motion,
-        axis,
-        name: name.into(),
-        value,
-    }
-}
 
 fn joint(name: &str, parent: Option<usize>, before: Vec<TreeElem>) -> TreeJoint {
     TreeJoint {

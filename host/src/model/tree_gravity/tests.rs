@@ -1,40 +1,13 @@
 use nalgebra::Vector3;
 
 use super::*;
-use crate::model::{Axis, Motion, Tip, TreeElem, TreeJoint, TreeMass};
-
-fn c(motion: Motion, axis: Axis, name: &str, value: f64) -> TreeElem {
-    TreeElem {
-        motion,
-        axis,
-        name: name.into(),
-        value,
-    }
-}
+use crate::model::tree::test_support::{dh_joint, elem as c};
+use crate::model::{Axis, Motion, Tip, TreeJoint};
 
 /// Joint `name`: `Rx(al) Tx(a) Tz(d) Rz(q + off)` from its parent's frame, with `kg` at
 /// `com_mm` in its frame.
 fn joint(name: &str, parent: Option<usize>, row: [f64; 3], kg: f64, com_mm: [f64; 3]) -> TreeJoint {
-    use Axis::{X, Z};
-    use Motion::{Rot, Trans};
-    TreeJoint {
-        name: name.into(),
-        parent,
-        before: vec![
-            c(Rot, X, &format!("al_{name}"), row[0]),
-            c(Trans, X, &format!("a_{name}"), row[1]),
-            c(Trans, Z, &format!("d_{name}"), row[2]),
-        ],
-        prismatic: false,
-        offset_name: format!("off_{name}"),
-        offset: 1.5,
-        limits: [-170.0, 170.0],
-        masses: vec![TreeMass {
-            mass_kg: kg,
-            com_mm,
-        }],
-        compliance_deg_per_kgfm: 0.0,
-    }
+    dh_joint(name, parent, row, 1.5, kg, com_mm)
 }
 
 /// A torso of two joints and two 3-joint arms (`two_arms`), or the torso and the left arm only.
