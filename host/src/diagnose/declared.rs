@@ -45,15 +45,18 @@ pub fn declared_fit(
     start.tilt = tilt;
     let start_rss: f64 = start.errors(cal)?.iter().map(|e| e.norm_squared()).sum();
     if start_rss < rss_mm2 {
+        // nothing is requested beyond the model as given: a candidate is then tested with its
+        // own unknowns only (not with every geometric parameter freed again beside it, which
+        // the input already beats)
         let split = Split {
             fitted: Vec::new(),
-            fixed: requested.clone(),
+            fixed: requested,
             unidentifiable: f.unidentifiable.clone(),
             rank: f.rank,
         };
         return Ok((
             Fit::unfitted(start, split, start_rss, cal.n_residuals()),
-            requested,
+            Vec::new(),
         ));
     }
     let fit = Fit {

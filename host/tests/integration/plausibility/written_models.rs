@@ -282,4 +282,18 @@ fn tiago_compliance_level_is_bounded_reproducible_and_diagnose_keeps_it() {
     }
     let flagged = dd["outliers"].as_array().unwrap();
     assert!(flagged.iter().all(|o| o["file"] != "val"), "{flagged:?}");
+    // the model as given is the declared fit (its geometric refit ends above it): a candidate is
+    // tested with its own unknowns, not with every geometric parameter freed again beside it
+    // (which counted 34 added parameters for one hysteresis and made every BIC +90)
+    let tested: Vec<&serde_json::Value> = dd["rejected"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .chain(dd["effects"].as_array().unwrap())
+        .collect();
+    assert!(!tested.is_empty(), "{dd}");
+    for t in tested {
+        let added = t["added_parameters"].as_u64().unwrap();
+        assert!((1..=3).contains(&added), "{t}");
+    }
 }
