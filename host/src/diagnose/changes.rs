@@ -119,7 +119,7 @@ pub fn scan(
     let rss = (e.norm_squared() - qte_all.norm_squared()).max(0.0);
     let m = e.len();
     let (mut c1, mut c2) = (DMatrix::zeros(c, c), DMatrix::zeros(r, c));
-    let (mut c3, mut c4) = (DVector::zeros(c), DVector::zeros(r));
+    let mut c3 = DVector::zeros(c);
     let mut best: Option<ChangePoint> = None;
     for g in (side..groups.len()).rev() {
         for &k in &groups[g].1 {
@@ -130,12 +130,13 @@ pub fn scan(
             c1 += xk.transpose() * xk;
             c2 += qk.transpose() * xk;
             c3 += xk.transpose() * ek;
-            c4 += qk.transpose() * ek;
         }
         if groups.len() - g < side {
             continue;
         }
-        let b = &c3 - c2.transpose() * &c4;
+        // the step's columns and the residual both projected off the fitted columns: `Q^T e`
+        // over every pose (the step's columns are zero before the split, the residual is not)
+        let b = &c3 - c2.transpose() * &qte_all;
         let a = &c1 - c2.transpose() * &c2;
         let (gain, added) = explained(&a, &b);
         if added == 0 || best.as_ref().is_some_and(|bst| bst.gain_mm2 >= gain) {

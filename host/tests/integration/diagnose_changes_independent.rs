@@ -209,7 +209,7 @@ fn this_files_fk_is_rigctls_ur5() {
 }
 
 /// (a) tools knocked in the flange's x-y plane and (b) markers re-mounted along its normal, at
-/// 25-75 % of the session (2400 s), 0.05-0.3 mm: `tool_change` named with `t_s` within
+/// 25-75 % of the session (2400 s), 0.05-0.3 mm: one `tool_change` named, with `t_s` within
 /// `TIME_TOLERANCE_INTERVALS` pose intervals, held out <= `HELD_OUT_BAR` x the floor.
 #[test]
 fn knocked_tools_and_remounted_markers_are_named_with_their_time() {
@@ -244,7 +244,10 @@ fn knocked_tools_and_remounted_markers_are_named_with_their_time() {
         record_push(&format!("{label}_time_error_intervals"), dt / INTERVAL_S);
         record_push(&format!("{label}_held_out_over_floor"), held_out);
         record_push(&format!("{label}_changes_named"), named.len() as u64);
-        if dt > TIME_TOLERANCE_INTERVALS * INTERVAL_S || held_out > HELD_OUT_BAR {
+        // one change happened: one named (a second, spurious one at the first's neighbour stood
+        // in for a wrongly placed first)
+        if dt > TIME_TOLERANCE_INTERVALS * INTERVAL_S || held_out > HELD_OUT_BAR || named.len() != 1
+        {
             failures.push(what);
         }
     }
@@ -253,10 +256,7 @@ fn knocked_tools_and_remounted_markers_are_named_with_their_time() {
 
 /// (c) the instrument bumped at 30-75 % of the session: no candidate describes it. Asserted on
 /// every set: `diagnose` does not end at the floor with nothing said: the probe's change-point
-/// scan reports a step. Recorded, not asserted: how far that step is from the truth. On seed 27
-/// (the step at 50 %) `time_drift` (a linear drift in the measurement frame) is accepted first
-/// and takes most of the step; the scan of what is left (the step minus a ramp) then puts the
-/// step at 350 s, 85 intervals early, so "near its time" does not hold on every set.
+/// scan reports a step, within `TIME_TOLERANCE_INTERVALS` pose intervals of its time.
 #[test]
 fn a_bumped_instrument_is_seen_by_the_probe() {
     let dir = tempfile::tempdir().unwrap();
@@ -279,7 +279,10 @@ fn a_bumped_instrument_is_seen_by_the_probe() {
         }
         record_push("instrument_time_error_intervals", dt / INTERVAL_S);
         let note = d["unexplained"]["note"].as_str().unwrap_or("");
-        if !t.is_finite() || !note.contains("something changed at t =") {
+        if !t.is_finite()
+            || !note.contains("something changed at t =")
+            || dt > TIME_TOLERANCE_INTERVALS * INTERVAL_S
+        {
             failures.push(format!(
                 "seed {seed}: change point {} vs {t_true}: {}",
                 d["probe"]["change_point"],
