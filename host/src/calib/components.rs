@@ -131,6 +131,11 @@ impl MeasuredSet {
         row: usize,
         jac: &mut DMatrix<f64>,
     ) -> usize {
+        if !self.has_directions(k) {
+            // a full position: its three rows as they are (no copy of `j` first)
+            jac.rows_mut(row, j.nrows()).copy_from(j);
+            return row + j.nrows();
+        }
         let rows = self.jacobian_rows(k, j);
         jac.rows_mut(row, rows.nrows()).copy_from(&rows);
         row + rows.nrows()

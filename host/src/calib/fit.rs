@@ -7,7 +7,7 @@
 use nalgebra::{DMatrix, DVector};
 
 use super::error::CalibError;
-use super::identifiability::{analyse, scaled_svd, Identifiability};
+use super::identifiability::{analyse, analyse_svd, scaled_svd, Identifiability, ScaledSvd};
 use super::lm::{solve, LmConfig, Problem};
 use super::normal::NormalReport;
 use super::prior::{Prior, PriorScales, WithPrior};
@@ -117,13 +117,22 @@ pub fn parameter_sigmas_m(
     residual_norm_sq: f64,
     rtol: f64,
 ) -> Vec<f64> {
-    let n = jac.ncols();
+    if jac.ncols() == 0 {
+        return Vec::new();
+    }
+    sigmas_of_svd(&scaled_svd(jac), m, residual_norm_sq, rtol)
+}
+
+/// [`parameter_sigmas_m`] given the Jacobian's [`scaled_svd`] `svd` (computed once by a caller
+/// that also analyses it, [`analyse_svd`]).
+fn sigmas_of_svd(svd: &ScaledSvd, m: usize, residual_norm_sq: f64, rtol: f64) -> Vec<f64> {
+    let (norms, s, v) = svd;
+    let n = v.nrows();
     if n == 0 {
         return Vec::new();
     }
     let dof = m.saturating_sub(n).max(1) as f64;
     let s2 = residual_norm_sq / dof;
-    let (norms, s, v) = scaled_svd(jac);
     let cut = rtol * s.first().copied().unwrap_or(0.0);
     (0..n)
         .map(|i| {
@@ -291,20 +300,50 @@ pub fn solve_split_with<U, S: SetUnknowns, F: Rows<S>>(
     let mut state = problem.into_state();
     state.set(&rep.x)?;
     let rss_mm2 = rep.residuals.rows(0, m).norm_squared();
-    let data_jac = rep.jacobian.rows(0, m).into_owned();
+    let (sigma, condition_number) = sigmas_and_condition(&rep.jacobian, m, rss_mm2, rtol);
     Ok(Fit {
         model: state,
         fitted: split.fitted,
         fixed: split.fixed,
         unidentifiable: split.unidentifiable,
-        sigma: parameter_sigmas_m(&rep.jacobian, m, rss_mm2, rtol),
-        condition_number: analyse(&data_jac, rtol).condition_number,
+        sigma,
+        condition_number,
         rank: split.rank,
         iterations: rep.iterations,
         converged: rep.termination.converged(),
         rss_mm2,
         n_residuals: m,
     })
+}
+
+/// The state at the solution of `problem` from `x0` alone: [`solve_split`]'s solve without its
+/// sigmas and condition number (for refits whose values are all that is used, e.g. the folds
+/// of a cross-validation).
+pub fn solve_values<S: SetUnknowns, F: Rows<S>>(
+    mut problem: ModelProblem<S, F>,
+    x0: DVector<f64>,
+    lm: &LmConfig,
+) -> Result<S, CalibError> {
+    let rep = solve(&mut problem, x0, lm).map_err(CalibError::from_lm)?;
+    let mut state = problem.into_state();
+    state.set(&rep.x)?;
+    Ok(state)
+}
+
+/// The sigmas ([`parameter_sigmas_m`]) of the solver's Jacobian `jac` (its first `m` rows the
+/// measurements', any further rows a prior's) and the condition number of the measurements'
+/// rows ([`analyse`]); one decomposition serves both when there is no prior.
+fn sigmas_and_condition(jac: &DMatrix<f64>, m: usize, rss_mm2: f64, rtol: f64) -> (Vec<f64>, f64) {
+    if jac.nrows() != m || jac.ncols() == 0 {
+        let data_jac = jac.rows(0, m.min(jac.nrows())).into_owned();
+        return (
+            parameter_sigmas_m(jac, m, rss_mm2, rtol),
+            analyse(&data_jac, rtol).condition_number,
+        );
+    }
+    let svd = scaled_svd(jac);
+    let sigma = sigmas_of_svd(&svd, m, rss_mm2, rtol);
+    (sigma, analyse_svd(jac, rtol, svd).condition_number)
 }
 
 /// The identification common to every kind of measurement: the identifiability analysis of

@@ -80,9 +80,38 @@ pub struct Identifiability {
     pub combinations: Vec<Combination>,
 }
 
+impl Identifiability {
+    /// The analysis of a Jacobian without columns.
+    fn empty() -> Self {
+        Identifiability {
+            rank: 0,
+            singular_values: Vec::new(),
+            condition_number: 1.0,
+            kept: Vec::new(),
+            fixed: Vec::new(),
+            combinations: Vec::new(),
+        }
+    }
+}
+
+/// What [`scaled_svd`] returns: the column norms, the singular values (descending) and the
+/// right singular vectors (columns).
+pub type ScaledSvd = (DVector<f64>, Vec<f64>, DMatrix<f64>);
+
+/// The largest over the smallest of the singular values `s` (descending); infinite when the
+/// smallest is zero.
+fn condition_of(s: &[f64]) -> f64 {
+    let lo = s.last().copied().unwrap_or(0.0);
+    if lo > 0.0 {
+        s[0] / lo
+    } else {
+        f64::INFINITY
+    }
+}
+
 /// Column norms (1 for a zero column) and the singular values (descending) and right singular
 /// vectors `V` (columns) of `jac` with unit-norm columns.
-pub fn scaled_svd(jac: &DMatrix<f64>) -> (DVector<f64>, Vec<f64>, DMatrix<f64>) {
+pub fn scaled_svd(jac: &DMatrix<f64>) -> ScaledSvd {
     let n = jac.ncols();
     if jac.nrows() == 0 || n == 0 || jac.iter().any(|v| !v.is_finite()) {
         // nothing to decompose (no rows, or values that are not numbers): no direction is
@@ -133,18 +162,21 @@ pub fn scaled_svd(jac: &DMatrix<f64>) -> (DVector<f64>, Vec<f64>, DMatrix<f64>) 
 /// Rank, condition number and unidentifiable combinations of the Jacobian `jac`
 /// (rows = residuals, columns = parameters), with threshold `rtol` (see [`DEFAULT_RTOL`]).
 pub fn analyse(jac: &DMatrix<f64>, rtol: f64) -> Identifiability {
+    if jac.ncols() == 0 {
+        return Identifiability::empty();
+    }
+    analyse_svd(jac, rtol, scaled_svd(jac))
+}
+
+/// [`analyse`] of `jac` given its [`scaled_svd`] `svd` (computed once by a caller that also
+/// needs it, e.g. for the sigmas). When every column is kept, the condition number is that of
+/// the same decomposition (the sub-Jacobian of the kept columns is `jac` itself).
+pub fn analyse_svd(jac: &DMatrix<f64>, rtol: f64, svd: ScaledSvd) -> Identifiability {
     let n = jac.ncols();
     if n == 0 {
-        return Identifiability {
-            rank: 0,
-            singular_values: Vec::new(),
-            condition_number: 1.0,
-            kept: Vec::new(),
-            fixed: Vec::new(),
-            combinations: Vec::new(),
-        };
+        return Identifiability::empty();
     }
-    let (norms, s, v) = scaled_svd(jac);
+    let (norms, s, v) = svd;
     let s_max = s.first().copied().unwrap_or(0.0);
     let cut = rtol * s_max;
     let rank = s.iter().filter(|&&x| x > cut && x > 0.0).count();
@@ -233,15 +265,11 @@ pub fn analyse(jac: &DMatrix<f64>, rtol: f64) -> Identifiability {
     let kept: Vec<usize> = (0..n).filter(|i| !fixed.contains(i)).collect();
     let condition_number = if kept.is_empty() {
         1.0
+    } else if kept.len() == n {
+        condition_of(&s)
     } else {
         let sub = DMatrix::from_fn(jac.nrows(), kept.len(), |r, c| jac[(r, kept[c])]);
-        let (_, ss, _) = scaled_svd(&sub);
-        let lo = ss.last().copied().unwrap_or(0.0);
-        if lo > 0.0 {
-            ss[0] / lo
-        } else {
-            f64::INFINITY
-        }
+        condition_of(&scaled_svd(&sub).1)
     };
     Identifiability {
         rank,

@@ -216,39 +216,42 @@ impl ExtModel {
                 wrt.len() - 1
             }));
         }
-        let (fk, jm) = at_t.position_jacobian(&q_eff, self.tilt_at(data, k), &wrt)?;
-        // the time terms scale the chain's position (and so its derivatives)
-        let thermal = self
-            .model
-            .time_terms()
-            .thermal_derivatives(&fk.position_mm, t_s);
-        let mut jac = DMatrix::zeros(3, unknowns.len());
-        for (c, u) in unknowns.iter().enumerate() {
-            let col: Vector3<f64> = match (*u, slot[c]) {
-                (Unknown::PositionDrift(a), _) => TimeTerms::drift_column(a, t_s),
-                (Unknown::ThermalPpm, _) => thermal.d_ppm,
-                (Unknown::ThermalTauMin, _) => thermal.d_tau_min,
-                (Unknown::JointDrift(_), Some(s)) => {
-                    jm.column(s) * TimeTerms::joint_drift_regressor(t_s) * thermal.factor
-                }
-                (Unknown::Compliance(j), Some(s)) => {
-                    jm.column(s) * compliance_regressor(&tau, j) * thermal.factor
-                }
-                (Unknown::JointScale(j), Some(s)) => {
-                    jm.column(s) * q.get(j).copied().unwrap_or(0.0) * thermal.factor
-                }
-                (Unknown::Coupling(_, k), Some(s)) => {
-                    jm.column(s) * q.get(k).copied().unwrap_or(0.0) * thermal.factor
-                }
-                (Unknown::Hysteresis(j), Some(s)) => {
-                    jm.column(s) * approach.get(j).copied().unwrap_or(0.0) * thermal.factor
-                }
-                (_, Some(s)) => jm.column(s) * thermal.factor,
-                (_, None) => Vector3::zeros(),
-            };
-            jac.view_mut((0, c), (3, 1)).copy_from(&col);
-        }
-        Ok((self.model.measured_mm(&fk.position_mm, t_s), jac))
+        // the chain's position and columns read in the evaluation workspace (no copies)
+        let columns = |position_mm: &Vector3<f64>, jm: &[Vector3<f64>]| {
+            // the time terms scale the chain's position (and so its derivatives)
+            let thermal = self
+                .model
+                .time_terms()
+                .thermal_derivatives(position_mm, t_s);
+            let mut jac = DMatrix::zeros(3, unknowns.len());
+            for (c, u) in unknowns.iter().enumerate() {
+                let col: Vector3<f64> = match (*u, slot[c]) {
+                    (Unknown::PositionDrift(a), _) => TimeTerms::drift_column(a, t_s),
+                    (Unknown::ThermalPpm, _) => thermal.d_ppm,
+                    (Unknown::ThermalTauMin, _) => thermal.d_tau_min,
+                    (Unknown::JointDrift(_), Some(s)) => {
+                        jm[s] * TimeTerms::joint_drift_regressor(t_s) * thermal.factor
+                    }
+                    (Unknown::Compliance(j), Some(s)) => {
+                        jm[s] * compliance_regressor(&tau, j) * thermal.factor
+                    }
+                    (Unknown::JointScale(j), Some(s)) => {
+                        jm[s] * q.get(j).copied().unwrap_or(0.0) * thermal.factor
+                    }
+                    (Unknown::Coupling(_, k), Some(s)) => {
+                        jm[s] * q.get(k).copied().unwrap_or(0.0) * thermal.factor
+                    }
+                    (Unknown::Hysteresis(j), Some(s)) => {
+                        jm[s] * approach.get(j).copied().unwrap_or(0.0) * thermal.factor
+                    }
+                    (_, Some(s)) => jm[s] * thermal.factor,
+                    (_, None) => Vector3::zeros(),
+                };
+                jac.view_mut((0, c), (3, 1)).copy_from(&col);
+            }
+            (self.model.measured_mm(position_mm, t_s), jac)
+        };
+        at_t.with_position_jacobian(&q_eff, self.tilt_at(data, k), &wrt, columns)
     }
 
     /// The sign pattern of the tilting law (MODEL.md eq. 5.19, `sign(x)` = 0 for `|x| < 1e-9`):
@@ -295,14 +298,27 @@ impl ExtModel {
     ) -> Result<(DMatrix<f64>, DVector<f64>), ModelError> {
         let mut jac = DMatrix::zeros(data.n_residuals(), unknowns.len());
         let mut err = DVector::zeros(data.n_residuals());
+        self.stacked_into(data, unknowns, &mut jac, &mut err)?;
+        Ok((jac, err))
+    }
+
+    /// [`ExtModel::stacked`] into `jac` and `err`, sized for `data` and `unknowns` (every entry
+    /// written).
+    fn stacked_into(
+        &self,
+        data: &MeasuredSet,
+        unknowns: &[Unknown],
+        jac: &mut DMatrix<f64>,
+        err: &mut DVector<f64>,
+    ) -> Result<(), ModelError> {
         let mut row = 0;
         for k in 0..data.len() {
             let (p, j) = self.predict_with_jacobian(data, k, unknowns)?;
             let e = data.components(k, &(data.poses.xyz_mm[k] - p));
             err.rows_mut(row, e.len()).copy_from_slice(&e);
-            row = data.put_jacobian_rows(k, &j, row, &mut jac);
+            row = data.put_jacobian_rows(k, &j, row, jac);
         }
-        Ok((jac, err))
+        Ok(())
     }
 
     /// Residuals `predicted - measured` (one row per measured component) into `r` and, with
@@ -316,9 +332,8 @@ impl ExtModel {
     ) -> Result<(), ModelError> {
         match jac {
             Some(jac) => {
-                let (j, e) = self.stacked(data, unknowns)?;
-                jac.copy_from(&j);
-                r.copy_from(&(-e));
+                self.stacked_into(data, unknowns, jac, r)?;
+                r.neg_mut();
             }
             None => {
                 let mut row = 0;

@@ -40,7 +40,7 @@ use rand_chacha::ChaCha8Rng;
 
 use super::candidates::Candidate;
 use super::compress::stacked_or_compressed;
-use super::extended::{fit, ExtModel, Unknown, Values};
+use super::extended::{fit_values, ExtModel, Unknown, Values};
 use super::parallel::map_ordered;
 use crate::calib::lm::LmConfig;
 use crate::calib::stats::autocorrelation_time;
@@ -255,10 +255,10 @@ pub fn cv_errors(
             return Ok(Vec::new());
         }
         let sub = data.subset(&train);
-        let refit = fit(&f.model, &sub, &f.fitted, &cfg.lm_cv, cfg.rtol, true)?;
+        let refit = fit_values(&f.model, &sub, &f.fitted, &cfg.lm_cv, cfg.rtol)?;
         test.iter()
             .map(|&i| {
-                let p = refit.model.predict_pose(data, i)?;
+                let p = refit.predict_pose(data, i)?;
                 Ok((i, data.error_mm(i, &p).norm()))
             })
             .collect()

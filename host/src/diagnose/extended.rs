@@ -3,7 +3,7 @@
 
 use nalgebra::{DMatrix, DVector};
 
-use crate::calib::fit::{fit_at_normal, solve_split, Fit, Split};
+use crate::calib::fit::{fit_at_normal, solve_split, solve_values, Fit, Split};
 use crate::calib::identifiability::{analyse, Identifiability};
 use crate::calib::lm::LmConfig;
 use crate::calib::normal::{
@@ -122,6 +122,34 @@ pub fn fit(
         solve_split(split, problem, x0, lm, rtol)?
     };
     Ok(fit.map_model(|f| f.state))
+}
+
+/// The state [`fit`] with `skip_analysis` reaches, without the sigmas and condition number of
+/// the result (the same solver from the same start, so the same values): for the refits of a
+/// cross-validation, which use only the fitted model.
+pub fn fit_values(
+    start: &ExtModel,
+    data: &MeasuredSet,
+    unknowns: &[Unknown],
+    lm: &LmConfig,
+    rtol: f64,
+) -> Result<ExtModel, CalibError> {
+    if data.is_empty() || unknowns.is_empty() {
+        return fit(start, data, unknowns, lm, rtol, true).map(|f| f.model);
+    }
+    let freed = Freed::new(start.clone(), unknowns.to_vec());
+    let x0 = freed.values();
+    if uses_normal(data, rtol) {
+        let mut problem = ExtNormal { freed, data };
+        let rep = solve_normal(&mut problem, x0, lm).map_err(CalibError::from_lm)?;
+        problem.freed.set(&rep.x)?;
+        return Ok(problem.freed.state);
+    }
+    let rows = |f: &Freed<ExtModel>, r: &mut DVector<f64>, jac: Option<&mut DMatrix<f64>>| {
+        f.state.rows(data, &f.unknowns, r, jac)
+    };
+    let problem = ModelProblem::new(freed, data.n_residuals(), rows);
+    Ok(solve_values(problem, x0, lm)?.state)
 }
 
 /// `unknowns` split by the analysis `id` of their columns.

@@ -308,6 +308,22 @@ impl Model {
         })
     }
 
+    /// [`Model::position_jacobian`] read in this thread's evaluation workspace: `f` gets the
+    /// tool position (mm) and the Jacobian's columns (one per `wrt` entry), and nothing is
+    /// copied out (the per-pose evaluations of an identification).
+    pub fn with_position_jacobian<T>(
+        &self,
+        q_deg: &[f64],
+        tilt: Tilt<'_>,
+        wrt: &[Wrt],
+        f: impl FnOnce(&Vector3<f64>, &[Vector3<f64>]) -> T,
+    ) -> Result<T, ModelError> {
+        with_workspace(self, |d| {
+            self.jacobian_with(d, q_deg, tilt, wrt)?;
+            Ok(f(&d.position_mm(), d.jacobian()))
+        })
+    }
+
     /// Jacobian of the tool position wrt all joints (mm/deg), with the FK.
     pub fn joint_jacobian(
         &self,
