@@ -23,7 +23,7 @@ use super::fit::{solve_split, Fit, Split};
 use super::identifiability::analyse;
 use super::lm::LmConfig;
 use super::measured::MeasuredSet;
-use super::problem::{put_position_rows, tilt_mode, ModelProblem};
+use super::problem::{put_position_rows, tilt_mode};
 pub use super::state::ExtModel;
 use super::unknown::Freed;
 pub use super::unknown::{Unknown, Values};
@@ -128,19 +128,11 @@ impl ExtModel {
             .collect()
     }
 
-    /// Residuals `predicted - measured` (3 rows per measured point) and their Jacobian wrt
-    /// `unknowns`.
-    pub fn point_rows(
-        &self,
-        data: &MeasuredSet,
-        unknowns: &[Unknown],
-        r: &mut DVector<f64>,
-        jac: Option<&mut DMatrix<f64>>,
-    ) -> Result<(), ModelError> {
-        let models = self.slot_models()?;
-        let tilt = tilt_mode(self.tilt);
+    /// The unknowns of `unknowns` as what the chain differentiates: a point offset moves the
+    /// tool point (`tool_of`).
+    fn point_wrt(&self, unknowns: &[Unknown]) -> Result<Vec<Wrt>, ModelError> {
         let t = tool_of(&self.model)?;
-        let wrt: Vec<Wrt> = unknowns
+        unknowns
             .iter()
             .map(|u| match *u {
                 Unknown::Param(i) => Ok(Wrt::Param(i)),
@@ -149,21 +141,49 @@ impl ExtModel {
                 Unknown::LateralCompliance(j) => Ok(Wrt::Lateral(j)),
                 other => Err(not_here(other, &self.model)),
             })
-            .collect::<Result<_, _>>()?;
+            .collect()
+    }
+
+    /// The residuals `predicted - measured` of every measured point (3 rows each) into `r`:
+    /// [`ExtModel::rows`] with point slots, without the Jacobian.
+    pub(super) fn point_residuals(
+        &self,
+        data: &MeasuredSet,
+        unknowns: &[Unknown],
+        r: &mut DVector<f64>,
+    ) -> Result<(), ModelError> {
+        // an unknown this prediction does not evaluate is refused with or without the Jacobian
+        self.point_wrt(unknowns)?;
+        let models = self.slot_models()?;
+        let tilt = tilt_mode(self.tilt);
         let tau = self.pose_torques(data, self.needs_torques(unknowns))?;
-        let Some(jac) = jac else {
-            for (i, m) in data.points().enumerate() {
-                let q = compliance_deflected(
-                    &data.poses.q_deg[m.pose],
-                    self.compliance_deg_per_kgfm(),
-                    &tau[m.pose],
-                );
-                let model = models.get(m.slot).unwrap_or(&self.model);
-                let p = model.position_mm(&q, tilt)?;
-                put_position_rows(3 * i, &p, &m.xyz_mm, r, None);
-            }
-            return Ok(());
-        };
+        for (i, m) in data.points().enumerate() {
+            let q = compliance_deflected(
+                &data.poses.q_deg[m.pose],
+                self.compliance_deg_per_kgfm(),
+                &tau[m.pose],
+            );
+            let model = models.get(m.slot).unwrap_or(&self.model);
+            let p = model.position_mm(&q, tilt)?;
+            put_position_rows(3 * i, &p, &m.xyz_mm, r, None);
+        }
+        Ok(())
+    }
+
+    /// [`ExtModel::point_residuals`] and their Jacobian wrt `unknowns` into `jac`:
+    /// [`ExtModel::rows`] with point slots.
+    pub(super) fn point_jacobian(
+        &self,
+        data: &MeasuredSet,
+        unknowns: &[Unknown],
+        r: &mut DVector<f64>,
+        jac: &mut DMatrix<f64>,
+    ) -> Result<(), ModelError> {
+        let wrt = self.point_wrt(unknowns)?;
+        let models = self.slot_models()?;
+        let tilt = tilt_mode(self.tilt);
+        let t = tool_of(&self.model)?;
+        let tau = self.pose_torques(data, self.needs_torques(unknowns))?;
         for (i, m) in data.points().enumerate() {
             let tau_i = &tau[m.pose];
             let q = compliance_deflected(
@@ -204,9 +224,9 @@ pub fn stacked(
     data: &MeasuredSet,
     unknowns: &[Unknown],
 ) -> Result<(DMatrix<f64>, DVector<f64>), ModelError> {
-    let mut r = DVector::zeros(3 * data.n_points());
-    let mut jac = DMatrix::zeros(3 * data.n_points(), unknowns.len());
-    state.point_rows(data, unknowns, &mut r, Some(&mut jac))?;
+    let mut r = DVector::zeros(state.n_rows(data));
+    let mut jac = DMatrix::zeros(state.n_rows(data), unknowns.len());
+    state.rows(data, unknowns, &mut r, Some(&mut jac))?;
     Ok((jac, r))
 }
 
@@ -228,10 +248,7 @@ pub fn fit_general(
     let split = Split::of(selection, &name_refs, &analyse(&jac0, rtol)).nonempty()?;
     let freed = Freed::new(start.clone(), split.fitted.clone());
     let x0 = freed.values();
-    let rows = |f: &Freed<ExtModel>, r: &mut DVector<f64>, jac: Option<&mut DMatrix<f64>>| {
-        f.state.point_rows(data, &f.unknowns, r, jac)
-    };
-    let problem = ModelProblem::new(freed, 3 * data.n_points(), rows);
+    let problem = ExtModel::problem(freed, data);
     let mut fit = solve_split(split, problem, x0, lm, rtol)?.map_model(|f| f.state);
     // Slot 0's offset mirrors the tool point.
     let v = fit.model.model.param_values();

@@ -171,19 +171,41 @@ impl<S: SetUnknowns, F: Rows<S>> Problem for ModelProblem<S, F> {
     }
 }
 
-/// Geometric identification: unknowns are the values of the parameters `cols` of a copy of
-/// `model` (model indices, parameter units; all others stay at their values); residuals are
-/// `model - measured` (x, y, z of every pose, mm).
+/// An identification of model parameters: unknowns are the values of the parameters `cols` of
+/// a copy of `model` (model indices, parameter units; all others stay at their values), the
+/// `n_residuals` rows written by `rows` from that model and `cols` ([`Rows`]).
+pub fn param_problem<'a, F>(
+    model: &Model,
+    cols: Vec<usize>,
+    n_residuals: usize,
+    mut rows: F,
+) -> ModelProblem<Unknowns, impl Rows<Unknowns> + 'a>
+where
+    F: FnMut(
+            &Model,
+            &[usize],
+            &mut DVector<f64>,
+            Option<&mut DMatrix<f64>>,
+        ) -> Result<(), ModelError>
+        + 'a,
+{
+    let rows = move |u: &Unknowns, r: &mut DVector<f64>, jac: Option<&mut DMatrix<f64>>| {
+        rows(u.model(), u.cols(), r, jac)
+    };
+    ModelProblem::new(Unknowns::new(model, cols), n_residuals, rows)
+}
+
+/// Geometric identification ([`param_problem`]): residuals are `model - measured` (x, y, z of
+/// every pose, mm).
 pub fn position_problem<'a>(
     model: &Model,
     poses: &'a PosePoints,
     cols: Vec<usize>,
     tilt: bool,
 ) -> ModelProblem<Unknowns, impl Rows<Unknowns> + 'a> {
-    let rows = move |u: &Unknowns, r: &mut DVector<f64>, jac: Option<&mut DMatrix<f64>>| {
-        position_rows(u.model(), poses, u.cols(), tilt, r, jac)
-    };
-    ModelProblem::new(Unknowns::new(model, cols), 3 * poses.len(), rows)
+    param_problem(model, cols, 3 * poses.len(), move |m, cols, r, jac| {
+        position_rows(m, poses, cols, tilt, r, jac)
+    })
 }
 
 /// Writes the residual `predicted - measured` of one full position into rows `row..row + 3` of

@@ -17,14 +17,14 @@
 //! `calibrate --json` stats `|dP|` is `sqrt(dev_u^2 + dev_n^2)` (the along-path error is not in
 //! it), and `mean_abs_x/y/z` are the R components of `e`.
 
-use nalgebra::{DMatrix, DVector, Vector3};
+use nalgebra::{DMatrix, Vector3};
 
 use super::calibrate::{fit_report, resolve_selection, CalibrateOptions};
 use super::error::CalibError;
 use super::fit::{fit_problem, Fit};
 use super::lm::LmConfig;
 use super::measured::MeasuredSet;
-use super::problem::{ModelProblem, Rows, Unknowns};
+use super::problem::{param_problem, ModelProblem, Rows, Unknowns};
 use super::report::CalibrateReport;
 use super::samples::FusedSample;
 use super::stats;
@@ -97,25 +97,23 @@ pub fn projected_jacobian(
     Ok(jac)
 }
 
-/// The identification on projected measurements as a least-squares problem: unknowns are the
-/// parameters `cols` of a copy of `model`, residuals `d . (p_model - measured)` (mm,
-/// [`MeasuredSet::residual`]).
+/// The identification on projected measurements as a least-squares problem
+/// ([`param_problem`]): residuals `d . (p_model - measured)` (mm, [`MeasuredSet::residual`]).
 pub fn projected_problem<'a>(
     model: &Model,
     data: &'a MeasuredSet,
     cols: Vec<usize>,
     tilt: SampleTilt,
 ) -> ModelProblem<Unknowns, impl Rows<Unknowns> + 'a> {
-    let rows = move |u: &Unknowns, r: &mut DVector<f64>, jac: Option<&mut DMatrix<f64>>| {
-        for (ri, v) in r.iter_mut().zip(residuals(u.model(), data, tilt)?) {
+    param_problem(model, cols, data.n_residuals(), move |m, cols, r, jac| {
+        for (ri, v) in r.iter_mut().zip(residuals(m, data, tilt)?) {
             *ri = v;
         }
         if let Some(jac) = jac {
-            jac.copy_from(&projected_jacobian(u.model(), data, u.cols(), tilt)?);
+            jac.copy_from(&projected_jacobian(m, data, cols, tilt)?);
         }
         Ok(())
-    };
-    ModelProblem::new(Unknowns::new(model, cols), data.n_residuals(), rows)
+    })
 }
 
 /// Identifies the parameters `selection` of `start` from projected measurements
@@ -177,8 +175,9 @@ pub fn autocorrelation_time(data: &MeasuredSet, r: &[f64]) -> f64 {
         .fold(1.0, f64::max)
 }
 
-/// Default outlier threshold of [`fit_projected_robust`], in robust standard deviations.
-pub const OUTLIER_SIGMAS: f64 = 5.0;
+/// Default outlier threshold of [`fit_projected_robust`], in robust standard deviations: the
+/// gross-error rule's.
+pub use super::outliers::OUTLIER_SIGMAS;
 
 /// A fit with outlier rejection: after a fit (`fit_on`, e.g. [`fit_projected`] from a start
 /// model), measurements of `data` whose residual (evaluated with `tilt`) exceeds `k` robust
@@ -201,9 +200,7 @@ pub fn fit_projected_robust(
     let mut fit = fit_on(&kept)?;
     for _ in 0..3 {
         let r = residuals(&fit.model, data, tilt)?;
-        let mut abs: Vec<f64> = r.iter().map(|x| x.abs()).collect();
-        abs.sort_by(f64::total_cmp);
-        let sigma = 1.4826 * abs.get(abs.len() / 2).copied().unwrap_or(0.0);
+        let sigma = stats::robust_sigma(r.iter().copied());
         let keep: Vec<bool> = r.iter().map(|ri| ri.abs() <= k * sigma).collect();
         let n = keep.iter().filter(|&&x| x).count();
         if n == n_kept || n < min_kept {

@@ -22,6 +22,8 @@ use nalgebra::{DMatrix, DVector, Vector3};
 
 use super::measured::MeasuredSet;
 use super::normal::Normal;
+use super::problem::{ModelProblem, Rows};
+use super::unknown::Freed;
 pub use super::unknown::{Unknown, Values};
 use crate::model::changes::TOOL_PARAMS;
 use crate::model::gravity::GravityModel;
@@ -321,8 +323,18 @@ impl ExtModel {
         Ok(())
     }
 
-    /// Residuals `predicted - measured` (one row per measured component) into `r` and, with
-    /// `jac`, their Jacobian wrt `unknowns` ([`ExtModel::stacked`]).
+    /// Number of rows of [`ExtModel::rows`] over `data`.
+    pub fn n_rows(&self, data: &MeasuredSet) -> usize {
+        match self.offsets_mm.is_empty() {
+            true => data.n_residuals(),
+            false => 3 * data.n_points(),
+        }
+    }
+
+    /// The residual of every identification on this state: `predicted - measured` into `r`
+    /// and, with `jac`, its Jacobian wrt `unknowns`. One row per measured component of every
+    /// pose ([`ExtModel::stacked`]); with point slots (`offsets_mm`, [`super::general`]) 3 rows
+    /// per measured point.
     pub fn rows(
         &self,
         data: &MeasuredSet,
@@ -330,12 +342,14 @@ impl ExtModel {
         r: &mut DVector<f64>,
         jac: Option<&mut DMatrix<f64>>,
     ) -> Result<(), ModelError> {
-        match jac {
-            Some(jac) => {
+        match (self.offsets_mm.is_empty(), jac) {
+            (false, Some(jac)) => self.point_jacobian(data, unknowns, r, jac)?,
+            (false, None) => self.point_residuals(data, unknowns, r)?,
+            (true, Some(jac)) => {
                 self.stacked_into(data, unknowns, jac, r)?;
                 r.neg_mut();
             }
-            None => {
+            (true, None) => {
                 let mut row = 0;
                 for k in 0..data.len() {
                     let e = data.residual(k, &self.predict_pose(data, k)?);
@@ -345,6 +359,18 @@ impl ExtModel {
             }
         }
         Ok(())
+    }
+
+    /// The least-squares problem of [`ExtModel::rows`] over `data` on the unknowns `freed`.
+    pub fn problem<'a>(
+        freed: Freed<ExtModel>,
+        data: &'a MeasuredSet,
+    ) -> ModelProblem<Freed<ExtModel>, impl Rows<Freed<ExtModel>> + 'a> {
+        let m = freed.state.n_rows(data);
+        let rows = |f: &Freed<ExtModel>, r: &mut DVector<f64>, jac: Option<&mut DMatrix<f64>>| {
+            f.state.rows(data, &f.unknowns, r, jac)
+        };
+        ModelProblem::new(freed, m, rows)
     }
 
     /// Normal equations of the residual `predicted - measured` over `data` wrt `unknowns`

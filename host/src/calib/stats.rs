@@ -120,9 +120,31 @@ pub fn autocorrelation_time(series: &[f64]) -> f64 {
     tau
 }
 
+/// The median absolute deviation's normal-consistent scale of values about 0: `1.4826` times the
+/// median of `|x|` (the upper one of an even count; 0 for none). For Gaussian values it is their
+/// standard deviation; a few gross ones barely move it.
+pub fn robust_sigma(values: impl IntoIterator<Item = f64>) -> f64 {
+    let mut abs: Vec<f64> = values.into_iter().map(f64::abs).collect();
+    abs.sort_by(f64::total_cmp);
+    1.4826 * abs.get(abs.len() / 2).copied().unwrap_or(0.0)
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// The robust sigma is the upper median of |x| times 1.4826, 0 for no values, and a gross
+    /// value does not move it much.
+    #[test]
+    fn robust_sigma_is_the_scaled_median_of_absolute_values() {
+        assert_eq!(robust_sigma(Vec::new()), 0.0);
+        // |x| sorted: 1, 2, 3, 4 -> upper median 3
+        assert!((robust_sigma([-4.0, 1.0, -2.0, 3.0]) - 1.4826 * 3.0).abs() < 1e-12);
+        let clean = robust_sigma([1.0, -1.0, 2.0, -2.0, 1.5]);
+        let gross = robust_sigma([1.0, -1.0, 2.0, -2.0, 1000.0]);
+        assert!((clean - 1.4826 * 1.5).abs() < 1e-12, "{clean}");
+        assert!((gross - 1.4826 * 2.0).abs() < 1e-12, "{gross}");
+    }
 
     /// White noise has tau about 1; an AR(1) series with coefficient a has
     /// tau = (1 + a) / (1 - a) (here 3 for a = 0.5), to the estimator's truncation.

@@ -4,6 +4,7 @@
 
 use super::decide::DecideConfig;
 use super::extended::{self, ExtModel, ExtendedFit, Unknown};
+use super::spikes;
 use super::DiagnoseError;
 use crate::calib::fit::{Fit, Split};
 use crate::calib::position_fit::fit_parameters;
@@ -67,54 +68,32 @@ pub fn declared_fit(
     Ok((fit, requested))
 }
 
-/// Outlier threshold of [`trim_outliers`], in robust standard deviations.
-pub const OUTLIER_SIGMAS: f64 = 5.0;
-/// Half width (samples) of the running median of [`trim_outliers`].
-pub const OUTLIER_HALF_WINDOW: usize = 5;
-
 /// The declared fit ([`declared_fit`]) of the calibration set, after leaving out the samples
-/// along a traced path whose declared-fit residual is a **spike** (at most 3 passes, each
-/// refitting): in some measured component the residual departs from its running median over
-/// the neighbouring samples (+- [`OUTLIER_HALF_WINDOW`]) by more than [`OUTLIER_SIGMAS`] robust
-/// standard deviations (`1.4826 median |departure|`). Such spikes are expected with the
+/// along a traced path whose declared-fit residual is a **spike** in some measured component
+/// ([`spikes::in_components`]; at most 3 passes, each refitting). Such spikes are expected with the
 /// declared tilting law: where a joint moment is near zero its sign, hence the side of the
 /// clearance, can differ between the arm and the model for a sample or two. A missing effect
 /// changes the residual smoothly along the path and is kept. Full positions (independent poses)
-/// are never left out, nor is the validation set. Returns the kept set, the number left out,
-/// and the declared fit on the kept set with its requested unknowns.
+/// are never left out, nor is the validation set.
 pub fn trim_outliers(
     model: &Model,
     cal: &MeasuredSet,
     cfg: &DecideConfig,
-) -> Result<(MeasuredSet, usize, ExtendedFit, Vec<Unknown>), DiagnoseError> {
+) -> Result<Declared, DiagnoseError> {
     if !cal.is_serial() {
-        let (fit, requested) = declared_fit(model, cal, cfg)?;
-        return Ok((cal.clone(), 0, fit, requested));
+        return Declared::on(model, cal.clone(), 0, cfg);
     }
     let mut kept: Vec<usize> = (0..cal.len()).collect();
     let mut sub = cal.clone();
     let (mut fit, mut requested) = declared_fit(model, &sub, cfg)?;
     for _ in 0..3 {
-        let mut spikes = vec![false; kept.len()];
         let comps: Vec<Vec<f64>> = (0..sub.len())
             .map(|k| {
                 let p = fit.model.predict_pose(&sub, k)?;
                 Ok(sub.components(k, &(sub.poses.xyz_mm[k] - p)))
             })
             .collect::<Result<_, ModelError>>()?;
-        let slots = comps.iter().map(Vec::len).max().unwrap_or(0);
-        for slot in 0..slots {
-            let series: Vec<(usize, f64)> = comps
-                .iter()
-                .enumerate()
-                .filter_map(|(k, c)| c.get(slot).map(|v| (k, *v)))
-                .collect();
-            for (k, bad) in running_median_spikes(&series) {
-                if bad {
-                    spikes[k] = true;
-                }
-            }
-        }
+        let spikes = spikes::in_components(&comps);
         let next: Vec<usize> = kept
             .iter()
             .zip(&spikes)
@@ -128,29 +107,42 @@ pub fn trim_outliers(
         sub = cal.subset(&kept);
         (fit, requested) = declared_fit(model, &sub, cfg)?;
     }
-    Ok((sub, cal.len() - kept.len(), fit, requested))
+    Ok(Declared {
+        spikes_left_out: cal.len() - kept.len(),
+        cal: sub,
+        fit,
+        requested,
+    })
 }
 
-/// For each `(index, value)` of a series: whether it departs from the running median of its
-/// neighbours by more than [`OUTLIER_SIGMAS`] robust standard deviations of the departures.
-fn running_median_spikes(series: &[(usize, f64)]) -> Vec<(usize, bool)> {
-    let n = series.len();
-    let median = |v: &mut Vec<f64>| {
-        v.sort_by(f64::total_cmp);
-        v.get(v.len() / 2).copied().unwrap_or(0.0)
-    };
-    let dep: Vec<f64> = (0..n)
-        .map(|i| {
-            let lo = i.saturating_sub(OUTLIER_HALF_WINDOW);
-            let hi = (i + OUTLIER_HALF_WINDOW + 1).min(n);
-            let mut w: Vec<f64> = series[lo..hi].iter().map(|x| x.1).collect();
-            series[i].1 - median(&mut w)
+/// The declared fit every selection starts from, on the calibration poses it keeps
+/// ([`trim_outliers`]).
+#[derive(Debug, Clone)]
+pub struct Declared {
+    /// The calibration poses kept.
+    pub cal: MeasuredSet,
+    /// Samples left out as spikes along a traced path.
+    pub spikes_left_out: usize,
+    /// The declared fit ([`declared_fit`]) on `cal`.
+    pub fit: ExtendedFit,
+    /// Its requested unknowns.
+    pub requested: Vec<Unknown>,
+}
+
+impl Declared {
+    /// The declared fit on `cal`, after `spikes_left_out` samples were left out.
+    pub fn on(
+        model: &Model,
+        cal: MeasuredSet,
+        spikes_left_out: usize,
+        cfg: &DecideConfig,
+    ) -> Result<Self, DiagnoseError> {
+        let (fit, requested) = declared_fit(model, &cal, cfg)?;
+        Ok(Self {
+            cal,
+            spikes_left_out,
+            fit,
+            requested,
         })
-        .collect();
-    let sigma = 1.4826 * median(&mut dep.iter().map(|d| d.abs()).collect());
-    series
-        .iter()
-        .zip(&dep)
-        .map(|((k, _), d)| (*k, sigma > 0.0 && d.abs() > OUTLIER_SIGMAS * sigma))
-        .collect()
+    }
 }

@@ -1,7 +1,7 @@
 //! The extended fit of `diagnose`: the state ([`ExtModel`], [`crate::calib::state`]) fitted
 //! on the tall Jacobian (QR) or, on many poses, on normal equations accumulated pose by pose.
 
-use nalgebra::{DMatrix, DVector};
+use nalgebra::DVector;
 
 use crate::calib::fit::{fit_at_normal, solve_split, solve_values, Fit, Split};
 use crate::calib::identifiability::{analyse, Identifiability};
@@ -9,7 +9,7 @@ use crate::calib::lm::LmConfig;
 use crate::calib::normal::{
     solve_normal, solve_normal_from, use_normal_equations, Normal, NormalProblem,
 };
-use crate::calib::problem::{ModelProblem, SetUnknowns};
+use crate::calib::problem::SetUnknowns;
 pub use crate::calib::state::ExtModel;
 use crate::calib::unknown::Freed;
 pub use crate::calib::unknown::{Unknown, Values};
@@ -115,11 +115,7 @@ pub fn fit(
         .map_err(CalibError::from_lm)?;
         fit_at_normal(split, problem.freed, &rep, rtol)?
     } else {
-        let rows = |f: &Freed<ExtModel>, r: &mut DVector<f64>, jac: Option<&mut DMatrix<f64>>| {
-            f.state.rows(data, &f.unknowns, r, jac)
-        };
-        let problem = ModelProblem::new(freed, data.n_residuals(), rows);
-        solve_split(split, problem, x0, lm, rtol)?
+        solve_split(split, ExtModel::problem(freed, data), x0, lm, rtol)?
     };
     Ok(fit.map_model(|f| f.state))
 }
@@ -145,11 +141,7 @@ pub fn fit_values(
         problem.freed.set(&rep.x)?;
         return Ok(problem.freed.state);
     }
-    let rows = |f: &Freed<ExtModel>, r: &mut DVector<f64>, jac: Option<&mut DMatrix<f64>>| {
-        f.state.rows(data, &f.unknowns, r, jac)
-    };
-    let problem = ModelProblem::new(freed, data.n_residuals(), rows);
-    Ok(solve_values(problem, x0, lm)?.state)
+    Ok(solve_values(ExtModel::problem(freed, data), x0, lm)?.state)
 }
 
 /// `unknowns` split by the analysis `id` of their columns.

@@ -5,8 +5,8 @@
 //! predicts is kept).
 
 use super::decide::{DecideConfig, Selection};
-use super::declared::{declared_fit, trim_outliers};
-use super::extended::{ExtendedFit, Unknown};
+use super::declared::{trim_outliers, Declared};
+use super::extended::ExtendedFit;
 use super::select::forward_selection;
 use super::{envelope, probe, simplest, verdict, DiagnoseError};
 use crate::calib::outliers::{self, OutlierReport};
@@ -16,14 +16,9 @@ use crate::model::Model;
 
 /// The selection on the calibration poses that are not gross errors.
 pub(super) struct Selected {
-    /// The calibration poses kept (gross errors and spikes left out).
-    pub cal: MeasuredSet,
-    /// Samples left out as spikes along a traced path ([`trim_outliers`]).
-    pub spikes_left_out: usize,
-    /// The declared fit on the kept poses.
-    pub declared: ExtendedFit,
-    /// Its requested unknowns.
-    pub requested: Vec<Unknown>,
+    /// The declared fit on the calibration poses kept (gross errors and spikes left out,
+    /// [`trim_outliers`]).
+    pub declared: Declared,
     /// The selection of effects.
     pub selection: Selection,
     /// Indices (in the whole calibration set) of the poses flagged as gross errors.
@@ -46,12 +41,12 @@ pub(super) fn select_without_gross(
     let mut flagged: Vec<usize> = Vec::new();
     let mut note = None;
     // the declared fit of trim's last round (on the poses it keeps), reused by the selection
-    let mut last_declared: Option<(Vec<usize>, ExtendedFit, Vec<Unknown>)> = None;
+    let mut last_declared: Option<(Vec<usize>, Declared)> = None;
     if gross {
         let t = outliers::trim(cal_all.len(), 3, cfg.floor_mm, |keep| {
-            let (fit, requested) = declared_fit(model, &cal_all.subset(keep), cfg)?;
-            let norms = norms_mm(&fit.model.errors(cal_all)?);
-            last_declared = Some((keep.to_vec(), fit, requested));
+            let declared = Declared::on(model, cal_all.subset(keep), 0, cfg)?;
+            let norms = norms_mm(&declared.fit.model.errors(cal_all)?);
+            last_declared = Some((keep.to_vec(), declared));
             Ok::<_, DiagnoseError>(norms)
         })?;
         flagged = t.flagged;
@@ -61,21 +56,23 @@ pub(super) fn select_without_gross(
     // spike rule of `trim_outliers` leaves them as they are and trim's declared fit serves)
     let run = |flagged: &[usize]| -> Result<Selected, DiagnoseError> {
         let keep = outliers::kept(cal_all.len(), flagged);
-        let kept_cal = cal_all.subset(&keep);
         let reused = last_declared
             .as_ref()
-            .filter(|(k, _, _)| *k == keep && !kept_cal.is_serial());
-        let (cal, left_out, declared, requested) = match reused {
-            Some((_, fit, requested)) => (kept_cal, 0, fit.clone(), requested.clone()),
-            None => trim_outliers(model, &kept_cal, cfg)?,
+            .filter(|(k, d)| *k == keep && !d.cal.is_serial());
+        let declared = match reused {
+            Some((_, d)) => d.clone(),
+            None => trim_outliers(model, &cal_all.subset(&keep), cfg)?,
         };
-        let greedy = forward_selection(declared.clone(), &requested, &cal, cfg)?;
-        let selection = simplest::prefer_simplest(greedy, &declared, &requested, &cal, cfg)?;
-        Ok(Selected {
+        let Declared {
             cal,
-            spikes_left_out: left_out,
-            declared,
+            fit,
             requested,
+            ..
+        } = &declared;
+        let greedy = forward_selection(fit.clone(), requested, cal, cfg)?;
+        let selection = simplest::prefer_simplest(greedy, fit, requested, cal, cfg)?;
+        Ok(Selected {
+            declared,
             selection,
             flagged: flagged.to_vec(),
             note: None,

@@ -4,6 +4,7 @@
 //! | module | holds |
 //! |---|---|
 //! | [`declared`] | the declared fit every diagnosis starts from; spikes along a traced path left out |
+//! | [`spikes`] | the spike rule of a residual along a traced path (running median, robust sigmas) |
 //! | [`gross`] | gross errors of the calibration and held-out poses (kept where a model within the fit's uncertainty predicts them) |
 //! | [`effect_reports`] | one report per accepted effect and the data of its plot |
 //! | [`final_residual`] | the final fit's noise, floor verdict, aliased pairs, probe and structure |
@@ -63,6 +64,7 @@ pub mod report;
 pub mod residual;
 pub mod select;
 pub mod simplest;
+pub mod spikes;
 pub mod stat;
 pub mod verdict;
 
@@ -70,13 +72,14 @@ use crate::calib::{CalibError, MeasuredSet, Stats};
 use crate::error::{Classify, ErrorKind};
 use crate::model::{Model, ModelError};
 use decide::{DecideConfig, Selection};
-pub use declared::{declared_fit, trim_outliers, OUTLIER_HALF_WINDOW, OUTLIER_SIGMAS};
+pub use declared::{declared_fit, trim_outliers, Declared};
 pub use effect_reports::EffectTrace;
 use extended::ExtModel;
 use final_residual::{aliased_pairs, judge_floor, probe_residual, unexplained};
 pub use final_residual::{STRUCTURE_ALPHA, STRUCTURE_MIN_R2};
 use report::{DiagnoseReport, SetStats, TrialReport};
 use residual::{explain, regressors};
+pub use spikes::{OUTLIER_HALF_WINDOW, OUTLIER_SIGMAS};
 
 /// Everything that can stop a diagnosis.
 #[derive(Debug, thiserror::Error)]
@@ -166,10 +169,13 @@ pub fn diagnose(
         && !cal_all.is_serial()
         && cal_all.len() >= crate::calib::calibrate::MIN_POSES_FOR_OUTLIERS;
     let gross::Selected {
-        cal,
-        spikes_left_out: outliers,
-        declared,
-        requested,
+        declared:
+            declared::Declared {
+                cal,
+                spikes_left_out: outliers,
+                fit: declared,
+                requested,
+            },
         mut selection,
         flagged,
         note: outlier_note,
