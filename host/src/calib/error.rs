@@ -31,15 +31,25 @@ pub enum CalibError {
     /// A combination of options that the identification does not support.
     #[error("{0}")]
     Unsupported(String),
-    /// A pose of a tree model with the wrong number of joint values or points.
-    #[error("pose {pose}: {found} joint values for a tree of {expected} joints, or {points} points for {tips} tips")]
-    TreePoseShape {
+    /// A pose of a tree model's set with the wrong number of joint values.
+    #[error("pose {pose}: {found} joint values for a tree of {expected} joints")]
+    TreeJoints {
         pose: usize,
         expected: usize,
         found: usize,
-        points: usize,
+    },
+    /// A point slot of a tree model's set on no tip of the tree (`tip`: the tip it names, or
+    /// `None`: a set of several points per pose that names no tips, a chain's `--markers`).
+    #[error("measured point {slot} of the poses is on {}, for a tree of {tips} tips", tip.map_or("no tip".to_string(), |t| format!("tip {}", t + 1)))]
+    TreeSlot {
+        slot: usize,
+        tip: Option<usize>,
         tips: usize,
     },
+    /// A tree model's set (points on its tips, or unmeasured points) given to a chain's
+    /// identification, which reads one chain's joints and every point of every pose.
+    #[error("{what}: the measured points are on a tree's tips or some are missing; a chain's identification reads one chain's joints and every point (give the tree model)")]
+    NotChainSet { what: String },
     /// Measurements that cannot be of this model as given (units, joint order, another robot):
     /// [`super::plausible`].
     #[error("{0}")]
@@ -70,7 +80,9 @@ impl Classify for CalibError {
             | CalibError::EmptySelection
             | CalibError::NoMasses
             | CalibError::Unsupported(_)
-            | CalibError::TreePoseShape { .. }
+            | CalibError::TreeJoints { .. }
+            | CalibError::TreeSlot { .. }
+            | CalibError::NotChainSet { .. }
             | CalibError::Implausible(_) => ErrorKind::BadInput,
         }
     }

@@ -30,6 +30,7 @@ use crate::model::transmission::approach_directions;
 use crate::model::{Model, ModelError};
 
 mod points;
+mod tips;
 pub use points::{Measurement, PosePoints};
 
 /// A `--markers` choice that the file cannot satisfy.
@@ -59,6 +60,12 @@ pub struct MeasuredSet {
     /// The file's point number (0-based: 0 = `x1` or `x`) of every slot; empty = one point,
     /// the file's own.
     pub markers: Vec<usize>,
+    /// The tip of the model's tree every slot's point is on (slot order); empty: a chain's set,
+    /// every slot on its last frame ([`MeasuredSet::tip`]; see `measured/tips.rs`).
+    pub tips: Vec<usize>,
+    /// Per pose, whether every slot's point was measured (slot order); `None`: every point of
+    /// every pose. An unmeasured point's coordinates are not read (NaN from the readers).
+    pub present: Option<Vec<Vec<bool>>>,
     /// Time of every pose (s), `None` without a `t` column.
     pub t_s: Option<Vec<f64>>,
     /// Measured directions of every pose (orthonormal, frame R); `None` when every pose is a
@@ -264,10 +271,12 @@ impl MeasuredSet {
     /// `self` followed by `other` (e.g. the samples of two sheets, or poses and samples). Times
     /// are kept only when both have them; directions and inertial moments when either has them
     /// (full positions get all three axes, poses at rest zero inertial moments); the further
-    /// points when both have as many slots (otherwise the first point of every pose only).
+    /// points when both have as many slots on the same tips (otherwise the first point of every
+    /// pose only).
     pub fn concat(mut self, other: MeasuredSet) -> Self {
         let (n0, n1) = (self.len(), other.len());
         let same_slots = self.n_slots() == other.n_slots();
+        let keep_slots = self.concat_tips(&other, same_slots);
         let a0 = self.approach_or_computed();
         let a1 = other.approach_or_computed();
         self.t_s = both(self.t_s.take(), other.t_s);
@@ -305,7 +314,7 @@ impl MeasuredSet {
         self.approach = Some(a0.into_iter().chain(a1).collect());
         self.ids = both(self.ids.take(), other.ids);
         self.lines = both(self.lines.take(), other.lines);
-        if same_slots {
+        if keep_slots {
             self.further_mm.extend(other.further_mm);
         } else {
             self.further_mm.clear();
@@ -406,6 +415,11 @@ impl MeasuredSet {
                 pick(&self.further_mm)
             },
             markers: self.markers.clone(),
+            tips: self.tips.clone(),
+            present: self
+                .present
+                .as_ref()
+                .map(|p| indices.iter().map(|&k| p[k].clone()).collect()),
             t_s: self
                 .t_s
                 .as_ref()

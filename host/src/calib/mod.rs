@@ -18,7 +18,7 @@
 //! | [`position_fit`] | the fit of model parameters on full positions ([`position_fit::fit_parameters`]): tall Jacobian or normal equations, the rank re-analysed at the solution, what it does not determine kept at its input |
 //! | [`influence`] | influence-based identification (thesis eq. 3.7-3.8) |
 //! | [`calibrate`] | the whole `calibrate` command: selection, methods, report |
-//! | [`measured`] | the one measurement set: joint readings, one or several points per pose, partial projections, times, ids, file lines, approach directions, inertial moments; its readers and constructors; its core (`measured/points.rs`: [`measured::PosePoints`], the joint readings and first point of every pose, and the points one by one) |
+//! | [`measured`] | the one measurement set: joint readings, one or several points per pose, partial projections, times, ids, file lines, approach directions, inertial moments; its readers and constructors; its core (`measured/points.rs`: [`measured::PosePoints`], the joint readings and first point of every pose, and the points one by one); a tree model's poses in the same set (`measured/tips.rs`: the tip of every point slot, unmeasured points, refused by chain identifications) |
 //! | `components` | the measured components of a pose of the set: rows, measured part, residual, error, Jacobian rows |
 //! | [`general`] | identification with point offsets and joint compliance (the prediction of several points per pose on [`state::ExtModel`]) |
 //! | [`state`] | `ExtModel`, the one state of every identification (`calibrate`'s and `diagnose`'s): the model, its joint map and time terms, point offsets; its one `Values` impl in `state/values.rs` |
@@ -33,7 +33,7 @@
 //! | [`predict`] | the prediction uncertainty of a fit at poses it was not fitted on (held-out gross errors vs extrapolation) |
 //! | [`calibrate_general`] | `calibrate_poses`, the one library entry of `calibrate` on a [`MeasuredSet`]: the model's terms applied, then partial measurements, one point per pose, or several points, `--compliance`, `--select press` |
 //! | [`registered`] | the input model with only the instrument's frame fitted (registration only): the report's "before" with `--base` |
-//! | [`tree_fit`] | one identification over a tree model: its unknowns as a state (`TreeUnknowns`), the rows of every measured tip point, [`position_fit::refine`] on them (`fit_tree`) |
+//! | [`tree_fit`] | one identification over a tree model: its unknowns as a state (`TreeUnknowns`), the rows of every measured tip point of the tree's [`MeasuredSet`], [`position_fit::refine`] on them (`fit_tree`) |
 //! | [`tree_calibrate`] | `calibrate` on a tree: the selection on every tip's chain, the fit, the same `calibrate --json` document |
 //! | [`samples`] | the pencil rig's partial measurement: a fused sample (`FUSED.csv` row) |
 

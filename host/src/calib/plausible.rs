@@ -308,12 +308,14 @@ const D2R: f64 = std::f64::consts::PI / 180.0;
 /// Refuses (`CalibError::Implausible`, exit 2) a set whose registration onto `model` is
 /// implausible (see the module documentation), naming what it looks like: a length unit, or
 /// revolute readings in the other angle unit when the registration with them converted is
-/// plausible; the registration otherwise.
+/// plausible; the registration otherwise. The check before every chain identification: a tree's
+/// set is refused first ([`MeasuredSet::chain_only`]).
 pub fn check_set(
     model: &Model,
     data: &MeasuredSet,
     what: &str,
 ) -> Result<Option<Registration>, CalibError> {
+    data.chain_only(what)?;
     let Some(reg) = register(model, data)? else {
         return Ok(None);
     };

@@ -11,10 +11,11 @@ use super::calibrate::{
 use super::error::CalibError;
 use super::fit::Fit;
 use super::large_changes::{large_changes, LargeChange};
+use super::measured::MeasuredSet;
 use super::outliers;
 use super::registered::{registered_summary, registration_options};
 use super::report::{unknowns_report, CalibrateReport, StandardSummary};
-use super::tree_fit::{check_poses, fit_tree, tree_errors, TreePose};
+use super::tree_fit::{check_poses, fit_tree, tree_errors};
 use crate::model::tree_gravity::tree_moments_kgfm;
 use crate::model::tree_params::compliance_joint;
 use crate::model::{Model, ParamKind, Tree};
@@ -115,8 +116,8 @@ pub struct TreeOutcome {
 /// over all of them.
 pub fn calibrate_tree(
     nominal: &Tree,
-    cal: &[TreePose],
-    val: Option<&[TreePose]>,
+    cal: &MeasuredSet,
+    val: Option<&MeasuredSet>,
     opts: &CalibrateOptions,
     compliance: bool,
 ) -> Result<TreeOutcome, CalibError> {
@@ -135,8 +136,7 @@ pub fn calibrate_tree(
     } else {
         let dims = 3 * nominal.tips.len().max(1);
         Some(outliers::trim(cal.len(), dims, None, |keep| {
-            let kept: Vec<TreePose> = keep.iter().map(|&k| cal[k].clone()).collect();
-            let f = fit_tree(nominal, &kept, &selection, &opts.lm, opts.rtol)?;
+            let f = fit_tree(nominal, &cal.subset(keep), &selection, &opts.lm, opts.rtol)?;
             pose_norms_mm(&f.model, cal)
         })?)
     };
@@ -144,13 +144,10 @@ pub fn calibrate_tree(
         .as_ref()
         .map_or_else(Vec::new, |t| t.flagged.clone());
     let cal_all = cal;
-    let kept_cal: Vec<TreePose> = outliers::kept(cal.len(), &flagged)
-        .iter()
-        .map(|&k| cal[k].clone())
-        .collect();
-    let cal: &[TreePose] = &kept_cal;
+    let kept_cal = cal.subset(&outliers::kept(cal.len(), &flagged));
+    let cal = &kept_cal;
     let (fit, held) = fit_bounded(nominal, cal, &mut selection, opts)?;
-    let errors = |poses: &[TreePose]| -> Result<[Vec<Vector3<f64>>; 3], CalibError> {
+    let errors = |poses: &MeasuredSet| -> Result<[Vec<Vector3<f64>>; 3], CalibError> {
         let after = tree_errors(&fit.model, poses)?;
         Ok([tree_errors(nominal, poses)?, after.clone(), after])
     };
@@ -194,7 +191,7 @@ const MIN_TORQUE_KGFM: f64 = 1e-6;
 /// `cal` (their columns are rounding noise, not a term the poses can tell).
 fn drop_unloaded(
     nominal: &Tree,
-    cal: &[TreePose],
+    cal: &MeasuredSet,
     selection: &mut Vec<String>,
 ) -> Result<(), CalibError> {
     if !selection.iter().any(|n| compliance_joint(n).is_some()) {
@@ -203,11 +200,8 @@ fn drop_unloaded(
     check_poses(nominal, cal)?;
     let chains = nominal.chains()?;
     let mut loaded = vec![false; nominal.n_joints()];
-    for p in cal {
-        for (j, m) in tree_moments_kgfm(nominal, &chains, &p.q)?
-            .iter()
-            .enumerate()
-        {
+    for q in &cal.poses.q_deg {
+        for (j, m) in tree_moments_kgfm(nominal, &chains, q)?.iter().enumerate() {
             loaded[j] |= m.z.abs() >= MIN_TORQUE_KGFM;
         }
     }
@@ -223,7 +217,7 @@ fn drop_unloaded(
 /// the held ones are described for the report's `unphysical`.
 fn fit_bounded(
     nominal: &Tree,
-    cal: &[TreePose],
+    cal: &MeasuredSet,
     selection: &mut Vec<String>,
     opts: &CalibrateOptions,
 ) -> Result<(Fit<Tree, String>, Vec<String>), CalibError> {
@@ -280,8 +274,8 @@ pub fn tree_large_changes(nominal: &Tree, fitted: &Tree) -> Result<Vec<LargeChan
 /// `registered`.
 pub fn tree_registration_only(
     nominal: &Tree,
-    cal: &[TreePose],
-    val: Option<&[TreePose]>,
+    cal: &MeasuredSet,
+    val: Option<&MeasuredSet>,
     with_tool: bool,
 ) -> Result<StandardSummary, CalibError> {
     let opts = registration_options(with_tool);
@@ -292,12 +286,18 @@ pub fn tree_registration_only(
 
 /// The error norm (mm) of every pose on `tree`: the root of the sum of squares over its measured
 /// tips.
-fn pose_norms_mm(tree: &Tree, poses: &[TreePose]) -> Result<Vec<f64>, CalibError> {
-    poses
-        .iter()
-        .map(|p| {
-            let e = tree_errors(tree, std::slice::from_ref(p))?;
-            Ok(e.iter().map(|v| v.norm_squared()).sum::<f64>().sqrt())
+fn pose_norms_mm(tree: &Tree, set: &MeasuredSet) -> Result<Vec<f64>, CalibError> {
+    let errors = tree_errors(tree, set)?;
+    let mut errors = errors.iter();
+    Ok((0..set.len())
+        .map(|k| {
+            let n = set.measured_of(k).count();
+            errors
+                .by_ref()
+                .take(n)
+                .map(|v| v.norm_squared())
+                .sum::<f64>()
+                .sqrt()
         })
-        .collect()
+        .collect())
 }

@@ -2,6 +2,11 @@
 //! in every pose, a measured point on any of its tips, and every parameter once, however many
 //! tips it moves (a torso's constants are one unknown for both arms, not one per chain).
 //!
+//! The poses are the one measurement set, a [`MeasuredSet`] of the tree (see
+//! `calib/measured/tips.rs`): the joints of the whole tree in every pose and each point slot on
+//! a tip ([`MeasuredSet::tip`]), a point a pose leaves unmeasured skipped
+//! ([`MeasuredSet::measured_of`]).
+//!
 //! It is an identification like a chain's, not a solver of its own: the unknowns (tree
 //! parameters named as [`Tree::set_param`] names them, `NAME@TIP` for a tip's own values) are a
 //! state ([`TreeUnknowns`], written into the tree and every tip's chain), the residual rows are
@@ -31,14 +36,6 @@ use crate::model::transmission::compliance_regressor;
 use crate::model::tree_gravity::compliant_joints;
 use crate::model::tree_params::compliance_joint;
 use crate::model::{Data, Model, ModelError, Tilt, Tree, Wrt};
-
-/// A pose of the whole tree: its joints (tree order; deg, mm for prismatic joints) and the
-/// measured point of each tip (mm in frame R), `None` where a tip was not measured.
-#[derive(Debug, Clone, PartialEq)]
-pub struct TreePose {
-    pub q: Vec<f64>,
-    pub points_mm: Vec<Option<[f64; 3]>>,
-}
 
 /// The unknowns of a tree identification: a copy of the tree and of every tip's chain, whose
 /// parameters `names` (tree names) are the unknowns; all others stay at their values.
@@ -122,12 +119,12 @@ impl TreeUnknowns {
     }
 
     /// Residuals `predicted - measured` (3 rows per measured tip point, mm) into `r` and, with
-    /// `jac`, their Jacobian wrt the unknowns (`poses` checked by [`check_poses`]). A
+    /// `jac`, their Jacobian wrt the unknowns (`set` checked by [`check_poses`]). A
     /// compliance's column is the tip's motion per joint angle times the joint's torque (the
     /// torques are taken as given by the readings, as on a chain).
     fn rows(
         &self,
-        poses: &[TreePose],
+        set: &MeasuredSet,
         r: &mut DVector<f64>,
         mut jac: Option<&mut DMatrix<f64>>,
     ) -> Result<(), ModelError> {
@@ -170,13 +167,13 @@ impl TreeUnknowns {
             })
             .collect();
         let mut row = 0;
-        for pose in poses {
-            let (q_eff, tau) = self.effective_joints(&pose.q)?;
-            for (t, point) in pose.points_mm.iter().enumerate() {
-                let Some(p) = point else { continue };
+        for (k, q_read) in set.poses.q_deg.iter().enumerate() {
+            let (q_eff, tau) = self.effective_joints(q_read)?;
+            for point in set.measured_of(k) {
+                let t = set.tip(point.slot);
                 let q: Vec<f64> = self.paths[t].iter().map(|&i| q_eff[i]).collect();
                 let (chain, d) = (&self.chains[t], &mut data[t]);
-                let measured = Vector3::from(*p);
+                let measured = point.xyz_mm;
                 match jac.as_deref_mut() {
                     Some(jac) => {
                         chain.jacobian_with(d, &q, Tilt::Off, &wrt[t])?;
@@ -200,11 +197,11 @@ impl TreeUnknowns {
         Ok(())
     }
 
-    /// The stacked Jacobian of the rows of `poses` wrt the unknowns.
-    fn jacobian(&self, poses: &[TreePose]) -> Result<DMatrix<f64>, ModelError> {
-        let m = n_rows(poses);
+    /// The stacked Jacobian of the rows of `set` wrt the unknowns.
+    fn jacobian(&self, set: &MeasuredSet) -> Result<DMatrix<f64>, ModelError> {
+        let m = n_rows(set);
         let mut jac = DMatrix::zeros(m, self.names.len());
-        self.rows(poses, &mut DVector::zeros(m), Some(&mut jac))?;
+        self.rows(set, &mut DVector::zeros(m), Some(&mut jac))?;
         Ok(jac)
     }
 }
@@ -227,57 +224,64 @@ impl SetUnknowns for TreeUnknowns {
     }
 }
 
-/// Number of residual rows of `poses` (3 per measured tip point).
-fn n_rows(poses: &[TreePose]) -> usize {
-    poses
-        .iter()
-        .map(|p| 3 * p.points_mm.iter().flatten().count())
-        .sum()
+/// Number of residual rows of `set` (3 per measured tip point).
+fn n_rows(set: &MeasuredSet) -> usize {
+    3 * set.n_measured_points()
 }
 
-/// Checks that every pose has the tree's joints and one (possibly absent) point per tip.
-pub fn check_poses(tree: &Tree, poses: &[TreePose]) -> Result<(), CalibError> {
-    for (k, pose) in poses.iter().enumerate() {
-        if pose.q.len() != tree.n_joints() || pose.points_mm.len() != tree.tips.len() {
-            return Err(CalibError::TreePoseShape {
+/// Checks that `set` is a set of `tree`: full positions, every pose with the tree's joints, and
+/// every point slot on a tip of the tree (a set without tips: one point per pose, on a tree of
+/// one tip).
+pub fn check_poses(tree: &Tree, set: &MeasuredSet) -> Result<(), CalibError> {
+    if set.is_serial() {
+        return Err(CalibError::Unsupported(
+            "a tree model's calibration reads full positions (x,y,z per tip); partial \
+             measurements are for a single chain"
+                .into(),
+        ));
+    }
+    let tips = tree.tips.len();
+    for slot in 0..set.n_slots() {
+        let tip = (!set.tips.is_empty() || slot == 0).then(|| set.tip(slot));
+        if tip.is_none_or(|t| t >= tips) {
+            return Err(CalibError::TreeSlot {
+                slot: slot + 1,
+                tip,
+                tips,
+            });
+        }
+    }
+    for (k, q) in set.poses.q_deg.iter().enumerate() {
+        if q.len() != tree.n_joints() {
+            return Err(CalibError::TreeJoints {
                 pose: k + 1,
                 expected: tree.n_joints(),
-                found: pose.q.len(),
-                points: pose.points_mm.len(),
-                tips: tree.tips.len(),
+                found: q.len(),
             });
         }
     }
     Ok(())
 }
 
-/// Refuses (`CalibError::Implausible`, exit 2) poses whose points on some tip cannot be of
+/// Refuses (`CalibError::Implausible`, exit 2) a set whose points on some tip cannot be of
 /// that tip's chain as given (a length unit, the angle unit, another robot): a chain's
-/// pre-fit check ([`super::plausible::check_set`]) on every tip's measured points; `what`
-/// names the file.
-pub fn check_tree_plausible(tree: &Tree, poses: &[TreePose], what: &str) -> Result<(), CalibError> {
-    check_poses(tree, poses)?;
+/// pre-fit check ([`super::plausible::check_set`]) on every tip's measured points
+/// ([`MeasuredSet::tip_view`]); `what` names the file.
+pub fn check_tree_plausible(tree: &Tree, set: &MeasuredSet, what: &str) -> Result<(), CalibError> {
+    check_poses(tree, set)?;
     for (t, chain) in tree.chains()?.iter().enumerate() {
-        let path = tree.path(t);
-        let (q, xyz): (Vec<Vec<f64>>, Vec<Vector3<f64>>) = poses
-            .iter()
-            .filter_map(|p| {
-                let point = p.points_mm[t]?;
-                Some((path.iter().map(|&j| p.q[j]).collect(), Vector3::from(point)))
-            })
-            .unzip();
-        let set = MeasuredSet::from_points(q, xyz);
+        let view = set.tip_view(t, &tree.path(t));
         let name = &tree.tips[t].name;
-        check_set(chain, &set, &format!("{what} (tip `{name}`)"))?;
+        check_set(chain, &view, &format!("{what} (tip `{name}`)"))?;
     }
     Ok(())
 }
 
-/// The tree identification: the poses, the candidate unknowns (tree names, preference order:
+/// The tree identification: the set, the candidate unknowns (tree names, preference order:
 /// of a combination the poses cannot tell apart, the later ones are kept at their values), the
 /// solver's settings and the identifiability threshold.
 struct TreeIdentification<'a> {
-    poses: &'a [TreePose],
+    set: &'a MeasuredSet,
     names: &'a [String],
     selection: Vec<usize>,
     lm: &'a LmConfig,
@@ -299,21 +303,21 @@ impl Identification for TreeIdentification<'_> {
     }
 
     fn once(&self, start: &Tree, selection: &[usize]) -> Result<Fit<Tree, usize>, CalibError> {
-        let jac0 = self.unknowns(start, selection)?.jacobian(self.poses)?;
+        let jac0 = self.unknowns(start, selection)?.jacobian(self.set)?;
         let names: Vec<&str> = selection.iter().map(|&u| self.names[u].as_str()).collect();
         let split = Split::of(selection, &names, &analyse(&jac0, self.rtol)).nonempty()?;
         let state = self.unknowns(start, &split.fitted)?;
         let x0 = state.values();
-        let poses = self.poses;
+        let set = self.set;
         let rows = move |s: &TreeUnknowns, r: &mut DVector<f64>, jac: Option<&mut DMatrix<f64>>| {
-            s.rows(poses, r, jac)
+            s.rows(set, r, jac)
         };
-        let problem = ModelProblem::new(state, n_rows(poses), rows);
+        let problem = ModelProblem::new(state, n_rows(set), rows);
         Ok(solve_split(split, problem, x0, self.lm, self.rtol)?.map_model(TreeUnknowns::into_tree))
     }
 
     fn rank_at(&self, tree: &Tree) -> Result<usize, CalibError> {
-        let jac = self.unknowns(tree, &self.selection)?.jacobian(self.poses)?;
+        let jac = self.unknowns(tree, &self.selection)?.jacobian(self.set)?;
         Ok(analyse(&jac, self.rtol).rank)
     }
 
@@ -326,26 +330,26 @@ impl Identification for TreeIdentification<'_> {
     }
 }
 
-/// Identifies the parameters `selection` (tree names, preference order) of `tree` from `poses`
-/// (see the module doc): the fitted tree, the fitted and fixed unknowns by name, their sigmas,
+/// Identifies the parameters `selection` (tree names, preference order) of `tree` from the
+/// tree's set `set` (see the module doc): the fitted tree, the fitted and fixed unknowns by name, their sigmas,
 /// the unidentifiable combinations, the rank.
 pub fn fit_tree(
     tree: &Tree,
-    poses: &[TreePose],
+    set: &MeasuredSet,
     selection: &[String],
     lm: &LmConfig,
     rtol: f64,
 ) -> Result<Fit<Tree, String>, CalibError> {
-    if poses.is_empty() {
+    if set.is_empty() {
         return Err(CalibError::NoPoses);
     }
     if selection.is_empty() {
         return Err(CalibError::EmptySelection);
     }
-    check_poses(tree, poses)?;
+    check_poses(tree, set)?;
     TreeUnknowns::new(tree, selection.to_vec())?;
     let on = TreeIdentification {
-        poses,
+        set,
         names: selection,
         selection: (0..selection.len()).collect(),
         lm,
@@ -354,21 +358,21 @@ pub fn fit_tree(
     Ok(refine(&on, tree)?.map_unknowns(|u| selection[u].clone()))
 }
 
-/// Error vectors `measured - model` (mm) of every measured tip point of `poses` on `tree`, in
-/// pose order, tips in tree order.
-pub fn tree_errors(tree: &Tree, poses: &[TreePose]) -> Result<Vec<Vector3<f64>>, CalibError> {
-    check_poses(tree, poses)?;
-    let m = n_rows(poses);
+/// Error vectors `measured - model` (mm) of every measured tip point of `set` on `tree`, in
+/// pose order, slots in order ([`MeasuredSet::measured_of`]).
+pub fn tree_errors(tree: &Tree, set: &MeasuredSet) -> Result<Vec<Vector3<f64>>, CalibError> {
+    check_poses(tree, set)?;
+    let m = n_rows(set);
     let mut r = DVector::zeros(m);
-    TreeUnknowns::new(tree, Vec::new())?.rows(poses, &mut r, None)?;
+    TreeUnknowns::new(tree, Vec::new())?.rows(set, &mut r, None)?;
     Ok((0..m / 3)
         .map(|k| -Vector3::new(r[3 * k], r[3 * k + 1], r[3 * k + 2]))
         .collect())
 }
 
-/// RMS (mm) of the residual coordinates of `poses` on `tree` (e.g. held-out poses).
-pub fn tree_rms_mm(tree: &Tree, poses: &[TreePose]) -> Result<f64, CalibError> {
-    let e = tree_errors(tree, poses)?;
+/// RMS (mm) of the residual coordinates of `set` on `tree` (e.g. held-out poses).
+pub fn tree_rms_mm(tree: &Tree, set: &MeasuredSet) -> Result<f64, CalibError> {
+    let e = tree_errors(tree, set)?;
     let ss: f64 = e.iter().map(|v| v.norm_squared()).sum();
     Ok((ss / (3 * e.len()).max(1) as f64).sqrt())
 }

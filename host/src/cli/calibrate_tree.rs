@@ -12,9 +12,10 @@ use std::path::Path;
 use std::fmt::Write as _;
 
 use rigctl::calib::calibrate_general::Select;
+use rigctl::calib::measured::MeasuredSet;
 use rigctl::calib::prior::PriorMode;
 use rigctl::calib::tree_calibrate::{calibrate_tree, tree_registration_only};
-use rigctl::calib::tree_fit::{check_tree_plausible, TreePose};
+use rigctl::calib::tree_fit::check_tree_plausible;
 use rigctl::calib::CalibrateOptions;
 use rigctl::io::pose_csv::{read_poses, PoseSpec};
 use rigctl::model::tree_file::is_tree_text;
@@ -48,8 +49,9 @@ pub fn tree_model(model: &ModelArgs) -> Result<Option<Tree>, CliError> {
     )?))
 }
 
-/// The poses of a tree's pose file and the line of each.
-fn read(args: &Args, tree: &Tree, path: &Path) -> Result<(Vec<TreePose>, Vec<usize>), CliError> {
+/// The poses of a tree's pose file as the tree's measured set (point k on the k-th tip, the
+/// file's lines), checked for units and motion on every tip.
+fn read(args: &Args, tree: &Tree, path: &Path) -> Result<MeasuredSet, CliError> {
     let spec = PoseSpec {
         n_joints: tree.n_joints(),
         limits: tree.joint_limits(),
@@ -71,20 +73,10 @@ fn read(args: &Args, tree: &Tree, path: &Path) -> Result<(Vec<TreePose>, Vec<usi
             n = tree.tips.len()
         )));
     }
-    let (poses, lines): (Vec<TreePose>, Vec<usize>) = file
-        .poses
-        .iter()
-        .map(|p| {
-            let pose = TreePose {
-                q: p.q.clone(),
-                points_mm: p.markers_mm.iter().map(|m| Some(*m)).collect(),
-            };
-            (pose, p.line)
-        })
-        .unzip();
+    let set = MeasuredSet::from_tip_pose_file(&file);
     // units and motion checked per tip before any fit, as a chain's pose file is
-    check_tree_plausible(tree, &poses, &path.display().to_string())?;
-    Ok((poses, lines))
+    check_tree_plausible(tree, &set, &path.display().to_string())?;
+    Ok(set)
 }
 
 pub fn run(args: &Args, tree: Tree) -> Result<(), CliError> {
@@ -102,11 +94,11 @@ pub fn run(args: &Args, tree: Tree) -> Result<(), CliError> {
     let Some(poses_path) = args.poses.as_deref() else {
         return Err(CliError::bad_input("--poses is required"));
     };
-    let (poses, cal_lines) = read(args, &tree, poses_path)?;
+    let poses = read(args, &tree, poses_path)?;
     let val = args
         .validate
         .as_deref()
-        .map(|v| read(args, &tree, v).map(|(p, _)| p))
+        .map(|v| read(args, &tree, v))
         .transpose()?;
     let opts = CalibrateOptions {
         method: args.method,
@@ -116,14 +108,15 @@ pub fn run(args: &Args, tree: Tree) -> Result<(), CliError> {
         keep_outliers: args.keep_outliers,
         ..Default::default()
     };
-    let mut o = calibrate_tree(&tree, &poses, val.as_deref(), &opts, args.compliance)?;
+    let mut o = calibrate_tree(&tree, &poses, val.as_ref(), &opts, args.compliance)?;
     // the gross errors named by the line of their pose, as on a chain
+    let cal_lines = poses.lines.as_deref().unwrap_or_default();
     for r in &mut o.report.outliers {
         r.pose.line = cal_lines.get(r.pose.index).copied();
     }
     if let Some(with_tool) = registers(args) {
         // as on a chain: a registration that fails leaves the key out
-        o.report.registered = tree_registration_only(&tree, &poses, val.as_deref(), with_tool).ok();
+        o.report.registered = tree_registration_only(&tree, &poses, val.as_ref(), with_tool).ok();
     }
     let n_points = o.calibration_errors[0].len();
     no_redundancy(poses_path, 3 * n_points, o.report.rank)?;

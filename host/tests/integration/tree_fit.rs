@@ -13,10 +13,30 @@ use rand_distr::{Distribution, Normal};
 use rigctl::calib::fit::Fit;
 use rigctl::calib::identifiability::DEFAULT_RTOL;
 use rigctl::calib::lm::LmConfig;
-use rigctl::calib::tree_fit::{fit_tree, tree_rms_mm, TreePose};
+use rigctl::calib::measured::MeasuredSet;
+use rigctl::calib::tree_fit::{fit_tree, tree_rms_mm};
 use rigctl::model::{Axis, Motion, Tilt, Tip, Tree, TreeElem, TreeJoint, TreeMass};
 
 const NOISE_MM: f64 = 0.3;
+
+/// A generated pose of the whole tree (the test's own record): its joints and the point of
+/// every tip, `None` where the tip is not measured.
+#[derive(Debug, Clone)]
+struct TipPose {
+    q: Vec<f64>,
+    points_mm: Vec<Option<[f64; 3]>>,
+}
+
+/// The poses as the library's one measurement set (point k on tip k).
+fn set_of(poses: &[TipPose]) -> MeasuredSet {
+    MeasuredSet::from_tip_points(
+        poses.iter().map(|p| p.q.clone()).collect(),
+        poses
+            .iter()
+            .map(|p| p.points_mm.iter().map(|m| m.map(Into::into)).collect())
+            .collect(),
+    )
+}
 
 fn c(motion: Motion, axis: Axis, name: &str, value: f64) -> TreeElem {
     TreeElem {
@@ -119,7 +139,7 @@ fn unknowns(tree: &Tree, tips: &[usize]) -> Vec<String> {
     out
 }
 
-fn poses(truth: &Tree, n: usize, rng: &mut rand::rngs::StdRng) -> Vec<TreePose> {
+fn poses(truth: &Tree, n: usize, rng: &mut rand::rngs::StdRng) -> Vec<TipPose> {
     let noise = Normal::new(0.0, NOISE_MM).unwrap();
     let chains = truth.chains().unwrap();
     (0..n)
@@ -136,7 +156,7 @@ fn poses(truth: &Tree, n: usize, rng: &mut rand::rngs::StdRng) -> Vec<TreePose> 
                     Some([0, 1, 2].map(|k| p[k] + noise.sample(rng)))
                 })
                 .collect();
-            TreePose { q, points_mm }
+            TipPose { q, points_mm }
         })
         .collect()
 }
@@ -159,6 +179,7 @@ fn one_fit_over_a_dual_arm_tree_shares_the_torso() {
     let held_out = poses(&truth, 150, &mut rng);
 
     let lm = LmConfig::default();
+    let (train, held_out) = (set_of(&train), set_of(&held_out));
     let fit = fit_tree(&nominal, &train, &all, &lm, DEFAULT_RTOL).unwrap();
     // every unknown the generator perturbs is identified (none fixed), each once
     assert_eq!(fit.fitted, all);
@@ -217,15 +238,9 @@ fn one_fit_over_a_dual_arm_tree_shares_the_torso() {
     .to_vec();
     let mut alone = Vec::new();
     for tip in 0..2 {
-        let only: Vec<TreePose> = train
-            .iter()
-            .map(|p| TreePose {
-                q: p.q.clone(),
-                points_mm: (0..2)
-                    .map(|t| if t == tip { p.points_mm[t] } else { None })
-                    .collect(),
-            })
-            .collect();
+        // the other tip's points unmeasured
+        let mut only = train.clone();
+        only.present = Some(vec![(0..2).map(|t| t == tip).collect(); only.len()]);
         let selection = unknowns(&nominal, &[tip]);
         alone.push(fit_tree(&nominal, &only, &selection, &lm, DEFAULT_RTOL).unwrap());
     }
@@ -256,7 +271,7 @@ fn one_fit_over_a_dual_arm_tree_shares_the_torso() {
 }
 
 /// A pose file of a tree: the joints by name, `x<k>,y<k>,z<k>` per tip.
-fn pose_csv(tree: &Tree, poses: &[TreePose]) -> String {
+fn pose_csv(tree: &Tree, poses: &[TipPose]) -> String {
     let mut header = tree.joint_names();
     for k in 1..=tree.tips.len() {
         header.extend([format!("x{k}"), format!("y{k}"), format!("z{k}")]);
@@ -379,7 +394,7 @@ fn calibrate_takes_a_tree_model_and_its_pose_files() {
         d.join("tree_base.json"),
     );
     chain.write_file(&chain_model).unwrap();
-    let left_csv = |poses: &[TreePose]| {
+    let left_csv = |poses: &[TipPose]| {
         let path = nominal.path(0);
         let mut text: Vec<String> = (1..=path.len()).map(|k| format!("q{k}")).collect();
         text.extend(["x", "y", "z"].map(String::from));

@@ -116,3 +116,83 @@ fn points_components_and_residuals() {
     assert_eq!((kept.len(), kept.rows(0), kept.rows(1)), (2, 3, 1));
     assert_eq!(kept.directions_at(1), vec![n]);
 }
+
+/// A tree's set: slot k on tip k, an unmeasured point left out of the measured points (and of
+/// their count), kept through `subset` and `concat`, the points of one tip seen by its chain
+/// with the joints of its path; a chain's identification refuses the set.
+#[test]
+fn a_tree_set_has_tips_and_unmeasured_points() {
+    let p = |x: f64| Vector3::new(x, 0.0, 0.0);
+    let q = vec![
+        vec![1.0, 2.0, 3.0],
+        vec![4.0, 5.0, 6.0],
+        vec![7.0, 8.0, 9.0],
+    ];
+    let points = vec![
+        vec![Some(p(1.0)), Some(p(10.0))],
+        vec![None, Some(p(20.0))],
+        vec![Some(p(3.0))],
+    ];
+    let set = MeasuredSet::from_tip_points(q, points);
+    assert_eq!(
+        (set.len(), set.n_slots(), set.tips.clone()),
+        (3, 2, vec![0, 1])
+    );
+    assert_eq!((set.tip(0), set.tip(1)), (0, 1));
+    let of = |s: &MeasuredSet, k: usize| -> Vec<(usize, f64)> {
+        s.measured_of(k).map(|m| (m.slot, m.xyz_mm.x)).collect()
+    };
+    assert_eq!(of(&set, 0), vec![(0, 1.0), (1, 10.0)]);
+    assert_eq!(of(&set, 1), vec![(1, 20.0)]);
+    assert_eq!(of(&set, 2), vec![(0, 3.0)]);
+    assert_eq!(set.n_measured_points(), 4);
+    assert!(set.has_tips());
+    assert!(matches!(
+        set.chain_only("poses"),
+        Err(crate::calib::error::CalibError::NotChainSet { .. })
+    ));
+
+    let sub = set.subset(&[1, 2]);
+    assert_eq!(of(&sub, 0), vec![(1, 20.0)]);
+    assert_eq!(sub.n_measured_points(), 2);
+
+    // tip 1's chain: joints 0 and 2 of the tree, the poses where tip 1 was measured
+    let view = set.tip_view(1, &[0, 2]);
+    assert_eq!(view.poses.q_deg, vec![vec![1.0, 3.0], vec![4.0, 6.0]]);
+    assert_eq!(view.poses.xyz_mm, vec![p(10.0), p(20.0)]);
+    assert!(!view.has_tips());
+    assert!(view.chain_only("tip").is_ok());
+
+    let both = set.clone().concat(set.subset(&[1]));
+    assert_eq!((both.len(), both.n_slots()), (4, 2));
+    assert_eq!(of(&both, 3), vec![(1, 20.0)]);
+    assert_eq!(both.n_measured_points(), 5);
+
+    // a chain's set: no tips, every point measured, nothing added by concat
+    let chain = MeasuredSet::from_points(vec![vec![0.0]; 2], vec![p(1.0), p(2.0)]);
+    let chain = chain.clone().concat(chain);
+    assert!(!chain.has_tips() && chain.present.is_none());
+    assert_eq!(chain.n_measured_points(), chain.n_points());
+}
+
+/// The pre-fit check of every chain identification refuses a tree's set with a typed error.
+#[test]
+fn a_chain_identification_refuses_a_tree_set() {
+    let model = katana450(330.0).unwrap();
+    let q = vec![vec![-90.0, 60.0, -60.0, 10.0, 90.0]; 12];
+    let xyz: Vec<Option<Vector3<f64>>> = vec![Some(Vector3::new(100.0, -200.0, 150.0))];
+    let mut set = MeasuredSet::from_tip_points(q, vec![xyz; 12]);
+    for what in ["tips", "unmeasured"] {
+        let err = crate::calib::plausible::check_set(&model, &set, what).unwrap_err();
+        assert!(
+            matches!(&err, crate::calib::error::CalibError::NotChainSet { what: w } if w == what),
+            "{err}"
+        );
+        assert_eq!(
+            crate::error::Classify::kind(&err),
+            crate::error::ErrorKind::BadInput
+        );
+        set.tips.clear();
+        set.present = Some(vec![vec![true]; 12]);
+    }
+}

@@ -1,4 +1,4 @@
-use nalgebra::DVector;
+use nalgebra::{DVector, Vector3};
 
 use super::*;
 use crate::model::tree::test_support::{dh_joint, elem as c};
@@ -33,18 +33,24 @@ fn tree() -> Tree {
     }
 }
 
-fn poses(t: &Tree) -> Vec<TreePose> {
-    (0..6)
-        .map(|k| TreePose {
-            q: (0..t.n_joints())
+/// Six poses of the whole tree, the right tip measured in every other pose only.
+fn poses(t: &Tree) -> MeasuredSet {
+    let q = (0..6)
+        .map(|k| {
+            (0..t.n_joints())
                 .map(|j| 60.0 * ((j * 5 + k * 11) as f64 * 0.41).sin())
-                .collect(),
-            points_mm: vec![
-                Some([100.0, 0.0, 0.0]),
-                (k % 2 == 0).then_some([0.0, 50.0, 0.0]),
-            ],
+                .collect()
         })
-        .collect()
+        .collect();
+    let points = (0..6)
+        .map(|k| {
+            vec![
+                Some(Vector3::new(100.0, 0.0, 0.0)),
+                (k % 2 == 0).then_some(Vector3::new(0.0, 50.0, 0.0)),
+            ]
+        })
+        .collect();
+    MeasuredSet::from_tip_points(q, points)
 }
 
 /// The analytic columns of the compliances (and of a shared length) equal central differences
@@ -104,9 +110,9 @@ fn compliance_columns_match_finite_differences() {
     let right_rows: Vec<usize> = {
         let mut rows = Vec::new();
         let mut row = 0;
-        for pose in &p {
-            for (tip, point) in pose.points_mm.iter().enumerate() {
-                if point.is_some() {
+        for k in 0..p.len() {
+            for tip in 0..2 {
+                if p.is_present(k, tip) {
                     if tip == 1 {
                         rows.extend(row..row + 3);
                     }
@@ -116,6 +122,11 @@ fn compliance_columns_match_finite_differences() {
         }
         rows
     };
+    assert_eq!(
+        right_rows.len(),
+        9,
+        "the right tip measured in 3 of 6 poses"
+    );
     assert!(right_rows
         .iter()
         .all(|&r| jac[(r, 1)] == 0.0 && jac[(r, 2)] == 0.0));
@@ -129,16 +140,13 @@ fn a_compliant_tree_evaluates_at_the_deflected_joints() {
     let mut soft = rigid.clone();
     soft.set_param("compliance_j1_deg_per_kgfm", 0.1).unwrap();
     let p = poses(&rigid);
-    for pose in &p {
-        let tau = rigid.axis_torques_kgfm(&pose.q).unwrap();
-        let mut q = pose.q.clone();
-        q[0] += 0.1 * tau[0];
-        let shifted = TreePose {
-            q,
-            points_mm: pose.points_mm.clone(),
-        };
-        let a = tree_errors(&soft, std::slice::from_ref(pose)).unwrap();
-        let b = tree_errors(&rigid, std::slice::from_ref(&shifted)).unwrap();
+    for k in 0..p.len() {
+        let pose = p.subset(&[k]);
+        let tau = rigid.axis_torques_kgfm(&pose.poses.q_deg[0]).unwrap();
+        let mut shifted = pose.clone();
+        shifted.poses.q_deg[0][0] += 0.1 * tau[0];
+        let a = tree_errors(&soft, &pose).unwrap();
+        let b = tree_errors(&rigid, &shifted).unwrap();
         assert!(a.iter().zip(&b).all(|(a, b)| (a - b).norm() < 1e-9));
         assert!(tau[0].abs() > 1.0);
     }
