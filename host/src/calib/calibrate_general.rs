@@ -8,8 +8,11 @@
 //!   and the offsets of every point slot after the first;
 //! * with `--select press`, candidates added by forward selection at the fit of the always-set:
 //!   the chain constants (`@chain`: lengths, twists) not already selected and, with
-//!   `--compliance`, the axial and the lateral compliance of every revolute joint; without
-//!   `--select press`, `--compliance` fits every axial compliance (no lateral ones).
+//!   `--compliance`, the axial and the lateral compliance of every revolute joint, with
+//!   `--hysteresis` the hysteresis of every joint (an offset by the direction of approach in
+//!   the pose order: a backlash whose side the path sets); without `--select press`,
+//!   `--compliance` fits every axial compliance (no lateral ones) and `--hysteresis` every
+//!   joint's hysteresis.
 
 use std::str::FromStr;
 
@@ -52,6 +55,8 @@ pub struct GeneralOptions {
     pub select: Select,
     /// Identify joint compliances (needs link masses).
     pub compliance: bool,
+    /// Identify joint hysteresis (`hysteresis:j<i>`, the pose order's directions of approach).
+    pub hysteresis: bool,
 }
 
 /// Result of [`calibrate_poses`].
@@ -106,8 +111,13 @@ fn unknown_sets(
             .collect(),
         false => Vec::new(),
     };
+    let hysteresis: Vec<Unknown> = match gen.hysteresis {
+        true => (0..nominal.n_joints()).map(Unknown::Hysteresis).collect(),
+        false => Vec::new(),
+    };
     if !press {
         always.extend(compliance);
+        always.extend(hysteresis);
         return Ok((always, Vec::new()));
     }
     let chain = super::calibrate::param_group(nominal, "chain")?;
@@ -124,6 +134,7 @@ fn unknown_sets(
                 .map(Unknown::LateralCompliance),
         );
     }
+    candidates.extend(hysteresis);
     Ok((always, candidates))
 }
 
@@ -360,7 +371,7 @@ impl Run<'_> {
                 .map(|&u| chosen.model.name_in(u, cal))
                 .collect(),
             outcome: Outcome {
-                model: chosen.model.model.clone(),
+                model: with_own_hysteresis(&chosen.model.model, nominal),
                 tilt,
                 report,
                 calibration_errors: cal_errors,
@@ -403,6 +414,25 @@ impl Run<'_> {
             rejected: p.rejected,
         })
     }
+}
+
+/// The calibrated `model` as written: the hysteresis fitted on the readings through
+/// `nominal`'s own terms ([`MeasuredSet::through_terms`]) plus `nominal`'s own (a hysteresis
+/// adds to the angle, so the two add), so that `fk` on the written model reproduces the
+/// reported errors.
+fn with_own_hysteresis(model: &Model, nominal: &Model) -> Model {
+    let own = &nominal.transmission().hysteresis_deg;
+    if own.iter().all(|b| *b == 0.0) {
+        return model.clone();
+    }
+    let mut out = model.clone();
+    let n = out.n_joints();
+    let fitted = &mut out.transmission_mut().hysteresis_deg;
+    fitted.resize(n, 0.0);
+    for (f, b) in fitted.iter_mut().zip(own) {
+        *f += b;
+    }
+    out
 }
 
 /// Most refits of [`settle`].

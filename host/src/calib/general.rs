@@ -3,12 +3,15 @@
 //! compliance (a joint deflection proportional to the gravity torque about its axis, the
 //! `compliance:j<i>` law of [`crate::model::transmission::compliance_deflection_deg`]) and
 //! lateral compliance (the joint bent across its axis by the gravity moments, applied by the
-//! chain itself, `lateral_compliance:j<i>`), on the one state [`ExtModel`] (its `offsets_mm`).
+//! chain itself, `lateral_compliance:j<i>`) and joint hysteresis (an angle offset by the
+//! direction from which the joint approached the pose, `hysteresis:j<i>`: a backlash whose
+//! side the path to the pose sets), on the one state [`ExtModel`] (its `offsets_mm`).
 //!
 //! Prediction of measurement (pose i, slot k):
 //!
 //! ```text
-//! q_eff = q_i + c . tau(q_i)                c deg per kgf.m, tau from the link masses
+//! q_eff = q_i + c . tau(q_i) + b . d_i      c deg per kgf.m, tau from the link masses;
+//!                                           b deg, d_i the directions of approach (+1, -1, 0)
 //! p     = fk(q_eff) with the tool point = slot k's offset (slot 0: tool_dx..dz)
 //! ```
 //!
@@ -48,9 +51,10 @@ fn tool_of(model: &Model) -> Result<[usize; 3], ModelError> {
 }
 
 impl ExtModel {
-    /// `model` with `slots` point slots, all starting at its tool point, and no compliance (its
-    /// other terms as they are: the measured set has been through them,
-    /// [`MeasuredSet::through_terms`]).
+    /// `model` with `slots` point slots, all starting at its tool point, and no compliance or
+    /// hysteresis (its other terms as they are: the measured set has been through them,
+    /// [`MeasuredSet::through_terms`]; so are a model file's own hysteresis terms, which the
+    /// caller adds back to the written model).
     pub fn with_points(model: Model, slots: usize, tilt: bool) -> Result<Self, ModelError> {
         let t = tool_of(&model)?;
         let v = model.param_values();
@@ -58,6 +62,7 @@ impl ExtModel {
         let mut model = model;
         let n = model.n_joints();
         model.transmission_mut().compliance_deg_per_kgfm = vec![0.0; n];
+        model.transmission_mut().hysteresis_deg = vec![0.0; n];
         Ok(Self {
             gravity: GravityModel::for_model(&model),
             offsets_mm: vec![tool; slots.max(1)],
@@ -98,6 +103,23 @@ impl ExtModel {
         Ok(out)
     }
 
+    /// The joint values the chain turns by at pose `pose` of `data` with torques `tau`: the
+    /// readings deflected by the compliance and offset by the hysteresis in the direction of
+    /// approach.
+    fn pose_joints(&self, data: &MeasuredSet, pose: usize, tau: &[f64]) -> Vec<f64> {
+        let mut q =
+            compliance_deflected(&data.poses.q_deg[pose], self.compliance_deg_per_kgfm(), tau);
+        let approach = ExtModel::approach_of(data, pose);
+        for ((qj, b), d) in q
+            .iter_mut()
+            .zip(&self.model.transmission().hysteresis_deg)
+            .zip(approach)
+        {
+            *qj += b * d;
+        }
+        q
+    }
+
     /// The gravity torques of every pose of `data` (kgf.m; empty ones when not `needed`).
     fn pose_torques(&self, data: &MeasuredSet, needed: bool) -> Result<Vec<Vec<f64>>, ModelError> {
         data.poses
@@ -117,11 +139,7 @@ impl ExtModel {
         let tau = self.pose_torques(data, self.needs_torques(&[]))?;
         data.points()
             .map(|m| {
-                let q = compliance_deflected(
-                    &data.poses.q_deg[m.pose],
-                    self.compliance_deg_per_kgfm(),
-                    &tau[m.pose],
-                );
+                let q = self.pose_joints(data, m.pose, &tau[m.pose]);
                 let model = models.get(m.slot).unwrap_or(&self.model);
                 Ok(m.xyz_mm - model.position_mm(&q, tilt)?)
             })
@@ -139,6 +157,7 @@ impl ExtModel {
                 Unknown::Offset { axis, .. } => Ok(Wrt::Param(t[axis.min(2)])),
                 Unknown::Compliance(j) => Ok(Wrt::Joint(j)),
                 Unknown::LateralCompliance(j) => Ok(Wrt::Lateral(j)),
+                Unknown::Hysteresis(j) => Ok(Wrt::Joint(j)),
                 other => Err(not_here(other, &self.model)),
             })
             .collect()
@@ -158,11 +177,7 @@ impl ExtModel {
         let tilt = tilt_mode(self.tilt);
         let tau = self.pose_torques(data, self.needs_torques(unknowns))?;
         for (i, m) in data.points().enumerate() {
-            let q = compliance_deflected(
-                &data.poses.q_deg[m.pose],
-                self.compliance_deg_per_kgfm(),
-                &tau[m.pose],
-            );
+            let q = self.pose_joints(data, m.pose, &tau[m.pose]);
             let model = models.get(m.slot).unwrap_or(&self.model);
             let p = model.position_mm(&q, tilt)?;
             put_position_rows(3 * i, &p, &m.xyz_mm, r, None);
@@ -186,11 +201,8 @@ impl ExtModel {
         let tau = self.pose_torques(data, self.needs_torques(unknowns))?;
         for (i, m) in data.points().enumerate() {
             let tau_i = &tau[m.pose];
-            let q = compliance_deflected(
-                &data.poses.q_deg[m.pose],
-                self.compliance_deg_per_kgfm(),
-                tau_i,
-            );
+            let approach = ExtModel::approach_of(data, m.pose);
+            let q = self.pose_joints(data, m.pose, tau_i);
             let model = models.get(m.slot).unwrap_or(&self.model);
             let (fk, j) = model.position_jacobian(&q, tilt, &wrt)?;
             let mut columns = unknowns.iter().enumerate().map(|(c, u)| {
@@ -199,6 +211,7 @@ impl ExtModel {
                     Unknown::Param(p) if m.slot != 0 && t.contains(&p) => 0.0,
                     Unknown::Offset { slot, .. } if slot != m.slot || slot == 0 => 0.0,
                     Unknown::Compliance(jt) => compliance_regressor(tau_i, jt),
+                    Unknown::Hysteresis(jt) => approach.get(jt).copied().unwrap_or(0.0),
                     _ => 1.0,
                 };
                 j.fixed_view::<3, 1>(0, c) * scale
@@ -402,6 +415,62 @@ mod tests {
         assert!(jac.column(0).amax() > 1e-3, "the bend is seen");
         let fit = fit_general(&start, &data, &sel, &LmConfig::default(), 1e-6).unwrap();
         for (u, want) in sel.iter().zip([0.3, 0.05]) {
+            let got = fit.model.value(*u);
+            assert!((got - want).abs() < 1e-6, "{u:?}: {got} vs {want}");
+        }
+    }
+    /// Hysteresis: each joint offset by `b` in the direction from which it approached the pose
+    /// (the pose order). The column is the joint's column times that direction (0 at the first
+    /// pose), it matches finite differences off the solution, and the fit recovers `b` of
+    /// exact data together with a length.
+    #[test]
+    fn hysteresis_in_the_general_identification() {
+        let urdf = Urdf::parse(XML, "m.urdf").unwrap();
+        let opts = ImportOptions {
+            base_link: None,
+            tip_link: "tip",
+            tool_mm: [0.0; 3],
+        };
+        let model = import_chain_with_masses(&urdf, &opts).unwrap().model;
+        let length = Unknown::Param(model.param_index("j2_x").unwrap());
+        let sel = [Unknown::Hysteresis(0), Unknown::Hysteresis(1), length];
+        let mut truth = ExtModel::with_points(model.clone(), 1, false).unwrap();
+        truth.set_value(sel[0], 0.3).unwrap();
+        truth.set_value(sel[1], -0.5).unwrap();
+        truth.set_value(length, 801.5).unwrap();
+        // up and down in both joints, not together
+        let path = [
+            [-60.0, -80.0],
+            [-20.0, 40.0],
+            [30.0, 10.0],
+            [10.0, 90.0],
+            [-40.0, -30.0],
+            [50.0, -60.0],
+            [20.0, 70.0],
+            [70.0, 20.0],
+            [-10.0, 100.0],
+            [0.0, -10.0],
+        ];
+        let mut poses = PosePoints::default();
+        for q in path {
+            poses.q_deg.push(q.to_vec());
+            poses.xyz_mm.push(Vector3::zeros());
+        }
+        let blank = MeasuredSet::from_poses(poses.clone()).with_approach();
+        for (k, e) in truth.point_errors(&blank).unwrap().iter().enumerate() {
+            poses.xyz_mm[k] = -e; // measured = 0 - error = predicted
+        }
+        let data = MeasuredSet::from_poses(poses).with_approach();
+        let start = ExtModel::with_points(model, 1, false).unwrap();
+        let mut at = start.clone();
+        at.set_value(sel[0], 0.1).unwrap();
+        at.set_value(sel[1], -0.1).unwrap();
+        let jac = columns_match_central_differences(&at, &data, &sel);
+        // the first pose has no history: no hysteresis there
+        assert_eq!(jac.fixed_view::<3, 2>(0, 0).amax(), 0.0);
+        assert!(jac.column(1).amax() > 1.0, "the offset is seen");
+        let fit = fit_general(&start, &data, &sel, &LmConfig::default(), 1e-6).unwrap();
+        for (u, want) in sel.iter().zip([0.3, -0.5, 801.5]) {
             let got = fit.model.value(*u);
             assert!((got - want).abs() < 1e-6, "{u:?}: {got} vs {want}");
         }

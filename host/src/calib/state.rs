@@ -139,7 +139,8 @@ impl ExtModel {
         Ok((self.model.joint_map(q_deg, t_s, approach, &tau), tau))
     }
 
-    fn approach_of(data: &MeasuredSet, k: usize) -> &[f64] {
+    /// The direction of approach of every joint before pose `k` of `data` (empty: no history).
+    pub(super) fn approach_of(data: &MeasuredSet, k: usize) -> &[f64] {
         data.approach
             .as_ref()
             .and_then(|a| a.get(k))

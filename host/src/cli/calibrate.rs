@@ -1,7 +1,7 @@
 //! `rigctl calibrate --poses CAL.csv [--validate VAL.csv] [--method standard|influence|tilting]
 //! [--json OUT.json] [--out MODEL.toml] [--robot NAME | --model FILE] [--tool-mm L]
 //! [--set NAME=VALUE ...] [--params a,b,@group] [--base] [--units m,rad] [--markers 1,2]
-//! [--select press] [--compliance]`: identifies the model's parameters (and, with several
+//! [--select press] [--compliance] [--hysteresis]`: identifies the model's parameters (and, with several
 //! measured points per pose or `--compliance`, the points' offsets and the joint compliances:
 //! `rigctl::calib::calibrate_general::calibrate_poses`) and prints a thesis-table-4.5 style summary.
 //!
@@ -99,6 +99,11 @@ pub struct Args {
     /// joints' lateral compliances (bending across the axis) are candidates too.
     #[arg(long, conflicts_with = "samples")]
     pub compliance: bool,
+    /// Identify a hysteresis of every joint (deg: the angle offset by +b when the joint last
+    /// moved up before the pose, -b when down, in the pose order: a backlash whose side the
+    /// path to the pose sets); with --select press, only those chosen.
+    #[arg(long, conflicts_with = "samples")]
+    pub hysteresis: bool,
     /// Keep every pose: no gross-error rule (poses whose error is inconsistent with the others
     /// are otherwise left out of the fit and listed as `outliers`).
     #[arg(long, conflicts_with = "samples")]
@@ -196,6 +201,7 @@ pub fn run(args: Args) -> Result<(), CliError> {
     let gen = GeneralOptions {
         select: args.select,
         compliance: args.compliance,
+        hysteresis: args.hysteresis,
     };
     let g = calibrate_poses(&model, &cal, val.as_ref(), &opts, &gen)?;
     let mut notes = general_notes(&g, &cal);
