@@ -86,6 +86,12 @@ pub fn run(args: &Args, tree: Tree) -> Result<(), CliError> {
              [[tip]] ..): --markers and --select press are for a single chain",
         ));
     }
+    if args.hysteresis {
+        return Err(CliError::bad_input(
+            "--hysteresis: a tree model's calibration has no joint hysteresis yet (it is for a \
+             single chain)",
+        ));
+    }
     if args.prior != PriorMode::default() {
         return Err(CliError::bad_input(
             "--prior: a tree model's calibration has no prior yet (leave --prior at auto)",
