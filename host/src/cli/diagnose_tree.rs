@@ -88,6 +88,23 @@ pub fn run(args: &Args, tree: Tree) -> Result<(), CliError> {
         errln!("tree with the accepted effects -> {}", path.display());
     }
     out!("{}{}", assumed_masses_line(&tree), text(&diag))?;
+    if !diag.large_changes.is_empty() {
+        let names: Vec<&str> = diag
+            .large_changes
+            .iter()
+            .map(|c| c.parameter.as_str())
+            .collect();
+        return Err(CliError::failure(format!(
+            "the diagnosis moved {} beyond a real arm's errors: check the model, the units and \
+             the robot the poses came from (outputs written, JSON `large_changes`)",
+            names.join(", ")
+        )));
+    }
+    if !diag.converged {
+        return Err(CliError::failure(
+            "the final fit did not meet its stopping rule; outputs written with \"converged\": false",
+        ));
+    }
     Ok(())
 }
 

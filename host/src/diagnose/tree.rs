@@ -19,7 +19,8 @@ use serde::Serialize;
 
 use super::ordered::Ordered;
 use super::stat::{delta_bic, nested_f_test};
-use crate::calib::tree_calibrate::{calibrate_tree, tree_selection};
+use crate::calib::large_changes::LargeChange;
+use crate::calib::tree_calibrate::{calibrate_tree, tree_large_changes, tree_selection};
 use crate::calib::{CalibError, CalibrateOptions, MeasuredSet, Stats};
 use crate::model::tree_params::{compliance_joint, lateral_joint};
 use crate::model::Tree;
@@ -123,6 +124,11 @@ pub struct TreeDiagnosis {
     pub outliers: Vec<usize>,
     /// Final residual statistics are judged `floor` or `missing_effect`.
     pub verdict: String,
+    /// Whether the final fit's solver met its stopping rule.
+    pub converged: bool,
+    /// Parameters the final fit moved beyond a real arm's errors (a chain's rule on every tip's
+    /// chain): the model, the units or the robot the poses came from are to be checked.
+    pub large_changes: Vec<LargeChange>,
 }
 
 /// The elastic candidates of `tree`: the axial then the lateral compliance of every revolute
@@ -345,5 +351,7 @@ pub fn diagnose_tree(
         candidates_note,
         outliers,
         verdict: verdict.to_string(),
+        converged: current.outcome.fit.converged,
+        large_changes: tree_large_changes(nominal, &current.outcome.fit.model)?,
     })
 }
