@@ -150,6 +150,10 @@ pub struct CalibrateReport {
     /// its input value ([`super::registered`]); with `--base` only.
     #[serde(skip_serializing_if = "Option::is_none")]
     pub registered: Option<StandardSummary>,
+    /// The link masses assumed where the model declared none (a tree's `calibrate
+    /// --assume-masses`): `{total_kg, per_joint_kg, rule}`, as `diagnose`'s.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub assumed_masses: Option<serde_json::Value>,
 }
 
 /// The `calibrate --json` document of the chosen `fit` of a model's parameters (model
@@ -219,6 +223,7 @@ pub fn unknowns_report<M, U: Clone + PartialEq>(
         extrapolated: Vec::new(),
         prior: None,
         registered: None,
+        assumed_masses: None,
     }
 }
 

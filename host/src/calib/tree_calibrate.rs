@@ -17,7 +17,7 @@ use super::registered::{registered_summary, registration_options};
 use super::report::{unknowns_report, CalibrateReport, StandardSummary};
 use super::tree_fit::{check_poses, fit_tree, tree_errors};
 use crate::model::tree_gravity::tree_moments_kgfm;
-use crate::model::tree_params::compliance_joint;
+use crate::model::tree_params::{compliance_joint, lateral_joint};
 use crate::model::{Model, ParamKind, Tree};
 
 /// The unknowns of a tree's calibration by tree name, in preference order: `opts.params`
@@ -25,8 +25,9 @@ use crate::model::{Model, ParamKind, Tree};
 /// by default every tip chain's [`default_selection`], each shared parameter once, ordered by
 /// kind as a chain's (the base frame with `opts.base`, the tool points, the joint offsets, then
 /// the constants). With `compliance`, the compliance of every revolute tree joint follows
-/// ([`Tree::compliance_names`], last: kept at 0 where the poses do not identify them); the
-/// group `@compliance` in `opts.params` names the same.
+/// ([`Tree::compliance_names`]), then its lateral compliance ([`Tree::lateral_names`]; last:
+/// kept at 0 where the poses do not identify them); the group `@compliance` in `opts.params`
+/// names the same.
 pub fn tree_selection(
     tree: &Tree,
     opts: &CalibrateOptions,
@@ -35,7 +36,7 @@ pub fn tree_selection(
     if compliance && !tree.has_masses() {
         return Err(CalibError::Unsupported(
             "joint compliance on a tree needs link masses ([[mass]] rows in the tree model \
-             file): the gravity torques come from them"
+             file, or --assume-masses / --robot-mass-kg KG): the gravity moments come from them"
                 .into(),
         ));
     }
@@ -65,7 +66,11 @@ pub fn tree_selection(
         Some(names) => {
             for n in names.iter().map(|n| n.trim()).filter(|n| !n.is_empty()) {
                 match n.strip_prefix('@') {
-                    Some("compliance") => tree.compliance_names().into_iter().for_each(&mut add),
+                    Some("compliance") => tree
+                        .compliance_names()
+                        .into_iter()
+                        .chain(tree.lateral_names())
+                        .for_each(&mut add),
                     Some(g) => on_chains(&|c| param_group(c, g))?
                         .into_iter()
                         .for_each(|(n, _)| add(n)),
@@ -75,7 +80,10 @@ pub fn tree_selection(
         }
     }
     if compliance {
-        tree.compliance_names().into_iter().for_each(&mut add);
+        tree.compliance_names()
+            .into_iter()
+            .chain(tree.lateral_names())
+            .for_each(&mut add);
     }
     if out.is_empty() {
         return Err(CalibError::EmptySelection);
@@ -184,28 +192,40 @@ pub fn calibrate_tree(
 }
 
 /// Gravity torques (kgf.m) under which, in every calibration pose, a joint's compliance has
-/// nothing to act on (a vertical axis on a level base carries none): not an unknown.
+/// nothing to act on (a vertical axis on a level base carries none): not an unknown. The same
+/// bound on the perpendicular moment for a lateral compliance.
 const MIN_TORQUE_KGFM: f64 = 1e-6;
 
+/// Whether `name` is an axial or lateral compliance (bounded at 0).
+fn is_compliance(name: &str) -> bool {
+    compliance_joint(name).is_some() || lateral_joint(name).is_some()
+}
+
 /// Takes out of `selection` the compliances of joints without gravity torque in any pose of
-/// `cal` (their columns are rounding noise, not a term the poses can tell).
+/// `cal`, and the lateral compliances of joints without perpendicular moment in any (their
+/// columns are rounding noise, not a term the poses can tell).
 fn drop_unloaded(
     nominal: &Tree,
     cal: &MeasuredSet,
     selection: &mut Vec<String>,
 ) -> Result<(), CalibError> {
-    if !selection.iter().any(|n| compliance_joint(n).is_some()) {
+    if !selection.iter().any(|n| is_compliance(n)) {
         return Ok(());
     }
     check_poses(nominal, cal)?;
     let chains = nominal.chains()?;
     let mut loaded = vec![false; nominal.n_joints()];
+    let mut bent = vec![false; nominal.n_joints()];
     for q in &cal.poses.q_deg {
         for (j, m) in tree_moments_kgfm(nominal, &chains, q)?.iter().enumerate() {
             loaded[j] |= m.z.abs() >= MIN_TORQUE_KGFM;
+            bent[j] |= m.xy().norm() >= MIN_TORQUE_KGFM;
         }
     }
-    selection.retain(|n| compliance_joint(n).is_none_or(|j| loaded.get(j) == Some(&true)));
+    selection.retain(|n| {
+        compliance_joint(n).is_none_or(|j| loaded.get(j) == Some(&true))
+            && lateral_joint(n).is_none_or(|j| bent.get(j) == Some(&true))
+    });
     if selection.is_empty() {
         return Err(CalibError::EmptySelection);
     }
@@ -229,7 +249,7 @@ fn fit_bounded(
             .fitted
             .iter()
             .zip(&fit.sigma)
-            .filter(|(n, _)| compliance_joint(n).is_some())
+            .filter(|(n, _)| is_compliance(n))
             .filter_map(|(n, s)| {
                 let v = fit.model.param(n)?;
                 (v < 0.0).then(|| (n.clone(), v, *s))

@@ -20,7 +20,10 @@
 //! Joint compliance (`compliance_j<i>_deg_per_kgfm`, a chain's `compliance:j<i>` law on tree
 //! joint i) deflects joint i by `c_i tau_i` with `tau_i` the gravity torque of the **whole
 //! tree** about its axis ([`compliant_joints`]): a torso joint bends under both arms, and every
-//! tip whose path holds it sees the bend.
+//! tip whose path holds it sees the bend. Lateral compliance (`lateral_compliance_j<i>_deg_per_kgfm`)
+//! bends joint i across its axis under the whole tree's perpendicular moments
+//! ([`crate::model::tree_bend`]); its column is the tip's motion per bend angle times those
+//! moments (exact: the moments do not depend on it).
 
 use nalgebra::{DMatrix, DVector, Vector3};
 
@@ -33,9 +36,9 @@ use super::plausible::check_set;
 use super::position_fit::{refine, Identification};
 use super::problem::{put_position_rows, ModelProblem, SetUnknowns};
 use crate::model::transmission::compliance_regressor;
-use crate::model::tree_gravity::compliant_joints;
-use crate::model::tree_params::compliance_joint;
-use crate::model::{Data, Model, ModelError, Tilt, Tree, Wrt};
+use crate::model::tree_bend::{bend, tree_at, TreeAt};
+use crate::model::tree_params::{compliance_joint, lateral_joint};
+use crate::model::{Data, Model, ModelError, Tree, Wrt};
 
 /// The unknowns of a tree identification: a copy of the tree and of every tip's chain, whose
 /// parameters `names` (tree names) are the unknowns; all others stay at their values.
@@ -51,6 +54,8 @@ pub struct TreeUnknowns {
     slots: Vec<Vec<Option<usize>>>,
     /// Per unknown: the tree joint (0-based) whose compliance it is, `None` for a parameter.
     compliance: Vec<Option<usize>>,
+    /// Per unknown: the tree joint (0-based) whose lateral compliance it is.
+    lateral: Vec<Option<usize>>,
 }
 
 impl TreeUnknowns {
@@ -61,11 +66,12 @@ impl TreeUnknowns {
             return Err(ModelError::UnknownParam {
                 name: bad.clone(),
                 valid: "the tree's constants and joint offsets, base_x .. base_ry, scale_ppm, \
+                        compliance_j<i>_deg_per_kgfm, lateral_compliance_j<i>_deg_per_kgfm, \
                         NAME@TIP (tool_dx@TIP ..)"
                     .into(),
             });
         }
-        let chains = tree.chains()?;
+        let chains = tree.bent_chains()?;
         let slots = chains
             .iter()
             .enumerate()
@@ -82,6 +88,7 @@ impl TreeUnknowns {
             .collect();
         Ok(Self {
             compliance: names.iter().map(|n| compliance_joint(n)).collect(),
+            lateral: names.iter().map(|n| lateral_joint(n)).collect(),
             paths: (0..tree.tips.len()).map(|t| tree.path(t)).collect(),
             tree: tree.clone(),
             chains,
@@ -110,18 +117,21 @@ impl TreeUnknowns {
         )
     }
 
-    /// The joints every pose's tips are evaluated at (tree order): the readings deflected by
-    /// the joints' compliances under the whole tree's gravity torques, and the torques (empty
-    /// when no joint is compliant and no compliance is an unknown).
-    fn effective_joints(&self, q: &[f64]) -> Result<(Vec<f64>, Vec<f64>), ModelError> {
-        let needed = self.compliance.iter().any(Option::is_some);
-        compliant_joints(&self.tree, &self.chains, q, needed)
+    /// What every pose's tips are evaluated at ([`tree_at`]): the readings deflected by the
+    /// joints' compliances under the whole tree's gravity torques, the torques (when a joint is
+    /// compliant or a compliance is an unknown) and the whole tree's moments (when a joint is
+    /// laterally compliant or a lateral compliance is an unknown).
+    fn effective_joints(&self, q: &[f64]) -> Result<TreeAt, ModelError> {
+        let torques = self.compliance.iter().any(Option::is_some);
+        let moments = self.lateral.iter().any(Option::is_some);
+        tree_at(&self.tree, &self.chains, q, torques, moments)
     }
 
     /// Residuals `predicted - measured` (3 rows per measured tip point, mm) into `r` and, with
     /// `jac`, their Jacobian wrt the unknowns (`set` checked by [`check_poses`]). A
     /// compliance's column is the tip's motion per joint angle times the joint's torque (the
-    /// torques are taken as given by the readings, as on a chain).
+    /// torques are taken as given by the readings, as on a chain); a lateral compliance's the
+    /// chain's [`Wrt::Lateral`] column under the whole tree's moments.
     fn rows(
         &self,
         set: &MeasuredSet,
@@ -131,18 +141,22 @@ impl TreeUnknowns {
         let n = self.names.len();
         let mut data: Vec<Data> = self.chains.iter().map(Data::new).collect();
         // per tip, what every unknown is for its chain: a parameter, a joint (a compliance of a
-        // joint on its path, scaled by the torque), or nothing
+        // joint on its path, scaled by the torque), a lateral compliance of a joint on its path,
+        // or nothing
         let of_unknown: Vec<Vec<Option<Wrt>>> = self
             .slots
             .iter()
             .zip(&self.paths)
             .map(|(s, path)| {
                 s.iter()
-                    .zip(&self.compliance)
+                    .zip(self.compliance.iter().zip(&self.lateral))
                     .map(|(slot, joint)| match (slot, joint) {
                         (Some(i), _) => Some(Wrt::Param(*i)),
-                        (None, Some(j)) => path.iter().position(|p| p == j).map(Wrt::Joint),
-                        (None, None) => None,
+                        (None, (Some(j), _)) => path.iter().position(|p| p == j).map(Wrt::Joint),
+                        (None, (None, Some(j))) => {
+                            path.iter().position(|p| p == j).map(Wrt::Lateral)
+                        }
+                        (None, (None, None)) => None,
                     })
                     .collect()
             })
@@ -168,18 +182,20 @@ impl TreeUnknowns {
             .collect();
         let mut row = 0;
         for (k, q_read) in set.poses.q_deg.iter().enumerate() {
-            let (q_eff, tau) = self.effective_joints(q_read)?;
+            let at = self.effective_joints(q_read)?;
+            let tau = &at.tau_kgfm;
             for point in set.measured_of(k) {
                 let t = set.tip(point.slot);
-                let q: Vec<f64> = self.paths[t].iter().map(|&i| q_eff[i]).collect();
+                let q = at.chain_joints(&self.paths[t]);
+                let moments = at.chain_moments(&self.paths[t]);
                 let (chain, d) = (&self.chains[t], &mut data[t]);
                 let measured = point.xyz_mm;
                 match jac.as_deref_mut() {
                     Some(jac) => {
-                        chain.jacobian_with(d, &q, Tilt::Off, &wrt[t])?;
+                        chain.jacobian_with(d, &q, bend(&moments), &wrt[t])?;
                         let mut columns = (0..n).map(|c| {
                             let scale =
-                                self.compliance[c].map_or(1.0, |j| compliance_regressor(&tau, j));
+                                self.compliance[c].map_or(1.0, |j| compliance_regressor(tau, j));
                             column[t][c].map_or_else(Vector3::zeros, |k| d.jacobian()[k] * scale)
                         });
                         let jac =
@@ -187,7 +203,7 @@ impl TreeUnknowns {
                         put_position_rows(row, &d.position_mm(), &measured, r, jac);
                     }
                     None => {
-                        chain.fk_with(d, &q, Tilt::Off)?;
+                        chain.fk_with(d, &q, bend(&moments))?;
                         put_position_rows(row, &d.position_mm(), &measured, r, None);
                     }
                 }
@@ -214,9 +230,13 @@ impl SetUnknowns for TreeUnknowns {
     fn set(&mut self, x: &DVector<f64>) -> Result<(), ModelError> {
         for (k, (name, &v)) in self.names.iter().zip(x.iter()).enumerate() {
             self.tree.set_param(name, v)?;
-            for (chain, slots) in self.chains.iter_mut().zip(&self.slots) {
+            for ((chain, slots), path) in self.chains.iter_mut().zip(&self.slots).zip(&self.paths) {
                 if let Some(i) = slots[k] {
                     chain.set_param_at(i, v)?;
+                }
+                // a lateral compliance bends every chain whose path holds its joint
+                if let Some(at) = self.lateral[k].and_then(|j| path.iter().position(|p| *p == j)) {
+                    chain.set_lateral_compliance(at, v)?;
                 }
             }
         }

@@ -104,6 +104,15 @@ pub struct Args {
     /// path to the pose sets); with --select press, only those chosen.
     #[arg(long, conflicts_with = "samples")]
     pub hysteresis: bool,
+    /// A tree model without link masses: assume them (per segment, mid-segment, in proportion
+    /// to the segment lengths, 20 kg per metre in total) so that --compliance has gravity
+    /// moments; said in the output (JSON `assumed_masses`). Tree models only (on a chain:
+    /// `diagnose --assume-masses`).
+    #[arg(long, conflicts_with = "samples")]
+    pub assume_masses: bool,
+    /// The robot's mass for `--assume-masses` (kg; implies it).
+    #[arg(long, value_name = "KG", conflicts_with = "samples")]
+    pub robot_mass_kg: Option<f64>,
     /// Keep every pose: no gross-error rule (poses whose error is inconsistent with the others
     /// are otherwise left out of the fit and listed as `outliers`).
     #[arg(long, conflicts_with = "samples")]
@@ -157,6 +166,12 @@ pub fn run(args: Args) -> Result<(), CliError> {
     }
     if let Some(tree) = super::calibrate_tree::tree_model(&args.model)? {
         return super::calibrate_tree::run(&args, tree);
+    }
+    if args.assume_masses || args.robot_mass_kg.is_some() {
+        return Err(CliError::bad_input(
+            "--assume-masses / --robot-mass-kg: calibrate assumes masses on a tree model; on a \
+             chain, `diagnose --assume-masses` offers the compliance with assumed masses",
+        ));
     }
     let poses = args
         .poses

@@ -27,6 +27,7 @@ use super::calibrate::{
 use super::calibrate_text::{report_tail, table};
 use super::model_args::ModelArgs;
 use super::out::{errln, out};
+use super::pose_args::PoseArgs;
 use super::CliError;
 
 /// The tree model `--model` names, `None` for a chain (or a preset).
@@ -51,16 +52,16 @@ pub fn tree_model(model: &ModelArgs) -> Result<Option<Tree>, CliError> {
 
 /// The poses of a tree's pose file as the tree's measured set (point k on the k-th tip, the
 /// file's lines), checked for units and motion on every tip.
-fn read(args: &Args, tree: &Tree, path: &Path) -> Result<MeasuredSet, CliError> {
+pub(super) fn read(pose: &PoseArgs, tree: &Tree, path: &Path) -> Result<MeasuredSet, CliError> {
     let spec = PoseSpec {
         n_joints: tree.n_joints(),
         limits: tree.joint_limits(),
         require_xyz: true,
         joint_names: tree.joint_names(),
         prismatic: tree.prismatic(),
-        units: args.pose.units,
+        units: pose.units,
         marker: 0,
-        dialect: args.pose.dialect(),
+        dialect: pose.dialect(),
     };
     let file = read_poses(path, &spec)?;
     if file.n_markers() != tree.tips.len() {
@@ -100,11 +101,12 @@ pub fn run(args: &Args, tree: Tree) -> Result<(), CliError> {
     let Some(poses_path) = args.poses.as_deref() else {
         return Err(CliError::bad_input("--poses is required"));
     };
-    let poses = read(args, &tree, poses_path)?;
+    let tree = assumed_masses(tree, args)?;
+    let poses = read(&args.pose, &tree, poses_path)?;
     let val = args
         .validate
         .as_deref()
-        .map(|v| read(args, &tree, v))
+        .map(|v| read(&args.pose, &tree, v))
         .transpose()?;
     let opts = CalibrateOptions {
         method: args.method,
@@ -124,6 +126,7 @@ pub fn run(args: &Args, tree: Tree) -> Result<(), CliError> {
         // as on a chain: a registration that fails leaves the key out
         o.report.registered = tree_registration_only(&tree, &poses, val.as_ref(), with_tool).ok();
     }
+    o.report.assumed_masses = assumed_masses_json(&tree);
     let n_points = o.calibration_errors[0].len();
     no_redundancy(poses_path, 3 * n_points, o.report.rank)?;
     let write_model = writes_model(&o.report, args);
@@ -134,7 +137,9 @@ pub fn run(args: &Args, tree: Tree) -> Result<(), CliError> {
         o.fit.model.write_file(out)?;
         errln!("fitted tree -> {}", out.display());
     }
-    let mut s = format!(
+    let mut s = assumed_masses_line(&tree);
+    let _ = write!(
+        s,
         "tree `{}`: {} joints, {} tips; {} poses, {} coordinates; {} unknowns\n",
         tree.name,
         tree.n_joints(),
@@ -182,4 +187,86 @@ pub fn run(args: &Args, tree: Tree) -> Result<(), CliError> {
 fn rms_mm(errors: &[nalgebra::Vector3<f64>]) -> f64 {
     let ss: f64 = errors.iter().map(|e| e.norm_squared()).sum();
     (ss / (3 * errors.len()).max(1) as f64).sqrt()
+}
+
+/// Whether the selection asks for compliance (`--compliance`, or `@compliance` in `--params`).
+fn asks_compliance(args: &Args) -> bool {
+    args.compliance
+        || args
+            .params
+            .iter()
+            .flatten()
+            .any(|p| p.trim() == "@compliance")
+}
+
+/// `tree` with assumed link masses when asked (`--assume-masses`, `--robot-mass-kg`); a tree
+/// without masses asked for compliance is refused, naming the flags.
+fn assumed_masses(tree: Tree, args: &Args) -> Result<Tree, CliError> {
+    tree_masses(
+        tree,
+        args.assume_masses,
+        args.robot_mass_kg,
+        asks_compliance(args),
+    )
+}
+
+/// `tree` with assumed link masses when asked (`assume`, or `robot_mass_kg`); refused when the
+/// tree declares its own, or when it has none and `needs_masses` (compliance asked) without the
+/// flags.
+pub(super) fn tree_masses(
+    tree: Tree,
+    assume: bool,
+    robot_mass_kg: Option<f64>,
+    needs_masses: bool,
+) -> Result<Tree, CliError> {
+    let asked = assume || robot_mass_kg.is_some();
+    if tree.has_masses() {
+        if asked {
+            return Err(CliError::bad_input(
+                "--assume-masses / --robot-mass-kg: the tree model declares its link masses \
+                 (remove the flag, or its [[mass]] rows)",
+            ));
+        }
+        return Ok(tree);
+    }
+    if !asked {
+        if needs_masses {
+            return Err(CliError::bad_input(
+                "the tree model has no link masses, so no gravity moments for the joint \
+                 compliances: give --assume-masses (or --robot-mass-kg KG) to fit them with \
+                 assumed masses, or [[mass]] rows with the robot's own",
+            ));
+        }
+        return Ok(tree);
+    }
+    tree.with_assumed_masses(robot_mass_kg)
+        .map_err(|e| CliError::bad_input(format!("--robot-mass-kg: {e}")))
+}
+
+/// The line that says the masses are assumed (empty when they are not).
+pub(super) fn assumed_masses_line(tree: &Tree) -> String {
+    if !tree.masses_assumed {
+        return String::new();
+    }
+    let (total, per) = tree.mass_per_joint_kg();
+    let per: Vec<String> = per.iter().map(|kg| format!("{kg:.2}")).collect();
+    format!(
+        "link masses ASSUMED (none declared): {total:.2} kg in total, {} kg on tree joints \
+         1..{}, mid-segment; compliance values are per kgf.m of these assumed moments\n",
+        per.join(", "),
+        per.len()
+    )
+}
+
+/// The JSON `assumed_masses` of a tree whose masses are assumed (`diagnose`'s keys).
+pub(super) fn assumed_masses_json(tree: &Tree) -> Option<serde_json::Value> {
+    tree.masses_assumed.then(|| {
+        let (total, per) = tree.mass_per_joint_kg();
+        serde_json::json!({
+            "total_kg": total,
+            "per_joint_kg": per,
+            "rule": "one point mass per segment from a joint to each child joint or tip, \
+                     mid-segment, in proportion to the segment lengths",
+        })
+    })
 }

@@ -97,6 +97,9 @@ pub fn run(args: Args) -> Result<(), CliError> {
         .apart("--poses", "--validate")
         .apart("--samples", "--validate")
         .check()?;
+    if let Some(tree) = super::calibrate_tree::tree_model(&args.model)? {
+        return super::diagnose_tree::run(&args, tree);
+    }
     // the pencil holder is on the arm when the rig's samples are measured
     let default_tool_mm = (!args.samples.is_empty()).then_some(KATANA_PENCIL_TOOL_MM);
     let model = args.model.choose_with_default_tool(default_tool_mm)?;

@@ -18,8 +18,8 @@ use std::fmt::Write as _;
 use std::path::PathBuf;
 
 use rigctl::io::pose_csv::read_poses;
+use rigctl::model::tree_bend::{bend, tree_at};
 use rigctl::model::tree_file::is_tree_text;
-use rigctl::model::tree_gravity::compliant_joints;
 use rigctl::model::{parse_set, ModelError, Tilt, Tree};
 
 use super::joint_log::JointLogArgs;
@@ -185,7 +185,7 @@ fn run_tree(args: &Args, tree: &Tree) -> Result<(), CliError> {
             args.joints.display()
         )));
     }
-    let mut chains = tree.chains()?;
+    let mut chains = tree.bent_chains()?;
     for set in &args.model.sets {
         let (name, value) = parse_set(set)?;
         let mut found = false;
@@ -218,12 +218,13 @@ fn run_tree(args: &Args, tree: &Tree) -> Result<(), CliError> {
     let _ = writeln!(out, "{}", header.join(","));
     for (row, q) in poses.joints().iter().enumerate() {
         // compliant joints bend under the whole tree's gravity (docs/model-files.md)
-        let (q, _) = compliant_joints(tree, &chains, q, false)
+        let at = tree_at(tree, &chains, q, false, false)
             .map_err(|e| CliError::from(e).in_file(&args.joints).with_row(row + 1))?;
         for (k, (model, path)) in chains.iter().zip(&paths).enumerate() {
-            let qc: Vec<f64> = path.iter().map(|&j| q[j]).collect();
+            let qc = at.chain_joints(path);
+            let moments = at.chain_moments(path);
             let mut cell = String::new();
-            fk_row(&mut cell, model, &qc, 0.0, Tilt::Off)
+            fk_row(&mut cell, model, &qc, 0.0, bend(&moments))
                 .map_err(|e| e.in_file(&args.joints).with_row(row + 1))?;
             if k > 0 {
                 out.push(',');

@@ -8,6 +8,7 @@ mod calibrate_text;
 mod calibrate_tree;
 mod compensate;
 mod diagnose;
+mod diagnose_tree;
 mod export;
 mod fk;
 mod fuse;

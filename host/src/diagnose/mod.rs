@@ -66,6 +66,7 @@ pub mod select;
 pub mod simplest;
 pub mod spikes;
 pub mod stat;
+pub mod tree;
 pub mod verdict;
 
 use crate::calib::{CalibError, MeasuredSet, Stats};

@@ -94,6 +94,7 @@ pub mod toml_file;
 mod toml_write;
 pub mod transmission;
 pub(crate) mod tree;
+pub mod tree_bend;
 pub mod tree_file;
 pub mod tree_gravity;
 pub mod tree_params;

@@ -25,6 +25,10 @@ pub enum Tilt<'a> {
     /// The static part follows the model's parameters (payload, base tilt) and the joints, and
     /// is differentiated like `Static`; the extra part is held fixed.
     StaticPlus(&'a [Vector3<f64>]),
+    /// No declared tilting; the lateral bend of the model's laterally compliant joints
+    /// ([`super::lateral`]) under supplied moments (kgf.m in joint frame i, one per joint; e.g.
+    /// a tree's whole-tree moments, [`super::tree_bend`]), held fixed in the Jacobian.
+    Bend(&'a [Vector3<f64>]),
 }
 
 /// `sign(x)` of MODEL.md: 0 for `|x| < 1e-9`, else +-1.

@@ -58,6 +58,12 @@ pub struct TreeJoint {
     /// gravity torque of the whole tree about its axis ([`Tree::axis_torques_kgfm`]); parameter
     /// `compliance_j<i>_deg_per_kgfm` (i: tree joint number, 1-based). 0: rigid.
     pub compliance_deg_per_kgfm: f64,
+    /// Lateral compliance (deg per kgf.m) of the joint: a bend `Rx(c eta_x) . Ry(c eta_y)` in
+    /// its joint frame right after the joint's rotation, `eta` the whole tree's gravity moment
+    /// ([`Tree::moments_kgfm`], at the axially deflected joints, unbent), the chain's
+    /// `lateral_compliance:j<i>` law ([`super::lateral`]); parameter
+    /// `lateral_compliance_j<i>_deg_per_kgfm`. 0: rigid across the axis.
+    pub lateral_compliance_deg_per_kgfm: f64,
 }
 
 /// A tip: a frame after a joint, and the tool point in it.
@@ -84,6 +90,8 @@ pub struct Tree {
     /// Values of the automatic parameters shared by every chain (`base_x .. base_ry`,
     /// `scale_ppm`), non-zero ones only.
     pub params: BTreeMap<String, f64>,
+    /// Whether the link masses are assumed ([`Tree::with_assumed_masses`]), not declared.
+    pub masses_assumed: bool,
 }
 
 /// The automatic parameters a tree carries (shared by every tip's chain).
@@ -284,6 +292,7 @@ impl Tree {
             joints: Vec::new(),
             tips: Vec::new(),
             params: BTreeMap::new(),
+            masses_assumed: false,
         };
         let mut by_name: HashMap<String, usize> = HashMap::new();
         for (s, (tip, model)) in split.into_iter().zip(chains) {
@@ -421,6 +430,7 @@ fn split_chain(tip: &str, m: &Model) -> Result<Split, ModelError> {
                 })
                 .collect(),
             compliance_deg_per_kgfm: 0.0,
+            lateral_compliance_deg_per_kgfm: 0.0,
         });
     }
     Ok(Split {

@@ -25,6 +25,7 @@
 //! min = -75.0              # (default: the previous joint, as in a chain)
 //! max = 75.0
 //! compliance_deg_per_kgfm = 0.0  # optional: deflection per kgf.m of the whole tree's gravity
+//! lateral_compliance_deg_per_kgfm = 0.0  # optional: bend across the axis, same moments
 //!
 //! [[mass]]                 # in the joint frame (after = 0 only)
 //! joint = 1
@@ -95,6 +96,8 @@ struct JointEntry {
     max: f64,
     #[serde(default)]
     compliance_deg_per_kgfm: f64,
+    #[serde(default)]
+    lateral_compliance_deg_per_kgfm: f64,
 }
 
 #[derive(Debug, Deserialize)]
@@ -186,11 +189,19 @@ fn build(f: TreeFile) -> Result<Tree, String> {
         if !e.value.is_finite() {
             return Err(format!("{at}: value = {} is not finite", e.value));
         }
-        if !info.compliance_deg_per_kgfm.is_finite() {
-            return Err(format!(
-                "[[joint]] {j} (`{}`): compliance_deg_per_kgfm is not finite",
-                info.name
-            ));
+        for (key, v) in [
+            ("compliance_deg_per_kgfm", info.compliance_deg_per_kgfm),
+            (
+                "lateral_compliance_deg_per_kgfm",
+                info.lateral_compliance_deg_per_kgfm,
+            ),
+        ] {
+            if !v.is_finite() {
+                return Err(format!(
+                    "[[joint]] {j} (`{}`): {key} is not finite",
+                    info.name
+                ));
+            }
         }
         joints.push(TreeJoint {
             name: info.name.clone(),
@@ -202,6 +213,7 @@ fn build(f: TreeFile) -> Result<Tree, String> {
             limits: [info.min, info.max],
             masses: Vec::new(),
             compliance_deg_per_kgfm: info.compliance_deg_per_kgfm,
+            lateral_compliance_deg_per_kgfm: info.lateral_compliance_deg_per_kgfm,
         });
     }
     if !pending.is_empty() {
@@ -272,6 +284,7 @@ fn build(f: TreeFile) -> Result<Tree, String> {
         joints,
         tips,
         params: f.params.into_iter().filter(|(_, v)| *v != 0.0).collect(),
+        masses_assumed: false,
     };
     tree.validate().map_err(|e| e.to_string())?;
     Ok(tree)
@@ -346,6 +359,21 @@ impl Tree {
                     fmt_f64(j.compliance_deg_per_kgfm)
                 );
             }
+            if j.lateral_compliance_deg_per_kgfm != 0.0 {
+                let _ = writeln!(
+                    s,
+                    "lateral_compliance_deg_per_kgfm = {}",
+                    fmt_f64(j.lateral_compliance_deg_per_kgfm)
+                );
+            }
+        }
+        if self.masses_assumed && self.has_masses() {
+            s.push_str(
+                "\n# The link masses below are ASSUMED by rigctl (the model declared none): one per\n\
+                 # segment from a joint to each child joint or tip, mid-segment, in proportion to\n\
+                 # the segment lengths. Replace them with the robot's own masses for compliance\n\
+                 # values in real units.\n",
+            );
         }
         for (i, j) in self.joints.iter().enumerate() {
             for m in &j.masses {

@@ -1,8 +1,9 @@
 //! A tree's parameters by name, for a fit over the whole tree: shared constants and joint
 //! offsets by their names, the shared base and scale values (`base_x` .. `scale_ppm`), and a
 //! tip's own values as `NAME@TIP` (its constants, `tool_dx@TIP` .. `tool_dz@TIP`), and the
-//! axial compliance of tree joint i as `compliance_j<i>_deg_per_kgfm` (i 1-based, tree order;
-//! a chain's name for the same law).
+//! axial compliance of tree joint i as `compliance_j<i>_deg_per_kgfm` and its lateral
+//! compliance as `lateral_compliance_j<i>_deg_per_kgfm` (i 1-based, tree order; a chain's
+//! model-file keys for the same laws).
 
 /// The name of tree joint `j`'s compliance (0-based `j`).
 pub fn compliance_name(j: usize) -> String {
@@ -17,6 +18,16 @@ pub fn compliance_joint(name: &str) -> Option<usize> {
         .parse()
         .ok()?;
     i.checked_sub(1)
+}
+
+/// The name of tree joint `j`'s lateral compliance (0-based `j`).
+pub fn lateral_name(j: usize) -> String {
+    format!("lateral_compliance_j{}_deg_per_kgfm", j + 1)
+}
+
+/// The tree joint (0-based) whose lateral compliance `name` is, if it is such a name.
+pub fn lateral_joint(name: &str) -> Option<usize> {
+    compliance_joint(name.strip_prefix("lateral_")?)
 }
 
 use super::error::ModelError;
@@ -40,7 +51,7 @@ impl Tree {
         let slot = self.slot(name).ok_or_else(|| ModelError::UnknownParam {
             name: name.to_string(),
             valid: "the tree's constants and joint offsets, base_x .. base_ry, scale_ppm, \
-                    compliance_j<i>_deg_per_kgfm, NAME@TIP for a tip's own constants and tool_dx@TIP .. tool_dz@TIP"
+                    compliance_j<i>_deg_per_kgfm, lateral_compliance_j<i>_deg_per_kgfm, NAME@TIP for a tip's own constants and tool_dx@TIP .. tool_dz@TIP"
                 .into(),
         })?;
         *slot = value;
@@ -63,6 +74,12 @@ impl Tree {
                     .find(|e| e.name == local)
                     .map(|e| &mut e.value),
             };
+        }
+        if let Some(j) = lateral_joint(name) {
+            return self
+                .joints
+                .get_mut(j)
+                .map(|j| &mut j.lateral_compliance_deg_per_kgfm);
         }
         if let Some(j) = compliance_joint(name) {
             return self
@@ -94,6 +111,23 @@ impl Tree {
             .filter(|&j| !self.joints[j].prismatic)
             .map(compliance_name)
             .collect()
+    }
+
+    /// The lateral compliance parameters of every revolute tree joint
+    /// (`lateral_compliance_j<i>_deg_per_kgfm`, tree order): what `calibrate --compliance` frees
+    /// on a tree after the axial ones.
+    pub fn lateral_names(&self) -> Vec<String> {
+        (0..self.joints.len())
+            .filter(|&j| !self.joints[j].prismatic)
+            .map(lateral_name)
+            .collect()
+    }
+
+    /// Whether some tree joint has a non-zero lateral compliance.
+    pub fn has_lateral_compliance(&self) -> bool {
+        self.joints
+            .iter()
+            .any(|j| j.lateral_compliance_deg_per_kgfm != 0.0)
     }
 
     /// Whether some tree joint has a non-zero compliance.

@@ -1,5 +1,5 @@
-//! Elastic joints on a tree, through the CLI, on an independent generator (this file's own
-//! kinematics and statics, not the product's): a humanoid upper body (a torso of 2 joints, two
+//! Elastic joints on a tree, through the CLI, on an independent generator ([`super::tree_body`]:
+//! its own kinematics and statics, not the product's): a humanoid upper body (a torso of 2 joints, two
 //! 6-joint arms, link masses), geometric errors on every segment, and joints that bend about
 //! their axes under gravity (the torso's pitch joint and both shoulders, `q + c tau` with `tau`
 //! the torque of every mass beyond the joint, both arms on the torso), measured by motion
@@ -10,195 +10,19 @@
 //! compliances, blind to the other arm's weight) do not. A pose file in metres is refused before
 //! the fit, naming the file.
 
-use nalgebra::{Matrix3, Rotation3, Vector3};
 use rand::{Rng, SeedableRng};
-use rand_distr::{Distribution, Normal};
 
+use super::tree_body::{calibrate, chain_csv, measure, tree_csv, Body};
 use crate::common::record::record;
 use crate::common::spawn::{output, path_arg, text};
 
-const NOISE_MM: f64 = 0.4;
+pub(crate) const NOISE_MM: f64 = 0.4;
 /// The bar: held-out RMS per coordinate within this factor of the noise.
 const FLOOR_FACTOR: f64 = 1.2;
 
-/// One segment of the body: `Rx(al) Tx(a) Tz(d) Rz(q + off)` from its parent's joint frame.
-#[derive(Clone)]
-pub(crate) struct Seg {
-    pub(crate) name: String,
-    pub(crate) parent: Option<usize>,
-    pub(crate) al_deg: f64,
-    pub(crate) a_mm: f64,
-    pub(crate) d_mm: f64,
-    pub(crate) off_deg: f64,
-    /// (kg, centre of mass in the joint frame, mm)
-    pub(crate) mass: (f64, [f64; 3]),
-    /// deg per kgf.m about the axis
-    pub(crate) compliance: f64,
-}
-
-#[derive(Clone)]
-pub(crate) struct Body {
-    pub(crate) segs: Vec<Seg>,
-    /// (tip name, last joint, tool point in its frame, mm)
-    pub(crate) tips: Vec<(String, usize, [f64; 3])>,
-}
-
-fn rot_x(deg: f64) -> Matrix3<f64> {
-    *Rotation3::from_axis_angle(&Vector3::x_axis(), deg.to_radians()).matrix()
-}
-
-fn rot_z(deg: f64) -> Matrix3<f64> {
-    *Rotation3::from_axis_angle(&Vector3::z_axis(), deg.to_radians()).matrix()
-}
-
-impl Body {
-    pub(crate) fn nominal() -> Body {
-        let seg = |name: &str, parent, al, a, d, kg, com: [f64; 3]| Seg {
-            name: name.into(),
-            parent,
-            al_deg: al,
-            a_mm: a,
-            d_mm: d,
-            off_deg: 0.0,
-            mass: (kg, com),
-            compliance: 0.0,
-        };
-        // torso: t1 yaw about the vertical, t2 pitch (horizontal axis)
-        let mut segs = vec![
-            seg("t1", None, 0.0, 0.0, 400.0, 12.0, [0.0, 0.0, 80.0]),
-            seg("t2", Some(0), -90.0, 40.0, 0.0, 10.0, [150.0, 0.0, 0.0]),
-        ];
-        let mut tips = Vec::new();
-        for (side, sign) in [("l", 1.0), ("r", -1.0)] {
-            let base = segs.len();
-            let rows = [
-                (90.0, 320.0, sign * 200.0, 3.0, [0.0, 0.0, sign * 40.0]),
-                (-90.0, 0.0, 60.0, 2.5, [60.0, 0.0, 0.0]),
-                (90.0, 20.0, 260.0, 2.0, [0.0, 0.0, -120.0]),
-                (-90.0, -20.0, 0.0, 1.5, [0.0, 60.0, 0.0]),
-                (90.0, 0.0, 240.0, 1.0, [0.0, 0.0, -100.0]),
-                (-90.0, 0.0, 0.0, 0.5, [0.0, 0.0, 20.0]),
-            ];
-            for (k, (al, a, d, kg, com)) in rows.into_iter().enumerate() {
-                let parent = if k == 0 { 1 } else { base + k - 1 };
-                segs.push(seg(
-                    &format!("{side}{}", k + 1),
-                    Some(parent),
-                    al,
-                    a,
-                    d,
-                    kg,
-                    com,
-                ));
-            }
-            let tool = [sign * 15.0, 10.0, 110.0];
-            tips.push((format!("{side}_hand"), segs.len() - 1, tool));
-        }
-        Body { segs, tips }
-    }
-
-    /// Joint frames (rotation, origin mm) in R at joint angles `q` (deg).
-    fn frames(&self, q: &[f64]) -> Vec<(Matrix3<f64>, Vector3<f64>)> {
-        let mut out: Vec<(Matrix3<f64>, Vector3<f64>)> = Vec::new();
-        for (s, q) in self.segs.iter().zip(q) {
-            let (r0, p0) = s
-                .parent
-                .map_or((Matrix3::identity(), Vector3::zeros()), |p| out[p]);
-            let r = r0 * rot_x(s.al_deg);
-            let p = p0 + r * Vector3::new(s.a_mm, 0.0, s.d_mm);
-            out.push((r * rot_z(q + s.off_deg), p));
-        }
-        out
-    }
-
-    /// Gravity torque about every joint's axis (kgf.m): the moment about its origin of the
-    /// weight (1 kgf per kg, -z of R) of every segment whose chain passes through it, in its
-    /// frame, z component. Brute force over (joint, segment) pairs.
-    pub(crate) fn torques_kgfm(&self, q: &[f64]) -> Vec<f64> {
-        let f = self.frames(q);
-        (0..self.segs.len())
-            .map(|i| {
-                let (ri, oi) = f[i];
-                let mut m = Vector3::zeros();
-                for (j, s) in self.segs.iter().enumerate() {
-                    let mut at = Some(j);
-                    while let Some(k) = at.filter(|&k| k != i) {
-                        at = self.segs[k].parent;
-                    }
-                    if at.is_none() {
-                        continue;
-                    }
-                    let (rj, oj) = f[j];
-                    let c = rj * Vector3::from(s.mass.1) + oj;
-                    m += ((c - oi) * 1e-3).cross(&Vector3::new(0.0, 0.0, -s.mass.0));
-                }
-                (ri.transpose() * m).z
-            })
-            .collect()
-    }
-
-    /// The hands' points (mm) at the readings `q`: the joints bent by their compliances.
-    fn hands_mm(&self, q: &[f64]) -> Vec<Vector3<f64>> {
-        let tau = self.torques_kgfm(q);
-        let q_eff: Vec<f64> = q
-            .iter()
-            .zip(&self.segs)
-            .zip(&tau)
-            .map(|((q, s), t)| q + s.compliance * t)
-            .collect();
-        let f = self.frames(&q_eff);
-        self.tips
-            .iter()
-            .map(|(_, j, tool)| f[*j].0 * Vector3::from(*tool) + f[*j].1)
-            .collect()
-    }
-
-    /// The body as a tree model file (docs/model-files.md "Tree models").
-    pub(crate) fn model_toml(&self) -> String {
-        let mut s = String::from("name = \"upper_body\"\n");
-        for (i, g) in self.segs.iter().enumerate() {
-            let n = &g.name;
-            for (op, name, v) in [
-                ("rx", format!("al_{n}"), g.al_deg),
-                ("tx", format!("a_{n}"), g.a_mm),
-                ("tz", format!("d_{n}"), g.d_mm),
-            ] {
-                s += &format!("\n[[chain]]\nop = \"{op}\"\nname = \"{name}\"\nvalue = {v:?}\n");
-            }
-            s += &format!(
-                "\n[[chain]]\nop = \"rz\"\njoint = {}\nname = \"off_{n}\"\nvalue = {:?}\n",
-                i + 1,
-                g.off_deg
-            );
-        }
-        for g in &self.segs {
-            s += &format!(
-                "\n[[joint]]\nname = \"{}\"\nparent = {}\nmin = -170.0\nmax = 170.0\n",
-                g.name,
-                g.parent.map_or(0, |p| p + 1)
-            );
-        }
-        for (i, g) in self.segs.iter().enumerate() {
-            let [x, y, z] = g.mass.1;
-            s += &format!(
-                "\n[[mass]]\njoint = {}\nkg = {:?}\ncom_mm = [{x:?}, {y:?}, {z:?}]\n",
-                i + 1,
-                g.mass.0
-            );
-        }
-        for (name, j, [x, y, z]) in &self.tips {
-            s += &format!(
-                "\n[[tip]]\nname = \"{name}\"\njoint = {}\ntool_mm = [{x:?}, {y:?}, {z:?}]\n",
-                j + 1
-            );
-        }
-        s
-    }
-}
-
 /// The truth: every segment's geometry off by up to 0.5 mm / 0.1 deg, each tool point by up to
 /// 0.5 mm, and the torso pitch joint and both shoulders (joints 1 and 2 of each arm) elastic.
-fn truth(nominal: &Body, rng: &mut rand::rngs::StdRng) -> Body {
+pub(crate) fn truth(nominal: &Body, rng: &mut rand::rngs::StdRng) -> Body {
     let mut t = nominal.clone();
     for s in &mut t.segs {
         s.al_deg += rng.gen_range(-0.1..0.1);
@@ -227,101 +51,14 @@ fn truth(nominal: &Body, rng: &mut rand::rngs::StdRng) -> Body {
     t
 }
 
-/// Poses over the joints' ranges, the hands measured with noise: (joints, points per tip).
-fn measure(
-    body: &Body,
-    n: usize,
-    rng: &mut rand::rngs::StdRng,
-) -> Vec<(Vec<f64>, Vec<Vector3<f64>>)> {
-    let noise = Normal::new(0.0, NOISE_MM).unwrap();
-    (0..n)
-        .map(|_| {
-            let q: Vec<f64> = body
-                .segs
-                .iter()
-                .map(|_| rng.gen_range(-110.0..110.0))
-                .collect();
-            let hands = body
-                .hands_mm(&q)
-                .into_iter()
-                .map(|p| p.map(|v| v + noise.sample(rng)))
-                .collect();
-            (q, hands)
-        })
-        .collect()
-}
-
-/// A tree pose file: the joints by name, `x<k>,y<k>,z<k>` per tip (points scaled by `unit`).
-fn tree_csv(body: &Body, poses: &[(Vec<f64>, Vec<Vector3<f64>>)], unit: f64) -> String {
-    let mut header: Vec<String> = body.segs.iter().map(|s| s.name.clone()).collect();
-    for k in 1..=body.tips.len() {
-        header.extend([format!("x{k}"), format!("y{k}"), format!("z{k}")]);
-    }
-    let mut text = header.join(",") + "\n";
-    for (q, hands) in poses {
-        let mut cells: Vec<String> = q.iter().map(|v| format!("{v:e}")).collect();
-        for p in hands {
-            cells.extend(p.iter().map(|v| format!("{:e}", v * unit)));
-        }
-        text += &(cells.join(",") + "\n");
-    }
-    text
-}
-
-/// A chain pose file of tip `tip`: `q1..qn` along its path, `x,y,z`.
-fn chain_csv(body: &Body, tip: usize, poses: &[(Vec<f64>, Vec<Vector3<f64>>)]) -> String {
-    let mut path = Vec::new();
-    let mut at = Some(body.tips[tip].1);
-    while let Some(j) = at {
-        path.push(j);
-        at = body.segs[j].parent;
-    }
-    path.reverse();
-    let mut header: Vec<String> = (1..=path.len()).map(|k| format!("q{k}")).collect();
-    header.extend(["x", "y", "z"].map(String::from));
-    let mut text = header.join(",") + "\n";
-    for (q, hands) in poses {
-        let mut cells: Vec<String> = path.iter().map(|&j| format!("{:e}", q[j])).collect();
-        cells.extend(hands[tip].iter().map(|v| format!("{v:e}")));
-        text += &(cells.join(",") + "\n");
-    }
-    text
-}
-
-/// Runs `calibrate` and returns the held-out RMS per coordinate after the fit (mm) and stdout:
-/// `validation rms A -> B mm` (a tree, a chain's standard fit) or `validation RMS of point 1: B mm`
-/// (a chain's fit with compliance).
-fn calibrate(args: &[&str]) -> (f64, String) {
-    let mut all = vec!["calibrate"];
-    all.extend(args);
-    let run = output(&all);
-    let stdout = text(&run.stdout);
-    assert!(
-        run.status.success(),
-        "rigctl {}: {stdout}\n{}",
-        all.join(" "),
-        text(&run.stderr)
-    );
-    let line = stdout
-        .lines()
-        .find(|l| l.starts_with("validation rms") || l.starts_with("validation RMS of point 1:"))
-        .unwrap_or_else(|| panic!("a validation line in {stdout}"));
-    let rms = line
-        .rsplit([' ', '>'])
-        .nth(1)
-        .and_then(|v| v.parse().ok())
-        .unwrap_or_else(|| panic!("a number in {line}"));
-    (rms, stdout)
-}
-
 #[test]
 fn tree_compliance_reaches_the_floor_where_geometry_and_chains_do_not() {
     let mut rng = rand::rngs::StdRng::seed_from_u64(5260);
     let nominal = Body::nominal();
     let truth = truth(&nominal, &mut rng);
     let (cal, val) = (
-        measure(&truth, 300, &mut rng),
-        measure(&truth, 150, &mut rng),
+        measure(&truth, 300, NOISE_MM, &mut rng),
+        measure(&truth, 150, NOISE_MM, &mut rng),
     );
     let dir = tempfile::tempdir().unwrap();
     let d = dir.path();
@@ -457,7 +194,7 @@ fn tree_compliance_reaches_the_floor_where_geometry_and_chains_do_not() {
 fn a_tree_pose_file_in_metres_is_refused_before_the_fit() {
     let mut rng = rand::rngs::StdRng::seed_from_u64(5261);
     let nominal = Body::nominal();
-    let poses = measure(&nominal, 40, &mut rng);
+    let poses = measure(&nominal, 40, NOISE_MM, &mut rng);
     let dir = tempfile::tempdir().unwrap();
     let (model, cal) = (
         dir.path().join("body.toml"),

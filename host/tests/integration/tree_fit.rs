@@ -68,6 +68,7 @@ fn mdh(name: &str, parent: Option<usize>, al: f64, a: f64, d: f64) -> TreeJoint 
             com_mm: [0.0, 0.0, 50.0],
         }],
         compliance_deg_per_kgfm: 0.0,
+        lateral_compliance_deg_per_kgfm: 0.0,
     }
 }
 
@@ -95,6 +96,7 @@ fn nominal() -> Tree {
     Tree {
         name: "upper_body".into(),
         root: Vec::new(),
+        masses_assumed: false,
         tips: vec![
             Tip {
                 name: "left_hand".into(),

@@ -1,6 +1,6 @@
 //! The whole tree's gravity torques (`Tree::axis_torques_kgfm`) against pinocchio's
 //! `computeGeneralizedGravity` on a URDF this test writes of the same body (the humanoid upper
-//! body of [`super::tree_compliance`], with its link masses as `<inertial>`s): pinocchio's
+//! body of [`super::tree_body`], with its link masses as `<inertial>`s): pinocchio's
 //! torque is what the joint must exert, `g = -9.81 tau` (N.m, `tau` in kgf.m), and the test's own
 //! brute-force statics agree too.
 
@@ -8,7 +8,7 @@ use std::path::Path;
 
 use rand::{Rng, SeedableRng};
 
-use super::tree_compliance::Body;
+use super::tree_body::Body;
 use crate::common::{py_script, python_env};
 use rigctl::model::Tree;
 

@@ -2,7 +2,7 @@ use nalgebra::{DVector, Vector3};
 
 use super::*;
 use crate::model::tree::test_support::{dh_joint, elem as c};
-use crate::model::tree_params::compliance_name;
+use crate::model::tree_params::{compliance_name, lateral_name};
 use crate::model::{Axis, Motion, Tip, TreeJoint};
 
 fn joint(name: &str, parent: Option<usize>, row: [f64; 3]) -> TreeJoint {
@@ -30,6 +30,7 @@ fn tree() -> Tree {
         joints,
         tips: vec![tip("left", 2), tip("right", 4)],
         params: Default::default(),
+        masses_assumed: false,
     }
 }
 
@@ -160,9 +161,13 @@ fn compliance_selection_needs_masses() {
     let t = tree();
     let opts = CalibrateOptions::default();
     let sel = tree_selection(&t, &opts, true).unwrap();
-    let names = t.compliance_names();
-    assert_eq!(names.len(), 5);
-    assert_eq!(sel[sel.len() - 5..], names[..]);
+    let names: Vec<String> = t
+        .compliance_names()
+        .into_iter()
+        .chain(t.lateral_names())
+        .collect();
+    assert_eq!(names.len(), 10);
+    assert_eq!(sel[sel.len() - 10..], names[..]);
     let mut bare = t.clone();
     bare.joints.iter_mut().for_each(|j| j.masses.clear());
     assert!(matches!(
@@ -170,4 +175,70 @@ fn compliance_selection_needs_masses() {
         Err(CalibError::Unsupported(_))
     ));
     assert!(tree_selection(&bare, &opts, false).is_ok());
+}
+
+/// The analytic columns of the lateral compliances equal central differences of the residuals,
+/// with the joints already compliant about and across their axes (and at zero: the column does
+/// not vanish with the value); the torso's moves both tips, an arm's only its own.
+#[test]
+fn lateral_columns_match_finite_differences() {
+    for bent in [true, false] {
+        let mut t = tree();
+        for (j, c) in [0.02, 0.05, 0.0, 0.03, 0.01].iter().enumerate() {
+            t.set_param(&compliance_name(j), *c).unwrap();
+            if bent {
+                t.set_param(&lateral_name(j), 0.5 * c + 0.01).unwrap();
+            }
+        }
+        let names = t.lateral_names();
+        let u = TreeUnknowns::new(&t, names.clone()).unwrap();
+        let p = poses(&t);
+        let m = n_rows(&p);
+        let jac = u.jacobian(&p).unwrap();
+        let x0 = u.values();
+        for k in 0..names.len() {
+            let h = 1e-4;
+            let at = |dx: f64| -> DVector<f64> {
+                let mut s = u.clone();
+                let mut x = x0.clone();
+                x[k] += dx;
+                s.set(&x).unwrap();
+                let mut r = DVector::zeros(m);
+                s.rows(&p, &mut r, None).unwrap();
+                r
+            };
+            let fd: DVector<f64> = (at(h) - at(-h)) / (2.0 * h);
+            let col = jac.column(k);
+            assert!(
+                fd.amax() > 0.1,
+                "{}: a column that moves the tips",
+                names[k]
+            );
+            assert!(
+                (col - &fd).amax() < 1e-6 * fd.amax(),
+                "{}: analytic {:?} fd {:?}",
+                names[k],
+                col.transpose(),
+                fd.transpose()
+            );
+        }
+        // rows of the right tip (the second point of even poses)
+        let mut right = Vec::new();
+        let mut row = 0;
+        for k in 0..p.len() {
+            for point in p.measured_of(k) {
+                if p.tip(point.slot) == 1 {
+                    right.extend(row..row + 3);
+                }
+                row += 3;
+            }
+        }
+        assert!(
+            right.iter().any(|&r| jac[(r, 0)].abs() > 1e-3),
+            "torso: both tips"
+        );
+        assert!(right
+            .iter()
+            .all(|&r| jac[(r, 1)] == 0.0 && jac[(r, 2)] == 0.0));
+    }
 }

@@ -151,6 +151,13 @@ impl Model {
         let nj = self.joints.len();
         match tilt {
             Tilt::Off => return Ok(()),
+            Tilt::Bend(m) if m.len() != nj => {
+                return Err(ModelError::MomentCount {
+                    expected: nj,
+                    found: m.len(),
+                })
+            }
+            Tilt::Bend(_) => return Ok(()),
             Tilt::Moments(m) if m.len() != nj => {
                 self.require_tilt()?;
                 return Err(ModelError::MomentCount {
@@ -207,7 +214,7 @@ impl Model {
         self.tilt_checks(d, tilt)?;
         self.load_joints(d, q_deg, given);
         d.has_untilted = false;
-        d.tilted = !matches!(tilt, Tilt::Off);
+        d.tilted = !matches!(tilt, Tilt::Off | Tilt::Bend(_));
         let lateral = self.has_lateral_compliance();
         d.bent = d.tilted || lateral || bend_always;
         match tilt {
@@ -228,6 +235,8 @@ impl Model {
                 }
             }
             Tilt::Moments(m) => d.moments_kgfm.copy_from_slice(m),
+            Tilt::Bend(m) if d.bent => d.moments_kgfm.copy_from_slice(m),
+            Tilt::Bend(_) => {}
         }
         if d.bent {
             for j in 0..self.joints.len() {

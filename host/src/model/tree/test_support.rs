@@ -42,5 +42,6 @@ pub(crate) fn dh_joint(
             com_mm,
         }],
         compliance_deg_per_kgfm: 0.0,
+        lateral_compliance_deg_per_kgfm: 0.0,
     }
 }

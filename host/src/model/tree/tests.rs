@@ -16,6 +16,7 @@ fn joint(name: &str, parent: Option<usize>, before: Vec<TreeElem>) -> TreeJoint 
             com_mm: [10.0, 0.0, 50.0],
         }],
         compliance_deg_per_kgfm: 0.0,
+        lateral_compliance_deg_per_kgfm: 0.0,
     }
 }
 
@@ -56,6 +57,7 @@ fn tree() -> Tree {
             },
         ],
         params: [("base_z".to_string(), 700.0)].into_iter().collect(),
+        masses_assumed: false,
     }
 }
 

@@ -55,6 +55,7 @@ fn tree(two_arms: bool) -> Tree {
         params: [("base_rx".to_string(), 2.0), ("base_z".to_string(), 300.0)]
             .into_iter()
             .collect(),
+        masses_assumed: false,
     }
 }
 

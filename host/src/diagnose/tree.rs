@@ -1,0 +1,357 @@
+//! `diagnose` on a tree model: the geometric calibration of the whole tree is the declared fit,
+//! and the elastic effects of the tree's joints are the candidates - `compliance:j<i>` (about
+//! the axis, under the whole tree's gravity torque) and `lateral_compliance:j<i>` (across it,
+//! under the whole tree's perpendicular moments), `j<i>` the tree joint (1-based, tree order).
+//! Forward selection as on a chain, then swaps ([`select`]): every candidate refitted with
+//! everything accepted so far (the tree's one identification, compliances bounded at 0), the
+//! one that lowers the residual most accepted when the nested F-test (`p <`
+//! [`TreeDiagnoseOptions::alpha`]), the BIC and a cross-validation over folds of the calibration
+//! poses all say so; then each accepted effect is tried against every candidate left and
+//! replaced where that lowers the residual. The held-out set is only reported. Candidates whose
+//! swap for an accepted effect leaves the residual within noise are listed as its `equivalent`
+//! (an axial and a lateral compliance the poses cannot tell apart, or two joints that share an
+//! origin). The report replays the accepted effects in order, one step each.
+//!
+//! Without link masses (declared or assumed) no elastic candidate exists; the report says so.
+
+use nalgebra::Vector3;
+use serde::Serialize;
+
+use super::ordered::Ordered;
+use super::stat::{delta_bic, nested_f_test};
+use crate::calib::large_changes::LargeChange;
+use crate::calib::tree_calibrate::{calibrate_tree, tree_large_changes, tree_selection};
+use crate::calib::{CalibError, CalibrateOptions, MeasuredSet, Stats};
+use crate::model::tree_params::{compliance_joint, lateral_joint};
+use crate::model::Tree;
+
+pub mod select;
+
+use select::{replay_order, select, Candidate, Fits, Trial};
+
+/// What a tree diagnosis is asked.
+#[derive(Debug, Clone)]
+pub struct TreeDiagnoseOptions {
+    /// The calibration's options (the declared selection: `params`, `base`; the solver).
+    pub calibrate: CalibrateOptions,
+    /// One-sigma accuracy per coordinate of the instrument (mm): the floor.
+    pub instrument_mm: Option<f64>,
+    /// Significance level of the F-test.
+    pub alpha: f64,
+}
+
+impl Default for TreeDiagnoseOptions {
+    fn default() -> Self {
+        Self {
+            calibrate: CalibrateOptions::default(),
+            instrument_mm: None,
+            alpha: 1e-3,
+        }
+    }
+}
+
+/// Statistics of the calibration and held-out points of one fit.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct TreeSetStats {
+    pub calibration: Stats,
+    pub validation: Stats,
+}
+
+/// One accepted elastic effect (FORMATS.md "diagnose --json" `effects[]`).
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct TreeEffect {
+    pub id: String,
+    /// Its value in the final fit (deg per kgf.m).
+    pub parameters: Ordered<f64>,
+    /// One sigma in the final fit (null when not fitted there).
+    pub sigma: Ordered<Option<f64>>,
+    /// Its value when it was accepted.
+    pub parameters_at_entry: Ordered<f64>,
+    pub validation_mean_mm_before: f64,
+    pub validation_mean_mm_after: f64,
+    pub calibration_mean_mm_before: f64,
+    pub calibration_mean_mm_after: f64,
+    pub cv_mean_mm_before: f64,
+    pub cv_mean_mm_after: f64,
+    pub p_value: f64,
+    pub f_statistic: f64,
+    pub delta_bic: f64,
+    pub added_parameters: usize,
+    /// Candidates that explained the same residual within noise when it was accepted.
+    pub equivalent: Vec<String>,
+    pub evidence: String,
+}
+
+/// The floor the final residual is judged against.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct TreeFloor {
+    pub instrument_mm: Option<f64>,
+    pub repeatability_mm: Option<f64>,
+    /// Final calibration residual, one sigma per coordinate (mm).
+    pub residual_mm: f64,
+    pub used: &'static str,
+    pub final_over_floor: f64,
+}
+
+/// What remains unexplained.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct TreeUnexplained {
+    pub structured: bool,
+    pub note: String,
+    pub depends_on: Vec<String>,
+    pub explainable_share: f64,
+}
+
+/// The tree diagnosis (FORMATS.md "diagnose --json", with `tree` and the candidates tried).
+#[derive(Debug, Clone, Serialize)]
+pub struct TreeDiagnosis {
+    /// The tree with the accepted effects fitted (for `--out`).
+    #[serde(skip)]
+    pub model: Tree,
+    pub declared: TreeSetStats,
+    pub effects: Vec<TreeEffect>,
+    #[serde(rename = "final")]
+    pub final_: TreeSetStats,
+    pub unexplained: TreeUnexplained,
+    pub floor: TreeFloor,
+    pub aliased: Vec<serde_json::Value>,
+    /// The tree: its name and tips.
+    pub tree: serde_json::Value,
+    /// The elastic candidates offered (empty without link masses), and why not when empty.
+    pub candidates: Vec<String>,
+    pub candidates_note: String,
+    /// Calibration poses left out as gross errors by the declared fit (0-based indices).
+    pub outliers: Vec<usize>,
+    /// Final residual statistics are judged `floor` or `missing_effect`.
+    pub verdict: String,
+    /// Whether the final fit's solver met its stopping rule.
+    pub converged: bool,
+    /// Parameters the final fit moved beyond a real arm's errors (a chain's rule on every tip's
+    /// chain): the model, the units or the robot the poses came from are to be checked.
+    pub large_changes: Vec<LargeChange>,
+}
+
+/// The elastic candidates of `tree`: the axial then the lateral compliance of every revolute
+/// joint (none without link masses).
+fn candidates(tree: &Tree) -> Vec<Candidate> {
+    if !tree.has_masses() {
+        return Vec::new();
+    }
+    let axial = tree.compliance_names().into_iter().filter_map(|p| {
+        let j = compliance_joint(&p)?;
+        Some(Candidate {
+            id: format!("compliance:j{}", j + 1),
+            param: p,
+            joint: j,
+        })
+    });
+    let lateral = tree.lateral_names().into_iter().filter_map(|p| {
+        let j = lateral_joint(&p)?;
+        Some(Candidate {
+            id: format!("lateral_compliance:j{}", j + 1),
+            param: p,
+            joint: j,
+        })
+    });
+    axial.chain(lateral).collect()
+}
+
+/// Mean error norm (mm) of a set of error vectors.
+fn mean_mm(e: &[Vector3<f64>]) -> f64 {
+    Stats::from_errors(e).mean_mm
+}
+
+/// RMS per coordinate (mm).
+fn rms_coord_mm(e: &[Vector3<f64>]) -> f64 {
+    let ss: f64 = e.iter().map(|v| v.norm_squared()).sum();
+    (ss / (3 * e.len()).max(1) as f64).sqrt()
+}
+
+/// The values (and sigmas) of the tree parameters `params` in a trial's fit.
+fn values(t: &Trial, params: &[String]) -> (Ordered<f64>, Ordered<Option<f64>>) {
+    let fit = &t.outcome.fit;
+    let v = params
+        .iter()
+        .map(|p| (p.clone(), fit.model.param(p).unwrap_or(0.0)))
+        .collect();
+    let s = params
+        .iter()
+        .map(|p| {
+            let s = fit
+                .fitted
+                .iter()
+                .position(|u| u == p)
+                .map(|i| fit.sigma[i])
+                .filter(|s| s.is_finite());
+            (p.clone(), s)
+        })
+        .collect();
+    (v, s)
+}
+
+/// Diagnoses `nominal` on `cal`, held out `val` (see the module doc).
+pub fn diagnose_tree(
+    nominal: &Tree,
+    cal: &MeasuredSet,
+    val: &MeasuredSet,
+    opts: &TreeDiagnoseOptions,
+) -> Result<TreeDiagnosis, CalibError> {
+    let declared_sel = tree_selection(nominal, &opts.calibrate, false)?;
+    // the declared fit, with the gross-error rule of a tree's calibration
+    let first = calibrate_tree(nominal, cal, Some(val), &opts.calibrate, false)?;
+    let outliers: Vec<usize> = first.report.outliers.iter().map(|o| o.pose.index).collect();
+    let kept: Vec<usize> = (0..cal.len()).filter(|k| !outliers.contains(k)).collect();
+    let cal = cal.subset(&kept);
+    let stats = |t: &Trial| TreeSetStats {
+        calibration: Stats::from_errors(&t.outcome.calibration_errors[2]),
+        validation: Stats::from_errors(&t.outcome.validation_errors[2]),
+    };
+    let fits = Fits::new(nominal, &cal, &opts.calibrate, &declared_sel);
+    let declared_fit = fits.fit(nominal, None, Some(val), &[])?;
+    let declared = stats(&declared_fit);
+    let all = candidates(nominal);
+    let candidates_note = if all.is_empty() {
+        "no elastic candidate: the tree model has no link masses, so no gravity moments \
+         (declare [[mass]] rows, or give --assume-masses / --robot-mass-kg)"
+            .to_string()
+    } else {
+        String::new()
+    };
+    let start = declared_fit.outcome.fit.model.clone();
+    let chosen = select(&fits, &all, fits.fit(&start, None, None, &[])?, opts.alpha)?;
+    // the report: one step per accepted effect, in order
+    let mut current = declared_fit;
+    let mut cv_current = fits.cv_mean_mm(&[])?;
+    let mut effects: Vec<TreeEffect> = Vec::new();
+    let mut extra: Vec<String> = Vec::new();
+    let order = replay_order(&fits, &chosen.accepted, &current)?;
+    for c in &order {
+        let equivalent = chosen
+            .accepted
+            .iter()
+            .position(|a| a == c)
+            .and_then(|i| chosen.equivalent.get(i))
+            .cloned()
+            .unwrap_or_default();
+        extra.push(c.param.clone());
+        let t = fits.fit(&current.outcome.fit.model, None, Some(val), &extra)?;
+        let added = t.n_fitted.saturating_sub(current.n_fitted);
+        let dof = t.m.saturating_sub(t.n_fitted);
+        let (f, p) = nested_f_test(current.rss_mm2, t.rss_mm2, added, dof);
+        let dbic = delta_bic(t.m, current.rss_mm2, t.rss_mm2, added);
+        let cv_after = fits.cv_mean_mm(&extra)?;
+        let swapped: Vec<&str> = chosen
+            .swaps
+            .iter()
+            .filter(|(_, b)| *b == c.id)
+            .map(|(a, _)| a.as_str())
+            .collect();
+        let evidence =
+            format!(
+            "F = {f:.1} (p = {p:.1e}), BIC {dbic:+.1}, cross-validated mean {cv_current:.4} -> \
+             {cv_after:.4} mm{}{}",
+            if swapped.is_empty() {
+                String::new()
+            } else {
+                format!("; in place of {} (a lower residual with the others)", swapped.join(", "))
+            },
+            if equivalent.is_empty() {
+                String::new()
+            } else {
+                format!("; equivalent on these poses: {}", equivalent.join(", "))
+            }
+        );
+        let (at_entry, _) = values(&t, std::slice::from_ref(&c.param));
+        effects.push(TreeEffect {
+            id: c.id.clone(),
+            parameters: at_entry.clone(),
+            sigma: Ordered::default(),
+            parameters_at_entry: at_entry,
+            validation_mean_mm_before: mean_mm(&current.outcome.validation_errors[2]),
+            validation_mean_mm_after: mean_mm(&t.outcome.validation_errors[2]),
+            calibration_mean_mm_before: mean_mm(&current.outcome.calibration_errors[2]),
+            calibration_mean_mm_after: mean_mm(&t.outcome.calibration_errors[2]),
+            cv_mean_mm_before: cv_current,
+            cv_mean_mm_after: cv_after,
+            p_value: p,
+            f_statistic: f,
+            delta_bic: dbic,
+            added_parameters: added,
+            equivalent: equivalent.clone(),
+            evidence,
+        });
+        current = t;
+        cv_current = cv_after;
+    }
+    let accepted = order;
+    // every effect's values in the final fit
+    for (e, c) in effects.iter_mut().zip(&accepted) {
+        let (v, s) = values(&current, std::slice::from_ref(&c.param));
+        e.parameters = v;
+        e.sigma = s;
+    }
+    let final_ = stats(&current);
+    let residual_mm = rms_coord_mm(&current.outcome.calibration_errors[2]);
+    let (used, floor_mm) = match opts.instrument_mm {
+        Some(s) => ("instrument", s),
+        None => ("residual", residual_mm),
+    };
+    let final_over_floor = residual_mm / floor_mm;
+    let dof = current.m.saturating_sub(current.n_fitted).max(1) as f64;
+    // chi-square of the residual against the instrument: beyond 3.1 sigmas of its spread
+    // (p ~ 1e-3) the residual is above the floor
+    let chi = current.rss_mm2 / (floor_mm * floor_mm);
+    let above = used == "instrument" && (chi - dof) / (2.0 * dof).sqrt() > 3.1;
+    let verdict = if used == "residual" {
+        "no_floor"
+    } else if above {
+        "missing_effect"
+    } else {
+        "floor"
+    };
+    let note = match verdict {
+        "floor" => format!(
+            "the final residual ({residual_mm:.4} mm per coordinate) is at the instrument's \
+             {floor_mm} mm"
+        ),
+        "missing_effect" => format!(
+            "the final residual ({residual_mm:.4} mm per coordinate) is {final_over_floor:.2} x \
+             the instrument's {floor_mm} mm: the tree model lacks something its elastic \
+             candidates do not describe (no probe of the residual on a tree yet)"
+        ),
+        _ => "no instrument figure: the final residual is its own floor, so a missing effect \
+              cannot be told from noise (give --instrument-mm)"
+            .to_string(),
+    };
+    Ok(TreeDiagnosis {
+        model: current.outcome.fit.model.clone(),
+        declared,
+        effects,
+        final_,
+        unexplained: TreeUnexplained {
+            structured: above,
+            note,
+            depends_on: Vec::new(),
+            explainable_share: 0.0,
+        },
+        floor: TreeFloor {
+            instrument_mm: opts.instrument_mm,
+            repeatability_mm: None,
+            residual_mm,
+            used,
+            final_over_floor,
+        },
+        aliased: Vec::new(),
+        tree: serde_json::json!({
+            "name": nominal.name,
+            "tips": nominal.tips.iter().map(|t| t.name.clone()).collect::<Vec<_>>(),
+            "joints": nominal.n_joints(),
+        }),
+        candidates: all.iter().map(|c| c.id.clone()).collect(),
+        candidates_note,
+        outliers,
+        verdict: verdict.to_string(),
+        converged: current.outcome.fit.converged,
+        large_changes: tree_large_changes(nominal, &current.outcome.fit.model)?,
+    })
+}
