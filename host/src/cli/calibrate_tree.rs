@@ -138,9 +138,9 @@ pub fn run(args: &Args, tree: Tree) -> Result<(), CliError> {
         errln!("fitted tree -> {}", out.display());
     }
     let mut s = assumed_masses_line(&tree);
-    let _ = write!(
+    let _ = writeln!(
         s,
-        "tree `{}`: {} joints, {} tips; {} poses, {} coordinates; {} unknowns\n",
+        "tree `{}`: {} joints, {} tips; {} poses, {} coordinates; {} unknowns",
         tree.name,
         tree.n_joints(),
         tree.tips.len(),
