@@ -22,6 +22,7 @@ use super::stat::{delta_bic, nested_f_test};
 use crate::calib::large_changes::LargeChange;
 use crate::calib::tree_calibrate::{calibrate_tree, tree_large_changes, tree_selection};
 use crate::calib::{CalibError, CalibrateOptions, MeasuredSet, Stats};
+use crate::model::effect::EffectId;
 use crate::model::tree_params::{compliance_joint, lateral_joint};
 use crate::model::Tree;
 
@@ -140,7 +141,7 @@ fn candidates(tree: &Tree) -> Vec<Candidate> {
     let axial = tree.compliance_names().into_iter().filter_map(|p| {
         let j = compliance_joint(&p)?;
         Some(Candidate {
-            id: format!("compliance:j{}", j + 1),
+            id: EffectId::Compliance(j).to_string(),
             param: p,
             joint: j,
         })
@@ -148,7 +149,7 @@ fn candidates(tree: &Tree) -> Vec<Candidate> {
     let lateral = tree.lateral_names().into_iter().filter_map(|p| {
         let j = lateral_joint(&p)?;
         Some(Candidate {
-            id: format!("lateral_compliance:j{}", j + 1),
+            id: EffectId::LateralCompliance(j).to_string(),
             param: p,
             joint: j,
         })
