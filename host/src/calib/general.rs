@@ -318,18 +318,23 @@ mod tests {
         <origin xyz="0.6 0 0"/></joint>
     </robot>"#;
 
-    /// Exact data of a compliant arm: the torques are the URDF's (|tau_1| = 2*0.4 + 1*1.1 kgf.m
-    /// at q = 0), the compliances are recovered, the residual vanishes, and the Jacobian
-    /// matches finite differences.
-    #[test]
-    fn compliance_is_recovered_with_the_gravity_torques() {
+    /// The two-link arm of [`XML`], with the URDF's masses.
+    fn xml_model() -> Model {
         let urdf = Urdf::parse(XML, "m.urdf").unwrap();
         let opts = ImportOptions {
             base_link: None,
             tip_link: "tip",
             tool_mm: [0.0; 3],
         };
-        let model = import_chain_with_masses(&urdf, &opts).unwrap().model;
+        import_chain_with_masses(&urdf, &opts).unwrap().model
+    }
+
+    /// Exact data of a compliant arm: the torques are the URDF's (|tau_1| = 2*0.4 + 1*1.1 kgf.m
+    /// at q = 0), the compliances are recovered, the residual vanishes, and the Jacobian
+    /// matches finite differences.
+    #[test]
+    fn compliance_is_recovered_with_the_gravity_torques() {
+        let model = xml_model();
         let g = GravityModel::for_model(&model).unwrap();
         let t0 = g.axis_torques_kgfm(&model, &[0.0, 0.0]).unwrap();
         assert!((t0[0].abs() - 1.9).abs() < 1e-12, "{t0:?}");
@@ -425,13 +430,7 @@ mod tests {
     /// exact data together with a length.
     #[test]
     fn hysteresis_in_the_general_identification() {
-        let urdf = Urdf::parse(XML, "m.urdf").unwrap();
-        let opts = ImportOptions {
-            base_link: None,
-            tip_link: "tip",
-            tool_mm: [0.0; 3],
-        };
-        let model = import_chain_with_masses(&urdf, &opts).unwrap().model;
+        let model = xml_model();
         let length = Unknown::Param(model.param_index("j2_x").unwrap());
         let sel = [Unknown::Hysteresis(0), Unknown::Hysteresis(1), length];
         let mut truth = ExtModel::with_points(model.clone(), 1, false).unwrap();

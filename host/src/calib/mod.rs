@@ -70,6 +70,7 @@ pub mod state;
 pub mod stats;
 pub mod tree_calibrate;
 pub mod tree_fit;
+pub mod tree_held_out;
 pub mod unknown;
 
 pub use accumulator::position_errors;

@@ -80,13 +80,59 @@ pub struct OutlierReport {
     pub note: String,
 }
 
-/// Median of the chi distribution with `dims` degrees of freedom (1, 2 or 3 coordinates).
+/// Median of the chi distribution with `dims` degrees of freedom (a pose's measured
+/// coordinates: 3 per point, 6 for a tree's two tips): the values of 1-3 coordinates
+/// tabulated, beyond the root of the chi-square median found by bisection on its distribution
+/// function ([`chi2_cdf`]).
 fn chi_median(dims: usize) -> f64 {
     match dims {
         0 | 1 => 0.674_489_75,
         2 => 1.177_410_02,
-        _ => 1.538_172_7,
+        3 => 1.538_172_7,
+        k => {
+            let k = k as f64;
+            let (mut lo, mut hi) = (0.0, 2.0 * k + 20.0);
+            for _ in 0..100 {
+                let mid = 0.5 * (lo + hi);
+                if chi2_cdf(mid, k) < 0.5 {
+                    lo = mid;
+                } else {
+                    hi = mid;
+                }
+            }
+            (0.5 * (lo + hi)).sqrt()
+        }
     }
+}
+
+/// `P(X <= x)` of a chi-square variable with `k` (a whole number) degrees of freedom: the
+/// regularised lower incomplete gamma `P(k/2, x/2)` by its power series, `Gamma(k/2)` by
+/// recursion from `Gamma(1) = 1` or `Gamma(1/2) = sqrt(pi)`.
+fn chi2_cdf(x: f64, k: f64) -> f64 {
+    if x <= 0.0 {
+        return 0.0;
+    }
+    let (a, y) = (0.5 * k, 0.5 * x);
+    let mut gamma_a = if k.round() as i64 % 2 == 0 {
+        1.0
+    } else {
+        std::f64::consts::PI.sqrt()
+    };
+    let mut z = if k.round() as i64 % 2 == 0 { 1.0 } else { 0.5 };
+    while z < a - 0.25 {
+        gamma_a *= z;
+        z += 1.0;
+    }
+    // P(a, y) = y^a e^-y / Gamma(a + 1) * sum_n y^n / ((a + 1) ... (a + n))
+    let (mut term, mut sum) = (1.0, 1.0);
+    for n in 1..1000 {
+        term *= y / (a + n as f64);
+        sum += term;
+        if term < 1e-17 * sum {
+            break;
+        }
+    }
+    (a * y.ln() - y).exp() / (a * gamma_a) * sum
 }
 
 /// Robust per-coordinate scale of per-pose error norms (`dims` coordinates each).
@@ -335,7 +381,18 @@ pub fn flag_held_out(
     prediction_sd_mm: &[f64],
     sigma_mm: f64,
 ) -> (Vec<usize>, Vec<f64>) {
-    let s = sigma_mm.max(robust_sigma_mm(errors_mm, 3));
+    flag_held_out_dims(errors_mm, prediction_sd_mm, sigma_mm, 3)
+}
+
+/// [`flag_held_out`] on poses that measure `dims` coordinates each (a tree's pose: 3 per tip),
+/// the robust scale of the held-out errors read with as many degrees of freedom.
+pub fn flag_held_out_dims(
+    errors_mm: &[f64],
+    prediction_sd_mm: &[f64],
+    sigma_mm: f64,
+    dims: usize,
+) -> (Vec<usize>, Vec<f64>) {
+    let s = sigma_mm.max(robust_sigma_mm(errors_mm, dims));
     let scale: Vec<f64> = (0..errors_mm.len())
         .map(|k| {
             let p = prediction_sd_mm.get(k).copied().unwrap_or(0.0);
@@ -436,6 +493,27 @@ mod tests {
         let mut g = e.clone();
         g[10] = 0.5;
         assert_eq!(beyond_gap(&g, 0.05), vec![10]);
+    }
+
+    /// The chi medians: the 1-3 coordinate values as before, a tree's 6, and the
+    /// approximation continuous with the table.
+    #[test]
+    fn chi_medians_of_several_points() {
+        assert!((chi_median(1) - 0.674_489_75).abs() < 1e-7);
+        assert!((chi_median(3) - 1.538_172_7).abs() < 1e-6);
+        // chi-square medians (bisection of the regularised gamma, 1e-10 elsewhere)
+        for (k, m) in [
+            (3, 2.365_973_884_4),
+            (4, 3.356_693_980_0),
+            (6, 5.348_120_627_4),
+            (9, 8.342_832_692_3),
+            (10, 9.341_817_765_6),
+        ] {
+            if k > 3 {
+                assert!((chi_median(k).powi(2) - m).abs() < 1e-8, "{k}");
+            }
+            assert!((chi2_cdf(m, k as f64) - 0.5).abs() < 1e-9, "{k}");
+        }
     }
 
     #[test]

@@ -16,6 +16,7 @@ use super::outliers;
 use super::registered::{registered_summary, registration_options};
 use super::report::{unknowns_report, CalibrateReport, StandardSummary};
 use super::tree_fit::{check_poses, fit_tree, tree_errors};
+use super::tree_held_out::{flag_tree_held_out, pose_norms_mm, TreeHeldOut};
 use crate::model::tree_gravity::tree_moments_kgfm;
 use crate::model::tree_params::{compliance_joint, lateral_joint};
 use crate::model::{Model, ParamKind, Tree};
@@ -112,8 +113,10 @@ pub struct TreeOutcome {
     /// poses: before, standard, chosen (the standard fit is the chosen one: a tree has no
     /// tilting).
     pub calibration_errors: [Vec<Vector3<f64>>; 3],
-    /// Same for the validation poses (empty without them).
+    /// Same for the validation poses not listed as gross errors (empty without them).
     pub validation_errors: [Vec<Vector3<f64>>; 3],
+    /// The held-out poses listed as gross errors (indices into the validation set, ascending).
+    pub validation_flagged: Vec<usize>,
 }
 
 /// Calibrates `nominal` on `cal` (and evaluates on `val`) with the options of a chain's
@@ -160,9 +163,22 @@ pub fn calibrate_tree(
         Ok([tree_errors(nominal, poses)?, after.clone(), after])
     };
     let calibration_errors = errors(cal)?;
-    let validation_errors = match val {
+    // held-out gross errors, by a chain's rule, when the calibration's were looked for
+    let held_out = match (&trimmed, val) {
+        (Some(t), Some(v)) => flag_tree_held_out(&fit, cal, v, t.sigma_mm)?,
+        _ => TreeHeldOut::default(),
+    };
+    let validation_all_errors = match val {
         Some(v) => errors(v)?,
         None => [Vec::new(), Vec::new(), Vec::new()],
+    };
+    // the held-out statistics leave the listed poses out; `validation_all` keeps them
+    let validation_errors = match val {
+        Some(v) if !held_out.flagged.is_empty() => {
+            let kept = outliers::kept(v.len(), &held_out.flagged);
+            errors(&v.subset(&kept))?
+        }
+        _ => validation_all_errors.clone(),
     };
     let entry = |t: &Tree, n: &String| t.param(n).map(|v| (n.clone(), v));
     let mut report = unknowns_report(
@@ -181,13 +197,18 @@ pub fn calibrate_tree(
         report.outliers = outliers::reports("cal", &flagged, &all, &all, t.threshold_mm);
         report.outlier_note = t.note.clone();
     }
-    // no pose is left out of a tree's fit: every held-out pose is in `validation`
-    report.validation_all = report.validation;
+    report.validation_all = val.map(|_| super::report::BeforeAfter {
+        before: super::stats::Stats::from_errors(&validation_all_errors[0]),
+        after: super::stats::Stats::from_errors(&validation_all_errors[2]),
+    });
+    report.outliers.extend(held_out.reports);
+    report.extrapolated = held_out.extrapolated;
     Ok(TreeOutcome {
         fit,
         report,
         calibration_errors,
         validation_errors,
+        validation_flagged: held_out.flagged,
     })
 }
 
@@ -302,22 +323,4 @@ pub fn tree_registration_only(
     Ok(registered_summary(
         &calibrate_tree(nominal, cal, val, &opts, false)?.report,
     ))
-}
-
-/// The error norm (mm) of every pose on `tree`: the root of the sum of squares over its measured
-/// tips.
-fn pose_norms_mm(tree: &Tree, set: &MeasuredSet) -> Result<Vec<f64>, CalibError> {
-    let errors = tree_errors(tree, set)?;
-    let mut errors = errors.iter();
-    Ok((0..set.len())
-        .map(|k| {
-            let n = set.measured_of(k).count();
-            errors
-                .by_ref()
-                .take(n)
-                .map(|v| v.norm_squared())
-                .sum::<f64>()
-                .sqrt()
-        })
-        .collect())
 }

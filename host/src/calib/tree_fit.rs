@@ -214,7 +214,7 @@ impl TreeUnknowns {
     }
 
     /// The stacked Jacobian of the rows of `set` wrt the unknowns.
-    fn jacobian(&self, set: &MeasuredSet) -> Result<DMatrix<f64>, ModelError> {
+    pub(crate) fn jacobian(&self, set: &MeasuredSet) -> Result<DMatrix<f64>, ModelError> {
         let m = n_rows(set);
         let mut jac = DMatrix::zeros(m, self.names.len());
         self.rows(set, &mut DVector::zeros(m), Some(&mut jac))?;

@@ -144,28 +144,12 @@ pub fn run(args: Args) -> Result<(), CliError> {
     let mut opts = DiagnoseOptions::default();
     opts.decide.seed = args.seed;
     opts.keep_outliers = args.keep_outliers;
-    if let Some(s) = args.instrument_mm {
-        if !(s.is_finite() && s > 0.0) {
-            return Err(CliError::bad_input(format!(
-                "--instrument-mm {s}: must be a finite number > 0"
-            )));
-        }
-        opts.instrument_mm = Some(s);
-    }
-    // Progress on stderr while the candidates are fitted (drawn only when stderr is a terminal).
-    let spinner =
-        indicatif::ProgressBar::with_draw_target(None, indicatif::ProgressDrawTarget::stderr());
-    if let Ok(style) =
-        indicatif::ProgressStyle::with_template("{spinner} diagnose: {msg} ({elapsed})")
-    {
-        spinner.set_style(style);
-    }
-    spinner.set_message(format!(
+    opts.instrument_mm = instrument_mm(&args)?;
+    let spinner = spinner(format!(
         "declared fit, candidate effects, cross-validation on {} + {} measurements",
         cal.len(),
         val.len()
     ));
-    spinner.enable_steady_tick(std::time::Duration::from_millis(200));
     let diag = diagnose(&model, &cal, &val, &opts);
     spinner.finish_and_clear();
     let mut diag = diag?;
@@ -300,4 +284,28 @@ fn is_fused(path: &Path) -> bool {
 fn read_samples(path: &Path, model: &rigctl::model::Model) -> Result<MeasuredSet, CliError> {
     let fused = rigctl::fusion::read_fused(path, model.n_joints())?;
     Ok(MeasuredSet::from_fused(&fused)?.with_inertial_moments(model)?)
+}
+
+/// `--instrument-mm`, checked: a finite figure above zero, or none.
+pub(super) fn instrument_mm(args: &Args) -> Result<Option<f64>, CliError> {
+    match args.instrument_mm {
+        Some(s) if !(s.is_finite() && s > 0.0) => Err(CliError::bad_input(format!(
+            "--instrument-mm {s}: must be a finite number > 0"
+        ))),
+        s => Ok(s),
+    }
+}
+
+/// Progress on stderr while the candidates are fitted (drawn only when stderr is a terminal).
+pub(super) fn spinner(message: String) -> indicatif::ProgressBar {
+    let spinner =
+        indicatif::ProgressBar::with_draw_target(None, indicatif::ProgressDrawTarget::stderr());
+    if let Ok(style) =
+        indicatif::ProgressStyle::with_template("{spinner} diagnose: {msg} ({elapsed})")
+    {
+        spinner.set_style(style);
+    }
+    spinner.set_message(message);
+    spinner.enable_steady_tick(std::time::Duration::from_millis(200));
+    spinner
 }

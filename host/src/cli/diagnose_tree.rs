@@ -43,38 +43,32 @@ pub fn run(args: &Args, tree: Tree) -> Result<(), CliError> {
         });
     }
     let val = val.ok_or_else(|| CliError::bad_input("--validate is required"))?;
-    let mut opts = TreeDiagnoseOptions {
+    let opts = TreeDiagnoseOptions {
         calibrate: CalibrateOptions {
             keep_outliers: args.keep_outliers,
             ..Default::default()
         },
+        instrument_mm: super::diagnose::instrument_mm(args)?,
         ..Default::default()
     };
-    if let Some(s) = args.instrument_mm {
-        if !(s.is_finite() && s > 0.0) {
-            return Err(CliError::bad_input(format!(
-                "--instrument-mm {s}: must be a finite number > 0"
-            )));
-        }
-        opts.instrument_mm = Some(s);
-    }
-    let spinner =
-        indicatif::ProgressBar::with_draw_target(None, indicatif::ProgressDrawTarget::stderr());
-    if let Ok(style) =
-        indicatif::ProgressStyle::with_template("{spinner} diagnose: {msg} ({elapsed})")
-    {
-        spinner.set_style(style);
-    }
-    spinner.set_message(format!(
+    let spinner = super::diagnose::spinner(format!(
         "tree `{}`: declared fit, elastic candidates, cross-validation on {} + {} poses",
         tree.name,
         cal.len(),
         val.len()
     ));
-    spinner.enable_steady_tick(std::time::Duration::from_millis(200));
     let diag = diagnose_tree(&tree, &cal, &val, &opts);
     spinner.finish_and_clear();
-    let diag = diag?;
+    let mut diag = diag?;
+    // the gross errors named by the line of their pose, as on a chain
+    for r in &mut diag.outliers {
+        let set = if r.pose.file == "cal" { &cal } else { &val };
+        r.pose.line = set
+            .lines
+            .as_deref()
+            .and_then(|l| l.get(r.pose.index))
+            .copied();
+    }
     if let Some(path) = &args.json {
         let mut doc = serde_json::to_value(&diag)
             .map_err(|e| CliError::failure(format!("diagnose --json: {e}")))?;
@@ -121,13 +115,16 @@ fn text(d: &TreeDiagnosis) -> String {
         } else {
             "axial and lateral compliance of every revolute joint"
         },
-        if d.outliers.is_empty() {
-            String::new()
-        } else {
-            format!(
-                "; {} calibration poses left out as gross errors",
-                d.outliers.len()
-            )
+        {
+            let listed = |file: &str| d.outliers.iter().filter(|o| o.pose.file == file).count();
+            match (listed("cal"), listed("val")) {
+                (0, 0) => String::new(),
+                (c, v) => format!(
+                    "; gross errors listed: {c} calibration poses left out, {v} held-out poses \
+                     out of the held-out figures (all held out: mean {:.4} mm)",
+                    d.final_.validation_all.mean_mm
+                ),
+            }
         }
     );
     let _ = writeln!(

@@ -17,16 +17,21 @@
 use nalgebra::Vector3;
 use serde::Serialize;
 
+use super::floor::{self, FinalResidual, FloorReport};
 use super::ordered::Ordered;
+use super::report::{EffectReport, SetStats, Unexplained};
 use super::stat::{delta_bic, nested_f_test};
 use crate::calib::large_changes::LargeChange;
+use crate::calib::outliers::OutlierReport;
 use crate::calib::tree_calibrate::{calibrate_tree, tree_large_changes, tree_selection};
+use crate::calib::tree_fit::tree_errors;
 use crate::calib::{CalibError, CalibrateOptions, MeasuredSet, Stats};
 use crate::model::effect::EffectId;
 use crate::model::tree_params::{compliance_joint, lateral_joint};
 use crate::model::Tree;
 
 pub mod select;
+pub mod where_to_look;
 
 use select::{replay_order, select, Candidate, Fits, Trial};
 
@@ -51,78 +56,28 @@ impl Default for TreeDiagnoseOptions {
     }
 }
 
-/// Statistics of the calibration and held-out points of one fit.
-#[derive(Debug, Clone, PartialEq, Serialize)]
-pub struct TreeSetStats {
-    pub calibration: Stats,
-    pub validation: Stats,
-}
-
-/// One accepted elastic effect (FORMATS.md "diagnose --json" `effects[]`).
-#[derive(Debug, Clone, PartialEq, Serialize)]
-pub struct TreeEffect {
-    pub id: String,
-    /// Its value in the final fit (deg per kgf.m).
-    pub parameters: Ordered<f64>,
-    /// One sigma in the final fit (null when not fitted there).
-    pub sigma: Ordered<Option<f64>>,
-    /// Its value when it was accepted.
-    pub parameters_at_entry: Ordered<f64>,
-    pub validation_mean_mm_before: f64,
-    pub validation_mean_mm_after: f64,
-    pub calibration_mean_mm_before: f64,
-    pub calibration_mean_mm_after: f64,
-    pub cv_mean_mm_before: f64,
-    pub cv_mean_mm_after: f64,
-    pub p_value: f64,
-    pub f_statistic: f64,
-    pub delta_bic: f64,
-    pub added_parameters: usize,
-    /// Candidates that explained the same residual within noise when it was accepted.
-    pub equivalent: Vec<String>,
-    pub evidence: String,
-}
-
-/// The floor the final residual is judged against.
-#[derive(Debug, Clone, PartialEq, Serialize)]
-pub struct TreeFloor {
-    pub instrument_mm: Option<f64>,
-    pub repeatability_mm: Option<f64>,
-    /// Final calibration residual, one sigma per coordinate (mm).
-    pub residual_mm: f64,
-    pub used: &'static str,
-    pub final_over_floor: f64,
-}
-
-/// What remains unexplained.
-#[derive(Debug, Clone, PartialEq, Serialize)]
-pub struct TreeUnexplained {
-    pub structured: bool,
-    pub note: String,
-    pub depends_on: Vec<String>,
-    pub explainable_share: f64,
-}
-
 /// The tree diagnosis (FORMATS.md "diagnose --json", with `tree` and the candidates tried).
 #[derive(Debug, Clone, Serialize)]
 pub struct TreeDiagnosis {
     /// The tree with the accepted effects fitted (for `--out`).
     #[serde(skip)]
     pub model: Tree,
-    pub declared: TreeSetStats,
-    pub effects: Vec<TreeEffect>,
+    pub declared: SetStats,
+    pub effects: Vec<EffectReport>,
     #[serde(rename = "final")]
-    pub final_: TreeSetStats,
-    pub unexplained: TreeUnexplained,
-    pub floor: TreeFloor,
+    pub final_: SetStats,
+    pub unexplained: Unexplained,
+    pub floor: FloorReport,
     pub aliased: Vec<serde_json::Value>,
     /// The tree: its name and tips.
     pub tree: serde_json::Value,
     /// The elastic candidates offered (empty without link masses), and why not when empty.
     pub candidates: Vec<String>,
     pub candidates_note: String,
-    /// Calibration poses left out as gross errors by the declared fit (0-based indices).
-    pub outliers: Vec<usize>,
+    /// Poses listed as gross errors by the declared fit (FORMATS.md "Gross errors": calibration
+    /// poses left out of every fit, held-out poses out of the held-out statistics but in
+    /// `validation_all`).
+    pub outliers: Vec<OutlierReport>,
     /// Final residual statistics are judged `floor` or `missing_effect`.
     pub verdict: String,
     /// Whether the final fit's solver met its stopping rule.
@@ -162,10 +117,19 @@ fn mean_mm(e: &[Vector3<f64>]) -> f64 {
     Stats::from_errors(e).mean_mm
 }
 
-/// RMS per coordinate (mm).
-fn rms_coord_mm(e: &[Vector3<f64>]) -> f64 {
-    let ss: f64 = e.iter().map(|v| v.norm_squared()).sum();
-    (ss / (3 * e.len()).max(1) as f64).sqrt()
+/// What a candidate's effect follows: the moment it acts under.
+fn regressor(c: &Candidate) -> String {
+    if lateral_joint(&c.param).is_some() {
+        format!(
+            "perpendicular gravity moment at tree joint {} (whole tree)",
+            c.joint + 1
+        )
+    } else {
+        format!(
+            "gravity torque about tree joint {} (whole tree)",
+            c.joint + 1
+        )
+    }
 }
 
 /// The values (and sigmas) of the tree parameters `params` in a trial's fit.
@@ -200,16 +164,35 @@ pub fn diagnose_tree(
     let declared_sel = tree_selection(nominal, &opts.calibrate, false)?;
     // the declared fit, with the gross-error rule of a tree's calibration
     let first = calibrate_tree(nominal, cal, Some(val), &opts.calibrate, false)?;
-    let outliers: Vec<usize> = first.report.outliers.iter().map(|o| o.pose.index).collect();
-    let kept: Vec<usize> = (0..cal.len()).filter(|k| !outliers.contains(k)).collect();
+    let outliers = first.report.outliers.clone();
+    let cal_flagged: Vec<usize> = outliers
+        .iter()
+        .filter(|o| o.pose.file == "cal")
+        .map(|o| o.pose.index)
+        .collect();
+    let kept: Vec<usize> = (0..cal.len())
+        .filter(|k| !cal_flagged.contains(k))
+        .collect();
     let cal = cal.subset(&kept);
-    let stats = |t: &Trial| TreeSetStats {
-        calibration: Stats::from_errors(&t.outcome.calibration_errors[2]),
-        validation: Stats::from_errors(&t.outcome.validation_errors[2]),
+    // the held-out poses listed as gross errors by the declared fit are left out of every
+    // held-out statistic after it, and kept in `validation_all`
+    let val_all = val;
+    let val = &val.subset(&crate::calib::outliers::kept(
+        val.len(),
+        &first.validation_flagged,
+    ));
+    let stats = |t: &Trial| -> Result<SetStats, CalibError> {
+        Ok(SetStats {
+            calibration: Stats::from_errors(&t.outcome.calibration_errors[2]),
+            validation: Stats::from_errors(&t.outcome.validation_errors[2]),
+            validation_all: Stats::from_errors(&tree_errors(&t.outcome.fit.model, val_all)?),
+        })
     };
     let fits = Fits::new(nominal, &cal, &opts.calibrate, &declared_sel);
-    let declared_fit = fits.fit(nominal, None, Some(val), &[])?;
-    let declared = stats(&declared_fit);
+    // the declared fit is the calibration's own (refitted on the kept poses after the gross
+    // errors, as every trial is): the selection starts from it
+    let declared_fit = Trial::from(first);
+    let declared = stats(&declared_fit)?;
     let all = candidates(nominal);
     let candidates_note = if all.is_empty() {
         "no elastic candidate: the tree model has no link masses, so no gravity moments \
@@ -218,12 +201,11 @@ pub fn diagnose_tree(
     } else {
         String::new()
     };
-    let start = declared_fit.outcome.fit.model.clone();
-    let chosen = select(&fits, &all, fits.fit(&start, None, None, &[])?, opts.alpha)?;
+    let chosen = select(&fits, &all, declared_fit.clone(), opts.alpha)?;
     // the report: one step per accepted effect, in order
     let mut current = declared_fit;
     let mut cv_current = fits.cv_mean_mm(&[])?;
-    let mut effects: Vec<TreeEffect> = Vec::new();
+    let mut effects: Vec<EffectReport> = Vec::new();
     let mut extra: Vec<String> = Vec::new();
     let order = replay_order(&fits, &chosen.accepted, &current)?;
     for c in &order {
@@ -262,14 +244,17 @@ pub fn diagnose_tree(
                 format!("; equivalent on these poses: {}", equivalent.join(", "))
             }
         );
-        let (at_entry, _) = values(&t, std::slice::from_ref(&c.param));
-        effects.push(TreeEffect {
+        let (at_entry, sigma_at_entry) = values(&t, std::slice::from_ref(&c.param));
+        effects.push(EffectReport {
             id: c.id.clone(),
             parameters: at_entry.clone(),
-            sigma: Ordered::default(),
+            sigma: sigma_at_entry.clone(),
             parameters_at_entry: at_entry,
             validation_mean_mm_before: mean_mm(&current.outcome.validation_errors[2]),
             validation_mean_mm_after: mean_mm(&t.outcome.validation_errors[2]),
+            evidence,
+            equivalent: equivalent.clone(),
+            uncertainty: sigma_at_entry,
             calibration_mean_mm_before: mean_mm(&current.outcome.calibration_errors[2]),
             calibration_mean_mm_after: mean_mm(&t.outcome.calibration_errors[2]),
             cv_mean_mm_before: cv_current,
@@ -278,8 +263,9 @@ pub fn diagnose_tree(
             f_statistic: f,
             delta_bic: dbic,
             added_parameters: added,
-            equivalent: equivalent.clone(),
-            evidence,
+            regressor: regressor(c),
+            unidentifiable: Vec::new(),
+            model_parameters: values(&t, &extra).0,
         });
         current = t;
         cv_current = cv_after;
@@ -289,59 +275,73 @@ pub fn diagnose_tree(
     for (e, c) in effects.iter_mut().zip(&accepted) {
         let (v, s) = values(&current, std::slice::from_ref(&c.param));
         e.parameters = v;
-        e.sigma = s;
+        e.sigma = s.clone();
+        e.uncertainty = s;
     }
-    let final_ = stats(&current);
-    let residual_mm = rms_coord_mm(&current.outcome.calibration_errors[2]);
-    let (used, floor_mm) = match opts.instrument_mm {
-        Some(s) => ("instrument", s),
-        None => ("residual", residual_mm),
-    };
-    let final_over_floor = residual_mm / floor_mm;
-    let dof = current.m.saturating_sub(current.n_fitted).max(1) as f64;
-    // chi-square of the residual against the instrument: beyond 3.1 sigmas of its spread
-    // (p ~ 1e-3) the residual is above the floor
-    let chi = current.rss_mm2 / (floor_mm * floor_mm);
-    let above = used == "instrument" && (chi - dof) / (2.0 * dof).sqrt() > 3.1;
-    let verdict = if used == "residual" {
+    let final_ = stats(&current)?;
+    let val_errors = &current.outcome.validation_errors[2];
+    let floor = floor::judge(
+        &FinalResidual {
+            rss_mm2: current.rss_mm2,
+            n_residuals: current.m,
+            n_params: current.n_fitted,
+            tau: 1.0,
+            n_poses: cal.len(),
+            val_ss_mm2: val_errors.iter().map(|e| e.norm_squared()).sum(),
+            val_residuals: 3 * val_errors.len(),
+        },
+        opts.instrument_mm,
+        floor::repeatability_of_files(&[&cal, val]),
+    );
+    let verdict = if floor.used == "residual" {
         "no_floor"
-    } else if above {
+    } else if floor.above {
         "missing_effect"
     } else {
         "floor"
     };
     let note = match verdict {
         "floor" => format!(
-            "the final residual ({residual_mm:.4} mm per coordinate) is at the instrument's \
-             {floor_mm} mm"
+            "the final residual ({:.4} mm per coordinate, held out {:.4}) is at the {} floor \
+             ({:.2} x)",
+            floor.residual_mm, floor.validation_rms_mm, floor.used, floor.final_over_floor
         ),
         "missing_effect" => format!(
-            "the final residual ({residual_mm:.4} mm per coordinate) is {final_over_floor:.2} x \
-             the instrument's {floor_mm} mm: the tree model lacks something its elastic \
-             candidates do not describe (no probe of the residual on a tree yet)"
+            "the final residual ({:.4} mm per coordinate, held out {:.4}) is {:.2} x the {} \
+             floor: the tree model lacks something its elastic candidates do not describe (a \
+             tree has no residual probe yet: the regressor scan of every tip's residual says \
+             where to look)",
+            floor.residual_mm,
+            floor.validation_rms_mm,
+            floor.final_over_floor.max(floor.validation_over_floor),
+            floor.used
         ),
-        _ => "no instrument figure: the final residual is its own floor, so a missing effect \
-              cannot be told from noise (give --instrument-mm)"
+        _ => "no instrument figure and no repeated poses: the final residual is its own floor, \
+              so a missing effect cannot be told from noise (give --instrument-mm)"
             .to_string(),
     };
+    let mut unexplained = Unexplained {
+        structured: floor.above,
+        note,
+        depends_on: Vec::new(),
+        explainable_share: 0.0,
+        depends_on_shares: Vec::new(),
+    };
+    if verdict == "missing_effect" {
+        let shares = where_to_look::tree_regressor_shares(
+            &current.outcome.fit.model,
+            &cal,
+            &current.outcome.calibration_errors[2],
+        );
+        unexplained.add_where_to_look(&shares);
+    }
     Ok(TreeDiagnosis {
         model: current.outcome.fit.model.clone(),
         declared,
         effects,
         final_,
-        unexplained: TreeUnexplained {
-            structured: above,
-            note,
-            depends_on: Vec::new(),
-            explainable_share: 0.0,
-        },
-        floor: TreeFloor {
-            instrument_mm: opts.instrument_mm,
-            repeatability_mm: None,
-            residual_mm,
-            used,
-            final_over_floor,
-        },
+        unexplained,
+        floor,
         aliased: Vec::new(),
         tree: serde_json::json!({
             "name": nominal.name,

@@ -445,8 +445,8 @@ impl Model {
         if super::tree_file::is_tree_text(text) {
             return Err(file_err(
                 "a tree model ([[tip]] tables): this command takes one chain; `rigctl fk`, \
-                 `calibrate` and `model2urdf` take trees, `rigctl urdf2model --tree FILE --tip NAME` \
-                 writes one tip's chain"
+                 `calibrate`, `diagnose` and `model2urdf` take trees, `rigctl urdf2model --tree \
+                 FILE --tip NAME` writes one tip's chain"
                     .into(),
             ));
         }

@@ -202,17 +202,26 @@ fn a_tree_pose_file_in_metres_is_refused_before_the_fit() {
     );
     std::fs::write(&model, nominal.model_toml()).unwrap();
     std::fs::write(&cal, tree_csv(&nominal, &poses, 1e-3)).unwrap();
-    let run = output(&[
-        "calibrate",
-        "--model",
-        path_arg(&model),
-        "--poses",
-        path_arg(&cal),
-    ]);
-    let stderr = text(&run.stderr);
-    assert_eq!(run.status.code(), Some(2), "{stderr}");
-    assert!(
-        stderr.contains("in_metres.csv") && stderr.contains("metres"),
-        "{stderr}"
-    );
+    let files = ["--model", path_arg(&model), "--poses", path_arg(&cal)];
+    // calibrate, and diagnose (which reads the same files held out too): refused, nothing fitted
+    for command in [
+        vec!["calibrate"],
+        vec![
+            "diagnose",
+            "--validate",
+            path_arg(&cal),
+            "--instrument-mm",
+            "0.4",
+        ],
+    ] {
+        let mut args = command.clone();
+        args.extend(files);
+        let run = output(&args);
+        let stderr = text(&run.stderr);
+        assert_eq!(run.status.code(), Some(2), "{command:?}: {stderr}");
+        assert!(
+            stderr.contains("in_metres.csv") && stderr.contains("metres"),
+            "{command:?}: {stderr}"
+        );
+    }
 }

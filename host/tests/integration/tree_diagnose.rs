@@ -169,6 +169,10 @@ fn tree_diagnosis_names_the_elastic_joints_and_reaches_the_floor() {
 fn without_masses_no_elastic_candidate_and_assumed_masses_are_said() {
     let nominal = Body::nominal();
     let (_, cal, val) = data(&nominal);
+    // without masses: a held-out pose with the wrong marker on one hand (15 mm off) is listed by
+    // its line, out of the held-out figures, in `validation_all`
+    let mut val_bad = val.clone();
+    val_bad[5].1[0].x += 15.0;
     let dir = tempfile::tempdir().unwrap();
     let d = dir.path();
     let (model, cal_csv, val_csv, json) = (
@@ -190,11 +194,43 @@ fn without_masses_no_elastic_candidate_and_assumed_masses_are_said() {
         "--instrument-mm",
         "0.4",
     ];
-    let (doc, stdout) = diagnose(&files, &json);
+    let val_bad_csv = d.join("val_bad.csv");
+    std::fs::write(&val_bad_csv, tree_csv(&nominal, &val_bad, 1.0)).unwrap();
+    let mut bad_files = files;
+    bad_files[5] = path_arg(&val_bad_csv);
+    let (doc, stdout) = diagnose(&bad_files, &json);
+    let listed: Vec<(&str, u64)> = doc["outliers"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|o| (o["file"].as_str().unwrap(), o["line"].as_u64().unwrap()))
+        .filter(|(file, _)| *file == "val")
+        .collect();
+    assert_eq!(listed, [("val", 7)], "{stdout}");
+    let all = doc["final"]["validation_all"]["rms_mm"].as_f64().unwrap() / 3f64.sqrt();
+    assert!(all > 1.1 * held_out_mm(&doc, "final"), "{stdout}");
     assert!(doc["candidates"].as_array().unwrap().is_empty());
     assert!(doc["effects"].as_array().unwrap().is_empty());
     assert!(stdout.contains("no link masses"), "{stdout}");
     assert_eq!(doc["verdict"], "missing_effect", "{stdout}");
+    // where to look: the joints whose angles carry the elastic bends the model lacks, each a
+    // joint of the tree, with the share it explains
+    let depends: Vec<&str> = doc["unexplained"]["depends_on"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|v| v.as_str().unwrap())
+        .collect();
+    eprintln!(
+        "where to look: {depends:?} {}",
+        doc["unexplained"]["depends_on_shares"]
+    );
+    assert!(!depends.is_empty(), "{stdout}");
+    let joints = nominal.segs.len();
+    for v in &depends {
+        let i: usize = v.trim_start_matches('q').parse().unwrap();
+        assert!((1..=joints).contains(&i), "{v}");
+    }
     let mut args = files.to_vec();
     args.push("--assume-masses");
     let (doc, stdout) = diagnose(&args, &json);

@@ -437,7 +437,9 @@ fn calibrate_takes_a_tree_model_and_its_pose_files() {
 
 /// A tree's calibration leaves gross errors out as a chain's does: two poses with one tip
 /// measured 5 mm off are listed in `outliers` with their lines and left out of the fit (held
-/// out at the noise); `--keep-outliers` keeps them (none listed, the fit pulled off).
+/// out at the noise); a held-out pose with a hand 5 mm off is listed (`"file": "val"`) and left
+/// out of the held-out statistics, kept in `validation_all`; `--keep-outliers` keeps them all
+/// (none listed, the fit pulled off).
 #[test]
 fn gross_errors_on_a_tree_are_left_out_and_named() {
     let (nominal, truth, mut rng) = perturbed(91);
@@ -446,12 +448,17 @@ fn gross_errors_on_a_tree_are_left_out_and_named() {
     let (model, cal, val) = (d.join("tree.toml"), d.join("cal.csv"), d.join("val.csv"));
     nominal.write_file(&model).unwrap();
     let mut cal_poses = poses(&truth, 200, &mut rng);
-    let val_poses = poses(&truth, 100, &mut rng);
+    let mut val_poses = poses(&truth, 100, &mut rng);
     // pose 7: the right hand 5 mm off in z; pose 120: the left hand 5 mm off in x
     for (k, tip, axis) in [(7, 1, 2), (120, 0, 0)] {
         if let Some(p) = cal_poses[k].points_mm[tip].as_mut() {
             p[axis] += 5.0;
         }
+    }
+    // held out, pose 40: the left hand 5 mm off in y (or the right when the left is unseen)
+    let tip = usize::from(val_poses[40].points_mm[0].is_none());
+    if let Some(p) = val_poses[40].points_mm[tip].as_mut() {
+        p[1] += 5.0;
     }
     std::fs::write(&cal, pose_csv(&truth, &cal_poses)).unwrap();
     std::fs::write(&val, pose_csv(&truth, &val_poses)).unwrap();
@@ -468,16 +475,30 @@ fn gross_errors_on_a_tree_are_left_out_and_named() {
         serde_json::from_str(&std::fs::read_to_string(&json).unwrap()).unwrap()
     };
     let trimmed = run(&[]);
-    let lines: Vec<u64> = trimmed["outliers"]
+    let listed: Vec<(String, u64)> = trimmed["outliers"]
         .as_array()
         .unwrap()
         .iter()
-        .map(|o| o["line"].as_u64().unwrap())
+        .map(|o| {
+            (
+                o["file"].as_str().unwrap().to_string(),
+                o["line"].as_u64().unwrap(),
+            )
+        })
         .collect();
     // the header is line 1: pose k is on line k + 2
-    assert_eq!(lines, vec![9, 122], "{}", trimmed["outliers"]);
+    let want = [("cal", 9), ("cal", 122), ("val", 42)].map(|(f, l)| (f.to_string(), l));
+    assert_eq!(listed, want, "{}", trimmed["outliers"]);
     let held_trimmed = trimmed["validation"]["after"]["rms_mm"].as_f64().unwrap() / 3f64.sqrt();
     assert!(held_trimmed <= 1.1 * NOISE_MM, "held out {held_trimmed}");
+    let held_all = trimmed["validation_all"]["after"]["rms_mm"]
+        .as_f64()
+        .unwrap()
+        / 3f64.sqrt();
+    assert!(
+        held_all > 1.1 * held_trimmed,
+        "the listed held-out pose stays in validation_all: {held_all} vs {held_trimmed}"
+    );
     let kept = run(&["--keep-outliers"]);
     assert!(kept["outliers"].as_array().unwrap().is_empty());
     let cal_kept = kept["calibration"]["after"]["rms_mm"].as_f64().unwrap();

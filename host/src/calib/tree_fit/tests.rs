@@ -35,6 +35,22 @@ fn tree() -> Tree {
 }
 
 /// Six poses of the whole tree, the right tip measured in every other pose only.
+/// The residual rows' central difference along unknown `k` (step `h`).
+fn central_column(u: &TreeUnknowns, p: &MeasuredSet, k: usize, h: f64) -> DVector<f64> {
+    let m = n_rows(p);
+    let x0 = u.values();
+    let at = |dx: f64| -> DVector<f64> {
+        let mut s = u.clone();
+        let mut x = x0.clone();
+        x[k] += dx;
+        s.set(&x).unwrap();
+        let mut r = DVector::zeros(m);
+        s.rows(p, &mut r, None).unwrap();
+        r
+    };
+    (at(h) - at(-h)) / (2.0 * h)
+}
+
 fn poses(t: &Tree) -> MeasuredSet {
     let q = (0..6)
         .map(|k| {
@@ -69,21 +85,9 @@ fn compliance_columns_match_finite_differences() {
         .collect();
     let u = TreeUnknowns::new(&t, names.clone()).unwrap();
     let p = poses(&t);
-    let m = n_rows(&p);
     let jac = u.jacobian(&p).unwrap();
-    let x0 = u.values();
     for k in 0..names.len() {
-        let h = if k < 5 { 1e-4 } else { 1e-3 };
-        let at = |dx: f64| -> DVector<f64> {
-            let mut s = u.clone();
-            let mut x = x0.clone();
-            x[k] += dx;
-            s.set(&x).unwrap();
-            let mut r = DVector::zeros(m);
-            s.rows(&p, &mut r, None).unwrap();
-            r
-        };
-        let fd: DVector<f64> = (at(h) - at(-h)) / (2.0 * h);
+        let fd = central_column(&u, &p, k, if k < 5 { 1e-4 } else { 1e-3 });
         let col = jac.column(k);
         let scale = fd.amax().max(1e-6);
         // a geometric column takes the torques as given (as on a chain): it misses their
@@ -99,7 +103,7 @@ fn compliance_columns_match_finite_differences() {
         if k == 0 {
             // the torso's compliance moves the points on both tips
             let rows_of = |tip_rows: &dyn Fn(usize) -> bool| {
-                (0..m)
+                (0..col.len())
                     .filter(|&r| tip_rows(r))
                     .map(|r| col[r].abs())
                     .sum::<f64>()
@@ -193,21 +197,9 @@ fn lateral_columns_match_finite_differences() {
         let names = t.lateral_names();
         let u = TreeUnknowns::new(&t, names.clone()).unwrap();
         let p = poses(&t);
-        let m = n_rows(&p);
         let jac = u.jacobian(&p).unwrap();
-        let x0 = u.values();
         for k in 0..names.len() {
-            let h = 1e-4;
-            let at = |dx: f64| -> DVector<f64> {
-                let mut s = u.clone();
-                let mut x = x0.clone();
-                x[k] += dx;
-                s.set(&x).unwrap();
-                let mut r = DVector::zeros(m);
-                s.rows(&p, &mut r, None).unwrap();
-                r
-            };
-            let fd: DVector<f64> = (at(h) - at(-h)) / (2.0 * h);
+            let fd = central_column(&u, &p, k, 1e-4);
             let col = jac.column(k);
             assert!(
                 fd.amax() > 0.1,

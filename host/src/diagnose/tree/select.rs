@@ -44,11 +44,23 @@ fn neighbours(tree: &Tree, a: &Candidate, b: &Candidate) -> bool {
 }
 
 /// One fit of the declared unknowns plus some candidates' parameters.
+#[derive(Debug, Clone)]
 pub struct Trial {
     pub outcome: TreeOutcome,
     pub rss_mm2: f64,
     pub n_fitted: usize,
     pub m: usize,
+}
+
+impl From<TreeOutcome> for Trial {
+    fn from(outcome: TreeOutcome) -> Self {
+        Self {
+            rss_mm2: outcome.fit.rss_mm2,
+            n_fitted: outcome.fit.fitted.len(),
+            m: outcome.fit.n_residuals,
+            outcome,
+        }
+    }
 }
 
 /// What the fits share: the tree, the poses, the options and the declared unknowns.
@@ -89,13 +101,7 @@ impl<'a> Fits<'a> {
         let mut o = self.opts.clone();
         o.keep_outliers = true;
         o.params = Some(self.declared.iter().chain(extra).cloned().collect());
-        let outcome = calibrate_tree(start, set.unwrap_or(self.cal), val, &o, false)?;
-        Ok(Trial {
-            rss_mm2: outcome.fit.rss_mm2,
-            n_fitted: outcome.fit.fitted.len(),
-            m: outcome.fit.n_residuals,
-            outcome,
-        })
+        Ok(calibrate_tree(start, set.unwrap_or(self.cal), val, &o, false)?.into())
     }
 
     /// Cross-validated mean error norm (mm) with `extra`: folds of every
@@ -150,6 +156,7 @@ pub fn select(
     let mut accepted: Vec<Candidate> = Vec::new();
     let mut swaps = Vec::new();
     let mut equivalent = Vec::new();
+    let mut settled = false;
     for _ in 0..MAX_SWAP_ROUNDS {
         current = forward(fits, all, &mut accepted, current, alpha)?;
         let (next, swap, eq) = swap_once(fits, all, &accepted, &current)?;
@@ -160,8 +167,15 @@ pub fn select(
                 accepted[a] = all[c].clone();
                 current = t;
             }
-            _ => break,
+            _ => {
+                settled = true;
+                break;
+            }
         }
+    }
+    if !settled {
+        // the rounds ended on a swap: the equivalents are those of the set after it
+        equivalent = swap_once(fits, all, &accepted, &current)?.2;
     }
     Ok(Selected {
         accepted,
