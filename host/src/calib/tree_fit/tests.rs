@@ -86,7 +86,7 @@ fn compliance_columns_match_finite_differences() {
     let u = TreeUnknowns::new(&t, names.clone()).unwrap();
     let p = poses(&t);
     let jac = u.jacobian(&p).unwrap();
-    for k in 0..names.len() {
+    for (k, name) in names.iter().enumerate() {
         let fd = central_column(&u, &p, k, if k < 5 { 1e-4 } else { 1e-3 });
         let col = jac.column(k);
         let scale = fd.amax().max(1e-6);
@@ -95,8 +95,7 @@ fn compliance_columns_match_finite_differences() {
         let tol = if k < 5 { 1e-5 } else { 1e-2 };
         assert!(
             (col - &fd).amax() < tol * scale.max(1.0),
-            "{}: analytic {:?} fd {:?}",
-            names[k],
+            "{name}: analytic {:?} fd {:?}",
             col.transpose(),
             fd.transpose()
         );
@@ -198,18 +197,13 @@ fn lateral_columns_match_finite_differences() {
         let u = TreeUnknowns::new(&t, names.clone()).unwrap();
         let p = poses(&t);
         let jac = u.jacobian(&p).unwrap();
-        for k in 0..names.len() {
+        for (k, name) in names.iter().enumerate() {
             let fd = central_column(&u, &p, k, 1e-4);
             let col = jac.column(k);
-            assert!(
-                fd.amax() > 0.1,
-                "{}: a column that moves the tips",
-                names[k]
-            );
+            assert!(fd.amax() > 0.1, "{}: a column that moves the tips", name);
             assert!(
                 (col - &fd).amax() < 1e-6 * fd.amax(),
-                "{}: analytic {:?} fd {:?}",
-                names[k],
+                "{name}: analytic {:?} fd {:?}",
                 col.transpose(),
                 fd.transpose()
             );
