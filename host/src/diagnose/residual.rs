@@ -40,6 +40,32 @@ pub struct Regressor {
     pub columns: Vec<Vec<f64>>,
 }
 
+/// The regressors of joint `j` (0-based) with readings `q` (deg, mm when `prismatic`): `q<j+1>`,
+/// and `sin/cos(h q<j+1>)` for h = 1..3 of a revolute joint.
+pub fn joint_regressors(j: usize, q: &[f64], prismatic: bool) -> Vec<Regressor> {
+    let label = format!("q{} (deg)", j + 1);
+    let mut out = vec![Regressor {
+        name: format!("q{}", j + 1),
+        x: q.to_vec(),
+        x_label: label.clone(),
+        columns: vec![q.to_vec()],
+    }];
+    if !prismatic {
+        for h in 1..=3 {
+            let hf = f64::from(h);
+            let s = q.iter().map(|v| (hf * v).to_radians().sin()).collect();
+            let c = q.iter().map(|v| (hf * v).to_radians().cos()).collect();
+            out.push(Regressor {
+                name: format!("sin/cos({h} q{})", j + 1),
+                x: q.to_vec(),
+                x_label: label.clone(),
+                columns: vec![s, c],
+            });
+        }
+    }
+    out
+}
+
 /// The regressors of every pose of `data` under `ext`.
 pub fn regressors(ext: &ExtModel, data: &MeasuredSet) -> Result<Vec<Regressor>, ModelError> {
     let n = data.len();
@@ -47,26 +73,7 @@ pub fn regressors(ext: &ExtModel, data: &MeasuredSet) -> Result<Vec<Regressor>, 
     let mut out = Vec::new();
     for j in 0..nj {
         let q: Vec<f64> = data.poses.q_deg.iter().map(|q| q[j]).collect();
-        let label = format!("q{} (deg)", j + 1);
-        out.push(Regressor {
-            name: format!("q{}", j + 1),
-            x: q.clone(),
-            x_label: label.clone(),
-            columns: vec![q.clone()],
-        });
-        if !ext.model.joints()[j].prismatic {
-            for h in 1..=3 {
-                let hf = f64::from(h);
-                let s = q.iter().map(|v| (hf * v).to_radians().sin()).collect();
-                let c = q.iter().map(|v| (hf * v).to_radians().cos()).collect();
-                out.push(Regressor {
-                    name: format!("sin/cos({h} q{})", j + 1),
-                    x: q.clone(),
-                    x_label: label.clone(),
-                    columns: vec![s, c],
-                });
-            }
-        }
+        out.extend(joint_regressors(j, &q, ext.model.joints()[j].prismatic));
     }
     if ext.gravity.is_some() {
         let taus: Vec<Vec<f64>> = data

@@ -10,41 +10,20 @@
 use nalgebra::Vector3;
 
 use crate::calib::MeasuredSet;
-use crate::diagnose::residual::{explain, Regressor};
+use crate::diagnose::residual::{explain, joint_regressors, Regressor};
 use crate::model::Tree;
 
-/// The regressors of the tree's joints over the points `rows` (pose index of each point).
-fn joint_regressors(tree: &Tree, set: &MeasuredSet, rows: &[usize]) -> Vec<Regressor> {
+/// The regressors of the tree's joints over the points `rows` (pose index of each point): a
+/// chain's per joint ([`joint_regressors`]).
+fn tree_joint_regressors(tree: &Tree, set: &MeasuredSet, rows: &[usize]) -> Vec<Regressor> {
     let mut out = Vec::new();
     for (j, joint) in tree.joints.iter().enumerate() {
-        let q: Vec<f64> = rows
+        let q: Option<Vec<f64>> = rows
             .iter()
             .map(|&k| set.poses.q_deg.get(k).and_then(|q| q.get(j)).copied())
-            .collect::<Option<Vec<f64>>>()
-            .unwrap_or_default();
-        if q.len() != rows.len() {
-            continue;
-        }
-        let label = format!("q{} (deg)", j + 1);
-        out.push(Regressor {
-            name: format!("q{}", j + 1),
-            x: q.clone(),
-            x_label: label.clone(),
-            columns: vec![q.clone()],
-        });
-        if !joint.prismatic {
-            for h in 1..=3 {
-                let hf = f64::from(h);
-                out.push(Regressor {
-                    name: format!("sin/cos({h} q{})", j + 1),
-                    x: q.clone(),
-                    x_label: label.clone(),
-                    columns: vec![
-                        q.iter().map(|v| (hf * v).to_radians().sin()).collect(),
-                        q.iter().map(|v| (hf * v).to_radians().cos()).collect(),
-                    ],
-                });
-            }
+            .collect();
+        if let Some(q) = q {
+            out.extend(joint_regressors(j, &q, joint.prismatic));
         }
     }
     out
@@ -75,7 +54,7 @@ pub fn tree_regressor_shares(
         let v: Vec<Vector3<f64>> = idx.iter().map(|&i| residual[i]).collect();
         let rows: Vec<usize> = idx.iter().map(|&i| at[i].0).collect();
         let weight = v.iter().map(|e| e.norm_squared()).sum::<f64>() / total;
-        for reg in joint_regressors(tree, set, &rows) {
+        for reg in tree_joint_regressors(tree, set, &rows) {
             let e = explain(&v, &reg);
             let share = weight * if e.r2.is_finite() { e.r2 } else { 0.0 };
             match shares.iter_mut().find(|(n, _)| *n == reg.name) {
