@@ -58,6 +58,12 @@ impl PoseError {
         }
     }
 
+    /// Names the pose by its line and id in `data`, the set its index is into.
+    pub fn label(&mut self, data: &super::measured::MeasuredSet) {
+        self.line = data.lines.as_ref().and_then(|l| l.get(self.index).copied());
+        self.id = data.ids.as_ref().and_then(|i| i.get(self.index).cloned());
+    }
+
     /// The pose's line in its file (`?` when not read from one), then its id when it has one:
     /// `6 (id D4_2_1)`, as the text outputs name it.
     pub fn line_and_id(&self) -> String {

@@ -203,6 +203,16 @@ pub fn calibrate_tree(
     });
     report.outliers.extend(held_out.reports);
     report.extrapolated = held_out.extrapolated;
+    // every pose named by its line and id in its own file
+    for r in &mut report.outliers {
+        match (r.pose.file.as_str(), val) {
+            ("val", Some(v)) => r.pose.label(v),
+            _ => r.pose.label(cal_all),
+        }
+    }
+    if let Some(v) = val {
+        report.extrapolated.iter_mut().for_each(|e| e.pose.label(v));
+    }
     Ok(TreeOutcome {
         fit,
         report,

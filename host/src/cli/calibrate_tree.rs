@@ -117,18 +117,6 @@ pub fn run(args: &Args, tree: Tree) -> Result<(), CliError> {
         ..Default::default()
     };
     let mut o = calibrate_tree(&tree, &poses, val.as_ref(), &opts, args.compliance)?;
-    // the gross errors named by the line of their pose in their file, as on a chain
-    for r in &mut o.report.outliers {
-        let set = if r.pose.file == "cal" {
-            Some(&poses)
-        } else {
-            val.as_ref()
-        };
-        r.pose.line = set
-            .and_then(|s| s.lines.as_deref())
-            .and_then(|l| l.get(r.pose.index))
-            .copied();
-    }
     if let Some(with_tool) = registers(args) {
         // as on a chain: a registration that fails leaves the key out
         o.report.registered = tree_registration_only(&tree, &poses, val.as_ref(), with_tool).ok();

@@ -146,7 +146,7 @@ pub fn run(args: Args) -> Result<(), CliError> {
     opts.keep_outliers = args.keep_outliers;
     opts.instrument_mm = instrument_mm(&args)?;
     let spinner = spinner(format!(
-        "declared fit, candidate effects, cross-validation on {} + {} measurements",
+        "diagnose: declared fit, candidate effects, cross-validation on {} + {} measurements",
         cal.len(),
         val.len()
     ));
@@ -300,9 +300,7 @@ pub(super) fn instrument_mm(args: &Args) -> Result<Option<f64>, CliError> {
 pub(super) fn spinner(message: String) -> indicatif::ProgressBar {
     let spinner =
         indicatif::ProgressBar::with_draw_target(None, indicatif::ProgressDrawTarget::stderr());
-    if let Ok(style) =
-        indicatif::ProgressStyle::with_template("{spinner} diagnose: {msg} ({elapsed})")
-    {
+    if let Ok(style) = indicatif::ProgressStyle::with_template("{spinner} {msg} ({elapsed})") {
         spinner.set_style(style);
     }
     spinner.set_message(message);

@@ -52,23 +52,14 @@ pub fn run(args: &Args, tree: Tree) -> Result<(), CliError> {
         ..Default::default()
     };
     let spinner = super::diagnose::spinner(format!(
-        "tree `{}`: declared fit, elastic candidates, cross-validation on {} + {} poses",
+        "diagnose: tree `{}`: declared fit, elastic candidates, cross-validation on {} + {} poses",
         tree.name,
         cal.len(),
         val.len()
     ));
     let diag = diagnose_tree(&tree, &cal, &val, &opts);
     spinner.finish_and_clear();
-    let mut diag = diag?;
-    // the gross errors named by the line of their pose, as on a chain
-    for r in &mut diag.outliers {
-        let set = if r.pose.file == "cal" { &cal } else { &val };
-        r.pose.line = set
-            .lines
-            .as_deref()
-            .and_then(|l| l.get(r.pose.index))
-            .copied();
-    }
+    let diag = diag?;
     if let Some(path) = &args.json {
         let mut doc = serde_json::to_value(&diag)
             .map_err(|e| CliError::failure(format!("diagnose --json: {e}")))?;

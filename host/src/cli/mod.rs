@@ -20,6 +20,7 @@ mod model_args;
 pub mod out;
 mod plan;
 mod plan_safety;
+mod plan_tree;
 mod ports;
 mod pose_args;
 mod poses;

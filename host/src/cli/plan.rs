@@ -14,7 +14,7 @@ use rigctl::io::pose_csv::read_poses;
 use rigctl::plan::output::{plan_csv, plan_json, summary_table};
 use rigctl::plan::sheets::{candidate_specs, rank_sheets, SheetRows};
 use rigctl::plan::sheets_output::{sheets_json, sheets_table};
-use rigctl::plan::{plan, Criterion, FromDiagnose, PlanConfig};
+use rigctl::plan::{plan, Criterion, FromDiagnose, PlanConfig, Workspace};
 use rigctl::plot::plan::poses_svg;
 
 use super::model_args::ModelArgs;
@@ -51,9 +51,9 @@ pub struct Args {
     /// Measurement noise per coordinate (mm) for the expected sigmas.
     #[arg(long, value_name = "MM", default_value_t = 0.01)]
     pub noise_mm: f64,
-    /// Number of random candidate configurations.
-    #[arg(long, value_name = "COUNT", default_value_t = 5000)]
-    pub candidates: usize,
+    /// Number of random candidate configurations (default 5000; 2000 on a tree model).
+    #[arg(long, value_name = "COUNT")]
+    pub candidates: Option<usize>,
     /// Choose among these configurations only (a pose file: q1..qN, measured x,y,z optional;
     /// e.g. the poses the robot reaches safely, or a measured set to subsample): no random or
     /// structured candidates, no refinement.
@@ -141,6 +141,10 @@ pub struct Args {
     /// effects with large sigmas), given --poses.
     #[arg(long, value_name = "D.json")]
     pub from_diagnose: Option<PathBuf>,
+    /// On a tree model: the smallest distance between points of two branches (the joint frame
+    /// origins beyond the shared joints and the tips), mm.
+    #[arg(long, value_name = "MM", default_value_t = rigctl::plan::tree::DEFAULT_BRANCH_CLEARANCE_MM)]
+    pub branch_clearance_mm: f64,
 }
 
 pub fn run(args: Args) -> Result<(), CliError> {
@@ -156,6 +160,9 @@ pub fn run(args: Args) -> Result<(), CliError> {
         .input("--urdf", args.safety.urdf.as_deref())
         .input("--srdf", args.safety.srdf.as_deref())
         .check()?;
+    if let Some(tree) = super::calibrate_tree::tree_model(&args.model)? {
+        return super::plan_tree::run(&args, tree);
+    }
     let model = match args.safety.urdf_model()? {
         Some(m) if args.model.model.is_none() && args.model.robot.is_none() => m,
         _ => args.model.choose()?,
@@ -164,7 +171,9 @@ pub fn run(args: Args) -> Result<(), CliError> {
     let safety_lines = args.safety.apply(&model, &mut cfg)?;
     cfg.seed = args.seed;
     cfg.noise_mm = args.noise_mm;
-    cfg.candidates = args.candidates;
+    if let Some(c) = args.candidates {
+        cfg.candidates = c;
+    }
     cfg.random_draws = args.random_draws;
     cfg.criterion = args.criterion;
     cfg.restarts = args.restarts;
@@ -173,46 +182,7 @@ pub fn run(args: Args) -> Result<(), CliError> {
     if args.no_structured {
         cfg.structured = Some(false);
     }
-    let finite = |flag: &str, v: &[f64]| {
-        if v.iter()
-            .all(|x| x.is_finite() && x.abs() <= rigctl::io::ranges::MAX_POSITION_MM)
-        {
-            Ok(())
-        } else {
-            Err(CliError::bad_input(format!(
-                "{flag} {v:?}: finite positions within +-100 m (mm)"
-            )))
-        }
-    };
-    finite("--box", args.box_mm.as_deref().unwrap_or(&[]))?;
-    finite(
-        "--visible-from",
-        args.visible_from.as_deref().unwrap_or(&[]),
-    )?;
-    finite("--min-z-mm", args.min_z_mm.as_slice())?;
-    if !(args.cone_deg.is_finite() && args.cone_deg > 0.0 && args.cone_deg <= 180.0) {
-        return Err(CliError::bad_input(format!(
-            "--cone-deg {}: a half angle in (0, 180] deg",
-            args.cone_deg
-        )));
-    }
-    if let Some(b) = &args.box_mm {
-        let b: [f64; 6] = b
-            .as_slice()
-            .try_into()
-            .map_err(|_| CliError::bad_input("--box needs 6 numbers X0,Y0,Z0,X1,Y1,Z1"))?;
-        cfg.workspace.box_mm = Some(b);
-    }
-    if let Some(v) = &args.visible_from {
-        if v.len() != 3 {
-            return Err(CliError::bad_input("--visible-from needs 3 numbers X,Y,Z"));
-        }
-        cfg.workspace.visible_from_mm = Some(Vector3::new(v[0], v[1], v[2]));
-        cfg.workspace.cone_half_angle_deg = args.cone_deg;
-    }
-    if let Some(z) = args.min_z_mm {
-        cfg.workspace.min_z_mm = Some(z);
-    }
+    tool_constraints(&args, &mut cfg.workspace)?;
     if let Some(p) = &args.candidates_from {
         let file = read_poses(p, &args.pose.spec(&model, false, 0))?;
         cfg.pool_q = Some(file.joints());
@@ -356,6 +326,52 @@ pub fn run(args: Args) -> Result<(), CliError> {
     }
     if let Some(r) = &sheets {
         out!("{}", sheets_table(r))?;
+    }
+    Ok(())
+}
+
+/// The constraints on the tool point (tips on a tree): `--box`, `--visible-from` within
+/// `--cone-deg`, `--min-z-mm`, checked finite.
+pub(super) fn tool_constraints(args: &Args, ws: &mut Workspace) -> Result<(), CliError> {
+    let finite = |flag: &str, v: &[f64]| {
+        if v.iter()
+            .all(|x| x.is_finite() && x.abs() <= rigctl::io::ranges::MAX_POSITION_MM)
+        {
+            Ok(())
+        } else {
+            Err(CliError::bad_input(format!(
+                "{flag} {v:?}: finite positions within +-100 m (mm)"
+            )))
+        }
+    };
+    finite("--box", args.box_mm.as_deref().unwrap_or(&[]))?;
+    finite(
+        "--visible-from",
+        args.visible_from.as_deref().unwrap_or(&[]),
+    )?;
+    finite("--min-z-mm", args.min_z_mm.as_slice())?;
+    if !(args.cone_deg.is_finite() && args.cone_deg > 0.0 && args.cone_deg <= 180.0) {
+        return Err(CliError::bad_input(format!(
+            "--cone-deg {}: a half angle in (0, 180] deg",
+            args.cone_deg
+        )));
+    }
+    if let Some(b) = &args.box_mm {
+        let b: [f64; 6] = b
+            .as_slice()
+            .try_into()
+            .map_err(|_| CliError::bad_input("--box needs 6 numbers X0,Y0,Z0,X1,Y1,Z1"))?;
+        ws.box_mm = Some(b);
+    }
+    if let Some(v) = &args.visible_from {
+        if v.len() != 3 {
+            return Err(CliError::bad_input("--visible-from needs 3 numbers X,Y,Z"));
+        }
+        ws.visible_from_mm = Some(Vector3::new(v[0], v[1], v[2]));
+        ws.cone_half_angle_deg = args.cone_deg;
+    }
+    if let Some(z) = args.min_z_mm {
+        ws.min_z_mm = Some(z);
     }
     Ok(())
 }

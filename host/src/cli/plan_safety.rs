@@ -9,7 +9,7 @@ use std::sync::Arc;
 use rigctl::model::Model;
 use rigctl::plan::collision::{model_joint_origins_mm, Collider, GeometrySource};
 use rigctl::plan::workspace::{SharedCollider, DEFAULT_CLEARANCE_MM, LIMIT_MARGIN_DEG};
-use rigctl::plan::PlanConfig;
+use rigctl::plan::{PlanConfig, Workspace};
 
 use super::CliError;
 
@@ -102,8 +102,9 @@ impl SafetyArgs {
         Ok(Some(imported.model))
     }
 
-    /// Sets the safety part of `cfg` for `model`; the lines that say what is checked.
-    pub fn apply(&self, model: &Model, cfg: &mut PlanConfig) -> Result<Vec<String>, CliError> {
+    /// Checks the options and sets the table, the keep-out boxes, the limit margin and the
+    /// clearance of `ws` (no collision geometry).
+    pub fn workspace(&self, ws: &mut Workspace) -> Result<(), CliError> {
         positive("--limit-margin-deg", self.limit_margin_deg, true)?;
         positive("--clearance-mm", self.clearance_mm, true)?;
         positive("--segment-step-deg", self.segment_step_deg, false)?;
@@ -115,7 +116,6 @@ impl SafetyArgs {
                 self.table_z_mm
             )));
         }
-        let ws = &mut cfg.workspace;
         ws.table_z_mm = (!self.no_table).then_some(self.table_z_mm);
         ws.limit_margin_deg = self.limit_margin_deg;
         ws.path_tolerance_mm = self.clearance_mm;
@@ -137,6 +137,13 @@ impl SafetyArgs {
                 })?;
             ws.keep_out_mm.push(b);
         }
+        Ok(())
+    }
+
+    /// Sets the safety part of `cfg` for `model`; the lines that say what is checked.
+    pub fn apply(&self, model: &Model, cfg: &mut PlanConfig) -> Result<Vec<String>, CliError> {
+        self.workspace(&mut cfg.workspace)?;
+        let ws = &mut cfg.workspace;
         cfg.segment_step_deg = self.segment_step_deg;
         let mut lines = vec![format!(
             "safety: joints >= {} deg inside their limits; table plane {}; tool point z >= {}; {} keep-out box(es); segments checked every {} deg",

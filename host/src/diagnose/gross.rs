@@ -162,9 +162,7 @@ pub(super) fn judge_held_out(
 /// `reports` with the line and id of each pose of `data`.
 fn labelled(mut reports: Vec<OutlierReport>, data: &MeasuredSet) -> Vec<OutlierReport> {
     for r in &mut reports {
-        let p = &mut r.pose;
-        p.line = data.lines.as_ref().and_then(|l| l.get(p.index).copied());
-        p.id = data.ids.as_ref().and_then(|i| i.get(p.index).cloned());
+        r.pose.label(data);
     }
     reports
 }

@@ -351,6 +351,7 @@ impl FromDiagnose {
         };
         let after_rows = super::metrics::stack_rows(
             &setup.b,
+            super::criteria::POSE_ROWS,
             &vec![1.0; setup.b.ncols()],
             &setup.prior_rows,
             chosen,

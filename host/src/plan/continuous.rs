@@ -193,7 +193,7 @@ pub(crate) fn best_possible(
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::plan::criteria::prediction_weight;
+    use crate::plan::criteria::{prediction_weight, POSE_ROWS};
     use crate::plan::test_support::{katana_pool, KatanaPool};
 
     /// On a small Katana pool: the configurations added lie within the constraints and each
@@ -208,7 +208,7 @@ mod tests {
             setup,
         } = katana_pool(300, 2);
         let p = setup.b.ncols();
-        let q = prediction_weight(&setup.b);
+        let q = prediction_weight(&setup.b, POSE_ROWS);
         let w = DMatrix::identity(p, p);
         for kind in [Criterion::A, Criterion::D] {
             let first = approximate_optimum(&setup.b, 12, kind, &w).unwrap();

@@ -1,8 +1,9 @@
 //! The optimality criteria of a design and their cheap per-candidate gains.
 //!
-//! `b` stacks the (column-scaled) Jacobian blocks `B_c` of every candidate, three rows each;
+//! `b` stacks the (column-scaled) Jacobian blocks `B_c` of every candidate, `k` rows each (a
+//! chain's pose measures one point, [`POSE_ROWS`]; a tree's pose a point on every tip);
 //! `M = M0 + sum_{c in S} B_c^T B_c (+ RIDGE I)` is the information of a design `S`. Adding
-//! candidate `c` gives, with `W_c = B_c M^-1` (3 x p) and `S_c = I_3 + W_c B_c^T`:
+//! candidate `c` gives, with `W_c = B_c M^-1` (k x p) and `S_c = I_k + W_c B_c^T`:
 //!
 //! * **D** (`log det M`): gain `log det S_c` (matrix determinant lemma); with columns of interest
 //!   `I` (nuisance `O` the others) Ds: `log det M - log det M_OO`, the log-determinant of the
@@ -19,9 +20,12 @@
 //!
 //! With columns of interest, A, G and I are restricted to them (As, Gs, Is).
 
-use nalgebra::{DMatrix, Matrix3, Vector3};
+use nalgebra::{DMatrix, DVector};
 
 use super::PlanError;
+
+/// The rows of a chain pose's Jacobian block: one measured point (x, y, z).
+pub const POSE_ROWS: usize = 3;
 
 /// Ridge added to the information matrix (columns are scaled to unit RMS per pose).
 pub const RIDGE: f64 = 1e-6;
@@ -77,11 +81,16 @@ impl Criterion {
     }
 }
 
-/// The information of `chosen` on top of `prior`.
-pub fn information(b: &DMatrix<f64>, prior: &DMatrix<f64>, chosen: &[usize]) -> DMatrix<f64> {
+/// The information of `chosen` (blocks of `rows` rows of `b`) on top of `prior`.
+pub fn information(
+    b: &DMatrix<f64>,
+    rows: usize,
+    prior: &DMatrix<f64>,
+    chosen: &[usize],
+) -> DMatrix<f64> {
     let mut m = prior.clone();
     for &c in chosen {
-        let bc = b.rows(3 * c, 3);
+        let bc = b.rows(rows * c, rows);
         m += bc.transpose() * bc;
     }
     m
@@ -107,9 +116,10 @@ fn log_det_ridged(m: &DMatrix<f64>, cols: &[usize]) -> f64 {
     }
 }
 
-/// The prediction weight `Q = B^T B / candidates` (mean information of one candidate).
-pub fn prediction_weight(b: &DMatrix<f64>) -> DMatrix<f64> {
-    let n = (b.nrows() / 3).max(1) as f64;
+/// The prediction weight `Q = B^T B / candidates` (mean information of one candidate, blocks
+/// of `rows` rows).
+pub fn prediction_weight(b: &DMatrix<f64>, rows: usize) -> DMatrix<f64> {
+    let n = (b.nrows() / rows.max(1)).max(1) as f64;
     b.transpose() * b / n
 }
 
@@ -187,12 +197,12 @@ impl InfoState {
         })
     }
 
-    /// Adds (`sign` = 1) or removes (-1) candidate `c`.
-    fn update(&mut self, b: &DMatrix<f64>, c: usize, sign: f64) {
+    /// Adds (`sign` = 1) or removes (-1) candidate `c` (rows `rows c ..` of `b`).
+    fn update(&mut self, b: &DMatrix<f64>, rows: usize, c: usize, sign: f64) {
         if self.cols.is_empty() {
             return;
         }
-        let bc = b.rows(3 * c, 3);
+        let bc = b.rows(rows * c, rows);
         self.m += bc.transpose() * bc * sign;
         if let Some(inv) = ridged_inverse(&self.m, &self.cols) {
             self.minv = inv;
@@ -200,7 +210,7 @@ impl InfoState {
     }
 }
 
-fn log_det3(s: &Matrix3<f64>) -> f64 {
+fn log_det(s: &DMatrix<f64>) -> f64 {
     let d = s.determinant();
     if d > 0.0 {
         d.ln()
@@ -209,10 +219,12 @@ fn log_det3(s: &Matrix3<f64>) -> f64 {
     }
 }
 
-/// The criterion's state along a greedy / exchange run: `M^-1` kept by rank-3 updates.
+/// The criterion's state along a greedy / exchange run: `M^-1` kept by rank-k updates.
 pub struct Scorer<'a> {
     kind: Criterion,
     b: &'a DMatrix<f64>,
+    /// Rows of one candidate's block.
+    rows: usize,
     prior: &'a DMatrix<f64>,
     /// Columns of interest (all when none were given).
     cols: Vec<usize>,
@@ -247,10 +259,12 @@ impl<'a> Scorer<'a> {
         self
     }
 
-    /// The state of the empty design (information `prior`).
+    /// The state of the empty design (information `prior`) on the candidates' blocks of `rows`
+    /// rows of `b`.
     pub fn new(
         kind: Criterion,
         b: &'a DMatrix<f64>,
+        rows: usize,
         prior: &'a DMatrix<f64>,
         interest: &[usize],
     ) -> Result<Self, PlanError> {
@@ -269,13 +283,14 @@ impl<'a> Scorer<'a> {
         };
         let b_nui = DMatrix::from_fn(b.nrows(), nuisance.len(), |r, k| b[(r, nuisance[k])]);
         let q = if kind == Criterion::I {
-            prediction_weight(b)
+            prediction_weight(b, rows)
         } else {
             DMatrix::zeros(0, 0)
         };
         Ok(Self {
             kind,
             b,
+            rows: rows.max(1),
             prior,
             full: InfoState::new(prior, all)?,
             nui: InfoState::new(prior, nuisance.clone())?,
@@ -290,14 +305,14 @@ impl<'a> Scorer<'a> {
 
     /// Adds (`sign` 1) or removes (-1) candidate `c`.
     pub fn update(&mut self, c: usize, sign: f64) {
-        self.full.update(self.b, c, sign);
-        self.nui.update(self.b, c, sign);
+        self.full.update(self.b, self.rows, c, sign);
+        self.nui.update(self.b, self.rows, c, sign);
     }
 
     /// Rebuilds `M` and `M^-1` from scratch for the design `chosen` (rounding drift of the
     /// additions and removals).
     pub fn rebuild(&mut self, chosen: &[usize]) -> Result<(), PlanError> {
-        let m = information(self.b, self.prior, chosen);
+        let m = information(self.b, self.rows, self.prior, chosen);
         self.full = InfoState::new(&m, self.full.cols.clone())?;
         self.nui = InfoState::new(&m, self.nuisance.clone())?;
         Ok(())
@@ -305,7 +320,7 @@ impl<'a> Scorer<'a> {
 
     /// The criterion of the design `chosen` (larger is better).
     pub fn value(&self, chosen: &[usize]) -> f64 {
-        let m = information(self.b, self.prior, chosen);
+        let m = information(self.b, self.rows, self.prior, chosen);
         let interest = if self.subset { &self.cols[..] } else { &[] };
         value_weighted(self.kind, &m, interest, &self.q, &self.weights)
     }
@@ -324,8 +339,8 @@ impl<'a> Scorer<'a> {
     /// G ranks by the D gain (its own gain would come from variances of order 1/RIDGE cancelling
     /// to O(1), with few digits left; D-greedy is the usual way to full rank).
     pub fn gains(&self) -> Vec<f64> {
-        let b = self.b;
-        let w = b * &self.full.minv; // 3n x p
+        let (b, k) = (self.b, self.rows);
+        let w = b * &self.full.minv; // k n x p
         let deficient = self.kind == Criterion::G && self.deficient();
         let wq = (self.kind == Criterion::I).then(|| {
             let k = self.cols.len();
@@ -338,17 +353,19 @@ impl<'a> Scorer<'a> {
             let Some(nw) = &nui_w else {
                 return 0.0;
             };
-            let sn: Matrix3<f64> = Matrix3::identity()
-                + Matrix3::from_fn(|r, t| nw.row(3 * c + r).dot(&self.b_nui.row(3 * c + t)));
-            log_det3(&sn)
+            let sn = DMatrix::identity(k, k)
+                + DMatrix::from_fn(k, k, |r, t| {
+                    nw.row(k * c + r).dot(&self.b_nui.row(k * c + t))
+                });
+            log_det(&sn)
         };
-        (0..b.nrows() / 3)
+        (0..b.nrows() / k)
             .map(|c| {
-                let s: Matrix3<f64> = Matrix3::identity()
-                    + Matrix3::from_fn(|r, t| w.row(3 * c + r).dot(&b.row(3 * c + t)));
+                let s = DMatrix::identity(k, k)
+                    + DMatrix::from_fn(k, k, |r, t| w.row(k * c + r).dot(&b.row(k * c + t)));
                 match self.kind {
-                    Criterion::D => log_det3(&s) - nui_gain(c),
-                    Criterion::G if deficient => log_det3(&s),
+                    Criterion::D => log_det(&s) - nui_gain(c),
+                    Criterion::G if deficient => log_det(&s),
                     _ => self.diag_gain(&w, &s, c, wq.as_ref()),
                 }
             })
@@ -358,23 +375,24 @@ impl<'a> Scorer<'a> {
     fn diag_gain(
         &self,
         w: &DMatrix<f64>,
-        s: &Matrix3<f64>,
+        s: &DMatrix<f64>,
         c: usize,
         wq: Option<&(DMatrix<f64>, DMatrix<f64>)>,
     ) -> f64 {
-        let Some(si) = s.try_inverse() else {
+        let k = self.rows;
+        let Some(si) = s.clone().try_inverse() else {
             return f64::NEG_INFINITY;
         };
         if let Some((wqm, wi)) = wq {
             // trace(S^-1 W Q W^T) over the columns of interest
-            let a = Matrix3::from_fn(|r, t| wqm.row(3 * c + r).dot(&wi.row(3 * c + t)));
+            let a = DMatrix::from_fn(k, k, |r, t| wqm.row(k * c + r).dot(&wi.row(k * c + t)));
             return (si * a).trace();
         }
         self.cols
             .iter()
             .map(|&i| {
-                let v = Vector3::new(w[(3 * c, i)], w[(3 * c + 1, i)], w[(3 * c + 2, i)]);
-                let drop = v.dot(&(si * v));
+                let v = DVector::from_fn(k, |r, _| w[(k * c + r, i)]);
+                let drop = v.dot(&(&si * &v));
                 if self.kind == Criterion::A {
                     self.weights[i] * drop
                 } else {
@@ -397,46 +415,51 @@ mod tests {
     #[test]
     fn gains_match_direct_evaluation() {
         let p = 7;
-        let b = random_stack(40, p, 8);
         let prior = DMatrix::zeros(p, p);
-        for kind in [Criterion::D, Criterion::A, Criterion::G, Criterion::I] {
-            for interest in [vec![], vec![1usize, 4]] {
-                let mut sc = Scorer::new(kind, &b, &prior, &interest).unwrap();
-                let mut chosen: Vec<usize> = Vec::new();
-                for add in [3usize, 9, 17, 21] {
-                    let g = sc.gains();
-                    if kind == Criterion::G && sc.deficient() {
+        // a chain's pose (3 rows) and a two-tip tree's (6 rows)
+        for (rows, b) in [
+            (POSE_ROWS, random_stack(40, p, 8)),
+            (6, random_stack(80, p, 9)),
+        ] {
+            for kind in [Criterion::D, Criterion::A, Criterion::G, Criterion::I] {
+                for interest in [vec![], vec![1usize, 4]] {
+                    let mut sc = Scorer::new(kind, &b, rows, &prior, &interest).unwrap();
+                    let mut chosen: Vec<usize> = Vec::new();
+                    for add in [3usize, 9, 17, 21] {
+                        let g = sc.gains();
+                        if kind == Criterion::G && sc.deficient() {
+                            sc.update(add, 1.0);
+                            chosen.push(add);
+                            continue;
+                        }
+                        let before = sc.value(&chosen);
+                        for c in [0usize, 5, 30] {
+                            let mut with = chosen.clone();
+                            with.push(c);
+                            let direct = sc.value(&with) - before;
+                            // while rank deficient, 1/RIDGE-sized variances cancel to O(1): fewer digits
+                            let rel = if rows * chosen.len() < p { 1e-5 } else { 1e-7 };
+                            let tol = rel * (1.0 + direct.abs());
+                            assert!(
+                                (g[c] - direct).abs() < tol,
+                                "{kind:?} {interest:?} after {chosen:?} + {c}: {} vs {direct}",
+                                g[c]
+                            );
+                        }
                         sc.update(add, 1.0);
                         chosen.push(add);
-                        continue;
                     }
-                    let before = sc.value(&chosen);
-                    for c in [0usize, 5, 30] {
-                        let mut with = chosen.clone();
-                        with.push(c);
-                        let direct = sc.value(&with) - before;
-                        // while rank deficient, 1/RIDGE-sized variances cancel to O(1): fewer digits
-                        let rel = if 3 * chosen.len() < p { 1e-5 } else { 1e-7 };
-                        let tol = rel * (1.0 + direct.abs());
-                        assert!(
-                            (g[c] - direct).abs() < tol,
-                            "{kind:?} {interest:?} after {chosen:?} + {c}: {} vs {direct}",
-                            g[c]
-                        );
-                    }
-                    sc.update(add, 1.0);
-                    chosen.push(add);
+                    sc.update(9, -1.0);
+                    chosen.retain(|&c| c != 9);
+                    let g = sc.gains();
+                    let mut with = chosen.clone();
+                    with.push(11);
+                    let direct = sc.value(&with) - sc.value(&chosen);
+                    assert!(
+                        (g[11] - direct).abs() < 1e-6 * (1.0 + direct.abs()),
+                        "{kind:?} after removal"
+                    );
                 }
-                sc.update(9, -1.0);
-                chosen.retain(|&c| c != 9);
-                let g = sc.gains();
-                let mut with = chosen.clone();
-                with.push(11);
-                let direct = sc.value(&with) - sc.value(&chosen);
-                assert!(
-                    (g[11] - direct).abs() < 1e-6 * (1.0 + direct.abs()),
-                    "{kind:?} after removal"
-                );
             }
         }
     }

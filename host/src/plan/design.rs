@@ -1,7 +1,9 @@
-//! Optimal designs on a candidate set: greedy selection then Fedorov-type exchange, with rank-3
-//! updates of the inverse information matrix (each pose measures three coordinates).
+//! Optimal designs on a candidate set: greedy selection then Fedorov-type exchange, with rank-k
+//! updates of the inverse information matrix (a chain's pose measures three coordinates, a
+//! tree's three per tip).
 //!
-//! `b` stacks the (column-scaled) Jacobian blocks of every candidate, three rows each. The
+//! `b` stacks the (column-scaled) Jacobian blocks of every candidate, [`Problem::rows`] rows
+//! each. The
 //! information of a design `S` is `M = M0 + sum_{c in S} B_c^T B_c` (`M0`: poses already
 //! measured); the criteria (D/Ds, A, G, I) and their per-candidate gains are in
 //! [`super::criteria`].
@@ -14,7 +16,7 @@
 
 use nalgebra::DMatrix;
 
-pub use super::criteria::{information, Criterion, RIDGE};
+pub use super::criteria::{information, Criterion, POSE_ROWS, RIDGE};
 use super::criteria::{value, Scorer};
 use super::PlanError;
 
@@ -41,7 +43,7 @@ pub fn a_criterion(
     chosen: &[usize],
     interest: &[usize],
 ) -> f64 {
-    let m = information(b, prior, chosen);
+    let m = information(b, POSE_ROWS, prior, chosen);
     value(Criterion::A, &m, interest, &DMatrix::zeros(0, 0))
 }
 
@@ -53,7 +55,7 @@ pub fn criterion(
     chosen: &[usize],
     nuisance: &[usize],
 ) -> f64 {
-    let m = information(b, prior, chosen);
+    let m = information(b, POSE_ROWS, prior, chosen);
     let p = m.nrows();
     let interest: Vec<usize> = (0..p).filter(|c| !nuisance.contains(c)).collect();
     let interest = if nuisance.is_empty() {
@@ -64,7 +66,7 @@ pub fn criterion(
     value(Criterion::D, &m, &interest, &DMatrix::zeros(0, 0))
 }
 
-/// Chooses `n` distinct candidates (rows `3c..3c+3` of `b`) maximising the criterion `kind`
+/// Chooses `n` distinct candidates (a chain's poses: rows `3c..3c+3` of `b`) maximising the criterion `kind`
 /// (restricted to the columns `interest` when it is a non-empty proper subset), greedily from
 /// an empty design then by exchanges. `prior`: the information of poses already measured
 /// (p x p, zeros for none).
@@ -103,6 +105,7 @@ pub fn exchange_weighted(
 ) -> Result<Design, PlanError> {
     let problem = Problem {
         b,
+        rows: POSE_ROWS,
         prior,
         interest,
         kind,
@@ -116,8 +119,10 @@ pub fn exchange_weighted(
 /// A design problem on a candidate set.
 #[derive(Debug, Clone, Copy)]
 pub struct Problem<'a> {
-    /// Scaled Jacobian blocks of the candidates, 3 rows each.
+    /// Scaled Jacobian blocks of the candidates, `rows` rows each.
     pub b: &'a DMatrix<f64>,
+    /// Rows of a candidate's block ([`POSE_ROWS`] on a chain, 3 per tip on a tree).
+    pub rows: usize,
     /// Information of the poses already measured (p x p).
     pub prior: &'a DMatrix<f64>,
     /// Columns of interest (all when empty).
@@ -137,6 +142,7 @@ pub struct Problem<'a> {
 pub fn exchange(problem: &Problem<'_>, n: usize, start: &[usize]) -> Result<Design, PlanError> {
     let Problem {
         b,
+        rows,
         prior,
         interest,
         kind,
@@ -144,7 +150,7 @@ pub fn exchange(problem: &Problem<'_>, n: usize, start: &[usize]) -> Result<Desi
         prediction,
         admissible,
     } = *problem;
-    let n_cand = b.nrows() / 3;
+    let n_cand = b.nrows() / rows.max(1);
     // a candidate that may not be chosen counts as taken from the start
     let mut taken: Vec<bool> = (0..n_cand)
         .map(|c| admissible.get(c).is_some_and(|a| !a))
@@ -156,7 +162,7 @@ pub fn exchange(problem: &Problem<'_>, n: usize, start: &[usize]) -> Result<Desi
             candidates: available,
         });
     }
-    let mut sc = Scorer::new(kind, b, prior, interest)?.with_weights(weights);
+    let mut sc = Scorer::new(kind, b, rows, prior, interest)?.with_weights(weights);
     if let Some(q) = prediction {
         sc = sc.with_prediction_weight(q);
     }
@@ -295,6 +301,7 @@ mod tests {
         }
         let problem = Problem {
             b: &b,
+            rows: POSE_ROWS,
             prior: &prior,
             interest: &[],
             kind: Criterion::A,

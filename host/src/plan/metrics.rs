@@ -6,6 +6,7 @@ use nalgebra::DMatrix;
 use rand::seq::index::sample;
 use rand::Rng;
 
+use super::criteria::POSE_ROWS;
 use crate::calib::fit::parameter_sigmas;
 use crate::calib::identifiability::{scaled_svd, DEFAULT_RTOL};
 
@@ -24,22 +25,24 @@ pub struct DesignStats {
     pub o1: f64,
 }
 
-/// Stacks rows `3c..3c+3` of `b` for every `c` of `chosen` under `prior_rows`, with the column
-/// scale `scale` undone (parameter units).
+/// Stacks the block (rows `k c .. k c + k`, `k` = `rows`) of `b` of every `c` of `chosen` under
+/// `prior_rows`, with the column scale `scale` undone (parameter units).
 pub fn stack_rows(
     b: &DMatrix<f64>,
+    rows: usize,
     scale: &[f64],
     prior_rows: &DMatrix<f64>,
     chosen: &[usize],
 ) -> DMatrix<f64> {
     let p = b.ncols();
     let m0 = prior_rows.nrows();
-    DMatrix::from_fn(m0 + 3 * chosen.len(), p, |r, c| {
+    let k = rows.max(1);
+    DMatrix::from_fn(m0 + k * chosen.len(), p, |r, c| {
         let v = if r < m0 {
             prior_rows[(r, c)]
         } else {
-            let k = r - m0;
-            b[(3 * chosen[k / 3] + k % 3, c)]
+            let i = r - m0;
+            b[(k * chosen[i / k] + i % k, c)]
         };
         v * scale[c]
     })
@@ -104,8 +107,10 @@ pub fn median(values: &[f64]) -> f64 {
 
 /// The random baseline: `draws` designs of `n` distinct random candidates (plus the prior
 /// rows); per parameter the median sigma over the draws, and the median condition number.
+#[allow(clippy::too_many_arguments)]
 pub fn random_baseline(
     b: &DMatrix<f64>,
+    rows: usize,
     scale: &[f64],
     prior_rows: &DMatrix<f64>,
     n: usize,
@@ -113,12 +118,14 @@ pub fn random_baseline(
     noise_mm: f64,
     rng: &mut impl Rng,
 ) -> DesignStats {
-    random_baseline_draws(b, scale, prior_rows, n, draws, noise_mm, rng).0
+    random_baseline_draws(b, rows, scale, prior_rows, n, draws, noise_mm, rng).0
 }
 
 /// As [`random_baseline`], with every draw's sigmas (one vector per draw).
+#[allow(clippy::too_many_arguments)]
 pub fn random_baseline_draws(
     b: &DMatrix<f64>,
+    rows: usize,
     scale: &[f64],
     prior_rows: &DMatrix<f64>,
     n: usize,
@@ -126,16 +133,16 @@ pub fn random_baseline_draws(
     noise_mm: f64,
     rng: &mut impl Rng,
 ) -> (DesignStats, Vec<Vec<f64>>) {
-    let n_cand = b.nrows() / 3;
+    let n_cand = b.nrows() / rows.max(1);
     let p = b.ncols();
-    let prior_poses = prior_rows.nrows() / 3;
+    let prior_poses = prior_rows.nrows() / rows.max(1);
     let prior_rows = &compact_prior(prior_rows);
     let mut sig: Vec<Vec<f64>> = vec![Vec::with_capacity(draws); p];
     let mut per_draw = Vec::with_capacity(draws.max(1));
     let (mut conds, mut mins, mut o1s) = (Vec::new(), Vec::new(), Vec::new());
     for _ in 0..draws.max(1) {
         let pick = sample(rng, n_cand, n.min(n_cand)).into_vec();
-        let jac = stack_rows(b, scale, prior_rows, &pick);
+        let jac = stack_rows(b, rows, scale, prior_rows, &pick);
         let st = design_stats(&jac, prior_poses + pick.len(), noise_mm);
         for (k, s) in st.sigma.iter().enumerate() {
             sig[k].push(*s);
@@ -203,7 +210,7 @@ impl DirectRatio {
     }
 }
 
-/// The spread of the baseline: for each of `draws` random designs of `n` candidates (plus the
+/// The spread of a chain plan's baseline: for each of `draws` random designs of `n` candidates (plus the
 /// prior rows), the median over parameters of `planned[i] / sigma_i(draw)`.
 #[allow(clippy::too_many_arguments)]
 pub fn ratio_per_draw(
@@ -216,13 +223,13 @@ pub fn ratio_per_draw(
     noise_mm: f64,
     rng: &mut impl Rng,
 ) -> Vec<f64> {
-    let n_cand = b.nrows() / 3;
-    let prior_poses = prior_rows.nrows() / 3;
+    let n_cand = b.nrows() / POSE_ROWS;
+    let prior_poses = prior_rows.nrows() / POSE_ROWS;
     let prior_rows = &compact_prior(prior_rows);
     (0..draws)
         .map(|_| {
             let pick = sample(rng, n_cand, n.min(n_cand)).into_vec();
-            let jac = stack_rows(b, scale, prior_rows, &pick);
+            let jac = stack_rows(b, POSE_ROWS, scale, prior_rows, &pick);
             let st = design_stats(&jac, prior_poses + pick.len(), noise_mm);
             median_ratio(planned, &st.sigma)
         })

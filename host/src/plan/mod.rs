@@ -22,6 +22,8 @@
 //! | [`sheets`] | `--sheets`: candidate pencil sheets and paths, what each sheet and pair identifies, the blind parameters |
 //! | [`sheets_output`] | the `sheets` object of `plan.json` and the sheet table |
 //! | [`evaluate`] | a plan checked on a simulated truth: held-out error against the noise floor |
+//! | [`tree`] | the plan of a tree model: safe for every tip's chain, branches kept apart, the tree's identification |
+//! | [`tree_output`] | a tree plan's `plan.csv`, `plan.json` and summary |
 //!
 //! The parameters are those the calibration identifies ([`crate::calib::default_selection`],
 //! the thesis's 12 on the Katana), linearised at the declared model with its declared static
@@ -54,6 +56,8 @@ mod steps;
 #[cfg(test)]
 mod test_support;
 pub mod trajectory;
+pub mod tree;
+pub mod tree_output;
 pub mod workspace;
 
 use rand::SeedableRng;
@@ -314,12 +318,13 @@ pub fn plan(
     let b_uniform = setup.b.rows(0, 3 * n_uniform).into_owned();
     // the baseline first: A weighs each parameter's variance by 1 / its random-design variance
     let (random, random_draws, weights) = baseline(&b_uniform, &setup, cfg, &mut rng);
-    let prediction = criteria::prediction_weight(&b_uniform);
+    let prediction = criteria::prediction_weight(&b_uniform, criteria::POSE_ROWS);
     let n_pool = cands.len();
     let best =
         continuous::best_possible(model, cfg, &mut setup, &mut cands, &weights, &prediction)?;
     let problem = design::Problem {
         b: &setup.b,
+        rows: criteria::POSE_ROWS,
         prior: &prior,
         interest: &setup.interest,
         kind: cfg.criterion,
@@ -341,7 +346,13 @@ pub fn plan(
     let sweeps = refine_sweeps(cfg, pool_index.is_some(), from.is_some());
     let refined = refiner.refine(&prior, &start, sweeps)?;
     let chosen: Vec<usize> = (0..refined.poses.len()).collect();
-    let jac = metrics::stack_rows(&refined.blocks, &setup.scale, &setup.prior_rows, &chosen);
+    let jac = metrics::stack_rows(
+        &refined.blocks,
+        criteria::POSE_ROWS,
+        &setup.scale,
+        &setup.prior_rows,
+        &chosen,
+    );
     let planned = design_stats(&jac, prior_poses + cfg.n, cfg.noise_mm);
     let median_sigma_ratio = median_ratio(&planned.sigma, &random.sigma);
     let optimum = best.map(|b| {

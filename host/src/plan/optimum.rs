@@ -374,7 +374,7 @@ pub fn approximate_optimum_from(
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::plan::criteria::information;
+    use crate::plan::criteria::{information, POSE_ROWS};
     use crate::plan::test_support::random_stack;
     use rand::SeedableRng;
     use rand_chacha::ChaCha8Rng;
@@ -400,7 +400,7 @@ mod tests {
             }
             for _ in 0..300 {
                 let pick = rand::seq::index::sample(&mut rng, 60, n).into_vec();
-                let m = information(&b, &DMatrix::zeros(p, p), &pick);
+                let m = information(&b, POSE_ROWS, &DMatrix::zeros(p, p), &pick);
                 let eff = o.efficiency_bound(&m, &w);
                 assert!(
                     eff <= 1.0 + 1e-9,

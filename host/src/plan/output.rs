@@ -6,7 +6,7 @@ use std::fmt::Write as _;
 use serde_json::{json, Map, Value};
 
 use super::aliased::FromDiagnoseReport;
-use super::metrics::quantile;
+use super::metrics::{quantile, DesignStats};
 use super::Plan;
 
 /// The plan as CSV: joints with 9 decimals (deg), nominal tool point with 6 (mm).
@@ -29,11 +29,11 @@ pub fn plan_csv(plan: &Plan) -> String {
     out
 }
 
-fn num(v: f64) -> Value {
+pub(super) fn num(v: f64) -> Value {
     serde_json::Number::from_f64(v).map_or(Value::Null, Value::Number)
 }
 
-fn named(names: &[String], values: &[f64]) -> Value {
+pub(super) fn named(names: &[String], values: &[f64]) -> Value {
     let mut m = Map::new();
     for (n, v) in names.iter().zip(values) {
         m.insert(n.clone(), num(*v));
@@ -137,6 +137,27 @@ pub fn plan_json(plan: &Plan, noise_mm: f64, seed: u64, sheets: Option<Value>) -
 }
 
 /// The table printed on stdout.
+/// Every parameter's expected sigma planned and of random designs, and their ratio (names
+/// `width` wide).
+pub(super) fn sigma_table(
+    names: &[String],
+    planned: &DesignStats,
+    random: &DesignStats,
+    width: usize,
+) -> String {
+    let mut out = String::new();
+    let _ = writeln!(
+        out,
+        "{:<width$} {:>14} {:>14} {:>7}",
+        "parameter", "sigma planned", "sigma random", "ratio"
+    );
+    for (k, name) in names.iter().enumerate() {
+        let (p, r) = (planned.sigma[k], random.sigma[k]);
+        let _ = writeln!(out, "{name:<width$} {p:>14.6} {r:>14.6} {:>7.3}", p / r);
+    }
+    out
+}
+
 pub fn summary_table(plan: &Plan, noise_mm: f64) -> String {
     let mut out = String::new();
     let _ = writeln!(
@@ -150,15 +171,7 @@ pub fn summary_table(plan: &Plan, noise_mm: f64) -> String {
         plan.robot,
         plan.parameters.len()
     );
-    let _ = writeln!(
-        out,
-        "{:<28} {:>14} {:>14} {:>7}",
-        "parameter", "sigma planned", "sigma random", "ratio"
-    );
-    for (k, name) in plan.parameters.iter().enumerate() {
-        let (p, r) = (plan.planned.sigma[k], plan.random.sigma[k]);
-        let _ = writeln!(out, "{name:<28} {p:>14.6} {r:>14.6} {:>7.3}", p / r);
-    }
+    out += &sigma_table(&plan.parameters, &plan.planned, &plan.random, 28);
     let _ = writeln!(
         out,
         "condition number {:.2} (random {:.2}), O1 {:.4} (random {:.4}), median sigma ratio {:.3}",

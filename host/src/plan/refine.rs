@@ -216,7 +216,7 @@ impl Refiner<'_> {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::plan::criteria::prediction_weight;
+    use crate::plan::criteria::{prediction_weight, POSE_ROWS};
     use crate::plan::test_support::{katana_pool, KatanaPool};
 
     /// The analytic block of a configuration equals the candidate set's rows; the refinement
@@ -236,7 +236,7 @@ mod tests {
         }
         let p = setup.b.ncols();
         let prior = DMatrix::zeros(p, p);
-        let q = prediction_weight(&setup.b);
+        let q = prediction_weight(&setup.b, POSE_ROWS);
         for kind in [Criterion::A, Criterion::D, Criterion::I] {
             let r = Refiner {
                 model: &model,

@@ -108,27 +108,16 @@ impl Setup {
     ) -> Result<Self, PlanError> {
         let q: Vec<Vec<f64>> = cands.iter().map(|c| c.q_deg.clone()).collect();
         let (jac_all, _) = ext.stacked(&joints_dataset(&q), requested)?;
-        let id = analyse(&jac_all, DEFAULT_RTOL);
         let names_all: Vec<String> = requested.iter().map(|u| u.name(&ext.model)).collect();
-        let name_refs: Vec<&str> = names_all.iter().map(String::as_str).collect();
-        let unidentifiable = id.combinations.iter().map(|c| c.name(&name_refs)).collect();
-        let kept = id.kept;
-        let n_cand = cands.len().max(1) as f64;
-        let scale: Vec<f64> = kept
-            .iter()
-            .map(|&k| {
-                let s = jac_all.column(k).norm() / n_cand.sqrt();
-                if s > 0.0 && s.is_finite() {
-                    s
-                } else {
-                    1.0
-                }
-            })
-            .collect();
+        let Scaled {
+            kept,
+            unidentifiable,
+            scale,
+            b,
+        } = Scaled::of(&jac_all, &names_all, cands.len());
         let scaled = |jac: &DMatrix<f64>| {
             DMatrix::from_fn(jac.nrows(), kept.len(), |r, c| jac[(r, kept[c])] / scale[c])
         };
-        let b = scaled(&jac_all);
         let prior_rows = if prior_q.is_empty() {
             DMatrix::zeros(0, kept.len())
         } else {
@@ -153,5 +142,51 @@ impl Setup {
             linearity: None,
             admissible: Vec::new(),
         })
+    }
+}
+
+/// The columns of a candidate set's Jacobian that the whole set identifies, scaled to unit RMS
+/// per candidate so that degrees and millimetres compare (a chain's or a tree's).
+#[derive(Debug, Clone)]
+pub struct Scaled {
+    /// The identifiable columns of the Jacobian, in order.
+    pub kept: Vec<usize>,
+    /// The unidentifiable combinations, by name.
+    pub unidentifiable: Vec<String>,
+    /// The scale of every kept column (its RMS per candidate; 1 for a zero column).
+    pub scale: Vec<f64>,
+    /// The kept columns divided by their scale.
+    pub b: DMatrix<f64>,
+}
+
+impl Scaled {
+    /// The identifiable, scaled columns of `jac_all` (the Jacobian of `n_cand` candidates, its
+    /// columns named `names`).
+    pub fn of(jac_all: &DMatrix<f64>, names: &[String], n_cand: usize) -> Self {
+        let id = analyse(jac_all, DEFAULT_RTOL);
+        let name_refs: Vec<&str> = names.iter().map(String::as_str).collect();
+        let unidentifiable = id.combinations.iter().map(|c| c.name(&name_refs)).collect();
+        let kept = id.kept;
+        let root_n = (n_cand.max(1) as f64).sqrt();
+        let scale: Vec<f64> = kept
+            .iter()
+            .map(|&k| {
+                let s = jac_all.column(k).norm() / root_n;
+                if s > 0.0 && s.is_finite() {
+                    s
+                } else {
+                    1.0
+                }
+            })
+            .collect();
+        let b = DMatrix::from_fn(jac_all.nrows(), kept.len(), |r, c| {
+            jac_all[(r, kept[c])] / scale[c]
+        });
+        Self {
+            kept,
+            unidentifiable,
+            scale,
+            b,
+        }
     }
 }

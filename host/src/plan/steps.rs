@@ -117,6 +117,7 @@ pub(super) fn baseline(
 ) -> (DesignStats, Vec<Vec<f64>>, Vec<f64>) {
     let (random, random_draws) = metrics::random_baseline_draws(
         b_uniform,
+        criteria::POSE_ROWS,
         &setup.scale,
         &setup.prior_rows,
         cfg.n,
@@ -167,7 +168,7 @@ pub(super) fn optimum_report(
     random_sigma: &[f64],
 ) -> optimum::OptimumReport {
     let p = blocks.ncols();
-    let m_plan = criteria::information(blocks, &DMatrix::zeros(p, p), chosen);
+    let m_plan = criteria::information(blocks, criteria::POSE_ROWS, &DMatrix::zeros(p, p), chosen);
     optimum::OptimumReport::new(
         b.optimum,
         &b.weight,

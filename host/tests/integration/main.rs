@@ -88,6 +88,7 @@ mod tree_diagnose;
 mod tree_fit;
 mod tree_gravity;
 mod tree_lateral;
+mod tree_plan;
 mod urdf_export;
 mod urdf_import;
 mod urdf_tree;

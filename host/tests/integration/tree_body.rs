@@ -113,6 +113,20 @@ impl Body {
         out
     }
 
+    /// The joint frames' origins (mm, R) of the unbent body at the readings `q`.
+    pub(crate) fn origins_mm(&self, q: &[f64]) -> Vec<Vector3<f64>> {
+        self.frames(q, &[]).into_iter().map(|(_, o)| o).collect()
+    }
+
+    /// The hands' points (mm, R) of the rigid body at the readings `q`.
+    pub(crate) fn rigid_hands_mm(&self, q: &[f64]) -> Vec<Vector3<f64>> {
+        let f = self.frames(q, &[]);
+        self.tips
+            .iter()
+            .map(|(_, j, tool)| f[*j].0 * Vector3::from(*tool) + f[*j].1)
+            .collect()
+    }
+
     /// Gravity torque about every joint's axis (kgf.m): the z component of
     /// [`Body::moments_kgfm`].
     pub(crate) fn torques_kgfm(&self, q: &[f64]) -> Vec<f64> {

@@ -248,8 +248,9 @@ fn one_tip_of_the_tree_is_the_chain_imported_alone() {
         assert!(ka[1] < kb[1], "{tip}: torso_2 {} vs {}", ka[1], kb[1]);
         assert_eq!(ka[2..], kb[2..], "{tip}: the arm's own masses");
     }
-    // a tree given to a chain command is named as such
+    // a chain-only option given with a tree is named as such
     let plan = d.join("plan.csv");
+    let plot = d.join("plan.svg");
     let out = output(&[
         "plan",
         "--model",
@@ -258,6 +259,8 @@ fn one_tip_of_the_tree_is_the_chain_imported_alone() {
         "5",
         "--out",
         s(&plan),
+        "--plot",
+        s(&plot),
     ]);
     assert_eq!(out.status.code(), Some(2));
     let err = String::from_utf8_lossy(&out.stderr);
