@@ -14,7 +14,7 @@ pub use super::workspace::{
 };
 
 /// Tries per wanted candidate before giving up on the constraints.
-const TRIES_PER_CANDIDATE: usize = 200;
+pub(super) const TRIES_PER_CANDIDATE: usize = 200;
 
 /// One candidate pose: joint readings and the nominal (declared, rigid) tool point.
 #[derive(Debug, Clone, PartialEq)]
@@ -79,20 +79,30 @@ pub fn draw_candidates(
                 tries: max_tries,
             });
         }
-        let q: Vec<f64> = limits
-            .iter()
-            .map(|l| {
-                let (lo, hi) = ws.usable_range(l);
-                if hi > lo && (hi - lo).is_finite() {
-                    rng.gen_range(lo..hi)
-                } else {
-                    lo
-                }
-            })
-            .collect();
+        let q = random_configuration(&limits, ws, rng);
         out.extend(CandidatePose::admitted(model, q, ws)?);
     }
     Ok(out)
+}
+
+/// One configuration, every joint uniform within its limits less `ws`'s margin (the lower
+/// usable end where the range is empty).
+pub(super) fn random_configuration(
+    limits: &[[f64; 2]],
+    ws: &Workspace,
+    rng: &mut impl Rng,
+) -> Vec<f64> {
+    limits
+        .iter()
+        .map(|l| {
+            let (lo, hi) = ws.usable_range(l);
+            if hi > lo && (hi - lo).is_finite() {
+                rng.gen_range(lo..hi)
+            } else {
+                lo
+            }
+        })
+        .collect()
 }
 
 /// The configurations `pool` (joint readings, deg; e.g. the poses a robot can reach safely, or

@@ -21,9 +21,10 @@ use nalgebra::{DMatrix, Vector3};
 use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
 
+use super::candidates::{random_configuration, TRIES_PER_CANDIDATE};
 use super::criteria::{prediction_weight, Criterion};
 use super::design::{exchange, Problem};
-use super::metrics::{design_stats, median_ratio, random_baseline_draws, stack_rows, DesignStats};
+use super::metrics::{design_stats, median_ratio, random_baseline, stack_rows, DesignStats};
 use super::setup::Scaled;
 use super::steps::baseline_weights;
 use super::workspace::Workspace;
@@ -35,9 +36,6 @@ use crate::calib::CalibrateOptions;
 use crate::model::{Model, Tilt, Tree};
 
 use super::collision::model_joint_origins_mm;
-
-/// Tries per wanted candidate before giving up on the constraints.
-const TRIES_PER_CANDIDATE: usize = 200;
 
 /// Default smallest distance between points of two branches (frame origins and tip points), mm.
 pub const DEFAULT_BRANCH_CLEARANCE_MM: f64 = 100.0;
@@ -162,7 +160,7 @@ pub fn plan_tree(tree: &Tree, cfg: &TreePlanConfig) -> Result<TreePlan, PlanErro
         });
     }
     let no_prior = DMatrix::zeros(0, p);
-    let (random, draws) = random_baseline_draws(
+    let random = random_baseline(
         &scaled.b,
         rows,
         &scaled.scale,
@@ -191,9 +189,9 @@ pub fn plan_tree(tree: &Tree, cfg: &TreePlanConfig) -> Result<TreePlan, PlanErro
     )?;
     let planned_jac = stack_rows(&scaled.b, rows, &scaled.scale, &no_prior, &design.chosen);
     let planned = design_stats(&planned_jac, cfg.n, cfg.noise_mm);
-    let prediction_rms = |sigma_jac: &DMatrix<f64>| prediction_rms_mm(&scaled.b, rows, sigma_jac);
+    let prediction_rms = |design: &DMatrix<f64>| prediction_rms_mm(&prediction, rows, design);
     // the expected prediction error of random designs (fewer draws: a p x p inverse each)
-    let random_rms: Vec<f64> = (0..draws.len().clamp(1, 25))
+    let random_rms: Vec<f64> = (0..cfg.random_draws.clamp(1, 25))
         .map(|_| {
             let pick = rand::seq::index::sample(&mut rng, cands.len(), cfg.n).into_vec();
             prediction_rms(&stack_rows(
@@ -233,16 +231,15 @@ pub fn plan_tree(tree: &Tree, cfg: &TreePlanConfig) -> Result<TreePlan, PlanErro
     })
 }
 
-/// The root mean prediction variance per coordinate over the candidates' rows of `b` (scaled
-/// columns) of a design whose scaled rows are `design` (unit noise): `sqrt(trace(Q M^-1) / rows)`
-/// with `Q` the mean information of a candidate. Infinite when the design does not determine the
-/// parameters.
-fn prediction_rms_mm(b: &DMatrix<f64>, rows: usize, design: &DMatrix<f64>) -> f64 {
+/// The root mean prediction variance per coordinate over the candidates of a design whose
+/// scaled rows are `design` (unit noise): `sqrt(trace(Q M^-1) / rows)` with `q` = `Q` the mean
+/// information of a candidate ([`prediction_weight`]) and `rows` a pose's rows. Infinite when
+/// the design does not determine the parameters.
+fn prediction_rms_mm(q: &DMatrix<f64>, rows: usize, design: &DMatrix<f64>) -> f64 {
     let m = design.transpose() * design;
-    let Some(inv) = m.clone().cholesky().map(|c| c.inverse()) else {
+    let Some(inv) = m.cholesky().map(|c| c.inverse()) else {
         return f64::INFINITY;
     };
-    let q = prediction_weight(b, rows);
     ((inv * q).trace() / rows as f64).max(0.0).sqrt()
 }
 
@@ -313,17 +310,7 @@ impl<'a> Safety<'a> {
                 });
             }
             tries += 1;
-            let q: Vec<f64> = limits
-                .iter()
-                .map(|l| {
-                    let (lo, hi) = self.ws.usable_range(l);
-                    if hi > lo && (hi - lo).is_finite() {
-                        rng.gen_range(lo..hi)
-                    } else {
-                        lo
-                    }
-                })
-                .collect();
+            let q = random_configuration(&limits, self.ws, rng);
             out.extend(self.admitted(q)?);
         }
         Ok((out, tries))
