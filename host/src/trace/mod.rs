@@ -16,6 +16,8 @@
 //!    weights);
 //! 5. centreline: tracking with darkness-weighted centroids across the stroke, bridging the
 //!    printed ring dots ([`centreline`], its window statistics in `centreline/section.rs`);
+//!    edges of light cut out: a hard shadow's step, a scan's page edge
+//!    (`centreline/illumination.rs`);
 //! 6. the drawn path from the graphite itself: pieces linked end to end by continuity of
 //!    position, direction and curvature, skips bridged, what is left out listed and judged
 //!    ([`link`]; the printed path only a hint between chains of similar length); the written
@@ -365,6 +367,9 @@ fn track(
     let pieces = centreline::track_all(
         img, &ink, paper, &occluders, map, &seeds, &roi, &params, progress,
     );
+    // Edges of light are not ink: steps of light cut out, the page's own edge dropped.
+    let cp = &opts.params.centreline;
+    let pieces = centreline::cut_light_steps(pieces, img, &ink, paper, px_per_mm, cp);
     let pieces_mm: Vec<chain::PieceMm> = pieces
         .into_iter()
         .map(|p| chain::PieceMm {
@@ -372,6 +377,9 @@ fn track(
             closed: p.closed,
         })
         .filter(|p| polyline_length(&p.pts, p.closed) >= 0.5)
+        .filter(|p| {
+            !matches!(opts.mapping, Mapping::Fiducials { .. }) || !centreline::is_page_edge(p, cp)
+        })
         .collect();
     Ok(Tracked {
         pieces_mm,
