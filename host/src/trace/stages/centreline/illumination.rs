@@ -86,9 +86,9 @@ fn profile(
             let mut m = 0.0;
             for r in raw[lo..=hi].iter().flatten() {
                 c += r.0;
-                for s in 0..2 {
-                    for k in 0..3 {
-                        sides[s][k] += r.1[s][k];
+                for (acc, flank) in sides.iter_mut().zip(&r.1) {
+                    for (a, v) in acc.iter_mut().zip(flank) {
+                        *a += v;
                     }
                 }
                 m += 1.0;
