@@ -367,9 +367,15 @@ fn track(
     let pieces = centreline::track_all(
         img, &ink, paper, &occluders, map, &seeds, &roi, &params, progress,
     );
-    // Edges of light are not ink: steps of light cut out, the page's own edge dropped.
+    // Edges of light are not ink: steps of light cut out, the page's own edge dropped (on a
+    // printed sheet; a plain-scale image, e.g. a plotter's photo, is traced as it was).
     let cp = &opts.params.centreline;
-    let pieces = centreline::cut_light_steps(pieces, img, &ink, paper, px_per_mm, cp);
+    let sheet = matches!(opts.mapping, Mapping::Fiducials { .. });
+    let pieces = if sheet {
+        centreline::cut_light_steps(pieces, img, &ink, paper, px_per_mm, cp)
+    } else {
+        pieces
+    };
     let pieces_mm: Vec<chain::PieceMm> = pieces
         .into_iter()
         .map(|p| chain::PieceMm {
@@ -377,9 +383,7 @@ fn track(
             closed: p.closed,
         })
         .filter(|p| polyline_length(&p.pts, p.closed) >= 0.5)
-        .filter(|p| {
-            !matches!(opts.mapping, Mapping::Fiducials { .. }) || !centreline::is_page_edge(p, cp)
-        })
+        .filter(|p| !sheet || !centreline::is_page_edge(p, cp))
         .collect();
     Ok(Tracked {
         pieces_mm,
