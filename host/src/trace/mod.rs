@@ -16,6 +16,8 @@
 //!    weights);
 //! 5. centreline: tracking with darkness-weighted centroids across the stroke, bridging the
 //!    printed ring dots ([`centreline`], its window statistics in `centreline/section.rs`);
+//!    edges of light cut out: a hard shadow's step, a scan's page edge
+//!    (`centreline/illumination.rs`);
 //! 6. the drawn path from the graphite itself: pieces linked end to end by continuity of
 //!    position, direction and curvature, skips bridged, what is left out listed and judged
 //!    ([`link`]; the printed path only a hint between chains of similar length); the written
@@ -365,6 +367,15 @@ fn track(
     let pieces = centreline::track_all(
         img, &ink, paper, &occluders, map, &seeds, &roi, &params, progress,
     );
+    // Edges of light are not ink: steps of light cut out, the page's own edge dropped (on a
+    // printed sheet; a plain-scale image, e.g. a plotter's photo, is traced as it was).
+    let cp = &opts.params.centreline;
+    let sheet = matches!(opts.mapping, Mapping::Fiducials { .. });
+    let pieces = if sheet {
+        centreline::cut_light_steps(pieces, img, &ink, paper, px_per_mm, cp)
+    } else {
+        pieces
+    };
     let pieces_mm: Vec<chain::PieceMm> = pieces
         .into_iter()
         .map(|p| chain::PieceMm {
@@ -372,6 +383,7 @@ fn track(
             closed: p.closed,
         })
         .filter(|p| polyline_length(&p.pts, p.closed) >= 0.5)
+        .filter(|p| !sheet || !centreline::is_page_edge(p, cp))
         .collect();
     Ok(Tracked {
         pieces_mm,

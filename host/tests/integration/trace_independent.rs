@@ -10,7 +10,8 @@
 //! Here: the sets of 20 seeds per renderer and image kind (`renderers` draws them) and a pencil
 //! line across ring dots. In the submodules: the exit rule (`exit_rule`), several drawn lines
 //! (`drawing`), sheets not lying flat (`bends`), device tone curves (`tone_curves`), two runs
-//! on one sheet (`two_runs`), six sheets as a new user would draw them (`reported`).
+//! on one sheet (`two_runs`), hard shadows and page edges (`shadows`), six sheets as a new user
+//! would draw them (`reported`).
 
 #[path = "trace_independent/bends.rs"]
 mod bends;
@@ -26,6 +27,8 @@ mod render2;
 mod renderers;
 #[path = "trace_independent/reported.rs"]
 mod reported;
+#[path = "trace_independent/shadows.rs"]
+mod shadows;
 #[path = "trace_independent/tone_curves.rs"]
 mod tone_curves;
 #[path = "trace_independent/two_runs.rs"]

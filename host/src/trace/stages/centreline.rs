@@ -2,7 +2,8 @@
 //! local tangent and put each centre at the darkness-weighted centroid of the pixels in a short
 //! window across the stroke (along the local normal; not a skeleton). Ends are found where the
 //! stroke's mass per unit length falls to half, then pulled back by half the stroke width (a
-//! round pencil tip leaves a round cap). Work is confined to windows around the stroke.
+//! round pencil tip leaves a round cap). Work is confined to windows around the stroke. Edges of
+//! light (a hard shadow's, a scan's page edge) are cut out of the pieces (`illumination.rs`).
 
 use crate::trace::ink::InkModel;
 use crate::trace::paper::PaperMap;
@@ -12,12 +13,14 @@ use image::RgbImage;
 use indicatif::ProgressBar;
 use own_track::{Retrace, Verdict};
 
+mod illumination;
 mod own_track;
 mod params;
 mod section;
 
 pub use params::CentrelineParams;
 
+pub(crate) use illumination::{cut_light_steps, is_page_edge};
 pub(crate) use section::Occluders;
 
 /// The owner of blocks around a seed too faint to begin a piece: not seeded again, but free

@@ -51,6 +51,11 @@ impl Placement {
         }
     }
 
+    /// Pixels per mm.
+    pub(super) fn ppmm(&self) -> f64 {
+        self.ppmm
+    }
+
     pub(super) fn sheet(&self, px: [f64; 2]) -> [f64; 2] {
         apply(&self.to_sheet, px)
     }

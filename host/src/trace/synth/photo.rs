@@ -49,6 +49,8 @@ pub struct PhotoSpec {
     pub seed: u64,
     /// The sheet bent (a bow, a lifted edge); `None`: flat on the desk.
     pub bend: Option<super::Bend>,
+    /// A hard shadow across the sheet (a phone's, sharp-edged); `None`: none.
+    pub hard_shadow: Option<super::HardShadow>,
 }
 
 impl Default for PhotoSpec {
@@ -73,6 +75,7 @@ impl Default for PhotoSpec {
             desk_level: 0.35,
             seed: 7,
             bend: None,
+            hard_shadow: None,
         }
     }
 }
@@ -216,10 +219,13 @@ pub fn render_photo(sheet: &RenderSpec, photo: &PhotoSpec) -> RgbImage {
         photo.gradient_dir_deg.to_radians().sin(),
     );
     let diag = (w as f64).hypot(h as f64);
+    // A pixel's size on the sheet, mm (for a hard shadow's edge).
+    let pixel_mm = photo.distance_mm / photo.focal_px.max(1e-9);
     for y in 0..h {
         for x in 0..w {
             let p = [x as f64 + 0.5, y as f64 + 0.5];
-            let mut v = match cam.unproject_onto(p, photo.bend.as_ref()) {
+            let on_sheet = cam.unproject_onto(p, photo.bend.as_ref());
+            let mut v = match on_sheet {
                 Some(s) => {
                     let page = [
                         (PAGE_WIDTH_MM / 2.0 + s[0]) * ppmm,
@@ -239,6 +245,9 @@ pub fn render_photo(sheet: &RenderSpec, photo: &PhotoSpec) -> RgbImage {
                 let t = ((q - 0.7) / 0.6).clamp(0.0, 1.0);
                 let smooth = t * t * (3.0 - 2.0 * t);
                 light *= 1.0 - depth * (1.0 - smooth);
+            }
+            if let (Some(hs), Some(s)) = (&photo.hard_shadow, on_sheet) {
+                light *= hs.light_at(s, pixel_mm);
             }
             for c in v.iter_mut() {
                 *c *= light;

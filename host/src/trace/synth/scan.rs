@@ -72,6 +72,12 @@ pub struct RenderSpec {
     pub fibres_mm: Vec<[f64; 4]>,
     /// Level (0..1) of whatever the scanner sees outside the page (desk, lid); `None`: paper.
     pub desk_level: Option<f64>,
+    /// The page's centre in sheet mm: the print off-centre on the page (a printer's margin), so
+    /// that one page edge may fall inside the trace area (with `desk_level` set).
+    pub page_offset_mm: [f64; 2],
+    /// The shadow the page's edge casts on the lid beyond it, `[width_mm, depth]` (with
+    /// `desk_level` set); `None`: none.
+    pub lid_shadow: Option<[f64; 2]>,
     /// The tone curve the device writes through (a photo applies it after its light, blur and
     /// noise, before JPEG).
     pub device_tone: DeviceTone,
@@ -102,6 +108,8 @@ impl Default for RenderSpec {
             dust_mm: Vec::new(),
             fibres_mm: Vec::new(),
             desk_level: None,
+            page_offset_mm: [0.0, 0.0],
+            lid_shadow: None,
             device_tone: DeviceTone::Linear,
         }
     }
@@ -214,7 +222,13 @@ pub fn render_scan(spec: &RenderSpec) -> RgbImage {
         }
     }
     if let Some(level) = spec.desk_level {
-        desk(&mut img, &place, level);
+        desk(
+            &mut img,
+            &place,
+            level,
+            spec.page_offset_mm,
+            spec.lid_shadow,
+        );
     }
     spec.device_tone.apply(&mut img);
     img

@@ -100,6 +100,8 @@ fn a_sheet_of_several_lines_gives_one_path_per_line() {
         seed: 24,
         tone: None,
         sag: None,
+        hand: None,
+        page: render2::Page::default(),
     });
     let opts = TraceOptions {
         path: PathChoice::Free,
@@ -230,6 +232,8 @@ fn a_grid_drawn_several_times_gives_one_line_per_grid_line() {
         seed: 31,
         tone: None,
         sag: None,
+        hand: None,
+        page: render2::Page::default(),
     });
     let opts = TraceOptions {
         path: PathChoice::Free,

@@ -24,5 +24,5 @@ mod strokes;
 mod view;
 
 pub use raster::render;
-pub use scene::{Mark, Printed, Scene};
-pub use view::{off_centre, photo_view, scan_view, Sag};
+pub use scene::{Hand, Mark, Page, Printed, Scene};
+pub use view::{off_centre, photo_view, scan_view, scan_view_wide, Sag};

@@ -88,6 +88,19 @@ pub(super) fn render_independent_with(
     tone: Option<fn(f64) -> f64>,
     sag: Option<render2::Sag>,
 ) -> image::RgbImage {
+    render2::render(&independent_scene(c, kind, s, seed, tone, sag))
+}
+
+/// The scene [`render_independent_with`] renders (for sets that change it further: a hand's
+/// shadow, the page's edge).
+pub(super) fn independent_scene(
+    c: &Case,
+    kind: Kind,
+    s: &Shot,
+    seed: u64,
+    tone: Option<fn(f64) -> f64>,
+    sag: Option<render2::Sag>,
+) -> Scene {
     let mut marks = vec![render2::Mark {
         pts: c.truth.clone(),
         width_mm: c.width_mm,
@@ -150,7 +163,7 @@ pub(super) fn render_independent_with(
             None,
         ),
     };
-    render2::render(&Scene {
+    Scene {
         printed: c.printed,
         marks,
         dust: c.dust.clone(),
@@ -162,7 +175,9 @@ pub(super) fn render_independent_with(
         seed,
         tone,
         sag,
-    })
+        hand: None,
+        page: render2::Page::default(),
+    }
 }
 
 pub(super) fn render_project(c: &Case, kind: Kind, seed: u64) -> image::RgbImage {
@@ -187,6 +202,19 @@ pub(super) fn render_project_with(
     tone: DeviceTone,
     bend: Option<Bend>,
 ) -> image::RgbImage {
+    render_project_changed(c, kind, seed, tone, bend, |_, _| {})
+}
+
+/// [`render_project_with`], the sheet's and the photo's specs changed by `change` before the
+/// render (a hard shadow, the page's edge).
+pub(super) fn render_project_changed(
+    c: &Case,
+    kind: Kind,
+    seed: u64,
+    tone: DeviceTone,
+    bend: Option<Bend>,
+    change: impl FnOnce(&mut RenderSpec, &mut PhotoSpec),
+) -> image::RgbImage {
     let s = shot(kind, seed);
     let spec = RenderSpec {
         dpi: if kind == Kind::Photo {
@@ -209,29 +237,27 @@ pub(super) fn render_project_with(
         device_tone: tone,
         ..RenderSpec::default()
     };
+    let dist = 400.0;
+    let half = (s.ppm * 100.0 * 1.45) as u32;
+    let mut photo = PhotoSpec {
+        width_px: 2 * half + 80,
+        height_px: 2 * half + 80,
+        focal_px: s.ppm * dist,
+        distance_mm: dist,
+        tilt_deg: s.tilt.to_degrees(),
+        tilt_azimuth_deg: s.azimuth.to_degrees(),
+        roll_deg: s.roll.to_degrees(),
+        k1: s.k1,
+        texture_dpi: 450.0,
+        jpeg_quality: Some(s.jpeg),
+        seed,
+        bend,
+        ..PhotoSpec::default()
+    };
+    let mut spec = spec;
+    change(&mut spec, &mut photo);
     match kind {
-        Kind::Photo => {
-            let dist = 400.0;
-            let half = (s.ppm * 100.0 * 1.45) as u32;
-            render_photo(
-                &spec,
-                &PhotoSpec {
-                    width_px: 2 * half + 80,
-                    height_px: 2 * half + 80,
-                    focal_px: s.ppm * dist,
-                    distance_mm: dist,
-                    tilt_deg: s.tilt.to_degrees(),
-                    tilt_azimuth_deg: s.azimuth.to_degrees(),
-                    roll_deg: s.roll.to_degrees(),
-                    k1: s.k1,
-                    texture_dpi: 450.0,
-                    jpeg_quality: Some(s.jpeg),
-                    seed,
-                    bend,
-                    ..PhotoSpec::default()
-                },
-            )
-        }
+        Kind::Photo => render_photo(&spec, &photo),
         _ => render_scan(&spec),
     }
 }

@@ -32,5 +32,31 @@ stage_params! {
         /// Along its own track within 15 deg, either way along it (cosine): the same line again.
         /// Higher: only a closer retrace counts as one.
         aligned_cos: f64 = 0.966,
+        /// A piece's flanks are read this far from its centreline on either side (the lightest
+        /// of the three offsets is the flank), mm (`illumination.rs`). Nearer: thick strokes
+        /// read as their own flanks; farther: a pencil line beside a shadow's edge reads as a
+        /// step.
+        step_flank_mm: [f64; 3] = [0.7, 1.5, 2.5],
+        /// Centre and flanks are averaged along the piece over this half length, mm. More: less
+        /// noise, shorter steps missed.
+        step_window_mm: f64 = 1.0,
+        /// A step of light: one flank's contrast to the centre under this share of the other's.
+        /// Higher: more of a line beside a shadow cut out. Ratio.
+        step_ratio: f64 = 0.35,
+        /// ... with the other flank's contrast at least this darkness. Lower: faint steps cut
+        /// too. Darkness (fraction of the paper's light).
+        step_min_contrast: f64 = 0.06,
+        /// Stretches of steps at least this long are cut out of a piece, mm. Shorter: more of a
+        /// pencil line crossing a shadow's edge cut (the link bridges it).
+        step_run_mm: f64 = 1.5,
+        /// The page's own edge: a straight piece wholly at least this far across from the
+        /// sheet's centre (outside the printed ring at 90 mm), mm.
+        page_edge_from_mm: f64 = 92.0,
+        /// ... along the sheet's y axis within this angle, degrees.
+        page_edge_max_deg: f64 = 3.0,
+        /// ... straight within this RMS across, mm.
+        page_edge_rms_mm: f64 = 0.3,
+        /// ... at least this long, mm.
+        page_edge_min_mm: f64 = 5.0,
     }
 }

@@ -1,5 +1,6 @@
 //! The second renderer's raster: every pixel mapped back to sheet mm and the sheet evaluated
-//! there (n x n sub-samples near ink), paper tooth, light (shading, vignette, shadow edge),
+//! there (n x n sub-samples near ink), paper tooth, light (shading, vignette, shadow edge, a
+//! hand's hard shadow), the page's edge and the lid beyond it,
 //! hashed triangular noise, a 3-tap blur and JPEG for photos, the device's tone curve.
 
 use image::RgbImage;
@@ -100,9 +101,15 @@ pub fn render(scene: &Scene) -> RgbImage {
     let mut buf = vec![0f32; 3 * w as usize * h as usize];
     // Reflectance of the sheet at `p` (mm) for a pixel `aa` mm across.
     let sheet = |p: [f64; 2], aa: f64| -> [f64; 3] {
-        let on_page = p[0].abs() <= 105.0 && p[1].abs() <= 140.0;
-        if !on_page {
-            return [0.28, 0.26, 0.24];
+        let out = scene.page.outside_mm(p);
+        if out > 0.0 {
+            let pg = &scene.page;
+            let shade = if pg.shadow_mm > 0.0 {
+                1.0 - pg.shadow_depth * (-out / pg.shadow_mm).exp()
+            } else {
+                1.0
+            };
+            return pg.lid.map(|v| v * shade);
         }
         let mut rgb = [0.93, 0.92, 0.885];
         let Some(cell) = idx(p) else {
@@ -193,6 +200,9 @@ pub fn render(scene: &Scene) -> RgbImage {
                 light *= 1.0 - vig * r2;
                 let edge = (pm[0] * 0.6 + pm[1] * 0.8 - 40.0) / 25.0;
                 light *= 1.0 - 0.22 / (1.0 + (-edge).exp());
+                if let Some(hand) = &scene.hand {
+                    light *= hand.light_at(pm);
+                }
             }
             let o = 3 * (y as usize * w as usize + x as usize);
             for k in 0..3 {

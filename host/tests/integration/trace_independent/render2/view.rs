@@ -266,9 +266,15 @@ pub fn photo_view(
 
 /// A flatbed scan of the fiducial square with a 3 mm margin, rotated by `rot_deg`.
 pub fn scan_view(dpi: f64, rot_deg: f64) -> View {
+    scan_view_wide(dpi, rot_deg, 96.0)
+}
+
+/// [`scan_view`] reaching `half_mm` from the sheet's centre (96 mm: the fiducial square and a
+/// 3 mm margin).
+pub fn scan_view_wide(dpi: f64, rot_deg: f64, half_mm: f64) -> View {
     let ppm = dpi / 25.4;
     let rot = rot_deg.to_radians();
-    let half = 96.0 * (rot.cos().abs() + rot.sin().abs());
+    let half = half_mm * (rot.cos().abs() + rot.sin().abs());
     let n = (2.0 * half * ppm).ceil() as u32;
     View::Scan {
         px_per_mm: ppm,
