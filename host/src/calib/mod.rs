@@ -34,6 +34,7 @@
 //! | [`calibrate_general`] | `calibrate_poses`, the one library entry of `calibrate` on a [`MeasuredSet`]: the model's terms applied, then partial measurements, one point per pose, or several points, `--compliance`, `--select press` |
 //! | [`registered`] | the input model with only the instrument's frame fitted (registration only): the report's "before" with `--base` |
 //! | [`tree_fit`] | one identification over a tree model: its unknowns as a state (`TreeUnknowns`), the rows of every measured tip point of the tree's [`MeasuredSet`], [`position_fit::refine`] on them (`fit_tree`) |
+//! | [`tree_read`] | a tree's pose file as its measured set: one point per tip, units and motion checked per tip |
 //! | [`tree_calibrate`] | `calibrate` on a tree: the selection on every tip's chain, the fit, the same `calibrate --json` document |
 //! | [`samples`] | the pencil rig's partial measurement: a fused sample (`FUSED.csv` row) |
 
@@ -71,6 +72,7 @@ pub mod stats;
 pub mod tree_calibrate;
 pub mod tree_fit;
 pub mod tree_held_out;
+pub mod tree_read;
 pub mod unknown;
 
 pub use accumulator::position_errors;

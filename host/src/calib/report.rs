@@ -154,6 +154,10 @@ pub struct CalibrateReport {
     /// --assume-masses`): `{total_kg, per_joint_kg, rule}`, as `diagnose`'s.
     #[serde(skip_serializing_if = "Option::is_none")]
     pub assumed_masses: Option<serde_json::Value>,
+    /// The tree a tree model's calibration is of: `{name, tips, joints}`, as `diagnose`'s; its
+    /// statistics are over every tip's point of a pose.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub tree: Option<serde_json::Value>,
 }
 
 /// The `calibrate --json` document of the chosen `fit` of a model's parameters (model
@@ -224,6 +228,7 @@ pub fn unknowns_report<M, U: Clone + PartialEq>(
         prior: None,
         registered: None,
         assumed_masses: None,
+        tree: None,
     }
 }
 

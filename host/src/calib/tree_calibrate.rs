@@ -191,6 +191,7 @@ pub fn calibrate_tree(
         false,
     );
     report.large_changes = tree_large_changes(nominal, &fit.model)?;
+    report.tree = Some(tree_json(nominal));
     report.unphysical.extend(held);
     if let Some(t) = &trimmed {
         let all = pose_norms_mm(&fit.model, cal_all)?;
@@ -219,6 +220,16 @@ pub fn calibrate_tree(
         calibration_errors,
         validation_errors,
         validation_flagged: held_out.flagged,
+    })
+}
+
+/// The `tree` object of a tree's `calibrate --json` and `diagnose --json`: its name, tips (in the
+/// pose files' point order) and number of joints.
+pub fn tree_json(tree: &Tree) -> serde_json::Value {
+    serde_json::json!({
+        "name": tree.name,
+        "tips": tree.tips.iter().map(|t| t.name.clone()).collect::<Vec<_>>(),
+        "joints": tree.n_joints(),
     })
 }
 

@@ -15,11 +15,9 @@ use rigctl::calib::calibrate_general::Select;
 use rigctl::calib::measured::MeasuredSet;
 use rigctl::calib::prior::PriorMode;
 use rigctl::calib::tree_calibrate::{calibrate_tree, tree_registration_only};
-use rigctl::calib::tree_fit::check_tree_plausible;
+use rigctl::calib::tree_read::read_tree_set;
 use rigctl::calib::CalibrateOptions;
-use rigctl::io::pose_csv::{read_poses, PoseSpec};
-use rigctl::model::tree_file::is_tree_text;
-use rigctl::model::{ModelError, Tree};
+use rigctl::model::Tree;
 
 use super::calibrate::{
     no_redundancy, not_converged, plausible_changes, registers, writes_model, Args,
@@ -35,49 +33,13 @@ pub fn tree_model(model: &ModelArgs) -> Result<Option<Tree>, CliError> {
     let Some(path) = &model.model else {
         return Ok(None);
     };
-    let text = rigctl::io::read::read_text_capped(path, rigctl::io::read::CAP_SMALL_TEXT).map_err(
-        |source| ModelError::Read {
-            path: path.clone(),
-            source,
-        },
-    )?;
-    if !is_tree_text(&text) {
-        return Ok(None);
-    }
-    Ok(Some(Tree::from_toml_str(
-        &text,
-        &path.display().to_string(),
-    )?))
+    Ok(Tree::from_file_if_tree(path)?)
 }
 
 /// The poses of a tree's pose file as the tree's measured set (point k on the k-th tip, the
 /// file's lines), checked for units and motion on every tip.
 pub(super) fn read(pose: &PoseArgs, tree: &Tree, path: &Path) -> Result<MeasuredSet, CliError> {
-    let spec = PoseSpec {
-        n_joints: tree.n_joints(),
-        limits: tree.joint_limits(),
-        require_xyz: true,
-        joint_names: tree.joint_names(),
-        prismatic: tree.prismatic(),
-        units: pose.units,
-        marker: 0,
-        dialect: pose.dialect(),
-    };
-    let file = read_poses(path, &spec)?;
-    if file.n_markers() != tree.tips.len() {
-        return Err(CliError::bad_input(format!(
-            "{}: {} measured point(s) per pose for a tree of {} tips: give x1,y1,z1 .. x{n},y{n},z{n} \
-             (point k on the k-th [[tip]])",
-            path.display(),
-            file.n_markers(),
-            tree.tips.len(),
-            n = tree.tips.len()
-        )));
-    }
-    let set = MeasuredSet::from_tip_pose_file(&file);
-    // units and motion checked per tip before any fit, as a chain's pose file is
-    check_tree_plausible(tree, &set, &path.display().to_string())?;
-    Ok(set)
+    Ok(read_tree_set(path, tree, pose.units, pose.dialect())?)
 }
 
 pub fn run(args: &Args, tree: Tree) -> Result<(), CliError> {

@@ -343,11 +343,7 @@ pub fn diagnose_tree(
         unexplained,
         floor,
         aliased: Vec::new(),
-        tree: serde_json::json!({
-            "name": nominal.name,
-            "tips": nominal.tips.iter().map(|t| t.name.clone()).collect::<Vec<_>>(),
-            "joints": nominal.n_joints(),
-        }),
+        tree: crate::calib::tree_calibrate::tree_json(nominal),
         candidates: all.iter().map(|c| c.id.clone()).collect(),
         candidates_note,
         outliers,

@@ -121,6 +121,16 @@ struct TipEntry {
     chain: Vec<ElemEntry>,
 }
 
+/// A model file's text (capped as every model file).
+fn read_model_text(path: &Path) -> Result<String, ModelError> {
+    crate::io::read::read_text_capped(path, crate::io::read::CAP_SMALL_TEXT).map_err(|source| {
+        ModelError::Read {
+            path: path.to_path_buf(),
+            source,
+        }
+    })
+}
+
 /// Whether a model file's text is a tree file (it has `[[tip]]` tables). Text that is not TOML
 /// is not a tree file (the chain reader reports its error).
 pub fn is_tree_text(text: &str) -> bool {
@@ -313,12 +323,18 @@ impl Tree {
 
     /// Reads a tree model file.
     pub fn from_file(path: &Path) -> Result<Tree, ModelError> {
-        let text = crate::io::read::read_text_capped(path, crate::io::read::CAP_SMALL_TEXT)
-            .map_err(|source| ModelError::Read {
-                path: path.to_path_buf(),
-                source,
-            })?;
+        let text = read_model_text(path)?;
         Self::from_toml_str(&text, &path.display().to_string())
+    }
+
+    /// Reads `path` as a tree model file when it is one (it has `[[tip]]` tables); `None` for
+    /// any other file (a chain's model file: its own reader reports its errors).
+    pub fn from_file_if_tree(path: &Path) -> Result<Option<Tree>, ModelError> {
+        let text = read_model_text(path)?;
+        if !is_tree_text(&text) {
+            return Ok(None);
+        }
+        Self::from_toml_str(&text, &path.display().to_string()).map(Some)
     }
 
     /// The tree as a tree model file (reads back to the identical tree).

@@ -76,6 +76,7 @@ pub fn draw_candidates(
             return Err(PlanError::Candidates {
                 wanted: count,
                 found: out.len(),
+                loosen: "--box / --visible-from",
                 tries: max_tries,
             });
         }

@@ -80,11 +80,13 @@ use steps::{
 #[derive(Debug, thiserror::Error)]
 pub enum PlanError {
     /// The workspace constraints admit too few configurations.
-    #[error("only {found} of {wanted} candidate poses satisfy the workspace constraints after {tries} random configurations (loosen --box / --visible-from)")]
+    #[error("only {found} of {wanted} candidate poses satisfy the workspace constraints after {tries} random configurations (loosen {loosen})")]
     Candidates {
         wanted: usize,
         found: usize,
         tries: usize,
+        /// The options that constrain these candidates, as the user would loosen them.
+        loosen: &'static str,
     },
     /// More poses asked than candidates.
     #[error("--n {n} is more than the {candidates} candidates")]

@@ -307,6 +307,8 @@ impl<'a> Safety<'a> {
                     wanted: count,
                     found: out.len(),
                     tries,
+                    loosen: "--table-z-mm / --keep-out / --branch-clearance-mm / \
+                             --limit-margin-deg / --min-z-mm / --box",
                 });
             }
             tries += 1;

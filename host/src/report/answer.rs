@@ -26,17 +26,7 @@ pub struct Identified {
 /// `unidentifiable`).
 pub fn identified(source: &str, doc: &Value) -> Option<Identified> {
     let total = doc.get("parameters")?.as_object()?.len();
-    let strings = |k: &str| -> Vec<String> {
-        doc.get(k)
-            .and_then(Value::as_array)
-            .map(|a| {
-                a.iter()
-                    .filter_map(Value::as_str)
-                    .map(String::from)
-                    .collect()
-            })
-            .unwrap_or_default()
-    };
+    let strings = |k: &str| super::markup::strings(doc.get(k));
     let kept = strings("fixed");
     Some(Identified {
         source: source.to_string(),
@@ -96,11 +86,14 @@ fn beyond_urdf(doc: &Value) -> Vec<String> {
 }
 
 /// Whether a calibrate document's `standard` fit is geometry only (no fitted compliance term:
-/// `--compliance` puts them in the standard fit too).
+/// `--compliance` puts them in the standard fit too; a chain's are `terms`, a tree's
+/// `parameters`).
 fn standard_is_geometry(doc: &Value) -> bool {
-    doc.get("terms")
-        .and_then(Value::as_object)
-        .is_none_or(|t| !t.keys().any(|k| k.contains("compliance")))
+    ["terms", "parameters"].iter().all(|key| {
+        doc.get(key)
+            .and_then(Value::as_object)
+            .is_none_or(|t| !t.keys().any(|k| k.contains("compliance")))
+    })
 }
 
 /// The best stage of a headline: the lowest mean error after the first (the "before").

@@ -15,8 +15,9 @@ use super::pose_sets::pose_sets;
 use super::run_dir::RunDir;
 use super::suggest::Suggest;
 use super::table::{merge_tables, tables_from_calibrate_json};
+use super::tree::{tree_facts, tree_pose_sets, POINTS};
 use super::{Report, ReportError, ReportOptions};
-use crate::model::{choose_model, Model, ModelChoice};
+use crate::model::{choose_model, Model, ModelChoice, Tree};
 use crate::plot::{LineChart, Series};
 
 /// The declared robot: the option, else `truth.json`'s, else a diagnose document's.
@@ -32,6 +33,15 @@ struct Models {
     declared: Option<Model>,
     truth: Option<Model>,
     files: Vec<(String, Model)>,
+    /// The declared model when `--model` names a tree model file.
+    declared_tree: Option<(std::path::PathBuf, Tree)>,
+    /// The tree model files of the run.
+    tree_files: Vec<(String, Tree)>,
+}
+
+fn stem(p: &std::path::Path) -> String {
+    p.file_stem()
+        .map_or_else(String::new, |s| s.to_string_lossy().into_owned())
 }
 
 fn load_models(
@@ -40,6 +50,14 @@ fn load_models(
     opts: &ReportOptions,
     notes: &mut Vec<String>,
 ) -> Models {
+    let declared_tree = match opts.model_file.as_deref().map(Tree::from_file_if_tree) {
+        Some(Ok(Some(t))) => opts.model_file.clone().map(|p| (p, t)),
+        Some(Err(e)) => {
+            notes.push(format!("declared model: {e}; pose files not evaluated"));
+            None
+        }
+        _ => None,
+    };
     let declared = match choose_model(&ModelChoice {
         robot: robot.filter(|_| opts.model_file.is_none()),
         model_file: opts.model_file.as_deref(),
@@ -47,6 +65,7 @@ fn load_models(
         sets: &opts.sets,
     }) {
         Ok(m) => Some(m),
+        Err(_) if declared_tree.is_some() => None,
         Err(e) => {
             notes.push(format!("declared model: {e}; pose files not evaluated"));
             None
@@ -58,13 +77,14 @@ fn load_models(
             .ok()
     });
     let mut files = Vec::new();
+    let mut tree_files = Vec::new();
     for p in &run.models {
-        match Model::from_file(p) {
-            Ok(m) => files.push((
-                p.file_stem()
-                    .map_or_else(String::new, |s| s.to_string_lossy().into_owned()),
-                m,
-            )),
+        match Tree::from_file_if_tree(p) {
+            Ok(Some(t)) => tree_files.push((stem(p), t)),
+            Ok(None) => match Model::from_file(p) {
+                Ok(m) => files.push((stem(p), m)),
+                Err(e) => notes.push(format!("model skipped: {e}")),
+            },
             Err(e) => notes.push(format!("model skipped: {e}")),
         }
     }
@@ -72,6 +92,8 @@ fn load_models(
         declared,
         truth,
         files,
+        declared_tree,
+        tree_files,
     }
 }
 
@@ -97,8 +119,29 @@ pub fn build_report(dir: &std::path::Path, opts: &ReportOptions) -> Result<Repor
     let mut tables = Vec::new();
     let mut best_model = None;
     let mut pose_counts = Vec::new();
-    if let Some(decl) = &models.declared {
-        let sets = pose_sets(&run, decl, &models.files, opts, &mut notes);
+    let tree = tree_facts(&run, models.declared_tree.as_ref());
+    let sets = match (&models.declared_tree, &tree, &models.declared) {
+        (Some((_, decl)), _, _) => Some(tree_pose_sets(
+            &run,
+            decl,
+            &models.tree_files,
+            opts,
+            &mut notes,
+        )),
+        (None, Some(t), _) => {
+            if run.cal_csv.is_some() || run.val_csv.is_some() {
+                notes.push(format!(
+                    "pose files not evaluated: the run is of the tree `{}` ({}); give its tree \
+                     model file with --model",
+                    t.name, t.source
+                ));
+            }
+            None
+        }
+        (None, None, Some(decl)) => Some(pose_sets(&run, decl, &models.files, opts, &mut notes)),
+        (None, None, None) => None,
+    };
+    if let Some(sets) = sets {
         tables.extend(sets.tables);
         report.figures.extend(sets.figures);
         best_model = sets.best_model;
@@ -115,7 +158,9 @@ pub fn build_report(dir: &std::path::Path, opts: &ReportOptions) -> Result<Repor
     let n_samples = path_errors.as_ref().map(|p| p.summary.n_samples);
     let no_pose_file = run.cal_csv.is_none() && run.val_csv.is_none();
     let noun_of = |n: usize| -> &'static str {
-        if pose_counts.contains(&n) {
+        if tree.is_some() {
+            POINTS
+        } else if pose_counts.contains(&n) {
             "poses"
         } else if n_samples == Some(n) || (no_pose_file && n_samples.is_some()) {
             "samples"
@@ -154,7 +199,8 @@ pub fn build_report(dir: &std::path::Path, opts: &ReportOptions) -> Result<Repor
             notes,
         });
     }
-    if let Some(decl) = &models.declared {
+    // the demonstration trajectory and its plots are a chain's
+    if let (Some(decl), None) = (&models.declared, &tree) {
         trajectory_figures(
             decl,
             models.truth.as_ref(),
@@ -167,6 +213,7 @@ pub fn build_report(dir: &std::path::Path, opts: &ReportOptions) -> Result<Repor
     report.summary = build_summary(
         &run,
         robot.as_deref(),
+        tree.as_ref(),
         &suggest,
         &report,
         &noun_of,

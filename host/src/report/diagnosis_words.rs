@@ -90,16 +90,7 @@ pub fn verdict(doc: &Value) -> Option<String> {
     let structured = un
         .and_then(|u| u.get("structured"))
         .and_then(Value::as_bool);
-    let depends: Vec<String> = un
-        .and_then(|u| u.get("depends_on"))
-        .and_then(Value::as_array)
-        .map(|a| {
-            a.iter()
-                .filter_map(Value::as_str)
-                .map(String::from)
-                .collect()
-        })
-        .unwrap_or_default();
+    let depends = super::markup::strings(un.and_then(|u| u.get("depends_on")));
     let share = un.and_then(|u| f(u, "explainable_share"));
     let (used, floor_words) = floor_words(doc);
     let structured = structured?;

@@ -56,10 +56,39 @@ pub struct ImageFigure {
 /// Largest width an overlay is embedded at (px); larger images are downscaled.
 pub const OVERLAY_MAX_WIDTH_PX: u32 = 1400;
 
-fn read_plan_positions(path: &std::path::Path) -> Result<Vec<[f64; 3]>, TableError> {
+/// Named point sets (mm, frame R), as [`WorkspaceViews`] draws them.
+type PointSets = Vec<(String, Vec<[f64; 3]>)>;
+
+/// The nominal points of `plan.csv`: `nom_x,nom_y,nom_z` (a chain's tool) as one set, else a
+/// tree's `nom_x<k>,nom_y<k>,nom_z<k>` as one set per tip, named from `tips` (plan.json's) when
+/// it has one name per tip.
+fn read_plan_positions(path: &std::path::Path, tips: &[String]) -> Result<PointSets, TableError> {
     let t = Table::read(path)?;
-    let cols = [t.need("nom_x")?, t.need("nom_y")?, t.need("nom_z")?];
-    t.rows.iter().map(|r| t.numbers(r, cols)).collect()
+    let read = |cols: [usize; 3]| -> Result<Vec<[f64; 3]>, TableError> {
+        t.rows.iter().map(|r| t.numbers(r, cols)).collect()
+    };
+    if t.find("nom_x").is_some() || t.find("nom_x1").is_none() {
+        let cols = [t.need("nom_x")?, t.need("nom_y")?, t.need("nom_z")?];
+        return Ok(vec![("planned".to_string(), read(cols)?)]);
+    }
+    let mut sets = Vec::new();
+    for k in 1.. {
+        let Some(x) = t.find(&format!("nom_x{k}")) else {
+            break;
+        };
+        let cols = [
+            x,
+            t.need(&format!("nom_y{k}"))?,
+            t.need(&format!("nom_z{k}"))?,
+        ];
+        sets.push((format!("tip {k}"), read(cols)?));
+    }
+    if tips.len() == sets.len() {
+        for (set, name) in sets.iter_mut().zip(tips) {
+            set.0 = format!("tip {name}");
+        }
+    }
+    Ok(sets)
 }
 
 /// The plan section, when the run directory holds `plan.csv` or `plan.json`.
@@ -70,15 +99,22 @@ pub(crate) fn plan_section(run: &RunDir, notes: &mut Vec<String>) -> Option<Plan
     let mut sec = PlanSection::default();
     let mut sources = Vec::new();
     if let Some(path) = &run.plan_csv {
-        match read_plan_positions(path) {
-            Ok(p) => {
+        let tips = super::markup::strings(run.plan_json.as_ref().and_then(|(_, d)| d.get("tips")));
+        match read_plan_positions(path, &tips) {
+            Ok(sets) => {
                 sources.push("plan.csv".to_string());
-                sec.n_poses = Some(p.len());
+                let n = sets.first().map_or(0, |s| s.1.len());
+                sec.n_poses = Some(n);
+                let what = if sets.len() > 1 {
+                    "every tip's point of the nominal tree"
+                } else {
+                    "tool position of the nominal model"
+                };
                 sec.figure = figure(
-                    format!("The {} planned poses, tool position of the nominal model seen from above (x-y) and from the side (x-z): they should fill the working volume, not a corner of it.", p.len()),
+                    format!("The {n} planned poses, {what} seen from above (x-y) and from the side (x-z): they should fill the working volume, not a corner of it."),
                     &WorkspaceViews {
                         title: "Planned poses in the workspace (frame R)".into(),
-                        sets: vec![("planned".into(), p)],
+                        sets,
                     },
                     notes,
                 );

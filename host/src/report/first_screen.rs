@@ -13,6 +13,7 @@ use super::markup::figure_with;
 use super::run_dir::RunDir;
 use super::suggest::Suggest;
 use super::summary::{headlines, Diagnosis, Headline, Stage, Summary};
+use super::tree::{TreeFacts, POINTS};
 use super::Report;
 use crate::plot::summary::fmt_mm;
 use crate::plot::StageBars;
@@ -20,10 +21,14 @@ use crate::plot::StageBars;
 fn about(
     run: &RunDir,
     robot: Option<&str>,
+    tree: Option<&TreeFacts>,
     noun_of: &dyn Fn(usize) -> &'static str,
 ) -> Vec<String> {
     let mut out = Vec::new();
-    let mut r = format!("Robot: {}", robot.unwrap_or("katana450 (default)"));
+    let mut r = match tree {
+        Some(t) => t.robot_line().trim_end_matches('.').to_string(),
+        None => format!("Robot: {}", robot.unwrap_or("katana450 (default)")),
+    };
     if let Some(t) = &run.truth_json {
         let mut facts = Vec::new();
         if let Some(s) = t.get("seed") {
@@ -85,6 +90,8 @@ fn about(
         let partial = d.get("measurements").and_then(Value::as_str) == Some("partial");
         let noun = if partial {
             "samples (partial measurements along a drawn path)"
+        } else if tree.is_some() {
+            POINTS
         } else {
             "poses"
         };
@@ -274,6 +281,7 @@ fn next_steps(
 pub(crate) fn build_summary(
     run: &RunDir,
     robot: Option<&str>,
+    tree: Option<&TreeFacts>,
     suggest: &Suggest,
     report: &Report,
     noun_of: &dyn Fn(usize) -> &'static str,
@@ -315,6 +323,8 @@ pub(crate) fn build_summary(
             source: name.clone(),
             noun: if doc.get("measurements").and_then(Value::as_str) == Some("partial") {
                 "samples"
+            } else if tree.is_some() {
+                POINTS
             } else {
                 "poses"
             },
@@ -336,7 +346,7 @@ pub(crate) fn build_summary(
         .first()
         .and_then(|h| urdf_accuracy(h, &run.calibrate, &run.diagnose));
     Summary {
-        about: about(run, robot, noun_of),
+        about: about(run, robot, tree, noun_of),
         headlines: heads,
         figure: fig,
         diagnoses,

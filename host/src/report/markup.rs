@@ -6,6 +6,18 @@ use std::fmt::Write as _;
 use super::Figure;
 use crate::plot::{svg_string, Chart};
 
+/// The strings of a JSON array (other elements, or anything but an array, give none).
+pub(crate) fn strings(v: Option<&serde_json::Value>) -> Vec<String> {
+    v.and_then(serde_json::Value::as_array)
+        .map(|a| {
+            a.iter()
+                .filter_map(serde_json::Value::as_str)
+                .map(String::from)
+                .collect()
+        })
+        .unwrap_or_default()
+}
+
 /// `chart` as a [`Figure`] with `caption`; a chart that cannot be drawn becomes a note.
 pub(crate) fn figure<C: Chart>(
     caption: String,

@@ -15,6 +15,7 @@
 //! | [`analysis`] | recomputed numbers: per-pose errors, parameter influence (fig. 3.8), moments and tilts (fig. 5.8-5.10), path error (fig. 5.12) |
 //! | [`path_errors`] | the section "Path error along the drawn path (thesis fig. 5.12)" from `path_errors.csv`: the per-sample errors of the low-cost rig that `rigctl calibrate --samples FUSED.csv --errors-csv path_errors.csv` writes (columns `t,q1..qN,dev_u_before,dev_n_before,dp_before,dev_u_after,dev_n_after,dp_after,dev_u_standard,dev_n_standard,dp_standard`, mm; see [`crate::plot::path_errors`]), as a chart and a table of RMS / max / mean before, after the standard calibration and after the chosen method (named from `calibrate*.json`'s `method`) |
 //! | [`captions`] | captions true to their plots: "near zero", "at most X mm", "no trend remains" computed from the values drawn (kept in [`Figure`]'s `series`) |
+//! | [`tree`] | a tree's run: the tree the documents are of, its figures counted in points (one per tip of a pose), its pose files evaluated with the nominal tree and every tree model file (a table over every tip, one per tip, before / after figures per tip) |
 //! | [`build`] | [`build_report`]: run directory -> [`Report`] |
 //! | `markup` | what the sections share and that imports none of them: a chart as a [`Figure`], HTML escaping, a figure's HTML |
 //! | [`html`] | [`render_html`]: [`Report`] -> page: the first screen, a table of contents, then the details; A4 print styles |
@@ -39,6 +40,7 @@ pub mod run_dir;
 pub mod suggest;
 pub mod summary;
 pub mod table;
+pub mod tree;
 
 use std::path::{Path, PathBuf};
 

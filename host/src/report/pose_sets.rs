@@ -55,6 +55,51 @@ fn read_set(
     MeasuredSet::read_with(path, &spec)
 }
 
+/// A pose file of the run read as a measured set.
+pub(super) struct PoseFile<'a> {
+    pub path: &'a std::path::Path,
+    /// "Calibration poses" or "Held-out poses".
+    pub title: &'static str,
+    pub held_out: bool,
+    pub set: MeasuredSet,
+}
+
+/// `cal.csv` and `val.csv` read by `read`; a file with no poses or that cannot be read is a note.
+pub(super) fn read_pose_files<'a, E: std::fmt::Display>(
+    run: &'a RunDir,
+    read: impl Fn(&std::path::Path) -> Result<MeasuredSet, E>,
+    notes: &mut Vec<String>,
+) -> Vec<PoseFile<'a>> {
+    let mut out = Vec::new();
+    for (path, title, held_out) in [
+        (&run.cal_csv, "Calibration poses", false),
+        (&run.val_csv, "Held-out poses", true),
+    ] {
+        let Some(path) = path else { continue };
+        match read(path) {
+            Ok(set) if !set.is_empty() => out.push(PoseFile {
+                path,
+                title,
+                held_out,
+                set,
+            }),
+            Ok(_) => notes.push(format!("{}: no poses", path.display())),
+            Err(e) => notes.push(format!("{title} skipped: {e}")),
+        }
+    }
+    out
+}
+
+/// Index among the model files (after the nominal column `cols[0]`) of the one with the lowest
+/// mean error; `None` without model files.
+pub(super) fn best_model(cols: &[Evaluated]) -> Option<usize> {
+    (1..cols.len())
+        .min_by(|&a, &b| {
+            mean(&norms(&cols[a].errors_mm)).total_cmp(&mean(&norms(&cols[b].errors_mm)))
+        })
+        .map(|k| k - 1)
+}
+
 /// Evaluates `cal.csv` and `val.csv` with `decl` (nominal, no tilting) and every model.
 pub(crate) fn pose_sets(
     run: &RunDir,
@@ -65,22 +110,13 @@ pub(crate) fn pose_sets(
 ) -> PoseSets {
     let mut out = PoseSets::default();
     let mut cal_q: Option<Vec<Vec<f64>>> = None;
-    for (path, title, held_out) in [
-        (&run.cal_csv, "Calibration poses", false),
-        (&run.val_csv, "Held-out poses", true),
-    ] {
-        let Some(path) = path else { continue };
-        let set = match read_set(path, decl, opts) {
-            Ok(s) if !s.is_empty() => s,
-            Ok(_) => {
-                notes.push(format!("{}: no poses", path.display()));
-                continue;
-            }
-            Err(e) => {
-                notes.push(format!("{title} skipped: {e}"));
-                continue;
-            }
-        };
+    for PoseFile {
+        path,
+        title,
+        held_out,
+        set,
+    } in read_pose_files(run, |p| read_set(p, decl, opts), notes)
+    {
         out.counts.push(set.len());
         let mut cols: Vec<Evaluated> = Vec::new();
         match evaluate("nominal model", decl, &set, Some(false)) {
@@ -108,15 +144,11 @@ pub(crate) fn pose_sets(
             .map_or_else(String::new, |n| n.to_string_lossy().into_owned());
         out.tables.push(ErrorTable::new(title, &file, &columns));
         // the best model on the calibration poses is "after" in every figure
-        if out.best_model.is_none() && cols.len() > 1 {
-            out.best_model = (1..cols.len())
-                .min_by(|&a, &b| {
-                    mean(&norms(&cols[a].errors_mm)).total_cmp(&mean(&norms(&cols[b].errors_mm)))
-                })
-                .map(|k| k - 1);
+        if out.best_model.is_none() {
+            out.best_model = best_model(&cols);
         }
         match out.best_model.filter(|b| b + 1 < cols.len()) {
-            Some(b) => before_after_figures(title, held_out, &set, &cols[0], &cols[b + 1], &mut out.figures, notes),
+            Some(b) => before_after_figures(title, held_out, &set.poses.q_deg, &cols[0], &cols[b + 1], &mut out.figures, notes),
             None => notes.push(format!(
                 "{title}: no calibrated model file (*.toml) in the run directory, so no before/after plots"
             )),
@@ -131,10 +163,10 @@ pub(crate) fn pose_sets(
     out
 }
 
-fn before_after_figures(
+pub(super) fn before_after_figures(
     title: &str,
     held_out: bool,
-    set: &MeasuredSet,
+    q_deg: &[Vec<f64>],
     before_col: &Evaluated,
     after_col: &Evaluated,
     figures: &mut Vec<Figure>,
@@ -185,8 +217,8 @@ fn before_after_figures(
         pair(),
         notes,
     ));
-    if let Some((j, r)) = most_correlated_joint(&set.poses.q_deg, &before) {
-        let x: Vec<f64> = set.poses.q_deg.iter().map(|q| q[j]).collect();
+    if let Some((j, r)) = most_correlated_joint(q_deg, &before) {
+        let x: Vec<f64> = q_deg.iter().map(|q| q[j]).collect();
         let x_cols: Vec<Vec<f64>> = x.iter().map(|v| vec![*v]).collect();
         let r_after = most_correlated_joint(&x_cols, &after).map(|(_, r)| r);
         let mut series = pair();

@@ -130,6 +130,14 @@ fn push_stage(h: &mut Headline, label: &str, st: (usize, f64, f64), source: &str
     }
 }
 
+/// A diagnosis's final stage: the last model it reached, so after its declared fit even when an
+/// earlier document reached the same numbers (that stage is taken out, not kept before it).
+fn push_last(h: &mut Headline, label: &str, st: (usize, f64, f64), source: &str) {
+    h.stages
+        .retain(|s| (s.mean_mm - st.1).abs() > 0.02 * s.mean_mm.abs().max(1e-12));
+    push_stage(h, label, st, source);
+}
+
 fn headline<'a>(
     list: &'a mut Vec<Headline>,
     n: usize,
@@ -247,7 +255,7 @@ pub fn headlines(
                         if n_eff == 1 { "" } else { "s" },
                         not_converged_words(doc)
                     );
-                    push_stage(h, &label, fin, name);
+                    push_last(h, &label, fin, name);
                 }
             }
         }

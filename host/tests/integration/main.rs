@@ -89,6 +89,7 @@ mod tree_fit;
 mod tree_gravity;
 mod tree_lateral;
 mod tree_plan;
+mod tree_report;
 mod urdf_export;
 mod urdf_import;
 mod urdf_tree;

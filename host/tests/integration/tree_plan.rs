@@ -174,13 +174,14 @@ fn tree_plan_is_safe_and_beats_random_poses_held_out() {
     );
 }
 
-#[test]
-fn chain_only_plan_options_are_refused_on_a_tree() {
+/// `rigctl plan --model BODY --n 20 --out plan.csv EXTRA` on the nominal body: exit code,
+/// stderr, and whether plan.csv was written.
+fn plan_body(extra: &[&str]) -> (Option<i32>, String, bool) {
     let dir = tempfile::tempdir().unwrap();
     let model = dir.path().join("body.toml");
     std::fs::write(&model, Body::nominal().model_toml()).unwrap();
     let out = dir.path().join("plan.csv");
-    let run = output(&[
+    let mut args = vec![
         "plan",
         "--model",
         path_arg(&model),
@@ -188,12 +189,32 @@ fn chain_only_plan_options_are_refused_on_a_tree() {
         "20",
         "--out",
         path_arg(&out),
-        "--plot",
-        path_arg(&dir.path().join("p.svg")),
-        "--sheets",
-    ]);
-    assert_eq!(run.status.code(), Some(2), "{}", text(&run.stderr));
-    let err = text(&run.stderr);
+    ];
+    args.extend(extra);
+    let run = output(&args);
+    (run.status.code(), text(&run.stderr), out.exists())
+}
+
+#[test]
+fn chain_only_plan_options_are_refused_on_a_tree() {
+    let (code, err, written) = plan_body(&["--plot", "p.svg", "--sheets"]);
+    assert_eq!(code, Some(2), "{err}");
     assert!(err.contains("--plot") && err.contains("--sheets"), "{err}");
-    assert!(!out.exists(), "nothing written");
+    assert!(!written, "nothing written");
+}
+
+#[test]
+fn a_table_above_every_pose_is_a_failure_naming_the_tree_options() {
+    // the table 5 m up: no pose of the body has its hands above it
+    let (code, err, written) = plan_body(&["--candidates", "200", "--table-z-mm", "5000"]);
+    assert_eq!(code, Some(1), "{err}");
+    assert!(
+        err.contains("--table-z-mm") && err.contains("--branch-clearance-mm"),
+        "{err}"
+    );
+    assert!(
+        !err.contains("--visible-from"),
+        "a chain's option named: {err}"
+    );
+    assert!(!written, "nothing written");
 }
