@@ -442,8 +442,9 @@ const MAX_SETTLE_REFITS: usize = 4;
 /// ([`crate::model::effect::bound`], one table for `calibrate` and `diagnose`). The gravity
 /// torques are always those of the state's chain (as `fk` on the written model computes them),
 /// and a compliance fitted below its bound (negative) is held at the bound and
-/// left out of the fitted set; the others are refitted, until nothing changes. Returns the fit
-/// and a line for every value held.
+/// left out of the fitted set; the others are refitted, until nothing changes. Without
+/// compliance only a value outside its bound (a payload heavier than the robot's links) is
+/// held so. Returns the fit and a line for every value held.
 fn settle(
     cal: &MeasuredSet,
     mut fit: GeneralFit,
@@ -452,9 +453,6 @@ fn settle(
 ) -> Result<(GeneralFit, Vec<String>), CalibError> {
     use crate::model::effect::bound;
     let mut held = Vec::new();
-    if !compliance {
-        return Ok((fit, held));
-    }
     for _ in 0..MAX_SETTLE_REFITS {
         let below: Vec<(Unknown, f64, f64)> = fit
             .fitted
@@ -462,17 +460,22 @@ fn settle(
             .zip(&fit.sigma)
             .filter_map(|(&u, &s)| {
                 let b = bound(u, &fit.model.model)?;
-                b.below(fit.model.value(u)).then_some((u, b.hold, s))
+                b.outside(fit.model.value(u)).map(|hold| (u, hold, s))
             })
             .collect();
+        // without compliance nothing else needs settling (a payload above the robot's links does)
+        if !compliance && below.is_empty() {
+            break;
+        }
         let mut start = fit.model.clone();
         for &(u, hold, sigma) in &below {
+            let value = start.value(u);
             held.push(format!(
-                "{} = {:.4} +- {sigma:.4} fitted below its physical bound: held at {hold} and \
+                "{} = {value:.4} +- {sigma:.4} fitted {} its physical bound: held at {hold} and \
                  left out of the fit (the term stood in for something the model lacks, e.g. a \
                  length or the link masses)",
                 start.name_in(u, cal),
-                start.value(u)
+                if value > hold { "above" } else { "below" },
             ));
             start.set_value(u, hold)?;
         }

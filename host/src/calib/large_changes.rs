@@ -1,5 +1,6 @@
 //! Plausibility of a calibration's result, after the fit: the parameters of the robot's own
-//! geometry that moved further than a real arm's errors go (JSON `large_changes`; `calibrate`
+//! geometry that moved further than a real arm's errors go, and a payload the robot's own links
+//! make implausible (JSON `large_changes`; `calibrate`
 //! exits 1 and writes no model unless asked to). The plausibility of a set before the fit is
 //! [`super::plausible`].
 
@@ -61,6 +62,72 @@ pub fn large_changes(nominal: &Model, calibrated: &Model) -> Vec<LargeChange> {
             })
         })
         .collect()
+}
+
+/// Sigmas beyond its bound at which a fitted payload is implausible, not noise about a
+/// physical value.
+pub const PAYLOAD_SIGMAS: f64 = 3.0;
+
+/// The calibrated payload against what the model's link masses make plausible
+/// ([`crate::model::effect::bound`]: not negative, not heavier than the links), with its
+/// `sigma`: further outside than [`PAYLOAD_SIGMAS`] sigma (or with no sigma) it is a large
+/// change (the mass stands in for something the model lacks: a joint's stiffness, the link
+/// masses themselves); outside within that, a line for `unphysical` (the poses hardly determine
+/// it); inside, nothing.
+pub fn payload_plausibility(
+    nominal: &Model,
+    calibrated: &Model,
+    sigma: Option<f64>,
+) -> (Option<LargeChange>, Option<String>) {
+    let i = nominal.payload_param();
+    let (Some(p), Some(c)) = (nominal.params().get(i), calibrated.params().get(i)) else {
+        return (None, None);
+    };
+    let Some(b) = crate::model::effect::bound(crate::model::unknown::Unknown::Param(i), calibrated)
+    else {
+        return (None, None);
+    };
+    let v = c.value;
+    if v.is_finite() && b.outside(v).is_none() {
+        return (None, None);
+    }
+    let (edge, beyond) = if v < b.min {
+        (b.min, b.min - v)
+    } else {
+        (b.max, v - b.max)
+    };
+    match sigma.filter(|s| s.is_finite() && *s > 0.0) {
+        Some(s) if v.is_finite() && beyond <= PAYLOAD_SIGMAS * s => {
+            let line = format!(
+                "{} = {v:.4} +- {s:.4} kg is outside its physical range (0 to {:.4} kg, the \
+                 robot's link masses) within {PAYLOAD_SIGMAS} sigma of {edge}: the poses hardly \
+                 determine it",
+                p.name, b.max
+            );
+            (None, Some(line))
+        }
+        _ => {
+            // as printed in a message (the sum of the link masses carries rounding digits)
+            let limit = ((edge - p.value).abs() * 1e6).round() / 1e6;
+            let change = LargeChange {
+                parameter: p.name.clone(),
+                nominal: p.value,
+                calibrated: v,
+                limit,
+            };
+            (Some(change), None)
+        }
+    }
+}
+
+/// A calibration's result judged (`report.large_changes`, `report.unphysical`): the
+/// geometry's [`large_changes`] and the payload's [`payload_plausibility`].
+pub fn judge(report: &mut super::report::CalibrateReport, nominal: &Model, calibrated: &Model) {
+    report.large_changes = large_changes(nominal, calibrated);
+    let sigma = report.sigma.get(crate::model::PAYLOAD_PARAM);
+    let (change, line) = payload_plausibility(nominal, calibrated, sigma);
+    report.large_changes.extend(change);
+    report.unphysical.extend(line);
 }
 
 /// One line naming `changes` for a message.

@@ -15,7 +15,7 @@ use std::fmt::Write as _;
 use std::path::PathBuf;
 
 use rigctl::calib::calibrate_general::{calibrate_poses, GeneralOptions, Select};
-use rigctl::calib::large_changes::{large_changes, large_changes_line};
+use rigctl::calib::large_changes::{judge, large_changes_line};
 use rigctl::calib::MeasuredSet;
 use rigctl::calib::{CalibrateOptions, Method};
 use rigctl::io::atomic::write_text_atomic;
@@ -238,13 +238,14 @@ pub fn run(args: Args) -> Result<(), CliError> {
             l.fill(&mut e.pose);
         }
     }
+    // judged before the notes, which list what is unphysical
+    judge(&mut outcome.report, &model, &outcome.model);
     notes.push_str(&held_out_lines(&outcome.report));
     notes.push_str(&outlier_lines(
         &outcome.report,
         poses,
         args.validate.as_deref(),
     ));
-    outcome.report.large_changes = large_changes(&model, &outcome.model);
     if let Some(with_tool) = registers(&args) {
         // the report's "before": the input model with only the instrument frame (and the tool
         // point when the run frees @tool) fitted; a registration that fails leaves the key out
@@ -321,7 +322,7 @@ fn run_samples(args: &Args, samples: &std::path::Path) -> Result<(), CliError> {
     let g = calibrate_poses(&model, &data, None, &opts, &GeneralOptions::default())?;
     let (mut outcome, rejected) = (g.outcome, g.rejected);
     no_redundancy(samples, data.n_residuals(), outcome.report.rank)?;
-    outcome.report.large_changes = large_changes(&model, &outcome.model);
+    judge(&mut outcome.report, &model, &outcome.model);
     let write_model = writes_model(&outcome.report, args);
     if let Some(path) = &args.json {
         rigctl::io::atomic::write_json_atomic(path, &outcome.report)?;
@@ -387,10 +388,20 @@ pub(super) fn plausible_changes(
         errln!("large changes allowed by --allow-large-changes, the model is written: {line}");
         return Ok(());
     }
+    let payload = r
+        .large_changes
+        .iter()
+        .any(|c| c.parameter == rigctl::model::PAYLOAD_PARAM);
     Err(CliError::failure(format!(
-        "the calibration moved the robot's geometry further than a real arm's errors go: {line}; \
-         check the model, the units and the robot the poses came from (the JSON lists them; no \
-         model was written: --allow-large-changes writes it)"
+        "the calibration moved the robot's geometry further than a real arm's errors go{}: \
+         {line}; check the model, the units and the robot the poses came from (the JSON lists \
+         them; no model was written: --allow-large-changes writes it)",
+        if payload {
+            ", or fitted a payload the robot's link masses do not carry (it stands in for \
+             something the model lacks: a joint's stiffness, the link masses themselves)"
+        } else {
+            ""
+        }
     )))
 }
 

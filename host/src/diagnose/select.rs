@@ -264,7 +264,7 @@ fn hold_at_bounds(
         .filter_map(|&u| {
             let b = bound(u, model)?;
             let v = after.model.value(u);
-            (b.below(v) || v > b.max).then_some((u, v, if v > b.max { b.max } else { b.hold }))
+            b.outside(v).map(|hold| (u, v, hold))
         })
         .collect();
     if outside.is_empty() {

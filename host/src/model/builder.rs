@@ -4,6 +4,9 @@
 
 use nalgebra::Vector3;
 
+/// The name of every chain's payload parameter (kg at the tool point).
+pub const PAYLOAD_PARAM: &str = "payload_kg";
+
 use super::chain::{
     Axis, Elem, GammaLaw, Harmonic, Joint, Model, Motion, PointMass, TiltParams, TiltValues,
     HARMONIC_ORDERS,
@@ -226,7 +229,7 @@ impl ModelBuilder {
         self.check_masses()?;
         self.add_harmonics()?;
         let tilt = self.add_tilt_params()?;
-        let payload_param = self.add_param("payload_kg", 0.0, Unit::Kg, ParamKind::Payload)?;
+        let payload_param = self.add_param(PAYLOAD_PARAM, 0.0, Unit::Kg, ParamKind::Payload)?;
         let scale_param = self.add_param("scale_ppm", 0.0, Unit::Ppm, ParamKind::Scale)?;
         Ok(Model {
             name: self.name,

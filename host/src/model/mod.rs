@@ -100,7 +100,7 @@ pub mod tree_gravity;
 pub mod tree_params;
 pub mod unknown;
 
-pub use builder::ModelBuilder;
+pub use builder::{ModelBuilder, PAYLOAD_PARAM};
 pub use chain::*;
 pub use data::Data;
 pub use error::ModelError;

@@ -88,7 +88,7 @@ pub fn katana450(tool_mm: f64) -> Result<Model, ModelError> {
 /// `Rz(qi + dthi) | Tz(di) Tx(ai) Rx(ali)` with
 /// `a = 0, -425, -392.25, 0, 0, 0` mm, `al = 90, 0, 0, 90, -90, 0` deg,
 /// `d = 89.159, 0, 0, 109.15, 94.65, 82.3` mm, limits +-360 deg. The tool point is the flange
-/// (`tool_d* = 0`, see [`UR5_SMR_TOOL_MM`]); no masses and no tilting data.
+/// (`tool_d* = 0`, see [`UR5_SMR_TOOL_MM`]); the published link masses, no tilting data.
 pub fn ur5() -> Result<Model, ModelError> {
     const A_MM: [f64; 6] = [0.0, -425.0, -392.25, 0.0, 0.0, 0.0];
     const AL_DEG: [f64; 6] = [90.0, 0.0, 0.0, 90.0, -90.0, 0.0];

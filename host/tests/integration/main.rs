@@ -6,6 +6,7 @@ mod calib_cli;
 mod calib_convergence;
 mod calib_markers;
 mod calib_normal;
+mod calib_payload;
 mod calib_synthetic;
 mod calib_ur5;
 mod capture_poses;

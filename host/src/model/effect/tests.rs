@@ -147,6 +147,27 @@ fn bounds_hold_negative_physical_values() {
     assert!(bound(Unknown::Param(a3), &model).is_none());
 }
 
+#[test]
+fn a_payload_is_at_most_the_robots_own_link_masses() {
+    let model = katana450(KATANA_TOOL_MM).unwrap();
+    // the Katana's moving links, thesis table 4.2: 1.03 + 0.90 + 1.00 + 0.80 kg
+    let links_kg: f64 = model.masses().iter().map(|m| m.mass_kg).sum();
+    assert!((links_kg - 3.73).abs() < 1e-9, "{links_kg}");
+    let b = bound(Unknown::Param(model.payload_param()), &model).unwrap();
+    assert_eq!(b.max, PAYLOAD_MAX_PER_LINK_MASS * links_kg);
+    assert_eq!(b.outside(0.5), None, "the Katana's rated payload");
+    assert_eq!(b.outside(8.0), Some(b.max), "above: held at the bound");
+    assert_eq!(b.outside(-0.1), Some(0.0), "below: held at zero");
+    // a model without link masses gives nothing to judge a payload by
+    let mut b = crate::model::builder::ModelBuilder::new("bare");
+    b.dh_row(1, 0.0, 100.0, 200.0, 0.0, [-180.0, 180.0], None)
+        .unwrap();
+    let bare = b.build().unwrap();
+    assert!(bare.masses().is_empty());
+    let open = bound(Unknown::Param(bare.payload_param()), &bare).unwrap();
+    assert!(open.max.is_infinite() && open.outside(50.0).is_none());
+}
+
 /// Effect ids are spelled in this table only: no other library file holds a string literal
 /// that is an effect id or begins one (`"payload"`, `"compliance:j{}"`); test modules and the
 /// documentation comments may.
