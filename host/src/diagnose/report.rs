@@ -226,7 +226,7 @@ pub struct DiagnoseReport {
     /// One verdict from the calibration, cross-validated and held-out residuals (extra key,
     /// [`super::verdict`]).
     pub verdict: super::verdict::Verdict,
-    /// Fitted values that fell below their physical bound and what was done (extra key,
+    /// Fitted values that fell outside their physical range and what was done (extra key,
     /// [`super::bounds`]).
     pub bounds: Vec<super::bounds::BoundReport>,
     /// The link masses the model was given because it declared none (`diagnose
