@@ -38,8 +38,9 @@ pub struct SafetyArgs {
     #[arg(long, value_name = "DEG", default_value_t = LIMIT_MARGIN_DEG)]
     pub limit_margin_deg: f64,
     /// The robot's URDF: its <collision> geometry is checked (and, without --model/--robot,
-    /// its chain --base-link .. --tip-link is the model).
-    #[arg(long, value_name = "FILE.urdf", requires = "tip_link")]
+    /// its chain --base-link .. --tip-link is the model). On a chain with --tip-link; on a
+    /// tree model the tree's own joints and tips.
+    #[arg(long, value_name = "FILE.urdf")]
     pub urdf: Option<PathBuf>,
     /// Last link of the chain in --urdf.
     #[arg(long, value_name = "LINK")]
@@ -142,6 +143,11 @@ impl SafetyArgs {
 
     /// Sets the safety part of `cfg` for `model`; the lines that say what is checked.
     pub fn apply(&self, model: &Model, cfg: &mut PlanConfig) -> Result<Vec<String>, CliError> {
+        if self.urdf.is_some() && self.tip_link.is_none() {
+            return Err(CliError::bad_input(
+                "--urdf on a chain needs --tip-link LINK (the chain's last link in the URDF)",
+            ));
+        }
         self.workspace(&mut cfg.workspace)?;
         let ws = &mut cfg.workspace;
         cfg.segment_step_deg = self.segment_step_deg;
@@ -181,6 +187,49 @@ impl SafetyArgs {
             ),
         }
         Ok(lines)
+    }
+
+    /// The collision geometry of --urdf for the tree model `tree` (its joints and tips; refused
+    /// with --tip-link / --base-link), `None` without --urdf; the lines that say what is checked.
+    pub fn tree_collider(
+        &self,
+        tree: &rigctl::model::Tree,
+        table_z_mm: Option<f64>,
+    ) -> Result<(Option<SharedCollider>, Vec<String>), CliError> {
+        let Some(urdf) = &self.urdf else {
+            return Ok((None, Vec::new()));
+        };
+        if self.tip_link.is_some() || self.base_link.is_some() {
+            return Err(CliError::bad_input(
+                "--tip-link / --base-link: a tree model's collision geometry follows its own \
+                 joints and tips (leave them out)",
+            ));
+        }
+        positive("--clearance-mm", self.clearance_mm, true)?;
+        let mut package_paths = self.package_path.clone();
+        if let Some(p) = std::env::var_os("ROS_PACKAGE_PATH") {
+            package_paths.extend(std::env::split_paths(&p));
+        }
+        let src = GeometrySource {
+            urdf: urdf.clone(),
+            base_link: None,
+            tip_link: tree
+                .tips
+                .first()
+                .map(|t| t.name.clone())
+                .unwrap_or_default(),
+            package_paths,
+            srdf: self.srdf.clone(),
+        };
+        let c = Collider::from_urdf_tree(&src, tree, self.clearance_mm, table_z_mm)?;
+        let mut lines = vec![format!(
+            "collision check: {} links with shapes from {} (meshes as convex hulls), clearance {} mm, every tree joint at the pose",
+            c.n_bodies,
+            urdf.display(),
+            self.clearance_mm
+        )];
+        lines.extend(c.notes.iter().map(|n| format!("  {n}")));
+        Ok((Some(SharedCollider(Arc::new(c))), lines))
     }
 
     /// The stick figure of the robot at `q`: the base, the link origins, the tool point (mm, R).

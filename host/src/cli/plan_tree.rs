@@ -1,9 +1,11 @@
 //! `rigctl plan --model TREE.toml --n N --out PLAN.csv [--json PLAN.json] [--seed S]
 //! [--noise-mm 0.01] [--candidates 2000] [--criterion a|g|i|d] [--base] [--table-z-mm Z |
 //! --no-table] [--keep-out ..] [--limit-margin-deg 2] [--min-z-mm Z] [--box ..]
-//! [--branch-clearance-mm 100]`: the poses of a tree model (`rigctl::plan::tree`). The
-//! chain-only options (collision geometry, the ordered trajectory, `--from-diagnose`, sheets,
-//! poses already measured, the plot, the refinement) are refused.
+//! [--branch-clearance-mm 100] [--urdf FILE [--srdf FILE] [--package-path DIR] [--clearance-mm
+//! C]]`: the poses of a tree model (`rigctl::plan::tree`), with the links of the whole tree
+//! checked when its URDF is given. The chain-only options (the ordered trajectory,
+//! `--from-diagnose`, sheets, poses already measured, the plot, the refinement, `--tip-link`)
+//! are refused.
 
 use rigctl::io::atomic::{write_bytes_atomic, write_text_atomic};
 use rigctl::io::finite::TextFormat;
@@ -30,6 +32,8 @@ pub fn run(args: &Args, tree: Tree) -> Result<(), CliError> {
     cfg.criterion = args.criterion;
     cfg.base = args.base;
     cfg.branch_clearance_mm = args.branch_clearance_mm;
+    let (collider, collision_lines) = args.safety.tree_collider(&tree, cfg.workspace.table_z_mm)?;
+    cfg.collider = collider;
     let spinner = super::diagnose::spinner(format!(
         "plan: planning {} poses of the tree {} on {} candidates",
         cfg.n, tree.name, cfg.candidates
@@ -54,9 +58,18 @@ pub fn run(args: &Args, tree: Tree) -> Result<(), CliError> {
         ws.keep_out_mm.len(),
         cfg.branch_clearance_mm
     )?;
-    out!(
-        "WARNING: NO COLLISION CHECK OF THE LINKS AND NO CHECK OF THE MOVES between poses on a tree (plan.json collisions_verified = false, order.moves_verified = false): only the joint frames' origins and the tips are kept above the table, out of the keep-out boxes and the branches apart; drive the poses with a motion planner\n"
-    )?;
+    for l in &collision_lines {
+        out!("{l}\n")?;
+    }
+    if plan.collisions_verified {
+        out!(
+            "WARNING: NO CHECK OF THE MOVES between poses on a tree (plan.json order.moves_verified = false): every pose's links are checked, the way between two poses is not; drive the poses with a motion planner\n"
+        )?;
+    } else {
+        out!(
+            "WARNING: NO COLLISION CHECK OF THE LINKS AND NO CHECK OF THE MOVES between poses on a tree (plan.json collisions_verified = false, order.moves_verified = false): only the joint frames' origins and the tips are kept above the table, out of the keep-out boxes and the branches apart; give --urdf FILE [--srdf FILE] to check the links; drive the poses with a motion planner\n"
+        )?;
+    }
     Ok(())
 }
 
@@ -64,8 +77,6 @@ pub fn run(args: &Args, tree: Tree) -> Result<(), CliError> {
 fn refuse_chain_only(args: &Args) -> Result<(), CliError> {
     let s = &args.safety;
     let given: Vec<&str> = [
-        ("--urdf", s.urdf.is_some()),
-        ("--srdf", s.srdf.is_some()),
         ("--trajectory", s.trajectory.is_some()),
         ("--from-diagnose", args.from_diagnose.is_some()),
         ("--sheets", args.sheets),
@@ -84,7 +95,7 @@ fn refuse_chain_only(args: &Args) -> Result<(), CliError> {
         Ok(())
     } else {
         Err(CliError::bad_input(format!(
-            "{}: not taken by plan on a tree model (one chain only); a tree plan takes --n, --out, --json, --seed, --noise-mm, --candidates, --random-draws, --criterion, --base, --table-z-mm / --no-table, --keep-out, --limit-margin-deg, --min-z-mm, --box, --branch-clearance-mm",
+            "{}: not taken by plan on a tree model (one chain only); a tree plan takes --n, --out, --json, --seed, --noise-mm, --candidates, --random-draws, --criterion, --base, --table-z-mm / --no-table, --keep-out, --limit-margin-deg, --min-z-mm, --box, --branch-clearance-mm, --urdf, --srdf, --package-path, --clearance-mm",
             given.join(", ")
         )))
     }

@@ -13,9 +13,11 @@
 //! blocks of 3 rows per tip; the random baseline of as many poses drawn from the same
 //! candidates ([`random_baseline_draws`]).
 //!
-//! A tree plan is not ordered nor refined, and without collision geometry the moves between
-//! poses and the links themselves are not checked ([`TreePlan::moves_verified`] is false):
-//! the output says so.
+//! With the robot's URDF ([`TreePlanConfig::collider`]) every candidate's links are kept apart
+//! (the URDF's or the SRDF's pairs), above the table and out of the keep-out boxes. A tree plan
+//! is not ordered nor refined: the moves between poses are not checked
+//! ([`TreePlan::moves_verified`] is false), nor the links without collision geometry
+//! ([`TreePlan::collisions_verified`]); the output says so.
 
 use nalgebra::{DMatrix, Vector3};
 use rand::{Rng, SeedableRng};
@@ -27,7 +29,7 @@ use super::design::{exchange, Problem};
 use super::metrics::{design_stats, median_ratio, random_baseline, stack_rows, DesignStats};
 use super::setup::Scaled;
 use super::steps::baseline_weights;
-use super::workspace::Workspace;
+use super::workspace::{SharedCollider, Workspace};
 use super::{PlanError, MAX_CANDIDATES};
 use crate::calib::measured::MeasuredSet;
 use crate::calib::tree_calibrate::tree_selection;
@@ -35,7 +37,7 @@ use crate::calib::tree_fit::TreeUnknowns;
 use crate::calib::CalibrateOptions;
 use crate::model::{Model, Tilt, Tree};
 
-use super::collision::model_joint_origins_mm;
+use super::collision::{model_joint_origins_mm, Environment};
 
 /// Default smallest distance between points of two branches (frame origins and tip points), mm.
 pub const DEFAULT_BRANCH_CLEARANCE_MM: f64 = 100.0;
@@ -61,6 +63,11 @@ pub struct TreePlanConfig {
     pub workspace: Workspace,
     /// Smallest distance between points of two branches, mm.
     pub branch_clearance_mm: f64,
+    /// The robot's collision geometry for the whole tree
+    /// ([`super::collision::Collider::from_urdf_tree`]): every
+    /// candidate's links kept apart, above the table and out of the keep-out boxes; `None`: the
+    /// frame origins and tips only.
+    pub collider: Option<SharedCollider>,
 }
 
 impl TreePlanConfig {
@@ -76,6 +83,7 @@ impl TreePlanConfig {
             base: false,
             workspace: Workspace::default(),
             branch_clearance_mm: DEFAULT_BRANCH_CLEARANCE_MM,
+            collider: None,
         }
     }
 }
@@ -116,8 +124,8 @@ pub struct TreePlan {
     pub tries: usize,
     /// Whether the moves between the poses were checked: never on a tree.
     pub moves_verified: bool,
-    /// Whether the links were checked for collisions: never on a tree (frame origins and tip
-    /// points only).
+    /// Whether the links were checked for collisions (with [`TreePlanConfig::collider`]; else
+    /// the frame origins and tip points only).
     pub collisions_verified: bool,
 }
 
@@ -227,7 +235,7 @@ pub fn plan_tree(tree: &Tree, cfg: &TreePlanConfig) -> Result<TreePlan, PlanErro
         candidates: cands.len(),
         tries,
         moves_verified: false,
-        collisions_verified: false,
+        collisions_verified: cfg.collider.is_some(),
     })
 }
 
@@ -278,6 +286,7 @@ struct Safety<'a> {
     chains: Vec<Model>,
     paths: Vec<Vec<usize>>,
     clearance_mm: f64,
+    collider: Option<&'a SharedCollider>,
 }
 
 impl<'a> Safety<'a> {
@@ -288,6 +297,7 @@ impl<'a> Safety<'a> {
             tree,
             ws: &cfg.workspace,
             clearance_mm: cfg.branch_clearance_mm,
+            collider: cfg.collider.as_ref(),
         })
     }
 
@@ -353,6 +363,16 @@ impl<'a> Safety<'a> {
                 if close {
                     return Ok(None);
                 }
+            }
+        }
+        if let Some(c) = self.collider {
+            let env = Environment {
+                table_z_mm: self.ws.table_z_mm,
+                keep_out_mm: &self.ws.keep_out_mm,
+                slack_mm: 0.0,
+            };
+            if c.0.collision(&q, &env).is_some() {
+                return Ok(None);
             }
         }
         Ok(Some(TreePlanPose { q_deg: q, tips_mm }))

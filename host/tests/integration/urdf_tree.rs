@@ -266,3 +266,110 @@ fn one_tip_of_the_tree_is_the_chain_imported_alone() {
     let err = String::from_utf8_lossy(&out.stderr);
     assert!(err.contains("tree model"), "{err}");
 }
+
+/// `plan` on the TALOS tree with its URDF and SRDF: every planned pose is free of
+/// self-collision by pinocchio + coal on the URDF's own meshes (`check_plan_safety.py`, every
+/// pair but the SRDF's disabled ones), where the plan without the URDF keeps only frame origins
+/// and tips apart; the plan says what it checked (`collisions_verified`) and what it did not
+/// (the moves).
+#[test]
+fn talos_tree_plan_with_its_urdf_is_collision_free_by_pinocchio() {
+    let test = "talos_tree_plan_with_its_urdf_is_collision_free_by_pinocchio";
+    let Some(py) = python_env(test) else {
+        return;
+    };
+    let Some(urdf) = talos_urdf(test, &py) else {
+        return;
+    };
+    let share = urdf.ancestors().nth(5).unwrap().to_path_buf();
+    let srdf = urdf
+        .parent()
+        .unwrap()
+        .parent()
+        .unwrap()
+        .join("srdf/talos.srdf");
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    let tree_path = d.join("talos_tree.toml");
+    run(&[
+        "urdf2model",
+        "--urdf",
+        s(&urdf),
+        "--tip",
+        TIPS[0],
+        "--tip",
+        TIPS[1],
+        "--out",
+        s(&tree_path),
+    ]);
+    let names = Tree::from_file(&tree_path).unwrap().joint_names().join(",");
+    let plan = |extra: &[&str], csv: &Path, json: &Path| -> String {
+        let mut args = vec![
+            "plan",
+            "--model",
+            s(&tree_path),
+            "--n",
+            "20",
+            "--candidates",
+            "400",
+            "--no-table",
+            "--out",
+            s(csv),
+            "--json",
+            s(json),
+        ];
+        args.extend(extra);
+        String::from_utf8_lossy(&run(&args).stdout).into_owned()
+    };
+    let collisions = |csv: &Path| -> usize {
+        let o = Command::new(&py)
+            .arg(py_script("check_plan_safety.py"))
+            .args([
+                s(&urdf),
+                s(&srdf),
+                s(&share),
+                s(csv),
+                &names,
+                "-100000",
+                "5",
+            ])
+            .output()
+            .expect("python runs");
+        assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+        let doc: serde_json::Value = serde_json::from_slice(&o.stdout).expect("checker JSON");
+        assert_eq!(doc["poses"], 20);
+        doc["pose_collisions"].as_array().unwrap().len()
+    };
+    let (checked_csv, checked_json) = (d.join("checked.csv"), d.join("checked.json"));
+    let said = plan(
+        &[
+            "--urdf",
+            s(&urdf),
+            "--srdf",
+            s(&srdf),
+            "--package-path",
+            s(&share),
+        ],
+        &checked_csv,
+        &checked_json,
+    );
+    assert!(said.contains("NO CHECK OF THE MOVES"), "{said}");
+    assert!(!said.contains("NO COLLISION CHECK"), "{said}");
+    let doc: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(&checked_json).unwrap()).unwrap();
+    assert_eq!(doc["collisions_verified"], true);
+    assert_eq!(doc["order"]["moves_verified"], false);
+    assert_eq!(
+        collisions(&checked_csv),
+        0,
+        "planned poses in self-collision"
+    );
+    // the same plan without the URDF: nothing but frame origins and tips kept apart, and said
+    let (bare_csv, bare_json) = (d.join("bare.csv"), d.join("bare.json"));
+    let said = plan(&[], &bare_csv, &bare_json);
+    assert!(said.contains("NO COLLISION CHECK OF THE LINKS"), "{said}");
+    eprintln!(
+        "TALOS tree plan, 20 poses: {} in self-collision without the URDF, 0 with it",
+        collisions(&bare_csv)
+    );
+}

@@ -15,7 +15,7 @@ use parry3d_f64::query;
 use parry3d_f64::shape::Cuboid;
 
 use super::PlanError;
-use crate::model::Model;
+use crate::model::{Model, Tree};
 use crate::urdf::collision::srdf_disabled_pairs;
 use crate::urdf::{JointType, Urdf};
 
@@ -147,13 +147,79 @@ impl Collider {
             .filter(|j| j.joint_type != JointType::Fixed)
             .map(|j| j.joint_type == JointType::Prismatic)
             .collect();
+        let home = home_of(&model.joint_limits());
+        Self::build(
+            src,
+            &urdf,
+            &text,
+            &movable,
+            prismatic,
+            &home,
+            clearance_mm,
+            table_z_mm,
+        )
+    }
+
+    /// The collision model of `src` for the tree model `tree`: every tree joint is the URDF's
+    /// movable joint of that name (tree order), every other joint held as on a chain;
+    /// `src.tip_link` is the link whose chain [`Collider::chain_origins_mm`] draws.
+    pub fn from_urdf_tree(
+        src: &GeometrySource,
+        tree: &Tree,
+        clearance_mm: f64,
+        table_z_mm: Option<f64>,
+    ) -> Result<Self, PlanError> {
+        let urdf = Urdf::from_file(&src.urdf)?;
+        let text = crate::io::read::read_text_capped(&src.urdf, crate::io::read::CAP_URDF)
+            .map_err(|e| geo_err(format!("{}: {e}", src.urdf.display())))?;
+        let names = tree.joint_names();
+        let mut prismatic = Vec::with_capacity(names.len());
+        for name in &names {
+            let j = urdf
+                .joints
+                .iter()
+                .find(|j| j.name == *name && j.joint_type != JointType::Fixed)
+                .ok_or_else(|| {
+                    geo_err(format!(
+                        "{}: the tree's joint `{name}` is not a movable joint of this URDF",
+                        src.urdf.display()
+                    ))
+                })?;
+            prismatic.push(j.joint_type == JointType::Prismatic);
+        }
+        let movable: Vec<&str> = names.iter().map(String::as_str).collect();
+        let home = home_of(&tree.joint_limits());
+        Self::build(
+            src,
+            &urdf,
+            &text,
+            &movable,
+            prismatic,
+            &home,
+            clearance_mm,
+            table_z_mm,
+        )
+    }
+
+    /// The collider of the links below the base of `urdf`, `movable` its model joints in order.
+    #[allow(clippy::too_many_arguments)]
+    fn build(
+        src: &GeometrySource,
+        urdf: &Urdf,
+        text: &str,
+        movable: &[&str],
+        prismatic: Vec<bool>,
+        home: &[f64],
+        clearance_mm: f64,
+        table_z_mm: Option<f64>,
+    ) -> Result<Self, PlanError> {
         let base = match &src.base_link {
             Some(b) => b.clone(),
             None => urdf.root_link()?.to_string(),
         };
-        let (nodes, chain_nodes) = build_nodes(&urdf, &base, &movable, &src.tip_link)?;
+        let (nodes, chain_nodes) = build_nodes(urdf, &base, movable, &src.tip_link)?;
         let mut notes = Vec::new();
-        let bodies = build_bodies(&text, src, &nodes, &mut notes)?;
+        let bodies = build_bodies(text, src, &nodes, &mut notes)?;
         let mut c = Collider {
             nodes,
             bodies,
@@ -166,8 +232,7 @@ impl Collider {
             n_pairs: 0,
             n_bodies: 0,
         };
-        let home = home_configuration(model);
-        let poses = c.link_poses(&home);
+        let poses = c.link_poses(home);
         let srdf = match &src.srdf {
             Some(p) => {
                 let t = crate::io::read::read_text_capped(p, crate::io::read::CAP_URDF)
@@ -415,8 +480,12 @@ impl Collider {
 
 /// The home configuration: every joint at 0, moved into its limits.
 pub fn home_configuration(model: &Model) -> Vec<f64> {
-    model
-        .joint_limits()
+    home_of(&model.joint_limits())
+}
+
+/// Every joint at 0, moved into its `limits`.
+fn home_of(limits: &[[f64; 2]]) -> Vec<f64> {
+    limits
         .iter()
         .map(|l| 0.0f64.clamp(l[0].min(l[1]), l[1].max(l[0])))
         .collect()
