@@ -28,6 +28,23 @@ fn talos_urdf(test: &str, py: &Path) -> Option<PathBuf> {
     robots_share(py, TALOS, test).map(|share| share.join(TALOS))
 }
 
+/// `urdf2model` of TALOS's two grippers into `dir`: the tree model file.
+fn talos_tree(urdf: &Path, dir: &Path) -> PathBuf {
+    let tree_path = dir.join("talos_tree.toml");
+    run(&[
+        "urdf2model",
+        "--urdf",
+        s(urdf),
+        "--tip",
+        TIPS[0],
+        "--tip",
+        TIPS[1],
+        "--out",
+        s(&tree_path),
+    ]);
+    tree_path
+}
+
 /// CSV of numbers with a header: (header, rows).
 fn read_csv(text: &str) -> (Vec<String>, Vec<Vec<f64>>) {
     let mut lines = text.lines().filter(|l| !l.trim().is_empty());
@@ -102,18 +119,7 @@ fn talos_dual_arm_tree_round_trips_through_pinocchio() {
     };
     let dir = tempfile::tempdir().unwrap();
     let d = dir.path();
-    let tree_path = d.join("talos_tree.toml");
-    run(&[
-        "urdf2model",
-        "--urdf",
-        s(&urdf),
-        "--tip",
-        TIPS[0],
-        "--tip",
-        TIPS[1],
-        "--out",
-        s(&tree_path),
-    ]);
+    let tree_path = talos_tree(&urdf, d);
     let tree = Tree::from_file(&tree_path).unwrap();
     // every joint once; the torso's two joints on both tips' paths, the arms' on one each
     assert_eq!(tree.n_joints(), 16, "{:?}", tree.joint_names());
@@ -290,18 +296,7 @@ fn talos_tree_plan_with_its_urdf_is_collision_free_by_pinocchio() {
         .join("srdf/talos.srdf");
     let dir = tempfile::tempdir().unwrap();
     let d = dir.path();
-    let tree_path = d.join("talos_tree.toml");
-    run(&[
-        "urdf2model",
-        "--urdf",
-        s(&urdf),
-        "--tip",
-        TIPS[0],
-        "--tip",
-        TIPS[1],
-        "--out",
-        s(&tree_path),
-    ]);
+    let tree_path = talos_tree(&urdf, d);
     let names = Tree::from_file(&tree_path).unwrap().joint_names().join(",");
     let plan = |extra: &[&str], csv: &Path, json: &Path| -> String {
         let mut args = vec![

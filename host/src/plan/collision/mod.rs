@@ -115,49 +115,42 @@ impl Collider {
         clearance_mm: f64,
         table_z_mm: Option<f64>,
     ) -> Result<Self, PlanError> {
-        let urdf = Urdf::from_file(&src.urdf)?;
-        let text = crate::io::read::read_text_capped(&src.urdf, crate::io::read::CAP_URDF)
-            .map_err(|e| geo_err(format!("{}: {e}", src.urdf.display())))?;
-        let chain = urdf.chain(src.base_link.as_deref(), &src.tip_link)?;
-        let movable: Vec<&str> = chain
-            .iter()
-            .filter(|j| j.joint_type != JointType::Fixed)
-            .map(|j| j.name.as_str())
-            .collect();
-        if movable.len() != model.n_joints() {
-            return Err(geo_err(format!(
-                "{}: the chain to `{}` has {} movable joints, the model {}",
-                src.urdf.display(),
-                src.tip_link,
-                movable.len(),
-                model.n_joints()
-            )));
-        }
-        let names = model.joint_names();
-        if !names.is_empty() && names.iter().zip(&movable).any(|(a, b)| a != b) {
-            return Err(geo_err(format!(
-                "{}: the chain's joints ({}) are not the model's ({})",
-                src.urdf.display(),
-                movable.join(", "),
-                names.join(", ")
-            )));
-        }
-        let prismatic: Vec<bool> = chain
-            .iter()
-            .filter(|j| j.joint_type != JointType::Fixed)
-            .map(|j| j.joint_type == JointType::Prismatic)
-            .collect();
+        let joints = |urdf: &Urdf| -> Result<Vec<(String, bool)>, PlanError> {
+            let chain = urdf.chain(src.base_link.as_deref(), &src.tip_link)?;
+            let movable: Vec<(String, bool)> = chain
+                .iter()
+                .filter(|j| j.joint_type != JointType::Fixed)
+                .map(|j| (j.name.clone(), j.joint_type == JointType::Prismatic))
+                .collect();
+            let listed = || {
+                movable
+                    .iter()
+                    .map(|m| m.0.as_str())
+                    .collect::<Vec<_>>()
+                    .join(", ")
+            };
+            if movable.len() != model.n_joints() {
+                return Err(geo_err(format!(
+                    "{}: the chain to `{}` has {} movable joints, the model {}",
+                    src.urdf.display(),
+                    src.tip_link,
+                    movable.len(),
+                    model.n_joints()
+                )));
+            }
+            let names = model.joint_names();
+            if !names.is_empty() && names.iter().zip(&movable).any(|(a, b)| *a != b.0) {
+                return Err(geo_err(format!(
+                    "{}: the chain's joints ({}) are not the model's ({})",
+                    src.urdf.display(),
+                    listed(),
+                    names.join(", ")
+                )));
+            }
+            Ok(movable)
+        };
         let home = home_of(&model.joint_limits());
-        Self::build(
-            src,
-            &urdf,
-            &text,
-            &movable,
-            prismatic,
-            &home,
-            clearance_mm,
-            table_z_mm,
-        )
+        Self::build(src, joints, &home, clearance_mm, table_z_mm)
     }
 
     /// The collision model of `src` for the tree model `tree`: every tree joint is the URDF's
@@ -169,50 +162,43 @@ impl Collider {
         clearance_mm: f64,
         table_z_mm: Option<f64>,
     ) -> Result<Self, PlanError> {
-        let urdf = Urdf::from_file(&src.urdf)?;
-        let text = crate::io::read::read_text_capped(&src.urdf, crate::io::read::CAP_URDF)
-            .map_err(|e| geo_err(format!("{}: {e}", src.urdf.display())))?;
-        let names = tree.joint_names();
-        let mut prismatic = Vec::with_capacity(names.len());
-        for name in &names {
-            let j = urdf
-                .joints
-                .iter()
-                .find(|j| j.name == *name && j.joint_type != JointType::Fixed)
-                .ok_or_else(|| {
-                    geo_err(format!(
-                        "{}: the tree's joint `{name}` is not a movable joint of this URDF",
-                        src.urdf.display()
-                    ))
-                })?;
-            prismatic.push(j.joint_type == JointType::Prismatic);
-        }
-        let movable: Vec<&str> = names.iter().map(String::as_str).collect();
+        let joints = |urdf: &Urdf| -> Result<Vec<(String, bool)>, PlanError> {
+            tree.joint_names()
+                .into_iter()
+                .map(|name| {
+                    let j = urdf
+                        .joints
+                        .iter()
+                        .find(|j| j.name == name && j.joint_type != JointType::Fixed)
+                        .ok_or_else(|| {
+                            geo_err(format!(
+                                "{}: the tree's joint `{name}` is not a movable joint of this URDF",
+                                src.urdf.display()
+                            ))
+                        })?;
+                    Ok((name, j.joint_type == JointType::Prismatic))
+                })
+                .collect()
+        };
         let home = home_of(&tree.joint_limits());
-        Self::build(
-            src,
-            &urdf,
-            &text,
-            &movable,
-            prismatic,
-            &home,
-            clearance_mm,
-            table_z_mm,
-        )
+        Self::build(src, joints, &home, clearance_mm, table_z_mm)
     }
 
-    /// The collider of the links below the base of `urdf`, `movable` its model joints in order.
-    #[allow(clippy::too_many_arguments)]
+    /// The collider of the links below the base of `src`'s URDF; `joints` names its model
+    /// joints in order (and whether each is prismatic), `home` their home configuration.
     fn build(
         src: &GeometrySource,
-        urdf: &Urdf,
-        text: &str,
-        movable: &[&str],
-        prismatic: Vec<bool>,
+        joints: impl FnOnce(&Urdf) -> Result<Vec<(String, bool)>, PlanError>,
         home: &[f64],
         clearance_mm: f64,
         table_z_mm: Option<f64>,
     ) -> Result<Self, PlanError> {
+        let urdf = &Urdf::from_file(&src.urdf)?;
+        let text = &crate::io::read::read_text_capped(&src.urdf, crate::io::read::CAP_URDF)
+            .map_err(|e| geo_err(format!("{}: {e}", src.urdf.display())))?;
+        let (names, prismatic): (Vec<String>, Vec<bool>) = joints(urdf)?.into_iter().unzip();
+        let movable: Vec<&str> = names.iter().map(String::as_str).collect();
+        let movable = &movable[..];
         let base = match &src.base_link {
             Some(b) => b.clone(),
             None => urdf.root_link()?.to_string(),
