@@ -64,9 +64,6 @@ pub(super) fn outlier_lines(
             r.outliers.len()
         );
     }
-    for u in &r.unphysical {
-        let _ = writeln!(s, "unphysical: {u}");
-    }
     if let Some(note) = &r.outlier_note {
         let _ = writeln!(s, "gross errors: {note}");
     }
@@ -278,6 +275,9 @@ pub(super) fn report_tail(r: &rigctl::calib::report::CalibrateReport) -> String 
             .filter(|_| !r.fixed.contains(name))
             .map_or_else(|| "fixed".to_string(), |x| format!("{x:.6}"));
         let _ = writeln!(s, "{name:<12} {v:>14.6} {sig:>12}");
+    }
+    for u in &r.unphysical {
+        let _ = writeln!(s, "unphysical: {u}");
     }
     s
 }

@@ -140,8 +140,8 @@ pub enum PoseCsvError {
     },
     /// The file has fewer joint columns than the model has joints (another robot's file).
     #[error(
-        "{file}:{line}: {in_file} joint{s} in the file ({columns}), {in_model} in the model: \
-         a file of another robot, or another --robot / --model?",
+        "{file}:{line}: {in_file} joint{s} in the file ({columns}), {in_model} in the model \
+         (not in the file: {missing}): a file of another robot, or another --robot / --model?",
         s = if *in_file == 1 { "" } else { "s" }
     )]
     JointCount {
@@ -150,6 +150,8 @@ pub enum PoseCsvError {
         in_file: usize,
         in_model: usize,
         columns: String,
+        /// The model's joints the file lacks.
+        missing: String,
     },
 }
 
@@ -222,12 +224,22 @@ fn joint_columns(table: &Table, spec: &PoseSpec) -> Result<Vec<usize>, PoseCsvEr
             false if found.len() == 1 => "q1".into(),
             false => format!("q1..q{}", found.len()),
         };
+        let missing = match by_name {
+            true => (0..spec.n_joints)
+                .filter(|i| !found.contains(i))
+                .map(name)
+                .collect::<Vec<_>>()
+                .join(", "),
+            false if found.len() + 1 == spec.n_joints => name(found.len()),
+            false => format!("{}..{}", name(found.len()), name(spec.n_joints - 1)),
+        };
         return Err(PoseCsvError::JointCount {
             file: table.file.clone(),
             line: table.header_line,
             in_file: found.len(),
             in_model: spec.n_joints,
             columns,
+            missing,
         });
     }
     Ok((0..spec.n_joints)

@@ -88,27 +88,22 @@ pub(crate) fn tree_facts(run: &RunDir, declared: Option<&(PathBuf, Tree)>) -> Op
         .find_map(|(name, doc)| TreeFacts::of_doc(doc, name))
 }
 
-/// Error vectors of every measured point of `set` on `tree`, split by tip, with the joint
-/// readings of the poses each tip was measured in.
-struct PerTip {
-    errors_mm: Vec<Vec<Vector3<f64>>>,
-    q_deg: Vec<Vec<Vec<f64>>>,
+/// The tip of every measured point of `set`, in the order of its error vectors, with the joint
+/// readings of the pose it was measured in.
+fn point_tips(set: &MeasuredSet) -> Vec<(usize, &[f64])> {
+    (0..set.len())
+        .flat_map(|k| set.measured_of(k))
+        .map(|m| (set.tip(m.slot), set.poses.q_deg[m.pose].as_slice()))
+        .collect()
 }
 
-fn per_tip(set: &MeasuredSet, all: &[Vector3<f64>], tips: usize) -> PerTip {
-    let mut out = PerTip {
-        errors_mm: vec![Vec::new(); tips],
-        q_deg: vec![Vec::new(); tips],
-    };
-    let points = (0..set.len()).flat_map(|k| set.measured_of(k));
-    for (m, e) in points.zip(all) {
-        let t = set.tip(m.slot);
-        if t < tips {
-            out.errors_mm[t].push(*e);
-            out.q_deg[t].push(set.poses.q_deg[m.pose].clone());
-        }
-    }
-    out
+/// The error vectors of tip `t` among `all` (one per measured point, as `point_tips`).
+fn of_tip(all: &[Vector3<f64>], tips: &[(usize, &[f64])], t: usize) -> Vec<Vector3<f64>> {
+    tips.iter()
+        .zip(all)
+        .filter(|((tip, _), _)| *tip == t)
+        .map(|(_, e)| *e)
+        .collect()
 }
 
 /// Evaluates `cal.csv` and `val.csv` with the nominal tree `decl` and every tree model file.
@@ -120,7 +115,6 @@ pub(crate) fn tree_pose_sets(
     notes: &mut Vec<String>,
 ) -> PoseSets {
     let mut out = PoseSets::default();
-    let tips = decl.tips.len();
     let read = |p: &std::path::Path| read_tree_set(p, decl, opts.pose_units, opts.pose_dialect);
     for PoseFile {
         path,
@@ -158,20 +152,13 @@ pub(crate) fn tree_pose_sets(
         out.tables.push(
             ErrorTable::new(title, &file, &columns(&|c| c.errors_mm.clone())).with_noun(POINTS),
         );
-        let split: Vec<PerTip> = cols
-            .iter()
-            .map(|c| per_tip(&set, &c.errors_mm, tips))
-            .collect();
+        let point_tip = point_tips(&set);
         for (t, tip) in decl.tips.iter().enumerate() {
-            let of_tip = |c: &Evaluated| {
-                let k = cols.iter().position(|o| o.label == c.label).unwrap_or(0);
-                split[k].errors_mm[t].clone()
-            };
             out.tables.push(
                 ErrorTable::new(
                     &format!("{title}, tip `{}`", tip.name),
                     &file,
-                    &columns(&of_tip),
+                    &columns(&|c| of_tip(&c.errors_mm, &point_tip, t)),
                 )
                 .with_noun("poses"),
             );
@@ -191,12 +178,17 @@ pub(crate) fn tree_pose_sets(
             let at = |k: usize| Evaluated {
                 label: cols[k].label.clone(),
                 tilt: false,
-                errors_mm: split[k].errors_mm[t].clone(),
+                errors_mm: of_tip(&cols[k].errors_mm, &point_tip, t),
             };
+            let q_deg: Vec<Vec<f64>> = point_tip
+                .iter()
+                .filter(|(tip, _)| *tip == t)
+                .map(|(_, q)| q.to_vec())
+                .collect();
             before_after_figures(
                 &format!("{title}, tip `{}`", tip.name),
                 held_out,
-                &split[0].q_deg[t],
+                &q_deg,
                 &at(0),
                 &at(b + 1),
                 &mut out.figures,

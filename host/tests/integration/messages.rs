@@ -165,7 +165,7 @@ fn another_robots_file_is_said_to_have_fewer_joints() {
     let f = write(dir.path(), "katana.csv", joints_csv(",", '.'));
     let err = refused(&rig!(30; "fk", "--robot", "ur5", "--joints", f), "5 vs 6");
     assert!(
-        err.contains("5 joints in the file (q1..q5), 6 in the model"),
+        err.contains("5 joints in the file (q1..q5), 6 in the model (not in the file: q6)"),
         "{err}"
     );
     assert!(!err.contains("column `q6` is missing"), "{err}");

@@ -15,20 +15,7 @@ use rigctl::report::{build_report, ReportOptions};
 
 use super::tree_body::{tree_csv, Body};
 use super::tree_lateral::{data, Poses};
-use crate::common::spawn::{output, path_arg, text};
-
-/// Runs `rigctl ARGS` and returns its stdout; fails the test on a non-zero exit.
-fn run_ok(args: &[&str]) -> String {
-    let run = output(args);
-    let stdout = text(&run.stdout);
-    assert!(
-        run.status.success(),
-        "rigctl {}: {stdout}\n{}",
-        args.join(" "),
-        text(&run.stderr)
-    );
-    stdout
-}
+use crate::common::spawn::{output_ok, path_arg, text};
 
 /// Mean |measured - nominal| (mm) of hand `tip` over `poses`, by the generator's kinematics.
 fn nominal_mean_mm(nominal: &Body, poses: &Poses, tip: usize) -> f64 {
@@ -75,13 +62,13 @@ fn write_run(d: &Path, nominal: &Body, cal: &Poses, val: &Poses) {
     let mut a = vec!["calibrate"];
     a.extend(files);
     a.extend(["--compliance", "--json", &cj, "--out", &ct]);
-    run_ok(&a);
+    output_ok(&a);
     let mut a = vec!["diagnose"];
     a.extend(files);
     a.extend(["--instrument-mm", "0.4", "--json", &dj, "--out", &dt]);
-    run_ok(&a);
+    output_ok(&a);
     let (plan_csv, plan_json) = (p("plan.csv"), p("plan.json"));
-    run_ok(&[
+    output_ok(&[
         "plan",
         "--model",
         &model,
@@ -106,14 +93,17 @@ fn a_tree_run_is_reported_as_a_tree_counted_in_points_and_evaluated_per_hand() {
     write_run(d, &nominal, &cal, &val);
     let page = d.join("page.html");
     let model = d.join("body.toml");
-    let stdout = run_ok(&[
-        "report",
-        path_arg(d),
-        "--model",
-        path_arg(&model),
-        "--html",
-        path_arg(&page),
-    ]);
+    let stdout = text(
+        &output_ok(&[
+            "report",
+            path_arg(d),
+            "--model",
+            path_arg(&model),
+            "--html",
+            path_arg(&page),
+        ])
+        .stdout,
+    );
     assert!(stdout.contains(" 0 notes "), "{stdout}");
     let html = std::fs::read_to_string(&page).unwrap();
     assert!(
@@ -218,4 +208,33 @@ fn a_tree_run_is_reported_as_a_tree_counted_in_points_and_evaluated_per_hand() {
         bare.notes
     );
     assert!(bare.tables.iter().all(|t| t.noun == "points"));
+
+    // a held-out file of another robot (a joint this tree does not have): skipped with a note
+    // naming it and the joint, the calibration file still evaluated
+    let csv = std::fs::read_to_string(d.join("val.csv")).unwrap();
+    let (header, rest) = csv.split_once('\n').unwrap();
+    let first_joint = header.split(',').next().unwrap();
+    let other = format!(
+        "{}\n{rest}",
+        header.replacen(first_joint, "other_robot_joint", 1)
+    );
+    std::fs::write(d.join("val.csv"), other).unwrap();
+    let mixed = build_report(d, &opts).unwrap();
+    assert!(
+        mixed
+            .notes
+            .iter()
+            .any(|n| n.starts_with("Held-out poses skipped") && n.contains("not in the file: t1)")),
+        "{:?}",
+        mixed.notes
+    );
+    let titles: Vec<&str> = mixed.tables.iter().map(|t| t.title.as_str()).collect();
+    assert!(
+        titles.contains(&"Calibration poses, tip `l_hand`"),
+        "{titles:?}"
+    );
+    assert!(
+        !titles.iter().any(|t| t.starts_with("Held-out poses, tip")),
+        "{titles:?}"
+    );
 }
