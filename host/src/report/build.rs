@@ -78,7 +78,14 @@ fn load_models(
     });
     let mut files = Vec::new();
     let mut tree_files = Vec::new();
-    for p in &run.models {
+    // the declared model file is the nominal column already, not a calibrated model of its own
+    let same = |a: &std::path::Path, b: &std::path::Path| matches!((a.canonicalize(), b.canonicalize()), (Ok(x), Ok(y)) if x == y);
+    let declared_file = opts.model_file.as_deref();
+    for p in run
+        .models
+        .iter()
+        .filter(|p| !declared_file.is_some_and(|d| same(p, d)))
+    {
         match Tree::from_file_if_tree(p) {
             Ok(Some(t)) => tree_files.push((stem(p), t)),
             Ok(None) => match Model::from_file(p) {

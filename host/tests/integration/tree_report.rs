@@ -165,6 +165,12 @@ fn a_tree_run_is_reported_as_a_tree_counted_in_points_and_evaluated_per_hand() {
         .iter()
         .position(|c| c.starts_with("calibrated.toml"))
         .unwrap_or_else(|| panic!("{:?}", all.columns));
+    // the declared model file (in the run directory) is the nominal column, not one of its own
+    assert!(
+        !all.columns.iter().any(|c| c.starts_with("body.toml")),
+        "{:?}",
+        all.columns
+    );
     let after = cal_doc["validation"]["after"]["mean_mm"].as_f64().unwrap();
     let got = all.get("Average", "|dP|", calibrated).unwrap();
     assert!((got - after).abs() < 1e-4 * after, "{got} vs {after}");
