@@ -120,16 +120,6 @@ pub fn payload_plausibility(
     }
 }
 
-/// A calibration's result judged (`report.large_changes`, `report.unphysical`): the
-/// geometry's [`large_changes`] and the payload's [`payload_plausibility`].
-pub fn judge(report: &mut super::report::CalibrateReport, nominal: &Model, calibrated: &Model) {
-    report.large_changes = large_changes(nominal, calibrated);
-    let sigma = report.sigma.get(crate::model::PAYLOAD_PARAM);
-    let (change, line) = payload_plausibility(nominal, calibrated, sigma);
-    report.large_changes.extend(change);
-    report.unphysical.extend(line);
-}
-
 /// One line naming `changes` for a message.
 pub fn large_changes_line(changes: &[LargeChange]) -> String {
     changes

@@ -232,6 +232,20 @@ pub fn unknowns_report<M, U: Clone + PartialEq>(
     }
 }
 
+impl CalibrateReport {
+    /// The calibration's result judged (`large_changes`, `unphysical`): the geometry's
+    /// [`super::large_changes::large_changes`] and the payload's
+    /// [`super::large_changes::payload_plausibility`].
+    pub fn judge(&mut self, nominal: &Model, calibrated: &Model) {
+        use super::large_changes::{large_changes, payload_plausibility};
+        self.large_changes = large_changes(nominal, calibrated);
+        let sigma = self.sigma.get(crate::model::PAYLOAD_PARAM);
+        let (change, line) = payload_plausibility(nominal, calibrated, sigma);
+        self.large_changes.extend(change);
+        self.unphysical.extend(line);
+    }
+}
+
 /// The error statistics of `calibrate --json` from the error vectors `[before, standard,
 /// chosen]` of the calibration poses and, with validation poses, of those.
 fn error_summary(

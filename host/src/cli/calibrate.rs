@@ -15,7 +15,7 @@ use std::fmt::Write as _;
 use std::path::PathBuf;
 
 use rigctl::calib::calibrate_general::{calibrate_poses, GeneralOptions, Select};
-use rigctl::calib::large_changes::{judge, large_changes_line};
+use rigctl::calib::large_changes::large_changes_line;
 use rigctl::calib::MeasuredSet;
 use rigctl::calib::{CalibrateOptions, Method};
 use rigctl::io::atomic::write_text_atomic;
@@ -239,7 +239,7 @@ pub fn run(args: Args) -> Result<(), CliError> {
         }
     }
     // judged before the notes, which list what is unphysical
-    judge(&mut outcome.report, &model, &outcome.model);
+    outcome.report.judge(&model, &outcome.model);
     notes.push_str(&held_out_lines(&outcome.report));
     notes.push_str(&outlier_lines(
         &outcome.report,
@@ -322,7 +322,7 @@ fn run_samples(args: &Args, samples: &std::path::Path) -> Result<(), CliError> {
     let g = calibrate_poses(&model, &data, None, &opts, &GeneralOptions::default())?;
     let (mut outcome, rejected) = (g.outcome, g.rejected);
     no_redundancy(samples, data.n_residuals(), outcome.report.rank)?;
-    judge(&mut outcome.report, &model, &outcome.model);
+    outcome.report.judge(&model, &outcome.model);
     let write_model = writes_model(&outcome.report, args);
     if let Some(path) = &args.json {
         rigctl::io::atomic::write_json_atomic(path, &outcome.report)?;
