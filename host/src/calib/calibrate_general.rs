@@ -300,7 +300,7 @@ impl Run<'_> {
             identify(&start, cal, &sets, opts)
         };
         let (chosen, added) = run(tilt)?;
-        let (chosen, held) = settle(cal, chosen, opts, gen.compliance)?;
+        let (chosen, held) = settle(nominal, cal, chosen, opts, gen.compliance)?;
         let standard = if tilt { run(false)?.0 } else { chosen.clone() };
         let mut before = ExtModel::with_points(nominal.clone(), cal.n_slots(), false)?;
         for (b, c) in before
@@ -443,15 +443,16 @@ const MAX_SETTLE_REFITS: usize = 4;
 /// torques are always those of the state's chain (as `fk` on the written model computes them),
 /// and a compliance fitted below its bound (negative) is held at the bound and
 /// left out of the fitted set; the others are refitted, until nothing changes. Without
-/// compliance only a value outside its bound (a payload heavier than the robot's links) is
-/// held so. Returns the fit and a line for every value held.
+/// compliance only a value outside its bound (a payload heavier than the robot's links and
+/// than the one `nominal` declares) is held so. Returns the fit and a line for every value held.
 fn settle(
+    nominal: &Model,
     cal: &MeasuredSet,
     mut fit: GeneralFit,
     opts: &CalibrateOptions,
     compliance: bool,
 ) -> Result<(GeneralFit, Vec<String>), CalibError> {
-    use crate::model::effect::bound;
+    use crate::model::effect::bound_declared;
     let mut held = Vec::new();
     for _ in 0..MAX_SETTLE_REFITS {
         let below: Vec<(Unknown, f64, f64)> = fit
@@ -459,7 +460,7 @@ fn settle(
             .iter()
             .zip(&fit.sigma)
             .filter_map(|(&u, &s)| {
-                let b = bound(u, &fit.model.model)?;
+                let b = bound_declared(u, &fit.model.model, nominal)?;
                 b.outside(fit.model.value(u)).map(|hold| (u, hold, s))
             })
             .collect();

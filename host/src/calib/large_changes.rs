@@ -83,12 +83,13 @@ pub fn payload_plausibility(
     let (Some(p), Some(c)) = (nominal.params().get(i), calibrated.params().get(i)) else {
         return (None, None);
     };
-    let Some(b) = crate::model::effect::bound(crate::model::unknown::Unknown::Param(i), calibrated)
-    else {
+    let u = crate::model::unknown::Unknown::Param(i);
+    let Some(b) = crate::model::effect::bound_declared(u, calibrated, nominal) else {
         return (None, None);
     };
     let v = c.value;
-    if v.is_finite() && b.outside(v).is_none() {
+    // a payload the fit left as declared is the user's, not the fit's
+    if v == p.value || (v.is_finite() && b.outside(v).is_none()) {
         return (None, None);
     }
     let (edge, beyond) = if v < b.min {

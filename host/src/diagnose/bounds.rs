@@ -12,7 +12,8 @@ use serde::Serialize;
 use super::decide::{DecideConfig, Selection};
 use super::extended::{self, Unknown, Values};
 use crate::calib::MeasuredSet;
-use crate::model::effect::bound;
+use crate::model::effect::bound_declared;
+use crate::model::Model;
 
 /// One value that fell outside its physical bound.
 #[derive(Debug, Clone, PartialEq, Serialize)]
@@ -31,9 +32,11 @@ pub struct BoundReport {
 }
 
 /// Holds every final value of `selection` outside its bound at the bound and refits the others
-/// on `cal` (the final fit is replaced); returns what was done.
+/// on `cal` (the final fit is replaced); returns what was done. A payload `declared` declares
+/// heavier than the links is within its bound ([`crate::model::effect::bound_declared`]).
 pub fn enforce(
     selection: &mut Selection,
+    declared: &Model,
     cal: &MeasuredSet,
     cfg: &DecideConfig,
 ) -> Vec<BoundReport> {
@@ -47,7 +50,7 @@ pub fn enforce(
             .fitted
             .iter()
             .filter_map(|&u| {
-                let b = bound(u, model)?;
+                let b = bound_declared(u, model, declared)?;
                 let v = selection.last.model.value(u);
                 let hold = b.outside(v)?;
                 Some((u, v, if b.below(v) { b.min } else { b.max }, hold))

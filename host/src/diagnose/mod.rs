@@ -182,7 +182,7 @@ pub fn diagnose(
         note: outlier_note,
     } = gross::select_without_gross(model, &cal_all, cfg, gross)?;
     let cal = &cal;
-    let bound_reports = bounds::enforce(&mut selection, cal, cfg);
+    let bound_reports = bounds::enforce(&mut selection, model, cal, cfg);
     // the fitted unknowns' Jacobians at the calibration poses (the held-out judgement and the
     // probe of the final residual)
     let cal_jac = probe::jacobians(&selection.last.model, cal, &selection.last.fitted)?;

@@ -17,7 +17,8 @@ use super::stat::{delta_bic, nested_f_test};
 use crate::calib::fit::Fit;
 use crate::calib::CalibError;
 use crate::calib::MeasuredSet;
-use crate::model::effect::bound;
+use crate::model::effect::bound_declared;
+use crate::model::Model;
 
 /// Most moves of a change's time from the split the linear scan found ([`refine`]).
 const REFINE_MAX_MOVES: usize = 3;
@@ -214,7 +215,7 @@ pub fn refit_candidate(
     }
     // the candidate's own values outside their physical bounds: held at the bound, the others
     // refitted, before the tests (a negative compliance is not an explanation)
-    let (after, held) = hold_at_bounds(after, &req, cand, data, cfg)?;
+    let (after, held) = hold_at_bounds(after, &cur.model.model, &req, cand, data, cfg)?;
     let rss0 = cur.rss_mm2;
     let directions = after.fitted.len().saturating_sub(cur.fitted.len());
     // a change's time is fitted too (chosen among the splits): one more parameter in the tests,
@@ -248,10 +249,12 @@ pub fn refit_candidate(
 }
 
 /// `after` with every unknown of `cand` whose value lies outside its physical bound
-/// ([`crate::model::effect::bound`]) held at the bound and the other unknowns of `requested`
-/// refitted; the held values as `name = value` (empty when none was outside).
+/// ([`crate::model::effect::bound_declared`]: a payload as heavy as the one `before` carries is
+/// within it) held at the bound and the other unknowns of `requested` refitted; the held values
+/// as `name = value` (empty when none was outside).
 fn hold_at_bounds(
     after: ExtendedFit,
+    before: &Model,
     requested: &[Unknown],
     cand: &Candidate,
     data: &MeasuredSet,
@@ -262,7 +265,7 @@ fn hold_at_bounds(
         .unknowns
         .iter()
         .filter_map(|&u| {
-            let b = bound(u, model)?;
+            let b = bound_declared(u, model, before)?;
             let v = after.model.value(u);
             b.outside(v).map(|hold| (u, v, hold))
         })

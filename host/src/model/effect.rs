@@ -451,7 +451,9 @@ mod change;
 mod id;
 mod library;
 
-pub use bounds::{bound, Bound, PAYLOAD_MAX_PER_LINK_MASS, RIGID_STIFFNESS_KGFM_PER_DEG};
+pub use bounds::{
+    bound, bound_declared, Bound, PAYLOAD_MAX_PER_LINK_MASS, RIGID_STIFFNESS_KGFM_PER_DEG,
+};
 pub use change::{Change, ChangeError, JointTerm};
 pub use id::{is_link_length_name, EffectId, UnknownEffectId};
 pub use library::{library, Offers};

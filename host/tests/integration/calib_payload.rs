@@ -98,3 +98,54 @@ fn a_payload_the_poses_hardly_determine_is_listed_when_outside_its_range() {
         assert!(said.contains("unphysical: payload_kg"), "{said}");
     }
 }
+
+/// A payload the user declares (the model file's `payload_kg`, here 5 kg on the Katana's
+/// 3.73 kg of links) is a fact: kept as declared it is not judged, and fitted it may stay near
+/// its declared value (was: "payload_kg 5.0000 -> 5.0000", exit 1, no model).
+#[test]
+fn a_declared_payload_heavier_than_the_links_is_the_users_fact() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    let sim = output(&[
+        "simulate",
+        "--seed",
+        "3",
+        "--effect",
+        "payload=5",
+        "--out",
+        path_arg(d),
+    ]);
+    assert!(sim.status.success(), "{}", text(&sim.stderr));
+    let truth = d.join("truth.toml");
+    let declared = std::fs::read_to_string(&truth).unwrap();
+    assert!(declared.contains("payload_kg = 5"), "the declared payload");
+    for params in ["dth2,dth3,dth4,dth5,a2,a3", PARAMS] {
+        let (json, out) = (d.join("c.json"), d.join("m.toml"));
+        let _ = std::fs::remove_file(&out);
+        let run = output(&[
+            "calibrate",
+            "--model",
+            path_arg(&truth),
+            "--poses",
+            path_arg(&d.join("cal.csv")),
+            "--validate",
+            path_arg(&d.join("val.csv")),
+            "--params",
+            params,
+            "--json",
+            path_arg(&json),
+            "--out",
+            path_arg(&out),
+        ]);
+        let said = format!("{}{}", text(&run.stdout), text(&run.stderr));
+        assert_eq!(run.status.code(), Some(0), "--params {params}: {said}");
+        let doc: serde_json::Value =
+            serde_json::from_str(&std::fs::read_to_string(&json).unwrap()).unwrap();
+        assert!(
+            doc["large_changes"].as_array().is_none_or(Vec::is_empty),
+            "{said}"
+        );
+        assert!(!said.contains("unphysical: payload_kg"), "{said}");
+        assert!(out.exists(), "--params {params}: the model written");
+    }
+}

@@ -318,7 +318,7 @@ fn a_negative_compliance_is_held_at_its_bound() {
             requested,
             simpler: None,
         };
-        let reports = bounds::enforce(&mut sel, &cal, &cfg);
+        let reports = bounds::enforce(&mut sel, &declared, &cal, &cfg);
         let held = sel.last.model.value(Unknown::Compliance(2));
         if negative {
             assert_eq!(reports.len(), 1, "{reports:?}");

@@ -105,6 +105,20 @@ pub fn bound(u: Unknown, model: &Model) -> Option<Bound> {
     }
 }
 
+/// [`bound`] of `u` on the fitted `model`, a payload's range widened to admit what `declared`
+/// (the model the user gave) declares: a payload the user declared is a fact, not a fit to judge.
+pub fn bound_declared(u: Unknown, model: &Model, declared: &Model) -> Option<Bound> {
+    let mut b = bound(u, model)?;
+    if let Unknown::Param(i) = u {
+        if i == declared.payload_param() {
+            if let Some(p) = declared.params().get(i).filter(|p| p.value.is_finite()) {
+                b.max = b.max.max(p.value);
+            }
+        }
+    }
+    Some(b)
+}
+
 /// A payload's range: not negative, and at most [`PAYLOAD_MAX_PER_LINK_MASS`] times the model's
 /// link masses; unbounded above on a model without link masses, which gives nothing to judge
 /// by.

@@ -166,6 +166,20 @@ fn a_payload_is_at_most_the_robots_own_link_masses() {
     assert!(bare.masses().is_empty());
     let open = bound(Unknown::Param(bare.payload_param()), &bare).unwrap();
     assert!(open.max.is_infinite() && open.outside(50.0).is_none());
+    // a payload the user declared heavier than the links widens the range to admit it
+    let mut declared = model.clone();
+    let p = declared.payload_param();
+    declared.set_param_at(p, 5.0).unwrap();
+    let wide = bound_declared(Unknown::Param(p), &model, &declared).unwrap();
+    assert_eq!(wide.max, 5.0);
+    assert_eq!(wide.outside(5.0), None);
+    assert_eq!(wide.outside(6.0), Some(5.0));
+    // and leaves every other bound as it was
+    let tp = model.tilt_params().unwrap()[0];
+    assert_eq!(
+        bound_declared(Unknown::Param(tp.clearance), &model, &declared),
+        bound(Unknown::Param(tp.clearance), &model)
+    );
 }
 
 /// Effect ids are spelled in this table only: no other library file holds a string literal
