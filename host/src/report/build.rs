@@ -79,12 +79,14 @@ fn load_models(
     let mut files = Vec::new();
     let mut tree_files = Vec::new();
     // the declared model file is the nominal column already, not a calibrated model of its own
-    let same = |a: &std::path::Path, b: &std::path::Path| matches!((a.canonicalize(), b.canonicalize()), (Ok(x), Ok(y)) if x == y);
-    let declared_file = opts.model_file.as_deref();
+    let declared_file = opts
+        .model_file
+        .as_deref()
+        .and_then(|d| d.canonicalize().ok());
     for p in run
         .models
         .iter()
-        .filter(|p| !declared_file.is_some_and(|d| same(p, d)))
+        .filter(|p| declared_file.is_none() || p.canonicalize().ok() != declared_file)
     {
         match Tree::from_file_if_tree(p) {
             Ok(Some(t)) => tree_files.push((stem(p), t)),
